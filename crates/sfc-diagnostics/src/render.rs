@@ -1,0 +1,216 @@
+//! Rendering of diagnostics: the rustc-like human form and the JSON contract.
+
+use crate::{Diagnostic, Severity, SourceFile, Span, Witness};
+use serde_json::{json, Map, Value};
+use std::fmt::Write;
+
+/// Options of the human renderer.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct RenderOptions {
+    /// ANSI colours (only when writing to a terminal).
+    pub color: bool,
+}
+
+struct Style {
+    on: bool,
+}
+
+impl Style {
+    fn paint(&self, code: &str, text: &str) -> String {
+        if self.on {
+            format!("\x1b[{code}m{text}\x1b[0m")
+        } else {
+            text.to_string()
+        }
+    }
+    fn severity(&self, sev: Severity, text: &str) -> String {
+        let code = match sev {
+            Severity::Error => "1;31",
+            Severity::Warning => "1;33",
+            Severity::Note => "1;32",
+        };
+        self.paint(code, text)
+    }
+    fn blue(&self, text: &str) -> String {
+        self.paint("1;34", text)
+    }
+    fn bold(&self, text: &str) -> String {
+        self.paint("1", text)
+    }
+}
+
+fn file_of(files: &[SourceFile], span: Span) -> Option<&SourceFile> {
+    files.get(span.file as usize)
+}
+
+/// Renders one diagnostic like rustc:
+///
+/// ```text
+/// error[SFC0303]: transition condition is not BOOL
+///  --> chart.st:12:8
+///    |
+/// 12 |     := Level;
+///    |        ^^^^^ this expression is INT
+///    |
+///    = note: …
+/// ```
+pub fn render_human(diag: &Diagnostic, files: &[SourceFile], opts: RenderOptions) -> String {
+    let st = Style { on: opts.color };
+    let mut out = String::new();
+    let sev = diag.severity.as_str();
+    let _ = writeln!(
+        out,
+        "{}{} {}",
+        st.severity(diag.severity, &format!("{sev}[{}]", diag.code)),
+        st.bold(":"),
+        st.bold(&diag.message)
+    );
+    // Width of the line-number gutter: the largest line number shown.
+    let mut max_line = 1;
+    for span in std::iter::once(diag.span).chain(diag.labels.iter().map(|l| l.span)) {
+        if let Some(f) = file_of(files, span) {
+            max_line = max_line.max(f.line_col(span.end).line);
+        }
+    }
+    let width = max_line.to_string().len();
+    let pad = " ".repeat(width);
+    if let Some(file) = file_of(files, diag.span) {
+        let lc = file.line_col(diag.span.start);
+        let _ = writeln!(out, "{pad}{} {}:{}:{}", st.blue("-->"), file.name, lc.line, lc.column);
+        let _ = writeln!(out, "{pad} {}", st.blue("|"));
+        snippet(&mut out, &st, file, diag.span, '^', diag.severity, "", width);
+        for label in &diag.labels {
+            if let Some(lf) = file_of(files, label.span) {
+                if label.span.file != diag.span.file {
+                    let lc = lf.line_col(label.span.start);
+                    let _ = writeln!(out, "{pad}{} {}:{}:{}", st.blue(":::"), lf.name, lc.line, lc.column);
+                }
+                snippet(&mut out, &st, lf, label.span, '-', Severity::Note, &label.message, width);
+            }
+        }
+    }
+    if let Some(element) = &diag.element {
+        if !diag.message.contains(element.as_str()) {
+            let _ = writeln!(out, "{pad} {} {}: {element}", st.blue("="), st.bold("element"));
+        }
+    }
+    for note in &diag.notes {
+        let _ = writeln!(out, "{pad} {} {}: {note}", st.blue("="), st.bold("note"));
+    }
+    if let Some(w) = &diag.witness {
+        let text = match w {
+            Witness::Firing(ts) if ts.is_empty() => "the initial situation".to_string(),
+            Witness::Firing(ts) => ts.join(" -> "),
+            Witness::Valuation(vs) => {
+                vs.iter().map(|(k, v)| format!("{k} = {v}")).collect::<Vec<_>>().join(", ")
+            }
+        };
+        let _ = writeln!(out, "{pad} {} {}: {text}", st.blue("="), st.bold("witness"));
+    }
+    out
+}
+
+#[allow(clippy::too_many_arguments)]
+fn snippet(
+    out: &mut String,
+    st: &Style,
+    file: &SourceFile,
+    span: Span,
+    mark: char,
+    sev: Severity,
+    label: &str,
+    width: usize,
+) {
+    let start = file.line_col(span.start);
+    let end = file.line_col(span.end);
+    let pad = " ".repeat(width);
+    let line_text = file.line_text(start.line);
+    let shown = line_text.replace('\t', "    ");
+    let _ = writeln!(out, "{} {} {}", st.blue(&format!("{:>width$}", start.line)), st.blue("|"), shown);
+    // Caret columns account for tabs expanded to four spaces.
+    let prefix: String = line_text.chars().take(start.column as usize - 1).collect();
+    let indent = prefix.chars().map(|c| if c == '\t' { 4 } else { 1 }).sum::<usize>();
+    let len = if end.line == start.line {
+        let inner: String = line_text
+            .chars()
+            .skip(start.column as usize - 1)
+            .take((end.column - start.column) as usize)
+            .collect();
+        inner.chars().map(|c| if c == '\t' { 4 } else { 1 }).sum::<usize>().max(1)
+    } else {
+        (shown.chars().count().saturating_sub(indent)).max(1)
+    };
+    let marks: String = std::iter::repeat(mark).take(len).collect();
+    let marks = if mark == '^' { st.severity(sev, &marks) } else { st.blue(&marks) };
+    let label = if label.is_empty() { String::new() } else { format!(" {label}") };
+    let _ = writeln!(out, "{pad} {} {}{}{}", st.blue("|"), " ".repeat(indent), marks, label);
+}
+
+/// One diagnostic as the JSON object of `interfaces.md`.
+pub fn to_json_value(diag: &Diagnostic, files: &[SourceFile]) -> Value {
+    let (file, start, end) = match file_of(files, diag.span) {
+        Some(f) => (f.name.clone(), f.line_col(diag.span.start), f.line_col(diag.span.end)),
+        None => (String::new(), crate::LineCol { line: 1, column: 1 }, crate::LineCol { line: 1, column: 1 }),
+    };
+    let witness = match &diag.witness {
+        None => Value::Null,
+        Some(Witness::Firing(ts)) => json!(ts),
+        Some(Witness::Valuation(vs)) => {
+            let mut m = Map::new();
+            for (k, v) in vs {
+                m.insert(k.clone(), v.clone());
+            }
+            Value::Object(m)
+        }
+    };
+    json!({
+        "code": diag.code,
+        "severity": diag.severity.as_str(),
+        "message": diag.message,
+        "file": file,
+        "line": start.line,
+        "column": start.column,
+        "end_line": end.line,
+        "end_column": end.column,
+        "element": diag.element,
+        "notes": diag.notes,
+        "witness": witness,
+    })
+}
+
+/// All diagnostics as one pretty-printed JSON array.
+pub fn render_json(diags: &[Diagnostic], files: &[SourceFile]) -> String {
+    let arr: Vec<Value> = diags.iter().map(|d| to_json_value(d, files)).collect();
+    serde_json::to_string_pretty(&Value::Array(arr)).expect("JSON values always serialise")
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn human_form_points_at_the_span() {
+        let f = SourceFile::new("a.st", "PROGRAM P\n  x := 1;\nEND_PROGRAM\n");
+        let d = Diagnostic::new("SFC0301", Span::new(0, 12, 13), "undeclared variable `x`")
+            .with_note("declare it in a VAR block");
+        let s = render_human(&d, &[f], RenderOptions::default());
+        assert_eq!(
+            s,
+            "error[SFC0301]: undeclared variable `x`\n --> a.st:2:3\n  |\n2 |   x := 1;\n  |   ^\n  = note: declare it in a VAR block\n"
+        );
+    }
+
+    #[test]
+    fn json_has_contract_keys() {
+        let f = SourceFile::new("a.st", "ab\ncd");
+        let d = Diagnostic::new("SFC0201", Span::new(0, 3, 5), "no initial step").with_element("Main");
+        let v = to_json_value(&d, &[f]);
+        assert_eq!(v["line"], 2);
+        assert_eq!(v["column"], 1);
+        assert_eq!(v["end_line"], 2);
+        assert_eq!(v["end_column"], 3);
+        assert_eq!(v["element"], "Main");
+        assert_eq!(v["witness"], Value::Null);
+        assert_eq!(v["severity"], "error");
+    }
+}

@@ -1,0 +1,597 @@
+//! The abstract syntax tree of an IEC 61131-3 source file.
+//!
+//! Every node carries its [`Span`]. Comments and pragmas are not nodes: they are kept, in
+//! source order, in [`SourceUnit::trivia`], and the printer puts each one back before the first
+//! node that starts after it. `sfc.*` attribute pragmas are additionally parsed and attached to the
+//! element that follows them ([`Attribute`]). Together with the token stream (which covers every
+//! byte of the input) this keeps the file lossless for `sfc fmt`.
+
+pub use sfc_diagnostics::Span;
+
+/// An identifier as written; compare with [`Ident::key`] (identifiers are case-insensitive).
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct Ident {
+    pub text: String,
+    pub span: Span,
+}
+
+impl Ident {
+    pub fn new(text: impl Into<String>, span: Span) -> Self {
+        Ident { text: text.into(), span }
+    }
+    /// The case-folded form used for name resolution.
+    pub fn key(&self) -> String {
+        self.text.to_ascii_uppercase()
+    }
+    /// Case-insensitive comparison with a name.
+    pub fn is(&self, name: &str) -> bool {
+        self.text.eq_ignore_ascii_case(name)
+    }
+}
+
+/// A comment or a pragma, kept for the printer.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct Trivia {
+    pub kind: TriviaKind,
+    /// The exact source text, delimiters included.
+    pub text: String,
+    pub span: Span,
+    /// True when only white space precedes it on its line (it starts a line).
+    pub own_line: bool,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum TriviaKind {
+    /// `(* … *)`
+    BlockComment,
+    /// `// …` (IEC 3rd edition line comment)
+    LineComment,
+    /// `{ … }`
+    Pragma,
+}
+
+/// `{attribute 'name' := 'value'}` attached to the element that follows it.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct Attribute {
+    pub name: String,
+    pub value: Option<String>,
+    /// Span of the whole pragma.
+    pub span: Span,
+}
+
+/// A parsed file.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct SourceUnit {
+    pub items: Vec<Item>,
+    pub trivia: Vec<Trivia>,
+    pub span: Span,
+}
+
+/// A top-level declaration.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Item {
+    Pou(Pou),
+    Types(TypeBlock),
+    /// `VAR_GLOBAL … END_VAR` at file level.
+    Globals(VarBlock),
+    /// `CONFIGURATION … END_CONFIGURATION` and other blocks that are recognised, kept verbatim
+    /// for the printer, and not analysed.
+    Verbatim(Verbatim),
+}
+
+impl Item {
+    pub fn span(&self) -> Span {
+        match self {
+            Item::Pou(p) => p.span,
+            Item::Types(t) => t.span,
+            Item::Globals(v) => v.span,
+            Item::Verbatim(v) => v.span,
+        }
+    }
+}
+
+/// A block kept as source text.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct Verbatim {
+    /// The opening keyword, e.g. `CONFIGURATION`.
+    pub keyword: String,
+    pub name: Option<Ident>,
+    pub text: String,
+    pub span: Span,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum PouKind {
+    Program,
+    FunctionBlock,
+    Function,
+}
+
+impl PouKind {
+    pub fn keyword(self) -> &'static str {
+        match self {
+            PouKind::Program => "PROGRAM",
+            PouKind::FunctionBlock => "FUNCTION_BLOCK",
+            PouKind::Function => "FUNCTION",
+        }
+    }
+    pub fn end_keyword(self) -> &'static str {
+        match self {
+            PouKind::Program => "END_PROGRAM",
+            PouKind::FunctionBlock => "END_FUNCTION_BLOCK",
+            PouKind::Function => "END_FUNCTION",
+        }
+    }
+}
+
+/// A program organisation unit.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Pou {
+    pub kind: PouKind,
+    pub name: Ident,
+    /// `FUNCTION F : INT`
+    pub return_type: Option<TypeSpec>,
+    pub attributes: Vec<Attribute>,
+    pub var_blocks: Vec<VarBlock>,
+    pub body: Body,
+    pub span: Span,
+}
+
+/// The body of a POU.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Body {
+    /// Structured Text statements.
+    St(Vec<Stmt>),
+    /// Instruction List.
+    Il(IlBody),
+    /// Sequential Function Chart elements in source order.
+    Sfc(Vec<SfcElement>),
+}
+
+impl Body {
+    pub fn sfc(&self) -> Option<&[SfcElement]> {
+        match self {
+            Body::Sfc(e) => Some(e),
+            _ => None,
+        }
+    }
+}
+
+// ---------------------------------------------------------------------------------------------
+// Declarations
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum VarKind {
+    Var,
+    Input,
+    Output,
+    InOut,
+    Global,
+    External,
+    Access,
+    Temp,
+}
+
+impl VarKind {
+    pub fn keyword(self) -> &'static str {
+        match self {
+            VarKind::Var => "VAR",
+            VarKind::Input => "VAR_INPUT",
+            VarKind::Output => "VAR_OUTPUT",
+            VarKind::InOut => "VAR_IN_OUT",
+            VarKind::Global => "VAR_GLOBAL",
+            VarKind::External => "VAR_EXTERNAL",
+            VarKind::Access => "VAR_ACCESS",
+            VarKind::Temp => "VAR_TEMP",
+        }
+    }
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum Retain {
+    Retain,
+    NonRetain,
+}
+
+/// `VAR [CONSTANT] [RETAIN|NON_RETAIN] … END_VAR`
+#[derive(Debug, Clone, PartialEq)]
+pub struct VarBlock {
+    pub kind: VarKind,
+    pub constant: bool,
+    pub retain: Option<Retain>,
+    pub decls: Vec<VarDecl>,
+    pub span: Span,
+}
+
+/// `a, b AT %IX1 : BOOL := TRUE;` (names may be empty for `AT %IW6.2 : WORD;`).
+#[derive(Debug, Clone, PartialEq)]
+pub struct VarDecl {
+    pub names: Vec<Ident>,
+    pub location: Option<DirectAddress>,
+    /// VAR_ACCESS: the access path between the name and the type, as written.
+    pub access_path: Option<String>,
+    /// VAR_ACCESS: `READ_ONLY` or `READ_WRITE`, as written.
+    pub access_mode: Option<String>,
+    pub ty: TypeSpec,
+    pub init: Option<Initializer>,
+    pub attributes: Vec<Attribute>,
+    pub span: Span,
+}
+
+/// `TYPE … END_TYPE`
+#[derive(Debug, Clone, PartialEq)]
+pub struct TypeBlock {
+    pub decls: Vec<TypeDecl>,
+    pub span: Span,
+}
+
+/// `Name : spec [:= init];`
+#[derive(Debug, Clone, PartialEq)]
+pub struct TypeDecl {
+    pub name: Ident,
+    pub spec: TypeSpec,
+    pub init: Option<Initializer>,
+    pub span: Span,
+}
+
+/// A type as written in a declaration.
+#[derive(Debug, Clone, PartialEq)]
+pub struct TypeSpec {
+    pub kind: TypeSpecKind,
+    pub span: Span,
+}
+
+#[derive(Debug, Clone, PartialEq)]
+pub enum TypeSpecKind {
+    /// An elementary type, a derived type or a function block type, by name.
+    Named(Ident),
+    /// `STRING`, `STRING[10]`, `WSTRING(20)`
+    String { wide: bool, length: Option<Box<Expr>> },
+    /// `ARRAY [1..2, 1..3] OF INT` (also `ARRAY [1..2][1..3] OF INT`)
+    Array { ranges: Vec<(Expr, Expr)>, element: Box<TypeSpec> },
+    /// `INT (0..100)`
+    Subrange { base: Ident, low: Box<Expr>, high: Box<Expr> },
+    /// `(Red, Green := 2, Blue)`; `base` for `INT (A := 1, B := 2)` typed enums.
+    Enum { base: Option<Ident>, values: Vec<(Ident, Option<Expr>)> },
+    /// `STRUCT a : INT; b : BOOL := TRUE; END_STRUCT`
+    Struct(Vec<VarDecl>),
+    /// Placeholder after a syntax error (a diagnostic has been reported).
+    Error,
+}
+
+/// An initial value.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Initializer {
+    Expr(Expr),
+    /// `[10(1), 2, 3(4)]`
+    Array { elements: Vec<ArrayInitElement>, span: Span },
+    /// `(a := 1, b := (c := 2))`
+    Struct { fields: Vec<(Ident, Initializer)>, span: Span },
+}
+
+impl Initializer {
+    pub fn span(&self) -> Span {
+        match self {
+            Initializer::Expr(e) => e.span,
+            Initializer::Array { span, .. } | Initializer::Struct { span, .. } => *span,
+        }
+    }
+}
+
+/// `value` or `count(value)` or `count()` inside an array initialiser.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ArrayInitElement {
+    pub repeat: Option<Expr>,
+    pub value: Option<Initializer>,
+    pub span: Span,
+}
+
+/// `%IX2.4`, `%QW29`, `%MW6`, `%I*` (a partly specified address in a declaration).
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct DirectAddress {
+    /// `I`, `Q` or `M`.
+    pub area: char,
+    /// `X`, `B`, `W`, `D`, `L`, or `X` when omitted (one bit).
+    pub size: char,
+    /// Whether the size letter was written.
+    pub size_written: bool,
+    /// The dot-separated unsigned integers; empty for `%I*`.
+    pub path: Vec<u32>,
+    pub text: String,
+    pub span: Span,
+}
+
+// ---------------------------------------------------------------------------------------------
+// SFC
+
+/// One element of an SFC body, in source order.
+#[derive(Debug, Clone, PartialEq)]
+pub enum SfcElement {
+    Step(Step),
+    Transition(Transition),
+    Action(Action),
+}
+
+impl SfcElement {
+    pub fn span(&self) -> Span {
+        match self {
+            SfcElement::Step(s) => s.span,
+            SfcElement::Transition(t) => t.span,
+            SfcElement::Action(a) => a.span,
+        }
+    }
+}
+
+/// `STEP name: associations END_STEP` or `INITIAL_STEP …`
+#[derive(Debug, Clone, PartialEq)]
+pub struct Step {
+    pub initial: bool,
+    pub name: Ident,
+    pub associations: Vec<ActionAssociation>,
+    pub attributes: Vec<Attribute>,
+    pub span: Span,
+}
+
+/// `Action(Qualifier, T#5s, Indicator);`
+#[derive(Debug, Clone, PartialEq)]
+pub struct ActionAssociation {
+    pub action: Ident,
+    /// As written (`N`, `SD`, …); `None` means the null qualifier (= N).
+    pub qualifier: Option<Ident>,
+    /// A TIME literal or a variable name.
+    pub duration: Option<Expr>,
+    pub indicators: Vec<Ident>,
+    pub span: Span,
+}
+
+/// `TRANSITION [name] [(PRIORITY := n)] FROM … TO … := cond; END_TRANSITION`
+#[derive(Debug, Clone, PartialEq)]
+pub struct Transition {
+    pub name: Option<Ident>,
+    pub priority: Option<Expr>,
+    pub from: Vec<Ident>,
+    /// Whether FROM was written with parentheses (kept for the printer).
+    pub from_parens: bool,
+    pub to: Vec<Ident>,
+    pub to_parens: bool,
+    pub condition: Condition,
+    pub attributes: Vec<Attribute>,
+    pub span: Span,
+}
+
+/// The condition of a transition.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Condition {
+    /// `:= expr;`
+    St(Expr),
+    /// `: LD a AND b` (the IL current result is the condition).
+    Il(IlBody),
+    /// Nothing usable was written (a diagnostic has been reported).
+    Missing,
+}
+
+/// `ACTION name: body END_ACTION`
+#[derive(Debug, Clone, PartialEq)]
+pub struct Action {
+    pub name: Ident,
+    pub body: ActionBody,
+    pub attributes: Vec<Attribute>,
+    pub span: Span,
+}
+
+#[derive(Debug, Clone, PartialEq)]
+pub enum ActionBody {
+    St(Vec<Stmt>),
+    Il(IlBody),
+}
+
+// ---------------------------------------------------------------------------------------------
+// Structured Text
+
+#[derive(Debug, Clone, PartialEq)]
+pub struct Stmt {
+    pub kind: StmtKind,
+    pub span: Span,
+}
+
+#[derive(Debug, Clone, PartialEq)]
+pub enum StmtKind {
+    /// `target := value;`
+    Assign { target: Expr, value: Expr },
+    /// A call used as a statement: `Timer(IN := x, PT := T#1s);`, `F(1);`
+    Call(Expr),
+    /// `IF c THEN … ELSIF c THEN … ELSE … END_IF`
+    If { branches: Vec<(Expr, Vec<Stmt>)>, else_body: Option<Vec<Stmt>> },
+    /// `CASE sel OF 1, 2..5: … ELSE … END_CASE`
+    Case { selector: Expr, arms: Vec<CaseArm>, else_body: Option<Vec<Stmt>> },
+    /// `FOR i := a TO b BY c DO … END_FOR`
+    For { var: Ident, from: Expr, to: Expr, by: Option<Expr>, body: Vec<Stmt> },
+    /// `WHILE c DO … END_WHILE`
+    While { cond: Expr, body: Vec<Stmt> },
+    /// `REPEAT … UNTIL c END_REPEAT`
+    Repeat { body: Vec<Stmt>, until: Expr },
+    Exit,
+    Return,
+    /// A lone `;`.
+    Empty,
+}
+
+#[derive(Debug, Clone, PartialEq)]
+pub struct CaseArm {
+    pub labels: Vec<CaseLabel>,
+    pub body: Vec<Stmt>,
+    pub span: Span,
+}
+
+#[derive(Debug, Clone, PartialEq)]
+pub enum CaseLabel {
+    Value(Expr),
+    Range(Expr, Expr),
+}
+
+#[derive(Debug, Clone, PartialEq)]
+pub struct Expr {
+    pub kind: ExprKind,
+    pub span: Span,
+}
+
+#[derive(Debug, Clone, PartialEq)]
+pub enum ExprKind {
+    Literal(Literal),
+    /// A variable, step, action, enumerated value or constant.
+    Name(Ident),
+    /// `%IX2.4` used directly in code.
+    Address(DirectAddress),
+    /// `base.member` (struct field, FB output, `Step.X`, `Step.T`, `Action.Q`); also bit access
+    /// `w.3` with `member` = "3".
+    Member { base: Box<Expr>, member: Ident },
+    /// `a[i, j]`
+    Index { base: Box<Expr>, indices: Vec<Expr> },
+    /// `F(1, 2)`, `Fb(IN := x, Q => y)`
+    Call { callee: Ident, args: Vec<Arg> },
+    Unary { op: UnaryOp, operand: Box<Expr> },
+    Binary { op: BinaryOp, lhs: Box<Expr>, rhs: Box<Expr> },
+    /// `( e )`, kept so the printer reproduces the user's grouping.
+    Paren(Box<Expr>),
+    /// Placeholder after a syntax error (a diagnostic has been reported).
+    Error,
+}
+
+/// One argument of a call.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Arg {
+    /// Formal parameter name, if written (`IN := x`, `Q => y`).
+    pub name: Option<Ident>,
+    /// `=>`: an output binding.
+    pub output: bool,
+    /// `NOT Q => y` (negated output binding).
+    pub negated: bool,
+    /// The value (input) or the target (output); `None` for an empty output binding `Q =>`.
+    pub value: Option<Expr>,
+    pub span: Span,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum UnaryOp {
+    Neg,
+    Plus,
+    Not,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum BinaryOp {
+    Or,
+    OrElse,
+    Xor,
+    And,
+    AndThen,
+    Eq,
+    Ne,
+    Lt,
+    Gt,
+    Le,
+    Ge,
+    Add,
+    Sub,
+    Mul,
+    Div,
+    Mod,
+    Pow,
+}
+
+impl BinaryOp {
+    /// Binding power: larger binds tighter (IEC 61131-3 table 55).
+    pub fn precedence(self) -> u8 {
+        match self {
+            BinaryOp::Or | BinaryOp::OrElse => 1,
+            BinaryOp::Xor => 2,
+            BinaryOp::And | BinaryOp::AndThen => 3,
+            BinaryOp::Eq | BinaryOp::Ne => 4,
+            BinaryOp::Lt | BinaryOp::Gt | BinaryOp::Le | BinaryOp::Ge => 5,
+            BinaryOp::Add | BinaryOp::Sub => 6,
+            BinaryOp::Mul | BinaryOp::Div | BinaryOp::Mod => 7,
+            BinaryOp::Pow => 9,
+        }
+    }
+    /// The canonical spelling.
+    pub fn symbol(self) -> &'static str {
+        match self {
+            BinaryOp::Or => "OR",
+            BinaryOp::OrElse => "OR_ELSE",
+            BinaryOp::Xor => "XOR",
+            BinaryOp::And => "AND",
+            BinaryOp::AndThen => "AND_THEN",
+            BinaryOp::Eq => "=",
+            BinaryOp::Ne => "<>",
+            BinaryOp::Lt => "<",
+            BinaryOp::Gt => ">",
+            BinaryOp::Le => "<=",
+            BinaryOp::Ge => ">=",
+            BinaryOp::Add => "+",
+            BinaryOp::Sub => "-",
+            BinaryOp::Mul => "*",
+            BinaryOp::Div => "/",
+            BinaryOp::Mod => "MOD",
+            BinaryOp::Pow => "**",
+        }
+    }
+}
+
+/// Precedence of unary operators (`-`, `NOT`): above `*` (7), below `**` (9).
+pub const UNARY_PRECEDENCE: u8 = 8;
+
+/// A literal with its optional type prefix (`INT#5`, `UINT#16#FE`, `STRING#'x'`).
+#[derive(Debug, Clone, PartialEq)]
+pub struct Literal {
+    pub kind: LiteralKind,
+    /// The elementary type name before `#`, upper-cased (`INT`, `BOOL`, …), if written.
+    pub type_prefix: Option<String>,
+    /// The source text, for the printer.
+    pub text: String,
+}
+
+#[derive(Debug, Clone, PartialEq)]
+pub enum LiteralKind {
+    /// Integer value. A sign is a unary operator, except inside a typed literal (`INT#-5`).
+    Int(i128),
+    Real(f64),
+    Bool(bool),
+    /// Decoded characters; `wide` for `"…"`.
+    String { value: String, wide: bool },
+    /// Microseconds (TIME / LTIME).
+    Duration(i64),
+    /// Days since 1970-01-01.
+    Date(i64),
+    /// Microseconds since midnight.
+    TimeOfDay(i64),
+    /// Microseconds since 1970-01-01T00:00:00.
+    DateAndTime(i64),
+    /// An enumerated value with its type: `Colour#Red` (`type_prefix` holds the type).
+    Enum(Ident),
+}
+
+// ---------------------------------------------------------------------------------------------
+// Instruction List
+
+/// A list of IL instructions.
+#[derive(Debug, Clone, PartialEq)]
+pub struct IlBody {
+    pub instructions: Vec<IlInstruction>,
+    pub span: Span,
+}
+
+/// `[label:] OP[N][C][(] operand(s)` or a call.
+#[derive(Debug, Clone, PartialEq)]
+pub struct IlInstruction {
+    pub label: Option<Ident>,
+    /// The operator as written (`LD`, `ANDN`, `JMPC`, `CAL`, a function name, …); `None` for a
+    /// line holding only a label, or for the closing `)` of a nested expression.
+    pub op: Option<Ident>,
+    /// Operands (`LD x`, `SEL G, a, b`, `JMP label` as a name).
+    pub operands: Vec<Expr>,
+    /// `AND( … )`: the nested instructions up to the matching `)`.
+    pub nested: Option<Vec<IlInstruction>>,
+    /// `CAL Fb(IN := x)`: the formal arguments.
+    pub call_args: Option<Vec<Arg>>,
+    pub span: Span,
+}

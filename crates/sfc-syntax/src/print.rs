@@ -1,0 +1,760 @@
+//! The canonical printer behind `sfc fmt`.
+//!
+//! The layout is fixed (upper-case keywords, four-space indentation, one declaration, statement,
+//! association or instruction per line); what the user wrote that carries meaning or intent is
+//! kept exactly: identifiers, literal text, grouping parentheses, comments and pragmas.
+//!
+//! Comments and pragmas are not in the tree but in [`SourceUnit::trivia`]. Every printed line
+//! that starts a node has an *anchor*, the source offset of that node; before the line, every
+//! not yet printed trivia that starts at or before the anchor is printed, on its own line, or at
+//! the end of the previous line when it followed code on its line in the source. Lines that close
+//! a block (`END_IF;`, `END_STEP`, …) first print the trivia that lies inside the block. Anchors
+//! are visited in source order, so every trivia is printed exactly once, in source order, and
+//! printing the output again puts each one at the same place (the printer is idempotent).
+
+use crate::ast::*;
+
+/// Prints a parsed file in canonical layout, putting every comment and pragma back.
+///
+/// The unit should come from an error-free parse: error placeholders print as nothing.
+pub fn print(unit: &SourceUnit) -> String {
+    let mut trivia: Vec<&Trivia> = unit.trivia.iter().collect();
+    // Stable, so trivia at one offset (impossible from the lexer) would keep their order.
+    trivia.sort_by_key(|t| t.span.start);
+    let mut p = Printer::new(trivia);
+    for (i, item) in unit.items.iter().enumerate() {
+        if i > 0 {
+            p.blank();
+        }
+        p.item(item);
+    }
+    // Comments after the last item are set apart from it like an item of their own.
+    p.blank();
+    p.flush_before(u32::MAX);
+    p.finish()
+}
+
+const INDENT: &str = "    ";
+
+struct Printer<'a> {
+    /// All trivia in source order; `next` is the first one not yet printed.
+    trivia: Vec<&'a Trivia>,
+    next: usize,
+    lines: Vec<String>,
+    /// The line being built (indentation included); empty between lines.
+    cur: String,
+    indent: usize,
+    /// A blank line is due before the next line that is printed.
+    pending_blank: bool,
+    /// The last line ends in a `//` comment: appending to it would comment the addition out.
+    sealed: bool,
+}
+
+impl<'a> Printer<'a> {
+    fn new(trivia: Vec<&'a Trivia>) -> Self {
+        Printer {
+            trivia,
+            next: 0,
+            lines: Vec::new(),
+            cur: String::new(),
+            indent: 0,
+            pending_blank: false,
+            sealed: false,
+        }
+    }
+
+    fn finish(mut self) -> String {
+        debug_assert!(self.cur.is_empty(), "a line was left open");
+        debug_assert_eq!(self.next, self.trivia.len(), "trivia left unprinted");
+        if self.lines.is_empty() {
+            return String::new();
+        }
+        let mut out = self.lines.join("\n");
+        out.push('\n');
+        self.lines.clear();
+        out
+    }
+
+    // -- Lines and trivia ---------------------------------------------------------------------
+
+    /// Asks for one blank line before whatever is printed next (none at the start of the file).
+    fn blank(&mut self) {
+        self.pending_blank = true;
+    }
+
+    fn push_line(&mut self, line: String) {
+        if self.pending_blank && !self.lines.is_empty() {
+            self.lines.push(String::new());
+        }
+        self.pending_blank = false;
+        self.lines.push(line);
+        self.sealed = false;
+    }
+
+    /// Starts a line for a node beginning at `anchor`, after the trivia that precedes it.
+    fn open(&mut self, anchor: u32) {
+        // `<=`: a node whose span were to include its leading pragma still gets it before it.
+        while self.next < self.trivia.len() && self.trivia[self.next].span.start <= anchor {
+            self.emit_next();
+        }
+        self.begin();
+    }
+
+    /// Starts a line that no node begins (a continuation or closing keyword).
+    fn begin(&mut self) {
+        debug_assert!(self.cur.is_empty());
+        self.cur = INDENT.repeat(self.indent);
+    }
+
+    fn push(&mut self, text: &str) {
+        self.cur.push_str(text);
+    }
+
+    fn end(&mut self) {
+        let mut line = std::mem::take(&mut self.cur);
+        line.truncate(line.trim_end().len());
+        self.push_line(line);
+    }
+
+    /// A whole line for a node beginning at `anchor`.
+    fn line(&mut self, anchor: u32, text: &str) {
+        self.open(anchor);
+        self.push(text);
+        self.end();
+    }
+
+    /// A whole line that no node begins.
+    fn plain(&mut self, text: &str) {
+        self.begin();
+        self.push(text);
+        self.end();
+    }
+
+    /// Prints the trivia that starts before `pos` (the end of the enclosing block).
+    fn flush_before(&mut self, pos: u32) {
+        while self.next < self.trivia.len() && self.trivia[self.next].span.start < pos {
+            self.emit_next();
+        }
+    }
+
+    /// Prints the end-of-line comments that start before `pos`, for a keyword line without an
+    /// anchor (`ELSE`): they belong to the line above it, own-line comments to what follows.
+    fn flush_trailing(&mut self, pos: u32) {
+        while self.next < self.trivia.len() {
+            let t = self.trivia[self.next];
+            if t.span.start >= pos || !self.can_trail(t) {
+                break;
+            }
+            self.emit_next();
+        }
+    }
+
+    /// Whether `t` goes at the end of the previous line rather than on its own.
+    fn can_trail(&self, t: &Trivia) -> bool {
+        // A pragma describes what follows it, so it always gets a line of its own.
+        !t.own_line && t.kind != TriviaKind::Pragma && !self.sealed && !self.lines.is_empty()
+    }
+
+    fn emit_next(&mut self) {
+        let t = self.trivia[self.next];
+        self.next += 1;
+        if self.can_trail(t) {
+            let last = self.lines.last_mut().expect("can_trail checks for a previous line");
+            last.push(' ');
+            last.push_str(&t.text);
+        } else {
+            let line = format!("{}{}", INDENT.repeat(self.indent), t.text);
+            self.push_line(line);
+        }
+        self.sealed = t.kind == TriviaKind::LineComment;
+    }
+
+    /// Whether unprinted trivia starts before `pos`, i.e. inside a block ending there.
+    fn trivia_before(&self, pos: u32) -> bool {
+        self.trivia.get(self.next).is_some_and(|t| t.span.start < pos)
+    }
+
+    /// Closes a block: its inner trivia at the inner indentation, then `keyword` one level out.
+    fn close(&mut self, end: u32, keyword: &str) {
+        self.flush_before(end);
+        self.indent -= 1;
+        self.plain(keyword);
+    }
+
+    // -- Top level ----------------------------------------------------------------------------
+
+    fn item(&mut self, item: &Item) {
+        match item {
+            Item::Pou(pou) => self.pou(pou),
+            Item::Types(block) => self.type_block(block),
+            Item::Globals(block) => self.var_block(block),
+            Item::Verbatim(v) => self.verbatim(v),
+        }
+    }
+
+    fn verbatim(&mut self, v: &Verbatim) {
+        self.open(v.span.start);
+        self.push(&v.text);
+        self.end();
+        // Comments inside the block are part of its text already.
+        while self.next < self.trivia.len() && self.trivia[self.next].span.start < v.span.end {
+            self.next += 1;
+        }
+    }
+
+    fn pou(&mut self, pou: &Pou) {
+        self.open(lead(pou.span, &pou.attributes));
+        self.push(pou.kind.keyword());
+        self.push(" ");
+        self.push(&pou.name.text);
+        if let Some(ty) = &pou.return_type {
+            self.push(" : ");
+            self.type_spec(ty);
+        }
+        self.end();
+        self.indent += 1;
+        for block in &pou.var_blocks {
+            self.var_block(block);
+        }
+        let body_empty = match &pou.body {
+            Body::St(stmts) => stmts.is_empty(),
+            Body::Il(il) => il.instructions.is_empty(),
+            Body::Sfc(elements) => elements.is_empty(),
+        };
+        if !body_empty {
+            if !pou.var_blocks.is_empty() {
+                self.blank();
+            }
+            match &pou.body {
+                Body::St(stmts) => self.stmts(stmts),
+                Body::Il(il) => self.il_body(il),
+                Body::Sfc(elements) => self.sfc(elements),
+            }
+        }
+        self.close(pou.span.end, pou.kind.end_keyword());
+    }
+
+    fn type_block(&mut self, block: &TypeBlock) {
+        self.line(block.span.start, "TYPE");
+        self.indent += 1;
+        for decl in &block.decls {
+            self.open(decl.span.start);
+            self.push(&decl.name.text);
+            self.push(" : ");
+            self.type_spec(&decl.spec);
+            if let Some(init) = &decl.init {
+                self.push(" := ");
+                self.push(&initializer(init));
+            }
+            self.push(";");
+            self.end();
+        }
+        self.close(block.span.end, "END_TYPE");
+    }
+
+    fn var_block(&mut self, block: &VarBlock) {
+        self.open(block.span.start);
+        self.push(block.kind.keyword());
+        if block.constant {
+            self.push(" CONSTANT");
+        }
+        match block.retain {
+            Some(Retain::Retain) => self.push(" RETAIN"),
+            Some(Retain::NonRetain) => self.push(" NON_RETAIN"),
+            None => {}
+        }
+        self.end();
+        self.indent += 1;
+        for decl in &block.decls {
+            self.var_decl(decl);
+        }
+        self.close(block.span.end, "END_VAR");
+    }
+
+    fn var_decl(&mut self, decl: &VarDecl) {
+        self.open(lead(decl.span, &decl.attributes));
+        let mut head = decl.names.iter().map(|n| n.text.as_str()).collect::<Vec<_>>().join(", ");
+        if let Some(location) = &decl.location {
+            if !head.is_empty() {
+                head.push(' ');
+            }
+            head.push_str("AT ");
+            head.push_str(&location.text);
+        }
+        self.push(&head);
+        self.push(" : ");
+        if let Some(path) = &decl.access_path {
+            self.push(path);
+            self.push(" : ");
+        }
+        self.type_spec(&decl.ty);
+        if let Some(mode) = &decl.access_mode {
+            self.push(" ");
+            self.push(mode);
+        }
+        if let Some(init) = &decl.init {
+            self.push(" := ");
+            self.push(&initializer(init));
+        }
+        self.push(";");
+        self.end();
+    }
+
+    /// Appends a type to the current line; a STRUCT spreads over lines and leaves the line
+    /// after `END_STRUCT` open.
+    fn type_spec(&mut self, ty: &TypeSpec) {
+        match &ty.kind {
+            TypeSpecKind::Named(name) => self.push(&name.text),
+            TypeSpecKind::String { wide, length } => {
+                self.push(if *wide { "WSTRING" } else { "STRING" });
+                if let Some(length) = length {
+                    self.push(&format!("[{}]", expr(length)));
+                }
+            }
+            TypeSpecKind::Array { ranges, element } => {
+                let ranges: Vec<String> = ranges.iter().map(|(lo, hi)| format!("{}..{}", expr(lo), expr(hi))).collect();
+                self.push(&format!("ARRAY [{}] OF ", ranges.join(", ")));
+                self.type_spec(element);
+            }
+            TypeSpecKind::Subrange { base, low, high } => {
+                self.push(&format!("{} ({}..{})", base.text, expr(low), expr(high)));
+            }
+            TypeSpecKind::Enum { base, values } => {
+                if let Some(base) = base {
+                    self.push(&base.text);
+                    self.push(" ");
+                }
+                let values: Vec<String> = values
+                    .iter()
+                    .map(|(name, value)| match value {
+                        Some(v) => format!("{} := {}", name.text, expr(v)),
+                        None => name.text.clone(),
+                    })
+                    .collect();
+                self.push(&format!("({})", values.join(", ")));
+            }
+            TypeSpecKind::Struct(members) => {
+                self.push("STRUCT");
+                self.end();
+                self.indent += 1;
+                for member in members {
+                    self.var_decl(member);
+                }
+                self.flush_before(ty.span.end);
+                self.indent -= 1;
+                self.begin();
+                self.push("END_STRUCT");
+            }
+            TypeSpecKind::Error => {}
+        }
+    }
+
+    // -- SFC ----------------------------------------------------------------------------------
+
+    fn sfc(&mut self, elements: &[SfcElement]) {
+        for (i, element) in elements.iter().enumerate() {
+            if i > 0 {
+                self.blank();
+            }
+            match element {
+                SfcElement::Step(step) => self.step(step),
+                SfcElement::Transition(transition) => self.transition(transition),
+                SfcElement::Action(action) => self.action(action),
+            }
+        }
+    }
+
+    fn step(&mut self, step: &Step) {
+        self.open(lead(step.span, &step.attributes));
+        self.push(if step.initial { "INITIAL_STEP " } else { "STEP " });
+        self.push(&step.name.text);
+        self.push(":");
+        // One line when empty, unless a comment inside would then move out of the step.
+        if step.associations.is_empty() && !self.trivia_before(step.span.end) {
+            self.push(" END_STEP");
+            self.end();
+            return;
+        }
+        self.end();
+        self.indent += 1;
+        for assoc in &step.associations {
+            self.line(assoc.span.start, &format!("{};", association(assoc)));
+        }
+        self.close(step.span.end, "END_STEP");
+    }
+
+    fn transition(&mut self, t: &Transition) {
+        self.open(lead(t.span, &t.attributes));
+        self.push("TRANSITION");
+        if let Some(name) = &t.name {
+            self.push(" ");
+            self.push(&name.text);
+        }
+        if let Some(priority) = &t.priority {
+            self.push(&format!(" (PRIORITY := {})", expr(priority)));
+        }
+        self.push(&format!(" FROM {} TO {}", step_list(&t.from, t.from_parens), step_list(&t.to, t.to_parens)));
+        match &t.condition {
+            Condition::St(cond) => {
+                self.end();
+                self.indent += 1;
+                self.line(cond.span.start, &format!(":= {};", expr(cond)));
+            }
+            Condition::Il(il) => {
+                self.push(":");
+                self.end();
+                self.indent += 1;
+                self.il_body(il);
+            }
+            Condition::Missing => {
+                self.end();
+                self.indent += 1;
+            }
+        }
+        self.close(t.span.end, "END_TRANSITION");
+    }
+
+    fn action(&mut self, action: &Action) {
+        self.open(lead(action.span, &action.attributes));
+        self.push("ACTION ");
+        self.push(&action.name.text);
+        self.push(":");
+        let empty = match &action.body {
+            ActionBody::St(stmts) => stmts.is_empty(),
+            ActionBody::Il(il) => il.instructions.is_empty(),
+        };
+        if empty && !self.trivia_before(action.span.end) {
+            self.push(" END_ACTION");
+            self.end();
+            return;
+        }
+        self.end();
+        self.indent += 1;
+        match &action.body {
+            ActionBody::St(stmts) => self.stmts(stmts),
+            ActionBody::Il(il) => self.il_body(il),
+        }
+        self.close(action.span.end, "END_ACTION");
+    }
+
+    // -- Structured Text ----------------------------------------------------------------------
+
+    fn stmts(&mut self, stmts: &[Stmt]) {
+        for stmt in stmts {
+            self.stmt(stmt);
+        }
+    }
+
+    /// Statements one level in.
+    fn block(&mut self, stmts: &[Stmt]) {
+        self.indent += 1;
+        self.stmts(stmts);
+        self.indent -= 1;
+    }
+
+    fn stmt(&mut self, stmt: &Stmt) {
+        let start = stmt.span.start;
+        match &stmt.kind {
+            StmtKind::Assign { target, value } => self.line(start, &format!("{} := {};", expr(target), expr(value))),
+            StmtKind::Call(call) => self.line(start, &format!("{};", expr(call))),
+            StmtKind::If { branches, else_body } => {
+                for (i, (cond, body)) in branches.iter().enumerate() {
+                    if i == 0 {
+                        self.line(start, &format!("IF {} THEN", expr(cond)));
+                    } else {
+                        // Comments ending the previous branch stay inside it.
+                        self.indent += 1;
+                        self.flush_before(cond.span.start);
+                        self.indent -= 1;
+                        self.line(cond.span.start, &format!("ELSIF {} THEN", expr(cond)));
+                    }
+                    self.block(body);
+                }
+                if let Some(else_body) = else_body {
+                    self.else_branch(else_body, stmt.span.end);
+                }
+                self.indent += 1;
+                self.close(stmt.span.end, "END_IF;");
+            }
+            StmtKind::Case { selector, arms, else_body } => {
+                self.line(start, &format!("CASE {} OF", expr(selector)));
+                self.indent += 1;
+                for arm in arms {
+                    let labels: Vec<String> = arm
+                        .labels
+                        .iter()
+                        .map(|label| match label {
+                            CaseLabel::Value(v) => expr(v),
+                            CaseLabel::Range(lo, hi) => format!("{}..{}", expr(lo), expr(hi)),
+                        })
+                        .collect();
+                    self.line(arm.span.start, &format!("{}:", labels.join(", ")));
+                    self.block(&arm.body);
+                }
+                if let Some(else_body) = else_body {
+                    self.else_branch(else_body, stmt.span.end);
+                }
+                self.close(stmt.span.end, "END_CASE;");
+            }
+            StmtKind::For { var, from, to, by, body } => {
+                let by = by.as_ref().map(|b| format!(" BY {}", expr(b))).unwrap_or_default();
+                self.line(start, &format!("FOR {} := {} TO {}{} DO", var.text, expr(from), expr(to), by));
+                self.indent += 1;
+                self.stmts(body);
+                self.close(stmt.span.end, "END_FOR;");
+            }
+            StmtKind::While { cond, body } => {
+                self.line(start, &format!("WHILE {} DO", expr(cond)));
+                self.indent += 1;
+                self.stmts(body);
+                self.close(stmt.span.end, "END_WHILE;");
+            }
+            StmtKind::Repeat { body, until } => {
+                self.line(start, "REPEAT");
+                self.indent += 1;
+                self.stmts(body);
+                self.flush_before(until.span.start);
+                self.indent -= 1;
+                self.line(until.span.start, &format!("UNTIL {}", expr(until)));
+                self.indent += 1;
+                self.close(stmt.span.end, "END_REPEAT;");
+            }
+            StmtKind::Exit => self.line(start, "EXIT;"),
+            StmtKind::Return => self.line(start, "RETURN;"),
+            StmtKind::Empty => self.line(start, ";"),
+        }
+    }
+
+    /// `ELSE` and its statements; `end` is the end of the whole statement.
+    fn else_branch(&mut self, body: &[Stmt], end: u32) {
+        // The ELSE keyword's own offset is not in the tree: end-of-line comments before the first
+        // statement stay on the line above, the others go under ELSE.
+        self.flush_trailing(body.first().map_or(end, |s| s.span.start));
+        self.plain("ELSE");
+        self.block(body);
+    }
+
+    // -- Instruction List ---------------------------------------------------------------------
+
+    fn il_body(&mut self, il: &IlBody) {
+        for instruction in &il.instructions {
+            self.il_instruction(instruction);
+        }
+    }
+
+    fn il_instruction(&mut self, ins: &IlInstruction) {
+        let mut text = String::new();
+        if let Some(label) = &ins.label {
+            text.push_str(&label.text);
+            text.push(':');
+        }
+        if let Some(op) = &ins.op {
+            if !text.is_empty() {
+                text.push(' ');
+            }
+            text.push_str(&op.text);
+            if ins.nested.is_some() {
+                text.push('(');
+            }
+            if !ins.operands.is_empty() {
+                text.push(' ');
+                text.push_str(&ins.operands.iter().map(expr).collect::<Vec<_>>().join(", "));
+            }
+            if let Some(args) = &ins.call_args {
+                text.push_str(&format!("({})", call_args(args)));
+            }
+        }
+        self.line(ins.span.start, &text);
+        if let Some(nested) = &ins.nested {
+            self.indent += 1;
+            self.il_body_slice(nested);
+            self.close(ins.span.end, ")");
+        }
+    }
+
+    fn il_body_slice(&mut self, instructions: &[IlInstruction]) {
+        for instruction in instructions {
+            self.il_instruction(instruction);
+        }
+    }
+}
+
+/// Where the line of an element with attributes starts: after its last attribute pragma, so
+/// that the pragmas are printed before it even if its span were to include them.
+fn lead(span: Span, attributes: &[Attribute]) -> u32 {
+    attributes.iter().map(|a| a.span.end).fold(span.start, u32::max)
+}
+
+/// `S1` or `(S1, S2)`.
+fn step_list(steps: &[Ident], parens: bool) -> String {
+    let names = steps.iter().map(|s| s.text.as_str()).collect::<Vec<_>>().join(", ");
+    if parens || steps.len() != 1 {
+        format!("({names})")
+    } else {
+        names
+    }
+}
+
+/// `Name(Q)`, `Name(L, T#5s)`, `Name(N, Indicator)`, `Name()`.
+fn association(assoc: &ActionAssociation) -> String {
+    let mut parts = vec![assoc.qualifier.as_ref().map(|q| q.text.clone()).unwrap_or_default()];
+    parts.extend(assoc.duration.iter().map(expr));
+    parts.extend(assoc.indicators.iter().map(|i| i.text.clone()));
+    format!("{}({})", assoc.action.text, parts.join(", "))
+}
+
+/// `[10(1), 2, 3()]`, `(a := 1, b := (c := 2))` or an expression.
+fn initializer(init: &Initializer) -> String {
+    match init {
+        Initializer::Expr(e) => expr(e),
+        Initializer::Array { elements, .. } => {
+            let elements: Vec<String> = elements
+                .iter()
+                .map(|el| {
+                    let value = el.value.as_ref().map(initializer).unwrap_or_default();
+                    match &el.repeat {
+                        Some(count) => format!("{}({})", expr(count), value),
+                        None => value,
+                    }
+                })
+                .collect();
+            format!("[{}]", elements.join(", "))
+        }
+        Initializer::Struct { fields, .. } => {
+            let fields: Vec<String> =
+                fields.iter().map(|(name, value)| format!("{} := {}", name.text, initializer(value))).collect();
+            format!("({})", fields.join(", "))
+        }
+    }
+}
+
+fn call_args(args: &[Arg]) -> String {
+    let args: Vec<String> = args
+        .iter()
+        .map(|arg| {
+            let value = arg.value.as_ref().map(expr).unwrap_or_default();
+            match &arg.name {
+                None => value,
+                Some(name) if arg.output => {
+                    let not = if arg.negated { "NOT " } else { "" };
+                    format!("{not}{} => {value}", name.text).trim_end().to_string()
+                }
+                Some(name) => format!("{} := {value}", name.text),
+            }
+        })
+        .collect();
+    args.join(", ")
+}
+
+// -- Expressions ------------------------------------------------------------------------------
+
+/// An expression on one line, with the user's parentheses and only those the tree needs.
+pub(crate) fn expr(e: &Expr) -> String {
+    let mut out = String::new();
+    write_expr(&mut out, e);
+    out
+}
+
+fn write_expr(out: &mut String, e: &Expr) {
+    match &e.kind {
+        ExprKind::Literal(lit) => out.push_str(&lit.text),
+        ExprKind::Name(name) => out.push_str(&name.text),
+        ExprKind::Address(address) => out.push_str(&address.text),
+        ExprKind::Member { base, member } => {
+            write_operand(out, base, !is_primary(base));
+            out.push('.');
+            out.push_str(&member.text);
+        }
+        ExprKind::Index { base, indices } => {
+            write_operand(out, base, !is_primary(base));
+            out.push('[');
+            for (i, index) in indices.iter().enumerate() {
+                if i > 0 {
+                    out.push_str(", ");
+                }
+                write_expr(out, index);
+            }
+            out.push(']');
+        }
+        ExprKind::Call { callee, args } => {
+            out.push_str(&callee.text);
+            out.push('(');
+            out.push_str(&call_args(args));
+            out.push(')');
+        }
+        ExprKind::Unary { op, operand } => {
+            let start = out.len();
+            out.push_str(match op {
+                UnaryOp::Neg => "-",
+                UnaryOp::Plus => "+",
+                UnaryOp::Not => "NOT ",
+            });
+            let mut inner = String::new();
+            write_operand(&mut inner, operand, unary_operand_needs_parens(operand));
+            // `- -x`, not `--x`; `-+x` alike: keep signs apart for the reader.
+            if *op != UnaryOp::Not && inner.starts_with(['-', '+']) {
+                out.push(' ');
+            }
+            out.push_str(&inner);
+            debug_assert!(out.len() > start);
+        }
+        ExprKind::Binary { op, lhs, rhs } => {
+            write_operand(out, lhs, binary_operand_needs_parens(*op, lhs, Side::Left));
+            out.push(' ');
+            out.push_str(op.symbol());
+            out.push(' ');
+            write_operand(out, rhs, binary_operand_needs_parens(*op, rhs, Side::Right));
+        }
+        ExprKind::Paren(inner) => {
+            out.push('(');
+            write_expr(out, inner);
+            out.push(')');
+        }
+        ExprKind::Error => {}
+    }
+}
+
+fn write_operand(out: &mut String, e: &Expr, parens: bool) {
+    if parens {
+        out.push('(');
+        write_expr(out, e);
+        out.push(')');
+    } else {
+        write_expr(out, e);
+    }
+}
+
+/// Whether `e` prints as one indivisible operand (a name, literal, call, member, …).
+fn is_primary(e: &Expr) -> bool {
+    !matches!(e.kind, ExprKind::Unary { .. } | ExprKind::Binary { .. })
+}
+
+#[derive(Clone, Copy, PartialEq)]
+enum Side {
+    Left,
+    Right,
+}
+
+/// Parentheses a parsed tree never needs but a built one may: an operand binding looser than
+/// its operator, an equal-precedence right operand (all IEC binary operators group to the left,
+/// `**` included), and a unary operand that would swallow the operator after it.
+fn binary_operand_needs_parens(op: BinaryOp, operand: &Expr, side: Side) -> bool {
+    match &operand.kind {
+        ExprKind::Binary { op: inner, .. } => match side {
+            Side::Left => inner.precedence() < op.precedence(),
+            Side::Right => inner.precedence() <= op.precedence(),
+        },
+        // `-a ** b` reads as `-(a ** b)`: a unary left operand of an operator binding at least as
+        // tightly as the unary operators needs parentheses.
+        ExprKind::Unary { .. } => side == Side::Left && op.precedence() >= UNARY_PRECEDENCE,
+        _ => false,
+    }
+}
+
+/// `-(a + b)`: a binary operand binding looser than the unary operator.
+fn unary_operand_needs_parens(operand: &Expr) -> bool {
+    match &operand.kind {
+        ExprKind::Binary { op, .. } => op.precedence() < UNARY_PRECEDENCE,
+        _ => false,
+    }
+}
