@@ -348,7 +348,7 @@ pub struct ActionAssociation {
 #[derive(Debug, Clone, PartialEq)]
 pub struct Transition {
     pub name: Option<Ident>,
-    pub priority: Option<Expr>,
+    pub priority: Option<Box<Expr>>,
     pub from: Vec<Ident>,
     /// Whether FROM was written with parentheses (kept for the printer).
     pub from_parens: bool,
@@ -389,6 +389,7 @@ pub enum ActionBody {
 // Structured Text
 
 #[derive(Debug, Clone, PartialEq)]
+/// (Large fields are boxed so a statement stays small: bodies of big charts are long lists.)
 pub struct Stmt {
     pub kind: StmtKind,
     pub span: Span,
@@ -397,19 +398,19 @@ pub struct Stmt {
 #[derive(Debug, Clone, PartialEq)]
 pub enum StmtKind {
     /// `target := value;`
-    Assign { target: Expr, value: Expr },
+    Assign { target: Box<Expr>, value: Box<Expr> },
     /// A call used as a statement: `Timer(IN := x, PT := T#1s);`, `F(1);`
-    Call(Expr),
+    Call(Box<Expr>),
     /// `IF c THEN … ELSIF c THEN … ELSE … END_IF`
     If { branches: Vec<(Expr, Vec<Stmt>)>, else_body: Option<Vec<Stmt>> },
     /// `CASE sel OF 1, 2..5: … ELSE … END_CASE`
-    Case { selector: Expr, arms: Vec<CaseArm>, else_body: Option<Vec<Stmt>> },
+    Case { selector: Box<Expr>, arms: Vec<CaseArm>, else_body: Option<Vec<Stmt>> },
     /// `FOR i := a TO b BY c DO … END_FOR`
-    For { var: Ident, from: Expr, to: Expr, by: Option<Expr>, body: Vec<Stmt> },
+    For { var: Ident, from: Box<Expr>, to: Box<Expr>, by: Option<Box<Expr>>, body: Vec<Stmt> },
     /// `WHILE c DO … END_WHILE`
-    While { cond: Expr, body: Vec<Stmt> },
+    While { cond: Box<Expr>, body: Vec<Stmt> },
     /// `REPEAT … UNTIL c END_REPEAT`
-    Repeat { body: Vec<Stmt>, until: Expr },
+    Repeat { body: Vec<Stmt>, until: Box<Expr> },
     Exit,
     Return,
     /// A lone `;`.

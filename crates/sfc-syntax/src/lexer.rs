@@ -53,6 +53,9 @@ pub enum TokenKind {
     Ge,
     /// `&`
     Amp,
+    /// `!`: not IEC, but the negation of an EATMT condition input (`!c5`); the parser reads it
+    /// as NOT and the checker rejects it outside EATMT charts.
+    Bang,
     /// A character no token starts with (reported).
     Unknown,
     Eof,
@@ -359,6 +362,7 @@ impl<'a> Lexer<'a> {
             (b'<', _) => (TokenKind::Lt, 1),
             (b'>', _) => (TokenKind::Gt, 1),
             (b'&', _) => (TokenKind::Amp, 1),
+            (b'!', _) => (TokenKind::Bang, 1),
             _ => {
                 // One whole UTF-8 character (or a run of bytes) no token starts with.
                 let mut end = self.pos + 1;
@@ -373,7 +377,7 @@ impl<'a> Lexer<'a> {
                     let c = self.src[end];
                     let starts_token = c.is_ascii_whitespace()
                         || c.is_ascii_alphanumeric()
-                        || b"_()[],;:.+-*/=<>&'\"%{".contains(&c);
+                        || b"_()[],;:.+-*/=<>&!'\"%{".contains(&c);
                     if starts_token {
                         break;
                     }

@@ -57,6 +57,7 @@ const VAR_KEYWORDS: &[(&str, VarKind)] = &[
 pub fn parse(file: u32, text: &str) -> (SourceUnit, Vec<Diagnostic>) {
     let (all, mut diags) = lex(file, text);
     let mut p = Parser::new(file, text, &all);
+    drop(all); // the parser keeps only significant tokens; free the rest before building the tree
     let unit = p.source_unit();
     diags.append(&mut p.diags);
     (unit, diags)
@@ -983,7 +984,7 @@ impl<'a> Parser<'a> {
                 self.error_here("expected PRIORITY");
             }
             self.expect(TokenKind::Assign, "`:=`");
-            priority = Some(self.expr());
+            priority = Some(Box::new(self.expr()));
             self.expect(TokenKind::RParen, "`)` after the priority");
         }
         let (mut from, mut from_parens, mut to, mut to_parens) = (Vec::new(), false, Vec::new(), false);
@@ -1027,7 +1028,10 @@ impl<'a> Parser<'a> {
         let attributes = self.take_attrs(start);
         let name = self.expect_ident("an action name").unwrap_or_else(|| Ident::new("", self.cur_span()));
         if !self.eat(TokenKind::Colon) {
-            self.error_here("expected `:` after the action name");
+            self.error_here(&format!("expected `:` after the action name `{}`", name.text));
+            if let Some(d) = self.diags.last_mut().filter(|d| d.code == "SFC0101") {
+                d.notes.push(format!("IEC 61131-3 writes `ACTION {}: … END_ACTION`", name.text));
+            }
         }
         let body = if self.looks_like_il() {
             ActionBody::Il(self.il_body(&["END_ACTION"]))
@@ -1302,7 +1306,7 @@ split it with intermediate variables"
                 arms.push(CaseArm { labels, body, span: self.span_from(astart) });
             }
             self.block_end("END_CASE", kw);
-            StmtKind::Case { selector, arms, else_body }
+            StmtKind::Case { selector: Box::new(selector), arms, else_body }
         } else if self.at_kw("FOR") {
             let kw = self.bump();
             let var = self.expect_ident("the loop variable").unwrap_or_else(|| Ident::new("", self.cur_span()));
@@ -1310,25 +1314,25 @@ split it with intermediate variables"
             let from = self.expr();
             self.then_kw("TO");
             let to = self.expr();
-            let by = if self.eat_kw("BY") { Some(self.expr()) } else { None };
+            let by = if self.eat_kw("BY") { Some(Box::new(self.expr())) } else { None };
             self.then_kw("DO");
             let body = self.stmt_list(&[]);
             self.block_end("END_FOR", kw);
-            StmtKind::For { var, from, to, by, body }
+            StmtKind::For { var, from: Box::new(from), to: Box::new(to), by, body }
         } else if self.at_kw("WHILE") {
             let kw = self.bump();
             let cond = self.expr();
             self.then_kw("DO");
             let body = self.stmt_list(&[]);
             self.block_end("END_WHILE", kw);
-            StmtKind::While { cond, body }
+            StmtKind::While { cond: Box::new(cond), body }
         } else if self.at_kw("REPEAT") {
             let kw = self.bump();
             let body = self.stmt_list(&[]);
             self.then_kw("UNTIL");
             let until = self.expr();
             self.block_end("END_REPEAT", kw);
-            StmtKind::Repeat { body, until }
+            StmtKind::Repeat { body, until: Box::new(until) }
         } else if self.at_kw("EXIT") {
             self.bump();
             self.expect(TokenKind::Semi, "`;` after EXIT");
@@ -1344,12 +1348,12 @@ split it with intermediate variables"
                 if !self.expect(TokenKind::Semi, "`;` after the assignment") {
                     self.recover_stmt();
                 }
-                StmtKind::Assign { target, value }
+                StmtKind::Assign { target: Box::new(target), value: Box::new(value) }
             } else if matches!(target.kind, ExprKind::Call { .. }) {
                 if !self.expect(TokenKind::Semi, "`;` after the call") {
                     self.recover_stmt();
                 }
-                StmtKind::Call(target)
+                StmtKind::Call(Box::new(target))
             } else {
                 self.error_here("expected `:=` or a call");
                 self.recover_stmt();
@@ -1480,6 +1484,7 @@ split it with intermediate variables"
             TokenKind::Minus => Some(UnaryOp::Neg),
             TokenKind::Plus => Some(UnaryOp::Plus),
             TokenKind::Ident if self.at_kw("NOT") => Some(UnaryOp::Not),
+            TokenKind::Bang => Some(UnaryOp::Not),
             _ => None,
         };
         if let Some(op) = op {

@@ -1,0 +1,238 @@
+//! The `sfc` binary. Exit status: 0 success, 1 the input has errors, 2 usage or I/O error.
+
+use clap::{Parser, Subcommand, ValueEnum};
+use sfc_diagnostics::{render_human, render_json, RenderOptions, Severity, SourceFile};
+use sfc_model::{check_source, CheckOptions, Target};
+use std::io::{IsTerminal, Read, Write};
+use std::path::{Path, PathBuf};
+use std::process::ExitCode;
+
+#[derive(Parser)]
+#[command(name = "sfc", version, about = "Check, format, build, simulate and run IEC 61131-3 Sequential Function Charts")]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Subcommand)]
+enum Command {
+    /// Parse and validate charts, printing diagnostics.
+    Check(CheckArgs),
+    /// Rewrite textual SFC in canonical layout.
+    Fmt(FmtArgs),
+}
+
+#[derive(Clone, Copy, ValueEnum)]
+enum Format {
+    Human,
+    Json,
+}
+
+#[derive(Clone, Copy, ValueEnum)]
+enum TargetArg {
+    Blank,
+    Atmt,
+    Eatmt,
+}
+
+#[derive(clap::Args)]
+struct CheckArgs {
+    /// IEC 61131-3 source files (`.st`).
+    #[arg(required_unless_present = "explain")]
+    files: Vec<PathBuf>,
+    /// Output format: rustc-like text on stderr, or a JSON array on stdout.
+    #[arg(long, value_enum, default_value = "human")]
+    format: Format,
+    /// Apply the rules of a REX automaton block (overrides the `sfc.target` attribute).
+    #[arg(long, value_enum)]
+    target: Option<TargetArg>,
+    /// State limit override for ATMT/EATMT.
+    #[arg(long)]
+    nstep: Option<u32>,
+    /// Rule limit override for ATMT/EATMT.
+    #[arg(long)]
+    ntr: Option<u32>,
+    /// Skip the reachability and guard analysis (structural and type checks only).
+    #[arg(long)]
+    no_analysis: bool,
+    /// Print what a diagnostic code means and how to fix it.
+    #[arg(long, value_name = "CODE")]
+    explain: Option<String>,
+}
+
+#[derive(clap::Args)]
+struct FmtArgs {
+    /// Files to format in place; `-` reads standard input and writes standard output.
+    #[arg(required = true)]
+    files: Vec<PathBuf>,
+    /// Only report files whose layout differs (exit 1 if any).
+    #[arg(long)]
+    check: bool,
+}
+
+fn main() -> ExitCode {
+    // Parsing and checking recurse along the (depth-capped) syntax tree: give them room.
+    let child = std::thread::Builder::new().stack_size(64 << 20).spawn(run);
+    match child.map(|h| h.join()) {
+        Ok(Ok(code)) => ExitCode::from(code),
+        _ => {
+            eprintln!("error: internal failure");
+            ExitCode::from(2)
+        }
+    }
+}
+
+fn run() -> u8 {
+    let cli = match Cli::try_parse() {
+        Ok(c) => c,
+        Err(e) => {
+            let code = if e.use_stderr() { 2 } else { 0 };
+            let _ = e.print();
+            return code;
+        }
+    };
+    match cli.command {
+        Command::Check(a) => check(a),
+        Command::Fmt(a) => fmt(a),
+    }
+}
+
+fn read(path: &Path) -> Result<String, String> {
+    if path.as_os_str() == "-" {
+        let mut s = String::new();
+        std::io::stdin().read_to_string(&mut s).map_err(|e| format!("cannot read standard input: {e}"))?;
+        return Ok(s);
+    }
+    let bytes = std::fs::read(path).map_err(|e| format!("cannot read `{}`: {e}", path.display()))?;
+    String::from_utf8(bytes).map_err(|_| format!("`{}` is not UTF-8 text", path.display()))
+}
+
+fn check(a: CheckArgs) -> u8 {
+    if let Some(code) = &a.explain {
+        return match sfc_diagnostics::explain(code) {
+            Some(info) => {
+                println!("{} ({}): {}\n\n{}", info.code, info.severity.as_str(), info.title, info.explanation);
+                0
+            }
+            None => {
+                eprintln!("error: unknown diagnostic code `{code}`");
+                2
+            }
+        };
+    }
+    let opts = CheckOptions {
+        target: a.target.map(|t| match t {
+            TargetArg::Blank => Target::Blank,
+            TargetArg::Atmt => Target::Atmt,
+            TargetArg::Eatmt => Target::Eatmt,
+        }),
+        nstep: a.nstep,
+        ntr: a.ntr,
+        analysis: !a.no_analysis,
+    };
+    let mut files: Vec<SourceFile> = Vec::new();
+    let mut diags = Vec::new();
+    for path in &a.files {
+        let text = match read(path) {
+            Ok(t) => t,
+            Err(e) => {
+                eprintln!("error: {e}");
+                return 2;
+            }
+        };
+        let id = files.len() as u32;
+        let checked = check_source(id, &path.display().to_string(), &text, &opts);
+        files.push(checked.file);
+        diags.extend(checked.diagnostics);
+    }
+    let errors = diags.iter().filter(|d| d.severity == Severity::Error).count();
+    let warnings = diags.iter().filter(|d| d.severity == Severity::Warning).count();
+    match a.format {
+        Format::Json => println!("{}", render_json(&diags, &files)),
+        Format::Human => {
+            let color = std::io::stderr().is_terminal();
+            let mut err = std::io::stderr().lock();
+            for d in &diags {
+                let _ = writeln!(err, "{}", render_human(d, &files, RenderOptions { color }));
+            }
+            if errors + warnings > 0 {
+                let _ = writeln!(err, "{}", summary(errors, warnings));
+            }
+        }
+    }
+    u8::from(errors > 0)
+}
+
+fn plural(n: usize, word: &str) -> String {
+    format!("{n} {word}{}", if n == 1 { "" } else { "s" })
+}
+
+fn summary(errors: usize, warnings: usize) -> String {
+    match (errors, warnings) {
+        (0, w) => format!("{} emitted", plural(w, "warning")),
+        (e, 0) => format!("{} emitted", plural(e, "error")),
+        (e, w) => format!("{} and {} emitted", plural(e, "error"), plural(w, "warning")),
+    }
+}
+
+/// Writes `text` to `path` through a temporary file in the same directory, then renames it, so
+/// an interrupted write never leaves a truncated chart.
+fn write_atomically(path: &Path, text: &str) -> std::io::Result<()> {
+    let dir = path.parent().filter(|p| !p.as_os_str().is_empty()).unwrap_or(Path::new("."));
+    let name = path.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
+    let tmp = dir.join(format!(".{name}.sfc-tmp-{}", std::process::id()));
+    let result = (|| {
+        let mut f = std::fs::File::create(&tmp)?;
+        f.write_all(text.as_bytes())?;
+        f.sync_all()?;
+        if let Ok(meta) = std::fs::metadata(path) {
+            let _ = std::fs::set_permissions(&tmp, meta.permissions());
+        }
+        std::fs::rename(&tmp, path)
+    })();
+    if result.is_err() {
+        let _ = std::fs::remove_file(&tmp);
+    }
+    result
+}
+
+fn fmt(a: FmtArgs) -> u8 {
+    let mut status = 0u8;
+    let color = std::io::stderr().is_terminal();
+    for path in &a.files {
+        let text = match read(path) {
+            Ok(t) => t,
+            Err(e) => {
+                eprintln!("error: {e}");
+                return 2;
+            }
+        };
+        let (unit, diags) = sfc_syntax::parse(0, &text);
+        let errors: Vec<_> = diags.iter().filter(|d| d.is_error()).collect();
+        if !errors.is_empty() {
+            let files = [SourceFile::new(path.display().to_string(), text.clone())];
+            for d in &errors {
+                eprintln!("{}", render_human(d, &files, RenderOptions { color }));
+            }
+            eprintln!("`{}` has syntax errors and was not formatted", path.display());
+            status = 1;
+            continue;
+        }
+        let formatted = sfc_syntax::print::print(&unit);
+        if path.as_os_str() == "-" {
+            print!("{formatted}");
+            continue;
+        }
+        if formatted == text {
+            continue;
+        }
+        if a.check {
+            println!("would reformat {}", path.display());
+            status = 1;
+        } else if let Err(e) = write_atomically(path, &formatted) {
+            eprintln!("error: cannot write `{}`: {e}", path.display());
+            return 2;
+        }
+    }
+    status
+}

@@ -1,0 +1,316 @@
+//! The chart of one SFC POU: steps, transitions and actions with resolved references, and the
+//! divergences and convergences the text implies.
+
+use sfc_diagnostics::Span;
+use sfc_syntax::ast;
+
+/// Index of a step in [`Chart::steps`].
+pub type StepId = usize;
+/// Index of a transition in [`Chart::transitions`].
+pub type TransitionId = usize;
+/// Index of an action in [`Chart::actions`].
+pub type ActionId = usize;
+
+/// Which REX block (if any) the chart is meant for; it adds target rules to validation.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum Target {
+    Blank,
+    Atmt,
+    Eatmt,
+}
+
+impl Target {
+    /// Parses `blank`, `atmt`, `eatmt` (any case).
+    pub fn from_name(s: &str) -> Option<Target> {
+        match s.to_ascii_lowercase().as_str() {
+            "blank" => Some(Target::Blank),
+            "atmt" => Some(Target::Atmt),
+            "eatmt" => Some(Target::Eatmt),
+            _ => None,
+        }
+    }
+    pub fn name(self) -> &'static str {
+        match self {
+            Target::Blank => "blank",
+            Target::Atmt => "atmt",
+            Target::Eatmt => "eatmt",
+        }
+    }
+}
+
+/// The eleven action qualifiers of IEC 61131-3.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum Qualifier {
+    N,
+    R,
+    S,
+    L,
+    D,
+    P,
+    SD,
+    DS,
+    SL,
+    P1,
+    P0,
+}
+
+impl Qualifier {
+    pub const ALL: [Qualifier; 11] = [
+        Qualifier::N,
+        Qualifier::R,
+        Qualifier::S,
+        Qualifier::L,
+        Qualifier::D,
+        Qualifier::P,
+        Qualifier::SD,
+        Qualifier::DS,
+        Qualifier::SL,
+        Qualifier::P1,
+        Qualifier::P0,
+    ];
+    pub fn from_name(s: &str) -> Option<Qualifier> {
+        Qualifier::ALL.iter().copied().find(|q| q.name().eq_ignore_ascii_case(s))
+    }
+    pub fn name(self) -> &'static str {
+        match self {
+            Qualifier::N => "N",
+            Qualifier::R => "R",
+            Qualifier::S => "S",
+            Qualifier::L => "L",
+            Qualifier::D => "D",
+            Qualifier::P => "P",
+            Qualifier::SD => "SD",
+            Qualifier::DS => "DS",
+            Qualifier::SL => "SL",
+            Qualifier::P1 => "P1",
+            Qualifier::P0 => "P0",
+        }
+    }
+    /// L, D, SD, DS and SL take a duration.
+    pub fn is_timed(self) -> bool {
+        matches!(self, Qualifier::L | Qualifier::D | Qualifier::SD | Qualifier::DS | Qualifier::SL)
+    }
+}
+
+/// The duration of a timed association.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Duration {
+    /// A literal, in microseconds.
+    Literal(i64),
+    /// A TIME variable, by declared name.
+    Variable(String),
+}
+
+/// What an association drives.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum ActionTarget {
+    /// An ACTION of the POU.
+    Action(ActionId),
+    /// A BOOL variable used as an action (it takes the value of `Q`).
+    Variable,
+}
+
+/// `Action(Q, T#1s, Indicator)` inside a step.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Association {
+    /// The action name as written.
+    pub action: String,
+    pub target: ActionTarget,
+    pub qualifier: Qualifier,
+    pub duration: Option<Duration>,
+    pub indicators: Vec<String>,
+    pub span: Span,
+}
+
+/// A step.
+#[derive(Debug, Clone, PartialEq)]
+pub struct StepNode {
+    pub name: String,
+    pub initial: bool,
+    pub associations: Vec<Association>,
+    /// `sfc.tag`: the ATMT/EATMT state number.
+    pub tag: Option<u32>,
+    /// `sfc.timeout`: supervision time in microseconds.
+    pub timeout: Option<i64>,
+    /// `sfc.final`: intentionally without a way out.
+    pub is_final: bool,
+    pub attributes: Vec<ast::Attribute>,
+    /// Span of the name.
+    pub name_span: Span,
+    pub span: Span,
+}
+
+/// A transition.
+#[derive(Debug, Clone, PartialEq)]
+pub struct TransitionNode {
+    /// The declared name, or `T<n>` for an unnamed one (see `semantics.md`).
+    pub name: String,
+    pub named: bool,
+    pub priority: Option<i64>,
+    pub from: Vec<StepId>,
+    pub to: Vec<StepId>,
+    pub condition: ast::Condition,
+    /// `sfc.tag`: the ATMT/EATMT condition index.
+    pub tag: Option<u32>,
+    pub attributes: Vec<ast::Attribute>,
+    /// Span of the `TRANSITION … FROM … TO …` header (for diagnostics).
+    pub header_span: Span,
+    pub span: Span,
+}
+
+/// An action.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ActionNode {
+    pub name: String,
+    pub body: ast::ActionBody,
+    pub attributes: Vec<ast::Attribute>,
+    pub name_span: Span,
+    pub span: Span,
+}
+
+/// A branching structure implied by the connections.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub enum Branch {
+    /// A step with several outgoing transitions (OR divergence).
+    SelectionDivergence { step: StepId, transitions: Vec<TransitionId> },
+    /// A step with several incoming transitions (OR convergence).
+    SelectionConvergence { step: StepId, transitions: Vec<TransitionId> },
+    /// A transition with several following steps (AND divergence).
+    SimultaneousDivergence { transition: TransitionId, steps: Vec<StepId> },
+    /// A transition with several preceding steps (AND convergence).
+    SimultaneousConvergence { transition: TransitionId, steps: Vec<StepId> },
+}
+
+/// Transitions leaving and entering each step, indexed by [`StepId`], in declaration order.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct Adjacency {
+    pub outgoing: Vec<Vec<TransitionId>>,
+    pub incoming: Vec<Vec<TransitionId>>,
+}
+
+/// The chart of one POU.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Chart {
+    /// Index of the file (in the check result) and of the POU among the file's items.
+    pub file: u32,
+    pub item: usize,
+    pub pou: String,
+    pub pou_kind: ast::PouKind,
+    pub target: Target,
+    pub steps: Vec<StepNode>,
+    pub transitions: Vec<TransitionNode>,
+    pub actions: Vec<ActionNode>,
+    pub name_span: Span,
+    pub span: Span,
+}
+
+impl Chart {
+    /// Case-insensitive step lookup.
+    pub fn step(&self, name: &str) -> Option<StepId> {
+        self.steps.iter().position(|s| s.name.eq_ignore_ascii_case(name))
+    }
+    pub fn transition(&self, name: &str) -> Option<TransitionId> {
+        self.transitions.iter().position(|t| t.name.eq_ignore_ascii_case(name))
+    }
+    pub fn action(&self, name: &str) -> Option<ActionId> {
+        self.actions.iter().position(|a| a.name.eq_ignore_ascii_case(name))
+    }
+    /// Transitions leaving a step, in declaration order.
+    pub fn outgoing(&self, s: StepId) -> Vec<TransitionId> {
+        (0..self.transitions.len()).filter(|&t| self.transitions[t].from.contains(&s)).collect()
+    }
+    /// Transitions entering a step, in declaration order.
+    pub fn incoming(&self, s: StepId) -> Vec<TransitionId> {
+        (0..self.transitions.len()).filter(|&t| self.transitions[t].to.contains(&s)).collect()
+    }
+    pub fn initial_steps(&self) -> Vec<StepId> {
+        (0..self.steps.len()).filter(|&s| self.steps[s].initial).collect()
+    }
+    /// Outgoing and incoming transitions of every step, computed in one pass.
+    pub fn adjacency(&self) -> Adjacency {
+        let mut outgoing = vec![Vec::new(); self.steps.len()];
+        let mut incoming = vec![Vec::new(); self.steps.len()];
+        for (t, tr) in self.transitions.iter().enumerate() {
+            for &s in &tr.from {
+                outgoing[s].push(t);
+            }
+            for &s in &tr.to {
+                incoming[s].push(t);
+            }
+        }
+        Adjacency { outgoing, incoming }
+    }
+    /// Every divergence and convergence, steps first, then transitions, in declaration order.
+    pub fn branches(&self) -> Vec<Branch> {
+        let mut out = Vec::new();
+        let adj = self.adjacency();
+        for s in 0..self.steps.len() {
+            let o = &adj.outgoing[s];
+            if o.len() > 1 {
+                out.push(Branch::SelectionDivergence { step: s, transitions: o.clone() });
+            }
+            let i = &adj.incoming[s];
+            if i.len() > 1 {
+                out.push(Branch::SelectionConvergence { step: s, transitions: i.clone() });
+            }
+        }
+        for (t, tr) in self.transitions.iter().enumerate() {
+            if tr.to.len() > 1 {
+                out.push(Branch::SimultaneousDivergence { transition: t, steps: tr.to.clone() });
+            }
+            if tr.from.len() > 1 {
+                out.push(Branch::SimultaneousConvergence { transition: t, steps: tr.from.clone() });
+            }
+        }
+        out
+    }
+    /// Connected networks of steps (steps linked through transitions), each sorted.
+    pub fn networks(&self) -> Vec<Vec<StepId>> {
+        let n = self.steps.len();
+        let mut parent: Vec<usize> = (0..n).collect();
+        fn find(p: &mut [usize], mut x: usize) -> usize {
+            while p[x] != x {
+                p[x] = p[p[x]];
+                x = p[x];
+            }
+            x
+        }
+        for t in &self.transitions {
+            let all: Vec<StepId> = t.from.iter().chain(t.to.iter()).copied().collect();
+            for w in all.windows(2) {
+                let (a, b) = (find(&mut parent, w[0]), find(&mut parent, w[1]));
+                if a != b {
+                    parent[a] = b;
+                }
+            }
+        }
+        let mut groups: Vec<(usize, Vec<StepId>)> = Vec::new();
+        for s in 0..n {
+            let r = find(&mut parent, s);
+            match groups.iter_mut().find(|g| g.0 == r) {
+                Some(g) => g.1.push(s),
+                None => groups.push((r, vec![s])),
+            }
+        }
+        groups.into_iter().map(|g| g.1).collect()
+    }
+    /// ATMT/EATMT state numbers: tags where given, the free numbers in declaration order
+    /// otherwise (so without tags the initial step is 0 when it is declared first).
+    pub fn state_numbers(&self) -> Vec<u32> {
+        let used: std::collections::HashSet<u32> = self.steps.iter().filter_map(|s| s.tag).collect();
+        let mut next = 0u32;
+        self.steps
+            .iter()
+            .map(|s| match s.tag {
+                Some(t) => t,
+                None => {
+                    while used.contains(&next) {
+                        next += 1;
+                    }
+                    next += 1;
+                    next - 1
+                }
+            })
+            .collect()
+    }
+}

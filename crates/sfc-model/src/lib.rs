@@ -1,0 +1,94 @@
+//! The chart model of sfc: lowers each SFC POU of a parsed file into a [`Chart`], resolves names,
+//! type-checks conditions and action bodies, and validates structure and target rules.
+//! [`check_source`] is the one entry point the CLI, the server and the tests use.
+
+pub mod chart;
+mod code;
+pub mod lower;
+pub mod validate;
+
+pub use chart::*;
+pub use validate::{condition_input, ConditionInput, Limits};
+
+use sfc_diagnostics::{Diagnostic, SourceFile, Span};
+use sfc_syntax::ast;
+
+/// What `sfc check` was asked for.
+#[derive(Debug, Clone, Default)]
+pub struct CheckOptions {
+    /// Overrides each POU's `sfc.target` attribute.
+    pub target: Option<Target>,
+    /// `--nstep`: ATMT/EATMT state limit override.
+    pub nstep: Option<u32>,
+    /// `--ntr`: ATMT/EATMT rule limit override.
+    pub ntr: Option<u32>,
+    /// Run the reachability and guard analysis (once it exists in `sfc-analysis`).
+    pub analysis: bool,
+}
+
+/// The result of checking one file.
+#[derive(Debug, Clone)]
+pub struct Checked {
+    pub file: SourceFile,
+    /// The parsed file; the conditions and action bodies of SFC POUs have moved into `charts`,
+    /// so large charts are not held twice.
+    pub unit: ast::SourceUnit,
+    /// One chart per SFC POU, in file order.
+    pub charts: Vec<Chart>,
+    /// Every diagnostic, sorted by position.
+    pub diagnostics: Vec<Diagnostic>,
+}
+
+impl Checked {
+    pub fn has_errors(&self) -> bool {
+        self.diagnostics.iter().any(|d| d.is_error())
+    }
+}
+
+/// Parses, lowers and validates one file. `file_id` goes into every span.
+pub fn check_source(file_id: u32, name: &str, text: &str, opts: &CheckOptions) -> Checked {
+    let (mut unit, mut diags) = sfc_syntax::parse(file_id, text);
+    let mut charts = Vec::new();
+    for (i, item) in unit.items.iter_mut().enumerate() {
+        let ast::Item::Pou(pou) = item else { continue };
+        lower::check_attributes(&pou.attributes, &["sfc.target"], "a POU", &mut diags);
+        let attr_target = lower::target_attr(&pou.attributes, &mut diags);
+        let target = opts.target.or(attr_target).unwrap_or(Target::Blank);
+        let mut body = std::mem::replace(&mut pou.body, ast::Body::St(Vec::new()));
+        if let ast::Body::Sfc(elements) = &mut body {
+            let chart = lower::lower(file_id, i, pou, elements, target, &mut diags);
+            validate::structure(&chart, text, &mut diags);
+            let limits = Limits::of(target, opts.nstep, opts.ntr);
+            validate::target_rules(&chart, limits, text, &mut diags);
+            charts.push(chart);
+        }
+        pou.body = body;
+    }
+    code::check(&unit, &charts, text, file_id, &mut diags);
+    bang_outside_eatmt(file_id, text, &charts, &mut diags);
+    sfc_diagnostics::sort(&mut diags);
+    diags.dedup();
+    Checked { file: SourceFile::new(name, text), unit, charts, diagnostics: diags }
+}
+
+/// `!c5` is the EATMT spelling of a negated input; anywhere else it is not IEC 61131-3.
+fn bang_outside_eatmt(file_id: u32, text: &str, charts: &[Chart], diags: &mut Vec<Diagnostic>) {
+    if !text.contains('!') {
+        return;
+    }
+    let (tokens, _) = sfc_syntax::lexer::lex(file_id, text);
+    for t in tokens.iter().filter(|t| t.kind == sfc_syntax::lexer::TokenKind::Bang) {
+        let in_eatmt_condition = charts.iter().filter(|c| c.target == Target::Eatmt).any(|c| {
+            c.transitions.iter().any(|tr| match &tr.condition {
+                ast::Condition::St(e) => e.span.start <= t.start && t.end <= e.span.end,
+                _ => false,
+            })
+        });
+        if !in_eatmt_condition {
+            diags.push(
+                Diagnostic::error("SFC0101", Span::new(file_id, t.start, t.end), "`!` is not IEC 61131-3: write NOT")
+                    .with_note("`!c5` is accepted only in the conditions of an EATMT chart"),
+            );
+        }
+    }
+}

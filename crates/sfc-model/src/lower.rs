@@ -1,0 +1,516 @@
+//! Lowering an SFC POU from the AST into a [`Chart`], with the structural rules that need only
+//! names: one namespace, declared steps and actions, qualifiers and durations, attributes.
+
+use crate::chart::*;
+use sfc_diagnostics::{Diagnostic, Span};
+use sfc_syntax::ast::{self, ExprKind, LiteralKind};
+use std::collections::HashMap;
+
+/// What the lowering needs to know about the POU's variables.
+pub struct VarInfo {
+    /// Declared name as written.
+    pub name: String,
+    pub span: Span,
+    /// The type name as written when it is a plain named type (`BOOL`, `TIME`, `TON`, …).
+    pub type_name: Option<String>,
+}
+
+/// Variables declared by a POU, in declaration order.
+pub fn pou_variables(pou: &ast::Pou) -> Vec<VarInfo> {
+    let mut out = Vec::new();
+    for b in &pou.var_blocks {
+        for d in &b.decls {
+            let type_name = match &d.ty.kind {
+                ast::TypeSpecKind::Named(id) => Some(id.text.to_ascii_uppercase()),
+                ast::TypeSpecKind::String { wide, .. } => Some(if *wide { "WSTRING" } else { "STRING" }.to_string()),
+                _ => None,
+            };
+            for n in &d.names {
+                out.push(VarInfo { name: n.text.clone(), span: n.span, type_name: type_name.clone() });
+            }
+        }
+    }
+    out
+}
+
+/// Attributes sfc knows; unknown `sfc.*` ones are reported as likely misspellings.
+const KNOWN_ATTRIBUTES: &[&str] = &[
+    "sfc.tag", "sfc.timeout", "sfc.target", "sfc.final", "sfc.x", "sfc.y", "sfc.width", "sfc.height",
+    "sfc.description", "sfc.background", "sfc.foreground", "sfc.linewidth", "sfc.hidelabel", "sfc.font",
+    "sfc.align", "sfc.pins", "sfc.bends", "sfc.label", "sfc.name",
+];
+
+fn attr<'a>(attrs: &'a [ast::Attribute], name: &str) -> Option<&'a ast::Attribute> {
+    attrs.iter().rev().find(|a| a.name.eq_ignore_ascii_case(name))
+}
+
+/// Reports unknown and misplaced `sfc.*` attributes; `allowed` lists those meaningful here.
+pub fn check_attributes(attrs: &[ast::Attribute], allowed: &[&str], what: &str, diags: &mut Vec<Diagnostic>) {
+    for a in attrs {
+        let lname = a.name.to_ascii_lowercase();
+        if !lname.starts_with("sfc.") {
+            continue;
+        }
+        if !KNOWN_ATTRIBUTES.contains(&lname.as_str()) {
+            diags.push(Diagnostic::warning("SFC0602", a.span, format!("unknown attribute `{}`", a.name)));
+        } else if ["sfc.tag", "sfc.timeout", "sfc.target", "sfc.final"].contains(&lname.as_str())
+            && !allowed.contains(&lname.as_str())
+        {
+            diags.push(Diagnostic::warning("SFC0603", a.span, format!("attribute `{}` has no meaning on {what}", a.name)));
+        }
+    }
+}
+
+fn tag_attr(attrs: &[ast::Attribute], diags: &mut Vec<Diagnostic>) -> Option<u32> {
+    let a = attr(attrs, "sfc.tag")?;
+    match a.value.as_deref().map(str::trim).and_then(|v| v.parse::<u32>().ok()) {
+        Some(v) => Some(v),
+        None => {
+            diags.push(Diagnostic::error(
+                "SFC0601",
+                a.span,
+                format!("`sfc.tag` must be a non-negative integer, found {:?}", a.value.as_deref().unwrap_or("")),
+            ));
+            None
+        }
+    }
+}
+
+fn timeout_attr(attrs: &[ast::Attribute], diags: &mut Vec<Diagnostic>) -> Option<i64> {
+    let a = attr(attrs, "sfc.timeout")?;
+    let v = a.value.as_deref().unwrap_or("").trim();
+    let parsed = match v.split_once('#') {
+        Some((p, body)) if ["T", "TIME"].iter().any(|k| p.eq_ignore_ascii_case(k)) => {
+            sfc_syntax::literal::decode_duration(body, a.span).ok()
+        }
+        _ => None,
+    };
+    match parsed {
+        Some(us) if us >= 0 => Some(us),
+        _ => {
+            diags.push(Diagnostic::error(
+                "SFC0601",
+                a.span,
+                format!("`sfc.timeout` must be a non-negative duration such as 'T#8.1s', found {v:?}"),
+            ));
+            None
+        }
+    }
+}
+
+fn final_attr(attrs: &[ast::Attribute], diags: &mut Vec<Diagnostic>) -> bool {
+    let Some(a) = attr(attrs, "sfc.final") else { return false };
+    match a.value.as_deref().map(|v| v.trim().to_ascii_lowercase()) {
+        None => true,
+        Some(v) if v == "true" => true,
+        Some(v) if v == "false" => false,
+        Some(v) => {
+            diags.push(Diagnostic::error("SFC0601", a.span, format!("`sfc.final` is 'true' or 'false', found {v:?}")));
+            false
+        }
+    }
+}
+
+/// The target named by a POU's `sfc.target` attribute.
+pub fn target_attr(attrs: &[ast::Attribute], diags: &mut Vec<Diagnostic>) -> Option<Target> {
+    let a = attr(attrs, "sfc.target")?;
+    let v = a.value.as_deref().unwrap_or("").trim();
+    match Target::from_name(v) {
+        Some(t) => Some(t),
+        None => {
+            diags.push(Diagnostic::error(
+                "SFC0601",
+                a.span,
+                format!("`sfc.target` is one of 'blank', 'atmt', 'eatmt', found {v:?}"),
+            ));
+            None
+        }
+    }
+}
+
+/// A declared name in the POU's single namespace.
+struct Declared {
+    span: Span,
+    kind: &'static str,
+}
+
+/// Builds the chart of an SFC POU. `file` and `item` locate it; `target` is the effective target.
+/// The transition conditions and action bodies move from the AST into the chart (the AST keeps
+/// `Condition::Missing` and empty bodies in their place), so large charts are not held twice.
+pub fn lower(
+    file: u32,
+    item: usize,
+    pou: &ast::Pou,
+    elements: &mut [ast::SfcElement],
+    target: Target,
+    diags: &mut Vec<Diagnostic>,
+) -> Chart {
+    let vars = pou_variables(pou);
+    let mut names: HashMap<String, Declared> = HashMap::new();
+    let mut declare = |name: &str, span: Span, kind: &'static str, diags: &mut Vec<Diagnostic>| -> bool {
+        if name.is_empty() {
+            return false;
+        }
+        let key = name.to_ascii_uppercase();
+        if let Some(prev) = names.get(&key) {
+            diags.push(
+                Diagnostic::error(
+                    "SFC0206",
+                    span,
+                    format!("`{name}` is already declared as {} in this POU", prev.kind),
+                )
+                .with_element(name)
+                .with_label(prev.span, "first declared here")
+                .with_note("variables, steps, actions and transitions share one case-insensitive namespace"),
+            );
+            false
+        } else {
+            names.insert(key, Declared { span, kind });
+            true
+        }
+    };
+    for v in &vars {
+        declare(&v.name, v.span, "a variable", diags);
+    }
+    let var_type: HashMap<String, Option<String>> =
+        vars.iter().map(|v| (v.name.to_ascii_uppercase(), v.type_name.clone())).collect();
+
+    // Steps and actions first (transitions and associations refer to them in any order).
+    let mut steps: Vec<StepNode> = Vec::new();
+    let mut actions: Vec<ActionNode> = Vec::new();
+    let mut step_index: HashMap<String, StepId> = HashMap::new();
+    let mut action_index: HashMap<String, ActionId> = HashMap::new();
+    for el in elements.iter_mut() {
+        match el {
+            ast::SfcElement::Step(s) => {
+                check_attributes(&s.attributes, &["sfc.tag", "sfc.timeout", "sfc.final"], "a step", diags);
+                let fresh = declare(&s.name.text, s.name.span, "a step", diags);
+                let node = StepNode {
+                    name: s.name.text.clone(),
+                    initial: s.initial,
+                    associations: Vec::new(),
+                    tag: tag_attr(&s.attributes, diags),
+                    timeout: timeout_attr(&s.attributes, diags),
+                    is_final: final_attr(&s.attributes, diags),
+                    attributes: s.attributes.clone(),
+                    name_span: s.name.span,
+                    span: s.span,
+                };
+                if fresh {
+                    step_index.insert(s.name.key(), steps.len());
+                    steps.push(node);
+                } else if s.name.text.is_empty() {
+                    // A step whose name failed to parse: nothing to refer to.
+                } else if !step_index.contains_key(&s.name.key()) {
+                    // Clashes with a variable or an action: keep it so its transitions resolve,
+                    // the duplicate-name error has been reported.
+                    step_index.insert(s.name.key(), steps.len());
+                    steps.push(node);
+                }
+            }
+            ast::SfcElement::Action(a) => {
+                check_attributes(&a.attributes, &[], "an action", diags);
+                let fresh = declare(&a.name.text, a.name.span, "an action", diags);
+                if fresh || (!a.name.text.is_empty() && !action_index.contains_key(&a.name.key())) {
+                    action_index.insert(a.name.key(), actions.len());
+                    actions.push(ActionNode {
+                        name: a.name.text.clone(),
+                        body: std::mem::replace(&mut a.body, ast::ActionBody::St(Vec::new())),
+                        attributes: a.attributes.clone(),
+                        name_span: a.name.span,
+                        span: a.span,
+                    });
+                }
+            }
+            ast::SfcElement::Transition(_) => {}
+        }
+    }
+
+    // Associations.
+    for el in elements.iter() {
+        let ast::SfcElement::Step(s) = el else { continue };
+        let Some(&sid) = step_index.get(&s.name.key()) else { continue };
+        if steps[sid].span != s.span {
+            continue; // a duplicate step declaration: its associations were not lowered
+        }
+        for a in &s.associations {
+            if let Some(assoc) = lower_association(a, &action_index, &var_type, diags) {
+                steps[sid].associations.push(assoc);
+            }
+        }
+    }
+
+    // Unused actions: judged on the associations as written, so an association rejected for
+    // another reason (say an unknown qualifier) does not also make its action "unused".
+    if !matches!(target, Target::Atmt | Target::Eatmt) {
+        let mentioned: std::collections::HashSet<String> = elements
+            .iter()
+            .filter_map(|e| match e {
+                ast::SfcElement::Step(s) => Some(s.associations.iter().map(|a| a.action.key())),
+                _ => None,
+            })
+            .flatten()
+            .collect();
+        for action in &actions {
+            if !mentioned.contains(&action.name.to_ascii_uppercase()) {
+                diags.push(
+                    Diagnostic::warning("SFC0214", action.name_span, format!("action `{}` is never used", action.name))
+                        .with_element(&action.name),
+                );
+            }
+        }
+    }
+
+    // Transitions, with names `T<n>` for unnamed ones.
+    let mut transitions: Vec<TransitionNode> = Vec::new();
+    let mut position = 0;
+    let mut pending_unnamed: Vec<(usize, usize)> = Vec::new(); // (transition index, position)
+    for el in elements.iter_mut() {
+        let ast::SfcElement::Transition(t) = el else { continue };
+        position += 1;
+        check_attributes(&t.attributes, &["sfc.tag"], "a transition", diags);
+        let resolve = |list: &[ast::Ident], diags: &mut Vec<Diagnostic>| -> Vec<StepId> {
+            let mut out: Vec<StepId> = Vec::new();
+            for id in list {
+                match step_index.get(&id.key()) {
+                    Some(&s) => {
+                        if out.contains(&s) {
+                            diags.push(
+                                Diagnostic::error("SFC0216", id.span, format!("step `{}` is listed twice", id.text))
+                                    .with_element(&id.text),
+                            );
+                        } else {
+                            out.push(s);
+                        }
+                    }
+                    None => {
+                        let mut d = Diagnostic::error("SFC0208", id.span, format!("undeclared step `{}`", id.text))
+                            .with_element(&id.text);
+                        if let Some(s) = closest(&id.text, step_index.keys().map(|k| steps[step_index[k]].name.as_str())) {
+                            d = d.with_note(format!("did you mean `{s}`?"));
+                        }
+                        diags.push(d);
+                    }
+                }
+            }
+            out
+        };
+        let from = resolve(&t.from, diags);
+        let to = resolve(&t.to, diags);
+        let priority = t.priority.as_ref().and_then(|p| match &p.kind {
+            ExprKind::Literal(ast::Literal { kind: LiteralKind::Int(v), .. }) if *v >= 0 && *v <= i64::MAX as i128 => {
+                Some(*v as i64)
+            }
+            _ => {
+                diags.push(Diagnostic::error("SFC0101", p.span, "PRIORITY must be a non-negative integer literal"));
+                None
+            }
+        });
+        let header_end = match &t.condition {
+            ast::Condition::St(e) => e.span.start,
+            ast::Condition::Il(b) => b.span.start,
+            ast::Condition::Missing => t.span.end,
+        };
+        let header_span = Span::new(t.span.file, t.span.start, header_end.max(t.span.start));
+        let name = match &t.name {
+            Some(n) => {
+                declare(&n.text, n.span, "a transition", diags);
+                n.text.clone()
+            }
+            None => {
+                pending_unnamed.push((transitions.len(), position));
+                String::new()
+            }
+        };
+        transitions.push(TransitionNode {
+            name,
+            named: t.name.is_some(),
+            priority,
+            from,
+            to,
+            condition: std::mem::replace(&mut t.condition, ast::Condition::Missing),
+            tag: tag_attr(&t.attributes, diags),
+            attributes: t.attributes.clone(),
+            header_span,
+            span: t.span,
+        });
+    }
+    // Unnamed transitions: `T<n>`, or the first free `T<n>_1`, `T<n>_2`, … when taken.
+    for (idx, pos) in pending_unnamed {
+        let base = format!("T{pos}");
+        let mut candidate = base.clone();
+        let mut k = 0;
+        while names.contains_key(&candidate.to_ascii_uppercase()) {
+            k += 1;
+            candidate = format!("{base}_{k}");
+        }
+        names.insert(candidate.to_ascii_uppercase(), Declared { span: transitions[idx].span, kind: "a transition" });
+        transitions[idx].name = candidate;
+    }
+
+    Chart {
+        file,
+        item,
+        pou: pou.name.text.clone(),
+        pou_kind: pou.kind,
+        target,
+        steps,
+        transitions,
+        actions,
+        name_span: pou.name.span,
+        span: pou.span,
+    }
+}
+
+fn lower_association(
+    a: &ast::ActionAssociation,
+    action_index: &HashMap<String, ActionId>,
+    var_type: &HashMap<String, Option<String>>,
+    diags: &mut Vec<Diagnostic>,
+) -> Option<Association> {
+    let mut ok = true;
+    let target = match action_index.get(&a.action.key()) {
+        Some(&id) => ActionTarget::Action(id),
+        None => match var_type.get(&a.action.key()) {
+            Some(Some(t)) if t == "BOOL" => ActionTarget::Variable,
+            Some(t) => {
+                diags.push(
+                    Diagnostic::error(
+                        "SFC0207",
+                        a.action.span,
+                        format!(
+                            "`{}` is a variable of type {}, and only BOOL variables can be used as actions",
+                            a.action.text,
+                            t.as_deref().unwrap_or("a non-elementary type")
+                        ),
+                    )
+                    .with_element(&a.action.text),
+                );
+                return None;
+            }
+            None => {
+                let mut d = Diagnostic::error("SFC0207", a.action.span, format!("undeclared action `{}`", a.action.text))
+                    .with_element(&a.action.text);
+                let candidates = action_index.keys().map(String::as_str);
+                if let Some(s) = closest(&a.action.text, candidates) {
+                    d = d.with_note(format!("did you mean `{s}`?"));
+                } else {
+                    d = d.with_note("declare it with `ACTION name: … END_ACTION`, or declare a BOOL variable of that name");
+                }
+                diags.push(d);
+                ok = false;
+                ActionTarget::Variable
+            }
+        },
+    };
+    let qualifier = match &a.qualifier {
+        None => Qualifier::N,
+        Some(q) => match Qualifier::from_name(&q.text) {
+            Some(q) => q,
+            None => {
+                diags.push(
+                    Diagnostic::error("SFC0209", q.span, format!("unknown action qualifier `{}`", q.text))
+                        .with_element(&a.action.text)
+                        .with_note("the qualifiers are N, R, S, L, D, P, SD, DS, SL, P1 and P0"),
+                );
+                return None;
+            }
+        },
+    };
+    let duration = match (&a.duration, qualifier.is_timed()) {
+        (None, true) => {
+            diags.push(
+                Diagnostic::error(
+                    "SFC0210",
+                    a.span,
+                    format!("qualifier {} needs a duration, e.g. `{}({}, T#5s)`", qualifier.name(), a.action.text, qualifier.name()),
+                )
+                .with_element(&a.action.text),
+            );
+            return None;
+        }
+        (Some(d), false) => {
+            diags.push(
+                Diagnostic::error(
+                    "SFC0211",
+                    d.span,
+                    format!("qualifier {} takes no duration", qualifier.name()),
+                )
+                .with_element(&a.action.text),
+            );
+            return None;
+        }
+        (None, false) => None,
+        (Some(d), true) => match &d.kind {
+            ExprKind::Literal(ast::Literal { kind: LiteralKind::Duration(us), .. }) => Some(Duration::Literal(*us)),
+            ExprKind::Name(n) => match var_type.get(&n.key()) {
+                Some(Some(t)) if t == "TIME" || t == "LTIME" => Some(Duration::Variable(n.text.clone())),
+                Some(t) => {
+                    diags.push(Diagnostic::error(
+                        "SFC0311",
+                        d.span,
+                        format!("the duration `{}` has type {}, expected TIME", n.text, t.as_deref().unwrap_or("(derived)")),
+                    ));
+                    return None;
+                }
+                None => {
+                    diags.push(Diagnostic::error("SFC0301", d.span, format!("undeclared variable `{}`", n.text)));
+                    return None;
+                }
+            },
+            ExprKind::Error => return None,
+            _ => {
+                diags.push(Diagnostic::error("SFC0311", d.span, "the duration must be a TIME literal or a TIME variable"));
+                return None;
+            }
+        },
+    };
+    let mut indicators = Vec::new();
+    for ind in &a.indicators {
+        match var_type.get(&ind.key()) {
+            Some(Some(t)) if t == "BOOL" => indicators.push(ind.text.clone()),
+            Some(_) => diags.push(Diagnostic::error(
+                "SFC0312",
+                ind.span,
+                format!("indicator variable `{}` must be BOOL", ind.text),
+            )),
+            None => diags.push(Diagnostic::error(
+                "SFC0312",
+                ind.span,
+                format!("indicator variable `{}` is not declared", ind.text),
+            )),
+        }
+    }
+    if !ok {
+        return None;
+    }
+    Some(Association { action: a.action.text.clone(), target, qualifier, duration, indicators, span: a.span })
+}
+
+/// The candidate within edit distance 2 of `name` (case-insensitive), if exactly one is best.
+pub fn closest<'a>(name: &str, candidates: impl Iterator<Item = &'a str>) -> Option<&'a str> {
+    let n = name.to_ascii_uppercase();
+    let mut best: Option<(usize, &str)> = None;
+    for c in candidates {
+        let d = edit_distance(&n, &c.to_ascii_uppercase());
+        if d <= 2 && d < n.len() && best.map(|b| d < b.0).unwrap_or(true) {
+            best = Some((d, c));
+        }
+    }
+    best.map(|b| b.1)
+}
+
+fn edit_distance(a: &str, b: &str) -> usize {
+    let a: Vec<char> = a.chars().collect();
+    let b: Vec<char> = b.chars().collect();
+    let mut prev: Vec<usize> = (0..=b.len()).collect();
+    for i in 1..=a.len() {
+        let mut cur = vec![i; b.len() + 1];
+        for j in 1..=b.len() {
+            let cost = usize::from(a[i - 1] != b[j - 1]);
+            cur[j] = (prev[j] + 1).min(cur[j - 1] + 1).min(prev[j - 1] + cost);
+        }
+        prev = cur;
+    }
+    prev[b.len()]
+}
