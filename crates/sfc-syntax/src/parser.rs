@@ -588,11 +588,13 @@ impl<'a> Parser<'a> {
         let mut access_path = None;
         if access {
             // `name : path : type [READ_WRITE];`
-            let pstart = self.tok().start;
+            // Rebuilt from the tokens, so comments and spaces inside the path are not part of it.
+            let mut path = String::new();
             while !self.at(TokenKind::Colon) && !self.at(TokenKind::Semi) && !self.at(TokenKind::Eof) && !self.at_kw("END_VAR") {
-                self.bump();
+                let t = self.bump();
+                path.push_str(self.text_of(t));
             }
-            access_path = Some(self.text[pstart as usize..self.prev_end().max(pstart) as usize].to_string());
+            access_path = Some(path);
             self.expect(TokenKind::Colon, "`:` and the type of the access path");
         }
         let ty = self.type_spec();
@@ -1264,6 +1266,12 @@ split it with intermediate variables"
                     branches.push((c, b));
                 } else if self.eat_kw("ELSE") {
                     else_body = Some(self.stmt_list(&[]));
+                    // ELSE is the last branch: a further ELSE or ELSIF is an error, not a
+                    // replacement of the branch before it.
+                    if self.at_kw("ELSE") || self.at_kw("ELSIF") {
+                        self.error_here("expected END_IF (ELSE is the last branch of an IF)");
+                    }
+                    break;
                 } else {
                     break;
                 }

@@ -13,6 +13,7 @@
 //! printing the output again puts each one at the same place (the printer is idempotent).
 
 use crate::ast::*;
+use crate::lexer::lex;
 
 /// Prints a parsed file in canonical layout, putting every comment and pragma back.
 ///
@@ -36,11 +37,20 @@ pub fn print(unit: &SourceUnit) -> String {
 
 const INDENT: &str = "    ";
 
+/// One printed line; a comment or verbatim block spanning several lines counts as one.
+struct Line {
+    text: String,
+    /// Code (not a comment or verbatim text): only code lines align their end-of-line comments.
+    code: bool,
+    /// Where the end-of-line comments of a code line start, to align them with the next lines'.
+    comment_at: Option<usize>,
+}
+
 struct Printer<'a> {
     /// All trivia in source order; `next` is the first one not yet printed.
     trivia: Vec<&'a Trivia>,
     next: usize,
-    lines: Vec<String>,
+    lines: Vec<Line>,
     /// The line being built (indentation included); empty between lines.
     cur: String,
     indent: usize,
@@ -69,9 +79,12 @@ impl<'a> Printer<'a> {
         if self.lines.is_empty() {
             return String::new();
         }
-        let mut out = self.lines.join("\n");
-        out.push('\n');
-        self.lines.clear();
+        align_comments(&mut self.lines);
+        let mut out = String::new();
+        for line in &self.lines {
+            out.push_str(&line.text);
+            out.push('\n');
+        }
         out
     }
 
@@ -82,12 +95,12 @@ impl<'a> Printer<'a> {
         self.pending_blank = true;
     }
 
-    fn push_line(&mut self, line: String) {
+    fn push_line(&mut self, text: String, code: bool) {
         if self.pending_blank && !self.lines.is_empty() {
-            self.lines.push(String::new());
+            self.lines.push(Line { text: String::new(), code: false, comment_at: None });
         }
         self.pending_blank = false;
-        self.lines.push(line);
+        self.lines.push(Line { text, code, comment_at: None });
         self.sealed = false;
     }
 
@@ -113,7 +126,7 @@ impl<'a> Printer<'a> {
     fn end(&mut self) {
         let mut line = std::mem::take(&mut self.cur);
         line.truncate(line.trim_end().len());
-        self.push_line(line);
+        self.push_line(line, true);
     }
 
     /// A whole line for a node beginning at `anchor`.
@@ -160,11 +173,14 @@ impl<'a> Printer<'a> {
         self.next += 1;
         if self.can_trail(t) {
             let last = self.lines.last_mut().expect("can_trail checks for a previous line");
-            last.push(' ');
-            last.push_str(&t.text);
+            if last.code && last.comment_at.is_none() {
+                last.comment_at = Some(last.text.len());
+            }
+            last.text.push(' ');
+            last.text.push_str(&t.text);
         } else {
             let line = format!("{}{}", INDENT.repeat(self.indent), t.text);
-            self.push_line(line);
+            self.push_line(line, false);
         }
         self.sealed = t.kind == TriviaKind::LineComment;
     }
@@ -194,8 +210,8 @@ impl<'a> Printer<'a> {
 
     fn verbatim(&mut self, v: &Verbatim) {
         self.open(v.span.start);
-        self.push(&v.text);
-        self.end();
+        let text = std::mem::take(&mut self.cur) + &v.text;
+        self.push_line(text, false);
         // Comments inside the block are part of its text already.
         while self.next < self.trivia.len() && self.trivia[self.next].span.start < v.span.end {
             self.next += 1;
@@ -284,7 +300,7 @@ impl<'a> Printer<'a> {
         self.push(&head);
         self.push(" : ");
         if let Some(path) = &decl.access_path {
-            self.push(path);
+            self.push(&access_path(path));
             self.push(" : ");
         }
         self.type_spec(&decl.ty);
@@ -579,10 +595,43 @@ impl<'a> Printer<'a> {
     }
 }
 
+/// Aligns the end-of-line comments of consecutive code lines at one indentation, as engineers
+/// do in declaration lists: one space after the longest code of the run.
+fn align_comments(lines: &mut [Line]) {
+    let indent = |line: &Line| line.text.len() - line.text.trim_start().len();
+    let mut i = 0;
+    while i < lines.len() {
+        if lines[i].comment_at.is_none() {
+            i += 1;
+            continue;
+        }
+        let mut j = i + 1;
+        while j < lines.len() && lines[j].comment_at.is_some() && indent(&lines[j]) == indent(&lines[i]) {
+            j += 1;
+        }
+        let width = |line: &Line| line.comment_at.map_or(0, |at| line.text[..at].chars().count());
+        let widest = lines[i..j].iter().map(width).max().unwrap_or(0);
+        for line in &mut lines[i..j] {
+            let pad = widest - width(line);
+            if let Some(at) = line.comment_at {
+                line.text.insert_str(at, &" ".repeat(pad));
+            }
+        }
+        i = j;
+    }
+}
+
 /// Where the line of an element with attributes starts: after its last attribute pragma, so
 /// that the pragmas are printed before it even if its span were to include them.
 fn lead(span: Span, attributes: &[Attribute]) -> u32 {
     attributes.iter().map(|a| a.span.end).fold(span.start, u32::max)
+}
+
+/// A VAR_ACCESS path without the white space and comments the parser keeps in it (the comments
+/// are printed from the trivia, so printing them here too would double them).
+fn access_path(path: &str) -> String {
+    let (tokens, _) = lex(0, path);
+    tokens.iter().filter(|t| !t.kind.is_trivia()).map(|t| &path[t.start as usize..t.end as usize]).collect()
 }
 
 /// `S1` or `(S1, S2)`.
@@ -657,16 +706,21 @@ pub(crate) fn expr(e: &Expr) -> String {
 
 fn write_expr(out: &mut String, e: &Expr) {
     match &e.kind {
-        ExprKind::Literal(lit) => out.push_str(&lit.text),
+        ExprKind::Literal(lit) => match lit.kind {
+            // TRUE and FALSE are keywords, upper case like the others; every other literal keeps
+            // its text (`16#ff`, `t#5s` and `1_000` say something about the value).
+            LiteralKind::Bool(_) if lit.type_prefix.is_none() => out.push_str(&lit.text.to_ascii_uppercase()),
+            _ => out.push_str(&lit.text),
+        },
         ExprKind::Name(name) => out.push_str(&name.text),
         ExprKind::Address(address) => out.push_str(&address.text),
         ExprKind::Member { base, member } => {
-            write_operand(out, base, !is_primary(base));
+            write_operand(out, base, !is_postfix_base(base));
             out.push('.');
             out.push_str(&member.text);
         }
         ExprKind::Index { base, indices } => {
-            write_operand(out, base, !is_primary(base));
+            write_operand(out, base, !is_postfix_base(base));
             out.push('[');
             for (i, index) in indices.iter().enumerate() {
                 if i > 0 {
@@ -683,7 +737,6 @@ fn write_expr(out: &mut String, e: &Expr) {
             out.push(')');
         }
         ExprKind::Unary { op, operand } => {
-            let start = out.len();
             out.push_str(match op {
                 UnaryOp::Neg => "-",
                 UnaryOp::Plus => "+",
@@ -696,7 +749,6 @@ fn write_expr(out: &mut String, e: &Expr) {
                 out.push(' ');
             }
             out.push_str(&inner);
-            debug_assert!(out.len() > start);
         }
         ExprKind::Binary { op, lhs, rhs } => {
             write_operand(out, lhs, binary_operand_needs_parens(*op, lhs, Side::Left));
@@ -724,9 +776,17 @@ fn write_operand(out: &mut String, e: &Expr, parens: bool) {
     }
 }
 
-/// Whether `e` prints as one indivisible operand (a name, literal, call, member, …).
-fn is_primary(e: &Expr) -> bool {
-    !matches!(e.kind, ExprKind::Unary { .. } | ExprKind::Binary { .. })
+/// Whether `e` can be followed by `.member` or `[index]` as it is: a literal cannot (`1.5`).
+fn is_postfix_base(e: &Expr) -> bool {
+    matches!(
+        e.kind,
+        ExprKind::Name(_)
+            | ExprKind::Address(_)
+            | ExprKind::Member { .. }
+            | ExprKind::Index { .. }
+            | ExprKind::Call { .. }
+            | ExprKind::Paren(_)
+    )
 }
 
 #[derive(Clone, Copy, PartialEq)]
@@ -741,7 +801,9 @@ enum Side {
 fn binary_operand_needs_parens(op: BinaryOp, operand: &Expr, side: Side) -> bool {
     match &operand.kind {
         ExprKind::Binary { op: inner, .. } => match side {
-            Side::Left => inner.precedence() < op.precedence(),
+            Side::Left => {
+                inner.precedence() < op.precedence() || op.precedence() >= UNARY_PRECEDENCE && ends_in_unary(operand)
+            }
             Side::Right => inner.precedence() <= op.precedence(),
         },
         // `-a ** b` reads as `-(a ** b)`: a unary left operand of an operator binding at least as
@@ -751,10 +813,419 @@ fn binary_operand_needs_parens(op: BinaryOp, operand: &Expr, side: Side) -> bool
     }
 }
 
+/// Whether `e` prints ending in a unary operator's operand, which would also take a following
+/// operator binding at least as tightly as the unary operators (`a ** -b ** c`).
+fn ends_in_unary(e: &Expr) -> bool {
+    match &e.kind {
+        ExprKind::Unary { .. } => true,
+        ExprKind::Binary { rhs, .. } => ends_in_unary(rhs),
+        _ => false,
+    }
+}
+
 /// `-(a + b)`: a binary operand binding looser than the unary operator.
 fn unary_operand_needs_parens(operand: &Expr) -> bool {
     match &operand.kind {
         ExprKind::Binary { op, .. } => op.precedence() < UNARY_PRECEDENCE,
         _ => false,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::{parse, parse_expression};
+    use sfc_diagnostics::Severity;
+
+    /// Formats `source`, checking that input and output parse cleanly, that the output is stable
+    /// and that every comment and pragma appears in it as often as in the input.
+    fn fmt(source: &str) -> String {
+        let (unit, diags) = parse(0, source);
+        assert!(diags.iter().all(|d| d.severity != Severity::Error), "{diags:?}");
+        let out = print(&unit);
+        let (again, diags) = parse(0, &out);
+        assert!(diags.iter().all(|d| d.severity != Severity::Error), "{diags:?}\n{out}");
+        assert_eq!(print(&again), out, "not idempotent");
+        for t in &unit.trivia {
+            assert_eq!(out.matches(&t.text).count(), source.matches(&t.text).count(), "{:?} in\n{out}", t.text);
+        }
+        out
+    }
+
+    #[test]
+    fn chart_layout() {
+        let source = "(* Filling a tank. *)
+{attribute 'sfc.target' := 'blank'}
+program Tank
+var level : int; full, pump : bool; end_var
+{attribute 'sfc.tag' := '0'}
+initial_step Idle: end_step
+transition Start (priority := 1) from Idle to (Fill, Log) := level < 10 and not full; end_transition
+step Fill: Pump(N); Alarm(L, T#5s, pump); Valve(); end_step
+step Log: end_step
+transition from (Fill, Log) to Idle := full; end_transition
+action Pump: pump := true; end_action
+end_program";
+        let expected = "\
+(* Filling a tank. *)
+{attribute 'sfc.target' := 'blank'}
+PROGRAM Tank
+    VAR
+        level : int;
+        full, pump : bool;
+    END_VAR
+
+    {attribute 'sfc.tag' := '0'}
+    INITIAL_STEP Idle: END_STEP
+
+    TRANSITION Start (PRIORITY := 1) FROM Idle TO (Fill, Log)
+        := level < 10 AND NOT full;
+    END_TRANSITION
+
+    STEP Fill:
+        Pump(N);
+        Alarm(L, T#5s, pump);
+        Valve();
+    END_STEP
+
+    STEP Log: END_STEP
+
+    TRANSITION FROM (Fill, Log) TO Idle
+        := full;
+    END_TRANSITION
+
+    ACTION Pump:
+        pump := TRUE;
+    END_ACTION
+END_PROGRAM
+";
+        assert_eq!(fmt(source), expected);
+    }
+
+    #[test]
+    fn statement_layout() {
+        let source = "FUNCTION_BLOCK Count
+VAR_INPUT go : BOOL; END_VAR
+VAR n, i : INT; END_VAR
+if go then n := n + 1; elsif n > 10 then n := 0; else ; end_if;
+case n of 0: n := 0; 1, 2..4: n := n * 2; else n := -n; end_case;
+for i := 0 to 9 by 3 do exit; end_for;
+while n > 0 do n := n - 1; end_while;
+repeat n := n + 1; until n = 5 end_repeat;
+Timer(IN := go, PT := T#1s, NOT Q => go, ET =>);
+return;
+END_FUNCTION_BLOCK";
+        let expected = "\
+FUNCTION_BLOCK Count
+    VAR_INPUT
+        go : BOOL;
+    END_VAR
+    VAR
+        n, i : INT;
+    END_VAR
+
+    IF go THEN
+        n := n + 1;
+    ELSIF n > 10 THEN
+        n := 0;
+    ELSE
+        ;
+    END_IF;
+    CASE n OF
+        0:
+            n := 0;
+        1, 2..4:
+            n := n * 2;
+        ELSE
+            n := -n;
+    END_CASE;
+    FOR i := 0 TO 9 BY 3 DO
+        EXIT;
+    END_FOR;
+    WHILE n > 0 DO
+        n := n - 1;
+    END_WHILE;
+    REPEAT
+        n := n + 1;
+    UNTIL n = 5
+    END_REPEAT;
+    Timer(IN := go, PT := T#1s, NOT Q => go, ET =>);
+    RETURN;
+END_FUNCTION_BLOCK
+";
+        assert_eq!(fmt(source), expected);
+    }
+
+    #[test]
+    fn declaration_layout() {
+        let source = "type Point : struct x : INT; y : INT := 2; end_struct;
+Grid : array [1..10, 0..2] of Point; Name : string(20) := 'abc'; Level : INT (0..100);
+Colour : (Red, Green := 2) := Red; end_type
+function F : INT var_input a : INT; end_var
+var constant AT %IW6.2 : WORD; p AT %QX1.0 : BOOL := TRUE; end_var
+var_access acc : Conf . Res.x : INT read_write; end_var
+var arr : ARRAY [1..5] OF INT := [2(1), 3(), 7]; pt : Point := (x := 1, y := 2); end_var
+F := a; end_function";
+        let expected = "\
+TYPE
+    Point : STRUCT
+        x : INT;
+        y : INT := 2;
+    END_STRUCT;
+    Grid : ARRAY [1..10, 0..2] OF Point;
+    Name : STRING[20] := 'abc';
+    Level : INT (0..100);
+    Colour : (Red, Green := 2) := Red;
+END_TYPE
+
+FUNCTION F : INT
+    VAR_INPUT
+        a : INT;
+    END_VAR
+    VAR CONSTANT
+        AT %IW6.2 : WORD;
+        p AT %QX1.0 : BOOL := TRUE;
+    END_VAR
+    VAR_ACCESS
+        acc : Conf.Res.x : INT READ_WRITE;
+    END_VAR
+    VAR
+        arr : ARRAY [1..5] OF INT := [2(1), 3(), 7];
+        pt : Point := (x := 1, y := 2);
+    END_VAR
+
+    F := a;
+END_FUNCTION
+";
+        assert_eq!(fmt(source), expected);
+    }
+
+    #[test]
+    fn instruction_list_layout() {
+        let source = "PROGRAM P
+VAR a, b : BOOL; END_VAR
+INITIAL_STEP S0: END_STEP
+TRANSITION FROM S0 TO S0 :
+ LD a
+ AND( b
+ OR a
+ )
+END_TRANSITION
+ACTION A:
+start: LD a
+ ANDN b
+ JMPC start
+ CAL T1(IN := a)
+done:
+ ST b
+END_ACTION
+END_PROGRAM";
+        let expected = "\
+PROGRAM P
+    VAR
+        a, b : BOOL;
+    END_VAR
+
+    INITIAL_STEP S0: END_STEP
+
+    TRANSITION FROM S0 TO S0:
+        LD a
+        AND( b
+            OR a
+        )
+    END_TRANSITION
+
+    ACTION A:
+        start: LD a
+        ANDN b
+        JMPC start
+        CAL T1(IN := a)
+        done:
+        ST b
+    END_ACTION
+END_PROGRAM
+";
+        assert_eq!(fmt(source), expected);
+    }
+
+    #[test]
+    fn end_of_line_comments_stay_and_align() {
+        let source = "PROGRAM P
+VAR
+  a : BOOL; (* first *)
+  longer_name : INT := 5; (* second *)
+  (* on its own *)
+  b : BOOL; // third
+END_VAR
+a := TRUE; (* set *)
+END_PROGRAM (* done *)";
+        let expected = "\
+PROGRAM P
+    VAR
+        a : BOOL;               (* first *)
+        longer_name : INT := 5; (* second *)
+        (* on its own *)
+        b : BOOL; // third
+    END_VAR
+
+    a := TRUE; (* set *)
+END_PROGRAM (* done *)
+";
+        assert_eq!(fmt(source), expected);
+    }
+
+    #[test]
+    fn nothing_is_appended_after_a_line_comment() {
+        let source = "PROGRAM P\nx := a + // why\n b; (* what *)\nEND_PROGRAM";
+        assert_eq!(fmt(source), "PROGRAM P\n    x := a + b; // why\n    (* what *)\nEND_PROGRAM\n");
+    }
+
+    #[test]
+    fn comments_inside_constructs_stay_inside() {
+        let source = "PROGRAM P\nIF a THEN x := 1;\n(* last of the branch *)\nEND_IF;\nEND_PROGRAM";
+        assert_eq!(
+            fmt(source),
+            "PROGRAM P\n    IF a THEN\n        x := 1;\n        (* last of the branch *)\n    END_IF;\nEND_PROGRAM\n"
+        );
+        let chart =
+            "PROGRAM P\nINITIAL_STEP S1: (* nothing yet *) END_STEP\nACTION A:\n(* later *)\nEND_ACTION\nEND_PROGRAM";
+        assert_eq!(
+            fmt(chart),
+            "PROGRAM P\n    INITIAL_STEP S1: (* nothing yet *)\n    END_STEP\n\n    ACTION A:\n        (* later *)\n    END_ACTION\nEND_PROGRAM\n"
+        );
+    }
+
+    #[test]
+    fn pragmas_always_get_their_own_line() {
+        let source = "PROGRAM P VAR a : INT; {attribute 'sfc.description' := 'b'} b : INT; END_VAR END_PROGRAM";
+        let out = fmt(source);
+        assert!(
+            out.contains("        a : INT;\n        {attribute 'sfc.description' := 'b'}\n        b : INT;\n"),
+            "{out}"
+        );
+    }
+
+    #[test]
+    fn comments_inside_verbatim_blocks_are_printed_once() {
+        let source =
+            "CONFIGURATION C (* kept in the text *)\n  RESOURCE R ON PLC\n  END_RESOURCE\nEND_CONFIGURATION // after";
+        assert_eq!(fmt(source), format!("{}\n", source));
+    }
+
+    #[test]
+    fn comments_in_an_access_path_are_printed_once() {
+        let out = fmt("PROGRAM P VAR_ACCESS acc : Conf.(* c *)Res.x : INT READ_ONLY; END_VAR END_PROGRAM");
+        assert!(out.contains("acc : Conf.Res.x : INT READ_ONLY; (* c *)"), "{out}");
+    }
+
+    #[test]
+    fn empty_and_comment_only_files() {
+        assert_eq!(fmt(""), "");
+        assert_eq!(fmt("  \n\n"), "");
+        assert_eq!(fmt("(* a *) (* b *)\n\n// c"), "(* a *) (* b *)\n// c\n");
+    }
+
+    #[test]
+    fn trailing_comments_of_the_file_come_last() {
+        let out = fmt("PROGRAM P\nEND_PROGRAM (* same line *)\n\n\n(* the end *)\n");
+        assert_eq!(out, "PROGRAM P\nEND_PROGRAM (* same line *)\n\n(* the end *)\n");
+    }
+
+    #[test]
+    fn parsed_expressions_keep_their_parentheses_and_get_none() {
+        for text in [
+            "a + b * c",
+            "(a + b) * c",
+            "a - (b - c)",
+            "a - b - c",
+            "a ** b ** c",
+            "a ** (b ** c)",
+            "-a ** b",
+            "(-a) ** b",
+            "a ** -b ** c",
+            "- -a",
+            "NOT a AND b",
+            "NOT (a AND b)",
+            "NOT NOT a = b",
+            "x MOD 3 = 0 OR y XOR z",
+            "((a))",
+            "s.x[i, j + 1].y",
+            "Fb(IN := -x, Q => y, NOT Q2 =>, 3)",
+            "%IX1.2 AND Step1.X",
+            "16#FF + 1_000 + INT#-5 + T#1h2m + 'it$'s'",
+        ] {
+            let (e, diags) = parse_expression(0, text);
+            assert!(diags.is_empty(), "{text}: {diags:?}");
+            assert_eq!(expr(&e), text);
+        }
+        let (e, _) = parse_expression(0, "a&b  AND_THEN  c OR_ELSE -(d)");
+        assert_eq!(expr(&e), "a AND b AND_THEN c OR_ELSE -(d)");
+    }
+
+    #[test]
+    fn the_deepest_accepted_nesting_prints() {
+        let depth = crate::MAX_DEPTH as usize - 8;
+        let parens = format!("x := {}a{};", "(".repeat(depth), ")".repeat(depth));
+        let unary = format!("x := {}a;", "-".repeat(depth).replace('-', "- "));
+        let chain = format!("x := a{};", " + a".repeat(depth));
+        let ifs = crate::MAX_STMT_DEPTH as usize - 4;
+        let nested = format!("{}x := 1;{}", "IF a THEN ".repeat(ifs), " END_IF;".repeat(ifs));
+        for body in [parens, unary, chain, nested] {
+            fmt(&format!("PROGRAM P\n{body}\nEND_PROGRAM"));
+        }
+    }
+
+    // -- Built trees, which the parser cannot produce: parentheses are added -----------------
+
+    fn node(kind: ExprKind) -> Expr {
+        Expr { kind, span: Span::default() }
+    }
+    fn name(n: &str) -> Expr {
+        node(ExprKind::Name(Ident::new(n, Span::default())))
+    }
+    fn bin(op: BinaryOp, lhs: Expr, rhs: Expr) -> Expr {
+        node(ExprKind::Binary { op, lhs: Box::new(lhs), rhs: Box::new(rhs) })
+    }
+    fn un(op: UnaryOp, operand: Expr) -> Expr {
+        node(ExprKind::Unary { op, operand: Box::new(operand) })
+    }
+
+    /// The tree with every operation parenthesised and the Paren nodes dropped: what the
+    /// expression means, whatever parentheses spell it.
+    fn meaning(e: &Expr) -> String {
+        match &e.kind {
+            ExprKind::Binary { op, lhs, rhs } => format!("({} {} {})", meaning(lhs), op.symbol(), meaning(rhs)),
+            ExprKind::Unary { op, operand } => format!("({op:?} {})", meaning(operand)),
+            ExprKind::Paren(inner) => meaning(inner),
+            _ => expr(e),
+        }
+    }
+
+    #[test]
+    fn built_trees_get_the_parentheses_they_need() {
+        use BinaryOp::*;
+        let (a, b, c) = (name("a"), name("b"), name("c"));
+        let five = node(ExprKind::Literal(Literal { kind: LiteralKind::Int(5), type_prefix: None, text: "5".into() }));
+        let cases = [
+            (bin(Sub, a.clone(), bin(Sub, b.clone(), c.clone())), "a - (b - c)"),
+            (bin(Sub, bin(Sub, a.clone(), b.clone()), c.clone()), "a - b - c"),
+            (bin(Mul, bin(Add, a.clone(), b.clone()), c.clone()), "(a + b) * c"),
+            (bin(Add, a.clone(), bin(Mul, b.clone(), c.clone())), "a + b * c"),
+            (bin(Pow, a.clone(), bin(Pow, b.clone(), c.clone())), "a ** (b ** c)"),
+            (un(UnaryOp::Neg, bin(Add, a.clone(), b.clone())), "-(a + b)"),
+            (un(UnaryOp::Neg, bin(Pow, a.clone(), b.clone())), "-a ** b"),
+            (bin(Pow, un(UnaryOp::Neg, a.clone()), b.clone()), "(-a) ** b"),
+            (bin(Pow, bin(Pow, a.clone(), un(UnaryOp::Neg, b.clone())), c.clone()), "(a ** -b) ** c"),
+            (un(UnaryOp::Neg, un(UnaryOp::Neg, a.clone())), "- -a"),
+            (un(UnaryOp::Not, bin(And, a.clone(), b.clone())), "NOT (a AND b)"),
+            (bin(And, un(UnaryOp::Not, a.clone()), b.clone()), "NOT a AND b"),
+            (node(ExprKind::Member { base: Box::new(five), member: Ident::new("x", Span::default()) }), "(5).x"),
+        ];
+        for (tree, text) in cases {
+            assert_eq!(expr(&tree), text);
+            let (parsed, diags) = parse_expression(0, text);
+            assert!(diags.is_empty(), "{text}: {diags:?}");
+            assert_eq!(meaning(&parsed), meaning(&tree), "{text}");
+        }
     }
 }

@@ -89,3 +89,11 @@ fn random_token_soup() {
         let _ = parse(0, &text.join(" "));
     }
 }
+
+#[test]
+fn else_is_the_last_branch() {
+    let p = program_with("IF x THEN x := TRUE; ELSE x := FALSE; ELSE x := TRUE; END_IF;");
+    assert_eq!(codes(&p), vec!["SFC0101"]);
+    let p = program_with("IF x THEN x := TRUE; ELSE x := FALSE; ELSIF x THEN x := TRUE; END_IF;");
+    assert!(codes(&p).contains(&"SFC0101"));
+}
