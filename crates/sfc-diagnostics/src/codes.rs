@@ -155,6 +155,12 @@ function block.";
 operand type does not fit.";
     "SFC0317" Warning "variable never used"
         "A local variable is declared but never read or written.";
+    "SFC0318" Error "duplicate declaration"
+        "A type, POU, enumerated value or structure field is declared twice, or a declaration \
+redefines a standard type, function or function block. Rename one of them.";
+    "SFC0319" Error "duplicate CASE label"
+        "Two labels of one CASE statement cover the same value, so the later arm can never run \
+for it.\n\n    CASE n OF 1..5: a(); 3: b(); END_CASE  (* 3 is already in 1..5 *)";
 
     "SFC0401" Error "too many states for the target"
         "ATMT has at most 16 states, EATMT 256 (`--nstep` overrides).";

@@ -78,13 +78,28 @@ pub fn render_human(diag: &Diagnostic, files: &[SourceFile], opts: RenderOptions
         let lc = file.line_col(diag.span.start);
         let _ = writeln!(out, "{pad}{} {}:{}:{}", st.blue("-->"), file.name, lc.line, lc.column);
         let _ = writeln!(out, "{pad} {}", st.blue("|"));
-        snippet(&mut out, &st, file, diag.span, '^', diag.severity, "", width);
-        for label in &diag.labels {
-            if let Some(lf) = file_of(files, label.span) {
-                if label.span.file != diag.span.file {
-                    let lc = lf.line_col(label.span.start);
-                    let _ = writeln!(out, "{pad}{} {}:{}:{}", st.blue(":::"), lf.name, lc.line, lc.column);
+        // Snippets of this file in source order (like rustc), with `...` between distant lines;
+        // labels in other files follow, each under its own `:::` header.
+        let mut local: Vec<(crate::Span, char, Severity, &str)> = vec![(diag.span, '^', diag.severity, "")];
+        local.extend(
+            diag.labels.iter().filter(|l| l.span.file == diag.span.file).map(|l| (l.span, '-', Severity::Note, l.message.as_str())),
+        );
+        local.sort_by_key(|(sp, ..)| sp.start);
+        let mut last_line: Option<u32> = None;
+        for (sp, mark, sev, msg) in local {
+            let line = file.line_col(sp.start).line;
+            if let Some(prev) = last_line {
+                if line > prev + 1 {
+                    let _ = writeln!(out, "{}", st.blue("..."));
                 }
+            }
+            snippet(&mut out, &st, file, sp, mark, sev, msg, width);
+            last_line = Some(line);
+        }
+        for label in diag.labels.iter().filter(|l| l.span.file != diag.span.file) {
+            if let Some(lf) = file_of(files, label.span) {
+                let lc = lf.line_col(label.span.start);
+                let _ = writeln!(out, "{pad}{} {}:{}:{}", st.blue(":::"), lf.name, lc.line, lc.column);
                 snippet(&mut out, &st, lf, label.span, '-', Severity::Note, &label.message, width);
             }
         }

@@ -1,11 +1,34 @@
-//! Type checking of the ST and IL code of every POU: transition conditions, action bodies and
-//! POU bodies, with step flags and action flags in scope.
+//! Type checking of the ST and IL code of every POU (conditions, action bodies, POU bodies,
+//! declarations) by `sfc-st`, fitted to the chart targets.
 
 use crate::chart::{Chart, Target};
 use sfc_diagnostics::Diagnostic;
 use sfc_syntax::ast;
 
-/// Checks every POU's code; conditions of ATMT/EATMT charts are left to the target rules.
-pub fn check(unit: &ast::SourceUnit, charts: &[Chart], source: &str, file_id: u32, diags: &mut Vec<Diagnostic>) {
-    let _ = (unit, charts, source, file_id, diags, Target::Blank);
+/// Type-checks the whole file. Runs on the intact AST, before lowering moves the SFC code into
+/// the charts.
+pub fn check_unit(unit: &ast::SourceUnit) -> Vec<Diagnostic> {
+    sfc_st::check_unit(unit)
+}
+
+/// Drops type diagnostics inside the conditions of ATMT/EATMT charts: there a condition is one
+/// implicit input (`C3`, `c1.2`, `NOT c5`) and the target rules (SFC04xx) judge it.
+pub fn fit_to_targets(diags: Vec<Diagnostic>, charts: &[Chart]) -> Vec<Diagnostic> {
+    let spans: Vec<sfc_diagnostics::Span> = charts
+        .iter()
+        .filter(|c| matches!(c.target, Target::Atmt | Target::Eatmt))
+        .flat_map(|c| c.transitions.iter())
+        .filter_map(|t| match &t.condition {
+            ast::Condition::St(e) => Some(e.span),
+            ast::Condition::Il(b) => Some(b.span),
+            ast::Condition::Missing => None,
+        })
+        .collect();
+    if spans.is_empty() {
+        return diags;
+    }
+    diags
+        .into_iter()
+        .filter(|d| !spans.iter().any(|s| s.file == d.span.file && s.start <= d.span.start && d.span.end <= s.end))
+        .collect()
 }

@@ -48,6 +48,7 @@ impl Checked {
 /// Parses, lowers and validates one file. `file_id` goes into every span.
 pub fn check_source(file_id: u32, name: &str, text: &str, opts: &CheckOptions) -> Checked {
     let (mut unit, mut diags) = sfc_syntax::parse(file_id, text);
+    let type_diags = code::check_unit(&unit);
     let mut charts = Vec::new();
     for (i, item) in unit.items.iter_mut().enumerate() {
         let ast::Item::Pou(pou) = item else { continue };
@@ -64,7 +65,7 @@ pub fn check_source(file_id: u32, name: &str, text: &str, opts: &CheckOptions) -
         }
         pou.body = body;
     }
-    code::check(&unit, &charts, text, file_id, &mut diags);
+    diags.extend(code::fit_to_targets(type_diags, &charts));
     bang_outside_eatmt(file_id, text, &charts, &mut diags);
     sfc_diagnostics::sort(&mut diags);
     diags.dedup();

@@ -147,6 +147,11 @@ pub fn lower(
 ) -> Chart {
     let vars = pou_variables(pou);
     let mut names: HashMap<String, Declared> = HashMap::new();
+    // Clashes between two variables are the type checker's (it checks every POU's
+    // declarations); here variables only seed the namespace that chart names must not reuse.
+    for v in &vars {
+        names.entry(v.name.to_ascii_uppercase()).or_insert(Declared { span: v.span, kind: "a variable" });
+    }
     let mut declare = |name: &str, span: Span, kind: &'static str, diags: &mut Vec<Diagnostic>| -> bool {
         if name.is_empty() {
             return false;
@@ -169,9 +174,6 @@ pub fn lower(
             true
         }
     };
-    for v in &vars {
-        declare(&v.name, v.span, "a variable", diags);
-    }
     let var_type: HashMap<String, Option<String>> =
         vars.iter().map(|v| (v.name.to_ascii_uppercase(), v.type_name.clone())).collect();
 
@@ -417,6 +419,8 @@ fn lower_association(
             }
         },
     };
+    // Whether a duration variable is TIME and an indicator BOOL is the type checker's to say
+    // (SFC0311, SFC0312); here they are only recorded.
     let duration = match (&a.duration, qualifier.is_timed()) {
         (None, true) => {
             diags.push(
@@ -431,56 +435,26 @@ fn lower_association(
         }
         (Some(d), false) => {
             diags.push(
-                Diagnostic::error(
-                    "SFC0211",
-                    d.span,
-                    format!("qualifier {} takes no duration", qualifier.name()),
-                )
-                .with_element(&a.action.text),
+                Diagnostic::error("SFC0211", d.span, format!("qualifier {} takes no duration", qualifier.name()))
+                    .with_element(&a.action.text),
             );
             return None;
         }
         (None, false) => None,
         (Some(d), true) => match &d.kind {
             ExprKind::Literal(ast::Literal { kind: LiteralKind::Duration(us), .. }) => Some(Duration::Literal(*us)),
-            ExprKind::Name(n) => match var_type.get(&n.key()) {
-                Some(Some(t)) if t == "TIME" || t == "LTIME" => Some(Duration::Variable(n.text.clone())),
-                Some(t) => {
-                    diags.push(Diagnostic::error(
-                        "SFC0311",
-                        d.span,
-                        format!("the duration `{}` has type {}, expected TIME", n.text, t.as_deref().unwrap_or("(derived)")),
-                    ));
-                    return None;
-                }
-                None => {
-                    diags.push(Diagnostic::error("SFC0301", d.span, format!("undeclared variable `{}`", n.text)));
-                    return None;
-                }
-            },
-            ExprKind::Error => return None,
-            _ => {
-                diags.push(Diagnostic::error("SFC0311", d.span, "the duration must be a TIME literal or a TIME variable"));
-                return None;
+            ExprKind::Name(n) if matches!(var_type.get(&n.key()), Some(Some(t)) if t == "TIME" || t == "LTIME") => {
+                Some(Duration::Variable(n.text.clone()))
             }
+            _ => return None,
         },
     };
-    let mut indicators = Vec::new();
-    for ind in &a.indicators {
-        match var_type.get(&ind.key()) {
-            Some(Some(t)) if t == "BOOL" => indicators.push(ind.text.clone()),
-            Some(_) => diags.push(Diagnostic::error(
-                "SFC0312",
-                ind.span,
-                format!("indicator variable `{}` must be BOOL", ind.text),
-            )),
-            None => diags.push(Diagnostic::error(
-                "SFC0312",
-                ind.span,
-                format!("indicator variable `{}` is not declared", ind.text),
-            )),
-        }
-    }
+    let indicators: Vec<String> = a
+        .indicators
+        .iter()
+        .filter(|ind| matches!(var_type.get(&ind.key()), Some(Some(t)) if t == "BOOL"))
+        .map(|ind| ind.text.clone())
+        .collect();
     if !ok {
         return None;
     }

@@ -188,13 +188,21 @@ pub fn target_rules(chart: &Chart, limits: Limits, source: &str, diags: &mut Vec
     }
     let tname = target.name().to_ascii_uppercase();
     if chart.steps.len() as u32 > limits.states {
+        // Reported on the first step beyond the limit, so the editor can point at it.
+        let s = &chart.steps[limits.states as usize];
         diags.push(
             Diagnostic::error(
                 "SFC0401",
-                chart.name_span,
-                format!("{tname} allows at most {} states, chart `{}` has {} steps", limits.states, chart.pou, chart.steps.len()),
+                s.name_span,
+                format!(
+                    "{tname} allows at most {} states: step `{}` is step number {} of {}",
+                    limits.states,
+                    s.name,
+                    limits.states + 1,
+                    chart.steps.len()
+                ),
             )
-            .with_element(&chart.pou),
+            .with_element(&s.name),
         );
     }
     if chart.transitions.len() as u32 > limits.rules {

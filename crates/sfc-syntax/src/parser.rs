@@ -58,6 +58,7 @@ pub fn parse(file: u32, text: &str) -> (SourceUnit, Vec<Diagnostic>) {
     let (all, mut diags) = lex(file, text);
     let mut p = Parser::new(file, text, &all);
     drop(all); // the parser keeps only significant tokens; free the rest before building the tree
+    p.lexical_error_ends = diags.iter().map(|d| d.span.end).collect();
     let unit = p.source_unit();
     diags.append(&mut p.diags);
     (unit, diags)
@@ -111,6 +112,9 @@ struct Parser<'a> {
     last_error_at: Option<usize>,
     depth: u32,
     depth_reported: bool,
+    /// Ends of lexical errors: a syntax error right after a malformed token (an unterminated
+    /// string swallowed its `;`) is a follow-on error and not reported.
+    lexical_error_ends: std::collections::HashSet<u32>,
 }
 
 impl<'a> Parser<'a> {
@@ -166,6 +170,7 @@ impl<'a> Parser<'a> {
             last_error_at: None,
             depth: 0,
             depth_reported: false,
+            lexical_error_ends: Default::default(),
         }
     }
 
@@ -259,11 +264,15 @@ impl<'a> Parser<'a> {
     // Errors and recovery
 
     fn push_error(&mut self, code: &'static str, span: Span, msg: String) {
-        if self.last_error_at == Some(self.pos) {
+        if self.last_error_at == Some(self.pos) || self.after_lexical_error() {
             return;
         }
         self.last_error_at = Some(self.pos);
         self.diags.push(Diagnostic::error(code, span, msg));
+    }
+
+    fn after_lexical_error(&self) -> bool {
+        self.pos > 0 && self.lexical_error_ends.contains(&self.toks[self.pos - 1].end)
     }
 
     /// `expected X, found Y` at the current token.

@@ -1,0 +1,139 @@
+//! The `sfc` command's contract (`interfaces.md`): exit codes, where output goes, the JSON
+//! diagnostic keys, `--explain`, and `fmt` in place, with `--check`, and on standard input.
+
+use std::io::Write;
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output, Stdio};
+
+fn sfc(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_sfc")).args(args).output().expect("sfc runs")
+}
+
+fn root() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../..")
+}
+
+fn temp_dir(name: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("sfc-cli-test-{}-{name}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&d);
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}
+
+const BROKEN: &str = "PROGRAM P\n    VAR_INPUT Start : BOOL; END_VAR\n    INITIAL_STEP S1: END_STEP\n    STEP S2: END_STEP\n    TRANSITION T1 FROM S1 TO S3 := Start; END_TRANSITION\n    TRANSITION T2 FROM S2 TO S1 := Start; END_TRANSITION\nEND_PROGRAM\n";
+
+#[test]
+fn clean_chart_is_silent_and_exits_0() {
+    let ex = root().join("examples/blinker/blinker.st");
+    let out = sfc(&["check", ex.to_str().unwrap()]);
+    assert_eq!(out.status.code(), Some(0), "{}", String::from_utf8_lossy(&out.stderr));
+    assert!(out.stdout.is_empty() && out.stderr.is_empty());
+}
+
+#[test]
+fn errors_go_to_stderr_and_exit_1() {
+    let d = temp_dir("errors");
+    let f = d.join("broken.st");
+    std::fs::write(&f, BROKEN).unwrap();
+    let out = sfc(&["check", f.to_str().unwrap()]);
+    assert_eq!(out.status.code(), Some(1));
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains("error[SFC0208]: undeclared step `S3`"), "{err}");
+    assert!(err.contains("broken.st:5:30"), "{err}");
+    assert!(out.stdout.is_empty());
+}
+
+#[test]
+fn json_has_the_contract_keys() {
+    let d = temp_dir("json");
+    let f = d.join("broken.st");
+    std::fs::write(&f, BROKEN).unwrap();
+    let out = sfc(&["check", "--format", "json", f.to_str().unwrap()]);
+    assert_eq!(out.status.code(), Some(1));
+    let v: serde_json::Value = serde_json::from_slice(&out.stdout).expect("stdout is JSON");
+    let arr = v.as_array().expect("an array");
+    let d0 = arr.iter().find(|d| d["code"] == "SFC0208").expect("SFC0208 reported");
+    for key in ["code", "severity", "message", "file", "line", "column", "end_line", "end_column", "element", "notes", "witness"] {
+        assert!(d0.get(key).is_some(), "missing key {key} in {d0}");
+    }
+    assert_eq!(d0["severity"], "error");
+    assert_eq!(d0["line"], 5);
+    assert_eq!(d0["column"], 30);
+    assert_eq!(d0["end_column"], 32);
+    assert_eq!(d0["element"], "S3");
+    assert!(d0["witness"].is_null());
+}
+
+#[test]
+fn missing_file_and_bad_usage_exit_2() {
+    assert_eq!(sfc(&["check", "/nonexistent/chart.st"]).status.code(), Some(2));
+    assert_eq!(sfc(&["check", "--format", "yaml", "x.st"]).status.code(), Some(2));
+    assert_eq!(sfc(&["frobnicate"]).status.code(), Some(2));
+    for sub in ["check", "fmt"] {
+        assert_eq!(sfc(&[sub, "--help"]).status.code(), Some(0));
+    }
+}
+
+#[test]
+fn explain_prints_the_registry_text() {
+    let out = sfc(&["check", "--explain", "SFC0209"]);
+    assert_eq!(out.status.code(), Some(0));
+    let s = String::from_utf8_lossy(&out.stdout);
+    assert!(s.contains("unknown action qualifier") && s.contains("N R S L D P SD DS SL P1 P0"), "{s}");
+    assert_eq!(sfc(&["check", "--explain", "SFC9999"]).status.code(), Some(2));
+}
+
+#[test]
+fn target_option_applies_atmt_rules() {
+    let d = temp_dir("target");
+    let f = d.join("a.st");
+    std::fs::write(&f, "PROGRAM A\n    INITIAL_STEP S0: END_STEP\n    STEP S1: END_STEP\n    TRANSITION FROM S0 TO S1 := C0; END_TRANSITION\n    TRANSITION FROM S1 TO S0 := NOT C1; END_TRANSITION\nEND_PROGRAM\n").unwrap();
+    let out = sfc(&["check", "--target", "atmt", "--format", "json", f.to_str().unwrap()]);
+    let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    let codes: Vec<&str> = v.as_array().unwrap().iter().map(|d| d["code"].as_str().unwrap()).collect();
+    assert_eq!(codes, vec!["SFC0407"]);
+    let out = sfc(&["check", "--target", "eatmt", f.to_str().unwrap()]);
+    assert_eq!(out.status.code(), Some(0), "{}", String::from_utf8_lossy(&out.stderr));
+}
+
+#[test]
+fn fmt_rewrites_in_place_and_check_reports() {
+    let d = temp_dir("fmt");
+    let f = d.join("messy.st");
+    let messy = "program P\nvar x : BOOL; (* keep me *) end_var\ninitial_step S1: end_step\nstep S2 : end_step\ntransition from S1 to S2 := x; end_transition\ntransition from S2 to S1 := not x; end_transition\nend_program\n";
+    std::fs::write(&f, messy).unwrap();
+    let out = sfc(&["fmt", "--check", f.to_str().unwrap()]);
+    assert_eq!(out.status.code(), Some(1));
+    assert_eq!(std::fs::read_to_string(&f).unwrap(), messy, "--check must not write");
+    assert_eq!(sfc(&["fmt", f.to_str().unwrap()]).status.code(), Some(0));
+    let formatted = std::fs::read_to_string(&f).unwrap();
+    assert!(formatted.contains("(* keep me *)") && formatted.contains("INITIAL_STEP S1: END_STEP"), "{formatted}");
+    assert_eq!(sfc(&["fmt", "--check", f.to_str().unwrap()]).status.code(), Some(0));
+    let leftovers: Vec<_> = std::fs::read_dir(&d).unwrap().flatten().filter(|e| e.file_name() != "messy.st").collect();
+    assert!(leftovers.is_empty(), "temporary files left behind");
+}
+
+#[test]
+fn fmt_refuses_files_with_syntax_errors() {
+    let d = temp_dir("fmt-bad");
+    let f = d.join("bad.st");
+    let bad = "PROGRAM P\nINITIAL_STEP S1: END_STEP\nTRANSITION FROM S1 TO := ; END_TRANSITION\nEND_PROGRAM\n";
+    std::fs::write(&f, bad).unwrap();
+    let out = sfc(&["fmt", f.to_str().unwrap()]);
+    assert_eq!(out.status.code(), Some(1));
+    assert_eq!(std::fs::read_to_string(&f).unwrap(), bad, "a file with errors is left untouched");
+}
+
+#[test]
+fn fmt_filters_standard_input() {
+    let mut child = Command::new(env!("CARGO_BIN_EXE_sfc"))
+        .args(["fmt", "-"])
+        .stdin(Stdio::piped())
+        .stdout(Stdio::piped())
+        .spawn()
+        .unwrap();
+    child.stdin.take().unwrap().write_all(b"program p\nvar x:int;end_var\nx:=x+1;\nend_program").unwrap();
+    let out = child.wait_with_output().unwrap();
+    assert_eq!(out.status.code(), Some(0));
+    assert_eq!(String::from_utf8_lossy(&out.stdout), "PROGRAM p\n    VAR\n        x : int;\n    END_VAR\n\n    x := x + 1;\nEND_PROGRAM\n");
+}

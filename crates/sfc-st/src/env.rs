@@ -1,0 +1,656 @@
+//! The type environment of one source file: declared types, POU interfaces, global variables,
+//! and the standard function blocks.
+
+use crate::resolve::{resolve_spec, Named, TypeNames};
+use crate::stdlib::{std_function, std_function_block, STD_FUNCTION_BLOCK_NAMES};
+use crate::types::Type;
+use crate::value::{const_eval, ConstLookup, Value};
+use sfc_diagnostics::{Diagnostic, Span};
+use sfc_syntax::ast::{
+    DirectAddress, Ident, Initializer, Item, Pou, PouKind, Retain, SourceUnit, TypeDecl, TypeSpecKind, VarBlock,
+    VarKind,
+};
+use std::collections::HashMap;
+
+/// A declared variable (of a POU, a global, or a parameter of a function block type).
+#[derive(Debug, Clone, PartialEq)]
+pub struct VarInfo {
+    /// The name as declared.
+    pub name: String,
+    /// The span of the name in its declaration.
+    pub span: Span,
+    /// The var block it was declared in.
+    pub kind: VarKind,
+    /// Declared in a `VAR … CONSTANT` block.
+    pub constant: bool,
+    /// `RETAIN` / `NON_RETAIN` of its block.
+    pub retain: Option<Retain>,
+    /// The declared type, resolved.
+    pub ty: Type,
+    /// `AT %IX1.2`.
+    pub location: Option<DirectAddress>,
+    /// The initial value as written.
+    pub init: Option<Initializer>,
+    /// The value of a CONSTANT whose initial value is a constant expression.
+    pub value: Option<Value>,
+}
+
+/// A declared data type (`TYPE Name : spec := init; END_TYPE`).
+#[derive(Debug, Clone, PartialEq)]
+pub struct TypeDef {
+    /// The name as declared.
+    pub name: String,
+    /// The type, resolved.
+    pub ty: Type,
+    /// The declared default initial value of the type.
+    pub init: Option<Initializer>,
+    /// For a structure: the initial value of each field, in field order.
+    pub field_inits: Vec<Option<Initializer>>,
+    /// The span of the name in the declaration.
+    pub span: Span,
+}
+
+/// The interface of a FUNCTION, FUNCTION_BLOCK or PROGRAM (user-declared or standard).
+#[derive(Debug, Clone, PartialEq)]
+pub struct PouInterface {
+    /// The name as declared (upper-case for standard function blocks).
+    pub name: String,
+    /// FUNCTION, FUNCTION_BLOCK or PROGRAM.
+    pub kind: PouKind,
+    /// Every variable, in declaration order (inputs, outputs, in-outs, locals, …).
+    pub vars: Vec<VarInfo>,
+    /// The result type of a FUNCTION (`None` for a function without result, FBs and programs).
+    pub return_type: Option<Type>,
+    /// A standard function block (TON, CTU, …).
+    pub standard: bool,
+    /// The span of the POU's name (default for standard blocks).
+    pub span: Span,
+}
+
+impl PouInterface {
+    /// The variable with this name (case-insensitive).
+    pub fn var(&self, name: &str) -> Option<&VarInfo> {
+        self.vars.iter().find(|v| v.name.eq_ignore_ascii_case(name))
+    }
+
+    /// The parameters that positional (non-formal) arguments bind to: VAR_INPUT and
+    /// VAR_IN_OUT, in declaration order.
+    pub fn positional_params(&self) -> impl Iterator<Item = &VarInfo> {
+        self.vars.iter().filter(|v| matches!(v.kind, VarKind::Input | VarKind::InOut))
+    }
+
+    /// The VAR_INPUT parameters.
+    pub fn inputs(&self) -> impl Iterator<Item = &VarInfo> {
+        self.vars.iter().filter(|v| v.kind == VarKind::Input)
+    }
+
+    /// The VAR_OUTPUT parameters.
+    pub fn outputs(&self) -> impl Iterator<Item = &VarInfo> {
+        self.vars.iter().filter(|v| v.kind == VarKind::Output)
+    }
+
+    /// The VAR_IN_OUT parameters.
+    pub fn in_outs(&self) -> impl Iterator<Item = &VarInfo> {
+        self.vars.iter().filter(|v| v.kind == VarKind::InOut)
+    }
+}
+
+/// Everything declared at file level, resolved, plus the standard function blocks.
+#[derive(Debug, Clone, Default)]
+pub struct TypeEnv {
+    types: HashMap<String, TypeDef>,
+    /// User POUs in source order (duplicates included, so each has its interface).
+    pous: Vec<PouInterface>,
+    /// Upper-case name → index into `pous`; the first declaration wins.
+    pou_index: HashMap<String, usize>,
+    std_fbs: HashMap<String, PouInterface>,
+    globals: Vec<VarInfo>,
+    global_index: HashMap<String, usize>,
+    /// Upper-case enumerated value → the enumerated types (named or inline in a global) that
+    /// declare it.
+    enum_values: HashMap<String, Vec<Type>>,
+}
+
+impl TypeEnv {
+    /// An environment with only the standard library (no file declarations).
+    pub fn standard() -> TypeEnv {
+        let mut env = TypeEnv::default();
+        for name in STD_FUNCTION_BLOCK_NAMES {
+            if let Some(fb) = standard_fb(name) {
+                env.std_fbs.insert(name.to_string(), fb);
+            }
+        }
+        env
+    }
+
+    /// Builds the environment of a parsed file, reporting unknown, duplicate and malformed
+    /// types (SFC0313, SFC0318, SFC0105, SFC0315), duplicate variables (SFC0206), located
+    /// variables whose type does not fit the address, and VAR_EXTERNAL declarations that
+    /// disagree with the global (SFC0302).
+    pub fn from_unit(unit: &SourceUnit) -> (TypeEnv, Vec<Diagnostic>) {
+        let mut diags = Vec::new();
+        let mut env = TypeEnv::standard();
+        let mut b = Builder::default();
+
+        // Names first, so that declarations may refer to types and blocks declared later.
+        for item in &unit.items {
+            match item {
+                Item::Types(block) => {
+                    for decl in &block.decls {
+                        let key = decl.name.key();
+                        if let Some(prev) = b.name_span(&key) {
+                            diags.push(duplicate(&decl.name, prev, "type"));
+                        } else if reserved(&key) {
+                            diags.push(reserved_name(&decl.name, "type"));
+                        } else {
+                            b.decls.insert(key, decl);
+                        }
+                    }
+                }
+                Item::Pou(pou) => {
+                    let key = pou.name.key();
+                    if let Some(prev) = b.name_span(&key) {
+                        diags.push(duplicate(&pou.name, prev, pou.kind.keyword()));
+                    } else if reserved(&key) {
+                        diags.push(reserved_name(&pou.name, pou.kind.keyword()));
+                    } else {
+                        b.pou_kinds.insert(key, (pou.kind, pou.name.span));
+                    }
+                }
+                Item::Globals(_) | Item::Verbatim(_) => {}
+            }
+        }
+
+        // Global constants, needed by array bounds and string lengths everywhere.
+        let global_blocks: Vec<&VarBlock> =
+            unit.items.iter().filter_map(|i| if let Item::Globals(g) = i { Some(g) } else { None }).collect();
+        for block in &global_blocks {
+            b.consts.extend(block_constants(block, &b.consts));
+        }
+
+        // Every TYPE declaration (resolving is lazy and memoised, so order does not matter).
+        let mut keys: Vec<(String, Span)> = b.decls.iter().map(|(k, d)| (k.clone(), d.name.span)).collect();
+        keys.sort_by_key(|(_, span)| *span);
+        for (key, _) in &keys {
+            b.resolve_decl(key, &mut diags);
+        }
+
+        // Global variables.
+        let mut seen: HashMap<String, Span> = HashMap::new();
+        for block in &global_blocks {
+            for var in b.block_vars(block, &mut diags) {
+                let key = var.name.to_ascii_uppercase();
+                if let Some(prev) = seen.get(&key) {
+                    diags.push(duplicate_var(&var, *prev));
+                    continue;
+                }
+                seen.insert(key.clone(), var.span);
+                env.global_index.insert(key, env.globals.len());
+                env.globals.push(var);
+            }
+        }
+
+        // POU interfaces.
+        for item in &unit.items {
+            if let Item::Pou(pou) = item {
+                let iface = b.interface(pou, &mut diags);
+                let key = pou.name.key();
+                let first = b.pou_kinds.get(&key).is_some_and(|(_, span)| *span == pou.name.span);
+                if first {
+                    env.pou_index.insert(key, env.pous.len());
+                }
+                env.pous.push(iface);
+            }
+        }
+
+        // VAR_GLOBAL inside a PROGRAM (IEC 61131-3 2nd ed.) is reachable from the blocks it
+        // calls through VAR_EXTERNAL, like a file-level global.
+        let program_globals: Vec<VarInfo> = env
+            .pous
+            .iter()
+            .filter(|p| p.kind == PouKind::Program)
+            .flat_map(|p| p.vars.iter().filter(|v| v.kind == VarKind::Global).cloned())
+            .collect();
+        for var in program_globals {
+            let key = var.name.to_ascii_uppercase();
+            if let Some(prev) = seen.get(&key) {
+                diags.push(duplicate_var(&var, *prev));
+                continue;
+            }
+            seen.insert(key.clone(), var.span);
+            env.global_index.insert(key, env.globals.len());
+            env.globals.push(var);
+        }
+
+        // A VAR_EXTERNAL must repeat the type of its global.
+        for pou in &env.pous {
+            for var in pou.vars.iter().filter(|v| v.kind == VarKind::External) {
+                let Some(g) = env.global(&var.name) else { continue };
+                if !g.ty.is_error() && !var.ty.is_error() && g.ty != var.ty {
+                    diags.push(
+                        Diagnostic::new(
+                            "SFC0302",
+                            var.span,
+                            format!(
+                                "type mismatch: VAR_EXTERNAL `{}` is declared `{}`, but the global is `{}`",
+                                var.name, var.ty, g.ty
+                            ),
+                        )
+                        .with_label(g.span, "global declared here"),
+                    );
+                }
+            }
+        }
+
+        env.types = b.resolved;
+        let mut index: HashMap<String, Vec<Type>> = HashMap::new();
+        let mut named: Vec<&TypeDef> = env.types.values().collect();
+        named.sort_by_key(|d| d.span);
+        let enum_types = named.iter().map(|d| &d.ty).chain(env.globals.iter().map(|v| &v.ty));
+        for ty in enum_types {
+            if let Type::Enum { values, .. } = ty {
+                for (v, _) in values {
+                    let list = index.entry(v.to_ascii_uppercase()).or_default();
+                    if !list.contains(ty) {
+                        list.push(ty.clone());
+                    }
+                }
+            }
+        }
+        env.enum_values = index;
+        (env, diags)
+    }
+
+    /// A declared data type by name (case-insensitive).
+    pub fn type_def(&self, name: &str) -> Option<&TypeDef> {
+        self.types.get(&name.to_ascii_uppercase())
+    }
+
+    /// All declared data types.
+    pub fn type_defs(&self) -> impl Iterator<Item = &TypeDef> {
+        self.types.values()
+    }
+
+    /// A user POU by name (the first one declared with that name).
+    pub fn pou(&self, name: &str) -> Option<&PouInterface> {
+        self.pou_index.get(&name.to_ascii_uppercase()).and_then(|&i| self.pous.get(i))
+    }
+
+    /// The interface of this very POU of the file (found by the span of its name, so each of
+    /// two POUs with the same name has its own).
+    pub fn interface_of(&self, pou: &Pou) -> Option<&PouInterface> {
+        self.pous.iter().find(|p| p.span == pou.name.span && p.name == pou.name.text)
+    }
+
+    /// A user FUNCTION by name.
+    pub fn function(&self, name: &str) -> Option<&PouInterface> {
+        self.pou(name).filter(|p| p.kind == PouKind::Function)
+    }
+
+    /// A function block type (user or standard) by name; programs count too, since a program
+    /// type can be instantiated like a block.
+    pub fn function_block(&self, name: &str) -> Option<&PouInterface> {
+        let key = name.to_ascii_uppercase();
+        if let Some(p) = self.pou(&key).filter(|p| p.kind != PouKind::Function) {
+            return Some(p);
+        }
+        self.std_fbs.get(&key)
+    }
+
+    /// The interface of the function block type of an instance type.
+    pub fn fb_of(&self, ty: &Type) -> Option<&PouInterface> {
+        match ty {
+            Type::FunctionBlock(name) => self.function_block(name),
+            _ => None,
+        }
+    }
+
+    /// File-level global variables, in declaration order.
+    pub fn globals(&self) -> &[VarInfo] {
+        &self.globals
+    }
+
+    /// The position of a global variable in [`TypeEnv::globals`].
+    pub(crate) fn global_position(&self, name: &str) -> Option<usize> {
+        self.global_index.get(&name.to_ascii_uppercase()).copied()
+    }
+
+    /// A global variable by name (case-insensitive).
+    pub fn global(&self, name: &str) -> Option<&VarInfo> {
+        self.global_index.get(&name.to_ascii_uppercase()).and_then(|&i| self.globals.get(i))
+    }
+
+    /// The enumerated types (named, or inline in a global declaration) that have a value of
+    /// this name.
+    pub fn enum_types_with_value(&self, name: &str) -> &[Type] {
+        self.enum_values.get(&name.to_ascii_uppercase()).map(Vec::as_slice).unwrap_or(&[])
+    }
+
+    /// The names of user functions, function blocks, programs and types (for suggestions).
+    pub(crate) fn declared_names(&self) -> impl Iterator<Item = &str> {
+        self.pous.iter().map(|p| p.name.as_str()).chain(self.types.values().map(|t| t.name.as_str()))
+    }
+
+    /// Resolves a type as written in a declaration; named constants come from `consts`.
+    pub fn resolve_type_spec(
+        &self,
+        spec: &sfc_syntax::ast::TypeSpec,
+        consts: &dyn ConstLookup,
+        diags: &mut Vec<Diagnostic>,
+    ) -> Type {
+        let mut names = EnvNames { env: self, consts };
+        resolve_spec(&mut names, spec, None, diags)
+    }
+}
+
+impl ConstLookup for TypeEnv {
+    fn constant(&self, name: &str) -> Option<Value> {
+        self.global(name).filter(|v| v.constant).and_then(|v| v.value)
+    }
+}
+
+/// Names reserved by the language and the standard library.
+fn reserved(key: &str) -> bool {
+    Type::elementary(key).is_some()
+        || crate::types::Generic::from_name(key).is_some()
+        || std_function(key).is_some()
+        || std_function_block(key).is_some()
+}
+
+fn duplicate(name: &Ident, prev: Span, what: &str) -> Diagnostic {
+    Diagnostic::new("SFC0318", name.span, format!("`{}` is declared more than once ({what})", name.text))
+        .with_label(prev, "first declared here")
+}
+
+fn reserved_name(name: &Ident, what: &str) -> Diagnostic {
+    Diagnostic::new(
+        "SFC0318",
+        name.span,
+        format!("{what} `{}` redefines a standard type, function or function block", name.text),
+    )
+}
+
+fn duplicate_var(var: &VarInfo, prev: Span) -> Diagnostic {
+    Diagnostic::new("SFC0206", var.span, format!("variable `{}` is declared more than once", var.name))
+        .with_label(prev, "first declared here")
+}
+
+/// The interface of a standard function block.
+fn standard_fb(name: &str) -> Option<PouInterface> {
+    let params = std_function_block(name)?;
+    let vars = params
+        .into_iter()
+        .map(|(n, kind, ty)| VarInfo {
+            name: n.to_string(),
+            span: Span::default(),
+            kind,
+            constant: false,
+            retain: None,
+            ty,
+            location: None,
+            init: None,
+            value: None,
+        })
+        .collect();
+    Some(PouInterface {
+        name: name.to_ascii_uppercase(),
+        kind: PouKind::FunctionBlock,
+        vars,
+        return_type: None,
+        standard: true,
+        span: Span::default(),
+    })
+}
+
+/// Evaluates the CONSTANT declarations of a block in order (later ones may use earlier ones).
+pub(crate) fn block_constants(block: &VarBlock, outer: &dyn ConstLookup) -> HashMap<String, Value> {
+    struct Chain<'a> {
+        local: &'a HashMap<String, Value>,
+        outer: &'a dyn ConstLookup,
+    }
+    impl ConstLookup for Chain<'_> {
+        fn constant(&self, name: &str) -> Option<Value> {
+            self.local.get(&name.to_ascii_uppercase()).copied().or_else(|| self.outer.constant(name))
+        }
+    }
+    let mut local = HashMap::new();
+    if !block.constant {
+        return local;
+    }
+    for decl in &block.decls {
+        let Some(Initializer::Expr(e)) = &decl.init else { continue };
+        let value = const_eval(e, &Chain { local: &local, outer });
+        if let Some(v) = value {
+            for n in &decl.names {
+                local.insert(n.key(), v);
+            }
+        }
+    }
+    local
+}
+
+impl ConstLookup for HashMap<String, Value> {
+    fn constant(&self, name: &str) -> Option<Value> {
+        self.get(&name.to_ascii_uppercase()).copied()
+    }
+}
+
+/// Type names as seen after the environment is built.
+struct EnvNames<'a> {
+    env: &'a TypeEnv,
+    consts: &'a dyn ConstLookup,
+}
+
+impl TypeNames for EnvNames<'_> {
+    fn named_type(&mut self, ident: &Ident, _diags: &mut Vec<Diagnostic>) -> Named {
+        let key = ident.key();
+        if let Some(def) = self.env.types.get(&key) {
+            return Named::Type(def.ty.clone());
+        }
+        match self.env.pou(&key) {
+            Some(p) if p.kind == PouKind::Function => Named::NotAType("a function"),
+            Some(_) => Named::Type(Type::FunctionBlock(key)),
+            None if std_function_block(&key).is_some() => Named::Type(Type::FunctionBlock(key)),
+            None if std_function(&key).is_some() => Named::NotAType("a standard function"),
+            None => Named::Unknown,
+        }
+    }
+    fn constant(&self, name: &str) -> Option<Value> {
+        self.consts.constant(name)
+    }
+    fn candidates(&self) -> Vec<String> {
+        self.env.declared_names().map(str::to_string).collect()
+    }
+}
+
+/// Deeper chains of type definitions (`A : B; B : C; …`) are refused rather than risking the
+/// stack.
+const MAX_TYPE_NESTING: usize = 128;
+
+/// State while building a [`TypeEnv`]: TYPE declarations are resolved on demand so that they
+/// may refer to each other in any order, and cycles are reported instead of looping.
+#[derive(Default)]
+struct Builder<'a> {
+    decls: HashMap<String, &'a TypeDecl>,
+    resolved: HashMap<String, TypeDef>,
+    in_progress: Vec<String>,
+    pou_kinds: HashMap<String, (PouKind, Span)>,
+    /// Global constants.
+    consts: HashMap<String, Value>,
+    /// Constants of the POU whose interface is being resolved.
+    local_consts: HashMap<String, Value>,
+}
+
+impl<'a> Builder<'a> {
+    /// Where a type or POU name was first declared.
+    fn name_span(&self, key: &str) -> Option<Span> {
+        self.decls.get(key).map(|d| d.name.span).or_else(|| self.pou_kinds.get(key).map(|(_, s)| *s))
+    }
+
+    fn resolve_decl(&mut self, key: &str, diags: &mut Vec<Diagnostic>) -> Type {
+        if let Some(def) = self.resolved.get(key) {
+            return def.ty.clone();
+        }
+        let Some(decl) = self.decls.get(key).copied() else { return Type::Error };
+        if self.in_progress.len() > MAX_TYPE_NESTING {
+            diags.push(Diagnostic::new(
+                "SFC0313",
+                decl.name.span,
+                format!("type `{}` is defined through too many other types", decl.name.text),
+            ));
+            return Type::Error;
+        }
+        if self.in_progress.iter().any(|k| k == key) {
+            diags.push(Diagnostic::new(
+                "SFC0313",
+                decl.name.span,
+                format!("type `{}` is defined in terms of itself", decl.name.text),
+            ));
+            return Type::Error;
+        }
+        self.in_progress.push(key.to_string());
+        let ty = resolve_spec(self, &decl.spec, Some(&decl.name.text), diags);
+        self.in_progress.pop();
+        let field_inits = match &decl.spec.kind {
+            TypeSpecKind::Struct(fields) => {
+                fields.iter().flat_map(|f| f.names.iter().map(|_| f.init.clone())).collect()
+            }
+            _ => Vec::new(),
+        };
+        // A cycle found deeper down may already have stored an entry; keep the first.
+        self.resolved.entry(key.to_string()).or_insert(TypeDef {
+            name: decl.name.text.clone(),
+            ty: ty.clone(),
+            init: decl.init.clone(),
+            field_inits,
+            span: decl.name.span,
+        });
+        ty
+    }
+
+    /// The variables of one var block, with types resolved and locations checked.
+    fn block_vars(&mut self, block: &VarBlock, diags: &mut Vec<Diagnostic>) -> Vec<VarInfo> {
+        let consts: HashMap<String, Value> = if block.constant {
+            let chain = ChainConsts { a: &self.local_consts, b: &self.consts };
+            block_constants(block, &chain)
+        } else {
+            HashMap::new()
+        };
+        let mut out = Vec::new();
+        for decl in &block.decls {
+            let ty = resolve_spec(self, &decl.ty, None, diags);
+            if let Some(addr) = &decl.location {
+                check_location(addr, &ty, decl.names.first(), diags);
+            }
+            for name in &decl.names {
+                out.push(VarInfo {
+                    name: name.text.clone(),
+                    span: name.span,
+                    kind: block.kind,
+                    constant: block.constant,
+                    retain: block.retain,
+                    ty: ty.clone(),
+                    location: decl.location.clone(),
+                    init: decl.init.clone(),
+                    value: consts.get(&name.key()).copied(),
+                });
+            }
+        }
+        out
+    }
+
+    fn interface(&mut self, pou: &Pou, diags: &mut Vec<Diagnostic>) -> PouInterface {
+        self.local_consts.clear();
+        for block in &pou.var_blocks {
+            let chain = ChainConsts { a: &self.local_consts, b: &self.consts };
+            let c = block_constants(block, &chain);
+            self.local_consts.extend(c);
+        }
+        let mut vars: Vec<VarInfo> = Vec::new();
+        let mut seen: HashMap<String, Span> = HashMap::new();
+        for block in &pou.var_blocks {
+            for var in self.block_vars(block, diags) {
+                let key = var.name.to_ascii_uppercase();
+                if let Some(prev) = seen.get(&key) {
+                    diags.push(duplicate_var(&var, *prev));
+                    continue;
+                }
+                seen.insert(key, var.span);
+                vars.push(var);
+            }
+        }
+        let return_type = pou.return_type.as_ref().map(|spec| resolve_spec(self, spec, None, diags));
+        self.local_consts.clear();
+        PouInterface {
+            name: pou.name.text.clone(),
+            kind: pou.kind,
+            vars,
+            return_type,
+            standard: false,
+            span: pou.name.span,
+        }
+    }
+}
+
+struct ChainConsts<'a> {
+    a: &'a HashMap<String, Value>,
+    b: &'a HashMap<String, Value>,
+}
+
+impl ConstLookup for ChainConsts<'_> {
+    fn constant(&self, name: &str) -> Option<Value> {
+        let key = name.to_ascii_uppercase();
+        self.a.get(&key).or_else(|| self.b.get(&key)).copied()
+    }
+}
+
+impl TypeNames for Builder<'_> {
+    fn named_type(&mut self, ident: &Ident, diags: &mut Vec<Diagnostic>) -> Named {
+        let key = ident.key();
+        if self.decls.contains_key(&key) {
+            return Named::Type(self.resolve_decl(&key, diags));
+        }
+        match self.pou_kinds.get(&key) {
+            Some((PouKind::Function, _)) => Named::NotAType("a function"),
+            Some(_) => Named::Type(Type::FunctionBlock(key)),
+            None if std_function_block(&key).is_some() => Named::Type(Type::FunctionBlock(key)),
+            None if std_function(&key).is_some() => Named::NotAType("a standard function"),
+            None => Named::Unknown,
+        }
+    }
+    fn constant(&self, name: &str) -> Option<Value> {
+        ChainConsts { a: &self.local_consts, b: &self.consts }.constant(name)
+    }
+    fn candidates(&self) -> Vec<String> {
+        self.decls.values().map(|d| d.name.text.clone()).collect()
+    }
+}
+
+/// Checks that a located variable's type has the size of its address (`%IX` a BOOL, `%IW` a
+/// 16-bit type, …); arrays are checked by their element type.
+fn check_location(addr: &DirectAddress, ty: &Type, name: Option<&Ident>, diags: &mut Vec<Diagnostic>) {
+    if addr.path.is_empty() {
+        return; // `%I*`: the size is decided at configuration time.
+    }
+    let elem = match ty {
+        Type::Array { elem, .. } => elem.as_ref(),
+        t => t,
+    };
+    let Some(width) = elem.bit_width() else { return };
+    let (ok, wanted) = match addr.size.to_ascii_uppercase() {
+        'X' => (width == 1, "a single bit (BOOL)"),
+        'B' => (width == 8 && !elem.is_bool(), "8 bits"),
+        'W' => (width == 16, "16 bits"),
+        'D' => (width == 32, "32 bits"),
+        'L' => (width == 64, "64 bits"),
+        _ => return,
+    };
+    if !ok {
+        let who = name.map(|n| format!("`{}`", n.text)).unwrap_or_else(|| "the variable".to_string());
+        diags.push(Diagnostic::new(
+            "SFC0302",
+            addr.span,
+            format!("type mismatch: `{}` holds {wanted}, but {who} is `{ty}`", addr.text),
+        ));
+    }
+}

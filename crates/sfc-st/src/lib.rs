@@ -1,0 +1,182 @@
+//! Structured Text typing, shared by the model checker, simulator and analyzer.
+//!
+//! * [`Type`] — IEC 61131-3 data types, generic classes and implicit widening.
+//! * [`TypeEnv`] — what a file declares: types, POU interfaces, globals, plus the standard
+//!   function blocks; standard functions are in [`stdlib`].
+//! * [`Scope`] — the names visible in one POU's code (variables, globals, steps, actions) and
+//!   how the code used them.
+//! * [`Checker`] — type checking of ST statements and expressions, transition conditions (ST
+//!   and IL), action associations and initial values, with located diagnostics (SFC03xx).
+//! * [`const_eval`] — compile-time integer/real/BOOL/TIME constants.
+//!
+//! [`check_unit`] runs all of it over a parsed file. A caller that holds the chart elements
+//! itself (the chart model) uses the parts:
+//!
+//! ```text
+//! let (env, mut diags) = TypeEnv::from_unit(&unit);          // types, interfaces, globals
+//! let mut scope = Scope::for_pou(&env, pou);                 // the POU's variables + globals
+//! scope.add_step(&step.name)?; scope.add_action(&action.name)?;
+//! let mut ck = Checker::new(&mut scope);
+//! ck.check_declarations();                                   // initial values
+//! ck.set_element(Some(name)); ck.check_condition(&t.condition); ck.check_action_body(&a.body);
+//! diags.extend(ck.finish()); diags.extend(scope.unused_diagnostics());
+//! ```
+
+#![warn(missing_docs)]
+
+mod calls;
+mod check;
+mod env;
+mod il;
+mod resolve;
+mod scope;
+pub mod stdlib;
+mod suggest;
+mod types;
+mod value;
+
+#[cfg(test)]
+mod tests;
+
+pub use check::Checker;
+pub use env::{PouInterface, TypeDef, TypeEnv, VarInfo};
+pub use scope::{Binding, Scope, Usage};
+pub use types::{Generic, Type};
+pub use value::{const_eval, ConstLookup, NoConstants, Value};
+
+use sfc_diagnostics::Diagnostic;
+use sfc_syntax::ast::{Body, Item, Pou, SfcElement, SourceUnit};
+
+/// Type-checks a whole file: declarations, global and type initial values, and the code of
+/// every POU (ST and IL bodies, and for charts the transition conditions, action bodies,
+/// association durations and indicators), plus SFC0317 warnings for unused locals.
+///
+/// Chart structure (steps, links, names shared by steps, actions and variables, undeclared
+/// actions) is the model's to check; clashing chart names are skipped here.
+pub fn check_unit(unit: &SourceUnit) -> Vec<Diagnostic> {
+    check_unit_with(unit, &mut |_, _| {})
+}
+
+/// [`check_unit`] with a hook that may add names to each POU's scope before its code is
+/// checked (e.g. the implicit BOOL inputs `C0`…`C15` of an ATMT chart, via
+/// [`Scope::declare`]).
+pub fn check_unit_with(unit: &SourceUnit, prepare: &mut dyn FnMut(&mut Scope<'_>, &Pou)) -> Vec<Diagnostic> {
+    let (env, mut diags) = TypeEnv::from_unit(unit);
+    {
+        let mut scope = Scope::globals_only(&env);
+        let mut ck = Checker::new(&mut scope);
+        ck.check_declarations();
+        let mut defs: Vec<&TypeDef> = env.type_defs().collect();
+        defs.sort_by_key(|d| d.span);
+        for def in defs {
+            if let Some(init) = &def.init {
+                ck.check_initializer(init, &def.ty, &def.name);
+            }
+            if let Type::Struct { fields, .. } = &def.ty {
+                for ((name, ty), init) in fields.iter().zip(&def.field_inits) {
+                    if let Some(init) = init {
+                        ck.check_initializer(init, ty, &format!("{}.{name}", def.name));
+                    }
+                }
+            }
+        }
+        diags.extend(ck.finish());
+    }
+    for item in &unit.items {
+        if let Item::Pou(pou) = item {
+            diags.extend(check_pou_with(&env, pou, prepare));
+        }
+    }
+    diags
+}
+
+/// Type-checks one POU of the file `env` was built from (see [`check_unit`]).
+pub fn check_pou(env: &TypeEnv, pou: &Pou) -> Vec<Diagnostic> {
+    check_pou_with(env, pou, &mut |_, _| {})
+}
+
+fn check_pou_with(env: &TypeEnv, pou: &Pou, prepare: &mut dyn FnMut(&mut Scope<'_>, &Pou)) -> Vec<Diagnostic> {
+    let mut scope = Scope::for_pou(env, pou);
+    if let Body::Sfc(elements) = &pou.body {
+        for el in elements {
+            // A clash is the model's SFC0206; the first declaration keeps the name.
+            let _ = match el {
+                SfcElement::Step(s) => scope.add_step(&s.name),
+                SfcElement::Action(a) => scope.add_action(&a.name),
+                SfcElement::Transition(_) => Ok(()),
+            };
+        }
+    }
+    prepare(&mut scope, pou);
+    let mut ck = Checker::new(&mut scope);
+    ck.check_declarations();
+    match &pou.body {
+        Body::St(stmts) => ck.check_stmts(stmts),
+        Body::Il(il) => ck.check_il(il),
+        Body::Sfc(elements) => {
+            let names = transition_names(&ck, elements);
+            let mut transitions = names.into_iter();
+            for el in elements {
+                match el {
+                    SfcElement::Step(s) => {
+                        ck.set_element(Some(s.name.text.clone()));
+                        for a in &s.associations {
+                            ck.check_association(a);
+                        }
+                    }
+                    SfcElement::Transition(t) => {
+                        ck.set_element(transitions.next());
+                        if let Some(p) = &t.priority {
+                            ck.check_priority(p);
+                        }
+                        ck.check_condition(&t.condition);
+                    }
+                    SfcElement::Action(a) => {
+                        ck.set_element(Some(a.name.text.clone()));
+                        ck.check_action_body(&a.body);
+                    }
+                }
+            }
+            ck.set_element(None);
+        }
+    }
+    let mut diags = ck.finish();
+    diags.extend(scope.unused_diagnostics());
+    diags
+}
+
+/// The names of the transitions in declaration order: as declared, or `T<n>` (`n` the
+/// 1-based position among the TRANSITION declarations), or the first free `T<n>_k` when that
+/// name is taken (semantics.md, "Names").
+fn transition_names(ck: &Checker<'_, '_>, elements: &[SfcElement]) -> Vec<String> {
+    let declared: Vec<String> = elements
+        .iter()
+        .filter_map(|e| match e {
+            SfcElement::Transition(t) => t.name.as_ref().map(|n| n.key()),
+            _ => None,
+        })
+        .collect();
+    let taken = |name: &str| ck.scope().lookup(name).is_some() || declared.iter().any(|d| d.eq_ignore_ascii_case(name));
+    let mut out: Vec<String> = Vec::new();
+    let mut n = 0usize;
+    for e in elements {
+        let SfcElement::Transition(t) = e else { continue };
+        n += 1;
+        let name = match &t.name {
+            Some(id) => id.text.clone(),
+            None => {
+                let base = format!("T{n}");
+                if !taken(&base) && !out.iter().any(|o| o.eq_ignore_ascii_case(&base)) {
+                    base
+                } else {
+                    (1..)
+                        .map(|k| format!("{base}_{k}"))
+                        .find(|c| !taken(c) && !out.iter().any(|o| o.eq_ignore_ascii_case(c)))
+                        .unwrap_or(base)
+                }
+            }
+        };
+        out.push(name);
+    }
+    out
+}
