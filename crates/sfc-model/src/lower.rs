@@ -229,6 +229,7 @@ pub fn lower(
     }
 
     // Associations.
+    let action_names: Vec<String> = actions.iter().map(|a| a.name.clone()).collect();
     for el in elements.iter() {
         let ast::SfcElement::Step(s) = el else { continue };
         let Some(&sid) = step_index.get(&s.name.key()) else { continue };
@@ -236,7 +237,7 @@ pub fn lower(
             continue; // a duplicate step declaration: its associations were not lowered
         }
         for a in &s.associations {
-            if let Some(assoc) = lower_association(a, &action_index, &var_type, diags) {
+            if let Some(assoc) = lower_association(a, &action_index, &action_names, &var_type, diags) {
                 steps[sid].associations.push(assoc);
             }
         }
@@ -288,7 +289,7 @@ pub fn lower(
                     None => {
                         let mut d = Diagnostic::error("SFC0208", id.span, format!("undeclared step `{}`", id.text))
                             .with_element(&id.text);
-                        if let Some(s) = closest(&id.text, step_index.keys().map(|k| steps[step_index[k]].name.as_str())) {
+                        if let Some(s) = closest(&id.text, steps.iter().map(|s| s.name.as_str())) {
                             d = d.with_note(format!("did you mean `{s}`?"));
                         }
                         diags.push(d);
@@ -367,6 +368,7 @@ pub fn lower(
 fn lower_association(
     a: &ast::ActionAssociation,
     action_index: &HashMap<String, ActionId>,
+    action_names: &[String],
     var_type: &HashMap<String, Option<String>>,
     diags: &mut Vec<Diagnostic>,
 ) -> Option<Association> {
@@ -393,7 +395,7 @@ fn lower_association(
             None => {
                 let mut d = Diagnostic::error("SFC0207", a.action.span, format!("undeclared action `{}`", a.action.text))
                     .with_element(&a.action.text);
-                let candidates = action_index.keys().map(String::as_str);
+                let candidates = action_names.iter().map(String::as_str);
                 if let Some(s) = closest(&a.action.text, candidates) {
                     d = d.with_note(format!("did you mean `{s}`?"));
                 } else {
@@ -461,7 +463,8 @@ fn lower_association(
     Some(Association { action: a.action.text.clone(), target, qualifier, duration, indicators, span: a.span })
 }
 
-/// The candidate within edit distance 2 of `name` (case-insensitive), if exactly one is best.
+/// The first candidate (in the given order) at the smallest edit distance, at most 2, from
+/// `name` (case-insensitive); deterministic because callers pass declaration order.
 pub fn closest<'a>(name: &str, candidates: impl Iterator<Item = &'a str>) -> Option<&'a str> {
     let n = name.to_ascii_uppercase();
     let mut best: Option<(usize, &str)> = None;

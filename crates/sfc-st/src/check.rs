@@ -54,8 +54,10 @@ pub struct Checker<'s, 'e> {
     loop_depth: u32,
     depth: u32,
     too_deep: bool,
-    /// The type of every checked expression, by span, for the simulator and the analyzer.
+    /// The type of every checked expression, by span, for the simulator and the analyzer;
+    /// filled only after [`Checker::keep_types`] (plain checking does not pay for it).
     types: HashMap<Span, Type>,
+    keep_types: bool,
 }
 
 impl<'s, 'e> Checker<'s, 'e> {
@@ -71,7 +73,13 @@ impl<'s, 'e> Checker<'s, 'e> {
             depth: 0,
             too_deep: false,
             types: HashMap::new(),
+            keep_types: false,
         }
+    }
+
+    /// Records the type of every expression checked from now on (see [`Checker::expr_type`]).
+    pub fn keep_types(&mut self) {
+        self.keep_types = true;
     }
 
     /// The chart element (step, transition, action) that following diagnostics concern.
@@ -102,6 +110,9 @@ impl<'s, 'e> Checker<'s, 'e> {
     }
 
     pub(crate) fn record(&mut self, span: Span, ty: &Type) {
+        if !self.keep_types {
+            return;
+        }
         self.types.insert(span, ty.clone());
     }
 

@@ -149,14 +149,20 @@ fn check_pou_with(env: &TypeEnv, pou: &Pou, prepare: &mut dyn FnMut(&mut Scope<'
 /// 1-based position among the TRANSITION declarations), or the first free `T<n>_k` when that
 /// name is taken (semantics.md, "Names").
 fn transition_names(ck: &Checker<'_, '_>, elements: &[SfcElement]) -> Vec<String> {
-    let declared: Vec<String> = elements
+    use std::collections::HashSet;
+    let declared: HashSet<String> = elements
         .iter()
         .filter_map(|e| match e {
             SfcElement::Transition(t) => t.name.as_ref().map(|n| n.key()),
             _ => None,
         })
         .collect();
-    let taken = |name: &str| ck.scope().lookup(name).is_some() || declared.iter().any(|d| d.eq_ignore_ascii_case(name));
+    // Names given so far, upper-cased: a set, so a chart of many unnamed transitions stays linear.
+    let mut given: HashSet<String> = HashSet::new();
+    let free = |name: &str, given: &HashSet<String>| {
+        let key = name.to_ascii_uppercase();
+        ck.scope().lookup(name).is_none() && !declared.contains(&key) && !given.contains(&key)
+    };
     let mut out: Vec<String> = Vec::new();
     let mut n = 0usize;
     for e in elements {
@@ -166,16 +172,14 @@ fn transition_names(ck: &Checker<'_, '_>, elements: &[SfcElement]) -> Vec<String
             Some(id) => id.text.clone(),
             None => {
                 let base = format!("T{n}");
-                if !taken(&base) && !out.iter().any(|o| o.eq_ignore_ascii_case(&base)) {
+                if free(&base, &given) {
                     base
                 } else {
-                    (1..)
-                        .map(|k| format!("{base}_{k}"))
-                        .find(|c| !taken(c) && !out.iter().any(|o| o.eq_ignore_ascii_case(c)))
-                        .unwrap_or(base)
+                    (1..).map(|k| format!("{base}_{k}")).find(|c| free(c, &given)).unwrap_or(base)
                 }
             }
         };
+        given.insert(name.to_ascii_uppercase());
         out.push(name);
     }
     out

@@ -534,6 +534,7 @@ fn expression_types_are_recorded() {
     let Some(sfc_syntax::ast::Item::Pou(pou)) = unit.items.first() else { panic!("no POU") };
     let mut scope = Scope::for_pou(&env, pou);
     let mut ck = Checker::new(&mut scope);
+    ck.keep_types();
     let (stmts, _) = sfc_syntax::parse_statements(0, "s := s + 1; r := i * 2; r := 2 * 1.5;");
     ck.check_stmts(&stmts);
     let ty_of = |ck: &Checker<'_, '_>, text: &str, nth: usize| {

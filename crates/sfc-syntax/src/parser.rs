@@ -1580,7 +1580,27 @@ split it with intermediate variables"
                 return Expr { kind: ExprKind::Error, span };
             }
         };
+        // Like operator chains, `a.b.c…` and `a[1][2]…` nest the tree one level per link.
+        let mut chain = 0;
         loop {
+            if self.at(TokenKind::Dot) || self.at(TokenKind::LBracket) {
+                chain += 1;
+                if self.depth + chain > MAX_DEPTH {
+                    self.depth += chain;
+                    self.enter();
+                    self.depth -= chain;
+                    while self.at(TokenKind::Dot) || self.at(TokenKind::LBracket) || self.at(TokenKind::Ident) || self.at(TokenKind::Int) {
+                        if self.at(TokenKind::LBracket) {
+                            self.bump();
+                            self.skip_nested();
+                            self.eat(TokenKind::RBracket);
+                        } else {
+                            self.bump();
+                        }
+                    }
+                    return Expr { kind: ExprKind::Error, span: self.span_from(start) };
+                }
+            }
             if self.at(TokenKind::Dot) {
                 self.bump();
                 let m = self.tok();

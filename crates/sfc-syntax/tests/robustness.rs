@@ -97,3 +97,11 @@ fn else_is_the_last_branch() {
     let p = program_with("IF x THEN x := TRUE; ELSE x := FALSE; ELSIF x THEN x := TRUE; END_IF;");
     assert!(codes(&p).contains(&"SFC0101"));
 }
+
+#[test]
+fn long_member_and_index_chains() {
+    let e = format!("x{}", ".a".repeat(100_000));
+    assert_eq!(codes(&program_with(&format!("x := {e};"))), vec!["SFC0103"]);
+    let e = format!("x{}", "[1]".repeat(100_000));
+    assert_eq!(codes(&program_with(&format!("x := {e};"))), vec!["SFC0103"]);
+}
