@@ -137,3 +137,19 @@ fn fmt_filters_standard_input() {
     assert_eq!(out.status.code(), Some(0));
     assert_eq!(String::from_utf8_lossy(&out.stdout), "PROGRAM p\n    VAR\n        x : int;\n    END_VAR\n\n    x := x + 1;\nEND_PROGRAM\n");
 }
+
+#[test]
+fn examples_are_in_canonical_layout() {
+    let mut args = vec!["fmt".to_string(), "--check".to_string()];
+    for dir in std::fs::read_dir(root().join("examples")).unwrap().flatten() {
+        for f in std::fs::read_dir(dir.path()).into_iter().flatten().flatten() {
+            if f.path().extension().is_some_and(|e| e == "st") {
+                args.push(f.path().display().to_string());
+            }
+        }
+    }
+    assert!(args.len() >= 6);
+    let refs: Vec<&str> = args.iter().map(String::as_str).collect();
+    let out = sfc(&refs);
+    assert_eq!(out.status.code(), Some(0), "{}", String::from_utf8_lossy(&out.stdout));
+}

@@ -38,6 +38,9 @@ pub struct Trivia {
     pub span: Span,
     /// True when only white space precedes it on its line (it starts a line).
     pub own_line: bool,
+    /// Its 0-based column (in characters) in the source, so the lines of a multi-line comment
+    /// keep their alignment when the printer moves it.
+    pub column: u32,
 }
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -64,6 +67,9 @@ pub struct Attribute {
 pub struct SourceUnit {
     pub items: Vec<Item>,
     pub trivia: Vec<Trivia>,
+    /// Byte offsets of the blank lines of the source (white space holding two or more line
+    /// breaks), in order, so the printer can keep the user's grouping of statements.
+    pub blank_lines: Vec<u32>,
     pub span: Span,
 }
 

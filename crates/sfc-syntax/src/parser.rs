@@ -105,6 +105,7 @@ struct Parser<'a> {
     toks: Vec<Tok>,
     pos: usize,
     trivia: Vec<Trivia>,
+    blank_lines: Vec<u32>,
     attrs: Vec<Attribute>,
     attr_cursor: usize,
     diags: Vec<Diagnostic>,
@@ -122,12 +123,16 @@ impl<'a> Parser<'a> {
         let mut toks = Vec::with_capacity(all.len() / 2 + 1);
         let mut trivia = Vec::new();
         let mut attrs = Vec::new();
+        let mut blank_lines = Vec::new();
         let mut nl = false;
         let mut line_blank = true; // only white space since the last line break
         for t in all {
             let s = &text[t.start as usize..t.end as usize];
             match t.kind {
                 TokenKind::Whitespace => {
+                    if s.matches('\n').nth(1).is_some() {
+                        blank_lines.push(t.start);
+                    }
                     if s.contains('\n') {
                         nl = true;
                         line_blank = true;
@@ -145,7 +150,9 @@ impl<'a> Parser<'a> {
                             attrs.push(a);
                         }
                     }
-                    trivia.push(Trivia { kind, text: s.to_string(), span, own_line: line_blank });
+                    let line_start = text[..t.start as usize].rfind('\n').map_or(0, |i| i + 1);
+                    let column = text[line_start..t.start as usize].chars().count() as u32;
+                    trivia.push(Trivia { kind, text: s.to_string(), span, own_line: line_blank, column });
                     if kind == TriviaKind::LineComment || s.contains('\n') {
                         nl = true;
                     }
@@ -164,6 +171,7 @@ impl<'a> Parser<'a> {
             toks,
             pos: 0,
             trivia,
+            blank_lines,
             attrs,
             attr_cursor: 0,
             diags: Vec::new(),
@@ -411,6 +419,7 @@ impl<'a> Parser<'a> {
         SourceUnit {
             items,
             trivia: std::mem::take(&mut self.trivia),
+            blank_lines: std::mem::take(&mut self.blank_lines),
             span: Span::new(self.file, 0, self.text.len() as u32),
         }
     }

@@ -22,7 +22,7 @@ pub fn print(unit: &SourceUnit) -> String {
     let mut trivia: Vec<&Trivia> = unit.trivia.iter().collect();
     // Stable, so trivia at one offset (impossible from the lexer) would keep their order.
     trivia.sort_by_key(|t| t.span.start);
-    let mut p = Printer::new(trivia);
+    let mut p = Printer::new(trivia, &unit.blank_lines);
     for (i, item) in unit.items.iter().enumerate() {
         if i > 0 {
             p.blank();
@@ -50,6 +50,9 @@ struct Printer<'a> {
     /// All trivia in source order; `next` is the first one not yet printed.
     trivia: Vec<&'a Trivia>,
     next: usize,
+    /// Blank lines of the source; `next_blank` is the first one not yet passed.
+    blank_lines: &'a [u32],
+    next_blank: usize,
     lines: Vec<Line>,
     /// The line being built (indentation included); empty between lines.
     cur: String,
@@ -61,10 +64,12 @@ struct Printer<'a> {
 }
 
 impl<'a> Printer<'a> {
-    fn new(trivia: Vec<&'a Trivia>) -> Self {
+    fn new(trivia: Vec<&'a Trivia>, blank_lines: &'a [u32]) -> Self {
         Printer {
             trivia,
             next: 0,
+            blank_lines,
+            next_blank: 0,
             lines: Vec::new(),
             cur: String::new(),
             indent: 0,
@@ -108,9 +113,32 @@ impl<'a> Printer<'a> {
     fn open(&mut self, anchor: u32) {
         // `<=`: a node whose span were to include its leading pragma still gets it before it.
         while self.next < self.trivia.len() && self.trivia[self.next].span.start <= anchor {
+            let t = self.trivia[self.next];
+            if !self.can_trail(t) {
+                self.keep_blank_before(t.span.start);
+            }
             self.emit_next();
         }
+        self.keep_blank_before(anchor);
         self.begin();
+    }
+
+    /// Keeps one blank line the user left before `pos`, between siblings only: not at the
+    /// start of a block, where the line before is less indented.
+    fn keep_blank_before(&mut self, pos: u32) {
+        let mut seen = false;
+        while self.next_blank < self.blank_lines.len() && self.blank_lines[self.next_blank] < pos {
+            self.next_blank += 1;
+            seen = true;
+        }
+        let indent = INDENT.len() * self.indent;
+        let sibling = self.lines.last().is_some_and(|l| {
+            let own = l.text.len() - l.text.trim_start().len();
+            !l.text.is_empty() && own == indent
+        });
+        if seen && sibling {
+            self.pending_blank = true;
+        }
     }
 
     /// Starts a line that no node begins (a continuation or closing keyword).
@@ -173,11 +201,15 @@ impl<'a> Printer<'a> {
         self.next += 1;
         if self.can_trail(t) {
             let last = self.lines.last_mut().expect("can_trail checks for a previous line");
-            if last.code && last.comment_at.is_none() {
+            let multi_line = t.text.contains('\n');
+            // A multi-line comment is not aligned with its neighbours: its continuation lines
+            // move by exactly as much as its first line, so they stay under it.
+            if last.code && last.comment_at.is_none() && !multi_line {
                 last.comment_at = Some(last.text.len());
             }
             last.text.push(' ');
-            last.text.push_str(&t.text);
+            let new_column = last.text.chars().count() as i64;
+            last.text.push_str(&shift_continuation(&t.text, new_column - t.column as i64));
         } else {
             let line = format!("{}{}", INDENT.repeat(self.indent), t.text);
             self.push_line(line, false);
@@ -597,6 +629,26 @@ impl<'a> Printer<'a> {
 
 /// Aligns the end-of-line comments of consecutive code lines at one indentation, as engineers
 /// do in declaration lists: one space after the longest code of the run.
+/// Moves the second and later lines of `text` right (or left, over blanks only) by `shift`.
+fn shift_continuation(text: &str, shift: i64) -> String {
+    let mut out = String::with_capacity(text.len());
+    for (i, line) in text.split('\n').enumerate() {
+        if i > 0 {
+            out.push('\n');
+            if shift >= 0 {
+                out.push_str(&" ".repeat(shift as usize));
+                out.push_str(line);
+            } else {
+                let blanks = line.len() - line.trim_start_matches(' ').len();
+                out.push_str(&line[blanks.min((-shift) as usize)..]);
+            }
+        } else {
+            out.push_str(line);
+        }
+    }
+    out
+}
+
 fn align_comments(lines: &mut [Line]) {
     let indent = |line: &Line| line.text.len() - line.text.trim_start().len();
     let mut i = 0;
@@ -846,8 +898,12 @@ mod tests {
         let (again, diags) = parse(0, &out);
         assert!(diags.iter().all(|d| d.severity != Severity::Error), "{diags:?}\n{out}");
         assert_eq!(print(&again), out, "not idempotent");
+        // Continuation lines of a moved multi-line comment are re-indented: compare without it.
+        let flat = |s: &str| s.split('\n').map(str::trim_start).collect::<Vec<_>>().join("\n");
+        let (flat_out, flat_src) = (flat(&out), flat(source));
         for t in &unit.trivia {
-            assert_eq!(out.matches(&t.text).count(), source.matches(&t.text).count(), "{:?} in\n{out}", t.text);
+            let text = flat(&t.text);
+            assert_eq!(flat_out.matches(&text).count(), flat_src.matches(&text).count(), "{:?} in\n{out}", t.text);
         }
         out
     }
@@ -1072,6 +1128,22 @@ PROGRAM P
 END_PROGRAM (* done *)
 ";
         assert_eq!(fmt(source), expected);
+    }
+
+    #[test]
+    fn multi_line_trailing_comments_move_as_one() {
+        let src = "PROGRAM P\n    VAR\n        Start : BOOL;       (* one\n                               two *)\n    END_VAR\nEND_PROGRAM\n";
+        let out = fmt(src);
+        assert!(out.contains("        Start : BOOL; (* one\n                         two *)\n"), "{out}");
+        assert_eq!(fmt(&out), out);
+    }
+
+    #[test]
+    fn blank_lines_between_statements_are_kept_once() {
+        let src = "PROGRAM P\nVAR x : INT; END_VAR\nx := 1;\n\n\n\nx := 2;\nx := 3;\nIF x > 1 THEN\n\n    x := 4;\nEND_IF;\nEND_PROGRAM\n";
+        let out = fmt(src);
+        assert!(out.contains("    x := 1;\n\n    x := 2;\n    x := 3;\n    IF x > 1 THEN\n        x := 4;"), "{out}");
+        assert_eq!(fmt(&out), out);
     }
 
     #[test]

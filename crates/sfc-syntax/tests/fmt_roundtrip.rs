@@ -61,8 +61,10 @@ fn strip_spans(debug: &str) -> String {
 }
 
 /// The text of every comment and pragma, in order.
+/// Comment and pragma texts; the indentation of continuation lines is left out, since the
+/// printer moves a multi-line trailing comment's lines together with its first line.
 fn trivia_texts(unit: &sfc_syntax::ast::SourceUnit) -> Vec<String> {
-    unit.trivia.iter().map(|t| t.text.clone()).collect()
+    unit.trivia.iter().map(|t| t.text.split('\n').map(str::trim_start).collect::<Vec<_>>().join("\n")).collect()
 }
 
 fn parse_clean(text: &str, what: &str) -> sfc_syntax::ast::SourceUnit {
