@@ -60,7 +60,7 @@ pub fn check_source(file_id: u32, name: &str, text: &str, opts: &CheckOptions) -
             let chart = lower::lower(file_id, i, pou, elements, target, &mut diags);
             validate::structure(&chart, text, &mut diags);
             let limits = Limits::of(target, opts.nstep, opts.ntr);
-            validate::target_rules(&chart, limits, text, &mut diags);
+            validate::target_rules(&chart, limits, &mut diags);
             charts.push(chart);
         }
         pou.body = body;

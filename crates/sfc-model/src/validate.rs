@@ -142,13 +142,12 @@ impl ConditionInput {
     }
 }
 
-fn input_index(name: &str, target: Target) -> Option<u32> {
+/// `C3` → 3 (ATMT names its inputs C0…C15, EATMT c0…c255; identifiers are case-insensitive).
+fn input_index(name: &str) -> Option<u32> {
     let rest = name.strip_prefix(['c', 'C'])?;
     if rest.is_empty() || !rest.chars().all(|c| c.is_ascii_digit()) || (rest.len() > 1 && rest.starts_with('0')) {
         return None;
     }
-    // ATMT names its inputs C0…C15, EATMT c0…c255 (identifiers are case-insensitive).
-    let _ = target;
     rest.parse().ok()
 }
 
@@ -167,11 +166,11 @@ pub fn condition_input(cond: &ast::Condition, target: Target) -> Option<Conditio
         _ => (false, e),
     };
     let index = match &inner.kind {
-        ExprKind::Name(n) => input_index(&n.text, target)?,
+        ExprKind::Name(n) => input_index(&n.text)?,
         // EATMT `cX.Y` = 16·X + Y
         ExprKind::Member { base, member } if target == Target::Eatmt => {
             let ExprKind::Name(n) = &base.kind else { return None };
-            let x = input_index(&n.text, target)?;
+            let x = input_index(&n.text)?;
             let y: u32 = member.text.parse().ok().filter(|y| *y < 16)?;
             16 * x + y
         }
@@ -181,7 +180,7 @@ pub fn condition_input(cond: &ast::Condition, target: Target) -> Option<Conditio
 }
 
 /// The ATMT/EATMT rules: limits, no AND branches, no actions, one input per condition, tags.
-pub fn target_rules(chart: &Chart, limits: Limits, source: &str, diags: &mut Vec<Diagnostic>) {
+pub fn target_rules(chart: &Chart, limits: Limits, diags: &mut Vec<Diagnostic>) {
     let target = chart.target;
     if !matches!(target, Target::Atmt | Target::Eatmt) {
         return;
@@ -294,7 +293,6 @@ pub fn target_rules(chart: &Chart, limits: Limits, source: &str, diags: &mut Vec
             }
         }
     }
-    let _ = source;
     if used.len() as u32 > limits.conditions {
         diags.push(Diagnostic::error(
             "SFC0402",

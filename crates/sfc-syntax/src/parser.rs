@@ -393,14 +393,11 @@ impl<'a> Parser<'a> {
     fn source_unit(&mut self) -> SourceUnit {
         let mut items = Vec::new();
         while !self.at(TokenKind::Eof) {
-            let start = self.tok().start;
             if self.at_kw("PROGRAM") || self.at_kw("FUNCTION_BLOCK") || self.at_kw("FUNCTION") {
                 items.push(Item::Pou(self.pou()));
             } else if self.at_kw("TYPE") {
                 items.push(Item::Types(self.type_block()));
-            } else if self.at_any_kw(&["VAR_GLOBAL"]) {
-                let attrs = self.take_attrs(start);
-                let _ = attrs;
+            } else if self.at_kw("VAR_GLOBAL") {
                 items.push(Item::Globals(self.var_block()));
             } else if self.at_kw("CONFIGURATION") || self.at_kw("RESOURCE") {
                 items.push(Item::Verbatim(self.verbatim()));
@@ -1168,9 +1165,14 @@ impl<'a> Parser<'a> {
 
     /// Statements until a stopper keyword, `extra` stoppers, or end of file.
     fn stmt_list(&mut self, extra: &[&str]) -> Vec<Stmt> {
+        self.stmts_until(|p| p.at_any_kw(extra))
+    }
+
+    /// Statements until a stopper keyword, end of file, or where `stop` says.
+    fn stmts_until(&mut self, stop: impl Fn(&Self) -> bool) -> Vec<Stmt> {
         let mut out = Vec::new();
         loop {
-            if self.at(TokenKind::Eof) || self.at_any_kw(STOPPERS) || self.at_any_kw(extra) {
+            if self.at(TokenKind::Eof) || self.at_any_kw(STOPPERS) || stop(self) {
                 break;
             }
             let before = self.pos;
@@ -1206,6 +1208,17 @@ split it with intermediate variables"
     }
     fn leave(&mut self) {
         self.depth -= 1;
+    }
+
+    /// Whether a chain of `chain` links at the current depth exceeds the budget (reported once).
+    fn chain_too_deep(&mut self, chain: u32) -> bool {
+        if self.depth + chain <= MAX_DEPTH {
+            return false;
+        }
+        self.depth += chain;
+        self.enter();
+        self.depth -= chain;
+        true
     }
 
     /// Skips a too-deeply nested construct without recursion, returning an error expression.
@@ -1406,20 +1419,7 @@ split it with intermediate variables"
 
     /// Statements of a CASE arm: stop where the next arm's labels begin.
     fn case_body(&mut self) -> Vec<Stmt> {
-        let mut out = Vec::new();
-        loop {
-            if self.at(TokenKind::Eof) || self.at_any_kw(STOPPERS) || self.at_kw("END_CASE") || self.at_case_label() {
-                break;
-            }
-            let before = self.pos;
-            if let Some(s) = self.stmt() {
-                out.push(s);
-            }
-            if self.pos == before {
-                self.bump();
-            }
-        }
-        out
+        self.stmts_until(|p| p.at_kw("END_CASE") || p.at_case_label())
     }
 
     fn at_case_label(&self) -> bool {
@@ -1482,10 +1482,7 @@ split it with intermediate variables"
                 break;
             }
             chain += 1;
-            if self.depth + chain > MAX_DEPTH {
-                self.depth += chain;
-                self.enter();
-                self.depth -= chain;
+            if self.chain_too_deep(chain) {
                 let rest = self.skip_nested();
                 let span = lhs.span.to(rest.span);
                 return Expr { kind: ExprKind::Error, span };
@@ -1594,10 +1591,7 @@ split it with intermediate variables"
         loop {
             if self.at(TokenKind::Dot) || self.at(TokenKind::LBracket) {
                 chain += 1;
-                if self.depth + chain > MAX_DEPTH {
-                    self.depth += chain;
-                    self.enter();
-                    self.depth -= chain;
+                if self.chain_too_deep(chain) {
                     while self.at(TokenKind::Dot) || self.at(TokenKind::LBracket) || self.at(TokenKind::Ident) || self.at(TokenKind::Int) {
                         if self.at(TokenKind::LBracket) {
                             self.bump();
