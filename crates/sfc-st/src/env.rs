@@ -35,6 +35,24 @@ pub struct VarInfo {
     pub value: Option<Value>,
 }
 
+impl VarInfo {
+    /// The variable `name` of declaration `decl` in `block`, with its resolved type and, for a
+    /// CONSTANT, its value from `consts`.
+    pub(crate) fn declared(name: &Ident, block: &VarBlock, decl: &sfc_syntax::ast::VarDecl, ty: Type, consts: &HashMap<String, Value>) -> VarInfo {
+        VarInfo {
+            name: name.text.clone(),
+            span: name.span,
+            kind: block.kind,
+            constant: block.constant,
+            retain: block.retain,
+            ty,
+            location: decl.location.clone(),
+            init: decl.init.clone(),
+            value: consts.get(&name.key()).copied(),
+        }
+    }
+}
+
 /// A declared data type (`TYPE Name : spec := init; END_TYPE`).
 #[derive(Debug, Clone, PartialEq)]
 pub struct TypeDef {
@@ -179,14 +197,7 @@ impl TypeEnv {
         let mut seen: HashMap<String, Span> = HashMap::new();
         for block in &global_blocks {
             for var in b.block_vars(block, &mut diags) {
-                let key = var.name.to_ascii_uppercase();
-                if let Some(prev) = seen.get(&key) {
-                    diags.push(duplicate_var(&var, *prev));
-                    continue;
-                }
-                seen.insert(key.clone(), var.span);
-                env.global_index.insert(key, env.globals.len());
-                env.globals.push(var);
+                env.add_global(var, &mut seen, &mut diags);
             }
         }
 
@@ -212,14 +223,7 @@ impl TypeEnv {
             .flat_map(|p| p.vars.iter().filter(|v| v.kind == VarKind::Global).cloned())
             .collect();
         for var in program_globals {
-            let key = var.name.to_ascii_uppercase();
-            if let Some(prev) = seen.get(&key) {
-                diags.push(duplicate_var(&var, *prev));
-                continue;
-            }
-            seen.insert(key.clone(), var.span);
-            env.global_index.insert(key, env.globals.len());
-            env.globals.push(var);
+            env.add_global(var, &mut seen, &mut diags);
         }
 
         // A VAR_EXTERNAL must repeat the type of its global.
@@ -368,6 +372,20 @@ fn reserved_name(name: &Ident, what: &str) -> Diagnostic {
         name.span,
         format!("{what} `{}` redefines a standard type, function or function block", name.text),
     )
+}
+
+impl TypeEnv {
+    /// Registers a global, or reports it as a duplicate of the one `seen` first.
+    fn add_global(&mut self, var: VarInfo, seen: &mut HashMap<String, Span>, diags: &mut Vec<Diagnostic>) {
+        let key = var.name.to_ascii_uppercase();
+        if let Some(prev) = seen.get(&key) {
+            diags.push(duplicate_var(&var, *prev));
+            return;
+        }
+        seen.insert(key.clone(), var.span);
+        self.global_index.insert(key, self.globals.len());
+        self.globals.push(var);
+    }
 }
 
 fn duplicate_var(var: &VarInfo, prev: Span) -> Diagnostic {
@@ -543,17 +561,7 @@ impl<'a> Builder<'a> {
                 check_location(addr, &ty, decl.names.first(), diags);
             }
             for name in &decl.names {
-                out.push(VarInfo {
-                    name: name.text.clone(),
-                    span: name.span,
-                    kind: block.kind,
-                    constant: block.constant,
-                    retain: block.retain,
-                    ty: ty.clone(),
-                    location: decl.location.clone(),
-                    init: decl.init.clone(),
-                    value: consts.get(&name.key()).copied(),
-                });
+                out.push(VarInfo::declared(name, block, decl, ty.clone(), &consts));
             }
         }
         out

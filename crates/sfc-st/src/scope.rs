@@ -117,17 +117,7 @@ impl<'e> Scope<'e> {
             for decl in &block.decls {
                 let ty = env.resolve_type_spec(&decl.ty, &lookup, &mut pending);
                 for n in &decl.names {
-                    vars.push(VarInfo {
-                        name: n.text.clone(),
-                        span: n.span,
-                        kind: block.kind,
-                        constant: block.constant,
-                        retain: block.retain,
-                        ty: ty.clone(),
-                        location: decl.location.clone(),
-                        init: decl.init.clone(),
-                        value: consts.get(&n.key()).copied(),
-                    });
+                    vars.push(VarInfo::declared(n, block, decl, ty.clone(), &consts));
                 }
             }
         }
