@@ -7,6 +7,8 @@ use std::io::{IsTerminal, Read, Write};
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
+mod sim;
+
 #[derive(Parser)]
 #[command(name = "sfc", version, about = "Check, format, build, simulate and run IEC 61131-3 Sequential Function Charts")]
 struct Cli {
@@ -20,6 +22,67 @@ enum Command {
     Check(CheckArgs),
     /// Rewrite textual SFC in canonical layout.
     Fmt(FmtArgs),
+    /// Simulate a chart on virtual time, optionally against a scenario, writing a trace.
+    Sim(SimArgs),
+    /// Run every `*.scenario.toml` under the given files and directories.
+    Test(TestArgs),
+}
+
+#[derive(Clone, Copy, ValueEnum)]
+enum ProfileArg {
+    Iec,
+    Matiec,
+    Codesys,
+    Grafcet,
+}
+
+#[derive(clap::Args)]
+struct SimArgs {
+    /// The chart to simulate (`.st`); it takes the place of the scenario's `chart`.
+    file: PathBuf,
+    /// Set inputs and check expectations from a scenario file (`*.scenario.toml`).
+    #[arg(long, value_name = "S.toml")]
+    scenario: Option<PathBuf>,
+    /// Scan period (default T#10ms, or the scenario's `period`).
+    #[arg(long, value_name = "TIME", value_parser = sim::parse_period)]
+    period: Option<i64>,
+    /// Run every scan whose time is at most this (default: 100 scans, or the scenario's length).
+    #[arg(long, value_name = "TIME", value_parser = sim::parse_until, conflicts_with = "scans")]
+    until: Option<i64>,
+    /// Run this many scans (0 … N-1).
+    #[arg(long, value_name = "N")]
+    scans: Option<u64>,
+    /// Write a trace: `.jsonl`, `.csv` or `.vcd` by extension, `-` for JSON lines on stdout.
+    #[arg(long, value_name = "OUT")]
+    trace: Option<PathBuf>,
+    /// Whose execution rules to follow (default iec).
+    #[arg(long, value_enum)]
+    profile: Option<ProfileArg>,
+    /// The POU to simulate when the file has several.
+    #[arg(long, value_name = "NAME")]
+    pou: Option<String>,
+    /// Print the time analysis: activations and active times per step, sequence of situations.
+    #[arg(long)]
+    stats: bool,
+    /// Print, at the end, why each active step has not been left.
+    #[arg(long)]
+    explain: bool,
+    /// Output format of the summary, `--stats` and `--explain`.
+    #[arg(long, value_enum, default_value = "human")]
+    format: Format,
+    /// Write a variable before scan 0 (repeatable), e.g. `--set Start=TRUE --set Limit=T#2s`.
+    #[arg(long = "set", value_name = "NAME=VALUE", value_parser = sim::parse_set)]
+    set: Vec<(String, String)>,
+}
+
+#[derive(clap::Args)]
+struct TestArgs {
+    /// Scenario files, or directories searched recursively for `*.scenario.toml`.
+    #[arg(required = true)]
+    paths: Vec<PathBuf>,
+    /// Print which steps were never active and which transitions never fired, per chart.
+    #[arg(long)]
+    coverage: bool,
 }
 
 #[derive(Clone, Copy, ValueEnum)]
@@ -94,6 +157,26 @@ fn run() -> u8 {
     match cli.command {
         Command::Check(a) => check(a),
         Command::Fmt(a) => fmt(a),
+        Command::Sim(a) => sim::sim(sim::SimRequest {
+            file: a.file,
+            scenario: a.scenario,
+            period: a.period,
+            until: a.until,
+            scans: a.scans,
+            trace: a.trace,
+            profile: a.profile.map(|p| match p {
+                ProfileArg::Iec => sfc_sim::Profile::Iec,
+                ProfileArg::Matiec => sfc_sim::Profile::Matiec,
+                ProfileArg::Codesys => sfc_sim::Profile::Codesys,
+                ProfileArg::Grafcet => sfc_sim::Profile::Grafcet,
+            }),
+            pou: a.pou,
+            stats: a.stats,
+            explain: a.explain,
+            json: matches!(a.format, Format::Json),
+            set: a.set,
+        }),
+        Command::Test(a) => sim::test(&a.paths, a.coverage),
     }
 }
 
@@ -129,6 +212,7 @@ fn check(a: CheckArgs) -> u8 {
         nstep: a.nstep,
         ntr: a.ntr,
         analysis: !a.no_analysis,
+        ..CheckOptions::default()
     };
     let mut files: Vec<SourceFile> = Vec::new();
     let mut diags = Vec::new();

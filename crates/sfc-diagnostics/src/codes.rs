@@ -161,6 +161,11 @@ redefines a standard type, function or function block. Rename one of them.";
     "SFC0319" Error "duplicate CASE label"
         "Two labels of one CASE statement cover the same value, so the later arm can never run \
 for it.\n\n    CASE n OF 1..5: a(); 3: b(); END_CASE  (* 3 is already in 1..5 *)";
+    "SFC0320" Error "cannot be simulated"
+        "The file checks, but the simulator cannot run this part of it: for example a function \
+block type that contains an instance of itself (its memory would be infinite), or an SFC function \
+block instance declared inside a FUNCTION (a function has no state that lasts between calls). \
+Restructure the code, or simulate another POU.";
 
     "SFC0401" Error "too many states for the target"
         "ATMT has at most 16 states, EATMT 256 (`--nstep` overrides).";

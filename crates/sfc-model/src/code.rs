@@ -2,13 +2,20 @@
 //! declarations) by `sfc-st`, fitted to the chart targets.
 
 use crate::chart::{Chart, Target};
-use sfc_diagnostics::Diagnostic;
+use sfc_diagnostics::{Diagnostic, Span};
+use sfc_st::Type;
 use sfc_syntax::ast;
+use std::collections::HashMap;
 
 /// Type-checks the whole file. Runs on the intact AST, before lowering moves the SFC code into
-/// the charts.
-pub fn check_unit(unit: &ast::SourceUnit) -> Vec<Diagnostic> {
-    sfc_st::check_unit(unit)
+/// the charts. With `keep_types`, also returns the type of every checked expression by span
+/// (for the simulator); otherwise the table is empty.
+pub fn check_unit(unit: &ast::SourceUnit, keep_types: bool) -> (Vec<Diagnostic>, HashMap<Span, Type>) {
+    if keep_types {
+        sfc_st::check_unit_typed(unit)
+    } else {
+        (sfc_st::check_unit(unit), HashMap::new())
+    }
 }
 
 /// Drops type diagnostics inside the conditions of ATMT/EATMT charts: there a condition is one

@@ -12,6 +12,7 @@ pub use validate::{condition_input, ConditionInput, Limits};
 
 use sfc_diagnostics::{Diagnostic, SourceFile, Span};
 use sfc_syntax::ast;
+use std::collections::HashMap;
 
 /// What `sfc check` was asked for.
 #[derive(Debug, Clone, Default)]
@@ -24,6 +25,9 @@ pub struct CheckOptions {
     pub ntr: Option<u32>,
     /// Run the reachability and guard analysis (once it exists in `sfc-analysis`).
     pub analysis: bool,
+    /// Keep the type of every checked expression in [`Checked::expr_types`] (the simulator
+    /// needs them for integer widths); off by default, so plain checking does not pay for it.
+    pub keep_types: bool,
 }
 
 /// The result of checking one file.
@@ -37,6 +41,9 @@ pub struct Checked {
     pub charts: Vec<Chart>,
     /// Every diagnostic, sorted by position.
     pub diagnostics: Vec<Diagnostic>,
+    /// With [`CheckOptions::keep_types`]: the type the checker gave each ST expression and IL
+    /// operand, by span (see `sfc_st::Checker::expr_type`); empty otherwise.
+    pub expr_types: HashMap<Span, sfc_st::Type>,
 }
 
 impl Checked {
@@ -48,7 +55,7 @@ impl Checked {
 /// Parses, lowers and validates one file. `file_id` goes into every span.
 pub fn check_source(file_id: u32, name: &str, text: &str, opts: &CheckOptions) -> Checked {
     let (mut unit, mut diags) = sfc_syntax::parse(file_id, text);
-    let type_diags = code::check_unit(&unit);
+    let (type_diags, expr_types) = code::check_unit(&unit, opts.keep_types);
     let mut charts = Vec::new();
     for (i, item) in unit.items.iter_mut().enumerate() {
         let ast::Item::Pou(pou) = item else { continue };
@@ -69,7 +76,7 @@ pub fn check_source(file_id: u32, name: &str, text: &str, opts: &CheckOptions) -
     bang_outside_eatmt(file_id, text, &charts, &mut diags);
     sfc_diagnostics::sort(&mut diags);
     diags.dedup();
-    Checked { file: SourceFile::new(name, text), unit, charts, diagnostics: diags }
+    Checked { file: SourceFile::new(name, text), unit, charts, diagnostics: diags, expr_types }
 }
 
 /// `!c5` is the EATMT spelling of a negated input; anywhere else it is not IEC 61131-3.

@@ -7,7 +7,7 @@ use crate::types::Type;
 use crate::value::{const_eval, ConstLookup, Value};
 use sfc_diagnostics::{Diagnostic, Span};
 use sfc_syntax::ast::{
-    DirectAddress, Ident, Initializer, Item, Pou, PouKind, Retain, SourceUnit, TypeDecl, TypeSpecKind, VarBlock,
+    Body, DirectAddress, Ident, Initializer, Item, Pou, PouKind, Retain, SourceUnit, TypeDecl, TypeSpecKind, VarBlock,
     VarKind,
 };
 use std::collections::HashMap;
@@ -33,12 +33,21 @@ pub struct VarInfo {
     pub init: Option<Initializer>,
     /// The value of a CONSTANT whose initial value is a constant expression.
     pub value: Option<Value>,
+    /// Not declared by the user: one of the control variables every SFC POU has
+    /// ([`sfc_control_variables`]).
+    pub implicit: bool,
 }
 
 impl VarInfo {
     /// The variable `name` of declaration `decl` in `block`, with its resolved type and, for a
     /// CONSTANT, its value from `consts`.
-    pub(crate) fn declared(name: &Ident, block: &VarBlock, decl: &sfc_syntax::ast::VarDecl, ty: Type, consts: &HashMap<String, Value>) -> VarInfo {
+    pub(crate) fn declared(
+        name: &Ident,
+        block: &VarBlock,
+        decl: &sfc_syntax::ast::VarDecl,
+        ty: Type,
+        consts: &HashMap<String, Value>,
+    ) -> VarInfo {
         VarInfo {
             name: name.text.clone(),
             span: name.span,
@@ -49,7 +58,63 @@ impl VarInfo {
             location: decl.location.clone(),
             init: decl.init.clone(),
             value: consts.get(&name.key()).copied(),
+            implicit: false,
         }
+    }
+}
+
+/// The implicit control variables of every POU whose body is a Sequential Function Chart, as
+/// `(name, kind, type)`: the inputs `SFCInit`, `SFCPause`, `SFCQuitError` (BOOL) and the outputs
+/// `SFCError` (BOOL), `SFCErrorStep` and `SFCCurrentStep` (STRING). A variable the user declares
+/// with one of these names is that control variable (and must have its type).
+pub fn sfc_control_variables() -> [(&'static str, VarKind, Type); 6] {
+    let s = Type::String { len: None };
+    [
+        ("SFCInit", VarKind::Input, Type::Bool),
+        ("SFCPause", VarKind::Input, Type::Bool),
+        ("SFCQuitError", VarKind::Input, Type::Bool),
+        ("SFCError", VarKind::Output, Type::Bool),
+        ("SFCErrorStep", VarKind::Output, s.clone()),
+        ("SFCCurrentStep", VarKind::Output, s),
+    ]
+}
+
+/// Whether `name` is one of [`sfc_control_variables`] (case-insensitive).
+pub fn is_sfc_control_variable(name: &str) -> bool {
+    sfc_control_variables().iter().any(|(n, _, _)| n.eq_ignore_ascii_case(name))
+}
+
+/// Adds the implicit control variables to the variables of an SFC POU (after the declared
+/// ones), and reports a declared variable of such a name whose type differs (SFC0302).
+pub(crate) fn add_sfc_control_variables(vars: &mut Vec<VarInfo>, pou_span: Span, diags: &mut Vec<Diagnostic>) {
+    for (name, kind, ty) in sfc_control_variables() {
+        if let Some(v) = vars.iter().find(|v| v.name.eq_ignore_ascii_case(name)) {
+            let same = v.ty.is_error()
+                || if ty.is_string() { v.ty.is_string() && !matches!(v.ty, Type::WString { .. }) } else { v.ty == ty };
+            if !same {
+                diags.push(Diagnostic::new(
+                    "SFC0302",
+                    v.span,
+                    format!(
+                        "type mismatch: `{name}` is a control variable of the chart and must be `{ty}`, not `{}`",
+                        v.ty
+                    ),
+                ));
+            }
+            continue;
+        }
+        vars.push(VarInfo {
+            name: name.to_string(),
+            span: pou_span,
+            kind,
+            constant: false,
+            retain: None,
+            ty,
+            location: None,
+            init: None,
+            value: None,
+            implicit: true,
+        });
     }
 }
 
@@ -83,6 +148,9 @@ pub struct PouInterface {
     pub standard: bool,
     /// The span of the POU's name (default for standard blocks).
     pub span: Span,
+    /// The body is a Sequential Function Chart: the POU has the implicit control variables
+    /// ([`sfc_control_variables`]).
+    pub sfc: bool,
 }
 
 impl PouInterface {
@@ -136,6 +204,15 @@ impl TypeEnv {
         for name in STD_FUNCTION_BLOCK_NAMES {
             if let Some(fb) = standard_fb(name) {
                 env.std_fbs.insert(name.to_string(), fb);
+            }
+        }
+        // The counters in other integer types (CTU_DINT, CTD_UDINT, …, IEC 61131-3 3rd ed.).
+        for stem in ["CTU", "CTD", "CTUD"] {
+            for ty in ["DINT", "LINT", "UDINT", "ULINT"] {
+                let name = format!("{stem}_{ty}");
+                if let Some(fb) = standard_fb(&name) {
+                    env.std_fbs.insert(name, fb);
+                }
             }
         }
         env
@@ -408,6 +485,7 @@ fn standard_fb(name: &str) -> Option<PouInterface> {
             location: None,
             init: None,
             value: None,
+            implicit: false,
         })
         .collect();
     Some(PouInterface {
@@ -417,6 +495,7 @@ fn standard_fb(name: &str) -> Option<PouInterface> {
         return_type: None,
         standard: true,
         span: Span::default(),
+        sfc: false,
     })
 }
 
@@ -589,6 +668,10 @@ impl<'a> Builder<'a> {
         }
         let return_type = pou.return_type.as_ref().map(|spec| resolve_spec(self, spec, None, diags));
         self.local_consts.clear();
+        let sfc = matches!(pou.body, Body::Sfc(_));
+        if sfc {
+            add_sfc_control_variables(&mut vars, pou.name.span, diags);
+        }
         PouInterface {
             name: pou.name.text.clone(),
             kind: pou.kind,
@@ -596,6 +679,7 @@ impl<'a> Builder<'a> {
             return_type,
             standard: false,
             span: pou.name.span,
+            sfc,
         }
     }
 }

@@ -39,13 +39,14 @@ mod value;
 mod tests;
 
 pub use check::Checker;
-pub use env::{PouInterface, TypeDef, TypeEnv, VarInfo};
+pub use env::{is_sfc_control_variable, sfc_control_variables, PouInterface, TypeDef, TypeEnv, VarInfo};
 pub use scope::{Binding, Scope, Usage};
 pub use types::{Generic, Type};
 pub use value::{const_eval, ConstLookup, NoConstants, Value};
 
-use sfc_diagnostics::Diagnostic;
+use sfc_diagnostics::{Diagnostic, Span};
 use sfc_syntax::ast::{Body, Item, Pou, SfcElement, SourceUnit};
+use std::collections::HashMap;
 
 /// Type-checks a whole file: declarations, global and type initial values, and the code of
 /// every POU (ST and IL bodies, and for charts the transition conditions, action bodies,
@@ -61,10 +62,29 @@ pub fn check_unit(unit: &SourceUnit) -> Vec<Diagnostic> {
 /// checked (e.g. the implicit BOOL inputs `C0`…`C15` of an ATMT chart, via
 /// [`Scope::declare`]).
 pub fn check_unit_with(unit: &SourceUnit, prepare: &mut dyn FnMut(&mut Scope<'_>, &Pou)) -> Vec<Diagnostic> {
+    check_unit_inner(unit, prepare, None)
+}
+
+/// [`check_unit`] that also returns the type of every checked expression by span (see
+/// [`Checker::expr_type`]): every [`Checker`] it creates keeps its types. For the simulator.
+pub fn check_unit_typed(unit: &SourceUnit) -> (Vec<Diagnostic>, HashMap<Span, Type>) {
+    let mut types = HashMap::new();
+    let diags = check_unit_inner(unit, &mut |_, _| {}, Some(&mut types));
+    (diags, types)
+}
+
+fn check_unit_inner(
+    unit: &SourceUnit,
+    prepare: &mut dyn FnMut(&mut Scope<'_>, &Pou),
+    mut types: Option<&mut HashMap<Span, Type>>,
+) -> Vec<Diagnostic> {
     let (env, mut diags) = TypeEnv::from_unit(unit);
     {
         let mut scope = Scope::globals_only(&env);
         let mut ck = Checker::new(&mut scope);
+        if types.is_some() {
+            ck.keep_types();
+        }
         ck.check_declarations();
         let mut defs: Vec<&TypeDef> = env.type_defs().collect();
         defs.sort_by_key(|d| d.span);
@@ -80,11 +100,14 @@ pub fn check_unit_with(unit: &SourceUnit, prepare: &mut dyn FnMut(&mut Scope<'_>
                 }
             }
         }
+        if let Some(t) = types.as_deref_mut() {
+            t.extend(ck.take_expr_types());
+        }
         diags.extend(ck.finish());
     }
     for item in &unit.items {
         if let Item::Pou(pou) = item {
-            diags.extend(check_pou_with(&env, pou, prepare));
+            diags.extend(check_pou_inner(&env, pou, prepare, types.as_deref_mut()));
         }
     }
     diags
@@ -96,6 +119,15 @@ pub fn check_pou(env: &TypeEnv, pou: &Pou) -> Vec<Diagnostic> {
 }
 
 fn check_pou_with(env: &TypeEnv, pou: &Pou, prepare: &mut dyn FnMut(&mut Scope<'_>, &Pou)) -> Vec<Diagnostic> {
+    check_pou_inner(env, pou, prepare, None)
+}
+
+fn check_pou_inner(
+    env: &TypeEnv,
+    pou: &Pou,
+    prepare: &mut dyn FnMut(&mut Scope<'_>, &Pou),
+    types: Option<&mut HashMap<Span, Type>>,
+) -> Vec<Diagnostic> {
     let mut scope = Scope::for_pou(env, pou);
     if let Body::Sfc(elements) = &pou.body {
         for el in elements {
@@ -109,6 +141,9 @@ fn check_pou_with(env: &TypeEnv, pou: &Pou, prepare: &mut dyn FnMut(&mut Scope<'
     }
     prepare(&mut scope, pou);
     let mut ck = Checker::new(&mut scope);
+    if types.is_some() {
+        ck.keep_types();
+    }
     ck.check_declarations();
     match &pou.body {
         Body::St(stmts) => ck.check_stmts(stmts),
@@ -139,6 +174,9 @@ fn check_pou_with(env: &TypeEnv, pou: &Pou, prepare: &mut dyn FnMut(&mut Scope<'
             }
             ck.set_element(None);
         }
+    }
+    if let Some(t) = types {
+        t.extend(ck.take_expr_types());
     }
     let mut diags = ck.finish();
     diags.extend(scope.unused_diagnostics());

@@ -1,7 +1,7 @@
 //! The names visible in the code of one POU: its variables, the globals, and the steps and
 //! actions of its chart; with a record of which names the code reads and writes.
 
-use crate::env::{block_constants, PouInterface, TypeEnv, VarInfo};
+use crate::env::{add_sfc_control_variables, block_constants, is_sfc_control_variable, PouInterface, TypeEnv, VarInfo};
 use crate::types::Type;
 use crate::value::{ConstLookup, Value};
 use sfc_diagnostics::{Diagnostic, Span};
@@ -65,6 +65,8 @@ pub struct Scope<'e> {
     env: &'e TypeEnv,
     pou_name: Option<String>,
     pou_kind: Option<PouKind>,
+    /// The POU's body is a chart (its control variables are used by the chart itself).
+    sfc: bool,
     return_type: Option<Type>,
     vars: Vec<VarInfo>,
     var_usage: Vec<Usage>,
@@ -86,6 +88,7 @@ impl<'e> Scope<'e> {
             env,
             pou_name: None,
             pou_kind: None,
+            sfc: false,
             return_type: None,
             vars: Vec::new(),
             var_usage: Vec::new(),
@@ -122,6 +125,10 @@ impl<'e> Scope<'e> {
             }
         }
         let return_type = pou.return_type.as_ref().map(|s| env.resolve_type_spec(s, &lookup, &mut pending));
+        let sfc = matches!(pou.body, sfc_syntax::ast::Body::Sfc(_));
+        if sfc {
+            add_sfc_control_variables(&mut vars, pou.name.span, &mut pending);
+        }
         let iface = PouInterface {
             name: pou.name.text.clone(),
             kind: pou.kind,
@@ -129,6 +136,7 @@ impl<'e> Scope<'e> {
             return_type,
             standard: false,
             span: pou.name.span,
+            sfc,
         };
         let mut scope = Scope::for_interface(env, &iface);
         scope.pending = pending;
@@ -140,6 +148,7 @@ impl<'e> Scope<'e> {
         let mut scope = Scope::globals_only(env);
         scope.pou_name = Some(iface.name.clone());
         scope.pou_kind = Some(iface.kind);
+        scope.sfc = iface.sfc;
         if iface.kind == PouKind::Function {
             scope.return_type = Some(iface.return_type.clone().unwrap_or(Type::Error));
         }
@@ -323,12 +332,14 @@ impl<'e> Scope<'e> {
     }
 
     /// Local variables (VAR, VAR_TEMP, not located) that the checked code never read nor
-    /// wrote. Interface variables are excluded: the caller of the POU uses them.
+    /// wrote. Interface variables are excluded: the caller of the POU uses them; so are the
+    /// control variables of a chart (`SFCInit`, …), which the chart itself uses.
     pub fn unused_variables(&self) -> Vec<&VarInfo> {
         self.vars
             .iter()
             .zip(&self.var_usage)
             .filter(|(v, u)| matches!(v.kind, VarKind::Var | VarKind::Temp) && v.location.is_none() && !u.used())
+            .filter(|(v, _)| !(self.sfc && is_sfc_control_variable(&v.name)))
             .map(|(v, _)| v)
             .collect()
     }

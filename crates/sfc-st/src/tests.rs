@@ -569,9 +569,80 @@ fn hook_declares_implicit_inputs() {
                 location: None,
                 init: None,
                 value: None,
+                implicit: true,
             };
             let _ = scope.declare(var);
         }
     });
     assert!(diags.is_empty(), "{diags:?}");
+}
+
+/// A function block `Seq` with an SFC body (so it has the implicit control variables) and a
+/// program that uses it.
+fn chart_fb(decls: &str, guard: &str, program: &str) -> String {
+    format!(
+        "FUNCTION_BLOCK Seq\nVAR_INPUT Go : BOOL; END_VAR\n{decls}\n\
+         INITIAL_STEP S0: END_STEP\nTRANSITION FROM S0 TO S1 := {guard}; END_TRANSITION\n\
+         STEP S1: END_STEP\nTRANSITION FROM S1 TO S0 := TRUE; END_TRANSITION\nEND_FUNCTION_BLOCK\n\
+         PROGRAM P\nVAR Rev : Seq; x, y : BOOL; s : STRING; END_VAR\n{program}\nEND_PROGRAM\n"
+    )
+}
+
+#[test]
+fn chart_control_variables() {
+    run(&[
+        ("read outside", chart_fb("", "Go", "Rev(Go := x); y := Rev.SFCError; s := Rev.SFCCurrentStep;"), &[]),
+        ("set as inputs", chart_fb("", "Go", "Rev(SFCInit := x, SFCPause := y, SFCQuitError := x);"), &[]),
+        ("error step", chart_fb("", "Go", "Rev(); s := Rev.SFCErrorStep;"), &[]),
+        ("read inside", chart_fb("", "Go AND NOT SFCError AND NOT SFCInit", "Rev();"), &[]),
+        ("outputs are read-only outside", chart_fb("", "Go", "Rev.SFCError := x;"), &["SFC0308"]),
+        ("declared with its type", chart_fb("VAR_OUTPUT SFCError : BOOL; END_VAR", "Go", "y := Rev.SFCError;"), &[]),
+        ("declared with another type", chart_fb("VAR_INPUT SFCInit : INT; END_VAR", "Go", "Rev();"), &["SFC0302"]),
+        (
+            "not on other POUs",
+            "FUNCTION_BLOCK F\nVAR_INPUT a : BOOL; END_VAR\n;\nEND_FUNCTION_BLOCK\n\
+             PROGRAM P\nVAR i : F; x : BOOL; END_VAR\nx := i.SFCError;\nEND_PROGRAM\n"
+                .to_string(),
+            &["SFC0309"],
+        ),
+    ]);
+    // A declared but unused control variable is the chart's, not an unused local.
+    let src = chart_fb("VAR SFCPause : BOOL; END_VAR", "Go", "Rev(Go := x); y := Rev.SFCError; s := '';");
+    assert_eq!(codes(&src), Vec::<&str>::new());
+}
+
+#[test]
+fn typed_check_records_every_expression() {
+    use crate::Type;
+    let src = "PROGRAM P\nVAR a : SINT; b : REAL; END_VAR\na := a + 1;\nb := b * 2;\nEND_PROGRAM\n";
+    let (unit, _) = sfc_syntax::parse(0, src);
+    let (diags, types) = crate::check_unit_typed(&unit);
+    assert!(diags.is_empty(), "{diags:?}");
+    let at = |text: &str, nth: usize| {
+        let start = src.match_indices(text).nth(nth).map(|(i, _)| i as u32).expect("in source");
+        types.iter().find(|(s, _)| s.start == start && s.end == start + text.len() as u32).map(|(_, t)| t.clone())
+    };
+    assert_eq!(at("a + 1", 0), Some(Type::SInt));
+    assert_eq!(at("1", 0), Some(Type::SInt));
+    assert_eq!(at("b * 2", 0), Some(Type::Real));
+    assert_eq!(at("2", 0), Some(Type::Real));
+}
+
+#[test]
+fn counter_variants_are_function_blocks() {
+    run(&[
+        (
+            "CTD_UDINT",
+            "PROGRAM P\nVAR c : CTD_UDINT; q : BOOL; n : UDINT; END_VAR\n\
+             c(CD := q, LD := q, PV := 2);\nq := c.Q;\nn := c.CV;\nEND_PROGRAM\n"
+                .to_string(),
+            &[],
+        ),
+        (
+            "CTUD_LINT",
+            "PROGRAM P\nVAR c : CTUD_LINT; n : LINT; END_VAR\nc(CU := TRUE, PV := 5, CV => n);\nEND_PROGRAM\n"
+                .to_string(),
+            &[],
+        ),
+    ]);
 }

@@ -1,0 +1,224 @@
+//! Compiled code: the memory layout of every POU and the ST/IL of guards, action bodies, POU
+//! bodies, user FUNCTIONs and FUNCTION_BLOCKs and the standard functions and function blocks,
+//! compiled once into closures over a flat memory of [`Value`] slots.
+//!
+//! The contract with the scan engine (`crate::engine`):
+//! * Memory is one `Vec<Value>`; the file's globals occupy slots `0..Program::globals.size`.
+//!   Every variable is a run of consecutive slots in its POU's frame (arrays and structures
+//!   flattened, function block instances nested as their own frame layout).
+//! * An SFC POU's frame also holds, for each step, the slots `X` (BOOL) and `T` (TIME), for each
+//!   action `Q` and `A` (BOOL), the implicit control variables ([`ControlSlots`]) and one hidden
+//!   slot ([`ChartCode::chart_slot`]) holding `Value::Int(index)` of the instance's chart state
+//!   in the engine. The engine writes X, T, Q, A; compiled code only reads them.
+//! * Calling an instance of a FUNCTION_BLOCK whose body is SFC runs one scan of its chart:
+//!   the compiled call copies the inputs, calls [`crate::engine::run_chart`], then copies the
+//!   outputs.
+
+use crate::engine::{ChartState, ScanSink};
+use crate::Profile;
+use crate::value::Value;
+use sfc_diagnostics::Span;
+use sfc_model::Chart;
+use sfc_st::Type;
+use sfc_syntax::ast::{PouKind, VarKind};
+
+/// A fault of running code (division by zero, index out of range, …): stops the run.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Fault {
+    pub message: String,
+    /// Where in the source (the operator, index expression, call, …).
+    pub span: Span,
+}
+
+/// What compiled code runs against.
+pub struct Ctx<'a> {
+    pub mem: &'a mut Vec<Value>,
+    pub prog: &'a Program,
+    /// Chart states of every SFC instance, indexed by the value of its `chart_slot`.
+    pub charts: &'a mut Vec<ChartState>,
+    /// Fired transitions and events of nested charts, collected for the scan record.
+    pub sink: &'a mut ScanSink,
+    /// Virtual time of this scan, µs.
+    pub now: i64,
+    /// Number of this scan.
+    pub scan: u64,
+    pub profile: Profile,
+}
+
+/// A compiled transition condition; the `usize` is the frame base of the chart instance.
+pub type Guard = Box<dyn Fn(&mut Ctx<'_>, usize) -> Result<bool, Fault> + Send + Sync>;
+/// A compiled statement list (action body, POU body); the `usize` is the frame base.
+pub type Block = Box<dyn Fn(&mut Ctx<'_>, usize) -> Result<(), Fault> + Send + Sync>;
+
+/// Where a variable lives: in the frame (offset from the frame base) or among the globals
+/// (absolute slot).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Place {
+    Local(u32),
+    Global(u32),
+}
+
+impl Place {
+    /// The absolute slot for a frame starting at `base`.
+    pub fn slot(self, base: usize) -> usize {
+        match self {
+            Place::Local(o) => base + o as usize,
+            Place::Global(g) => g as usize,
+        }
+    }
+}
+
+/// One declared variable of a frame.
+#[derive(Debug, Clone)]
+pub struct VarSlot {
+    /// The declared spelling.
+    pub name: String,
+    pub ty: Type,
+    pub kind: VarKind,
+    /// First slot, relative to the frame base (absolute for globals).
+    pub offset: u32,
+    /// Number of slots (1 for elementary types).
+    pub size: u32,
+    /// `AT %IX0.0`, as written.
+    pub location: Option<String>,
+    /// Not declared by the user: the SFC control variables and the ATMT/EATMT inputs.
+    pub implicit: bool,
+}
+
+/// The slots of one frame.
+#[derive(Debug, Clone, Default)]
+pub struct Layout {
+    /// Declared (and implicit) variables in declaration order.
+    pub vars: Vec<VarSlot>,
+    /// Slots of one frame, hidden slots included.
+    pub size: u32,
+}
+
+/// One compiled POU.
+pub struct PouCode {
+    /// The declared spelling.
+    pub name: String,
+    pub kind: PouKind,
+    pub layout: Layout,
+    pub body: PouBody,
+}
+
+pub enum PouBody {
+    /// ST or IL body (FUNCTIONs store their result in the variable named like the POU).
+    Code(Block),
+    Chart(Box<ChartCode>),
+}
+
+/// The duration of a timed association.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum DurationCode {
+    Literal(i64),
+    Variable(Place),
+}
+
+/// One association of a step, in the chart's order.
+#[derive(Debug, Clone)]
+pub struct AssocCode {
+    pub duration: Option<DurationCode>,
+    /// For a BOOL variable used as an action: where it lives.
+    pub variable: Option<Place>,
+}
+
+/// Frame offsets of the implicit control variables of an SFC instance (see `docs/sim.md`).
+#[derive(Debug, Clone, Copy, Default)]
+pub struct ControlSlots {
+    /// `SFCInit : BOOL` (input): reset to the initial situation, and hold there while TRUE.
+    pub init: u32,
+    /// `SFCPause : BOOL` (input): no transition fires and step times stand still while TRUE.
+    pub pause: u32,
+    /// `SFCQuitError : BOOL` (input): acknowledges `SFCError`.
+    pub quit_error: u32,
+    /// `SFCError : BOOL` (output): a step stayed active longer than its `sfc.timeout`.
+    pub error: u32,
+    /// `SFCErrorStep : STRING` (output): the name of that step.
+    pub error_step: u32,
+    /// `SFCCurrentStep : STRING` (output): the first active step in declaration order.
+    pub current_step: u32,
+}
+
+/// A compiled chart.
+pub struct ChartCode {
+    /// The model; its conditions and bodies are compiled below and are not used at run time.
+    pub chart: Chart,
+    /// Per step: frame offsets of `X` and `T`.
+    pub step_x: Vec<u32>,
+    pub step_t: Vec<u32>,
+    /// Per action: frame offsets of `Q` and `A`.
+    pub action_q: Vec<u32>,
+    pub action_a: Vec<u32>,
+    /// Per transition, in the chart's order.
+    pub guards: Vec<Guard>,
+    /// Per action, in the chart's order.
+    pub bodies: Vec<Block>,
+    /// Per step, per association (same order as `chart.steps[s].associations`).
+    pub associations: Vec<Vec<AssocCode>>,
+    pub control: ControlSlots,
+    /// Hidden slot holding `Value::Int(i)`: this instance's index in `Ctx::charts`.
+    pub chart_slot: u32,
+    /// The engine's plan of the net and its action control, built on first use.
+    pub plan: std::sync::OnceLock<std::sync::Arc<crate::engine::ChartPlan>>,
+}
+
+impl ChartCode {
+    /// The engine's plan of this chart.
+    #[inline]
+    pub fn plan(&self) -> &crate::engine::ChartPlan {
+        self.plan_arc()
+    }
+    pub(crate) fn plan_arc(&self) -> &std::sync::Arc<crate::engine::ChartPlan> {
+        self.plan.get_or_init(|| std::sync::Arc::new(crate::engine::ChartPlan::new(self)))
+    }
+}
+
+/// Every POU of a file, compiled.
+pub struct Program {
+    pub pous: Vec<PouCode>,
+    /// The file's VAR_GLOBAL variables; absolute slots `0..globals.size`.
+    pub globals: Layout,
+    /// Frame templates, initial-value code and standard block layouts used by compiled code,
+    /// [`Program::instantiate`] and [`Program::resolve`].
+    pub(crate) support: compile::Support,
+}
+
+/// Memory ready for the first scan of one top-level POU.
+pub struct Memory {
+    /// Initial values of every slot (globals, the top frame, nested instances).
+    pub mem: Vec<Value>,
+    /// Frame base of the top POU.
+    pub top_frame: usize,
+    /// Every SFC instance in memory: the top POU (if it is SFC) first, path `""`; nested
+    /// instances by their path (`Rev`, `Cells[2].Seq`), in declaration order, depth first.
+    pub charts: Vec<ChartInstance>,
+}
+
+/// An SFC instance found while laying out memory.
+#[derive(Debug, Clone)]
+pub struct ChartInstance {
+    /// Index in `Program::pous`.
+    pub pou: usize,
+    /// Absolute frame base.
+    pub frame: usize,
+    /// Instance path from the top POU: `""` for the top itself, `Rev`, `Cells[2].Seq`.
+    pub path: String,
+}
+
+mod call;
+mod compile;
+mod convert;
+mod expr;
+mod il;
+mod init;
+mod ops;
+mod place;
+mod resolve;
+mod rt;
+mod stdfb;
+mod stdfn;
+mod stmt;
+mod texpr;
+mod unit;

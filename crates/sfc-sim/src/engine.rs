@@ -1,0 +1,1446 @@
+//! The scan engine: `semantics.md` scan by scan for every SFC instance, action control, events,
+//! profiles, chart control variables, and the [`Simulation`] driving one top-level POU.
+//!
+//! Per-scan cost grows with the active steps and the live actions, not with the chart: the
+//! engine keeps the active steps as a list, tests only the transitions leaving them, and runs
+//! action control only for actions that are associated with an active step or still hold
+//! state (stored flags, running timers, pending final scans).
+
+use crate::code::{ChartCode, Ctx, DurationCode, Fault, Memory, Place, PouBody, Program};
+use crate::explain::StepReport;
+use crate::value::Value;
+use crate::{Event, Profile, RuntimeError, ScanRecord, SimOptions};
+use sfc_diagnostics::{Diagnostic, SourceFile, Span};
+use sfc_model::{ActionTarget, Qualifier};
+use sfc_st::Type;
+use std::sync::Arc;
+
+/// Fired transitions and events collected during one scan (from every chart instance).
+#[derive(Debug, Default)]
+pub struct ScanSink {
+    /// `(chart instance, transition)` in firing order.
+    pub fired: Vec<(u32, u32)>,
+    pub events: Vec<Event>,
+}
+
+/// What drives an action control block: an ACTION, or a BOOL variable used as an action.
+#[derive(Debug, Clone)]
+pub(crate) struct Entity {
+    pub(crate) name: String,
+    pub(crate) action: Option<usize>,
+    pub(crate) variable: Option<Place>,
+    /// Associations in text order (step declaration order, then order inside the step).
+    pub(crate) assocs: Vec<Assoc>,
+}
+
+#[derive(Debug, Clone)]
+pub(crate) struct Assoc {
+    pub(crate) step: u32,
+    pub(crate) qualifier: Qualifier,
+    pub(crate) duration: Option<DurationCode>,
+}
+
+/// A list per index, stored flat (compressed rows): `rows[i]` is `items[start[i]..start[i+1]]`.
+#[derive(Debug, Clone, Default)]
+pub(crate) struct Rows {
+    start: Vec<u32>,
+    items: Vec<u32>,
+}
+
+impl Rows {
+    fn from_lists(lists: impl Iterator<Item = Vec<u32>>) -> Rows {
+        let mut rows = Rows { start: vec![0], items: Vec::new() };
+        for l in lists {
+            rows.items.extend(l);
+            rows.start.push(rows.items.len() as u32);
+        }
+        rows
+    }
+    #[inline]
+    pub(crate) fn get(&self, i: u32) -> &[u32] {
+        let i = i as usize;
+        &self.items[self.start[i] as usize..self.start[i + 1] as usize]
+    }
+}
+
+/// What every instance of one SFC POU shares: the net and the action control plan. Built once
+/// per POU ([`ChartCode::plan`]).
+#[derive(Debug)]
+pub struct ChartPlan {
+    pub(crate) outgoing: Rows,
+    pub(crate) pre: Rows,
+    pub(crate) post: Rows,
+    /// Sort key of each transition for conflict resolution: explicit priorities first.
+    pub(crate) order_key: Vec<(u8, i64, u32)>,
+    pub(crate) explicit: Vec<bool>,
+    pub(crate) initial: Vec<u32>,
+    pub(crate) timeouts: Vec<Option<i64>>,
+    pub(crate) supervised: bool,
+    pub(crate) entities: Vec<Entity>,
+    /// Entities each step associates, without repetition.
+    pub(crate) step_entities: Rows,
+    /// Entities that are BOOL variables: written with Q every scan.
+    pub(crate) variable_entities: Vec<u32>,
+    pub(crate) step_names: Vec<String>,
+    pub(crate) transition_names: Vec<String>,
+    pub(crate) action_names: Vec<String>,
+}
+
+impl ChartPlan {
+    pub(crate) fn new(code: &ChartCode) -> ChartPlan {
+        let chart = &code.chart;
+        let n = chart.steps.len();
+        let dedup = |v: &[usize]| {
+            let mut out: Vec<u32> = Vec::new();
+            for &s in v {
+                if !out.contains(&(s as u32)) {
+                    out.push(s as u32);
+                }
+            }
+            out
+        };
+        let mut outgoing = vec![Vec::new(); n];
+        for (t, tr) in chart.transitions.iter().enumerate() {
+            for s in dedup(&tr.from) {
+                outgoing[s as usize].push(t as u32);
+            }
+        }
+        let pre = Rows::from_lists(chart.transitions.iter().map(|t| dedup(&t.from)));
+        let post = Rows::from_lists(chart.transitions.iter().map(|t| dedup(&t.to)));
+        let order_key = chart
+            .transitions
+            .iter()
+            .enumerate()
+            .map(|(i, t)| match t.priority {
+                Some(p) => (0u8, p, i as u32),
+                None => (1u8, 0, i as u32),
+            })
+            .collect();
+        let explicit = chart.transitions.iter().map(|t| t.priority.is_some()).collect();
+        let mut entities: Vec<Entity> = chart
+            .actions
+            .iter()
+            .enumerate()
+            .map(|(i, a)| Entity { name: a.name.clone(), action: Some(i), variable: None, assocs: Vec::new() })
+            .collect();
+        let mut step_entities = vec![Vec::new(); n];
+        let mut variable_entities = Vec::new();
+        for (s, step) in chart.steps.iter().enumerate() {
+            for (k, a) in step.associations.iter().enumerate() {
+                let assoc_code = code.associations.get(s).and_then(|v| v.get(k));
+                let e = match a.target {
+                    ActionTarget::Action(id) => id,
+                    ActionTarget::Variable => {
+                        let Some(place) = assoc_code.and_then(|c| c.variable) else { continue };
+                        match entities.iter().position(|e| e.variable == Some(place)) {
+                            Some(e) => e,
+                            None => {
+                                entities.push(Entity {
+                                    name: a.action.clone(),
+                                    action: None,
+                                    variable: Some(place),
+                                    assocs: Vec::new(),
+                                });
+                                variable_entities.push((entities.len() - 1) as u32);
+                                entities.len() - 1
+                            }
+                        }
+                    }
+                };
+                entities[e].assocs.push(Assoc {
+                    step: s as u32,
+                    qualifier: a.qualifier,
+                    duration: assoc_code.and_then(|c| c.duration),
+                });
+                if !step_entities[s].contains(&(e as u32)) {
+                    step_entities[s].push(e as u32);
+                }
+            }
+        }
+        let timeouts: Vec<Option<i64>> = chart.steps.iter().map(|s| s.timeout).collect();
+        ChartPlan {
+            outgoing: Rows::from_lists(outgoing.into_iter()),
+            pre,
+            post,
+            order_key,
+            explicit,
+            initial: chart.steps.iter().enumerate().filter(|(_, s)| s.initial).map(|(i, _)| i as u32).collect(),
+            supervised: timeouts.iter().any(Option::is_some),
+            timeouts,
+            entities,
+            step_entities: Rows::from_lists(step_entities.into_iter()),
+            variable_entities,
+            step_names: chart.steps.iter().map(|s| s.name.clone()).collect(),
+            transition_names: chart.transitions.iter().map(|t| t.name.clone()).collect(),
+            action_names: chart.actions.iter().map(|a| a.name.clone()).collect(),
+        }
+    }
+}
+
+/// The ACTION_CONTROL block of one entity (IEC 61131-3 2nd ed. 2.6.4.5) with its timers on
+/// virtual time: a timer holds the time its input was first seen TRUE.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub(crate) struct Control {
+    s_ff: bool,
+    sd_ff: bool,
+    ds_ff: bool,
+    sl_ff: bool,
+    l_tmr: Option<i64>,
+    d_tmr: Option<i64>,
+    sd_tmr: Option<i64>,
+    ds_tmr: Option<i64>,
+    sl_tmr: Option<i64>,
+    p_mem: bool,
+    p1_mem: bool,
+    p0_mem: bool,
+    /// The duration of each timed qualifier (L, D, SD, DS, SL): the last one a winning
+    /// association of that qualifier gave, so a stored SD/SL keeps its own duration after its
+    /// step was left.
+    t: [i64; 5],
+    pub(crate) q: bool,
+    pub(crate) a: bool,
+    live: bool,
+}
+
+/// The inputs of one ACTION_CONTROL block in one scan.
+#[derive(Debug, Clone, Copy, Default)]
+struct Inputs {
+    n: bool,
+    r: bool,
+    s: bool,
+    l: bool,
+    d: bool,
+    p: bool,
+    sd: bool,
+    ds: bool,
+    sl: bool,
+    p1: bool,
+    p0: bool,
+}
+
+impl Inputs {
+    fn set(&mut self, q: Qualifier, v: bool, or: bool) {
+        let slot = match q {
+            Qualifier::N => &mut self.n,
+            Qualifier::R => &mut self.r,
+            Qualifier::S => &mut self.s,
+            Qualifier::L => &mut self.l,
+            Qualifier::D => &mut self.d,
+            Qualifier::P => &mut self.p,
+            Qualifier::SD => &mut self.sd,
+            Qualifier::DS => &mut self.ds,
+            Qualifier::SL => &mut self.sl,
+            Qualifier::P1 => &mut self.p1,
+            Qualifier::P0 => &mut self.p0,
+        };
+        *slot = if or { *slot || v } else { v };
+    }
+}
+
+/// TON on virtual time: `Q = elapsed ≥ PT`, elapsed counted from the scan the input rose.
+fn ton(mem: &mut Option<i64>, input: bool, pt: i64, now: i64) -> bool {
+    if !input {
+        *mem = None;
+        return false;
+    }
+    let start = *mem.get_or_insert(now);
+    now - start >= pt
+}
+
+impl Control {
+    /// One execution of the block; returns `(Q, A)`.
+    fn update(&mut self, i: Inputs, now: i64, profile: Profile) -> (bool, bool) {
+        let [t_l, t_d, t_sd, t_ds, t_sl] = self.t;
+        let r = i.r;
+        self.s_ff = !r && (self.s_ff || i.s);
+        let l_q = ton(&mut self.l_tmr, i.l, t_l, now);
+        let d_q = ton(&mut self.d_tmr, i.d, t_d, now);
+        let p_q = i.p && !self.p_mem;
+        self.p_mem = i.p;
+        // MatIEC does not let R cancel a pending SD.
+        let sd_reset = r && profile != Profile::Matiec;
+        self.sd_ff = !sd_reset && (self.sd_ff || i.sd);
+        let sd_q = ton(&mut self.sd_tmr, self.sd_ff, t_sd, now);
+        let ds_q = ton(&mut self.ds_tmr, i.ds, t_ds, now);
+        self.ds_ff = !r && (self.ds_ff || ds_q);
+        self.sl_ff = !r && (self.sl_ff || i.sl);
+        let sl_q = ton(&mut self.sl_tmr, self.sl_ff, t_sl, now);
+        let q = !r && (i.n || (i.l && !l_q) || d_q || p_q || self.s_ff || sd_q || self.ds_ff || (self.sl_ff && !sl_q));
+        let p1 = i.p1 && !self.p1_mem;
+        let p0 = !i.p0 && self.p0_mem;
+        self.p1_mem = i.p1;
+        self.p0_mem = i.p0;
+        let fell = self.q && !q && profile != Profile::Matiec;
+        self.q = q;
+        self.a = q || fell || p1 || p0;
+        (self.q, self.a)
+    }
+
+    /// Holds no state: no flip-flop set, no timer running, no edge memory, Q and A FALSE.
+    fn idle(&self) -> bool {
+        !(self.s_ff || self.sd_ff || self.ds_ff || self.sl_ff || self.p_mem || self.p1_mem || self.p0_mem || self.q || self.a)
+            && self.l_tmr.is_none()
+            && self.d_tmr.is_none()
+            && self.sd_tmr.is_none()
+            && self.ds_tmr.is_none()
+            && self.sl_tmr.is_none()
+    }
+}
+
+/// Activations and active time of one step, for the time analysis.
+#[derive(Debug, Clone, Copy, Default)]
+struct StepTally {
+    activations: u64,
+    completed: u64,
+    min: i64,
+    max: i64,
+    sum: i128,
+}
+
+/// The run-time state of one step, kept together so a step touches one cache line.
+#[derive(Debug, Clone, Copy, Default)]
+pub(crate) struct StepState {
+    /// Elapsed time, µs (mirrored into the `T` slot).
+    pub(crate) t: i64,
+    /// Position in `ChartState::active` while active.
+    pos: u32,
+    pub(crate) x: bool,
+    /// `sfc.timeout` already reported for the current activation.
+    overdue: bool,
+    /// Scratch: consumed by an accepted transition / member of the deactivated set.
+    consumed: bool,
+    /// Scratch: accepted transitions activating it in this scan, or conflicting ones.
+    hits: u8,
+}
+
+/// The run-time state of one SFC instance.
+#[derive(Debug, Clone)]
+pub struct ChartState {
+    /// Index of the POU in `Program::pous`.
+    pub pou: usize,
+    /// Absolute frame base.
+    pub frame: usize,
+    /// Instance path, `""` for the top POU.
+    pub path: String,
+    pub(crate) plan: Arc<ChartPlan>,
+    started: bool,
+    last_time: i64,
+    /// Active steps, in no particular order.
+    pub(crate) active: Vec<u32>,
+    pub(crate) steps: Vec<StepState>,
+    pub(crate) controls: Vec<Control>,
+    live: Vec<u32>,
+    /// Steps left by the last evolution (CODESYS body order, publishing).
+    left: Vec<u32>,
+    /// Steps activated since the last action phase.
+    entered: Vec<u32>,
+    /// The active set changed since the last `finish_scan`.
+    changed: bool,
+    tally: Vec<StepTally>,
+    // Scratch buffers, kept to avoid allocation per scan.
+    stamp: Vec<u64>,
+    evolutions: u64,
+    cand: Vec<u32>,
+    accepted: Vec<u32>,
+    run: Vec<u32>,
+    current: Option<u32>,
+    /// `(time, transition)` of every firing, to rebuild the sequence of situations.
+    pub(crate) log: Vec<(i64, u32)>,
+}
+
+/// At most this many firings are kept per instance for the sequence of situations.
+const LOG_LIMIT: usize = 1 << 20;
+
+impl ChartState {
+    pub(crate) fn new(pou: usize, plan: Arc<ChartPlan>, frame: usize, path: String) -> ChartState {
+        let n = plan.step_names.len();
+        let m = plan.entities.len();
+        let nt = plan.transition_names.len();
+        ChartState {
+            pou,
+            frame,
+            path,
+            started: false,
+            last_time: 0,
+            active: Vec::new(),
+            steps: vec![StepState::default(); n],
+            controls: vec![Control::default(); m],
+            live: Vec::new(),
+            left: Vec::new(),
+            entered: Vec::new(),
+            changed: true,
+            tally: vec![StepTally::default(); n],
+            stamp: vec![0; nt],
+            evolutions: 0,
+            cand: Vec::new(),
+            accepted: Vec::new(),
+            run: Vec::new(),
+            current: None,
+            log: Vec::new(),
+            plan,
+        }
+    }
+
+    /// `Path.Name`, or `Name` for the top chart.
+    pub(crate) fn qualify(&self, name: &str) -> String {
+        if self.path.is_empty() {
+            name.to_string()
+        } else {
+            format!("{}.{name}", self.path)
+        }
+    }
+
+    /// Whether step `s` is active.
+    pub(crate) fn is_active(&self, s: u32) -> bool {
+        self.steps[s as usize].x
+    }
+
+    /// Elapsed time of step `s`, µs.
+    pub(crate) fn time(&self, s: u32) -> i64 {
+        self.steps[s as usize].t
+    }
+
+    /// Activates `s` (or restarts its time if it stays active).
+    fn activate(&mut self, s: u32) {
+        let st = &mut self.steps[s as usize];
+        if !st.x {
+            st.x = true;
+            st.pos = self.active.len() as u32;
+            self.active.push(s);
+        }
+        st.t = 0;
+        st.overdue = false;
+        self.tally[s as usize].activations += 1;
+        self.entered.push(s);
+        self.changed = true;
+    }
+
+    fn deactivate(&mut self, s: u32) {
+        let i = s as usize;
+        let st = &mut self.steps[i];
+        if !st.x {
+            return;
+        }
+        st.x = false;
+        let pos = st.pos as usize;
+        let d = st.t;
+        self.active.swap_remove(pos);
+        if let Some(&moved) = self.active.get(pos) {
+            self.steps[moved as usize].pos = pos as u32;
+        }
+        let tl = &mut self.tally[i];
+        if tl.completed == 0 {
+            tl.min = d;
+            tl.max = d;
+        } else {
+            tl.min = tl.min.min(d);
+            tl.max = tl.max.max(d);
+        }
+        tl.completed += 1;
+        tl.sum += i128::from(d);
+        self.changed = true;
+    }
+}
+
+fn code_of(prog: &Program, pou: usize) -> &ChartCode {
+    match &prog.pous[pou].body {
+        PouBody::Chart(c) => c,
+        PouBody::Code(_) => unreachable!("chart state of a POU without SFC body"),
+    }
+}
+
+/// Runs one scan of the SFC instance `chart` (an index into `ctx.charts`), as a call of its
+/// function block does. The first call is the instance's scan 0.
+pub fn run_chart(ctx: &mut Ctx<'_>, chart: usize) -> Result<(), Fault> {
+    let prog = ctx.prog;
+    let code = code_of(prog, ctx.charts[chart].pou);
+    let plan = code.plan();
+    let frame = ctx.charts[chart].frame;
+    let now = ctx.now;
+    let ctl = code.control;
+    // Chart control: SFCInit resets and holds the initial situation.
+    if read_bool(ctx.mem, frame + ctl.init as usize) {
+        reset(ctx, chart, code);
+        return Ok(());
+    }
+    if read_bool(ctx.mem, frame + ctl.quit_error as usize) {
+        ctx.mem[frame + ctl.error as usize] = Value::Bool(false);
+    }
+    let st = &mut ctx.charts[chart];
+    if !st.started {
+        st.started = true;
+        st.last_time = now;
+        for &s in &plan.initial {
+            st.activate(s);
+        }
+        for &e in &plan.variable_entities {
+            let c = &mut st.controls[e as usize];
+            if !c.live {
+                c.live = true;
+                st.live.push(e);
+            }
+        }
+        if ctx.profile == Profile::Matiec {
+            // No activation edge for the initial step: its edge memories start as if it had
+            // been active before.
+            for &s in &plan.initial {
+                for &e in plan.step_entities.get(s) {
+                    let c = &mut st.controls[e as usize];
+                    for a in plan.entities[e as usize].assocs.iter().filter(|a| a.step == s) {
+                        match a.qualifier {
+                            Qualifier::P => c.p_mem = true,
+                            Qualifier::P1 => c.p1_mem = true,
+                            _ => {}
+                        }
+                    }
+                }
+            }
+        }
+        publish_steps(ctx, chart, code);
+        action_phase(ctx, chart, code, plan)?;
+        finish_scan(ctx, chart, code, plan);
+        return Ok(());
+    }
+    let paused = read_bool(ctx.mem, frame + ctl.pause as usize);
+    let st = &mut ctx.charts[chart];
+    let delta = now - st.last_time;
+    st.last_time = now;
+    if !paused && delta != 0 {
+        for &s in &st.active {
+            let step = &mut st.steps[s as usize];
+            step.t += delta;
+            ctx.mem[frame + code.step_t[s as usize] as usize] = Value::Time(step.t);
+        }
+    }
+    match ctx.profile {
+        Profile::Codesys => {
+            action_phase(ctx, chart, code, plan)?;
+            if !paused {
+                evolve(ctx, chart, code, plan)?;
+            }
+        }
+        Profile::Grafcet => {
+            if !paused {
+                evolve_until_stable(ctx, chart, code, plan)?;
+            }
+            action_phase(ctx, chart, code, plan)?;
+        }
+        Profile::Iec | Profile::Matiec => {
+            if !paused {
+                evolve(ctx, chart, code, plan)?;
+            }
+            action_phase(ctx, chart, code, plan)?;
+        }
+    }
+    finish_scan(ctx, chart, code, plan);
+    Ok(())
+}
+
+#[inline]
+fn read_bool(mem: &[Value], slot: usize) -> bool {
+    matches!(mem.get(slot), Some(Value::Bool(true)))
+}
+
+/// SFCInit: back to the initial situation with every action control block cleared; the next
+/// call after SFCInit falls is the instance's scan 0 again.
+fn reset(ctx: &mut Ctx<'_>, chart: usize, code: &ChartCode) {
+    let plan = code.plan();
+    let frame = ctx.charts[chart].frame;
+    let st = &mut ctx.charts[chart];
+    if !st.started && !st.active.is_empty() {
+        return; // already held in the initial situation
+    }
+    while let Some(&s) = st.active.last() {
+        st.deactivate(s);
+    }
+    st.left.clear();
+    st.entered.clear();
+    for c in st.controls.iter_mut() {
+        *c = Control::default();
+    }
+    st.live.clear();
+    st.started = false;
+    for step in st.steps.iter_mut() {
+        step.t = 0;
+        step.overdue = false;
+    }
+    for &s in &plan.initial {
+        let step = &mut st.steps[s as usize];
+        step.x = true;
+        step.pos = st.active.len() as u32;
+        st.active.push(s);
+    }
+    st.changed = true;
+    for (s, &off) in code.step_x.iter().enumerate() {
+        ctx.mem[frame + off as usize] = Value::Bool(plan.initial.contains(&(s as u32)));
+        ctx.mem[frame + code.step_t[s] as usize] = Value::Time(0);
+    }
+    for (&q, &a) in code.action_q.iter().zip(&code.action_a) {
+        ctx.mem[frame + q as usize] = Value::Bool(false);
+        ctx.mem[frame + a as usize] = Value::Bool(false);
+    }
+    for &e in &plan.variable_entities {
+        if let Some(p) = plan.entities[e as usize].variable {
+            ctx.mem[p.slot(frame)] = Value::Bool(false);
+        }
+    }
+    ctx.mem[frame + code.control.error as usize] = Value::Bool(false);
+    ctx.mem[frame + code.control.error_step as usize] = Value::Str(Arc::from(""));
+}
+
+/// Steps 3–5: enabled and true transitions against one snapshot, conflicts, firing.
+/// Returns whether anything fired.
+fn evolve(ctx: &mut Ctx<'_>, chart: usize, code: &ChartCode, plan: &ChartPlan) -> Result<bool, Fault> {
+    let frame = ctx.charts[chart].frame;
+    let mut cand = {
+        let st = &mut ctx.charts[chart];
+        let mut cand = std::mem::take(&mut st.cand);
+        cand.clear();
+        st.evolutions += 1;
+        let stamp = st.evolutions;
+        for &s in &st.active {
+            for &t in plan.outgoing.get(s) {
+                let mark = &mut st.stamp[t as usize];
+                if *mark == stamp {
+                    continue;
+                }
+                *mark = stamp;
+                if plan.pre.get(t).iter().all(|&p| st.steps[p as usize].x) {
+                    cand.push(t);
+                }
+            }
+        }
+        cand
+    };
+    if cand.len() > 1 {
+        cand.sort_unstable();
+    }
+    // Guards, in declaration order, against the snapshot.
+    let mut e_len = 0;
+    for k in 0..cand.len() {
+        let t = cand[k];
+        match (code.guards[t as usize])(ctx, frame) {
+            Ok(true) => {
+                cand[e_len] = t;
+                e_len += 1;
+            }
+            Ok(false) => {}
+            Err(f) => {
+                ctx.charts[chart].cand = cand;
+                return Err(f);
+            }
+        }
+    }
+    cand.truncate(e_len);
+    let st = &mut ctx.charts[chart];
+    if cand.is_empty() {
+        st.cand = cand;
+        return Ok(false);
+    }
+    let mut accepted = std::mem::take(&mut st.accepted);
+    accepted.clear();
+    if cand.len() == 1 {
+        accepted.push(cand[0]);
+    } else {
+        resolve_conflicts(st, plan, &cand, &mut accepted, ctx.profile, &mut ctx.sink.events);
+    }
+    // Fire together: D = ∪ pre (marked `consumed`), A = ∪ post (counted in `hits`).
+    for &t in &accepted {
+        for &s in plan.pre.get(t) {
+            st.steps[s as usize].consumed = true;
+        }
+    }
+    let mut unsafe_steps: Vec<u32> = Vec::new();
+    for &t in &accepted {
+        for &s in plan.post.get(t) {
+            let step = &mut st.steps[s as usize];
+            step.hits = step.hits.saturating_add(1);
+            // Activated while active and not left, or by two transitions: unsafe.
+            if (step.hits >= 2 || (step.x && !step.consumed)) && !unsafe_steps.contains(&s) {
+                unsafe_steps.push(s);
+            }
+        }
+    }
+    if !unsafe_steps.is_empty() {
+        unsafe_steps.sort_unstable();
+        for &s in &unsafe_steps {
+            let trs = accepted
+                .iter()
+                .filter(|&&t| plan.post.get(t).contains(&s))
+                .map(|&t| st.qualify(&plan.transition_names[t as usize]))
+                .collect();
+            ctx.sink.events.push(Event::Unsafe { step: st.qualify(&plan.step_names[s as usize]), transitions: trs });
+        }
+    }
+    st.left.clear();
+    for &t in &accepted {
+        for &s in plan.pre.get(t) {
+            let step = &mut st.steps[s as usize];
+            if step.consumed {
+                step.consumed = false;
+                if step.x {
+                    st.deactivate(s);
+                    st.left.push(s);
+                }
+            }
+        }
+    }
+    let now = ctx.now;
+    for &t in &accepted {
+        for &s in plan.post.get(t) {
+            // `hits` still counts this scan's activations: activate each step once. A step left
+            // and re-entered stays active (its flag never falls) and its time restarts.
+            let step = &mut st.steps[s as usize];
+            if step.hits != 0 {
+                step.hits = 0;
+                st.activate(s);
+            }
+        }
+        if st.log.len() < LOG_LIMIT {
+            st.log.push((now, t));
+        }
+        ctx.sink.fired.push((chart as u32, t));
+    }
+    st.accepted = accepted;
+    st.cand = cand;
+    publish_steps(ctx, chart, code);
+    Ok(true)
+}
+
+/// Step 4 for two or more true transitions: `conflict` events, then acceptance in priority
+/// order, each step consumed once (MatIEC: a true transition without priority always fires;
+/// CODESYS: no priorities, declaration order).
+fn resolve_conflicts(
+    st: &mut ChartState,
+    plan: &ChartPlan,
+    cand: &[u32],
+    accepted: &mut Vec<u32>,
+    profile: Profile,
+    events: &mut Vec<Event>,
+) {
+    let codesys = profile == Profile::Codesys;
+    let explicit = |t: u32| !codesys && plan.explicit[t as usize];
+    for &t in cand {
+        if !explicit(t) {
+            for &s in plan.pre.get(t) {
+                let step = &mut st.steps[s as usize];
+                step.hits = step.hits.saturating_add(1);
+            }
+        }
+    }
+    let mut steps: Vec<u32> = Vec::new();
+    for &t in cand {
+        for &s in plan.pre.get(t) {
+            if st.steps[s as usize].hits >= 2 && !steps.contains(&s) {
+                steps.push(s);
+            }
+        }
+    }
+    for &t in cand {
+        for &s in plan.pre.get(t) {
+            st.steps[s as usize].hits = 0;
+        }
+    }
+    steps.sort_unstable();
+    for s in steps {
+        let trs = cand
+            .iter()
+            .filter(|&&t| !explicit(t) && plan.pre.get(t).contains(&s))
+            .map(|&t| st.qualify(&plan.transition_names[t as usize]))
+            .collect();
+        events.push(Event::Conflict { step: st.qualify(&plan.step_names[s as usize]), transitions: trs });
+    }
+    let mut order = cand.to_vec();
+    if !codesys {
+        order.sort_unstable_by_key(|&t| plan.order_key[t as usize]);
+    }
+    for &t in &order {
+        let pre = plan.pre.get(t);
+        let free = pre.iter().all(|&s| !st.steps[s as usize].consumed);
+        if free || (profile == Profile::Matiec && !explicit(t)) {
+            for &s in pre {
+                st.steps[s as usize].consumed = true;
+            }
+            accepted.push(t);
+        }
+    }
+    for &t in accepted.iter() {
+        for &s in plan.pre.get(t) {
+            st.steps[s as usize].consumed = false;
+        }
+    }
+    accepted.sort_unstable();
+}
+
+/// GRAFCET (IEC 60848): evolve on frozen inputs until nothing fires; a situation met twice
+/// is an endless cycle and stops the run.
+fn evolve_until_stable(ctx: &mut Ctx<'_>, chart: usize, code: &ChartCode, plan: &ChartPlan) -> Result<(), Fault> {
+    let mut seen: Vec<Vec<u32>> = Vec::new();
+    loop {
+        let mut now_active = ctx.charts[chart].active.clone();
+        now_active.sort_unstable();
+        if seen.contains(&now_active) {
+            return Err(Fault {
+                message: "the situation never becomes stable (GRAFCET evolution cycles on frozen inputs)".into(),
+                span: code.chart.name_span,
+            });
+        }
+        seen.push(now_active);
+        if !evolve(ctx, chart, code, plan)? {
+            return Ok(());
+        }
+    }
+}
+
+/// Writes the `X` and `T` slots of the steps left and entered by the last evolution.
+fn publish_steps(ctx: &mut Ctx<'_>, chart: usize, code: &ChartCode) {
+    let st = &ctx.charts[chart];
+    let frame = st.frame;
+    for &s in &st.left {
+        if !st.steps[s as usize].x {
+            ctx.mem[frame + code.step_x[s as usize] as usize] = Value::Bool(false);
+        }
+    }
+    for &s in &st.entered {
+        ctx.mem[frame + code.step_x[s as usize] as usize] = Value::Bool(true);
+        ctx.mem[frame + code.step_t[s as usize] as usize] = Value::Time(st.steps[s as usize].t);
+    }
+}
+
+/// Steps 6–7: action control for every live entity, then the bodies with `A` TRUE.
+fn action_phase(ctx: &mut Ctx<'_>, chart: usize, code: &ChartCode, plan: &ChartPlan) -> Result<(), Fault> {
+    let now = ctx.now;
+    let profile = ctx.profile;
+    let frame = ctx.charts[chart].frame;
+    let st = &mut ctx.charts[chart];
+    // Entities of newly active steps become live; they stay live while one of their steps is
+    // active or they hold state.
+    for &s in &st.entered {
+        for &e in plan.step_entities.get(s) {
+            let c = &mut st.controls[e as usize];
+            if !c.live {
+                c.live = true;
+                st.live.push(e);
+            }
+        }
+    }
+    st.entered.clear();
+    if st.live.is_empty() {
+        return Ok(());
+    }
+    let mut run = std::mem::take(&mut st.run);
+    run.clear();
+    let mut k = 0;
+    while k < st.live.len() {
+        let e = st.live[k] as usize;
+        let ent = &plan.entities[e];
+        let mut inputs = Inputs::default();
+        let or = profile != Profile::Matiec;
+        let mut winner: Option<(u32, Qualifier, i64)> = None;
+        let mut contenders: Vec<(u32, Qualifier)> = Vec::new();
+        let mut any_active = false;
+        for a in &ent.assocs {
+            let active = st.steps[a.step as usize].x;
+            any_active |= active;
+            if a.qualifier.is_timed() {
+                if !active {
+                    if !or {
+                        inputs.set(a.qualifier, false, false);
+                    }
+                    continue;
+                }
+                let dur = match a.duration {
+                    Some(DurationCode::Literal(d)) => d,
+                    Some(DurationCode::Variable(p)) => match &ctx.mem[p.slot(frame)] {
+                        Value::Time(d) => *d,
+                        _ => 0,
+                    },
+                    None => 0,
+                };
+                match winner {
+                    None => {
+                        winner = Some((a.step, a.qualifier, dur));
+                        inputs.set(a.qualifier, true, or);
+                    }
+                    Some((_, q, d)) if q == a.qualifier && d == dur => inputs.set(a.qualifier, true, true),
+                    Some(_) => contenders.push((a.step, a.qualifier)),
+                }
+            } else {
+                inputs.set(a.qualifier, active, or);
+            }
+        }
+        if let Some((ws, wq, d)) = winner {
+            let k = match wq {
+                Qualifier::L => 0,
+                Qualifier::D => 1,
+                Qualifier::SD => 2,
+                Qualifier::DS => 3,
+                _ => 4,
+            };
+            st.controls[e].t[k] = d;
+            if !contenders.is_empty() {
+                let mut steps = vec![st.qualify(&plan.step_names[ws as usize])];
+                let mut quals = vec![wq.name().to_string()];
+                for (s, q) in &contenders {
+                    steps.push(st.qualify(&plan.step_names[*s as usize]));
+                    quals.push(q.name().to_string());
+                }
+                ctx.sink.events.push(Event::Contention { action: st.qualify(&ent.name), steps, qualifiers: quals });
+            }
+        }
+        let c = &mut st.controls[e];
+        let (q, a) = c.update(inputs, now, profile);
+        match (ent.action, ent.variable) {
+            (Some(id), _) => {
+                ctx.mem[frame + code.action_q[id] as usize] = Value::Bool(q);
+                ctx.mem[frame + code.action_a[id] as usize] = Value::Bool(a);
+                if a {
+                    run.push(e as u32);
+                }
+            }
+            (None, Some(p)) => ctx.mem[p.slot(frame)] = Value::Bool(q),
+            (None, None) => {}
+        }
+        if c.idle() && ent.variable.is_none() && !any_active {
+            c.live = false;
+            st.live.swap_remove(k);
+        } else {
+            k += 1;
+        }
+    }
+    // Bodies: declaration order of the actions (entity index = action index), or CODESYS
+    // order: alphabetical, those of steps left in the previous scan first.
+    if profile == Profile::Codesys && run.len() > 1 {
+        let left = &st.left;
+        run.sort_by_cached_key(|&e| {
+            let ent = &plan.entities[e as usize];
+            (!ent.assocs.iter().any(|a| left.contains(&a.step)), ent.name.to_ascii_uppercase())
+        });
+    } else if run.len() > 1 {
+        run.sort_unstable();
+    }
+    if profile == Profile::Codesys {
+        st.left.clear();
+    }
+    for &e in &run {
+        if let Some(id) = plan.entities[e as usize].action {
+            if let Err(f) = (code.bodies[id])(ctx, frame) {
+                ctx.charts[chart].run = run;
+                return Err(f);
+            }
+        }
+    }
+    ctx.charts[chart].run = run;
+    Ok(())
+}
+
+/// After the scan: supervision times, SFCError/SFCErrorStep, SFCCurrentStep.
+fn finish_scan(ctx: &mut Ctx<'_>, chart: usize, code: &ChartCode, plan: &ChartPlan) {
+    let frame = ctx.charts[chart].frame;
+    let st = &mut ctx.charts[chart];
+    if plan.supervised {
+        let mut expired: Option<u32> = None;
+        for &s in &st.active {
+            if let Some(limit) = plan.timeouts[s as usize] {
+                let step = &mut st.steps[s as usize];
+                if step.t > limit && !step.overdue {
+                    step.overdue = true;
+                    if expired.is_none_or(|f| s < f) {
+                        expired = Some(s);
+                    }
+                }
+            }
+        }
+        if let Some(s) = expired {
+            ctx.mem[frame + code.control.error as usize] = Value::Bool(true);
+            ctx.mem[frame + code.control.error_step as usize] = Value::Str(Arc::from(plan.step_names[s as usize].as_str()));
+        }
+    }
+    if st.changed {
+        st.changed = false;
+        let first = st.active.iter().copied().min();
+        if first != st.current {
+            st.current = first;
+            let name = first.map(|s| plan.step_names[s as usize].as_str()).unwrap_or("");
+            ctx.mem[frame + code.control.current_step as usize] = Value::Str(Arc::from(name));
+        }
+    }
+}
+
+/// Activation count and active time of one step (time analysis).
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct StepStats {
+    /// Qualified step name.
+    pub step: String,
+    pub activations: u64,
+    /// Over completed and current activations, µs; `None` when never active.
+    pub min: Option<i64>,
+    pub max: Option<i64>,
+    pub mean: Option<i64>,
+}
+
+/// Time analysis of a run so far.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct TimeStats {
+    /// Every step of every instance, in declaration order (top chart first).
+    pub steps: Vec<StepStats>,
+    /// The sequence of situations passed: `(time µs, active steps)` each time the active set
+    /// changed, starting with the initial situation.
+    pub sequence: Vec<(i64, Vec<String>)>,
+}
+
+/// A simulation of one top-level POU of a checked file.
+pub struct Simulation {
+    prog: Program,
+    mem: Vec<Value>,
+    top_frame: usize,
+    charts: Vec<ChartState>,
+    opts: SimOptions,
+    source: SourceFile,
+    top: usize,
+    record: ScanRecord,
+    sink: ScanSink,
+    error: Option<RuntimeError>,
+    next_scan: u64,
+}
+
+impl Simulation {
+    /// Checks `text` and compiles it for simulation of `pou` (by name, or the only SFC POU,
+    /// or the only PROGRAM). Errors are the check diagnostics (or SFC0901 when `pou` does not
+    /// name a simulatable POU), with the source to render them.
+    pub fn from_source(
+        name: &str,
+        text: &str,
+        pou: Option<&str>,
+        opts: SimOptions,
+    ) -> Result<Simulation, (SourceFile, Vec<Diagnostic>)> {
+        let check_opts = sfc_model::CheckOptions { keep_types: true, ..Default::default() };
+        let checked = sfc_model::check_source(0, name, text, &check_opts);
+        if checked.has_errors() {
+            let diags = checked.diagnostics.into_iter().filter(|d| d.is_error()).collect();
+            return Err((checked.file, diags));
+        }
+        let source = checked.file;
+        let top = match choose_pou(&checked.unit, &checked.charts, pou) {
+            Ok(n) => n,
+            Err(d) => return Err((source, vec![d])),
+        };
+        let prog = match Program::compile(&checked.unit, checked.charts, &checked.expr_types) {
+            Ok(p) => p,
+            Err(d) => return Err((source, d)),
+        };
+        let Some(top) = prog.pou(&top) else {
+            let d = Diagnostic::error("SFC0901", Span::default(), format!("no POU named `{top}` to simulate"));
+            return Err((source, vec![d]));
+        };
+        Ok(Simulation::new(prog, top, source, opts))
+    }
+
+    /// A simulation of the compiled POU `top`.
+    pub fn new(prog: Program, top: usize, source: SourceFile, opts: SimOptions) -> Simulation {
+        let Memory { mem, top_frame, charts: instances } = prog.instantiate(top);
+        let mut mem = mem;
+        let mut charts = Vec::with_capacity(instances.len());
+        for (i, inst) in instances.into_iter().enumerate() {
+            let PouBody::Chart(code) = &prog.pous[inst.pou].body else { continue };
+            let plan = code.plan_arc().clone();
+            mem[inst.frame + code.chart_slot as usize] = Value::Int(i as i64);
+            charts.push(ChartState::new(inst.pou, plan, inst.frame, inst.path));
+        }
+        Simulation {
+            prog,
+            mem,
+            top_frame,
+            charts,
+            opts,
+            source,
+            top,
+            record: ScanRecord::default(),
+            sink: ScanSink::default(),
+            error: None,
+            next_scan: 0,
+        }
+    }
+
+    /// The checked source (to render runtime errors and diagnostics).
+    pub fn source(&self) -> &SourceFile {
+        &self.source
+    }
+    /// The declared name of the simulated POU.
+    pub fn pou_name(&self) -> &str {
+        &self.prog.pous[self.top].name
+    }
+    pub fn options(&self) -> SimOptions {
+        self.opts
+    }
+    /// The number of the scan that [`Simulation::scan`] runs next (0 before the first).
+    pub fn next_scan(&self) -> u64 {
+        self.next_scan
+    }
+    /// The virtual time of the next scan, µs.
+    pub fn next_time(&self) -> i64 {
+        self.next_scan as i64 * self.opts.period
+    }
+
+    /// Runs the next scan without building its record (the fast path for benchmarks and the
+    /// runtime). Returns the error that stopped the run, if any.
+    pub fn advance(&mut self) -> Result<(), &RuntimeError> {
+        if self.error.is_some() {
+            return Err(self.error.as_ref().unwrap());
+        }
+        self.sink.fired.clear();
+        self.sink.events.clear();
+        let now = self.next_time();
+        let scan = self.next_scan;
+        let result = {
+            let mut ctx = Ctx {
+                mem: &mut self.mem,
+                prog: &self.prog,
+                charts: &mut self.charts,
+                sink: &mut self.sink,
+                now,
+                scan,
+                profile: self.opts.profile,
+            };
+            match &self.prog.pous[self.top].body {
+                PouBody::Chart(_) => run_chart(&mut ctx, 0),
+                PouBody::Code(block) => block(&mut ctx, self.top_frame),
+            }
+        };
+        self.next_scan += 1;
+        if let Err(fault) = result {
+            let lc = self.source.line_col(fault.span.start);
+            let e = RuntimeError { message: fault.message, span: fault.span, line: lc.line, column: lc.column, scan, time: now };
+            self.sink.events.push(Event::Error(e.clone()));
+            self.error = Some(e);
+            return Err(self.error.as_ref().unwrap());
+        }
+        Ok(())
+    }
+
+    /// Runs the next scan. When it faults, the record holds the `error` event and
+    /// [`Simulation::error`] is set; once stopped, `scan` runs nothing and returns that record.
+    pub fn scan(&mut self) -> &ScanRecord {
+        if self.error.is_some() {
+            return &self.record;
+        }
+        let scan = self.next_scan;
+        let time = self.next_time();
+        let _ = self.advance();
+        let mut events = std::mem::take(&mut self.sink.events);
+        events.sort_by_key(Event::rank);
+        let fired = self
+            .sink
+            .fired
+            .iter()
+            .map(|&(c, t)| {
+                let st = &self.charts[c as usize];
+                st.qualify(&st.plan.transition_names[t as usize])
+            })
+            .collect();
+        self.record = ScanRecord { scan, time, active: self.active(), fired, events };
+        &self.record
+    }
+
+    /// The record of the last scan run.
+    pub fn record(&self) -> &ScanRecord {
+        &self.record
+    }
+    /// The runtime error that stopped the run.
+    pub fn error(&self) -> Option<&RuntimeError> {
+        self.error.as_ref()
+    }
+
+    /// Writes a variable (`Start`, `Rev.Start`, `Cells[2]`, global names), as an input change:
+    /// the value must have the variable's type (an `Int` is accepted for REAL/LREAL, and is
+    /// range-checked for the integer types). Step and action flags cannot be written.
+    pub fn set(&mut self, name: &str, value: Value) -> Result<(), String> {
+        if self.is_chart_flag(name) {
+            return Err(format!("`{name}` is a step or action flag: the chart sets it"));
+        }
+        let Some((slot, ty)) = self.prog.resolve(self.top, self.top_frame, name) else {
+            return Err(format!("no variable `{name}` in `{}`", self.pou_name()));
+        };
+        let v = fit(value, &ty).map_err(|why| format!("`{name}` is {}: {why}", type_name(&ty)))?;
+        self.mem[slot] = v;
+        Ok(())
+    }
+
+    fn is_chart_flag(&self, name: &str) -> bool {
+        let Some((base, member)) = name.rsplit_once('.') else { return false };
+        if !["X", "T", "Q", "A"].iter().any(|m| m.eq_ignore_ascii_case(member)) {
+            return false;
+        }
+        let (path, leaf) = match base.rsplit_once('.') {
+            Some((p, l)) => (p, l),
+            None => ("", base),
+        };
+        self.charts.iter().any(|c| {
+            c.path.eq_ignore_ascii_case(path)
+                && (c.plan.step_names.iter().any(|s| s.eq_ignore_ascii_case(leaf))
+                    || c.plan.action_names.iter().any(|a| a.eq_ignore_ascii_case(leaf)))
+        })
+    }
+
+    /// Reads a variable, `Step.X`, `Step.T`, `Action.Q`, `Action.A`, also inside nested
+    /// instances (`Rev.Busy`, `Rev.OpenKM1.X`). Case-insensitive.
+    pub fn get(&self, name: &str) -> Option<Value> {
+        let (slot, _) = self.prog.resolve(self.top, self.top_frame, name)?;
+        self.mem.get(slot).cloned()
+    }
+    /// The type of what [`Simulation::get`] reads.
+    pub fn type_of(&self, name: &str) -> Option<Type> {
+        self.prog.resolve(self.top, self.top_frame, name).map(|(_, t)| t)
+    }
+
+    /// Active steps now, sorted by code points (nested instances as `Path.Step`).
+    pub fn active(&self) -> Vec<String> {
+        let mut out: Vec<String> = Vec::new();
+        for st in &self.charts {
+            for &s in &st.active {
+                out.push(st.qualify(&st.plan.step_names[s as usize]));
+            }
+        }
+        out.sort();
+        out
+    }
+
+    fn trace_slots(&self) -> impl Iterator<Item = &crate::code::VarSlot> {
+        self.prog.pous[self.top].layout.vars.iter().filter(|v| !v.implicit && v.size == 1 && v.ty.is_elementary())
+    }
+    /// The variables a trace shows: every declared variable of elementary type of the top
+    /// POU, in declaration order, with its declared name and type.
+    pub fn trace_vars(&self) -> Vec<(String, Type)> {
+        self.trace_slots().map(|v| (v.name.clone(), v.ty.clone())).collect()
+    }
+    /// Current values of [`Simulation::trace_vars`], same order.
+    pub fn trace_values(&self) -> Vec<Value> {
+        self.trace_slots()
+            .map(|v| match self.prog.resolve(self.top, self.top_frame, &v.name) {
+                Some((slot, _)) => self.mem[slot].clone(),
+                None => Value::default(),
+            })
+            .collect()
+    }
+    /// Every step (qualified), in declaration order, top chart first.
+    pub fn step_names(&self) -> Vec<String> {
+        self.charts.iter().flat_map(|c| c.plan.step_names.iter().map(|s| c.qualify(s))).collect()
+    }
+    /// Every transition (qualified), in declaration order, top chart first.
+    pub fn transition_names(&self) -> Vec<String> {
+        self.charts.iter().flat_map(|c| c.plan.transition_names.iter().map(|s| c.qualify(s))).collect()
+    }
+
+    /// Condition analysis of every active step now: why each outgoing transition does not fire.
+    pub fn explain(&self) -> Vec<StepReport> {
+        let mut out = Vec::new();
+        for (i, st) in self.charts.iter().enumerate() {
+            let mut act = st.active.clone();
+            act.sort_unstable();
+            for s in act {
+                out.push(crate::explain::report(self.explain_view(), i, s));
+            }
+        }
+        out
+    }
+    /// Condition analysis of the active steps whose `sfc.timeout` has expired.
+    pub fn overdue(&self) -> Vec<StepReport> {
+        let mut out = Vec::new();
+        for (i, st) in self.charts.iter().enumerate() {
+            let mut act = st.active.clone();
+            act.sort_unstable();
+            for s in act {
+                if st.plan.timeouts[s as usize].is_some_and(|limit| st.time(s) > limit) {
+                    out.push(crate::explain::report(self.explain_view(), i, s));
+                }
+            }
+        }
+        out
+    }
+
+    fn explain_view(&self) -> crate::explain::View<'_> {
+        crate::explain::View {
+            prog: &self.prog,
+            mem: &self.mem,
+            charts: &self.charts,
+            source: &self.source,
+            top: self.top,
+            top_frame: self.top_frame,
+            now: self.next_time() - self.opts.period,
+            profile: self.opts.profile,
+        }
+    }
+
+    /// Time analysis of the run so far.
+    pub fn stats(&self) -> TimeStats {
+        let mut steps = Vec::new();
+        for st in &self.charts {
+            for (s, name) in st.plan.step_names.iter().enumerate() {
+                let tl = st.tally[s];
+                let mut count = tl.completed;
+                let (mut min, mut max, mut sum) = (tl.min, tl.max, tl.sum);
+                if st.steps[s].x {
+                    let d = st.steps[s].t;
+                    if count == 0 {
+                        min = d;
+                        max = d;
+                    } else {
+                        min = min.min(d);
+                        max = max.max(d);
+                    }
+                    sum += i128::from(d);
+                    count += 1;
+                }
+                let some = count > 0;
+                steps.push(StepStats {
+                    step: st.qualify(name),
+                    activations: tl.activations,
+                    min: some.then_some(min),
+                    max: some.then_some(max),
+                    mean: some.then(|| (sum / i128::from(count)) as i64),
+                });
+            }
+        }
+        TimeStats { steps, sequence: self.sequence() }
+    }
+
+    /// Rebuilds the sequence of situations from the firing logs of all instances.
+    fn sequence(&self) -> Vec<(i64, Vec<String>)> {
+        let mut x: Vec<Vec<bool>> = self
+            .charts
+            .iter()
+            .map(|c| {
+                let mut v = vec![false; c.plan.step_names.len()];
+                if c.started || !c.log.is_empty() || c.tally.iter().any(|t| t.activations > 0) {
+                    for &s in &c.plan.initial {
+                        v[s as usize] = true;
+                    }
+                }
+                v
+            })
+            .collect();
+        let names = |x: &Vec<Vec<bool>>| {
+            let mut out = Vec::new();
+            for (c, flags) in self.charts.iter().zip(x) {
+                for (s, &on) in flags.iter().enumerate() {
+                    if on {
+                        out.push(c.qualify(&c.plan.step_names[s]));
+                    }
+                }
+            }
+            out.sort();
+            out
+        };
+        let mut events: Vec<(i64, usize, usize, u32)> = Vec::new();
+        for (c, st) in self.charts.iter().enumerate() {
+            for (k, &(time, t)) in st.log.iter().enumerate() {
+                events.push((time, c, k, t));
+            }
+        }
+        events.sort_by_key(|&(time, c, k, _)| (time, c, k));
+        let mut out = vec![(0, names(&x))];
+        let mut i = 0;
+        while i < events.len() {
+            let time = events[i].0;
+            // All firings of one scan form one step of the sequence.
+            let mut j = i;
+            while j < events.len() && events[j].0 == time {
+                j += 1;
+            }
+            for &(_, c, _, t) in &events[i..j] {
+                let plan = &self.charts[c].plan;
+                for &s in plan.pre.get(t) {
+                    x[c][s as usize] = false;
+                }
+            }
+            for &(_, c, _, t) in &events[i..j] {
+                let plan = &self.charts[c].plan;
+                for &s in plan.post.get(t) {
+                    x[c][s as usize] = true;
+                }
+            }
+            let now = names(&x);
+            if out.last().map(|l| &l.1) != Some(&now) {
+                out.push((time, now));
+            }
+            i = j;
+        }
+        out
+    }
+}
+
+/// Picks the POU to simulate: the named one, else the only SFC POU, else the only PROGRAM.
+fn choose_pou(unit: &sfc_syntax::ast::SourceUnit, charts: &[sfc_model::Chart], pou: Option<&str>) -> Result<String, Diagnostic> {
+    use sfc_syntax::ast::{Item, PouKind};
+    let pous: Vec<&sfc_syntax::ast::Pou> =
+        unit.items.iter().filter_map(|i| if let Item::Pou(p) = i { Some(p) } else { None }).collect();
+    if let Some(name) = pou {
+        return match pous.iter().find(|p| p.name.is(name)) {
+            Some(p) if p.kind == PouKind::Function => Err(Diagnostic::error(
+                "SFC0901",
+                p.name.span,
+                format!("`{}` is a FUNCTION: simulate a PROGRAM or FUNCTION_BLOCK", p.name.text),
+            )),
+            Some(p) => Ok(p.name.text.clone()),
+            None => {
+                let names: Vec<&str> = pous.iter().map(|p| p.name.text.as_str()).collect();
+                Err(Diagnostic::error("SFC0901", Span::default(), format!("no POU named `{name}` in this file"))
+                    .with_note(format!("the file declares: {}", names.join(", "))))
+            }
+        };
+    }
+    let programs: Vec<&&sfc_syntax::ast::Pou> = pous.iter().filter(|p| p.kind == PouKind::Program).collect();
+    if programs.len() == 1 {
+        return Ok(programs[0].name.text.clone());
+    }
+    if charts.len() == 1 {
+        return Ok(charts[0].pou.clone());
+    }
+    let names: Vec<&str> = pous.iter().filter(|p| p.kind != PouKind::Function).map(|p| p.name.text.as_str()).collect();
+    Err(Diagnostic::error("SFC0901", Span::default(), "choose the POU to simulate (`pou` / `--pou`)")
+        .with_note(format!("candidates: {}", names.join(", "))))
+}
+
+fn type_name(ty: &Type) -> String {
+    ty.to_string()
+}
+
+/// Converts a written value to the slot value of `ty`, or says why it does not fit.
+pub(crate) fn fit(value: Value, ty: &Type) -> Result<Value, String> {
+    let base = ty.base();
+    match (&value, base) {
+        (Value::Bool(_), Type::Bool) => Ok(value),
+        (Value::Int(i), _) if ty.is_integer() || ty.is_bit() || matches!(ty, Type::Subrange { .. }) => {
+            match ty.int_range() {
+                Some((lo, hi)) if (i128::from(*i) < lo || i128::from(*i) > hi) => {
+                    Err(format!("{i} is out of range {lo}..{hi}"))
+                }
+                _ => Ok(value),
+            }
+        }
+        (Value::Int(i), _) if ty.is_real() => Ok(real_of(*i as f64, ty)),
+        (Value::Real(r), _) if ty.is_real() => Ok(real_of(*r, ty)),
+        (Value::Time(_), _) if ty.is_duration() => Ok(value),
+        (Value::Str(_), _) if ty.is_string() => Ok(value),
+        (Value::Int(_), Type::Enum { .. }) => Ok(value),
+        _ => Err(format!("cannot take {}", describe(&value))),
+    }
+}
+
+fn real_of(r: f64, ty: &Type) -> Value {
+    if matches!(ty.base(), Type::Real) {
+        Value::Real(r as f32 as f64)
+    } else {
+        Value::Real(r)
+    }
+}
+
+fn describe(v: &Value) -> String {
+    match v {
+        Value::Bool(b) => format!("the BOOL {}", if *b { "TRUE" } else { "FALSE" }),
+        Value::Int(i) => format!("the integer {i}"),
+        Value::Real(r) => format!("the real {r}"),
+        Value::Time(t) => format!("the TIME {}", crate::format_time(*t)),
+        Value::Str(s) => format!("the string '{s}'"),
+    }
+}

@@ -1,0 +1,124 @@
+//! The SFC simulator: the scan engine of `semantics.md` (profile `iec` and the documented
+//! deviations), ST/IL execution compiled to closures, scenarios, traces, condition analysis
+//! ("why is this step stuck") and time analysis ("how long did each step take").
+//!
+//! Nothing here prints, exits or reads the clock: time is virtual (`scan · period`).
+
+pub mod code;
+pub mod engine;
+pub mod explain;
+pub mod value;
+pub mod scenario; pub mod trace; pub mod coverage;
+
+pub use engine::{ScanSink, Simulation, TimeStats, StepStats};
+pub use explain::{StepReport, TransitionReport};
+pub use value::{format_time, parse_time, Value};
+
+use sfc_diagnostics::Span;
+
+/// Which tool's behaviour to reproduce (`semantics.md`, "Profiles").
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
+pub enum Profile {
+    #[default]
+    Iec,
+    Matiec,
+    Codesys,
+    Grafcet,
+}
+
+impl Profile {
+    pub const ALL: [Profile; 4] = [Profile::Iec, Profile::Matiec, Profile::Codesys, Profile::Grafcet];
+    /// Parses `iec`, `matiec`, `codesys`, `grafcet` (any case).
+    pub fn from_name(s: &str) -> Option<Profile> {
+        Profile::ALL.into_iter().find(|p| p.name().eq_ignore_ascii_case(s))
+    }
+    pub fn name(self) -> &'static str {
+        match self {
+            Profile::Iec => "iec",
+            Profile::Matiec => "matiec",
+            Profile::Codesys => "codesys",
+            Profile::Grafcet => "grafcet",
+        }
+    }
+}
+
+/// How to simulate.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct SimOptions {
+    /// Scan period Δ in microseconds (default `T#10ms`).
+    pub period: i64,
+    pub profile: Profile,
+}
+
+impl Default for SimOptions {
+    fn default() -> Self {
+        SimOptions { period: 10_000, profile: Profile::Iec }
+    }
+}
+
+/// A runtime event of one scan (`interfaces.md`, "Traces"). Names of steps, transitions and
+/// actions of nested SFC instances carry the instance path (`Rev.OpenKM1`).
+#[derive(Debug, Clone, PartialEq)]
+pub enum Event {
+    /// Two or more true transitions without explicit priority share `step`.
+    Conflict { step: String, transitions: Vec<String> },
+    /// `step` was activated while active, or by two transitions of one scan.
+    Unsafe { step: String, transitions: Vec<String> },
+    /// Timed associations of `action` on several active steps differ; the first wins.
+    Contention { action: String, steps: Vec<String>, qualifiers: Vec<String> },
+    /// A runtime error stopped the run.
+    Error(RuntimeError),
+}
+
+impl Event {
+    /// Position in the trace's event order: conflict, unsafe, contention, error.
+    pub fn rank(&self) -> u8 {
+        match self {
+            Event::Conflict { .. } => 0,
+            Event::Unsafe { .. } => 1,
+            Event::Contention { .. } => 2,
+            Event::Error(_) => 3,
+        }
+    }
+    /// The JSON object of the trace format.
+    pub fn to_json(&self) -> serde_json::Value {
+        use serde_json::json;
+        match self {
+            Event::Conflict { step, transitions } => json!({"kind": "conflict", "step": step, "transitions": transitions}),
+            Event::Unsafe { step, transitions } => json!({"kind": "unsafe", "step": step, "transitions": transitions}),
+            Event::Contention { action, steps, qualifiers } => {
+                json!({"kind": "contention", "action": action, "steps": steps, "qualifiers": qualifiers})
+            }
+            Event::Error(e) => json!({"kind": "error", "message": e.message, "line": e.line, "column": e.column,
+                "scan": e.scan, "time": format_time(e.time)}),
+        }
+    }
+}
+
+/// A fault that stopped the run, located in the source.
+#[derive(Debug, Clone, PartialEq)]
+pub struct RuntimeError {
+    pub message: String,
+    pub span: Span,
+    /// 1-based line and column of `span.start`.
+    pub line: u32,
+    pub column: u32,
+    pub scan: u64,
+    /// Virtual time of the faulting scan, µs.
+    pub time: i64,
+}
+
+/// What one scan did.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct ScanRecord {
+    pub scan: u64,
+    /// Virtual time, µs.
+    pub time: i64,
+    /// Active steps after the scan, sorted by code points (nested instances as `Path.Step`).
+    pub active: Vec<String>,
+    /// Transitions fired in this scan, in declaration order (top chart first, then nested
+    /// instances in the order they ran).
+    pub fired: Vec<String>,
+    /// Events in the order conflict, unsafe, contention, error.
+    pub events: Vec<Event>,
+}
