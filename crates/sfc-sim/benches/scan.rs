@@ -108,12 +108,20 @@ fn measure(sim: &mut Simulation, scans: u64, rounds: usize) -> f64 {
 
 fn main() {
     let full = std::env::args().any(|a| a == "--bench");
+    // `cargo bench -p sfc-sim --bench scan -- ring-plain` runs only the cases whose name contains
+    // the argument (`ring-plain`, `ring-actions`, `loops`, `arith`).
+    let filter: Vec<String> = std::env::args().skip(1).filter(|a| !a.starts_with("--")).collect();
+    let wanted = |name: &str| filter.is_empty() || filter.iter().any(|f| name.contains(f.as_str()));
     let (scale, rounds) = if full { (1u64, 7) } else { (0, 1) };
     let scans = |n: u64| if scale == 0 { 20 } else { n };
 
     println!("sfc-sim scan benchmark ({} build)", if cfg!(debug_assertions) { "debug" } else { "release" });
     let mut ring_ns = Vec::new();
     for &(n, actions) in &[(100usize, false), (10_000, false), (100, true), (10_000, true)] {
+        if !wanted(if actions { "ring-actions" } else { "ring-plain" }) {
+            ring_ns.push(f64::NAN);
+            continue;
+        }
         let text = ring(n, actions);
         let mut sim = simulation("ring", &text);
         let _ = measure(&mut sim, scans(20_000), 1);
@@ -126,10 +134,15 @@ fn main() {
         (ring_ns[1] / ring_ns[0] - 1.0) * 100.0, (ring_ns[3] / ring_ns[2] - 1.0) * 100.0);
 
     let k = if full { 1000 } else { 50 };
+    if wanted("loops") {
     let mut sim = simulation("loops", &loops(k));
     let _ = measure(&mut sim, scans(200), 1);
     let ns = measure(&mut sim, scans(20_000), rounds);
     println!("{k} parallel loops, all active: {ns:10.1} ns/scan, {:6.2} ns per active step", ns / k as f64);
+    }
+    if !wanted("arith") {
+        return;
+    }
 
     let mut sim = simulation("arith", &arithmetic());
     let _ = measure(&mut sim, scans(20_000), 1);

@@ -82,6 +82,9 @@ pub struct ChartPlan {
     /// Entities that are BOOL variables: written with Q every scan.
     pub(crate) variable_entities: Vec<u32>,
     pub(crate) step_names: Vec<String>,
+    /// The step names as STRING values (for SFCCurrentStep and SFCErrorStep, shared, so
+    /// writing them allocates nothing).
+    step_values: Vec<Value>,
     pub(crate) transition_names: Vec<String>,
     pub(crate) action_names: Vec<String>,
 }
@@ -171,6 +174,7 @@ impl ChartPlan {
             step_entities: Rows::from_lists(step_entities.into_iter()),
             variable_entities,
             step_names: chart.steps.iter().map(|s| s.name.clone()).collect(),
+            step_values: chart.steps.iter().map(|s| Value::Str(Arc::from(s.name.as_str()))).collect(),
             transition_names: chart.transitions.iter().map(|t| t.name.clone()).collect(),
             action_names: chart.actions.iter().map(|a| a.name.clone()).collect(),
         }
@@ -336,6 +340,10 @@ pub struct ChartState {
     entered: Vec<u32>,
     /// The active set changed since the last `finish_scan`.
     changed: bool,
+    /// Keep `SFCCurrentStep` up to date in memory: only when some code of the file reads it
+    /// (writing a STRING every scan costs more than the rest of a scan). Readers from outside
+    /// (`Simulation::get`) get it computed.
+    pub(crate) track_current: bool,
     tally: Vec<StepTally>,
     // Scratch buffers, kept to avoid allocation per scan.
     stamp: Vec<u64>,
@@ -369,6 +377,7 @@ impl ChartState {
             left: Vec::new(),
             entered: Vec::new(),
             changed: true,
+            track_current: true,
             tally: vec![StepTally::default(); n],
             stamp: vec![0; nt],
             evolutions: 0,
@@ -509,7 +518,7 @@ pub fn run_chart(ctx: &mut Ctx<'_>, chart: usize) -> Result<(), Fault> {
         for &s in &st.active {
             let step = &mut st.steps[s as usize];
             step.t += delta;
-            ctx.mem[frame + code.step_t[s as usize] as usize] = Value::Time(step.t);
+            put_time(ctx.mem, frame + code.step_t[s as usize] as usize, step.t);
         }
     }
     match ctx.profile {
@@ -534,6 +543,24 @@ pub fn run_chart(ctx: &mut Ctx<'_>, chart: usize) -> Result<(), Fault> {
     }
     finish_scan(ctx, chart, code, plan);
     Ok(())
+}
+
+/// Writes a BOOL slot in place (no drop glue for the old value on the hot path).
+#[inline]
+fn put_bool(mem: &mut [Value], slot: usize, b: bool) {
+    match &mut mem[slot] {
+        Value::Bool(x) => *x = b,
+        other => *other = Value::Bool(b),
+    }
+}
+
+/// Writes a TIME slot in place.
+#[inline]
+fn put_time(mem: &mut [Value], slot: usize, t: i64) {
+    match &mut mem[slot] {
+        Value::Time(x) => *x = t,
+        other => *other = Value::Time(t),
+    }
 }
 
 #[inline]
@@ -612,10 +639,8 @@ fn evolve(ctx: &mut Ctx<'_>, chart: usize, code: &ChartCode, plan: &ChartPlan) -
         }
         cand
     };
-    if cand.len() > 1 {
-        cand.sort_unstable();
-    }
-    // Guards, in declaration order, against the snapshot.
+    // Guards against the snapshot. They have no side effects, so their order does not matter;
+    // when one faults, the first faulting guard in declaration order is reported.
     let mut e_len = 0;
     for k in 0..cand.len() {
         let t = cand[k];
@@ -626,8 +651,11 @@ fn evolve(ctx: &mut Ctx<'_>, chart: usize, code: &ChartCode, plan: &ChartPlan) -
             }
             Ok(false) => {}
             Err(f) => {
+                let mut all = cand[k..].to_vec();
+                all.sort_unstable();
+                let first = all.into_iter().find_map(|t| (code.guards[t as usize])(ctx, frame).err()).unwrap_or(f);
                 ctx.charts[chart].cand = cand;
-                return Err(f);
+                return Err(first);
             }
         }
     }
@@ -637,12 +665,51 @@ fn evolve(ctx: &mut Ctx<'_>, chart: usize, code: &ChartCode, plan: &ChartPlan) -
         st.cand = cand;
         return Ok(false);
     }
+    if cand.len() == 1 {
+        let t = cand[0];
+        let (pre, post) = (plan.pre.get(t), plan.post.get(t));
+        // The common case, a transition between two steps of a sequence (or a self-loop) whose
+        // target is not active: fire it without the general bookkeeping.
+        if let ([from], [to]) = (pre, post) {
+            let (from, to) = (*from, *to);
+            if from == to || !st.steps[to as usize].x {
+                st.left.clear();
+                st.deactivate(from);
+                st.left.push(from);
+                st.activate(to);
+                if st.log.len() < LOG_LIMIT {
+                    st.log.push((ctx.now, t));
+                }
+                ctx.sink.fired.push((chart as u32, t));
+                st.cand = cand;
+                publish_steps(ctx, chart, code);
+                return Ok(true);
+            }
+        }
+    }
     let mut accepted = std::mem::take(&mut st.accepted);
     accepted.clear();
-    if cand.len() == 1 {
-        accepted.push(cand[0]);
-    } else {
+    // Two true transitions sharing a step are a conflict; without one, all of them fire.
+    let mut shared = false;
+    if cand.len() > 1 {
+        for &t in &cand {
+            for &p in plan.pre.get(t) {
+                let step = &mut st.steps[p as usize];
+                shared |= step.hits != 0;
+                step.hits = 1;
+            }
+        }
+        for &t in &cand {
+            for &p in plan.pre.get(t) {
+                st.steps[p as usize].hits = 0;
+            }
+        }
+    }
+    if shared {
+        cand.sort_unstable();
         resolve_conflicts(st, plan, &cand, &mut accepted, ctx.profile, &mut ctx.sink.events);
+    } else {
+        accepted.extend_from_slice(&cand);
     }
     // Fire together: D = ∪ pre (marked `consumed`), A = ∪ post (counted in `hits`).
     for &t in &accepted {
@@ -663,8 +730,10 @@ fn evolve(ctx: &mut Ctx<'_>, chart: usize, code: &ChartCode, plan: &ChartPlan) -
     }
     if !unsafe_steps.is_empty() {
         unsafe_steps.sort_unstable();
+        let mut in_order = accepted.clone();
+        in_order.sort_unstable();
         for &s in &unsafe_steps {
-            let trs = accepted
+            let trs = in_order
                 .iter()
                 .filter(|&&t| plan.post.get(t).contains(&s))
                 .map(|&t| st.qualify(&plan.transition_names[t as usize]))
@@ -798,12 +867,12 @@ fn publish_steps(ctx: &mut Ctx<'_>, chart: usize, code: &ChartCode) {
     let frame = st.frame;
     for &s in &st.left {
         if !st.steps[s as usize].x {
-            ctx.mem[frame + code.step_x[s as usize] as usize] = Value::Bool(false);
+            put_bool(ctx.mem, frame + code.step_x[s as usize] as usize, false);
         }
     }
     for &s in &st.entered {
-        ctx.mem[frame + code.step_x[s as usize] as usize] = Value::Bool(true);
-        ctx.mem[frame + code.step_t[s as usize] as usize] = Value::Time(st.steps[s as usize].t);
+        put_bool(ctx.mem, frame + code.step_x[s as usize] as usize, true);
+        put_time(ctx.mem, frame + code.step_t[s as usize] as usize, st.steps[s as usize].t);
     }
 }
 
@@ -892,13 +961,13 @@ fn action_phase(ctx: &mut Ctx<'_>, chart: usize, code: &ChartCode, plan: &ChartP
         let (q, a) = c.update(inputs, now, profile);
         match (ent.action, ent.variable) {
             (Some(id), _) => {
-                ctx.mem[frame + code.action_q[id] as usize] = Value::Bool(q);
-                ctx.mem[frame + code.action_a[id] as usize] = Value::Bool(a);
+                put_bool(ctx.mem, frame + code.action_q[id] as usize, q);
+                put_bool(ctx.mem, frame + code.action_a[id] as usize, a);
                 if a {
                     run.push(e as u32);
                 }
             }
-            (None, Some(p)) => ctx.mem[p.slot(frame)] = Value::Bool(q),
+            (None, Some(p)) => put_bool(ctx.mem, p.slot(frame), q),
             (None, None) => {}
         }
         if c.idle() && ent.variable.is_none() && !any_active {
@@ -953,16 +1022,18 @@ fn finish_scan(ctx: &mut Ctx<'_>, chart: usize, code: &ChartCode, plan: &ChartPl
         }
         if let Some(s) = expired {
             ctx.mem[frame + code.control.error as usize] = Value::Bool(true);
-            ctx.mem[frame + code.control.error_step as usize] = Value::Str(Arc::from(plan.step_names[s as usize].as_str()));
+            ctx.mem[frame + code.control.error_step as usize] = plan.step_values[s as usize].clone();
         }
     }
-    if st.changed {
+    if st.changed && st.track_current {
         st.changed = false;
         let first = st.active.iter().copied().min();
         if first != st.current {
             st.current = first;
-            let name = first.map(|s| plan.step_names[s as usize].as_str()).unwrap_or("");
-            ctx.mem[frame + code.control.current_step as usize] = Value::Str(Arc::from(name));
+            ctx.mem[frame + code.control.current_step as usize] = match first {
+                Some(s) => plan.step_values[s as usize].clone(),
+                None => Value::Str(Arc::from("")),
+            };
         }
     }
 }
@@ -1047,6 +1118,10 @@ impl Simulation {
             mem[inst.frame + code.chart_slot as usize] = Value::Int(i as i64);
             charts.push(ChartState::new(inst.pou, plan, inst.frame, inst.path));
         }
+        let mentioned = source.text.to_ascii_lowercase().contains("sfccurrentstep");
+        for c in &mut charts {
+            c.track_current = mentioned;
+        }
         Simulation {
             prog,
             mem,
@@ -1129,6 +1204,14 @@ impl Simulation {
         let _ = self.advance();
         let mut events = std::mem::take(&mut self.sink.events);
         events.sort_by_key(Event::rank);
+        // Within one chart's evolution, `fired` is in declaration order.
+        let mut k = 0;
+        while k < self.sink.fired.len() {
+            let c = self.sink.fired[k].0;
+            let end = self.sink.fired[k..].iter().position(|f| f.0 != c).map_or(self.sink.fired.len(), |n| k + n);
+            self.sink.fired[k..end].sort_unstable();
+            k = end;
+        }
         let fired = self
             .sink
             .fired
@@ -1186,7 +1269,24 @@ impl Simulation {
     /// instances (`Rev.Busy`, `Rev.OpenKM1.X`). Case-insensitive.
     pub fn get(&self, name: &str) -> Option<Value> {
         let (slot, _) = self.prog.resolve(self.top, self.top_frame, name)?;
+        if let Some(v) = self.current_step_of(name) {
+            return Some(v);
+        }
         self.mem.get(slot).cloned()
+    }
+
+    /// `[Path.]SFCCurrentStep` computed from the chart state (see `ChartState::track_current`).
+    fn current_step_of(&self, name: &str) -> Option<Value> {
+        let (path, leaf) = match name.rsplit_once('.') {
+            Some((p, l)) => (p, l),
+            None => ("", name),
+        };
+        if !leaf.eq_ignore_ascii_case("SFCCurrentStep") {
+            return None;
+        }
+        let st = self.charts.iter().find(|c| c.path.eq_ignore_ascii_case(path))?;
+        let first = st.active.iter().copied().min();
+        Some(Value::Str(Arc::from(first.map(|s| st.plan.step_names[s as usize].as_str()).unwrap_or(""))))
     }
     /// The type of what [`Simulation::get`] reads.
     pub fn type_of(&self, name: &str) -> Option<Type> {
