@@ -538,3 +538,19 @@ fn stats_and_explain() {
     assert_eq!(v["stats"]["sequence"][0]["time"], "T#0s");
     assert!(v["explain"].is_array(), "{v}");
 }
+
+/// The promise: every example has a scenario and `sfc test examples/` passes them all.
+#[test]
+fn every_example_has_a_passing_scenario() {
+    let examples = root().join("examples");
+    let mut dirs: Vec<_> = std::fs::read_dir(&examples).unwrap().map(|e| e.unwrap().path()).filter(|p| p.is_dir()).collect();
+    dirs.sort();
+    for dir in &dirs {
+        let has = std::fs::read_dir(dir).unwrap().any(|e| e.unwrap().file_name().to_string_lossy().ends_with(".scenario.toml"));
+        assert!(has, "{} has no scenario", dir.display());
+    }
+    let out = sfc(&["test", "examples"]);
+    let s = stdout(&out);
+    assert_eq!(out.status.code(), Some(0), "{s}");
+    assert!(s.ends_with(" passed, 0 failed\n"), "{s}");
+}

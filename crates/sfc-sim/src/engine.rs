@@ -298,7 +298,7 @@ struct StepTally {
     completed: u64,
     min: i64,
     max: i64,
-    sum: i128,
+    sum: i64,
 }
 
 /// The run-time state of one step, kept together so a step touches one cache line.
@@ -315,6 +315,8 @@ pub(crate) struct StepState {
     consumed: bool,
     /// Scratch: accepted transitions activating it in this scan, or conflicting ones.
     hits: u8,
+    /// Scratch: the evolution in which a true transition leaving it was seen (conflict test).
+    seen: u32,
 }
 
 /// The run-time state of one SFC instance.
@@ -446,7 +448,7 @@ impl ChartState {
             tl.max = tl.max.max(d);
         }
         tl.completed += 1;
-        tl.sum += i128::from(d);
+        tl.sum = tl.sum.saturating_add(d);
         self.changed = true;
     }
 }
@@ -692,16 +694,12 @@ fn evolve(ctx: &mut Ctx<'_>, chart: usize, code: &ChartCode, plan: &ChartPlan) -
     // Two true transitions sharing a step are a conflict; without one, all of them fire.
     let mut shared = false;
     if cand.len() > 1 {
+        let stamp = st.evolutions as u32;
         for &t in &cand {
             for &p in plan.pre.get(t) {
                 let step = &mut st.steps[p as usize];
-                shared |= step.hits != 0;
-                step.hits = 1;
-            }
-        }
-        for &t in &cand {
-            for &p in plan.pre.get(t) {
-                st.steps[p as usize].hits = 0;
+                shared |= step.seen == stamp;
+                step.seen = stamp;
             }
         }
     }
@@ -1388,7 +1386,7 @@ impl Simulation {
                         min = min.min(d);
                         max = max.max(d);
                     }
-                    sum += i128::from(d);
+                    sum = sum.saturating_add(d);
                     count += 1;
                 }
                 let some = count > 0;
@@ -1397,7 +1395,7 @@ impl Simulation {
                     activations: tl.activations,
                     min: some.then_some(min),
                     max: some.then_some(max),
-                    mean: some.then(|| (sum / i128::from(count)) as i64),
+                    mean: some.then(|| sum / count as i64),
                 });
             }
         }

@@ -216,12 +216,9 @@ fn generate(rng: &mut Rng, max_steps: usize) -> Chart {
             }
         }
     }
-    // Associations: one duration per action. ACTION_CONTROL has a single duration input T
-    // shared by its five timers, and semantics.md does not settle which duration a stored SD/SL
-    // timer uses while another timed association of the action is active (the engine takes the
-    // winner's T, the per-qualifier descriptions suggest the stored one's own t); with one
-    // duration per action both readings agree. Different qualifiers still contend.
-    let mut durations: HashMap<usize, i64> = HashMap::new();
+    // Associations. ACTION_CONTROL keeps one duration per timed qualifier: the last one a
+    // winning association of that qualifier gave (so a stored SD/SL keeps its own time after
+    // its step was left); the reference does the same, and durations vary freely.
     for s in 0..g.chart.steps.len() {
         let n = g.rng.pick(&[0, 0, 1, 1, 2]);
         let mut used = Vec::new();
@@ -236,8 +233,7 @@ fn generate(rng: &mut Rng, max_steps: usize) -> Chart {
                 ActionKind::Body { .. } => g.rng.pick(&Qual::ALL),
             };
             let duration = if qual.timed() {
-                let d = g.rng.pick(&DURATIONS_MS) * 1000;
-                *durations.entry(action).or_insert(d)
+                g.rng.pick(&DURATIONS_MS) * 1000
             } else {
                 0
             };
