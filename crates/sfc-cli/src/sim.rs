@@ -281,12 +281,14 @@ pub fn sim(r: SimRequest) -> u8 {
     let mut overdue_json: Vec<serde_json::Value> = Vec::new();
     let json = r.json;
     let mut on_scan = |sim: &Simulation, rec: &ScanRecord| {
-        let reports = sim.overdue();
-        let now: HashSet<String> = reports.iter().map(|x| x.step.clone()).collect();
-        for x in &reports {
-            if overdue_seen.contains(&x.step) {
+        // Reports are built only for steps that have just overrun.
+        let steps = sim.overdue_steps();
+        let now: HashSet<String> = steps.iter().cloned().collect();
+        for step in &steps {
+            if overdue_seen.contains(step) {
                 continue;
             }
+            let Some(x) = &sim.explain_step(step) else { continue };
             if json {
                 let mut v = report_json(x);
                 v["scan"] = rec.scan.into();

@@ -166,6 +166,10 @@ for it.\n\n    CASE n OF 1..5: a(); 3: b(); END_CASE  (* 3 is already in 1..5 *)
 block type that contains an instance of itself (its memory would be infinite), or an SFC function \
 block instance declared inside a FUNCTION (a function has no state that lasts between calls). \
 Restructure the code, or simulate another POU.";
+    "SFC0321" Error "no such POU to simulate"
+        "`sfc sim --pou NAME` (or `pou =` in a scenario) names no PROGRAM or FUNCTION_BLOCK of \
+the file, or the file has several candidates and none was named. Name one of those the note \
+lists:\n\n    sfc sim plant.st --pou Main";
 
     "SFC0401" Error "too many states for the target"
         "ATMT has at most 16 states, EATMT 256 (`--nstep` overrides).";

@@ -1071,11 +1071,13 @@ pub struct Simulation {
     sink: ScanSink,
     error: Option<RuntimeError>,
     next_scan: u64,
+    /// The traced variables with their slots, resolved once.
+    trace: Vec<(String, Type, usize)>,
 }
 
 impl Simulation {
     /// Checks `text` and compiles it for simulation of `pou` (by name, or the only SFC POU,
-    /// or the only PROGRAM). Errors are the check diagnostics (or SFC0901 when `pou` does not
+    /// or the only PROGRAM). Errors are the check diagnostics (or SFC0321 when `pou` does not
     /// name a simulatable POU), with the source to render them.
     pub fn from_source(
         name: &str,
@@ -1099,7 +1101,7 @@ impl Simulation {
             Err(d) => return Err((source, d)),
         };
         let Some(top) = prog.pou(&top) else {
-            let d = Diagnostic::error("SFC0901", Span::default(), format!("no POU named `{top}` to simulate"));
+            let d = Diagnostic::error("SFC0321", Span::default(), format!("no POU named `{top}` to simulate"));
             return Err((source, vec![d]));
         };
         Ok(Simulation::new(prog, top, source, opts))
@@ -1116,6 +1118,13 @@ impl Simulation {
             mem[inst.frame + code.chart_slot as usize] = Value::Int(i as i64);
             charts.push(ChartState::new(inst.pou, plan, inst.frame, inst.path));
         }
+        let trace = prog.pous[top]
+            .layout
+            .vars
+            .iter()
+            .filter(|v| !v.implicit && v.size == 1 && v.ty.is_elementary())
+            .filter_map(|v| prog.resolve(top, top_frame, &v.name).map(|(slot, _)| (v.name.clone(), v.ty.clone(), slot)))
+            .collect();
         let mentioned = source.text.to_ascii_lowercase().contains("sfccurrentstep");
         for c in &mut charts {
             c.track_current = mentioned;
@@ -1132,6 +1141,7 @@ impl Simulation {
             sink: ScanSink::default(),
             error: None,
             next_scan: 0,
+            trace,
         }
     }
 
@@ -1303,22 +1313,14 @@ impl Simulation {
         out
     }
 
-    fn trace_slots(&self) -> impl Iterator<Item = &crate::code::VarSlot> {
-        self.prog.pous[self.top].layout.vars.iter().filter(|v| !v.implicit && v.size == 1 && v.ty.is_elementary())
-    }
     /// The variables a trace shows: every declared variable of elementary type of the top
     /// POU, in declaration order, with its declared name and type.
     pub fn trace_vars(&self) -> Vec<(String, Type)> {
-        self.trace_slots().map(|v| (v.name.clone(), v.ty.clone())).collect()
+        self.trace.iter().map(|(name, ty, _)| (name.clone(), ty.clone())).collect()
     }
     /// Current values of [`Simulation::trace_vars`], same order.
     pub fn trace_values(&self) -> Vec<Value> {
-        self.trace_slots()
-            .map(|v| match self.prog.resolve(self.top, self.top_frame, &v.name) {
-                Some((slot, _)) => self.mem[slot].clone(),
-                None => Value::default(),
-            })
-            .collect()
+        self.trace.iter().map(|&(_, _, slot)| self.mem[slot].clone()).collect()
     }
     /// Every step (qualified), in declaration order, top chart first.
     pub fn step_names(&self) -> Vec<String> {
@@ -1343,15 +1345,37 @@ impl Simulation {
     }
     /// Condition analysis of the active steps whose `sfc.timeout` has expired.
     pub fn overdue(&self) -> Vec<StepReport> {
+        self.overdue_at().into_iter().map(|(c, s)| crate::explain::report(self.explain_view(), c, s)).collect()
+    }
+
+    /// The active steps whose `sfc.timeout` has expired (qualified, sorted by chart and step):
+    /// cheap enough to ask every scan, unlike their reports.
+    pub fn overdue_steps(&self) -> Vec<String> {
+        self.overdue_at().into_iter().map(|(c, s)| self.charts[c].qualify(&self.charts[c].plan.step_names[s as usize])).collect()
+    }
+
+    /// Condition analysis of one active step, by qualified name (`Rev.OpenKM1`).
+    pub fn explain_step(&self, step: &str) -> Option<StepReport> {
+        self.charts.iter().enumerate().find_map(|(c, st)| {
+            let s = st.active.iter().copied().find(|&s| st.qualify(&st.plan.step_names[s as usize]).eq_ignore_ascii_case(step))?;
+            Some(crate::explain::report(self.explain_view(), c, s))
+        })
+    }
+
+    fn overdue_at(&self) -> Vec<(usize, u32)> {
         let mut out = Vec::new();
-        for (i, st) in self.charts.iter().enumerate() {
-            let mut act = st.active.clone();
-            act.sort_unstable();
-            for s in act {
-                if st.plan.timeouts[s as usize].is_some_and(|limit| st.time(s) > limit) {
-                    out.push(crate::explain::report(self.explain_view(), i, s));
-                }
+        for (c, st) in self.charts.iter().enumerate() {
+            if !st.plan.supervised {
+                continue;
             }
+            let mut act: Vec<u32> = st
+                .active
+                .iter()
+                .copied()
+                .filter(|&s| st.plan.timeouts[s as usize].is_some_and(|limit| st.time(s) > limit))
+                .collect();
+            act.sort_unstable();
+            out.extend(act.into_iter().map(|s| (c, s)));
         }
         out
     }
@@ -1475,14 +1499,14 @@ fn choose_pou(unit: &sfc_syntax::ast::SourceUnit, charts: &[sfc_model::Chart], p
     if let Some(name) = pou {
         return match pous.iter().find(|p| p.name.is(name)) {
             Some(p) if p.kind == PouKind::Function => Err(Diagnostic::error(
-                "SFC0901",
+                "SFC0321",
                 p.name.span,
                 format!("`{}` is a FUNCTION: simulate a PROGRAM or FUNCTION_BLOCK", p.name.text),
             )),
             Some(p) => Ok(p.name.text.clone()),
             None => {
                 let names: Vec<&str> = pous.iter().map(|p| p.name.text.as_str()).collect();
-                Err(Diagnostic::error("SFC0901", Span::default(), format!("no POU named `{name}` in this file"))
+                Err(Diagnostic::error("SFC0321", Span::default(), format!("no POU named `{name}` in this file"))
                     .with_note(format!("the file declares: {}", names.join(", "))))
             }
         };
@@ -1495,7 +1519,7 @@ fn choose_pou(unit: &sfc_syntax::ast::SourceUnit, charts: &[sfc_model::Chart], p
         return Ok(charts[0].pou.clone());
     }
     let names: Vec<&str> = pous.iter().filter(|p| p.kind != PouKind::Function).map(|p| p.name.text.as_str()).collect();
-    Err(Diagnostic::error("SFC0901", Span::default(), "choose the POU to simulate (`pou` / `--pou`)")
+    Err(Diagnostic::error("SFC0321", Span::default(), "choose the POU to simulate (`pou` / `--pou`)")
         .with_note(format!("candidates: {}", names.join(", "))))
 }
 

@@ -296,23 +296,31 @@ fn smallest_change(f: &Formula, values: &[Option<bool>]) -> Option<u32> {
     None
 }
 
-/// Evaluates transition `t`'s compiled guard on a copy of the memory.
-fn guard_value(view: &View<'_>, chart: usize, t: usize) -> Option<bool> {
-    let st = &view.charts[chart];
-    let PouBody::Chart(code) = &view.prog.pous[st.pou].body else { return None };
-    let mut mem = view.mem.to_vec();
-    let mut charts = view.charts.to_vec();
-    let mut sink = ScanSink::default();
-    let mut ctx = Ctx {
-        mem: &mut mem,
-        prog: view.prog,
-        charts: &mut charts,
-        sink: &mut sink,
-        now: view.now,
-        scan: 0,
-        profile: view.profile,
-    };
-    (code.guards[t])(&mut ctx, st.frame).ok()
+/// The compiled guards of one chart instance, evaluated on one copy of the memory (guards
+/// have no side effects, but compiled code runs against a mutable context).
+struct Guards<'v, 'a> {
+    view: &'v View<'a>,
+    chart: usize,
+    mem: Vec<Value>,
+    charts: Vec<ChartState>,
+}
+
+impl Guards<'_, '_> {
+    fn value(&mut self, t: u32) -> Option<bool> {
+        let st = &self.view.charts[self.chart];
+        let PouBody::Chart(code) = &self.view.prog.pous[st.pou].body else { return None };
+        let mut sink = ScanSink::default();
+        let mut ctx = Ctx {
+            mem: &mut self.mem,
+            prog: self.view.prog,
+            charts: &mut self.charts,
+            sink: &mut sink,
+            now: self.view.now,
+            scan: 0,
+            profile: self.view.profile,
+        };
+        (code.guards[t as usize])(&mut ctx, st.frame).ok()
+    }
 }
 
 /// The report for active step `s` of chart instance `chart`.
@@ -330,8 +338,15 @@ pub(crate) fn report(view: View<'_>, chart: usize, s: u32) -> StepReport {
             plan.order_key[a as usize] < plan.order_key[b as usize]
         }
     };
-    let enabled_true = |t: u32| {
-        plan.pre.get(t).iter().all(|&p| st.is_active(p)) && guard_value(&view, chart, t as usize) == Some(true)
+    let mut guards = Guards { view: &view, chart, mem: view.mem.to_vec(), charts: view.charts.to_vec() };
+    let mut values: Vec<(u32, Option<bool>)> = Vec::new();
+    let mut value_of = |t: u32| match values.iter().find(|v| v.0 == t) {
+        Some(v) => v.1,
+        None => {
+            let v = guards.value(t);
+            values.push((t, v));
+            v
+        }
     };
     for &t in outgoing {
         let tr = &code.chart.transitions[t as usize];
@@ -339,7 +354,7 @@ pub(crate) fn report(view: View<'_>, chart: usize, s: u32) -> StepReport {
             Condition::St(e) => {
                 let mut atoms = Atoms { view: &view, path: &st.path, texts: Vec::new(), values: Vec::new(), operands: Vec::new() };
                 let f = atoms.formula(e, 0);
-                let value = guard_value(&view, chart, t as usize).unwrap_or(false);
+                let value = value_of(t).unwrap_or(false);
                 let change = if value {
                     Vec::new()
                 } else {
@@ -364,7 +379,7 @@ pub(crate) fn report(view: View<'_>, chart: usize, s: u32) -> StepReport {
                 (view.source.slice(e.span).to_string(), value, operands, change)
             }
             Condition::Il(il) => {
-                let value = guard_value(&view, chart, t as usize).unwrap_or(false);
+                let value = value_of(t).unwrap_or(false);
                 (view.source.slice(il.span).trim().to_string(), value, Vec::new(), Vec::new())
             }
             Condition::Missing => (String::new(), false, Vec::new(), Vec::new()),
@@ -377,7 +392,7 @@ pub(crate) fn report(view: View<'_>, chart: usize, s: u32) -> StepReport {
         let masked_by = outgoing
             .iter()
             .filter(|&&o| o != t && precedes(o, t))
-            .find(|&&o| enabled_true(o))
+            .find(|&&o| plan.pre.get(o).iter().all(|&p| st.is_active(p)) && value_of(o) == Some(true))
             .map(|&o| st.qualify(&plan.transition_names[o as usize]));
         transitions.push(TransitionReport {
             transition: st.qualify(&plan.transition_names[t as usize]),

@@ -96,37 +96,8 @@ impl fmt::Display for ScenarioError {
 
 impl std::error::Error for ScenarioError {}
 
-/// The name closest to `name` (case-insensitive edit distance at most 2, and less than the
-/// name's length), for "did you mean" hints.
-pub fn closest<'a>(name: &str, candidates: impl IntoIterator<Item = &'a str>) -> Option<&'a str> {
-    fn distance(a: &str, b: &str) -> usize {
-        let a: Vec<char> = a.chars().map(|c| c.to_ascii_uppercase()).collect();
-        let b: Vec<char> = b.chars().map(|c| c.to_ascii_uppercase()).collect();
-        let mut prev: Vec<usize> = (0..=b.len()).collect();
-        let mut cur = vec![0; b.len() + 1];
-        for (i, ca) in a.iter().enumerate() {
-            cur[0] = i + 1;
-            for (j, cb) in b.iter().enumerate() {
-                cur[j + 1] = (prev[j] + usize::from(ca != cb)).min(prev[j + 1] + 1).min(cur[j] + 1);
-            }
-            std::mem::swap(&mut prev, &mut cur);
-        }
-        prev[b.len()]
-    }
-    let len = name.chars().count();
-    let limit = if len <= 3 { 1.min(len.saturating_sub(1)) } else { 2 };
-    let mut best: Option<(usize, &str)> = None;
-    for c in candidates {
-        if c.chars().count().abs_diff(len) > limit {
-            continue;
-        }
-        let d = distance(name, c);
-        if d <= limit && best.is_none_or(|(bd, _)| d < bd) {
-            best = Some((d, c));
-        }
-    }
-    best.map(|(_, c)| c)
-}
+/// The name closest to `name`, for "did you mean" hints (the checker's rule).
+pub use sfc_st::closest;
 
 fn did_you_mean<'a>(name: &str, candidates: impl IntoIterator<Item = &'a str>) -> String {
     match closest(name, candidates) {

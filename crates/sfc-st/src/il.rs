@@ -12,21 +12,29 @@ use std::collections::HashSet;
 
 /// The operators of IL (IEC 61131-3 table 52), without modifiers.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
-enum IlOp {
+pub enum IlOp {
+    /// `LD`.
     Ld,
+    /// `ST`.
     St,
+    /// `S`.
     Set,
+    /// `R`.
     Reset,
     /// AND OR XOR and the arithmetic and comparison operators.
     Binary(BinaryOp),
+    /// `NOT`.
     Not,
+    /// `JMP`.
     Jmp,
+    /// `CAL`.
     Cal,
+    /// `RET`.
     Ret,
 }
 
 /// Splits an operator as written into the operator, the `N` modifier and the `C` modifier.
-fn parse_op(text: &str) -> Option<(IlOp, bool, bool)> {
+pub fn parse_il_op(text: &str) -> Option<(IlOp, bool, bool)> {
     let upper = text.to_ascii_uppercase();
     let r = match upper.as_str() {
         "LD" => (IlOp::Ld, false, false),
@@ -226,7 +234,7 @@ impl Checker<'_, '_> {
     ) -> Option<Cr> {
         let op_text = op_ident.text.to_ascii_uppercase();
         let span = ins.span;
-        let Some((op, negate, conditional)) = parse_op(&op_text) else {
+        let Some((op, negate, conditional)) = parse_il_op(&op_text) else {
             return self.il_function(ins, op_ident, cr);
         };
         if conditional && self.needs_cr(&cr, &op_text, span) {

@@ -19,7 +19,7 @@ pub(crate) fn edit_distance(a: &str, b: &str) -> usize {
 
 /// The candidate closest to `name` within edit distance 2 (and shorter than the name itself,
 /// so `X` does not suggest `Y`), first one on ties.
-pub(crate) fn closest<'a>(name: &str, candidates: impl IntoIterator<Item = &'a str>) -> Option<&'a str> {
+pub fn closest<'a>(name: &str, candidates: impl IntoIterator<Item = &'a str>) -> Option<&'a str> {
     let limit = 2.min(name.chars().count().saturating_sub(1));
     let mut best: Option<(usize, &str)> = None;
     for c in candidates {

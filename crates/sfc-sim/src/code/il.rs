@@ -12,8 +12,8 @@ use super::unit::{Cx, Sym, C};
 use super::{Ctx, Place};
 use crate::value::Value;
 use sfc_diagnostics::Span;
-use sfc_st::Type;
-use sfc_syntax::ast::{BinaryOp, Expr, ExprKind, IlBody, IlInstruction};
+use sfc_st::{parse_il_op as parse_op, IlOp as Op, Type};
+use sfc_syntax::ast::{Expr, ExprKind, IlBody, IlInstruction};
 use std::collections::HashMap;
 
 pub(crate) enum IlNext {
@@ -31,60 +31,6 @@ pub(crate) enum Cr {
     Typed(Type),
     /// `LD 5`: a constant that still takes the type of where it goes.
     Untyped(Untyped),
-}
-
-#[derive(Clone, Copy, PartialEq, Eq)]
-enum Op {
-    Ld,
-    St,
-    Set,
-    Reset,
-    Binary(BinaryOp),
-    Not,
-    Jmp,
-    Cal,
-    Ret,
-}
-
-fn parse_op(text: &str) -> Option<(Op, bool, bool)> {
-    let upper = text.to_ascii_uppercase();
-    let r = match upper.as_str() {
-        "LD" => (Op::Ld, false, false),
-        "LDN" => (Op::Ld, true, false),
-        "ST" => (Op::St, false, false),
-        "STN" => (Op::St, true, false),
-        "S" => (Op::Set, false, false),
-        "R" => (Op::Reset, false, false),
-        "AND" | "&" => (Op::Binary(BinaryOp::And), false, false),
-        "ANDN" | "&N" => (Op::Binary(BinaryOp::And), true, false),
-        "OR" => (Op::Binary(BinaryOp::Or), false, false),
-        "ORN" => (Op::Binary(BinaryOp::Or), true, false),
-        "XOR" => (Op::Binary(BinaryOp::Xor), false, false),
-        "XORN" => (Op::Binary(BinaryOp::Xor), true, false),
-        "NOT" => (Op::Not, false, false),
-        "ADD" => (Op::Binary(BinaryOp::Add), false, false),
-        "SUB" => (Op::Binary(BinaryOp::Sub), false, false),
-        "MUL" => (Op::Binary(BinaryOp::Mul), false, false),
-        "DIV" => (Op::Binary(BinaryOp::Div), false, false),
-        "MOD" => (Op::Binary(BinaryOp::Mod), false, false),
-        "GT" => (Op::Binary(BinaryOp::Gt), false, false),
-        "GE" => (Op::Binary(BinaryOp::Ge), false, false),
-        "EQ" => (Op::Binary(BinaryOp::Eq), false, false),
-        "NE" => (Op::Binary(BinaryOp::Ne), false, false),
-        "LE" => (Op::Binary(BinaryOp::Le), false, false),
-        "LT" => (Op::Binary(BinaryOp::Lt), false, false),
-        "JMP" => (Op::Jmp, false, false),
-        "JMPC" => (Op::Jmp, false, true),
-        "JMPCN" => (Op::Jmp, true, true),
-        "CAL" => (Op::Cal, false, false),
-        "CALC" => (Op::Cal, false, true),
-        "CALCN" => (Op::Cal, true, true),
-        "RET" => (Op::Ret, false, false),
-        "RETC" => (Op::Ret, false, true),
-        "RETCN" => (Op::Ret, true, true),
-        _ => return None,
-    };
-    Some(r)
 }
 
 /// Runs an instruction list; more than [`MAX_ITERATIONS`] jumps stop the run.
