@@ -1059,6 +1059,16 @@ pub struct TimeStats {
 }
 
 /// A simulation of one top-level POU of a checked file.
+/// The run-time state of a [`Simulation`], taken by [`Simulation::snapshot`].
+#[derive(Debug, Clone)]
+pub struct Snapshot {
+    mem: Vec<Value>,
+    charts: Vec<ChartState>,
+    record: ScanRecord,
+    error: Option<RuntimeError>,
+    next_scan: u64,
+}
+
 pub struct Simulation {
     prog: Program,
     mem: Vec<Value>,
@@ -1231,6 +1241,29 @@ impl Simulation {
             .collect();
         self.record = ScanRecord { scan, time, active: self.active(), fired, events };
         &self.record
+    }
+
+    /// The whole run-time state (variables, steps, action control, time, last record), so a
+    /// search (the analyzer's witness replay) can try a scan and come back.
+    pub fn snapshot(&self) -> Snapshot {
+        Snapshot {
+            mem: self.mem.clone(),
+            charts: self.charts.clone(),
+            record: self.record.clone(),
+            error: self.error.clone(),
+            next_scan: self.next_scan,
+        }
+    }
+
+    /// Returns to a state taken with [`Simulation::snapshot`] of this simulation.
+    pub fn restore(&mut self, snap: &Snapshot) {
+        self.mem.clone_from(&snap.mem);
+        self.charts.clone_from(&snap.charts);
+        self.record = snap.record.clone();
+        self.error = snap.error.clone();
+        self.next_scan = snap.next_scan;
+        self.sink.fired.clear();
+        self.sink.events.clear();
     }
 
     /// The record of the last scan run.

@@ -10,7 +10,7 @@ pub mod explain;
 pub mod value;
 pub mod scenario; pub mod trace; pub mod coverage;
 
-pub use engine::{ScanSink, Simulation, TimeStats, StepStats};
+pub use engine::{ScanSink, Simulation, Snapshot, StepStats, TimeStats};
 pub use explain::{StepReport, TransitionReport};
 pub use value::{format_time, parse_time, Value};
 
