@@ -23,11 +23,18 @@ fn ring(n: usize, actions: bool) -> String {
         } else {
             let _ = writeln!(s, "    {kw} S{i}: END_STEP\n");
         }
-        let _ = writeln!(s, "    TRANSITION T{i} FROM S{i} TO S{}\n        := Go;\n    END_TRANSITION\n", (i + 1) % n);
+        let _ = writeln!(
+            s,
+            "    TRANSITION T{i} FROM S{i} TO S{}\n        := Go;\n    END_TRANSITION\n",
+            (i + 1) % n
+        );
     }
     if actions {
         for i in 0..n {
-            let _ = writeln!(s, "    ACTION A{i}:\n        Count := Count + 1;\n    END_ACTION\n");
+            let _ = writeln!(
+                s,
+                "    ACTION A{i}:\n        Count := Count + 1;\n    END_ACTION\n"
+            );
         }
     }
     s.push_str("END_PROGRAM\n");
@@ -38,9 +45,18 @@ fn ring(n: usize, actions: bool) -> String {
 fn loops(k: usize) -> String {
     let mut s = String::from("PROGRAM Loops\n    VAR_INPUT\n        Go : BOOL;\n    END_VAR\n\n");
     for i in 0..k {
-        let _ = writeln!(s, "    INITIAL_STEP A{i}: END_STEP\n\n    STEP B{i}: END_STEP\n");
-        let _ = writeln!(s, "    TRANSITION FROM A{i} TO B{i}\n        := Go;\n    END_TRANSITION\n");
-        let _ = writeln!(s, "    TRANSITION FROM B{i} TO A{i}\n        := Go;\n    END_TRANSITION\n");
+        let _ = writeln!(
+            s,
+            "    INITIAL_STEP A{i}: END_STEP\n\n    STEP B{i}: END_STEP\n"
+        );
+        let _ = writeln!(
+            s,
+            "    TRANSITION FROM A{i} TO B{i}\n        := Go;\n    END_TRANSITION\n"
+        );
+        let _ = writeln!(
+            s,
+            "    TRANSITION FROM B{i} TO A{i}\n        := Go;\n    END_TRANSITION\n"
+        );
     }
     s.push_str("END_PROGRAM\n");
     s
@@ -79,8 +95,10 @@ fn simulation(name: &str, text: &str) -> Simulation {
         Ok(s) => s,
         Err((file, diags)) => {
             let files = [file];
-            let text: Vec<String> =
-                diags.iter().map(|d| sfc_diagnostics::render_human(d, &files, Default::default())).collect();
+            let text: Vec<String> = diags
+                .iter()
+                .map(|d| sfc_diagnostics::render_human(d, &files, Default::default()))
+                .collect();
             panic!("{name}: {}", text.join("\n"))
         }
     };
@@ -110,15 +128,34 @@ fn main() {
     let full = std::env::args().any(|a| a == "--bench");
     // `cargo bench -p sfc-sim --bench scan -- ring-plain` runs only the cases whose name contains
     // the argument (`ring-plain`, `ring-actions`, `loops`, `arith`).
-    let filter: Vec<String> = std::env::args().skip(1).filter(|a| !a.starts_with("--")).collect();
+    let filter: Vec<String> = std::env::args()
+        .skip(1)
+        .filter(|a| !a.starts_with("--"))
+        .collect();
     let wanted = |name: &str| filter.is_empty() || filter.iter().any(|f| name.contains(f.as_str()));
     let (scale, rounds) = if full { (1u64, 7) } else { (0, 1) };
     let scans = |n: u64| if scale == 0 { 20 } else { n };
 
-    println!("sfc-sim scan benchmark ({} build)", if cfg!(debug_assertions) { "debug" } else { "release" });
+    println!(
+        "sfc-sim scan benchmark ({} build)",
+        if cfg!(debug_assertions) {
+            "debug"
+        } else {
+            "release"
+        }
+    );
     let mut ring_ns = Vec::new();
-    for &(n, actions) in &[(100usize, false), (10_000, false), (100, true), (10_000, true)] {
-        if !wanted(if actions { "ring-actions" } else { "ring-plain" }) {
+    for &(n, actions) in &[
+        (100usize, false),
+        (10_000, false),
+        (100, true),
+        (10_000, true),
+    ] {
+        if !wanted(if actions {
+            "ring-actions"
+        } else {
+            "ring-plain"
+        }) {
             ring_ns.push(f64::NAN);
             continue;
         }
@@ -126,19 +163,30 @@ fn main() {
         let mut sim = simulation("ring", &text);
         let _ = measure(&mut sim, scans(20_000), 1);
         let ns = measure(&mut sim, scans(2_000_000), rounds);
-        let what = if actions { "with an N action per step" } else { "without actions" };
+        let what = if actions {
+            "with an N action per step"
+        } else {
+            "without actions"
+        };
         println!("ring of {n:>6} steps, one token, {what}: {ns:8.1} ns/scan");
         ring_ns.push(ns);
     }
-    println!("  ring 10,000 vs 100 steps: {:+.1} % (without actions), {:+.1} % (with actions)",
-        (ring_ns[1] / ring_ns[0] - 1.0) * 100.0, (ring_ns[3] / ring_ns[2] - 1.0) * 100.0);
+    println!(
+        "  ring 10,000 vs 100 steps: {:+.1} % (without actions), {:+.1} % (with actions)",
+        (ring_ns[1] / ring_ns[0] - 1.0) * 100.0,
+        (ring_ns[3] / ring_ns[2] - 1.0) * 100.0
+    );
 
     let k = if full { 1000 } else { 50 };
     if wanted("loops") {
-    let mut sim = simulation("loops", &loops(k));
-    let _ = measure(&mut sim, scans(200), 1);
-    let ns = measure(&mut sim, scans(20_000), rounds);
-    println!("{k} parallel loops, all active: {ns:10.1} ns/scan, {:6.2} ns per active step", ns / k as f64);
+        let mut sim = simulation("loops", &loops(k));
+        let _ = measure(&mut sim, scans(200), 1);
+        let ns = measure(&mut sim, scans(20_000), rounds);
+        println!("{k} parallel loops, all active, every token moving: {ns:10.1} ns/scan, {:6.2} ns per active step", ns / k as f64);
+        // The same loops waiting: every step active, every guard tested and FALSE.
+        sim.set("Go", Value::Bool(false)).expect("Go is an input");
+        let ns = measure(&mut sim, scans(20_000), rounds);
+        println!("{k} parallel loops, all active, every guard FALSE: {ns:10.1} ns/scan, {:6.2} ns per active step", ns / k as f64);
     }
     if !wanted("arith") {
         return;

@@ -6,7 +6,9 @@
 //! action control only for actions that are associated with an active step or still hold
 //! state (stored flags, running timers, pending final scans).
 
-use crate::code::{ChartCode, Ctx, DurationCode, Fault, Memory, Place, PouBody, Program};
+use crate::code::{
+    ChartCode, Ctx, DurationCode, FastGuard, Fault, Memory, Place, PouBody, Program,
+};
 use crate::explain::StepReport;
 use crate::value::Value;
 use crate::{Event, Profile, RuntimeError, ScanRecord, SimOptions};
@@ -49,7 +51,10 @@ pub(crate) struct Rows {
 
 impl Rows {
     fn from_lists(lists: impl Iterator<Item = Vec<u32>>) -> Rows {
-        let mut rows = Rows { start: vec![0], items: Vec::new() };
+        let mut rows = Rows {
+            start: vec![0],
+            items: Vec::new(),
+        };
         for l in lists {
             rows.items.extend(l);
             rows.start.push(rows.items.len() as u32);
@@ -70,6 +75,16 @@ pub struct ChartPlan {
     pub(crate) outgoing: Rows,
     pub(crate) pre: Rows,
     pub(crate) post: Rows,
+    /// Transitions with one preceding step: enabled whenever that step is active.
+    single_pre: Vec<bool>,
+    /// `(from, to)` of each transition between one step and one step; `(u32::MAX, _)` for the
+    /// others.
+    links: Vec<(u32, u32)>,
+    /// Transitions leaving a step that has other outgoing transitions: only those can conflict.
+    may_conflict: Vec<bool>,
+    /// Frame offsets of the `X` and `T` slots of each step.
+    x_slots: Vec<u32>,
+    t_slots: Vec<u32>,
     /// Sort key of each transition for conflict resolution: explicit priorities first.
     pub(crate) order_key: Vec<(u8, i64, u32)>,
     pub(crate) explicit: Vec<bool>,
@@ -119,12 +134,21 @@ impl ChartPlan {
                 None => (1u8, 0, i as u32),
             })
             .collect();
-        let explicit = chart.transitions.iter().map(|t| t.priority.is_some()).collect();
+        let explicit = chart
+            .transitions
+            .iter()
+            .map(|t| t.priority.is_some())
+            .collect();
         let mut entities: Vec<Entity> = chart
             .actions
             .iter()
             .enumerate()
-            .map(|(i, a)| Entity { name: a.name.clone(), action: Some(i), variable: None, assocs: Vec::new() })
+            .map(|(i, a)| Entity {
+                name: a.name.clone(),
+                action: Some(i),
+                variable: None,
+                assocs: Vec::new(),
+            })
             .collect();
         let mut step_entities = vec![Vec::new(); n];
         let mut variable_entities = Vec::new();
@@ -134,7 +158,9 @@ impl ChartPlan {
                 let e = match a.target {
                     ActionTarget::Action(id) => id,
                     ActionTarget::Variable => {
-                        let Some(place) = assoc_code.and_then(|c| c.variable) else { continue };
+                        let Some(place) = assoc_code.and_then(|c| c.variable) else {
+                            continue;
+                        };
                         match entities.iter().position(|e| e.variable == Some(place)) {
                             Some(e) => e,
                             None => {
@@ -161,20 +187,51 @@ impl ChartPlan {
             }
         }
         let timeouts: Vec<Option<i64>> = chart.steps.iter().map(|s| s.timeout).collect();
+        let single_pre = (0..chart.transitions.len())
+            .map(|t| pre.get(t as u32).len() == 1)
+            .collect();
+        let may_conflict = (0..chart.transitions.len())
+            .map(|t| {
+                pre.get(t as u32)
+                    .iter()
+                    .any(|&s| outgoing[s as usize].len() > 1)
+            })
+            .collect();
+        let links = (0..chart.transitions.len() as u32)
+            .map(|t| match (pre.get(t), post.get(t)) {
+                ([from], [to]) => (*from, *to),
+                _ => (u32::MAX, 0),
+            })
+            .collect();
         ChartPlan {
             outgoing: Rows::from_lists(outgoing.into_iter()),
+            single_pre,
+            links,
+            may_conflict,
+            x_slots: code.step_x.clone(),
+            t_slots: code.step_t.clone(),
             pre,
             post,
             order_key,
             explicit,
-            initial: chart.steps.iter().enumerate().filter(|(_, s)| s.initial).map(|(i, _)| i as u32).collect(),
+            initial: chart
+                .steps
+                .iter()
+                .enumerate()
+                .filter(|(_, s)| s.initial)
+                .map(|(i, _)| i as u32)
+                .collect(),
             supervised: timeouts.iter().any(Option::is_some),
             timeouts,
             entities,
             step_entities: Rows::from_lists(step_entities.into_iter()),
             variable_entities,
             step_names: chart.steps.iter().map(|s| s.name.clone()).collect(),
-            step_values: chart.steps.iter().map(|s| Value::Str(Arc::from(s.name.as_str()))).collect(),
+            step_values: chart
+                .steps
+                .iter()
+                .map(|s| Value::Str(Arc::from(s.name.as_str())))
+                .collect(),
             transition_names: chart.transitions.iter().map(|t| t.name.clone()).collect(),
             action_names: chart.actions.iter().map(|a| a.name.clone()).collect(),
         }
@@ -269,7 +326,15 @@ impl Control {
         self.ds_ff = !r && (self.ds_ff || ds_q);
         self.sl_ff = !r && (self.sl_ff || i.sl);
         let sl_q = ton(&mut self.sl_tmr, self.sl_ff, t_sl, now);
-        let q = !r && (i.n || (i.l && !l_q) || d_q || p_q || self.s_ff || sd_q || self.ds_ff || (self.sl_ff && !sl_q));
+        let q = !r
+            && (i.n
+                || (i.l && !l_q)
+                || d_q
+                || p_q
+                || self.s_ff
+                || sd_q
+                || self.ds_ff
+                || (self.sl_ff && !sl_q));
         let p1 = i.p1 && !self.p1_mem;
         let p0 = !i.p0 && self.p0_mem;
         self.p1_mem = i.p1;
@@ -282,7 +347,15 @@ impl Control {
 
     /// Holds no state: no flip-flop set, no timer running, no edge memory, Q and A FALSE.
     fn idle(&self) -> bool {
-        !(self.s_ff || self.sd_ff || self.ds_ff || self.sl_ff || self.p_mem || self.p1_mem || self.p0_mem || self.q || self.a)
+        !(self.s_ff
+            || self.sd_ff
+            || self.ds_ff
+            || self.sl_ff
+            || self.p_mem
+            || self.p1_mem
+            || self.p0_mem
+            || self.q
+            || self.a)
             && self.l_tmr.is_none()
             && self.d_tmr.is_none()
             && self.sd_tmr.is_none()
@@ -317,6 +390,32 @@ pub(crate) struct StepState {
     hits: u8,
     /// Scratch: the evolution in which a true transition leaving it was seen (conflict test).
     seen: u32,
+    /// Scratch: the evolution that deactivates it (member of `D`).
+    dmark: u32,
+    /// Scratch: the evolution that activates it (member of `A`).
+    amark: u32,
+    /// Absolute memory slots of its `X` and `T`.
+    x_slot: u32,
+    t_slot: u32,
+    /// Keep the `X` / `T` slot up to date: only when some code of the file may read it
+    /// (otherwise [`Simulation::get`] answers from the step state).
+    mirror_x: bool,
+    mirror_t: bool,
+}
+
+impl StepState {
+    #[inline]
+    fn publish_x(&self, mem: &mut [Value], x: bool) {
+        if self.mirror_x {
+            put_bool(mem, self.x_slot as usize, x);
+        }
+    }
+    #[inline]
+    fn publish_t(&self, mem: &mut [Value]) {
+        if self.mirror_t {
+            put_time(mem, self.t_slot as usize, self.t);
+        }
+    }
 }
 
 /// The run-time state of one SFC instance.
@@ -348,8 +447,9 @@ pub struct ChartState {
     pub(crate) track_current: bool,
     tally: Vec<StepTally>,
     // Scratch buffers, kept to avoid allocation per scan.
-    stamp: Vec<u64>,
-    evolutions: u64,
+    stamp: Vec<u32>,
+    /// Number of evolutions so far, modulo 2^32: the epoch marking scratch fields.
+    evolutions: u32,
     cand: Vec<u32>,
     accepted: Vec<u32>,
     run: Vec<u32>,
@@ -366,6 +466,15 @@ impl ChartState {
         let n = plan.step_names.len();
         let m = plan.entities.len();
         let nt = plan.transition_names.len();
+        let steps = (0..n)
+            .map(|s| StepState {
+                x_slot: (frame + plan.x_slots[s] as usize) as u32,
+                t_slot: (frame + plan.t_slots[s] as usize) as u32,
+                mirror_x: true,
+                mirror_t: true,
+                ..StepState::default()
+            })
+            .collect();
         ChartState {
             pou,
             frame,
@@ -373,7 +482,7 @@ impl ChartState {
             started: false,
             last_time: 0,
             active: Vec::new(),
-            steps: vec![StepState::default(); n],
+            steps,
             controls: vec![Control::default(); m],
             live: Vec::new(),
             left: Vec::new(),
@@ -399,6 +508,22 @@ impl ChartState {
         } else {
             format!("{}.{name}", self.path)
         }
+    }
+
+    /// Starts a new evolution and returns its epoch (never 0: 0 marks nothing). When the
+    /// counter wraps, every mark is cleared so an old mark cannot equal a new epoch.
+    fn next_epoch(&mut self) -> u32 {
+        self.evolutions = self.evolutions.wrapping_add(1);
+        if self.evolutions == 0 {
+            for step in &mut self.steps {
+                step.seen = 0;
+                step.dmark = 0;
+                step.amark = 0;
+            }
+            self.stamp.fill(0);
+            self.evolutions = 1;
+        }
+        self.evolutions
     }
 
     /// Whether step `s` is active.
@@ -434,12 +559,18 @@ impl ChartState {
         }
         st.x = false;
         let pos = st.pos as usize;
-        let d = st.t;
         self.active.swap_remove(pos);
         if let Some(&moved) = self.active.get(pos) {
             self.steps[moved as usize].pos = pos as u32;
         }
-        let tl = &mut self.tally[i];
+        self.complete(s);
+    }
+
+    /// Ends the current activation of `s` in the time analysis (the step is left, or left and
+    /// re-entered).
+    fn complete(&mut self, s: u32) {
+        let d = self.steps[s as usize].t;
+        let tl = &mut self.tally[s as usize];
         if tl.completed == 0 {
             tl.min = d;
             tl.max = d;
@@ -497,7 +628,11 @@ pub fn run_chart(ctx: &mut Ctx<'_>, chart: usize) -> Result<(), Fault> {
             for &s in &plan.initial {
                 for &e in plan.step_entities.get(s) {
                     let c = &mut st.controls[e as usize];
-                    for a in plan.entities[e as usize].assocs.iter().filter(|a| a.step == s) {
+                    for a in plan.entities[e as usize]
+                        .assocs
+                        .iter()
+                        .filter(|a| a.step == s)
+                    {
                         match a.qualifier {
                             Qualifier::P => c.p_mem = true,
                             Qualifier::P1 => c.p1_mem = true,
@@ -507,7 +642,7 @@ pub fn run_chart(ctx: &mut Ctx<'_>, chart: usize) -> Result<(), Fault> {
                 }
             }
         }
-        publish_steps(ctx, chart, code);
+        publish_initial(ctx, chart);
         action_phase(ctx, chart, code, plan)?;
         finish_scan(ctx, chart, code, plan);
         return Ok(());
@@ -520,7 +655,7 @@ pub fn run_chart(ctx: &mut Ctx<'_>, chart: usize) -> Result<(), Fault> {
         for &s in &st.active {
             let step = &mut st.steps[s as usize];
             step.t += delta;
-            put_time(ctx.mem, frame + code.step_t[s as usize] as usize, step.t);
+            step.publish_t(ctx.mem);
         }
     }
     match ctx.profile {
@@ -617,36 +752,57 @@ fn reset(ctx: &mut Ctx<'_>, chart: usize, code: &ChartCode) {
     ctx.mem[frame + code.control.error_step as usize] = Value::Str(Arc::from(""));
 }
 
+/// Evaluates the guard of `t` on the current memory: plain BOOL reads inline, the rest through
+/// the compiled closure.
+#[inline]
+fn eval_guard(ctx: &mut Ctx<'_>, code: &ChartCode, frame: usize, t: u32) -> Result<bool, Fault> {
+    match code.fast[t as usize] {
+        FastGuard::Local(o, neg) => Ok(read_bool(ctx.mem, frame + o as usize) != neg),
+        FastGuard::Global(g, neg) => Ok(read_bool(ctx.mem, g as usize) != neg),
+        FastGuard::Const(b) => Ok(b),
+        FastGuard::Code => (code.guards[t as usize])(ctx, frame),
+    }
+}
+
 /// Steps 3–5: enabled and true transitions against one snapshot, conflicts, firing.
 /// Returns whether anything fired.
-fn evolve(ctx: &mut Ctx<'_>, chart: usize, code: &ChartCode, plan: &ChartPlan) -> Result<bool, Fault> {
+fn evolve(
+    ctx: &mut Ctx<'_>,
+    chart: usize,
+    code: &ChartCode,
+    plan: &ChartPlan,
+) -> Result<bool, Fault> {
     let frame = ctx.charts[chart].frame;
-    let mut cand = {
+    let (mut cand, epoch) = {
         let st = &mut ctx.charts[chart];
         let mut cand = std::mem::take(&mut st.cand);
         cand.clear();
-        st.evolutions += 1;
-        let stamp = st.evolutions;
+        let epoch = st.next_epoch();
         for &s in &st.active {
             for &t in plan.outgoing.get(s) {
-                let mark = &mut st.stamp[t as usize];
-                if *mark == stamp {
+                // A transition with one preceding step is met only from that (active) step.
+                if plan.single_pre[t as usize] {
+                    cand.push(t);
                     continue;
                 }
-                *mark = stamp;
+                let mark = &mut st.stamp[t as usize];
+                if *mark == epoch {
+                    continue;
+                }
+                *mark = epoch;
                 if plan.pre.get(t).iter().all(|&p| st.steps[p as usize].x) {
                     cand.push(t);
                 }
             }
         }
-        cand
+        (cand, epoch)
     };
     // Guards against the snapshot. They have no side effects, so their order does not matter;
     // when one faults, the first faulting guard in declaration order is reported.
     let mut e_len = 0;
     for k in 0..cand.len() {
         let t = cand[k];
-        match (code.guards[t as usize])(ctx, frame) {
+        match eval_guard(ctx, code, frame, t) {
             Ok(true) => {
                 cand[e_len] = t;
                 e_len += 1;
@@ -655,7 +811,10 @@ fn evolve(ctx: &mut Ctx<'_>, chart: usize, code: &ChartCode, plan: &ChartPlan) -
             Err(f) => {
                 let mut all = cand[k..].to_vec();
                 all.sort_unstable();
-                let first = all.into_iter().find_map(|t| (code.guards[t as usize])(ctx, frame).err()).unwrap_or(f);
+                let first = all
+                    .into_iter()
+                    .find_map(|t| eval_guard(ctx, code, frame, t).err())
+                    .unwrap_or(f);
                 ctx.charts[chart].cand = cand;
                 return Err(first);
             }
@@ -667,6 +826,7 @@ fn evolve(ctx: &mut Ctx<'_>, chart: usize, code: &ChartCode, plan: &ChartPlan) -
         st.cand = cand;
         return Ok(false);
     }
+    let now = ctx.now;
     if cand.len() == 1 {
         let t = cand[0];
         let (pre, post) = (plan.pre.get(t), plan.post.get(t));
@@ -676,59 +836,119 @@ fn evolve(ctx: &mut Ctx<'_>, chart: usize, code: &ChartCode, plan: &ChartPlan) -
             let (from, to) = (*from, *to);
             if from == to || !st.steps[to as usize].x {
                 st.left.clear();
-                st.deactivate(from);
                 st.left.push(from);
+                if from == to {
+                    st.complete(from);
+                } else {
+                    st.deactivate(from);
+                    st.steps[from as usize].publish_x(ctx.mem, false);
+                }
                 st.activate(to);
+                let step = &st.steps[to as usize];
+                step.publish_x(ctx.mem, true);
+                step.publish_t(ctx.mem);
                 if st.log.len() < LOG_LIMIT {
-                    st.log.push((ctx.now, t));
+                    st.log.push((now, t));
                 }
                 ctx.sink.fired.push((chart as u32, t));
                 st.cand = cand;
-                publish_steps(ctx, chart, code);
                 return Ok(true);
             }
         }
     }
-    let mut accepted = std::mem::take(&mut st.accepted);
-    accepted.clear();
-    // Two true transitions sharing a step are a conflict; without one, all of them fire.
+    // Two true transitions sharing a step are a conflict; without one, all of them fire. Only
+    // transitions leaving a divergence can share a step.
     let mut shared = false;
-    if cand.len() > 1 {
-        let stamp = st.evolutions as u32;
+    if cand.len() > 1 && cand.iter().any(|&t| plan.may_conflict[t as usize]) {
         for &t in &cand {
             for &p in plan.pre.get(t) {
                 let step = &mut st.steps[p as usize];
-                shared |= step.seen == stamp;
-                step.seen = stamp;
+                shared |= step.seen == epoch;
+                step.seen = epoch;
             }
         }
     }
-    if shared {
+    let accepted = if shared {
         cand.sort_unstable();
-        resolve_conflicts(st, plan, &cand, &mut accepted, ctx.profile, &mut ctx.sink.events);
+        let mut accepted = std::mem::take(&mut st.accepted);
+        accepted.clear();
+        resolve_conflicts(
+            st,
+            plan,
+            &cand,
+            &mut accepted,
+            ctx.profile,
+            &mut ctx.sink.events,
+        );
+        st.cand = cand;
+        accepted
     } else {
-        accepted.extend_from_slice(&cand);
+        cand
+    };
+    fire(
+        ctx,
+        chart,
+        plan,
+        &accepted,
+        epoch,
+        !shared || ctx.profile != Profile::Matiec,
+    );
+    let st = &mut ctx.charts[chart];
+    if shared {
+        st.accepted = accepted;
+    } else {
+        st.cand = accepted;
     }
-    // Fire together: D = ∪ pre (marked `consumed`), A = ∪ post (counted in `hits`).
-    for &t in &accepted {
+    Ok(true)
+}
+
+/// Step 5: fires the accepted transitions together. `D = ∪ pre` is marked with `dmark`,
+/// `A = ∪ post` with `amark`; a step of `A` that is active and not in `D`, or that two
+/// transitions activate, is unsafe. Steps of `D` not in `A` are deactivated, then every step of
+/// `A` is activated once (a step left and re-entered stays active, its time restarts).
+/// `disjoint`: no two accepted transitions share a preceding step (always, except MatIEC's
+/// firing of every true alternative).
+fn fire(
+    ctx: &mut Ctx<'_>,
+    chart: usize,
+    plan: &ChartPlan,
+    accepted: &[u32],
+    epoch: u32,
+    disjoint: bool,
+) {
+    if disjoint
+        && accepted
+            .iter()
+            .all(|&t| plan.links[t as usize].0 != u32::MAX)
+    {
+        fire_links(ctx, chart, plan, accepted, epoch);
+    } else {
+        fire_general(ctx, chart, plan, accepted, epoch);
+    }
+}
+
+fn fire_general(ctx: &mut Ctx<'_>, chart: usize, plan: &ChartPlan, accepted: &[u32], epoch: u32) {
+    let st = &mut ctx.charts[chart];
+    for &t in accepted {
         for &s in plan.pre.get(t) {
-            st.steps[s as usize].consumed = true;
+            st.steps[s as usize].dmark = epoch;
         }
     }
     let mut unsafe_steps: Vec<u32> = Vec::new();
-    for &t in &accepted {
+    for &t in accepted {
         for &s in plan.post.get(t) {
             let step = &mut st.steps[s as usize];
-            step.hits = step.hits.saturating_add(1);
-            // Activated while active and not left, or by two transitions: unsafe.
-            if (step.hits >= 2 || (step.x && !step.consumed)) && !unsafe_steps.contains(&s) {
+            if (step.amark == epoch || (step.x && step.dmark != epoch))
+                && !unsafe_steps.contains(&s)
+            {
                 unsafe_steps.push(s);
             }
+            step.amark = epoch;
         }
     }
     if !unsafe_steps.is_empty() {
         unsafe_steps.sort_unstable();
-        let mut in_order = accepted.clone();
+        let mut in_order = accepted.to_vec();
         in_order.sort_unstable();
         for &s in &unsafe_steps {
             let trs = in_order
@@ -736,31 +956,43 @@ fn evolve(ctx: &mut Ctx<'_>, chart: usize, code: &ChartCode, plan: &ChartPlan) -
                 .filter(|&&t| plan.post.get(t).contains(&s))
                 .map(|&t| st.qualify(&plan.transition_names[t as usize]))
                 .collect();
-            ctx.sink.events.push(Event::Unsafe { step: st.qualify(&plan.step_names[s as usize]), transitions: trs });
+            ctx.sink.events.push(Event::Unsafe {
+                step: st.qualify(&plan.step_names[s as usize]),
+                transitions: trs,
+            });
         }
     }
     st.left.clear();
-    for &t in &accepted {
+    for &t in accepted {
         for &s in plan.pre.get(t) {
             let step = &mut st.steps[s as usize];
-            if step.consumed {
-                step.consumed = false;
-                if step.x {
-                    st.deactivate(s);
-                    st.left.push(s);
-                }
+            // Each step of D once (MatIEC may accept transitions sharing a step).
+            if step.dmark != epoch {
+                continue;
             }
+            step.dmark = 0;
+            if !step.x {
+                continue;
+            }
+            if step.amark == epoch {
+                st.complete(s);
+            } else {
+                st.deactivate(s);
+                st.steps[s as usize].publish_x(ctx.mem, false);
+            }
+            st.left.push(s);
         }
     }
     let now = ctx.now;
-    for &t in &accepted {
+    for &t in accepted {
         for &s in plan.post.get(t) {
-            // `hits` still counts this scan's activations: activate each step once. A step left
-            // and re-entered stays active (its flag never falls) and its time restarts.
             let step = &mut st.steps[s as usize];
-            if step.hits != 0 {
-                step.hits = 0;
+            if step.amark == epoch {
+                step.amark = 0;
                 st.activate(s);
+                let step = &st.steps[s as usize];
+                step.publish_x(ctx.mem, true);
+                step.publish_t(ctx.mem);
             }
         }
         if st.log.len() < LOG_LIMIT {
@@ -768,10 +1000,54 @@ fn evolve(ctx: &mut Ctx<'_>, chart: usize, code: &ChartCode, plan: &ChartPlan) -
         }
         ctx.sink.fired.push((chart as u32, t));
     }
-    st.accepted = accepted;
-    st.cand = cand;
-    publish_steps(ctx, chart, code);
-    Ok(true)
+}
+
+/// [`fire`] for transitions that each link one step to one step (sequences, loops, the
+/// branches of a selection): the same rule without walking the pre/post lists.
+fn fire_links(ctx: &mut Ctx<'_>, chart: usize, plan: &ChartPlan, accepted: &[u32], epoch: u32) {
+    let st = &mut ctx.charts[chart];
+    for &t in accepted {
+        st.steps[plan.links[t as usize].0 as usize].dmark = epoch;
+    }
+    let mut safe = true;
+    for &t in accepted {
+        let step = &mut st.steps[plan.links[t as usize].1 as usize];
+        safe &= step.amark != epoch && (!step.x || step.dmark == epoch);
+        step.amark = epoch;
+    }
+    if !safe {
+        // Rare: clear the activation marks and take the general path, which names the unsafe
+        // steps.
+        for &t in accepted {
+            st.steps[plan.links[t as usize].1 as usize].amark = 0;
+        }
+        return fire_general(ctx, chart, plan, accepted, epoch);
+    }
+    st.left.clear();
+    for &t in accepted {
+        let from = plan.links[t as usize].0;
+        let step = &mut st.steps[from as usize];
+        if step.amark == epoch {
+            st.complete(from);
+        } else {
+            st.deactivate(from);
+            st.steps[from as usize].publish_x(ctx.mem, false);
+        }
+        st.left.push(from);
+    }
+    let now = ctx.now;
+    for &t in accepted {
+        let to = plan.links[t as usize].1;
+        st.steps[to as usize].amark = 0;
+        st.activate(to);
+        let step = &st.steps[to as usize];
+        step.publish_x(ctx.mem, true);
+        step.publish_t(ctx.mem);
+        if st.log.len() < LOG_LIMIT {
+            st.log.push((now, t));
+        }
+        ctx.sink.fired.push((chart as u32, t));
+    }
 }
 
 /// Step 4 for two or more true transitions: `conflict` events, then acceptance in priority
@@ -815,7 +1091,10 @@ fn resolve_conflicts(
             .filter(|&&t| !explicit(t) && plan.pre.get(t).contains(&s))
             .map(|&t| st.qualify(&plan.transition_names[t as usize]))
             .collect();
-        events.push(Event::Conflict { step: st.qualify(&plan.step_names[s as usize]), transitions: trs });
+        events.push(Event::Conflict {
+            step: st.qualify(&plan.step_names[s as usize]),
+            transitions: trs,
+        });
     }
     let mut order = cand.to_vec();
     if !codesys {
@@ -841,14 +1120,21 @@ fn resolve_conflicts(
 
 /// GRAFCET (IEC 60848): evolve on frozen inputs until nothing fires; a situation met twice
 /// is an endless cycle and stops the run.
-fn evolve_until_stable(ctx: &mut Ctx<'_>, chart: usize, code: &ChartCode, plan: &ChartPlan) -> Result<(), Fault> {
+fn evolve_until_stable(
+    ctx: &mut Ctx<'_>,
+    chart: usize,
+    code: &ChartCode,
+    plan: &ChartPlan,
+) -> Result<(), Fault> {
     let mut seen: Vec<Vec<u32>> = Vec::new();
     loop {
         let mut now_active = ctx.charts[chart].active.clone();
         now_active.sort_unstable();
         if seen.contains(&now_active) {
             return Err(Fault {
-                message: "the situation never becomes stable (GRAFCET evolution cycles on frozen inputs)".into(),
+                message:
+                    "the situation never becomes stable (GRAFCET evolution cycles on frozen inputs)"
+                        .into(),
                 span: code.chart.name_span,
             });
         }
@@ -859,23 +1145,55 @@ fn evolve_until_stable(ctx: &mut Ctx<'_>, chart: usize, code: &ChartCode, plan: 
     }
 }
 
-/// Writes the `X` and `T` slots of the steps left and entered by the last evolution.
-fn publish_steps(ctx: &mut Ctx<'_>, chart: usize, code: &ChartCode) {
-    let st = &ctx.charts[chart];
-    let frame = st.frame;
-    for &s in &st.left {
-        if !st.steps[s as usize].x {
-            put_bool(ctx.mem, frame + code.step_x[s as usize] as usize, false);
+/// Every `(name, b'x' | b't')` such that the (lowercase) source text contains `name.x` /
+/// `name.t` (spaces allowed around the dot) with `name` a whole identifier: the step flags
+/// that some code may read. Comments and strings count too, which only keeps more slots
+/// up to date than needed.
+fn step_flags_read(lower: &str) -> std::collections::HashSet<(String, u8)> {
+    let b = lower.as_bytes();
+    let ident = |c: u8| c.is_ascii_alphanumeric() || c == b'_';
+    let mut out = std::collections::HashSet::new();
+    for (i, _) in lower.match_indices('.') {
+        let mut k = i + 1;
+        while k < b.len() && b[k] == b' ' {
+            k += 1;
+        }
+        let flag = match b.get(k) {
+            Some(&c @ (b'x' | b't')) if !b.get(k + 1).is_some_and(|&n| ident(n)) => c,
+            _ => continue,
+        };
+        let mut end = i;
+        while end > 0 && b[end - 1] == b' ' {
+            end -= 1;
+        }
+        let mut start = end;
+        while start > 0 && ident(b[start - 1]) {
+            start -= 1;
+        }
+        if start < end {
+            out.insert((lower[start..end].to_string(), flag));
         }
     }
+    out
+}
+
+/// Writes the `X` and `T` slots of the initial steps (evolutions write them as they fire).
+fn publish_initial(ctx: &mut Ctx<'_>, chart: usize) {
+    let st = &ctx.charts[chart];
     for &s in &st.entered {
-        put_bool(ctx.mem, frame + code.step_x[s as usize] as usize, true);
-        put_time(ctx.mem, frame + code.step_t[s as usize] as usize, st.steps[s as usize].t);
+        let step = &st.steps[s as usize];
+        put_bool(ctx.mem, step.x_slot as usize, true);
+        put_time(ctx.mem, step.t_slot as usize, step.t);
     }
 }
 
 /// Steps 6–7: action control for every live entity, then the bodies with `A` TRUE.
-fn action_phase(ctx: &mut Ctx<'_>, chart: usize, code: &ChartCode, plan: &ChartPlan) -> Result<(), Fault> {
+fn action_phase(
+    ctx: &mut Ctx<'_>,
+    chart: usize,
+    code: &ChartCode,
+    plan: &ChartPlan,
+) -> Result<(), Fault> {
     let now = ctx.now;
     let profile = ctx.profile;
     let frame = ctx.charts[chart].frame;
@@ -929,7 +1247,9 @@ fn action_phase(ctx: &mut Ctx<'_>, chart: usize, code: &ChartCode, plan: &ChartP
                         winner = Some((a.step, a.qualifier, dur));
                         inputs.set(a.qualifier, true, or);
                     }
-                    Some((_, q, d)) if q == a.qualifier && d == dur => inputs.set(a.qualifier, true, true),
+                    Some((_, q, d)) if q == a.qualifier && d == dur => {
+                        inputs.set(a.qualifier, true, true)
+                    }
                     Some(_) => contenders.push((a.step, a.qualifier)),
                 }
             } else {
@@ -952,7 +1272,11 @@ fn action_phase(ctx: &mut Ctx<'_>, chart: usize, code: &ChartCode, plan: &ChartP
                     steps.push(st.qualify(&plan.step_names[*s as usize]));
                     quals.push(q.name().to_string());
                 }
-                ctx.sink.events.push(Event::Contention { action: st.qualify(&ent.name), steps, qualifiers: quals });
+                ctx.sink.events.push(Event::Contention {
+                    action: st.qualify(&ent.name),
+                    steps,
+                    qualifiers: quals,
+                });
             }
         }
         let c = &mut st.controls[e];
@@ -981,7 +1305,10 @@ fn action_phase(ctx: &mut Ctx<'_>, chart: usize, code: &ChartCode, plan: &ChartP
         let left = &st.left;
         run.sort_by_cached_key(|&e| {
             let ent = &plan.entities[e as usize];
-            (!ent.assocs.iter().any(|a| left.contains(&a.step)), ent.name.to_ascii_uppercase())
+            (
+                !ent.assocs.iter().any(|a| left.contains(&a.step)),
+                ent.name.to_ascii_uppercase(),
+            )
         });
     } else if run.len() > 1 {
         run.sort_unstable();
@@ -1020,7 +1347,8 @@ fn finish_scan(ctx: &mut Ctx<'_>, chart: usize, code: &ChartCode, plan: &ChartPl
         }
         if let Some(s) = expired {
             ctx.mem[frame + code.control.error as usize] = Value::Bool(true);
-            ctx.mem[frame + code.control.error_step as usize] = plan.step_values[s as usize].clone();
+            ctx.mem[frame + code.control.error_step as usize] =
+                plan.step_values[s as usize].clone();
         }
     }
     if st.changed && st.track_current {
@@ -1095,10 +1423,17 @@ impl Simulation {
         pou: Option<&str>,
         opts: SimOptions,
     ) -> Result<Simulation, (SourceFile, Vec<Diagnostic>)> {
-        let check_opts = sfc_model::CheckOptions { keep_types: true, ..Default::default() };
+        let check_opts = sfc_model::CheckOptions {
+            keep_types: true,
+            ..Default::default()
+        };
         let checked = sfc_model::check_source(0, name, text, &check_opts);
         if checked.has_errors() {
-            let diags = checked.diagnostics.into_iter().filter(|d| d.is_error()).collect();
+            let diags = checked
+                .diagnostics
+                .into_iter()
+                .filter(|d| d.is_error())
+                .collect();
             return Err((checked.file, diags));
         }
         let source = checked.file;
@@ -1111,7 +1446,11 @@ impl Simulation {
             Err(d) => return Err((source, d)),
         };
         let Some(top) = prog.pou(&top) else {
-            let d = Diagnostic::error("SFC0321", Span::default(), format!("no POU named `{top}` to simulate"));
+            let d = Diagnostic::error(
+                "SFC0321",
+                Span::default(),
+                format!("no POU named `{top}` to simulate"),
+            );
             return Err((source, vec![d]));
         };
         Ok(Simulation::new(prog, top, source, opts))
@@ -1119,11 +1458,17 @@ impl Simulation {
 
     /// A simulation of the compiled POU `top`.
     pub fn new(prog: Program, top: usize, source: SourceFile, opts: SimOptions) -> Simulation {
-        let Memory { mem, top_frame, charts: instances } = prog.instantiate(top);
+        let Memory {
+            mem,
+            top_frame,
+            charts: instances,
+        } = prog.instantiate(top);
         let mut mem = mem;
         let mut charts = Vec::with_capacity(instances.len());
         for (i, inst) in instances.into_iter().enumerate() {
-            let PouBody::Chart(code) = &prog.pous[inst.pou].body else { continue };
+            let PouBody::Chart(code) = &prog.pous[inst.pou].body else {
+                continue;
+            };
             let plan = code.plan_arc().clone();
             mem[inst.frame + code.chart_slot as usize] = Value::Int(i as i64);
             charts.push(ChartState::new(inst.pou, plan, inst.frame, inst.path));
@@ -1133,11 +1478,21 @@ impl Simulation {
             .vars
             .iter()
             .filter(|v| !v.implicit && v.size == 1 && v.ty.is_elementary())
-            .filter_map(|v| prog.resolve(top, top_frame, &v.name).map(|(slot, _)| (v.name.clone(), v.ty.clone(), slot)))
+            .filter_map(|v| {
+                prog.resolve(top, top_frame, &v.name)
+                    .map(|(slot, _)| (v.name.clone(), v.ty.clone(), slot))
+            })
             .collect();
-        let mentioned = source.text.to_ascii_lowercase().contains("sfccurrentstep");
+        let lower = source.text.to_ascii_lowercase();
+        let mentioned = lower.contains("sfccurrentstep");
+        let flags = step_flags_read(&lower);
         for c in &mut charts {
             c.track_current = mentioned;
+            for (step, name) in c.steps.iter_mut().zip(&c.plan.step_names) {
+                let name = name.to_ascii_lowercase();
+                step.mirror_x = flags.contains(&(name.clone(), b'x'));
+                step.mirror_t = flags.contains(&(name, b't'));
+            }
         }
         Simulation {
             prog,
@@ -1203,7 +1558,14 @@ impl Simulation {
         self.next_scan += 1;
         if let Err(fault) = result {
             let lc = self.source.line_col(fault.span.start);
-            let e = RuntimeError { message: fault.message, span: fault.span, line: lc.line, column: lc.column, scan, time: now };
+            let e = RuntimeError {
+                message: fault.message,
+                span: fault.span,
+                line: lc.line,
+                column: lc.column,
+                scan,
+                time: now,
+            };
             self.sink.events.push(Event::Error(e.clone()));
             self.error = Some(e);
             return Err(self.error.as_ref().unwrap());
@@ -1226,7 +1588,10 @@ impl Simulation {
         let mut k = 0;
         while k < self.sink.fired.len() {
             let c = self.sink.fired[k].0;
-            let end = self.sink.fired[k..].iter().position(|f| f.0 != c).map_or(self.sink.fired.len(), |n| k + n);
+            let end = self.sink.fired[k..]
+                .iter()
+                .position(|f| f.0 != c)
+                .map_or(self.sink.fired.len(), |n| k + n);
             self.sink.fired[k..end].sort_unstable();
             k = end;
         }
@@ -1239,7 +1604,13 @@ impl Simulation {
                 st.qualify(&st.plan.transition_names[t as usize])
             })
             .collect();
-        self.record = ScanRecord { scan, time, active: self.active(), fired, events };
+        self.record = ScanRecord {
+            scan,
+            time,
+            active: self.active(),
+            fired,
+            events,
+        };
         &self.record
     }
 
@@ -1280,7 +1651,9 @@ impl Simulation {
     /// range-checked for the integer types). Step and action flags cannot be written.
     pub fn set(&mut self, name: &str, value: Value) -> Result<(), String> {
         if self.is_chart_flag(name) {
-            return Err(format!("`{name}` is a step or action flag: the chart sets it"));
+            return Err(format!(
+                "`{name}` is a step or action flag: the chart sets it"
+            ));
         }
         let Some((slot, ty)) = self.prog.resolve(self.top, self.top_frame, name) else {
             return Err(format!("no variable `{name}` in `{}`", self.pou_name()));
@@ -1291,8 +1664,13 @@ impl Simulation {
     }
 
     fn is_chart_flag(&self, name: &str) -> bool {
-        let Some((base, member)) = name.rsplit_once('.') else { return false };
-        if !["X", "T", "Q", "A"].iter().any(|m| m.eq_ignore_ascii_case(member)) {
+        let Some((base, member)) = name.rsplit_once('.') else {
+            return false;
+        };
+        if !["X", "T", "Q", "A"]
+            .iter()
+            .any(|m| m.eq_ignore_ascii_case(member))
+        {
             return false;
         }
         let (path, leaf) = match base.rsplit_once('.') {
@@ -1301,8 +1679,15 @@ impl Simulation {
         };
         self.charts.iter().any(|c| {
             c.path.eq_ignore_ascii_case(path)
-                && (c.plan.step_names.iter().any(|s| s.eq_ignore_ascii_case(leaf))
-                    || c.plan.action_names.iter().any(|a| a.eq_ignore_ascii_case(leaf)))
+                && (c
+                    .plan
+                    .step_names
+                    .iter()
+                    .any(|s| s.eq_ignore_ascii_case(leaf))
+                    || c.plan
+                        .action_names
+                        .iter()
+                        .any(|a| a.eq_ignore_ascii_case(leaf)))
         })
     }
 
@@ -1310,13 +1695,29 @@ impl Simulation {
     /// instances (`Rev.Busy`, `Rev.OpenKM1.X`). Case-insensitive.
     pub fn get(&self, name: &str) -> Option<Value> {
         let (slot, _) = self.prog.resolve(self.top, self.top_frame, name)?;
-        if let Some(v) = self.current_step_of(name) {
+        if let Some(v) = self
+            .current_step_of(name)
+            .or_else(|| self.unmirrored_step_value(slot))
+        {
             return Some(v);
         }
         self.mem.get(slot).cloned()
     }
 
     /// `[Path.]SFCCurrentStep` computed from the chart state (see `ChartState::track_current`).
+    /// The `X` or `T` of a step whose slot is not mirrored in memory, from the step state.
+    fn unmirrored_step_value(&self, slot: usize) -> Option<Value> {
+        self.charts.iter().flat_map(|c| &c.steps).find_map(|s| {
+            if !s.mirror_x && s.x_slot as usize == slot {
+                Some(Value::Bool(s.x))
+            } else if !s.mirror_t && s.t_slot as usize == slot {
+                Some(Value::Time(s.t))
+            } else {
+                None
+            }
+        })
+    }
+
     fn current_step_of(&self, name: &str) -> Option<Value> {
         let (path, leaf) = match name.rsplit_once('.') {
             Some((p, l)) => (p, l),
@@ -1325,13 +1726,22 @@ impl Simulation {
         if !leaf.eq_ignore_ascii_case("SFCCurrentStep") {
             return None;
         }
-        let st = self.charts.iter().find(|c| c.path.eq_ignore_ascii_case(path))?;
+        let st = self
+            .charts
+            .iter()
+            .find(|c| c.path.eq_ignore_ascii_case(path))?;
         let first = st.active.iter().copied().min();
-        Some(Value::Str(Arc::from(first.map(|s| st.plan.step_names[s as usize].as_str()).unwrap_or(""))))
+        Some(Value::Str(Arc::from(
+            first
+                .map(|s| st.plan.step_names[s as usize].as_str())
+                .unwrap_or(""),
+        )))
     }
     /// The type of what [`Simulation::get`] reads.
     pub fn type_of(&self, name: &str) -> Option<Type> {
-        self.prog.resolve(self.top, self.top_frame, name).map(|(_, t)| t)
+        self.prog
+            .resolve(self.top, self.top_frame, name)
+            .map(|(_, t)| t)
     }
 
     /// Active steps now, sorted by code points (nested instances as `Path.Step`).
@@ -1349,19 +1759,31 @@ impl Simulation {
     /// The variables a trace shows: every declared variable of elementary type of the top
     /// POU, in declaration order, with its declared name and type.
     pub fn trace_vars(&self) -> Vec<(String, Type)> {
-        self.trace.iter().map(|(name, ty, _)| (name.clone(), ty.clone())).collect()
+        self.trace
+            .iter()
+            .map(|(name, ty, _)| (name.clone(), ty.clone()))
+            .collect()
     }
     /// Current values of [`Simulation::trace_vars`], same order.
     pub fn trace_values(&self) -> Vec<Value> {
-        self.trace.iter().map(|&(_, _, slot)| self.mem[slot].clone()).collect()
+        self.trace
+            .iter()
+            .map(|&(_, _, slot)| self.mem[slot].clone())
+            .collect()
     }
     /// Every step (qualified), in declaration order, top chart first.
     pub fn step_names(&self) -> Vec<String> {
-        self.charts.iter().flat_map(|c| c.plan.step_names.iter().map(|s| c.qualify(s))).collect()
+        self.charts
+            .iter()
+            .flat_map(|c| c.plan.step_names.iter().map(|s| c.qualify(s)))
+            .collect()
     }
     /// Every transition (qualified), in declaration order, top chart first.
     pub fn transition_names(&self) -> Vec<String> {
-        self.charts.iter().flat_map(|c| c.plan.transition_names.iter().map(|s| c.qualify(s))).collect()
+        self.charts
+            .iter()
+            .flat_map(|c| c.plan.transition_names.iter().map(|s| c.qualify(s)))
+            .collect()
     }
 
     /// Condition analysis of every active step now: why each outgoing transition does not fire.
@@ -1378,19 +1800,28 @@ impl Simulation {
     }
     /// Condition analysis of the active steps whose `sfc.timeout` has expired.
     pub fn overdue(&self) -> Vec<StepReport> {
-        self.overdue_at().into_iter().map(|(c, s)| crate::explain::report(self.explain_view(), c, s)).collect()
+        self.overdue_at()
+            .into_iter()
+            .map(|(c, s)| crate::explain::report(self.explain_view(), c, s))
+            .collect()
     }
 
     /// The active steps whose `sfc.timeout` has expired (qualified, sorted by chart and step):
     /// cheap enough to ask every scan, unlike their reports.
     pub fn overdue_steps(&self) -> Vec<String> {
-        self.overdue_at().into_iter().map(|(c, s)| self.charts[c].qualify(&self.charts[c].plan.step_names[s as usize])).collect()
+        self.overdue_at()
+            .into_iter()
+            .map(|(c, s)| self.charts[c].qualify(&self.charts[c].plan.step_names[s as usize]))
+            .collect()
     }
 
     /// Condition analysis of one active step, by qualified name (`Rev.OpenKM1`).
     pub fn explain_step(&self, step: &str) -> Option<StepReport> {
         self.charts.iter().enumerate().find_map(|(c, st)| {
-            let s = st.active.iter().copied().find(|&s| st.qualify(&st.plan.step_names[s as usize]).eq_ignore_ascii_case(step))?;
+            let s = st.active.iter().copied().find(|&s| {
+                st.qualify(&st.plan.step_names[s as usize])
+                    .eq_ignore_ascii_case(step)
+            })?;
             Some(crate::explain::report(self.explain_view(), c, s))
         })
     }
@@ -1456,7 +1887,10 @@ impl Simulation {
                 });
             }
         }
-        TimeStats { steps, sequence: self.sequence() }
+        TimeStats {
+            steps,
+            sequence: self.sequence(),
+        }
     }
 
     /// Rebuilds the sequence of situations from the firing logs of all instances.
@@ -1525,35 +1959,58 @@ impl Simulation {
 }
 
 /// Picks the POU to simulate: the named one, else the only SFC POU, else the only PROGRAM.
-fn choose_pou(unit: &sfc_syntax::ast::SourceUnit, charts: &[sfc_model::Chart], pou: Option<&str>) -> Result<String, Diagnostic> {
+fn choose_pou(
+    unit: &sfc_syntax::ast::SourceUnit,
+    charts: &[sfc_model::Chart],
+    pou: Option<&str>,
+) -> Result<String, Diagnostic> {
     use sfc_syntax::ast::{Item, PouKind};
-    let pous: Vec<&sfc_syntax::ast::Pou> =
-        unit.items.iter().filter_map(|i| if let Item::Pou(p) = i { Some(p) } else { None }).collect();
+    let pous: Vec<&sfc_syntax::ast::Pou> = unit
+        .items
+        .iter()
+        .filter_map(|i| if let Item::Pou(p) = i { Some(p) } else { None })
+        .collect();
     if let Some(name) = pou {
         return match pous.iter().find(|p| p.name.is(name)) {
             Some(p) if p.kind == PouKind::Function => Err(Diagnostic::error(
                 "SFC0321",
                 p.name.span,
-                format!("`{}` is a FUNCTION: simulate a PROGRAM or FUNCTION_BLOCK", p.name.text),
+                format!(
+                    "`{}` is a FUNCTION: simulate a PROGRAM or FUNCTION_BLOCK",
+                    p.name.text
+                ),
             )),
             Some(p) => Ok(p.name.text.clone()),
             None => {
                 let names: Vec<&str> = pous.iter().map(|p| p.name.text.as_str()).collect();
-                Err(Diagnostic::error("SFC0321", Span::default(), format!("no POU named `{name}` in this file"))
-                    .with_note(format!("the file declares: {}", names.join(", "))))
+                Err(Diagnostic::error(
+                    "SFC0321",
+                    Span::default(),
+                    format!("no POU named `{name}` in this file"),
+                )
+                .with_note(format!("the file declares: {}", names.join(", "))))
             }
         };
     }
-    let programs: Vec<&&sfc_syntax::ast::Pou> = pous.iter().filter(|p| p.kind == PouKind::Program).collect();
+    let programs: Vec<&&sfc_syntax::ast::Pou> =
+        pous.iter().filter(|p| p.kind == PouKind::Program).collect();
     if programs.len() == 1 {
         return Ok(programs[0].name.text.clone());
     }
     if charts.len() == 1 {
         return Ok(charts[0].pou.clone());
     }
-    let names: Vec<&str> = pous.iter().filter(|p| p.kind != PouKind::Function).map(|p| p.name.text.as_str()).collect();
-    Err(Diagnostic::error("SFC0321", Span::default(), "choose the POU to simulate (`pou` / `--pou`)")
-        .with_note(format!("candidates: {}", names.join(", "))))
+    let names: Vec<&str> = pous
+        .iter()
+        .filter(|p| p.kind != PouKind::Function)
+        .map(|p| p.name.text.as_str())
+        .collect();
+    Err(Diagnostic::error(
+        "SFC0321",
+        Span::default(),
+        "choose the POU to simulate (`pou` / `--pou`)",
+    )
+    .with_note(format!("candidates: {}", names.join(", "))))
 }
 
 fn type_name(ty: &Type) -> String {
@@ -1565,7 +2022,9 @@ pub(crate) fn fit(value: Value, ty: &Type) -> Result<Value, String> {
     let base = ty.base();
     match (&value, base) {
         (Value::Bool(_), Type::Bool) => Ok(value),
-        (Value::Int(i), _) if ty.is_integer() || ty.is_bit() || matches!(ty, Type::Subrange { .. }) => {
+        (Value::Int(i), _)
+            if ty.is_integer() || ty.is_bit() || matches!(ty, Type::Subrange { .. }) =>
+        {
             match ty.int_range() {
                 Some((lo, hi)) if (i128::from(*i) < lo || i128::from(*i) > hi) => {
                     Err(format!("{i} is out of range {lo}..{hi}"))

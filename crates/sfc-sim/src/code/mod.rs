@@ -15,8 +15,8 @@
 //!   outputs.
 
 use crate::engine::{ChartState, ScanSink};
-use crate::Profile;
 use crate::value::Value;
+use crate::Profile;
 use sfc_diagnostics::Span;
 use sfc_model::Chart;
 use sfc_st::Type;
@@ -141,6 +141,18 @@ pub struct ControlSlots {
     pub current_step: u32,
 }
 
+/// A guard the engine evaluates without calling its closure.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum FastGuard {
+    /// A BOOL slot of the chart's frame, negated when the flag is set.
+    Local(u32, bool),
+    /// A BOOL global slot, negated when the flag is set.
+    Global(u32, bool),
+    Const(bool),
+    /// Anything else: call the closure.
+    Code,
+}
+
 /// A compiled chart.
 pub struct ChartCode {
     /// The model; its conditions and bodies are compiled below and are not used at run time.
@@ -153,6 +165,9 @@ pub struct ChartCode {
     pub action_a: Vec<u32>,
     /// Per transition, in the chart's order.
     pub guards: Vec<Guard>,
+    /// Per transition: the same guard when it is a plain BOOL read, which the engine
+    /// evaluates inline (no call).
+    pub fast: Vec<FastGuard>,
     /// Per action, in the chart's order.
     pub bodies: Vec<Block>,
     /// Per step, per association (same order as `chart.steps[s].associations`).
@@ -171,7 +186,8 @@ impl ChartCode {
         self.plan_arc()
     }
     pub(crate) fn plan_arc(&self) -> &std::sync::Arc<crate::engine::ChartPlan> {
-        self.plan.get_or_init(|| std::sync::Arc::new(crate::engine::ChartPlan::new(self)))
+        self.plan
+            .get_or_init(|| std::sync::Arc::new(crate::engine::ChartPlan::new(self)))
     }
 }
 
