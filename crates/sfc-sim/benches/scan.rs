@@ -15,7 +15,9 @@ use std::time::Instant;
 /// A ring of `n` steps; each transition is `Go`, so the token moves every scan. With
 /// `actions`, every step runs an N action with an ST body.
 fn ring(n: usize, actions: bool) -> String {
-    let mut s = String::from("PROGRAM Ring\n    VAR_INPUT\n        Go : BOOL;\n    END_VAR\n    VAR\n        Count : DINT;\n    END_VAR\n\n");
+    let mut s = String::from(
+        "PROGRAM Ring\n    VAR_INPUT\n        Go : BOOL;\n    END_VAR\n    VAR\n        Count : DINT;\n    END_VAR\n\n",
+    );
     for i in 0..n {
         let kw = if i == 0 { "INITIAL_STEP" } else { "STEP" };
         if actions {
@@ -23,18 +25,11 @@ fn ring(n: usize, actions: bool) -> String {
         } else {
             let _ = writeln!(s, "    {kw} S{i}: END_STEP\n");
         }
-        let _ = writeln!(
-            s,
-            "    TRANSITION T{i} FROM S{i} TO S{}\n        := Go;\n    END_TRANSITION\n",
-            (i + 1) % n
-        );
+        let _ = writeln!(s, "    TRANSITION T{i} FROM S{i} TO S{}\n        := Go;\n    END_TRANSITION\n", (i + 1) % n);
     }
     if actions {
         for i in 0..n {
-            let _ = writeln!(
-                s,
-                "    ACTION A{i}:\n        Count := Count + 1;\n    END_ACTION\n"
-            );
+            let _ = writeln!(s, "    ACTION A{i}:\n        Count := Count + 1;\n    END_ACTION\n");
         }
     }
     s.push_str("END_PROGRAM\n");
@@ -45,18 +40,9 @@ fn ring(n: usize, actions: bool) -> String {
 fn loops(k: usize) -> String {
     let mut s = String::from("PROGRAM Loops\n    VAR_INPUT\n        Go : BOOL;\n    END_VAR\n\n");
     for i in 0..k {
-        let _ = writeln!(
-            s,
-            "    INITIAL_STEP A{i}: END_STEP\n\n    STEP B{i}: END_STEP\n"
-        );
-        let _ = writeln!(
-            s,
-            "    TRANSITION FROM A{i} TO B{i}\n        := Go;\n    END_TRANSITION\n"
-        );
-        let _ = writeln!(
-            s,
-            "    TRANSITION FROM B{i} TO A{i}\n        := Go;\n    END_TRANSITION\n"
-        );
+        let _ = writeln!(s, "    INITIAL_STEP A{i}: END_STEP\n\n    STEP B{i}: END_STEP\n");
+        let _ = writeln!(s, "    TRANSITION FROM A{i} TO B{i}\n        := Go;\n    END_TRANSITION\n");
+        let _ = writeln!(s, "    TRANSITION FROM B{i} TO A{i}\n        := Go;\n    END_TRANSITION\n");
     }
     s.push_str("END_PROGRAM\n");
     s
@@ -95,10 +81,8 @@ fn simulation(name: &str, text: &str) -> Simulation {
         Ok(s) => s,
         Err((file, diags)) => {
             let files = [file];
-            let text: Vec<String> = diags
-                .iter()
-                .map(|d| sfc_diagnostics::render_human(d, &files, Default::default()))
-                .collect();
+            let text: Vec<String> =
+                diags.iter().map(|d| sfc_diagnostics::render_human(d, &files, Default::default())).collect();
             panic!("{name}: {}", text.join("\n"))
         }
     };
@@ -128,34 +112,15 @@ fn main() {
     let full = std::env::args().any(|a| a == "--bench");
     // `cargo bench -p sfc-sim --bench scan -- ring-plain` runs only the cases whose name contains
     // the argument (`ring-plain`, `ring-actions`, `loops`, `arith`).
-    let filter: Vec<String> = std::env::args()
-        .skip(1)
-        .filter(|a| !a.starts_with("--"))
-        .collect();
+    let filter: Vec<String> = std::env::args().skip(1).filter(|a| !a.starts_with("--")).collect();
     let wanted = |name: &str| filter.is_empty() || filter.iter().any(|f| name.contains(f.as_str()));
     let (scale, rounds) = if full { (1u64, 7) } else { (0, 1) };
     let scans = |n: u64| if scale == 0 { 20 } else { n };
 
-    println!(
-        "sfc-sim scan benchmark ({} build)",
-        if cfg!(debug_assertions) {
-            "debug"
-        } else {
-            "release"
-        }
-    );
+    println!("sfc-sim scan benchmark ({} build)", if cfg!(debug_assertions) { "debug" } else { "release" });
     let mut ring_ns = Vec::new();
-    for &(n, actions) in &[
-        (100usize, false),
-        (10_000, false),
-        (100, true),
-        (10_000, true),
-    ] {
-        if !wanted(if actions {
-            "ring-actions"
-        } else {
-            "ring-plain"
-        }) {
+    for &(n, actions) in &[(100usize, false), (10_000, false), (100, true), (10_000, true)] {
+        if !wanted(if actions { "ring-actions" } else { "ring-plain" }) {
             ring_ns.push(f64::NAN);
             continue;
         }
@@ -163,11 +128,7 @@ fn main() {
         let mut sim = simulation("ring", &text);
         let _ = measure(&mut sim, scans(20_000), 1);
         let ns = measure(&mut sim, scans(2_000_000), rounds);
-        let what = if actions {
-            "with an N action per step"
-        } else {
-            "without actions"
-        };
+        let what = if actions { "with an N action per step" } else { "without actions" };
         println!("ring of {n:>6} steps, one token, {what}: {ns:8.1} ns/scan");
         ring_ns.push(ns);
     }
@@ -182,11 +143,17 @@ fn main() {
         let mut sim = simulation("loops", &loops(k));
         let _ = measure(&mut sim, scans(200), 1);
         let ns = measure(&mut sim, scans(20_000), rounds);
-        println!("{k} parallel loops, all active, every token moving: {ns:10.1} ns/scan, {:6.2} ns per active step", ns / k as f64);
+        println!(
+            "{k} parallel loops, all active, every token moving: {ns:10.1} ns/scan, {:6.2} ns per active step",
+            ns / k as f64
+        );
         // The same loops waiting: every step active, every guard tested and FALSE.
         sim.set("Go", Value::Bool(false)).expect("Go is an input");
         let ns = measure(&mut sim, scans(20_000), rounds);
-        println!("{k} parallel loops, all active, every guard FALSE: {ns:10.1} ns/scan, {:6.2} ns per active step", ns / k as f64);
+        println!(
+            "{k} parallel loops, all active, every guard FALSE: {ns:10.1} ns/scan, {:6.2} ns per active step",
+            ns / k as f64
+        );
     }
     if !wanted("arith") {
         return;

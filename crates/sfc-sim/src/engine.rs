@@ -6,9 +6,7 @@
 //! action control only for actions that are associated with an active step or still hold
 //! state (stored flags, running timers, pending final scans).
 
-use crate::code::{
-    ChartCode, Ctx, DurationCode, FastGuard, Fault, Memory, Place, PouBody, Program,
-};
+use crate::code::{ChartCode, Ctx, DurationCode, FastGuard, Fault, Memory, Place, PouBody, Program};
 use crate::explain::StepReport;
 use crate::value::Value;
 use crate::{Event, Profile, RuntimeError, ScanRecord, SimOptions};
@@ -51,10 +49,7 @@ pub(crate) struct Rows {
 
 impl Rows {
     fn from_lists(lists: impl Iterator<Item = Vec<u32>>) -> Rows {
-        let mut rows = Rows {
-            start: vec![0],
-            items: Vec::new(),
-        };
+        let mut rows = Rows { start: vec![0], items: Vec::new() };
         for l in lists {
             rows.items.extend(l);
             rows.start.push(rows.items.len() as u32);
@@ -134,21 +129,12 @@ impl ChartPlan {
                 None => (1u8, 0, i as u32),
             })
             .collect();
-        let explicit = chart
-            .transitions
-            .iter()
-            .map(|t| t.priority.is_some())
-            .collect();
+        let explicit = chart.transitions.iter().map(|t| t.priority.is_some()).collect();
         let mut entities: Vec<Entity> = chart
             .actions
             .iter()
             .enumerate()
-            .map(|(i, a)| Entity {
-                name: a.name.clone(),
-                action: Some(i),
-                variable: None,
-                assocs: Vec::new(),
-            })
+            .map(|(i, a)| Entity { name: a.name.clone(), action: Some(i), variable: None, assocs: Vec::new() })
             .collect();
         let mut step_entities = vec![Vec::new(); n];
         let mut variable_entities = Vec::new();
@@ -187,15 +173,9 @@ impl ChartPlan {
             }
         }
         let timeouts: Vec<Option<i64>> = chart.steps.iter().map(|s| s.timeout).collect();
-        let single_pre = (0..chart.transitions.len())
-            .map(|t| pre.get(t as u32).len() == 1)
-            .collect();
+        let single_pre = (0..chart.transitions.len()).map(|t| pre.get(t as u32).len() == 1).collect();
         let may_conflict = (0..chart.transitions.len())
-            .map(|t| {
-                pre.get(t as u32)
-                    .iter()
-                    .any(|&s| outgoing[s as usize].len() > 1)
-            })
+            .map(|t| pre.get(t as u32).iter().any(|&s| outgoing[s as usize].len() > 1))
             .collect();
         let links = (0..chart.transitions.len() as u32)
             .map(|t| match (pre.get(t), post.get(t)) {
@@ -214,24 +194,14 @@ impl ChartPlan {
             post,
             order_key,
             explicit,
-            initial: chart
-                .steps
-                .iter()
-                .enumerate()
-                .filter(|(_, s)| s.initial)
-                .map(|(i, _)| i as u32)
-                .collect(),
+            initial: chart.steps.iter().enumerate().filter(|(_, s)| s.initial).map(|(i, _)| i as u32).collect(),
             supervised: timeouts.iter().any(Option::is_some),
             timeouts,
             entities,
             step_entities: Rows::from_lists(step_entities.into_iter()),
             variable_entities,
             step_names: chart.steps.iter().map(|s| s.name.clone()).collect(),
-            step_values: chart
-                .steps
-                .iter()
-                .map(|s| Value::Str(Arc::from(s.name.as_str())))
-                .collect(),
+            step_values: chart.steps.iter().map(|s| Value::Str(Arc::from(s.name.as_str()))).collect(),
             transition_names: chart.transitions.iter().map(|t| t.name.clone()).collect(),
             action_names: chart.actions.iter().map(|a| a.name.clone()).collect(),
         }
@@ -326,15 +296,7 @@ impl Control {
         self.ds_ff = !r && (self.ds_ff || ds_q);
         self.sl_ff = !r && (self.sl_ff || i.sl);
         let sl_q = ton(&mut self.sl_tmr, self.sl_ff, t_sl, now);
-        let q = !r
-            && (i.n
-                || (i.l && !l_q)
-                || d_q
-                || p_q
-                || self.s_ff
-                || sd_q
-                || self.ds_ff
-                || (self.sl_ff && !sl_q));
+        let q = !r && (i.n || (i.l && !l_q) || d_q || p_q || self.s_ff || sd_q || self.ds_ff || (self.sl_ff && !sl_q));
         let p1 = i.p1 && !self.p1_mem;
         let p0 = !i.p0 && self.p0_mem;
         self.p1_mem = i.p1;
@@ -628,11 +590,7 @@ pub fn run_chart(ctx: &mut Ctx<'_>, chart: usize) -> Result<(), Fault> {
             for &s in &plan.initial {
                 for &e in plan.step_entities.get(s) {
                     let c = &mut st.controls[e as usize];
-                    for a in plan.entities[e as usize]
-                        .assocs
-                        .iter()
-                        .filter(|a| a.step == s)
-                    {
+                    for a in plan.entities[e as usize].assocs.iter().filter(|a| a.step == s) {
                         match a.qualifier {
                             Qualifier::P => c.p_mem = true,
                             Qualifier::P1 => c.p1_mem = true,
@@ -766,12 +724,7 @@ fn eval_guard(ctx: &mut Ctx<'_>, code: &ChartCode, frame: usize, t: u32) -> Resu
 
 /// Steps 3–5: enabled and true transitions against one snapshot, conflicts, firing.
 /// Returns whether anything fired.
-fn evolve(
-    ctx: &mut Ctx<'_>,
-    chart: usize,
-    code: &ChartCode,
-    plan: &ChartPlan,
-) -> Result<bool, Fault> {
+fn evolve(ctx: &mut Ctx<'_>, chart: usize, code: &ChartCode, plan: &ChartPlan) -> Result<bool, Fault> {
     let frame = ctx.charts[chart].frame;
     let (mut cand, epoch) = {
         let st = &mut ctx.charts[chart];
@@ -811,10 +764,7 @@ fn evolve(
             Err(f) => {
                 let mut all = cand[k..].to_vec();
                 all.sort_unstable();
-                let first = all
-                    .into_iter()
-                    .find_map(|t| eval_guard(ctx, code, frame, t).err())
-                    .unwrap_or(f);
+                let first = all.into_iter().find_map(|t| eval_guard(ctx, code, frame, t).err()).unwrap_or(f);
                 ctx.charts[chart].cand = cand;
                 return Err(first);
             }
@@ -872,27 +822,13 @@ fn evolve(
         cand.sort_unstable();
         let mut accepted = std::mem::take(&mut st.accepted);
         accepted.clear();
-        resolve_conflicts(
-            st,
-            plan,
-            &cand,
-            &mut accepted,
-            ctx.profile,
-            &mut ctx.sink.events,
-        );
+        resolve_conflicts(st, plan, &cand, &mut accepted, ctx.profile, &mut ctx.sink.events);
         st.cand = cand;
         accepted
     } else {
         cand
     };
-    fire(
-        ctx,
-        chart,
-        plan,
-        &accepted,
-        epoch,
-        !shared || ctx.profile != Profile::Matiec,
-    );
+    fire(ctx, chart, plan, &accepted, epoch, !shared || ctx.profile != Profile::Matiec);
     let st = &mut ctx.charts[chart];
     if shared {
         st.accepted = accepted;
@@ -908,19 +844,8 @@ fn evolve(
 /// `A` is activated once (a step left and re-entered stays active, its time restarts).
 /// `disjoint`: no two accepted transitions share a preceding step (always, except MatIEC's
 /// firing of every true alternative).
-fn fire(
-    ctx: &mut Ctx<'_>,
-    chart: usize,
-    plan: &ChartPlan,
-    accepted: &[u32],
-    epoch: u32,
-    disjoint: bool,
-) {
-    if disjoint
-        && accepted
-            .iter()
-            .all(|&t| plan.links[t as usize].0 != u32::MAX)
-    {
+fn fire(ctx: &mut Ctx<'_>, chart: usize, plan: &ChartPlan, accepted: &[u32], epoch: u32, disjoint: bool) {
+    if disjoint && accepted.iter().all(|&t| plan.links[t as usize].0 != u32::MAX) {
         fire_links(ctx, chart, plan, accepted, epoch);
     } else {
         fire_general(ctx, chart, plan, accepted, epoch);
@@ -938,9 +863,7 @@ fn fire_general(ctx: &mut Ctx<'_>, chart: usize, plan: &ChartPlan, accepted: &[u
     for &t in accepted {
         for &s in plan.post.get(t) {
             let step = &mut st.steps[s as usize];
-            if (step.amark == epoch || (step.x && step.dmark != epoch))
-                && !unsafe_steps.contains(&s)
-            {
+            if (step.amark == epoch || (step.x && step.dmark != epoch)) && !unsafe_steps.contains(&s) {
                 unsafe_steps.push(s);
             }
             step.amark = epoch;
@@ -956,10 +879,7 @@ fn fire_general(ctx: &mut Ctx<'_>, chart: usize, plan: &ChartPlan, accepted: &[u
                 .filter(|&&t| plan.post.get(t).contains(&s))
                 .map(|&t| st.qualify(&plan.transition_names[t as usize]))
                 .collect();
-            ctx.sink.events.push(Event::Unsafe {
-                step: st.qualify(&plan.step_names[s as usize]),
-                transitions: trs,
-            });
+            ctx.sink.events.push(Event::Unsafe { step: st.qualify(&plan.step_names[s as usize]), transitions: trs });
         }
     }
     st.left.clear();
@@ -1091,10 +1011,7 @@ fn resolve_conflicts(
             .filter(|&&t| !explicit(t) && plan.pre.get(t).contains(&s))
             .map(|&t| st.qualify(&plan.transition_names[t as usize]))
             .collect();
-        events.push(Event::Conflict {
-            step: st.qualify(&plan.step_names[s as usize]),
-            transitions: trs,
-        });
+        events.push(Event::Conflict { step: st.qualify(&plan.step_names[s as usize]), transitions: trs });
     }
     let mut order = cand.to_vec();
     if !codesys {
@@ -1120,21 +1037,14 @@ fn resolve_conflicts(
 
 /// GRAFCET (IEC 60848): evolve on frozen inputs until nothing fires; a situation met twice
 /// is an endless cycle and stops the run.
-fn evolve_until_stable(
-    ctx: &mut Ctx<'_>,
-    chart: usize,
-    code: &ChartCode,
-    plan: &ChartPlan,
-) -> Result<(), Fault> {
+fn evolve_until_stable(ctx: &mut Ctx<'_>, chart: usize, code: &ChartCode, plan: &ChartPlan) -> Result<(), Fault> {
     let mut seen: Vec<Vec<u32>> = Vec::new();
     loop {
         let mut now_active = ctx.charts[chart].active.clone();
         now_active.sort_unstable();
         if seen.contains(&now_active) {
             return Err(Fault {
-                message:
-                    "the situation never becomes stable (GRAFCET evolution cycles on frozen inputs)"
-                        .into(),
+                message: "the situation never becomes stable (GRAFCET evolution cycles on frozen inputs)".into(),
                 span: code.chart.name_span,
             });
         }
@@ -1188,12 +1098,7 @@ fn publish_initial(ctx: &mut Ctx<'_>, chart: usize) {
 }
 
 /// Steps 6–7: action control for every live entity, then the bodies with `A` TRUE.
-fn action_phase(
-    ctx: &mut Ctx<'_>,
-    chart: usize,
-    code: &ChartCode,
-    plan: &ChartPlan,
-) -> Result<(), Fault> {
+fn action_phase(ctx: &mut Ctx<'_>, chart: usize, code: &ChartCode, plan: &ChartPlan) -> Result<(), Fault> {
     let now = ctx.now;
     let profile = ctx.profile;
     let frame = ctx.charts[chart].frame;
@@ -1247,9 +1152,7 @@ fn action_phase(
                         winner = Some((a.step, a.qualifier, dur));
                         inputs.set(a.qualifier, true, or);
                     }
-                    Some((_, q, d)) if q == a.qualifier && d == dur => {
-                        inputs.set(a.qualifier, true, true)
-                    }
+                    Some((_, q, d)) if q == a.qualifier && d == dur => inputs.set(a.qualifier, true, true),
                     Some(_) => contenders.push((a.step, a.qualifier)),
                 }
             } else {
@@ -1272,11 +1175,7 @@ fn action_phase(
                     steps.push(st.qualify(&plan.step_names[*s as usize]));
                     quals.push(q.name().to_string());
                 }
-                ctx.sink.events.push(Event::Contention {
-                    action: st.qualify(&ent.name),
-                    steps,
-                    qualifiers: quals,
-                });
+                ctx.sink.events.push(Event::Contention { action: st.qualify(&ent.name), steps, qualifiers: quals });
             }
         }
         let c = &mut st.controls[e];
@@ -1305,10 +1204,7 @@ fn action_phase(
         let left = &st.left;
         run.sort_by_cached_key(|&e| {
             let ent = &plan.entities[e as usize];
-            (
-                !ent.assocs.iter().any(|a| left.contains(&a.step)),
-                ent.name.to_ascii_uppercase(),
-            )
+            (!ent.assocs.iter().any(|a| left.contains(&a.step)), ent.name.to_ascii_uppercase())
         });
     } else if run.len() > 1 {
         run.sort_unstable();
@@ -1347,8 +1243,7 @@ fn finish_scan(ctx: &mut Ctx<'_>, chart: usize, code: &ChartCode, plan: &ChartPl
         }
         if let Some(s) = expired {
             ctx.mem[frame + code.control.error as usize] = Value::Bool(true);
-            ctx.mem[frame + code.control.error_step as usize] =
-                plan.step_values[s as usize].clone();
+            ctx.mem[frame + code.control.error_step as usize] = plan.step_values[s as usize].clone();
         }
     }
     if st.changed && st.track_current {
@@ -1423,17 +1318,10 @@ impl Simulation {
         pou: Option<&str>,
         opts: SimOptions,
     ) -> Result<Simulation, (SourceFile, Vec<Diagnostic>)> {
-        let check_opts = sfc_model::CheckOptions {
-            keep_types: true,
-            ..Default::default()
-        };
+        let check_opts = sfc_model::CheckOptions { keep_types: true, ..Default::default() };
         let checked = sfc_model::check_source(0, name, text, &check_opts);
         if checked.has_errors() {
-            let diags = checked
-                .diagnostics
-                .into_iter()
-                .filter(|d| d.is_error())
-                .collect();
+            let diags = checked.diagnostics.into_iter().filter(|d| d.is_error()).collect();
             return Err((checked.file, diags));
         }
         let source = checked.file;
@@ -1446,11 +1334,7 @@ impl Simulation {
             Err(d) => return Err((source, d)),
         };
         let Some(top) = prog.pou(&top) else {
-            let d = Diagnostic::error(
-                "SFC0321",
-                Span::default(),
-                format!("no POU named `{top}` to simulate"),
-            );
+            let d = Diagnostic::error("SFC0321", Span::default(), format!("no POU named `{top}` to simulate"));
             return Err((source, vec![d]));
         };
         Ok(Simulation::new(prog, top, source, opts))
@@ -1458,11 +1342,7 @@ impl Simulation {
 
     /// A simulation of the compiled POU `top`.
     pub fn new(prog: Program, top: usize, source: SourceFile, opts: SimOptions) -> Simulation {
-        let Memory {
-            mem,
-            top_frame,
-            charts: instances,
-        } = prog.instantiate(top);
+        let Memory { mem, top_frame, charts: instances } = prog.instantiate(top);
         let mut mem = mem;
         let mut charts = Vec::with_capacity(instances.len());
         for (i, inst) in instances.into_iter().enumerate() {
@@ -1478,10 +1358,7 @@ impl Simulation {
             .vars
             .iter()
             .filter(|v| !v.implicit && v.size == 1 && v.ty.is_elementary())
-            .filter_map(|v| {
-                prog.resolve(top, top_frame, &v.name)
-                    .map(|(slot, _)| (v.name.clone(), v.ty.clone(), slot))
-            })
+            .filter_map(|v| prog.resolve(top, top_frame, &v.name).map(|(slot, _)| (v.name.clone(), v.ty.clone(), slot)))
             .collect();
         let lower = source.text.to_ascii_lowercase();
         let mentioned = lower.contains("sfccurrentstep");
@@ -1588,10 +1465,7 @@ impl Simulation {
         let mut k = 0;
         while k < self.sink.fired.len() {
             let c = self.sink.fired[k].0;
-            let end = self.sink.fired[k..]
-                .iter()
-                .position(|f| f.0 != c)
-                .map_or(self.sink.fired.len(), |n| k + n);
+            let end = self.sink.fired[k..].iter().position(|f| f.0 != c).map_or(self.sink.fired.len(), |n| k + n);
             self.sink.fired[k..end].sort_unstable();
             k = end;
         }
@@ -1604,13 +1478,7 @@ impl Simulation {
                 st.qualify(&st.plan.transition_names[t as usize])
             })
             .collect();
-        self.record = ScanRecord {
-            scan,
-            time,
-            active: self.active(),
-            fired,
-            events,
-        };
+        self.record = ScanRecord { scan, time, active: self.active(), fired, events };
         &self.record
     }
 
@@ -1651,9 +1519,7 @@ impl Simulation {
     /// range-checked for the integer types). Step and action flags cannot be written.
     pub fn set(&mut self, name: &str, value: Value) -> Result<(), String> {
         if self.is_chart_flag(name) {
-            return Err(format!(
-                "`{name}` is a step or action flag: the chart sets it"
-            ));
+            return Err(format!("`{name}` is a step or action flag: the chart sets it"));
         }
         let Some((slot, ty)) = self.prog.resolve(self.top, self.top_frame, name) else {
             return Err(format!("no variable `{name}` in `{}`", self.pou_name()));
@@ -1667,10 +1533,7 @@ impl Simulation {
         let Some((base, member)) = name.rsplit_once('.') else {
             return false;
         };
-        if !["X", "T", "Q", "A"]
-            .iter()
-            .any(|m| m.eq_ignore_ascii_case(member))
-        {
+        if !["X", "T", "Q", "A"].iter().any(|m| m.eq_ignore_ascii_case(member)) {
             return false;
         }
         let (path, leaf) = match base.rsplit_once('.') {
@@ -1679,15 +1542,8 @@ impl Simulation {
         };
         self.charts.iter().any(|c| {
             c.path.eq_ignore_ascii_case(path)
-                && (c
-                    .plan
-                    .step_names
-                    .iter()
-                    .any(|s| s.eq_ignore_ascii_case(leaf))
-                    || c.plan
-                        .action_names
-                        .iter()
-                        .any(|a| a.eq_ignore_ascii_case(leaf)))
+                && (c.plan.step_names.iter().any(|s| s.eq_ignore_ascii_case(leaf))
+                    || c.plan.action_names.iter().any(|a| a.eq_ignore_ascii_case(leaf)))
         })
     }
 
@@ -1695,10 +1551,7 @@ impl Simulation {
     /// instances (`Rev.Busy`, `Rev.OpenKM1.X`). Case-insensitive.
     pub fn get(&self, name: &str) -> Option<Value> {
         let (slot, _) = self.prog.resolve(self.top, self.top_frame, name)?;
-        if let Some(v) = self
-            .current_step_of(name)
-            .or_else(|| self.unmirrored_step_value(slot))
-        {
+        if let Some(v) = self.current_step_of(name).or_else(|| self.unmirrored_step_value(slot)) {
             return Some(v);
         }
         self.mem.get(slot).cloned()
@@ -1726,22 +1579,13 @@ impl Simulation {
         if !leaf.eq_ignore_ascii_case("SFCCurrentStep") {
             return None;
         }
-        let st = self
-            .charts
-            .iter()
-            .find(|c| c.path.eq_ignore_ascii_case(path))?;
+        let st = self.charts.iter().find(|c| c.path.eq_ignore_ascii_case(path))?;
         let first = st.active.iter().copied().min();
-        Some(Value::Str(Arc::from(
-            first
-                .map(|s| st.plan.step_names[s as usize].as_str())
-                .unwrap_or(""),
-        )))
+        Some(Value::Str(Arc::from(first.map(|s| st.plan.step_names[s as usize].as_str()).unwrap_or(""))))
     }
     /// The type of what [`Simulation::get`] reads.
     pub fn type_of(&self, name: &str) -> Option<Type> {
-        self.prog
-            .resolve(self.top, self.top_frame, name)
-            .map(|(_, t)| t)
+        self.prog.resolve(self.top, self.top_frame, name).map(|(_, t)| t)
     }
 
     /// Active steps now, sorted by code points (nested instances as `Path.Step`).
@@ -1759,31 +1603,19 @@ impl Simulation {
     /// The variables a trace shows: every declared variable of elementary type of the top
     /// POU, in declaration order, with its declared name and type.
     pub fn trace_vars(&self) -> Vec<(String, Type)> {
-        self.trace
-            .iter()
-            .map(|(name, ty, _)| (name.clone(), ty.clone()))
-            .collect()
+        self.trace.iter().map(|(name, ty, _)| (name.clone(), ty.clone())).collect()
     }
     /// Current values of [`Simulation::trace_vars`], same order.
     pub fn trace_values(&self) -> Vec<Value> {
-        self.trace
-            .iter()
-            .map(|&(_, _, slot)| self.mem[slot].clone())
-            .collect()
+        self.trace.iter().map(|&(_, _, slot)| self.mem[slot].clone()).collect()
     }
     /// Every step (qualified), in declaration order, top chart first.
     pub fn step_names(&self) -> Vec<String> {
-        self.charts
-            .iter()
-            .flat_map(|c| c.plan.step_names.iter().map(|s| c.qualify(s)))
-            .collect()
+        self.charts.iter().flat_map(|c| c.plan.step_names.iter().map(|s| c.qualify(s))).collect()
     }
     /// Every transition (qualified), in declaration order, top chart first.
     pub fn transition_names(&self) -> Vec<String> {
-        self.charts
-            .iter()
-            .flat_map(|c| c.plan.transition_names.iter().map(|s| c.qualify(s)))
-            .collect()
+        self.charts.iter().flat_map(|c| c.plan.transition_names.iter().map(|s| c.qualify(s))).collect()
     }
 
     /// Condition analysis of every active step now: why each outgoing transition does not fire.
@@ -1800,10 +1632,7 @@ impl Simulation {
     }
     /// Condition analysis of the active steps whose `sfc.timeout` has expired.
     pub fn overdue(&self) -> Vec<StepReport> {
-        self.overdue_at()
-            .into_iter()
-            .map(|(c, s)| crate::explain::report(self.explain_view(), c, s))
-            .collect()
+        self.overdue_at().into_iter().map(|(c, s)| crate::explain::report(self.explain_view(), c, s)).collect()
     }
 
     /// The active steps whose `sfc.timeout` has expired (qualified, sorted by chart and step):
@@ -1818,10 +1647,11 @@ impl Simulation {
     /// Condition analysis of one active step, by qualified name (`Rev.OpenKM1`).
     pub fn explain_step(&self, step: &str) -> Option<StepReport> {
         self.charts.iter().enumerate().find_map(|(c, st)| {
-            let s = st.active.iter().copied().find(|&s| {
-                st.qualify(&st.plan.step_names[s as usize])
-                    .eq_ignore_ascii_case(step)
-            })?;
+            let s = st
+                .active
+                .iter()
+                .copied()
+                .find(|&s| st.qualify(&st.plan.step_names[s as usize]).eq_ignore_ascii_case(step))?;
             Some(crate::explain::report(self.explain_view(), c, s))
         })
     }
@@ -1887,10 +1717,7 @@ impl Simulation {
                 });
             }
         }
-        TimeStats {
-            steps,
-            sequence: self.sequence(),
-        }
+        TimeStats { steps, sequence: self.sequence() }
     }
 
     /// Rebuilds the sequence of situations from the firing logs of all instances.
@@ -1965,52 +1792,33 @@ fn choose_pou(
     pou: Option<&str>,
 ) -> Result<String, Diagnostic> {
     use sfc_syntax::ast::{Item, PouKind};
-    let pous: Vec<&sfc_syntax::ast::Pou> = unit
-        .items
-        .iter()
-        .filter_map(|i| if let Item::Pou(p) = i { Some(p) } else { None })
-        .collect();
+    let pous: Vec<&sfc_syntax::ast::Pou> =
+        unit.items.iter().filter_map(|i| if let Item::Pou(p) = i { Some(p) } else { None }).collect();
     if let Some(name) = pou {
         return match pous.iter().find(|p| p.name.is(name)) {
             Some(p) if p.kind == PouKind::Function => Err(Diagnostic::error(
                 "SFC0321",
                 p.name.span,
-                format!(
-                    "`{}` is a FUNCTION: simulate a PROGRAM or FUNCTION_BLOCK",
-                    p.name.text
-                ),
+                format!("`{}` is a FUNCTION: simulate a PROGRAM or FUNCTION_BLOCK", p.name.text),
             )),
             Some(p) => Ok(p.name.text.clone()),
             None => {
                 let names: Vec<&str> = pous.iter().map(|p| p.name.text.as_str()).collect();
-                Err(Diagnostic::error(
-                    "SFC0321",
-                    Span::default(),
-                    format!("no POU named `{name}` in this file"),
-                )
-                .with_note(format!("the file declares: {}", names.join(", "))))
+                Err(Diagnostic::error("SFC0321", Span::default(), format!("no POU named `{name}` in this file"))
+                    .with_note(format!("the file declares: {}", names.join(", "))))
             }
         };
     }
-    let programs: Vec<&&sfc_syntax::ast::Pou> =
-        pous.iter().filter(|p| p.kind == PouKind::Program).collect();
+    let programs: Vec<&&sfc_syntax::ast::Pou> = pous.iter().filter(|p| p.kind == PouKind::Program).collect();
     if programs.len() == 1 {
         return Ok(programs[0].name.text.clone());
     }
     if charts.len() == 1 {
         return Ok(charts[0].pou.clone());
     }
-    let names: Vec<&str> = pous
-        .iter()
-        .filter(|p| p.kind != PouKind::Function)
-        .map(|p| p.name.text.as_str())
-        .collect();
-    Err(Diagnostic::error(
-        "SFC0321",
-        Span::default(),
-        "choose the POU to simulate (`pou` / `--pou`)",
-    )
-    .with_note(format!("candidates: {}", names.join(", "))))
+    let names: Vec<&str> = pous.iter().filter(|p| p.kind != PouKind::Function).map(|p| p.name.text.as_str()).collect();
+    Err(Diagnostic::error("SFC0321", Span::default(), "choose the POU to simulate (`pou` / `--pou`)")
+        .with_note(format!("candidates: {}", names.join(", "))))
 }
 
 fn type_name(ty: &Type) -> String {
@@ -2022,9 +1830,7 @@ pub(crate) fn fit(value: Value, ty: &Type) -> Result<Value, String> {
     let base = ty.base();
     match (&value, base) {
         (Value::Bool(_), Type::Bool) => Ok(value),
-        (Value::Int(i), _)
-            if ty.is_integer() || ty.is_bit() || matches!(ty, Type::Subrange { .. }) =>
-        {
+        (Value::Int(i), _) if ty.is_integer() || ty.is_bit() || matches!(ty, Type::Subrange { .. }) => {
             match ty.int_range() {
                 Some((lo, hi)) if (i128::from(*i) < lo || i128::from(*i) > hi) => {
                     Err(format!("{i} is out of range {lo}..{hi}"))

@@ -54,9 +54,7 @@ pub(crate) fn run_inits(ctx: &mut Ctx<'_>, p: usize, base: usize) -> R<()> {
     let prog = ctx.prog;
     for op in &prog.support.inits[p] {
         match op {
-            super::compile::InitOp::Nested { pou, offset } => {
-                run_inits(ctx, *pou, base + *offset as usize)?
-            }
+            super::compile::InitOp::Nested { pou, offset } => run_inits(ctx, *pou, base + *offset as usize)?,
             super::compile::InitOp::Run(f) => f(ctx, base)?,
         }
     }
@@ -73,12 +71,7 @@ impl Cx<'_, '_> {
         Some(
             list.into_iter()
                 .enumerate()
-                .map(|(i, (n, k, t))| Param {
-                    name: n.to_string(),
-                    kind: k,
-                    offset: i as u32,
-                    ty: t,
-                })
+                .map(|(i, (n, k, t))| Param { name: n.to_string(), kind: k, offset: i as u32, ty: t })
                 .collect(),
         )
     }
@@ -89,27 +82,14 @@ impl Cx<'_, '_> {
             .vars
             .iter()
             .filter(|v| matches!(v.kind, VarKind::Input | VarKind::Output | VarKind::InOut))
-            .map(|v| Param {
-                name: v.name.clone(),
-                kind: v.kind,
-                offset: v.offset,
-                ty: v.ty.clone(),
-            })
+            .map(|v| Param { name: v.name.clone(), kind: v.kind, offset: v.offset, ty: v.ty.clone() })
             .collect()
     }
 
     fn bind<'e>(&self, owner: &str, params: &[Param], args: &'e [Arg], span: Span) -> C<Bound<'e>> {
-        let positional: Vec<&Param> = params
-            .iter()
-            .filter(|p| matches!(p.kind, VarKind::Input | VarKind::InOut))
-            .collect();
-        let mut b = Bound {
-            inputs: Vec::new(),
-            in_outs: Vec::new(),
-            outputs: Vec::new(),
-            en: None,
-            eno: None,
-        };
+        let positional: Vec<&Param> =
+            params.iter().filter(|p| matches!(p.kind, VarKind::Input | VarKind::InOut)).collect();
+        let mut b = Bound { inputs: Vec::new(), in_outs: Vec::new(), outputs: Vec::new(), en: None, eno: None };
         for (i, a) in args.iter().enumerate() {
             if let Some(n) = &a.name {
                 if n.is("EN") && !a.output {
@@ -133,12 +113,7 @@ impl Cx<'_, '_> {
                 (VarKind::Output, true) => b.outputs.push((p.clone(), v, a.negated)),
                 (VarKind::InOut, false) => b.in_outs.push((p.clone(), v)),
                 (VarKind::Input, false) => b.inputs.push((p.clone(), v)),
-                _ => {
-                    return Err(self.error(
-                        a.span,
-                        format!("wrong binding of `{}` of `{owner}`", p.name),
-                    ))
-                }
+                _ => return Err(self.error(a.span, format!("wrong binding of `{}` of `{owner}`", p.name))),
             }
         }
         let _ = span;
@@ -159,22 +134,11 @@ impl Cx<'_, '_> {
     }
 
     /// `inst(IN := x, Q => y)` for an instance at `inst`.
-    pub(crate) fn fb_call(
-        &self,
-        name: &Ident,
-        inst: PlaceC,
-        args: &[Arg],
-        span: Span,
-    ) -> C<StmtFn> {
+    pub(crate) fn fb_call(&self, name: &Ident, inst: PlaceC, args: &[Arg], span: Span) -> C<StmtFn> {
         let Type::FunctionBlock(fb) = inst.ty.clone() else {
-            return Err(self.error(
-                name.span,
-                format!("`{}` is not a function block instance", name.text),
-            ));
+            return Err(self.error(name.span, format!("`{}` is not a function block instance", name.text)));
         };
-        let params = self
-            .params_of_fb(&fb)
-            .ok_or_else(|| self.error(name.span, format!("unknown block `{fb}`")))?;
+        let params = self.params_of_fb(&fb).ok_or_else(|| self.error(name.span, format!("unknown block `{fb}`")))?;
         let bound = self.bind(&name.text, &params, args, span)?;
         let param_place = |p: &Param| PlaceC::new(inst.loc.clone().offset(p.offset), p.ty.clone());
         let mut pre: Vec<StmtFn> = Vec::new();
@@ -189,11 +153,7 @@ impl Cx<'_, '_> {
             let cur = read(caller.clone(), size);
             pre.push(write(param_place(p), coerce(cur, &p.ty, v.span)?, size));
             let back = read(param_place(p), size);
-            post.push(write(
-                caller.clone(),
-                coerce(back, &caller.ty, v.span)?,
-                size,
-            ));
+            post.push(write(caller.clone(), coerce(back, &caller.ty, v.span)?, size));
         }
         for (p, target, negated) in &bound.outputs {
             post.push(self.out_writer(param_place(p), target, *negated)?);
@@ -204,19 +164,16 @@ impl Cx<'_, '_> {
         };
         let eno = match bound.eno {
             Some((t, neg)) => {
-                let Sink::One(s) = sink(self.place(t)?, 1) else {
-                    return Err(self.error(t.span, "ENO must be BOOL"));
-                };
+                let Sink::One(s) = sink(self.place(t)?, 1) else { return Err(self.error(t.span, "ENO must be BOOL")) };
                 Some((s, neg))
             }
             None => None,
         };
         let run: RunFb = match self.u.fb_pou(&fb) {
             Some(i) => RunFb::User(i),
-            None => RunFb::Std(
-                StdFb::from_name(&fb)
-                    .ok_or_else(|| self.error(name.span, format!("unknown block `{fb}`")))?,
-            ),
+            None => {
+                RunFb::Std(StdFb::from_name(&fb).ok_or_else(|| self.error(name.span, format!("unknown block `{fb}`")))?)
+            }
         };
         let slot = inst.loc.slot_fn();
         Ok(Box::new(move |c, b| {
@@ -261,9 +218,7 @@ impl Cx<'_, '_> {
                 self.fb_call(callee, PlaceC::new(Loc::Static(place), ty), args, e.span)
             }
             Some(Sym::Action(a)) => {
-                let p = self
-                    .pou
-                    .ok_or_else(|| self.error(e.span, "an action outside a chart"))?;
+                let p = self.pou.ok_or_else(|| self.error(e.span, "an action outside a chart"))?;
                 Ok(Box::new(move |c, b| {
                     let prog = c.prog;
                     if let PouBody::Chart(cc) = &prog.pous[p].body {
@@ -285,9 +240,7 @@ impl Cx<'_, '_> {
 
     /// A call used as a value (the call spans `span`): a user FUNCTION or a standard function.
     pub(crate) fn call_value_at(&self, callee: &Ident, args: &[Arg], span: Span) -> C<TExpr> {
-        if let Some(Sym::Var { .. } | Sym::Step(_) | Sym::Action(_) | Sym::Return) =
-            self.lookup(&callee.text)
-        {
+        if let Some(Sym::Var { .. } | Sym::Step(_) | Sym::Action(_) | Sym::Return) = self.lookup(&callee.text) {
             return Err(self.error(callee.span, format!("`{}` is not a function", callee.text)));
         }
         if let Some(fi) = self.u.function(&callee.text) {
@@ -321,9 +274,9 @@ impl Cx<'_, '_> {
                     positional += 1;
                     positional - 1
                 }
-                Some(n) => f.param_index(&n.text).ok_or_else(|| {
-                    self.error(n.span, format!("`{}` has no input `{}`", f.name, n.text))
-                })?,
+                Some(n) => f
+                    .param_index(&n.text)
+                    .ok_or_else(|| self.error(n.span, format!("`{}` has no input `{}`", f.name, n.text)))?,
             };
             if let Some(v) = &a.value {
                 bound.push((idx, v));
@@ -352,8 +305,7 @@ impl Cx<'_, '_> {
                 let ty = out.ty.clone();
                 let dflt = default_value(&ty);
                 let f = out.value();
-                let v: ValFn =
-                    Box::new(move |c, b| if g(c, b)? { f(c, b) } else { Ok(dflt.clone()) });
+                let v: ValFn = Box::new(move |c, b| if g(c, b)? { f(c, b) } else { Ok(dflt.clone()) });
                 Ok(TExpr::from_val(ty, v, false))
             }
         }
@@ -390,11 +342,8 @@ impl Cx<'_, '_> {
 
     /// A call of user FUNCTION `fi` with positional values (IL: the current result first).
     pub(crate) fn func_call_values(&self, fi: usize, vals: Vec<TExpr>, span: Span) -> C<TExpr> {
-        let params: Vec<Param> = self
-            .pou_params(fi)
-            .into_iter()
-            .filter(|p| matches!(p.kind, VarKind::Input | VarKind::InOut))
-            .collect();
+        let params: Vec<Param> =
+            self.pou_params(fi).into_iter().filter(|p| matches!(p.kind, VarKind::Input | VarKind::InOut)).collect();
         if params.len() != vals.len() {
             return Err(self.error(span, "wrong number of inputs"));
         }
@@ -415,43 +364,26 @@ impl Cx<'_, '_> {
         span: Span,
     ) -> C<TExpr> {
         let m = &self.u.pous[fi];
-        let (roff, rty) = m
-            .result
-            .clone()
-            .ok_or_else(|| self.error(span, "the function has no result"))?;
+        let (roff, rty) = m.result.clone().ok_or_else(|| self.error(span, "the function has no result"))?;
         let rsize = self.u.type_size(&rty) as usize;
         let mut ins: Vec<(usize, ValFn, Option<AggFn>, usize)> = Vec::new();
         for (p, x) in inputs {
             let size = self.u.type_size(&p.ty) as usize;
             if kind_of(&p.ty) == Kind::Agg {
-                ins.push((
-                    p.offset as usize,
-                    Box::new(|_, _| Ok(Value::default())),
-                    Some(x.agg()),
-                    size,
-                ));
+                ins.push((p.offset as usize, Box::new(|_, _| Ok(Value::default())), Some(x.agg()), size));
             } else {
                 ins.push((p.offset as usize, x.value(), None, size));
             }
         }
         let name = m.name().to_string();
-        let call = std::sync::Arc::new(FnCall {
-            idx: fi,
-            inputs: ins,
-            copies_in,
-            copies_out,
-            span,
-            name,
-        });
+        let call = std::sync::Arc::new(FnCall { idx: fi, inputs: ins, copies_in, copies_out, span, name });
         let r = roff as usize;
         let e = match kind_of(&rty) {
             Kind::Bool => CExpr::Bool(Box::new(move |c, b| call.invoke(c, b, |s| bool_of(&s[r])))),
             Kind::Int => CExpr::Int(Box::new(move |c, b| call.invoke(c, b, |s| int_of(&s[r])))),
             Kind::Real => CExpr::Real(Box::new(move |c, b| call.invoke(c, b, |s| real_of(&s[r])))),
             Kind::Str => CExpr::Str(Box::new(move |c, b| call.invoke(c, b, |s| str_of(&s[r])))),
-            Kind::Agg => CExpr::Agg(Box::new(move |c, b| {
-                call.invoke(c, b, |s| s[r..r + rsize].to_vec())
-            })),
+            Kind::Agg => CExpr::Agg(Box::new(move |c, b| call.invoke(c, b, |s| s[r..r + rsize].to_vec()))),
         };
         Ok(TExpr::new(e, rty, false))
     }
@@ -478,10 +410,7 @@ impl FnCall {
     fn invoke<T>(&self, c: &mut Ctx<'_>, b: usize, get: impl Fn(&[Value]) -> T) -> R<T> {
         let depth = CALL_DEPTH.with(|d| d.get());
         if depth >= MAX_CALL_DEPTH {
-            return Err(fault(
-                format!("calls of `{}` nested too deeply (recursion?)", self.name),
-                self.span,
-            ));
+            return Err(fault(format!("calls of `{}` nested too deeply (recursion?)", self.name), self.span));
         }
         CALL_DEPTH.with(|d| d.set(depth + 1));
         let prog = c.prog;
@@ -493,13 +422,7 @@ impl FnCall {
         r
     }
 
-    fn inner<T>(
-        &self,
-        c: &mut Ctx<'_>,
-        b: usize,
-        fbase: usize,
-        get: &impl Fn(&[Value]) -> T,
-    ) -> R<T> {
+    fn inner<T>(&self, c: &mut Ctx<'_>, b: usize, fbase: usize, get: &impl Fn(&[Value]) -> T) -> R<T> {
         run_inits(c, self.idx, fbase)?;
         for (off, f, agg, size) in &self.inputs {
             match agg {

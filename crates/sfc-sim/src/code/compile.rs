@@ -6,16 +6,16 @@ use super::rt::*;
 use super::stmt::to_block;
 use super::unit::{Cx, Globals, PouMeta, Sym, Unit, C};
 use super::{
-    AssocCode, Block, ChartCode, ControlSlots, DurationCode, FastGuard, Guard, Layout, Place,
-    PouBody, PouCode, Program, VarSlot,
+    AssocCode, Block, ChartCode, ControlSlots, DurationCode, FastGuard, Guard, Layout, Place, PouBody, PouCode,
+    Program, VarSlot,
 };
 use crate::value::Value;
 use sfc_diagnostics::{Diagnostic, Span};
 use sfc_model::{ActionTarget, Chart, Duration, Target};
 use sfc_st::{Type, TypeEnv};
 use sfc_syntax::ast::{
-    ActionBody, Body, Condition, IlInstruction, Initializer, Item, PouKind, SourceUnit, TypeSpec,
-    TypeSpecKind, VarDecl, VarKind,
+    ActionBody, Body, Condition, IlInstruction, Initializer, Item, PouKind, SourceUnit, TypeSpec, TypeSpecKind,
+    VarDecl, VarKind,
 };
 use std::collections::HashMap;
 
@@ -44,10 +44,7 @@ pub(crate) struct Support {
 
 /// Standard block type names, with the counter variants.
 fn std_fb_names() -> Vec<String> {
-    let mut out: Vec<String> = sfc_st::stdlib::STD_FUNCTION_BLOCK_NAMES
-        .iter()
-        .map(|s| s.to_string())
-        .collect();
+    let mut out: Vec<String> = sfc_st::stdlib::STD_FUNCTION_BLOCK_NAMES.iter().map(|s| s.to_string()).collect();
     for c in ["CTU", "CTD", "CTUD"] {
         for t in ["DINT", "LINT", "UDINT", "ULINT"] {
             out.push(format!("{c}_{t}"));
@@ -210,16 +207,8 @@ impl Program {
         for (meta, body) in parts.into_iter().zip(bodies) {
             let body = match body {
                 Compiled::Code(b) => PouBody::Code(b),
-                Compiled::Chart {
-                    guards,
-                    fast,
-                    bodies,
-                    associations,
-                } => {
-                    let chart = meta
-                        .chart
-                        .and_then(|c| charts[c].take())
-                        .expect("chart POUs have a chart");
+                Compiled::Chart { guards, fast, bodies, associations } => {
+                    let chart = meta.chart.and_then(|c| charts[c].take()).expect("chart POUs have a chart");
                     PouBody::Chart(Box::new(ChartCode {
                         chart,
                         step_x: meta.step_x,
@@ -236,12 +225,7 @@ impl Program {
                     }))
                 }
             };
-            out.push(PouCode {
-                name: meta.name,
-                kind: meta.kind,
-                layout: meta.layout,
-                body,
-            });
+            out.push(PouCode { name: meta.name, kind: meta.kind, layout: meta.layout, body });
         }
         Ok(Program {
             pous: out,
@@ -258,20 +242,13 @@ impl Program {
 
     /// Index of the POU with this name (case-insensitive).
     pub fn pou(&self, name: &str) -> Option<usize> {
-        self.pous
-            .iter()
-            .position(|p| p.name.eq_ignore_ascii_case(name))
+        self.pous.iter().position(|p| p.name.eq_ignore_ascii_case(name))
     }
 }
 
 enum Compiled {
     Code(Block),
-    Chart {
-        guards: Vec<Guard>,
-        fast: Vec<FastGuard>,
-        bodies: Vec<Block>,
-        associations: Vec<Vec<AssocCode>>,
-    },
+    Chart { guards: Vec<Guard>, fast: Vec<FastGuard>, bodies: Vec<Block>, associations: Vec<Vec<AssocCode>> },
 }
 
 /// POUs in an order where every block type comes before the POUs that contain instances of it;
@@ -319,9 +296,7 @@ fn layout_order(u: &Unit<'_>) -> Vec<usize> {
 fn is_global_ref(u: &Unit<'_>, m: &PouMeta<'_>, v: &sfc_st::VarInfo) -> bool {
     let g = match v.kind {
         VarKind::External => u.env.global(&v.name).is_some(),
-        VarKind::Global => {
-            m.kind() == PouKind::Program && u.env.global(&v.name).is_some_and(|g| g.span == v.span)
-        }
+        VarKind::Global => m.kind() == PouKind::Program && u.env.global(&v.name).is_some_and(|g| g.span == v.span),
         _ => false,
     };
     g
@@ -355,16 +330,8 @@ fn lay_out(u: &mut Unit<'_>, i: usize) {
             Target::Blank => (0, true),
         };
         for n in 0..count {
-            let name = if upper {
-                format!("C{n}")
-            } else {
-                format!("c{n}")
-            };
-            if m.iface
-                .vars
-                .iter()
-                .any(|v| v.name.eq_ignore_ascii_case(&name))
-            {
+            let name = if upper { format!("C{n}") } else { format!("c{n}") };
+            if m.iface.vars.iter().any(|v| v.name.eq_ignore_ascii_case(&name)) {
                 continue;
             }
             vars.push(VarSlot {
@@ -424,11 +391,7 @@ fn lay_out(u: &mut Unit<'_>, i: usize) {
         result = Some((off, rt.clone()));
         off += u.type_size(&rt);
     }
-    let find = |name: &str| {
-        vars.iter()
-            .find(|v: &&VarSlot| v.name.eq_ignore_ascii_case(name))
-            .map(|v| v.offset)
-    };
+    let find = |name: &str| vars.iter().find(|v: &&VarSlot| v.name.eq_ignore_ascii_case(name)).map(|v| v.offset);
     let control = ControlSlots {
         init: find("SFCInit").unwrap_or(0),
         pause: find("SFCPause").unwrap_or(0),
@@ -489,48 +452,28 @@ fn fill_names(u: &mut Unit<'_>, i: usize) {
             let konst = if v.constant { v.value } else { None };
             if is_global_ref(u, m, v) {
                 if let Some((slot, ty, k)) = u.global(&v.name) {
-                    names.insert(
-                        key,
-                        Sym::Var {
-                            place: Place::Global(slot),
-                            ty,
-                            konst: k.or(konst),
-                        },
-                    );
+                    names.insert(key, Sym::Var { place: Place::Global(slot), ty, konst: k.or(konst) });
                 }
                 continue;
             }
             if let Some(s) = m.var(&v.name) {
-                names.insert(
-                    key,
-                    Sym::Var {
-                        place: Place::Local(s.offset),
-                        ty: s.ty.clone(),
-                        konst,
-                    },
-                );
+                names.insert(key, Sym::Var { place: Place::Local(s.offset), ty: s.ty.clone(), konst });
             }
         }
         for s in m.layout.vars.iter().filter(|s| s.implicit) {
-            names
-                .entry(s.name.to_ascii_uppercase())
-                .or_insert(Sym::Var {
-                    place: Place::Local(s.offset),
-                    ty: s.ty.clone(),
-                    konst: None,
-                });
+            names.entry(s.name.to_ascii_uppercase()).or_insert(Sym::Var {
+                place: Place::Local(s.offset),
+                ty: s.ty.clone(),
+                konst: None,
+            });
         }
         if let Some(c) = m.chart {
             let ch = &u.charts[c];
             for (k, s) in ch.steps.iter().enumerate() {
-                names
-                    .entry(s.name.to_ascii_uppercase())
-                    .or_insert(Sym::Step(k));
+                names.entry(s.name.to_ascii_uppercase()).or_insert(Sym::Step(k));
             }
             for (k, a) in ch.actions.iter().enumerate() {
-                names
-                    .entry(a.name.to_ascii_uppercase())
-                    .or_insert(Sym::Action(k));
+                names.entry(a.name.to_ascii_uppercase()).or_insert(Sym::Action(k));
             }
         }
     }
@@ -549,10 +492,7 @@ fn template_of(u: &Unit<'_>, ty: &Type, frames: &[Vec<Value>]) -> Vec<Value> {
             }
             out
         }
-        Type::Struct { fields, .. } => fields
-            .iter()
-            .flat_map(|(_, t)| template_of(u, t, frames))
-            .collect(),
+        Type::Struct { fields, .. } => fields.iter().flat_map(|(_, t)| template_of(u, t, frames)).collect(),
         Type::FunctionBlock(name) => match u.fb_pou(name) {
             Some(j) => frames
                 .get(j)
@@ -600,36 +540,19 @@ fn frame_templates(u: &Unit<'_>, order: &[usize]) -> Vec<Vec<Value>> {
 
 /// The declaration of variable `name` in a POU's var blocks.
 fn decl_of<'a>(pou: &'a sfc_syntax::ast::Pou, name: &str) -> Option<&'a VarDecl> {
-    pou.var_blocks
-        .iter()
-        .flat_map(|b| b.decls.iter())
-        .find(|d| d.names.iter().any(|n| n.is(name)))
+    pou.var_blocks.iter().flat_map(|b| b.decls.iter()).find(|d| d.names.iter().any(|n| n.is(name)))
 }
 
 impl Cx<'_, '_> {
     /// Initial-value code for a value of `ty` declared with `spec` at `loc`: nested instances,
     /// then the default initial values of named types and structure fields.
-    fn type_inits(
-        &self,
-        ty: &Type,
-        spec: Option<&TypeSpec>,
-        loc: &Loc,
-        out: &mut Vec<InitOp>,
-        depth: u32,
-    ) -> C<()> {
+    fn type_inits(&self, ty: &Type, spec: Option<&TypeSpec>, loc: &Loc, out: &mut Vec<InitOp>, depth: u32) -> C<()> {
         if depth > 64 {
             return Ok(());
         }
-        if let Some(TypeSpec {
-            kind: TypeSpecKind::Named(id),
-            ..
-        }) = spec
-        {
+        if let Some(TypeSpec { kind: TypeSpecKind::Named(id), .. }) = spec {
             if let Some(decl) = self.u.type_decls.get(&id.key()) {
-                let g = Cx {
-                    u: self.u,
-                    pou: None,
-                };
+                let g = Cx { u: self.u, pou: None };
                 g.type_inits(ty, Some(&decl.spec), loc, out, depth + 1)?;
                 if let Some(init) = &decl.init {
                     g.initializer(init, ty, loc, out)?;
@@ -641,22 +564,15 @@ impl Cx<'_, '_> {
             Type::FunctionBlock(name) => {
                 if let Some(j) = self.u.fb_pou(name) {
                     match loc {
-                        Loc::Static(Place::Local(o)) => {
-                            out.push(InitOp::Nested { pou: j, offset: *o })
-                        }
-                        Loc::Static(Place::Global(g)) => {
-                            out.push(InitOp::Nested { pou: j, offset: *g })
-                        }
+                        Loc::Static(Place::Local(o)) => out.push(InitOp::Nested { pou: j, offset: *o }),
+                        Loc::Static(Place::Global(g)) => out.push(InitOp::Nested { pou: j, offset: *g }),
                         Loc::Dyn(_) => {}
                     }
                 }
             }
             Type::Array { dims, elem } => {
                 let elem_spec = match spec {
-                    Some(TypeSpec {
-                        kind: TypeSpecKind::Array { element, .. },
-                        ..
-                    }) => Some(element.as_ref()),
+                    Some(TypeSpec { kind: TypeSpecKind::Array { element, .. }, .. }) => Some(element.as_ref()),
                     _ => None,
                 };
                 if !self.needs_init(elem, elem_spec, depth) {
@@ -665,33 +581,20 @@ impl Cx<'_, '_> {
                 let n: i64 = dims.iter().map(|(lo, hi)| hi - lo + 1).product();
                 let esize = self.u.type_size(elem);
                 for k in 0..n.max(0) as u32 {
-                    self.type_inits(
-                        elem,
-                        elem_spec,
-                        &loc.clone().offset(k * esize),
-                        out,
-                        depth + 1,
-                    )?;
+                    self.type_inits(elem, elem_spec, &loc.clone().offset(k * esize), out, depth + 1)?;
                 }
             }
             Type::Struct { fields, .. } => {
                 let decls: Vec<(&VarDecl, usize)> = match spec {
-                    Some(TypeSpec {
-                        kind: TypeSpecKind::Struct(decls),
-                        ..
-                    }) => decls
-                        .iter()
-                        .flat_map(|d| (0..d.names.len()).map(move |k| (d, k)))
-                        .collect(),
+                    Some(TypeSpec { kind: TypeSpecKind::Struct(decls), .. }) => {
+                        decls.iter().flat_map(|d| (0..d.names.len()).map(move |k| (d, k))).collect()
+                    }
                     _ => Vec::new(),
                 };
                 let mut off = 0;
                 for (fi, (fname, fty)) in fields.iter().enumerate() {
                     let floc = loc.clone().offset(off);
-                    let d = decls
-                        .iter()
-                        .find(|(d, k)| d.names[*k].text.eq_ignore_ascii_case(fname))
-                        .map(|(d, _)| *d);
+                    let d = decls.iter().find(|(d, k)| d.names[*k].text.eq_ignore_ascii_case(fname)).map(|(d, _)| *d);
                     self.type_inits(fty, d.map(|d| &d.ty), &floc, out, depth + 1)?;
                     let init = d.and_then(|d| d.init.as_ref()).or_else(|| {
                         let name = match ty {
@@ -710,11 +613,7 @@ impl Cx<'_, '_> {
             Type::Enum { name: Some(n), .. } => {
                 if let Some(def) = self.u.env.type_def(n) {
                     if let Some(init) = &def.init {
-                        Cx {
-                            u: self.u,
-                            pou: None,
-                        }
-                        .initializer(init, ty, loc, out)?;
+                        Cx { u: self.u, pou: None }.initializer(init, ty, loc, out)?;
                     }
                 }
             }
@@ -727,11 +626,7 @@ impl Cx<'_, '_> {
         if depth > 64 {
             return false;
         }
-        if let Some(TypeSpec {
-            kind: TypeSpecKind::Named(id),
-            ..
-        }) = spec
-        {
+        if let Some(TypeSpec { kind: TypeSpecKind::Named(id), .. }) = spec {
             if self.u.type_decls.contains_key(&id.key()) {
                 return true;
             }
@@ -746,13 +641,7 @@ impl Cx<'_, '_> {
     }
 
     /// Code for a declared initial value of a value of `ty` at `loc`.
-    fn initializer(
-        &self,
-        init: &Initializer,
-        ty: &Type,
-        loc: &Loc,
-        out: &mut Vec<InitOp>,
-    ) -> C<()> {
+    fn initializer(&self, init: &Initializer, ty: &Type, loc: &Loc, out: &mut Vec<InitOp>) -> C<()> {
         match init {
             Initializer::Expr(e) => {
                 let v = self.expr_as(e, ty)?;
@@ -775,9 +664,10 @@ impl Cx<'_, '_> {
                         None => 1,
                         Some(r) => {
                             let v = self.expr(r, Some(&Type::DInt))?;
-                            int_of(&v.const_value().ok_or_else(|| {
-                                self.error(r.span, "a repetition count must be constant")
-                            })?)
+                            int_of(
+                                &v.const_value()
+                                    .ok_or_else(|| self.error(r.span, "a repetition count must be constant"))?,
+                            )
                         }
                     };
                     for _ in 0..count.max(0) {
@@ -804,21 +694,16 @@ impl Cx<'_, '_> {
                                 }
                                 off += self.u.type_size(t);
                             }
-                            found.ok_or_else(|| {
-                                self.error(name.span, format!("no field `{}`", name.text))
-                            })?
+                            found.ok_or_else(|| self.error(name.span, format!("no field `{}`", name.text)))?
                         }
                         Type::FunctionBlock(fb) => {
-                            let (o, t, _) = self.u.fb_param(fb, &name.text).ok_or_else(|| {
-                                self.error(name.span, format!("no parameter `{}`", name.text))
-                            })?;
+                            let (o, t, _) = self
+                                .u
+                                .fb_param(fb, &name.text)
+                                .ok_or_else(|| self.error(name.span, format!("no parameter `{}`", name.text)))?;
                             (o, t)
                         }
-                        _ => {
-                            return Err(
-                                self.error(*span, "a structure initial value for a non-structure")
-                            )
-                        }
+                        _ => return Err(self.error(*span, "a structure initial value for a non-structure")),
                     };
                     self.initializer(value, &fty, &loc.clone().offset(off), out)?;
                 }
@@ -839,12 +724,12 @@ fn frame_inits(u: &Unit<'_>, i: usize) -> Vec<InitOp> {
         let info = m.iface.var(&v.name);
         let decl = decl_of(m.ast, &v.name);
         let loc = Loc::Static(Place::Local(v.offset));
-        let r = cx
-            .type_inits(&v.ty, decl.map(|d| &d.ty), &loc, &mut out, 0)
-            .and_then(|_| match info.and_then(|i| i.init.as_ref()) {
+        let r = cx.type_inits(&v.ty, decl.map(|d| &d.ty), &loc, &mut out, 0).and_then(|_| {
+            match info.and_then(|i| i.init.as_ref()) {
                 Some(init) => cx.initializer(init, &v.ty, &loc, &mut out),
                 None => Ok(()),
-            });
+            }
+        });
         if let Err(d) = r {
             u.report(d);
         }
@@ -861,12 +746,9 @@ fn globals_inits(u: &Unit<'_>) -> Vec<InitOp> {
         .iter()
         .flat_map(|it| match it {
             Item::Globals(b) => b.decls.iter().collect::<Vec<_>>(),
-            Item::Pou(p) if p.kind == PouKind::Program => p
-                .var_blocks
-                .iter()
-                .filter(|b| b.kind == VarKind::Global)
-                .flat_map(|b| b.decls.iter())
-                .collect(),
+            Item::Pou(p) if p.kind == PouKind::Program => {
+                p.var_blocks.iter().filter(|b| b.kind == VarKind::Global).flat_map(|b| b.decls.iter()).collect()
+            }
             _ => Vec::new(),
         })
         .collect();
@@ -875,15 +757,11 @@ fn globals_inits(u: &Unit<'_>) -> Vec<InitOp> {
             continue;
         };
         let loc = Loc::Static(Place::Global(slot));
-        let decl = decls
-            .iter()
-            .find(|d| d.names.iter().any(|n| n.span == v.span));
-        let r = cx
-            .type_inits(&ty, decl.map(|d| &d.ty), &loc, &mut out, 0)
-            .and_then(|_| match &v.init {
-                Some(init) => cx.initializer(init, &ty, &loc, &mut out),
-                None => Ok(()),
-            });
+        let decl = decls.iter().find(|d| d.names.iter().any(|n| n.span == v.span));
+        let r = cx.type_inits(&ty, decl.map(|d| &d.ty), &loc, &mut out, 0).and_then(|_| match &v.init {
+            Some(init) => cx.initializer(init, &ty, &loc, &mut out),
+            None => Ok(()),
+        });
         if let Err(d) = r {
             u.report(d);
         }
@@ -906,22 +784,13 @@ fn temp_inits(u: &Unit<'_>, i: usize, template: &[Value]) -> C<Vec<InitOp>> {
     }
     for v in m.layout.vars.iter().filter(|v| v.kind == VarKind::Temp) {
         let (off, size) = (v.offset as usize, v.size as usize);
-        let fresh: Vec<Value> = template
-            .get(off..off + size)
-            .map(<[Value]>::to_vec)
-            .unwrap_or_default();
+        let fresh: Vec<Value> = template.get(off..off + size).map(<[Value]>::to_vec).unwrap_or_default();
         out.push(InitOp::Run(Box::new(move |c, b| {
             c.mem[b + off..b + off + fresh.len()].clone_from_slice(&fresh);
             Ok(())
         })));
         let loc = Loc::Static(Place::Local(v.offset));
-        cx.type_inits(
-            &v.ty,
-            decl_of(m.ast, &v.name).map(|d| &d.ty),
-            &loc,
-            &mut out,
-            0,
-        )?;
+        cx.type_inits(&v.ty, decl_of(m.ast, &v.name).map(|d| &d.ty), &loc, &mut out, 0)?;
         if let Some(init) = m.iface.var(&v.name).and_then(|i| i.init.as_ref()) {
             cx.initializer(init, &v.ty, &loc, &mut out)?;
         }
@@ -946,9 +815,7 @@ fn compile_pou(u: &Unit<'_>, i: usize, template: &[Value]) -> Compiled {
             let b: Block = Box::new(move |c, base| {
                 for op in &temps {
                     let r = match op {
-                        InitOp::Nested { pou, offset } => {
-                            super::call::run_inits(c, *pou, base + *offset as usize)
-                        }
+                        InitOp::Nested { pou, offset } => super::call::run_inits(c, *pou, base + *offset as usize),
                         InitOp::Run(f) => f(c, base),
                     };
                     r.map_err(|e| *e)?;
@@ -1000,18 +867,11 @@ fn compile_pou(u: &Unit<'_>, i: usize, template: &[Value]) -> Compiled {
                 None => None,
                 Some(Duration::Literal(us)) => Some(DurationCode::Literal(*us)),
                 Some(Duration::Variable(name)) => match cx.lookup(name) {
-                    Some(Sym::Var {
-                        place, konst: None, ..
-                    }) => Some(DurationCode::Variable(place)),
-                    Some(Sym::Var {
-                        konst: Some(sfc_st::Value::Time(t)),
-                        ..
-                    }) => Some(DurationCode::Literal(t)),
+                    Some(Sym::Var { place, konst: None, .. }) => Some(DurationCode::Variable(place)),
+                    Some(Sym::Var { konst: Some(sfc_st::Value::Time(t)), .. }) => Some(DurationCode::Literal(t)),
                     Some(Sym::Var { place, .. }) => Some(DurationCode::Variable(place)),
                     _ => {
-                        u.report(
-                            u.error(a.span, format!("the duration `{name}` is not a variable")),
-                        );
+                        u.report(u.error(a.span, format!("the duration `{name}` is not a variable")));
                         None
                     }
                 },
@@ -1027,12 +887,7 @@ fn compile_pou(u: &Unit<'_>, i: usize, template: &[Value]) -> Compiled {
         }
         associations.push(list);
     }
-    Compiled::Chart {
-        guards,
-        fast,
-        bodies,
-        associations,
-    }
+    Compiled::Chart { guards, fast, bodies, associations }
 }
 
 fn guard(cx: &Cx<'_, '_>, cond: &Condition) -> C<(Guard, FastGuard)> {
@@ -1042,20 +897,12 @@ fn guard(cx: &Cx<'_, '_>, cond: &Condition) -> C<(Guard, FastGuard)> {
             // A plain BOOL variable: read it directly.
             match v.leaf {
                 Some(super::texpr::Leaf::Local(o)) => {
-                    return Ok((
-                        Box::new(move |c, b| Ok(bool_of(&c.mem[b + o]))),
-                        FastGuard::Local(o as u32, false),
-                    ))
+                    return Ok((Box::new(move |c, b| Ok(bool_of(&c.mem[b + o]))), FastGuard::Local(o as u32, false)))
                 }
                 Some(super::texpr::Leaf::Global(g)) => {
-                    return Ok((
-                        Box::new(move |c, _| Ok(bool_of(&c.mem[g]))),
-                        FastGuard::Global(g as u32, false),
-                    ))
+                    return Ok((Box::new(move |c, _| Ok(bool_of(&c.mem[g]))), FastGuard::Global(g as u32, false)))
                 }
-                Some(super::texpr::Leaf::Bool(x)) => {
-                    return Ok((Box::new(move |_, _| Ok(x)), FastGuard::Const(x)))
-                }
+                Some(super::texpr::Leaf::Bool(x)) => return Ok((Box::new(move |_, _| Ok(x)), FastGuard::Const(x))),
                 _ => v.bool(),
             }
         }
@@ -1072,17 +919,8 @@ fn guard(cx: &Cx<'_, '_>, cond: &Condition) -> C<(Guard, FastGuard)> {
 }
 
 /// An ATMT/EATMT condition: one implicit input `C3` / `c18`, maybe negated.
-fn atmt_guard(
-    cx: &Cx<'_, '_>,
-    target: Target,
-    ci: sfc_model::ConditionInput,
-    span: Span,
-) -> C<(Guard, FastGuard)> {
-    let name = if target == Target::Atmt {
-        format!("C{}", ci.index)
-    } else {
-        format!("c{}", ci.index)
-    };
+fn atmt_guard(cx: &Cx<'_, '_>, target: Target, ci: sfc_model::ConditionInput, span: Span) -> C<(Guard, FastGuard)> {
+    let name = if target == Target::Atmt { format!("C{}", ci.index) } else { format!("c{}", ci.index) };
     let Some(Sym::Var { place, .. }) = cx.lookup(&name) else {
         return Err(cx.error(span, format!("the condition input `{name}` does not exist")));
     };
@@ -1111,12 +949,7 @@ fn check_function_frames(u: &Unit<'_>) {
         }
         match ty {
             Type::FunctionBlock(n) => u.fb_pou(n).is_some_and(|j| {
-                u.pous[j].chart.is_some()
-                    || u.pous[j]
-                        .layout
-                        .vars
-                        .iter()
-                        .any(|v| has_chart(u, &v.ty, depth + 1))
+                u.pous[j].chart.is_some() || u.pous[j].layout.vars.iter().any(|v| has_chart(u, &v.ty, depth + 1))
             }),
             Type::Array { elem, .. } => has_chart(u, elem, depth + 1),
             Type::Struct { fields, .. } => fields.iter().any(|(_, t)| has_chart(u, t, depth + 1)),
@@ -1129,11 +962,7 @@ fn check_function_frames(u: &Unit<'_>) {
         }
         for v in &m.layout.vars {
             if has_chart(u, &v.ty, 0) {
-                let span = m
-                    .iface
-                    .var(&v.name)
-                    .map(|i| i.span)
-                    .unwrap_or(m.ast.name.span);
+                let span = m.iface.var(&v.name).map(|i| i.span).unwrap_or(m.ast.name.span);
                 u.report(u.error(
                     span,
                     format!(

@@ -132,11 +132,7 @@ fn int_to_int(from: &Type, to: &Type) -> Option<Box<dyn Fn(i64) -> i64 + Send + 
 }
 
 fn conversion_error(span: Span, from: &Type, to: &Type) -> Box<Diagnostic> {
-    Box::new(Diagnostic::error(
-        "SFC0320",
-        span,
-        format!("cannot be simulated: no conversion from `{from}` to `{to}`"),
-    ))
+    Box::new(Diagnostic::error("SFC0320", span, format!("cannot be simulated: no conversion from `{from}` to `{to}`")))
 }
 
 /// The explicit conversion of `v` to `to` (`<from>_TO_<to>`, `TRUNC`).
@@ -166,9 +162,7 @@ pub(crate) fn convert(v: TExpr, to: &Type, span: Span, mode: Rounding) -> C<TExp
         (Kind::Bool, Kind::Int) => {
             let f = v.bool();
             let ut = unit_of(to);
-            CExpr::Int(Box::new(move |c, b| {
-                Ok(from_plain(ut, i128::from(f(c, b)?)))
-            }))
+            CExpr::Int(Box::new(move |c, b| Ok(from_plain(ut, i128::from(f(c, b)?)))))
         }
         (Kind::Int, Kind::Bool) => {
             let f = v.int();
@@ -197,16 +191,13 @@ pub(crate) fn convert(v: TExpr, to: &Type, span: Span, mode: Rounding) -> C<TExp
             let name = format!("{from}_TO_{to}");
             CExpr::Int(Box::new(move |c, b| {
                 let x = f(c, b)?;
-                from_real(ut, x, mode)
-                    .ok_or_else(|| fault(format!("{name}: {x} has no integer value"), span))
+                from_real(ut, x, mode).ok_or_else(|| fault(format!("{name}: {x} has no integer value"), span))
             }))
         }
         (_, Kind::Str) => {
             let f = v.value();
             let ft = from.clone();
-            CExpr::Str(Box::new(move |c, b| {
-                Ok(Arc::from(format_value(&ft, &f(c, b)?)))
-            }))
+            CExpr::Str(Box::new(move |c, b| Ok(Arc::from(format_value(&ft, &f(c, b)?)))))
         }
         (Kind::Str, _) => {
             let f = v.str();
@@ -238,25 +229,15 @@ pub(crate) fn coerce(v: TExpr, to: &Type, span: Span) -> C<TExpr> {
                 return Ok(TExpr::new(e, to.clone(), c).fold());
             }
         }
-        return Ok(TExpr {
-            ty: to.clone(),
-            ..v
-        });
+        return Ok(TExpr { ty: to.clone(), ..v });
     }
     let same_base = v.ty.base() == to.base();
     let mut out = if same_base || (v.kind() == Kind::Agg && kind_of(to) == Kind::Agg) {
         let mut v = v;
-        v.ty = if matches!(to, Type::Subrange { .. }) {
-            v.ty
-        } else {
-            to.clone()
-        };
+        v.ty = if matches!(to, Type::Subrange { .. }) { v.ty } else { to.clone() };
         v
     } else if let (Type::Enum { .. }, Kind::Int) = (to, v.kind()) {
-        TExpr {
-            ty: to.clone(),
-            ..v
-        }
+        TExpr { ty: to.clone(), ..v }
     } else {
         convert(v, to, span, Rounding::Nearest)?
     };
@@ -288,9 +269,7 @@ fn parse_number(t: &str) -> Option<f64> {
     let v = if let Ok(i) = sfc_syntax::literal::decode_int(body, Span::default()) {
         i as f64
     } else {
-        sfc_syntax::literal::decode_real(body, Span::default())
-            .ok()
-            .or_else(|| body.parse::<f64>().ok())?
+        sfc_syntax::literal::decode_real(body, Span::default()).ok().or_else(|| body.parse::<f64>().ok())?
     };
     Some(if neg { -v } else { v })
 }
@@ -320,9 +299,7 @@ fn parse_int(to: &Type, s: &str) -> i64 {
         let i = i as i128;
         return from_plain(u, if neg { -i } else { i });
     }
-    parse_number(t)
-        .and_then(|x| from_real(u, x, Rounding::Nearest))
-        .unwrap_or(0)
+    parse_number(t).and_then(|x| from_real(u, x, Rounding::Nearest)).unwrap_or(0)
 }
 
 fn parse_real(to: &Type, s: &str) -> f64 {

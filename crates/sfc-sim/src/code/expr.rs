@@ -9,9 +9,7 @@ use super::unit::{Cx, Sym, C};
 use super::{Place, VarSlot};
 use crate::value::Value;
 use sfc_st::Type;
-use sfc_syntax::ast::{
-    BinaryOp, DirectAddress, Expr, ExprKind, Ident, Literal, LiteralKind, UnaryOp, VarKind,
-};
+use sfc_syntax::ast::{BinaryOp, DirectAddress, Expr, ExprKind, Ident, Literal, LiteralKind, UnaryOp, VarKind};
 use std::sync::Arc;
 
 /// A numeric constant written without a type (`5`, `-1.5`, `2 * 3`), folded.
@@ -31,33 +29,16 @@ fn untyped_at(e: &Expr, depth: u32) -> Option<Untyped> {
         return None;
     }
     match &e.kind {
-        ExprKind::Literal(Literal {
-            kind: LiteralKind::Int(v),
-            type_prefix: None,
-            ..
-        }) => Some(Untyped::Int(*v)),
-        ExprKind::Literal(Literal {
-            kind: LiteralKind::Real(r),
-            type_prefix: None,
-            ..
-        }) => Some(Untyped::Real(*r)),
+        ExprKind::Literal(Literal { kind: LiteralKind::Int(v), type_prefix: None, .. }) => Some(Untyped::Int(*v)),
+        ExprKind::Literal(Literal { kind: LiteralKind::Real(r), type_prefix: None, .. }) => Some(Untyped::Real(*r)),
         ExprKind::Paren(inner) => untyped_at(inner, depth + 1),
-        ExprKind::Unary {
-            op: UnaryOp::Neg,
-            operand,
-        } => match untyped_at(operand, depth + 1)? {
+        ExprKind::Unary { op: UnaryOp::Neg, operand } => match untyped_at(operand, depth + 1)? {
             Untyped::Int(v) => Some(Untyped::Int(v.checked_neg()?)),
             Untyped::Real(v) => Some(Untyped::Real(-v)),
         },
-        ExprKind::Unary {
-            op: UnaryOp::Plus,
-            operand,
-        } => untyped_at(operand, depth + 1),
+        ExprKind::Unary { op: UnaryOp::Plus, operand } => untyped_at(operand, depth + 1),
         ExprKind::Binary { op, lhs, rhs }
-            if matches!(
-                op,
-                BinaryOp::Add | BinaryOp::Sub | BinaryOp::Mul | BinaryOp::Div | BinaryOp::Mod
-            ) =>
+            if matches!(op, BinaryOp::Add | BinaryOp::Sub | BinaryOp::Mul | BinaryOp::Div | BinaryOp::Mod) =>
         {
             let a = untyped_at(lhs, depth + 1)?;
             let b = untyped_at(rhs, depth + 1)?;
@@ -136,10 +117,7 @@ impl Cx<'_, '_> {
     /// checker recorded none).
     pub(crate) fn expr(&self, e: &Expr, expected: Option<&Type>) -> C<TExpr> {
         if let Some(u) = untyped(e) {
-            let ty = self
-                .recorded(e)
-                .or_else(|| expected.cloned())
-                .unwrap_or_else(|| natural(u));
+            let ty = self.recorded(e).or_else(|| expected.cloned()).unwrap_or_else(|| natural(u));
             return Ok(untyped_const(u, &ty));
         }
         match &e.kind {
@@ -165,12 +143,7 @@ impl Cx<'_, '_> {
                 let rt = self.recorded(e).filter(|_| {
                     !matches!(
                         op,
-                        BinaryOp::Eq
-                            | BinaryOp::Ne
-                            | BinaryOp::Lt
-                            | BinaryOp::Gt
-                            | BinaryOp::Le
-                            | BinaryOp::Ge
+                        BinaryOp::Eq | BinaryOp::Ne | BinaryOp::Lt | BinaryOp::Gt | BinaryOp::Le | BinaryOp::Ge
                     )
                 });
                 ops::binary(*op, l, r, rt, e.span)
@@ -205,11 +178,7 @@ impl Cx<'_, '_> {
             }
             LiteralKind::Bool(b) => (Value::Bool(*b), Type::Bool),
             LiteralKind::String { value, wide } => {
-                let ty = if *wide {
-                    Type::WString { len: None }
-                } else {
-                    Type::String { len: None }
-                };
+                let ty = if *wide { Type::WString { len: None } } else { Type::String { len: None } };
                 (Value::Str(Arc::from(value.as_str())), ty)
             }
             LiteralKind::Duration(us) => {
@@ -222,18 +191,11 @@ impl Cx<'_, '_> {
             LiteralKind::Enum(value) => {
                 let ty = rec
                     .filter(Type::is_enum)
-                    .or_else(|| {
-                        lit.type_prefix
-                            .as_deref()
-                            .and_then(|p| self.u.env.type_def(p))
-                            .map(|d| d.ty.clone())
-                    })
-                    .ok_or_else(|| {
-                        self.error(e.span, format!("unknown enumerated value `{}`", lit.text))
-                    })?;
-                let n = ty.enum_value(&value.text).ok_or_else(|| {
-                    self.error(e.span, format!("unknown enumerated value `{}`", lit.text))
-                })?;
+                    .or_else(|| lit.type_prefix.as_deref().and_then(|p| self.u.env.type_def(p)).map(|d| d.ty.clone()))
+                    .ok_or_else(|| self.error(e.span, format!("unknown enumerated value `{}`", lit.text)))?;
+                let n = ty
+                    .enum_value(&value.text)
+                    .ok_or_else(|| self.error(e.span, format!("unknown enumerated value `{}`", lit.text)))?;
                 (Value::Int(n), ty)
             }
         };
@@ -254,12 +216,8 @@ impl Cx<'_, '_> {
                 let size = self.u.type_size(&p.ty);
                 Ok(read(p, size))
             }
-            Some(Sym::Step(_)) => {
-                Err(self.error(id.span, format!("`{}` is a step; read `{0}.X`", id.text)))
-            }
-            Some(Sym::Action(_)) => {
-                Err(self.error(id.span, format!("`{}` is an action; read `{0}.Q`", id.text)))
-            }
+            Some(Sym::Step(_)) => Err(self.error(id.span, format!("`{}` is a step; read `{0}.X`", id.text))),
+            Some(Sym::Action(_)) => Err(self.error(id.span, format!("`{}` is an action; read `{0}.Q`", id.text))),
             None => {
                 let ty = self
                     .recorded(e)
@@ -295,10 +253,7 @@ impl Cx<'_, '_> {
             ExprKind::Name(id) => match self.lookup(&id.text) {
                 Some(Sym::Var { place, ty, .. }) => Ok(PlaceC::new(Loc::Static(place), ty)),
                 Some(Sym::Return) => {
-                    let (off, ty) = self
-                        .meta()
-                        .and_then(|m| m.result.clone())
-                        .expect("functions have a result slot");
+                    let (off, ty) = self.meta().and_then(|m| m.result.clone()).expect("functions have a result slot");
                     Ok(PlaceC::new(Loc::Static(Place::Local(off)), ty))
                 }
                 Some(Sym::Step(_)) | Some(Sym::Action(_)) => {
@@ -320,34 +275,16 @@ impl Cx<'_, '_> {
             match (self.lookup(&id.text), m) {
                 (Some(Sym::Step(i)), Some(m)) => {
                     return match member.text.to_ascii_uppercase().as_str() {
-                        "X" => Ok(PlaceC::new(
-                            Loc::Static(Place::Local(m.step_x[i])),
-                            Type::Bool,
-                        )),
-                        "T" => Ok(PlaceC::new(
-                            Loc::Static(Place::Local(m.step_t[i])),
-                            Type::Time,
-                        )),
-                        _ => Err(self.error(
-                            member.span,
-                            format!("steps have no member `{}`", member.text),
-                        )),
+                        "X" => Ok(PlaceC::new(Loc::Static(Place::Local(m.step_x[i])), Type::Bool)),
+                        "T" => Ok(PlaceC::new(Loc::Static(Place::Local(m.step_t[i])), Type::Time)),
+                        _ => Err(self.error(member.span, format!("steps have no member `{}`", member.text))),
                     };
                 }
                 (Some(Sym::Action(i)), Some(m)) => {
                     return match member.text.to_ascii_uppercase().as_str() {
-                        "Q" => Ok(PlaceC::new(
-                            Loc::Static(Place::Local(m.action_q[i])),
-                            Type::Bool,
-                        )),
-                        "A" => Ok(PlaceC::new(
-                            Loc::Static(Place::Local(m.action_a[i])),
-                            Type::Bool,
-                        )),
-                        _ => Err(self.error(
-                            member.span,
-                            format!("actions have no member `{}`", member.text),
-                        )),
+                        "Q" => Ok(PlaceC::new(Loc::Static(Place::Local(m.action_q[i])), Type::Bool)),
+                        "A" => Ok(PlaceC::new(Loc::Static(Place::Local(m.action_a[i])), Type::Bool)),
+                        _ => Err(self.error(member.span, format!("actions have no member `{}`", member.text))),
                     };
                 }
                 _ => {}
@@ -360,12 +297,7 @@ impl Cx<'_, '_> {
         if !member.text.is_empty() && member.text.bytes().all(|b| b.is_ascii_digit()) {
             let bit: u32 = member.text.parse().unwrap_or(0);
             let w = W::of(&pb.ty);
-            return Ok(PlaceC {
-                loc: pb.loc,
-                ty: Type::Bool,
-                bit: Some(bit),
-                bit_w: w,
-            });
+            return Ok(PlaceC { loc: pb.loc, ty: Type::Bool, bit: Some(bit), bit_w: w });
         }
         match &pb.ty {
             Type::Struct { fields, .. } => {
@@ -376,24 +308,16 @@ impl Cx<'_, '_> {
                     }
                     off += self.u.type_size(t);
                 }
-                Err(self.error(
-                    member.span,
-                    format!("`{}` has no field `{}`", pb.ty, member.text),
-                ))
+                Err(self.error(member.span, format!("`{}` has no field `{}`", pb.ty, member.text)))
             }
             Type::FunctionBlock(fb) => {
-                let (off, ty, _) = self.u.fb_param(fb, &member.text).ok_or_else(|| {
-                    self.error(
-                        member.span,
-                        format!("`{fb}` has no member `{}`", member.text),
-                    )
-                })?;
+                let (off, ty, _) = self
+                    .u
+                    .fb_param(fb, &member.text)
+                    .ok_or_else(|| self.error(member.span, format!("`{fb}` has no member `{}`", member.text)))?;
                 Ok(PlaceC::new(pb.loc.offset(off), ty))
             }
-            t => Err(self.error(
-                member.span,
-                format!("`{t}` has no member `{}`", member.text),
-            )),
+            t => Err(self.error(member.span, format!("`{t}` has no member `{}`", member.text))),
         }
     }
 
@@ -420,9 +344,7 @@ impl Cx<'_, '_> {
                 Some(c) => {
                     let i = int_of(&c);
                     if i < lo || i > hi {
-                        return Err(
-                            self.error(idx.span, format!("index {i} is out of range {lo}..{hi}"))
-                        );
+                        return Err(self.error(idx.span, format!("index {i} is out of range {lo}..{hi}")));
                     }
                     fixed += (i - lo) * stride;
                 }
@@ -451,10 +373,7 @@ impl Cx<'_, '_> {
             Arc::new(move |c, b| {
                 let i = f(c, b)?;
                 if i < lo || i > hi {
-                    return Err(fault(
-                        format!("array index {i} is out of range {lo}..{hi}"),
-                        span,
-                    ));
+                    return Err(fault(format!("array index {i} is out of range {lo}..{hi}"), span));
                 }
                 Ok(base_slot(c, b)? + ((i - lo) * stride) as usize)
             })
@@ -464,10 +383,7 @@ impl Cx<'_, '_> {
                 for (f, lo, hi, stride, span) in &dynamic {
                     let i = f(c, b)?;
                     if i < *lo || i > *hi {
-                        return Err(fault(
-                            format!("array index {i} is out of range {lo}..{hi}"),
-                            *span,
-                        ));
+                        return Err(fault(format!("array index {i} is out of range {lo}..{hi}"), *span));
                     }
                     s += ((i - lo) * stride) as usize;
                 }
@@ -489,22 +405,18 @@ impl Cx<'_, '_> {
             _ => Type::Bool,
         };
         if let Some(m) = self.meta() {
-            if let Some(v) = m.layout.vars.iter().find(|v| {
-                v.location
-                    .as_deref()
-                    .is_some_and(|l| l.eq_ignore_ascii_case(&key))
-            }) {
+            if let Some(v) =
+                m.layout.vars.iter().find(|v| v.location.as_deref().is_some_and(|l| l.eq_ignore_ascii_case(&key)))
+            {
                 if v.size == 1 {
                     return PlaceC::new(Loc::Static(Place::Local(v.offset)), v.ty.clone());
                 }
             }
         }
         let mut g = self.u.globals.borrow_mut();
-        if let Some(v) = g.layout.vars.iter().find(|v| {
-            v.location
-                .as_deref()
-                .is_some_and(|l| l.eq_ignore_ascii_case(&key))
-        }) {
+        if let Some(v) =
+            g.layout.vars.iter().find(|v| v.location.as_deref().is_some_and(|l| l.eq_ignore_ascii_case(&key)))
+        {
             if v.size == 1 {
                 return PlaceC::new(Loc::Static(Place::Global(v.offset)), v.ty.clone());
             }

@@ -43,10 +43,7 @@ pub(crate) fn run_il(steps: &[IlStep], c: &mut Ctx<'_>, b: usize, span: Span) ->
             IlNext::Jump(t) => {
                 jumps += 1;
                 if jumps > MAX_ITERATIONS {
-                    return Err(fault(
-                        format!("loop did not terminate (more than {MAX_ITERATIONS} jumps)"),
-                        span,
-                    ));
+                    return Err(fault(format!("loop did not terminate (more than {MAX_ITERATIONS} jumps)"), span));
                 }
                 pc = t;
             }
@@ -71,16 +68,11 @@ fn stmt_step(s: StmtFn) -> IlStep {
 
 impl Cx<'_, '_> {
     fn cr_place(&self, depth: u32, ty: Type, span: Span) -> C<PlaceC> {
-        let m = self
-            .meta()
-            .ok_or_else(|| self.error(span, "IL outside a POU"))?;
+        let m = self.meta().ok_or_else(|| self.error(span, "IL outside a POU"))?;
         if depth >= m.il_slots {
             return Err(self.error(span, "IL nested too deeply"));
         }
-        Ok(PlaceC::new(
-            Loc::Static(Place::Local(m.il_base + depth)),
-            ty,
-        ))
+        Ok(PlaceC::new(Loc::Static(Place::Local(m.il_base + depth)), ty))
     }
 
     /// The current result as an expression (an untyped constant takes `want`).
@@ -88,10 +80,7 @@ impl Cx<'_, '_> {
         match cr {
             Cr::None => Err(self.error(span, "the instruction needs a current result")),
             Cr::Typed(t) => Ok(read(self.cr_place(depth, t.clone(), span)?, 1)),
-            Cr::Untyped(u) => Ok(untyped_const(
-                *u,
-                &want.cloned().unwrap_or_else(|| natural(*u)),
-            )),
+            Cr::Untyped(u) => Ok(untyped_const(*u, &want.cloned().unwrap_or_else(|| natural(*u)))),
         }
     }
 
@@ -111,9 +100,7 @@ impl Cx<'_, '_> {
     pub(crate) fn il_block(&self, body: &IlBody) -> C<super::Block> {
         let (steps, _) = self.il(body)?;
         let span = body.span;
-        Ok(Box::new(move |c, b| {
-            run_il(&steps, c, b, span).map_err(|e| *e)
-        }))
+        Ok(Box::new(move |c, b| run_il(&steps, c, b, span).map_err(|e| *e)))
     }
 
     /// An IL transition condition: the current result at the end.
@@ -220,11 +207,7 @@ impl Cx<'_, '_> {
                 return Ok(None);
             }
             let c = this.cr_value(&cr, depth, Some(&Type::Bool), span)?.bool();
-            Ok(Some(if negate {
-                Box::new(move |x, b| Ok(!c(x, b)?))
-            } else {
-                c
-            }))
+            Ok(Some(if negate { Box::new(move |x, b| Ok(!c(x, b)?)) } else { c }))
         };
         match op {
             Op::Ld => {
@@ -259,11 +242,7 @@ impl Cx<'_, '_> {
                     return Ok((stmt_step(write(p, v, size)), cr));
                 }
                 let c = self.cr_value(&cr, depth, Some(&Type::Bool), span)?.bool();
-                let w = write(
-                    p,
-                    TExpr::constant(Value::Bool(op == Op::Set), Type::Bool),
-                    size,
-                );
+                let w = write(p, TExpr::constant(Value::Bool(op == Op::Set), Type::Bool), size);
                 let step: IlStep = Box::new(move |x, b| {
                     if c(x, b)? {
                         w(x, b)?;
@@ -308,12 +287,9 @@ impl Cx<'_, '_> {
             }
             Op::Jmp => {
                 let target = match ins.operands.as_slice() {
-                    [Expr {
-                        kind: ExprKind::Name(l),
-                        ..
-                    }] => *labels.get(&l.key()).ok_or_else(|| {
-                        self.error(l.span, format!("jump to unknown label `{}`", l.text))
-                    })?,
+                    [Expr { kind: ExprKind::Name(l), .. }] => *labels
+                        .get(&l.key())
+                        .ok_or_else(|| self.error(l.span, format!("jump to unknown label `{}`", l.text)))?,
                     _ => return Err(self.error(span, "a jump needs a label")),
                 };
                 if !matches!(cr, Cr::None) {
@@ -326,30 +302,18 @@ impl Cx<'_, '_> {
                 match cond(self)? {
                     None => Ok((Box::new(move |_, _| Ok(IlNext::Jump(target))), Cr::None)),
                     Some(c) => {
-                        let step: IlStep = Box::new(move |x, b| {
-                            Ok(if c(x, b)? {
-                                IlNext::Jump(target)
-                            } else {
-                                IlNext::Next
-                            })
-                        });
+                        let step: IlStep =
+                            Box::new(move |x, b| Ok(if c(x, b)? { IlNext::Jump(target) } else { IlNext::Next }));
                         Ok((step, cr))
                     }
                 }
             }
             Op::Cal => {
-                let Some(Expr {
-                    kind: ExprKind::Name(name),
-                    ..
-                }) = ins.operands.first()
-                else {
+                let Some(Expr { kind: ExprKind::Name(name), .. }) = ins.operands.first() else {
                     return Err(self.error(span, "CAL needs a function block instance"));
                 };
                 let Some(Sym::Var { place, ty, .. }) = self.lookup(&name.text) else {
-                    return Err(self.error(
-                        name.span,
-                        format!("`{}` is not a function block instance", name.text),
-                    ));
+                    return Err(self.error(name.span, format!("`{}` is not a function block instance", name.text)));
                 };
                 let args = ins.call_args.as_deref().unwrap_or(&[]);
                 let call = self.fb_call(name, super::call::static_place(place, ty), args, span)?;
@@ -368,8 +332,7 @@ impl Cx<'_, '_> {
             Op::Ret => match cond(self)? {
                 None => Ok((Box::new(|_, _| Ok(IlNext::Ret)), Cr::None)),
                 Some(c) => {
-                    let step: IlStep =
-                        Box::new(move |x, b| Ok(if c(x, b)? { IlNext::Ret } else { IlNext::Next }));
+                    let step: IlStep = Box::new(move |x, b| Ok(if c(x, b)? { IlNext::Ret } else { IlNext::Next }));
                     Ok((step, cr))
                 }
             },
@@ -378,13 +341,7 @@ impl Cx<'_, '_> {
 
     /// A function used as an operator: `LD a  MAX b` is `MAX(a, b)`; with formal arguments,
     /// a plain call.
-    fn il_function(
-        &self,
-        ins: &IlInstruction,
-        name: &sfc_syntax::ast::Ident,
-        cr: Cr,
-        depth: u32,
-    ) -> C<(IlStep, Cr)> {
+    fn il_function(&self, ins: &IlInstruction, name: &sfc_syntax::ast::Ident, cr: Cr, depth: u32) -> C<(IlStep, Cr)> {
         let span = ins.span;
         if let Some(args) = &ins.call_args {
             let v = self.call_value_at(name, args, span)?;
@@ -395,12 +352,7 @@ impl Cx<'_, '_> {
                 .layout
                 .vars
                 .iter()
-                .filter(|v| {
-                    matches!(
-                        v.kind,
-                        sfc_syntax::ast::VarKind::Input | sfc_syntax::ast::VarKind::InOut
-                    )
-                })
+                .filter(|v| matches!(v.kind, sfc_syntax::ast::VarKind::Input | sfc_syntax::ast::VarKind::InOut))
                 .map(|v| v.ty.clone())
                 .collect();
             let first = params.first().cloned();

@@ -47,45 +47,21 @@ impl Program {
         if let Some(p) = self.pous.get(top) {
             if let PouBody::Chart(cc) = &p.body {
                 mem[top_frame + cc.chart_slot as usize] = Value::Int(0);
-                charts.push(ChartInstance {
-                    pou: top,
-                    frame: top_frame,
-                    path: String::new(),
-                });
+                charts.push(ChartInstance { pou: top, frame: top_frame, path: String::new() });
             }
             for v in &p.layout.vars {
-                self.walk(
-                    &v.ty,
-                    top_frame + v.offset as usize,
-                    v.name.clone(),
-                    &mut mem,
-                    &mut charts,
-                    0,
-                );
+                self.walk(&v.ty, top_frame + v.offset as usize, v.name.clone(), &mut mem, &mut charts, 0);
             }
         }
         for v in &self.globals.vars {
-            self.walk(
-                &v.ty,
-                v.offset as usize,
-                v.name.clone(),
-                &mut mem,
-                &mut charts,
-                0,
-            );
+            self.walk(&v.ty, v.offset as usize, v.name.clone(), &mut mem, &mut charts, 0);
         }
-        Memory {
-            mem,
-            top_frame,
-            charts,
-        }
+        Memory { mem, top_frame, charts }
     }
 
     /// The user POU that is function block type `name`.
     pub(crate) fn fb_index(&self, name: &str) -> Option<usize> {
-        self.pous
-            .iter()
-            .position(|p| p.kind != PouKind::Function && p.name.eq_ignore_ascii_case(name))
+        self.pous.iter().position(|p| p.kind != PouKind::Function && p.name.eq_ignore_ascii_case(name))
     }
 
     /// Slots taken by a value of `ty`.
@@ -98,27 +74,14 @@ impl Program {
             Type::Struct { fields, .. } => fields.iter().map(|(_, t)| self.type_size(t)).sum(),
             Type::FunctionBlock(name) => match self.fb_index(name) {
                 Some(j) => self.pous[j].layout.size as usize,
-                None => self
-                    .support
-                    .std_layouts
-                    .get(&name.to_ascii_uppercase())
-                    .map(|l| l.size as usize)
-                    .unwrap_or(1),
+                None => self.support.std_layouts.get(&name.to_ascii_uppercase()).map(|l| l.size as usize).unwrap_or(1),
             },
             _ => 1,
         }
     }
 
     /// Finds SFC instances inside a value of `ty` at `slot`, depth first.
-    fn walk(
-        &self,
-        ty: &Type,
-        slot: usize,
-        path: String,
-        mem: &mut [Value],
-        out: &mut Vec<ChartInstance>,
-        depth: u32,
-    ) {
+    fn walk(&self, ty: &Type, slot: usize, path: String, mem: &mut [Value], out: &mut Vec<ChartInstance>, depth: u32) {
         if depth > 64 {
             return;
         }
@@ -129,21 +92,10 @@ impl Program {
                     if let Some(s) = mem.get_mut(slot + cc.chart_slot as usize) {
                         *s = Value::Int(out.len() as i64);
                     }
-                    out.push(ChartInstance {
-                        pou: j,
-                        frame: slot,
-                        path: path.clone(),
-                    });
+                    out.push(ChartInstance { pou: j, frame: slot, path: path.clone() });
                 }
                 for v in &self.pous[j].layout.vars {
-                    self.walk(
-                        &v.ty,
-                        slot + v.offset as usize,
-                        format!("{path}.{}", v.name),
-                        mem,
-                        out,
-                        depth + 1,
-                    );
+                    self.walk(&v.ty, slot + v.offset as usize, format!("{path}.{}", v.name), mem, out, depth + 1);
                 }
             }
             Type::Array { dims, elem } => {

@@ -186,8 +186,7 @@ impl ChartCode {
         self.plan_arc()
     }
     pub(crate) fn plan_arc(&self) -> &std::sync::Arc<crate::engine::ChartPlan> {
-        self.plan
-            .get_or_init(|| std::sync::Arc::new(crate::engine::ChartPlan::new(self)))
+        self.plan.get_or_init(|| std::sync::Arc::new(crate::engine::ChartPlan::new(self)))
     }
 }
 

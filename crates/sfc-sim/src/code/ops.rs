@@ -3,20 +3,14 @@
 
 use super::convert::coerce;
 use super::rt::*;
-use super::texpr::{
-    bool_fn, int_fn, leaf_bool, leaf_int, leaf_real, opd1, opd2, real_fn, CExpr, TExpr,
-};
+use super::texpr::{bool_fn, int_fn, leaf_bool, leaf_int, leaf_real, opd1, opd2, real_fn, CExpr, TExpr};
 use super::unit::C;
 use sfc_diagnostics::{Diagnostic, Span};
 use sfc_st::Type;
 use sfc_syntax::ast::BinaryOp;
 
 fn err(span: Span, msg: impl Into<String>) -> Box<Diagnostic> {
-    Box::new(Diagnostic::error(
-        "SFC0320",
-        span,
-        format!("cannot be simulated: {}", msg.into()),
-    ))
+    Box::new(Diagnostic::error("SFC0320", span, format!("cannot be simulated: {}", msg.into())))
 }
 
 fn timey(t: &Type) -> bool {
@@ -32,9 +26,7 @@ pub(crate) fn result_type(op: BinaryOp, l: &Type, r: &Type) -> Option<Type> {
             let (a, b) = (l.base(), r.base());
             match op {
                 B::Add | B::Sub if a.is_duration() && b.is_duration() => Type::common(a, b),
-                B::Add | B::Sub
-                    if matches!(a, Type::TimeOfDay | Type::DateAndTime) && b.is_duration() =>
-                {
+                B::Add | B::Sub if matches!(a, Type::TimeOfDay | Type::DateAndTime) && b.is_duration() => {
                     Some(a.clone())
                 }
                 B::Sub if a == b && a.is_date() => Some(Type::Time),
@@ -43,11 +35,7 @@ pub(crate) fn result_type(op: BinaryOp, l: &Type, r: &Type) -> Option<Type> {
                 _ => None,
             }
         }
-        B::Pow => Some(if l.is_real() {
-            l.base().clone()
-        } else {
-            Type::LReal
-        }),
+        B::Pow => Some(if l.is_real() { l.base().clone() } else { Type::LReal }),
         _ => Type::common(l.base(), r.base()),
     }
 }
@@ -67,18 +55,11 @@ pub(crate) fn binary(op: BinaryOp, l: TExpr, r: TExpr, rt: Option<Type>, span: S
             };
             TExpr::new(CExpr::Bool(e), Type::Bool, constant)
         }
-        B::Add | B::Sub | B::Mul | B::Div if timey(&l.ty) || timey(&r.ty) => {
-            time_arith(op, l, r, rt, span)?
-        }
+        B::Add | B::Sub | B::Mul | B::Div if timey(&l.ty) || timey(&r.ty) => time_arith(op, l, r, rt, span)?,
         _ => {
             let t = match rt.or_else(|| result_type(op, &l.ty, &r.ty)) {
                 Some(t) => t,
-                None => {
-                    return Err(err(
-                        span,
-                        format!("operator `{}` on `{}` and `{}`", op.symbol(), l.ty, r.ty),
-                    ))
-                }
+                None => return Err(err(span, format!("operator `{}` on `{}` and `{}`", op.symbol(), l.ty, r.ty))),
             };
             match op {
                 B::And | B::Or | B::Xor => logic(op, l, r, t, span)?,
@@ -128,15 +109,9 @@ pub(crate) fn arith(op: BinaryOp, l: TExpr, r: TExpr, t: Type, span: Span) -> C<
             let a = coerce(l, &t, span)?.int_opd();
             let b = coerce(r, &t, span)?.int_opd();
             let e: IntFn = match op {
-                BinaryOp::Add => opd2!(int_fn, a, b, leaf_int, leaf_int, |x, y| Ok(
-                    w.wrap(x.wrapping_add(y))
-                )),
-                BinaryOp::Sub => opd2!(int_fn, a, b, leaf_int, leaf_int, |x, y| Ok(
-                    w.wrap(x.wrapping_sub(y))
-                )),
-                BinaryOp::Mul => opd2!(int_fn, a, b, leaf_int, leaf_int, |x, y| Ok(
-                    w.wrap(x.wrapping_mul(y))
-                )),
+                BinaryOp::Add => opd2!(int_fn, a, b, leaf_int, leaf_int, |x, y| Ok(w.wrap(x.wrapping_add(y)))),
+                BinaryOp::Sub => opd2!(int_fn, a, b, leaf_int, leaf_int, |x, y| Ok(w.wrap(x.wrapping_sub(y)))),
+                BinaryOp::Mul => opd2!(int_fn, a, b, leaf_int, leaf_int, |x, y| Ok(w.wrap(x.wrapping_mul(y)))),
                 BinaryOp::Div if w == W::U64 => opd2!(int_fn, a, b, leaf_int, leaf_int, |x, y| {
                     if y == 0 {
                         return Err(fault("division by zero", span));
@@ -170,30 +145,14 @@ pub(crate) fn arith(op: BinaryOp, l: TExpr, r: TExpr, t: Type, span: Span) -> C<
             let a = coerce(l, &t, span)?.real_opd();
             let b = coerce(r, &t, span)?.real_opd();
             let e: RealFn = match (op, single) {
-                (BinaryOp::Add, true) => {
-                    opd2!(real_fn, a, b, leaf_real, leaf_real, |x, y| Ok(r32(x + y)))
-                }
-                (BinaryOp::Add, false) => {
-                    opd2!(real_fn, a, b, leaf_real, leaf_real, |x, y| Ok(x + y))
-                }
-                (BinaryOp::Sub, true) => {
-                    opd2!(real_fn, a, b, leaf_real, leaf_real, |x, y| Ok(r32(x - y)))
-                }
-                (BinaryOp::Sub, false) => {
-                    opd2!(real_fn, a, b, leaf_real, leaf_real, |x, y| Ok(x - y))
-                }
-                (BinaryOp::Mul, true) => {
-                    opd2!(real_fn, a, b, leaf_real, leaf_real, |x, y| Ok(r32(x * y)))
-                }
-                (BinaryOp::Mul, false) => {
-                    opd2!(real_fn, a, b, leaf_real, leaf_real, |x, y| Ok(x * y))
-                }
-                (BinaryOp::Div, true) => {
-                    opd2!(real_fn, a, b, leaf_real, leaf_real, |x, y| Ok(r32(x / y)))
-                }
-                (BinaryOp::Div, false) => {
-                    opd2!(real_fn, a, b, leaf_real, leaf_real, |x, y| Ok(x / y))
-                }
+                (BinaryOp::Add, true) => opd2!(real_fn, a, b, leaf_real, leaf_real, |x, y| Ok(r32(x + y))),
+                (BinaryOp::Add, false) => opd2!(real_fn, a, b, leaf_real, leaf_real, |x, y| Ok(x + y)),
+                (BinaryOp::Sub, true) => opd2!(real_fn, a, b, leaf_real, leaf_real, |x, y| Ok(r32(x - y))),
+                (BinaryOp::Sub, false) => opd2!(real_fn, a, b, leaf_real, leaf_real, |x, y| Ok(x - y)),
+                (BinaryOp::Mul, true) => opd2!(real_fn, a, b, leaf_real, leaf_real, |x, y| Ok(r32(x * y))),
+                (BinaryOp::Mul, false) => opd2!(real_fn, a, b, leaf_real, leaf_real, |x, y| Ok(x * y)),
+                (BinaryOp::Div, true) => opd2!(real_fn, a, b, leaf_real, leaf_real, |x, y| Ok(r32(x / y))),
+                (BinaryOp::Div, false) => opd2!(real_fn, a, b, leaf_real, leaf_real, |x, y| Ok(x / y)),
                 _ => return Err(err(span, format!("operator `{}` on `{t}`", op.symbol()))),
             };
             Ok(TExpr::new(CExpr::Real(e), t, false))
@@ -218,10 +177,7 @@ fn pow(l: TExpr, r: TExpr, t: Type, span: Span) -> C<TExpr> {
 /// TIME and date arithmetic (IEC 61131-3 table 30). TIME_OF_DAY results wrap into one day.
 fn time_arith(op: BinaryOp, l: TExpr, r: TExpr, rt: Option<Type>, span: Span) -> C<TExpr> {
     let Some(res) = rt.or_else(|| result_type(op, &l.ty, &r.ty)) else {
-        return Err(err(
-            span,
-            format!("operator `{}` on `{}` and `{}`", op.symbol(), l.ty, r.ty),
-        ));
+        return Err(err(span, format!("operator `{}` on `{}` and `{}`", op.symbol(), l.ty, r.ty)));
     };
     let tod = res.base() == &Type::TimeOfDay;
     let out = res.clone();
@@ -230,11 +186,7 @@ fn time_arith(op: BinaryOp, l: TExpr, r: TExpr, rt: Option<Type>, span: Span) ->
             let (a, b) = (l.int(), r.int());
             let sub = op == BinaryOp::Sub;
             let e: IntFn = bin_closure!(a, b, |x, y| {
-                let v = if sub {
-                    x.wrapping_sub(y)
-                } else {
-                    x.wrapping_add(y)
-                };
+                let v = if sub { x.wrapping_sub(y) } else { x.wrapping_add(y) };
                 Ok(if tod { v.rem_euclid(DAY_US) } else { v })
             });
             Ok(TExpr::new(CExpr::Int(e), out, false))
@@ -259,11 +211,7 @@ fn time_arith(op: BinaryOp, l: TExpr, r: TExpr, rt: Option<Type>, span: Span) ->
                 let w = W::of(&n.ty);
                 let b = n.int();
                 bin_closure!(a, b, |x, y| {
-                    let y = if w == W::U64 {
-                        (y as u64).min(i64::MAX as u64) as i64
-                    } else {
-                        y
-                    };
+                    let y = if w == W::U64 { (y as u64).min(i64::MAX as u64) as i64 } else { y };
                     if div {
                         if y == 0 {
                             return Err(fault("division by zero", span));
@@ -276,10 +224,7 @@ fn time_arith(op: BinaryOp, l: TExpr, r: TExpr, rt: Option<Type>, span: Span) ->
             };
             Ok(TExpr::new(CExpr::Int(e), out, false))
         }
-        _ => Err(err(
-            span,
-            format!("operator `{}` on `{}`", op.symbol(), res),
-        )),
+        _ => Err(err(span, format!("operator `{}` on `{}`", op.symbol(), res))),
     }
 }
 
@@ -351,9 +296,7 @@ pub(crate) fn neg(v: TExpr, rt: Option<Type>, span: Span) -> C<TExpr> {
     let e = match v.kind() {
         Kind::Int => {
             let w = W::of(&t);
-            CExpr::Int(opd1!(int_fn, v.int_opd(), leaf_int, |x| Ok(
-                w.wrap(x.wrapping_neg())
-            )))
+            CExpr::Int(opd1!(int_fn, v.int_opd(), leaf_int, |x| Ok(w.wrap(x.wrapping_neg()))))
         }
         Kind::Real => CExpr::Real(opd1!(real_fn, v.real_opd(), leaf_real, |x| Ok(-x))),
         _ => return Err(err(span, format!("unary minus on `{t}`"))),

@@ -50,12 +50,7 @@ pub(crate) struct PlaceC {
 
 impl PlaceC {
     pub(crate) fn new(loc: Loc, ty: Type) -> PlaceC {
-        PlaceC {
-            loc,
-            ty,
-            bit: None,
-            bit_w: W::I64,
-        }
+        PlaceC { loc, ty, bit: None, bit_w: W::I64 }
     }
 }
 
@@ -107,10 +102,7 @@ pub(crate) fn read(p: PlaceC, size: u32) -> TExpr {
             }))
         }
     };
-    TExpr {
-        leaf,
-        ..TExpr::new(e, p.ty, false)
-    }
+    TExpr { leaf, ..TExpr::new(e, p.ty, false) }
 }
 
 /// Stores a leaf value through a static place.
@@ -183,11 +175,7 @@ pub(crate) fn write(p: PlaceC, v: TExpr, size: u32) -> StmtFn {
             let x = val(c, b)?;
             let s = slot(c, b)?;
             let old = int_of(&c.mem[s]);
-            let new = if x {
-                old | (1i64 << bit)
-            } else {
-                old & !(1i64 << bit)
-            };
+            let new = if x { old | (1i64 << bit) } else { old & !(1i64 << bit) };
             c.mem[s] = match c.mem[s] {
                 Value::Time(_) => Value::Time(new),
                 _ => Value::Int(w.wrap(new)),
@@ -198,9 +186,7 @@ pub(crate) fn write(p: PlaceC, v: TExpr, size: u32) -> StmtFn {
     if let Some(l) = v.leaf {
         let fast = match (kind_of(&p.ty), v.kind()) {
             (Kind::Bool, Kind::Bool) => leaf_storer(&p.loc, l, leaf_bool, Value::Bool),
-            (Kind::Int, Kind::Int) if p.ty.is_duration() => {
-                leaf_storer(&p.loc, l, leaf_int, Value::Time)
-            }
+            (Kind::Int, Kind::Int) if p.ty.is_duration() => leaf_storer(&p.loc, l, leaf_int, Value::Time),
             (Kind::Int, Kind::Int) => leaf_storer(&p.loc, l, leaf_int, Value::Int),
             (Kind::Real, Kind::Real) => leaf_storer(&p.loc, l, leaf_real, Value::Real),
             _ => None,
@@ -248,11 +234,7 @@ pub(crate) fn sink(p: PlaceC, size: u32) -> Sink {
         return Sink::One(Box::new(move |c, b, v| {
             let s = slot(c, b)?;
             let old = int_of(&c.mem[s]);
-            let new = if bool_of(&v) {
-                old | (1i64 << bit)
-            } else {
-                old & !(1i64 << bit)
-            };
+            let new = if bool_of(&v) { old | (1i64 << bit) } else { old & !(1i64 << bit) };
             c.mem[s] = Value::Int(w.wrap(new));
             Ok(())
         }));
@@ -287,10 +269,7 @@ pub(crate) fn check_subrange(v: TExpr, lo: i64, hi: i64, span: Span) -> TExpr {
     let e = CExpr::Int(Box::new(move |c, b| {
         let x = f(c, b)?;
         if x < lo || x > hi {
-            return Err(fault(
-                format!("subrange violation: {x} is outside {lo}..{hi}"),
-                span,
-            ));
+            return Err(fault(format!("subrange violation: {x} is outside {lo}..{hi}"), span));
         }
         Ok(x)
     }));

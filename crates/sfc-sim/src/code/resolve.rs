@@ -42,8 +42,7 @@ fn parse_path(path: &str) -> Option<Vec<Seg>> {
             b'[' => {
                 let end = i + path.trim()[i..].find(']')?;
                 let inner = &path.trim()[i + 1..end];
-                let idx: Option<Vec<i64>> =
-                    inner.split(',').map(|s| s.trim().parse().ok()).collect();
+                let idx: Option<Vec<i64>> = inner.split(',').map(|s| s.trim().parse().ok()).collect();
                 out.push(Seg::Index(idx?));
                 i = end + 1;
             }
@@ -72,77 +71,43 @@ impl Program {
     pub fn resolve(&self, top: usize, top_frame: usize, path: &str) -> Option<(usize, Type)> {
         let path = path.trim();
         if path.starts_with('%') {
-            let v = self.globals.vars.iter().find(|v| {
-                v.location
-                    .as_deref()
-                    .is_some_and(|l| l.eq_ignore_ascii_case(path))
-                    && v.size == 1
-            })?;
+            let v = self
+                .globals
+                .vars
+                .iter()
+                .find(|v| v.location.as_deref().is_some_and(|l| l.eq_ignore_ascii_case(path)) && v.size == 1)?;
             return Some((v.offset as usize, v.ty.clone()));
         }
         let segs = parse_path(path)?;
         let mut it = segs.into_iter();
-        let Some(Seg::Name(first)) = it.next() else {
-            return None;
-        };
+        let Some(Seg::Name(first)) = it.next() else { return None };
         let mut cur = self.member_of(top, top_frame, &first).or_else(|| {
-            let g = self
-                .globals
-                .vars
-                .iter()
-                .find(|v| v.name.eq_ignore_ascii_case(&first))?;
-            Some(Cur::Val {
-                slot: g.offset as usize,
-                ty: g.ty.clone(),
-            })
+            let g = self.globals.vars.iter().find(|v| v.name.eq_ignore_ascii_case(&first))?;
+            Some(Cur::Val { slot: g.offset as usize, ty: g.ty.clone() })
         })?;
         for seg in it {
             cur = match (cur, seg) {
-                (
-                    Cur::Val {
-                        slot,
-                        ty: Type::FunctionBlock(fb),
-                    },
-                    Seg::Name(n),
-                ) => match self.fb_index(&fb) {
+                (Cur::Val { slot, ty: Type::FunctionBlock(fb) }, Seg::Name(n)) => match self.fb_index(&fb) {
                     Some(j) => self.member_of(j, slot, &n)?,
                     None => {
                         let l = self.support.std_layouts.get(&fb.to_ascii_uppercase())?;
                         let v = l.vars.iter().find(|v| v.name.eq_ignore_ascii_case(&n))?;
-                        Cur::Val {
-                            slot: slot + v.offset as usize,
-                            ty: v.ty.clone(),
-                        }
+                        Cur::Val { slot: slot + v.offset as usize, ty: v.ty.clone() }
                     }
                 },
-                (
-                    Cur::Val {
-                        slot,
-                        ty: Type::Struct { fields, .. },
-                    },
-                    Seg::Name(n),
-                ) => {
+                (Cur::Val { slot, ty: Type::Struct { fields, .. } }, Seg::Name(n)) => {
                     let mut off = 0;
                     let mut found = None;
                     for (f, t) in &fields {
                         if f.eq_ignore_ascii_case(&n) {
-                            found = Some(Cur::Val {
-                                slot: slot + off,
-                                ty: t.clone(),
-                            });
+                            found = Some(Cur::Val { slot: slot + off, ty: t.clone() });
                             break;
                         }
                         off += self.type_size(t);
                     }
                     found?
                 }
-                (
-                    Cur::Val {
-                        slot,
-                        ty: Type::Array { dims, elem },
-                    },
-                    Seg::Index(ix),
-                ) => {
+                (Cur::Val { slot, ty: Type::Array { dims, elem } }, Seg::Index(ix)) => {
                     if ix.len() != dims.len() {
                         return None;
                     }
@@ -154,40 +119,21 @@ impl Program {
                         }
                         flat = flat * (hi - lo + 1) + (i - lo);
                     }
-                    Cur::Val {
-                        slot: slot + flat as usize * esize,
-                        ty: *elem,
-                    }
+                    Cur::Val { slot: slot + flat as usize * esize, ty: *elem }
                 }
                 (Cur::Step { pou, base, k }, Seg::Name(n)) => {
-                    let PouBody::Chart(cc) = &self.pous[pou].body else {
-                        return None;
-                    };
+                    let PouBody::Chart(cc) = &self.pous[pou].body else { return None };
                     match n.to_ascii_uppercase().as_str() {
-                        "X" => Cur::Val {
-                            slot: base + cc.step_x[k] as usize,
-                            ty: Type::Bool,
-                        },
-                        "T" => Cur::Val {
-                            slot: base + cc.step_t[k] as usize,
-                            ty: Type::Time,
-                        },
+                        "X" => Cur::Val { slot: base + cc.step_x[k] as usize, ty: Type::Bool },
+                        "T" => Cur::Val { slot: base + cc.step_t[k] as usize, ty: Type::Time },
                         _ => return None,
                     }
                 }
                 (Cur::Action { pou, base, k }, Seg::Name(n)) => {
-                    let PouBody::Chart(cc) = &self.pous[pou].body else {
-                        return None;
-                    };
+                    let PouBody::Chart(cc) = &self.pous[pou].body else { return None };
                     match n.to_ascii_uppercase().as_str() {
-                        "Q" => Cur::Val {
-                            slot: base + cc.action_q[k] as usize,
-                            ty: Type::Bool,
-                        },
-                        "A" => Cur::Val {
-                            slot: base + cc.action_a[k] as usize,
-                            ty: Type::Bool,
-                        },
+                        "Q" => Cur::Val { slot: base + cc.action_q[k] as usize, ty: Type::Bool },
+                        "A" => Cur::Val { slot: base + cc.action_a[k] as usize, ty: Type::Bool },
                         _ => return None,
                     }
                 }
@@ -203,16 +149,8 @@ impl Program {
     /// Member `name` of the frame of POU `pou` at `base`: a variable, step or action.
     fn member_of(&self, pou: usize, base: usize, name: &str) -> Option<Cur> {
         let p = self.pous.get(pou)?;
-        if let Some(v) = p
-            .layout
-            .vars
-            .iter()
-            .find(|v| v.name.eq_ignore_ascii_case(name))
-        {
-            return Some(Cur::Val {
-                slot: base + v.offset as usize,
-                ty: v.ty.clone(),
-            });
+        if let Some(v) = p.layout.vars.iter().find(|v| v.name.eq_ignore_ascii_case(name)) {
+            return Some(Cur::Val { slot: base + v.offset as usize, ty: v.ty.clone() });
         }
         if let PouBody::Chart(cc) = &p.body {
             if let Some(k) = cc.chart.step(name) {
@@ -232,17 +170,10 @@ mod tests {
 
     #[test]
     fn paths_parse() {
-        assert_eq!(
-            parse_path("Rev.Busy"),
-            Some(vec![Seg::Name("Rev".into()), Seg::Name("Busy".into())])
-        );
+        assert_eq!(parse_path("Rev.Busy"), Some(vec![Seg::Name("Rev".into()), Seg::Name("Busy".into())]));
         assert_eq!(
             parse_path("Cells[1, 2].Seq"),
-            Some(vec![
-                Seg::Name("Cells".into()),
-                Seg::Index(vec![1, 2]),
-                Seg::Name("Seq".into())
-            ])
+            Some(vec![Seg::Name("Cells".into()), Seg::Index(vec![1, 2]), Seg::Name("Seq".into())])
         );
         assert_eq!(parse_path("a."), None);
         assert_eq!(parse_path("[1]"), None);

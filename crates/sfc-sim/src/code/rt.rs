@@ -39,10 +39,7 @@ pub(crate) const MAX_ITERATIONS: u64 = 10_000_000;
 pub(crate) const MAX_CALL_DEPTH: u32 = 200;
 
 pub(crate) fn fault(message: impl Into<String>, span: Span) -> Box<Fault> {
-    Box::new(Fault {
-        message: message.into(),
-        span,
-    })
+    Box::new(Fault { message: message.into(), span })
 }
 
 #[inline]
@@ -204,9 +201,7 @@ pub(crate) fn kind_of(ty: &Type) -> Kind {
         Type::Bool => Kind::Bool,
         Type::Real | Type::LReal => Kind::Real,
         Type::String { .. } | Type::WString { .. } => Kind::Str,
-        Type::Array { .. } | Type::Struct { .. } | Type::FunctionBlock(_) | Type::Error => {
-            Kind::Agg
-        }
+        Type::Array { .. } | Type::Struct { .. } | Type::FunctionBlock(_) | Type::Error => Kind::Agg,
         _ => Kind::Int,
     }
 }
@@ -288,19 +283,11 @@ pub(crate) fn format_value(ty: &Type, v: &Value) -> String {
         Type::TimeOfDay => format!("TOD#{}", format_tod(int_of(v).rem_euclid(DAY_US))),
         Type::DateAndTime => {
             let us = int_of(v);
-            format!(
-                "DT#{}-{}",
-                format_date(us.div_euclid(DAY_US)),
-                format_tod(us.rem_euclid(DAY_US))
-            )
+            format!("DT#{}-{}", format_date(us.div_euclid(DAY_US)), format_tod(us.rem_euclid(DAY_US)))
         }
         Type::Enum { values, .. } => {
             let n = int_of(v);
-            values
-                .iter()
-                .find(|(_, o)| *o == n)
-                .map(|(s, _)| s.clone())
-                .unwrap_or_else(|| n.to_string())
+            values.iter().find(|(_, o)| *o == n).map(|(s, _)| s.clone()).unwrap_or_else(|| n.to_string())
         }
         t => {
             let w = W::of(t);
@@ -311,11 +298,7 @@ pub(crate) fn format_value(ty: &Type, v: &Value) -> String {
 
 /// Shortest text that reads back as the same REAL (or LREAL).
 pub(crate) fn format_real(x: f64, single: bool) -> String {
-    let s = if single {
-        format!("{}", x as f32)
-    } else {
-        format!("{x}")
-    };
+    let s = if single { format!("{}", x as f32) } else { format!("{x}") };
     if x.is_finite() && !s.contains(['.', 'e', 'E']) {
         format!("{s}.0")
     } else {
@@ -374,10 +357,7 @@ mod tests {
     #[test]
     fn dates_format() {
         assert_eq!(format_date(0), "1970-01-01");
-        assert_eq!(
-            format_date(sfc_syntax::literal::days_from_civil(2024, 2, 29)),
-            "2024-02-29"
-        );
+        assert_eq!(format_date(sfc_syntax::literal::days_from_civil(2024, 2, 29)), "2024-02-29");
         assert_eq!(format_tod(38_543_780_000), "10:42:23.78");
         assert_eq!(format_real(1.0, true), "1.0");
         assert_eq!(format_real(0.1, true), "0.1");

@@ -32,11 +32,7 @@ impl StdFb {
     pub(crate) fn from_name(name: &str) -> Option<StdFb> {
         let params = sfc_st::stdlib::std_function_block(name)?;
         let upper = name.to_ascii_uppercase();
-        let count = params
-            .iter()
-            .find(|(n, _, _)| *n == "CV")
-            .map(|(_, _, t)| W::of(t))
-            .unwrap_or(W::I16);
+        let count = params.iter().find(|(n, _, _)| *n == "CV").map(|(_, _, t)| W::of(t)).unwrap_or(W::I16);
         let stem = upper.split('_').next().unwrap_or("");
         Some(match (upper.as_str(), stem) {
             ("TON", _) => StdFb::Ton,
@@ -56,11 +52,9 @@ impl StdFb {
     /// Hidden state after the parameters: `(name, default)`.
     fn hidden(self) -> &'static [(&'static str, HiddenInit)] {
         match self {
-            StdFb::Ton | StdFb::Tof | StdFb::Tp => &[
-                ("start", HiddenInit::Time),
-                ("running", HiddenInit::Bool),
-                ("prev", HiddenInit::Bool),
-            ],
+            StdFb::Ton | StdFb::Tof | StdFb::Tp => {
+                &[("start", HiddenInit::Time), ("running", HiddenInit::Bool), ("prev", HiddenInit::Bool)]
+            }
             StdFb::Ctu(_) | StdFb::Ctd(_) => &[("prev", HiddenInit::Bool)],
             StdFb::Ctud(_) => &[("prev_cu", HiddenInit::Bool), ("prev_cd", HiddenInit::Bool)],
             StdFb::RTrig | StdFb::FTrig => &[("m", HiddenInit::Bool)],
@@ -100,13 +94,7 @@ pub(crate) fn std_layout(name: &str) -> Option<(Layout, Vec<Value>)> {
             HiddenInit::Time => Value::Time(0),
         });
     }
-    Some((
-        Layout {
-            vars,
-            size: template.len() as u32,
-        },
-        template,
-    ))
+    Some((Layout { vars, size: template.len() as u32 }, template))
 }
 
 #[inline]
@@ -221,13 +209,7 @@ pub(crate) fn run(kind: StdFb, ctx: &mut Ctx<'_>, ib: usize) {
         }
         // CU CD R LD PV QU QD CV | prev_cu prev_cd
         StdFb::Ctud(w) => {
-            let (cu, cd, r, ld, pv) = (
-                b(m, ib),
-                b(m, ib + 1),
-                b(m, ib + 2),
-                b(m, ib + 3),
-                t(m, ib + 4),
-            );
+            let (cu, cd, r, ld, pv) = (b(m, ib), b(m, ib + 1), b(m, ib + 2), b(m, ib + 3), t(m, ib + 4));
             let up = cu && !b(m, ib + 8);
             let down = cd && !b(m, ib + 9);
             let mut cv = t(m, ib + 7);

@@ -18,11 +18,7 @@ use std::cmp::Ordering;
 use std::sync::Arc;
 
 fn err(span: Span, msg: impl Into<String>) -> Box<Diagnostic> {
-    Box::new(Diagnostic::error(
-        "SFC0320",
-        span,
-        format!("cannot be simulated: {}", msg.into()),
-    ))
+    Box::new(Diagnostic::error("SFC0320", span, format!("cannot be simulated: {}", msg.into())))
 }
 
 /// The common type of the `Same` inputs.
@@ -66,9 +62,7 @@ fn cmp_values(kind: Kind, w: W, a: &Value, b: &Value) -> Ordering {
         Kind::Bool => bool_of(a).cmp(&bool_of(b)),
         Kind::Int if w == W::U64 => (int_of(a) as u64).cmp(&(int_of(b) as u64)),
         Kind::Int => int_of(a).cmp(&int_of(b)),
-        Kind::Real => real_of(a)
-            .partial_cmp(&real_of(b))
-            .unwrap_or(Ordering::Equal),
+        Kind::Real => real_of(a).partial_cmp(&real_of(b)).unwrap_or(Ordering::Equal),
         Kind::Str => str_of(a).cmp(&str_of(b)),
         Kind::Agg => Ordering::Equal,
     }
@@ -131,14 +125,7 @@ pub(crate) fn apply(f: &StdFunction, args: Vec<TExpr>, rt: Option<Type>, span: S
         "SQRT" | "LN" | "LOG" | "EXP" | "SIN" | "COS" | "TAN" | "ASIN" | "ACOS" | "ATAN" => {
             need(1)?;
             let a = args.next().expect("checked");
-            let t = rt
-                .clone()
-                .filter(Type::is_real)
-                .unwrap_or(if a.ty.is_real() {
-                    a.ty.clone()
-                } else {
-                    Type::LReal
-                });
+            let t = rt.clone().filter(Type::is_real).unwrap_or(if a.ty.is_real() { a.ty.clone() } else { Type::LReal });
             let c = a.constant;
             let g = coerce(a, &t, span)?.real();
             let single = t.base() == &Type::Real;
@@ -172,11 +159,7 @@ pub(crate) fn apply(f: &StdFunction, args: Vec<TExpr>, rt: Option<Type>, span: S
             let t = rt_or(&a);
             let c = a.constant && k.constant;
             let bits = t.bit_width().unwrap_or(64);
-            let mask: u64 = if bits >= 64 {
-                u64::MAX
-            } else {
-                (1u64 << bits) - 1
-            };
+            let mask: u64 = if bits >= 64 { u64::MAX } else { (1u64 << bits) - 1 };
             let w = W::of(&t);
             let bool_in = t.is_bool();
             let g = coerce(a, &t, span)?.int();
@@ -222,9 +205,7 @@ pub(crate) fn apply(f: &StdFunction, args: Vec<TExpr>, rt: Option<Type>, span: S
             let out = TExpr::new(e, if bool_in { Type::Bool } else { t.clone() }, c);
             if bool_in {
                 let g = out.int();
-                return Ok(
-                    TExpr::new(CExpr::Bool(Box::new(move |x, b| Ok(g(x, b)? != 0))), t, c).fold(),
-                );
+                return Ok(TExpr::new(CExpr::Bool(Box::new(move |x, b| Ok(g(x, b)? != 0))), t, c).fold());
             }
             Ok(out.fold())
         }
@@ -233,10 +214,7 @@ pub(crate) fn apply(f: &StdFunction, args: Vec<TExpr>, rt: Option<Type>, span: S
             let g = args.next().expect("checked");
             let a = args.next().expect("checked");
             let b2 = args.next().expect("checked");
-            let t = rt
-                .clone()
-                .or_else(|| Type::common(&a.ty, &b2.ty))
-                .unwrap_or_else(|| a.ty.clone());
+            let t = rt.clone().or_else(|| Type::common(&a.ty, &b2.ty)).unwrap_or_else(|| a.ty.clone());
             let gf = g.bool();
             let af = coerce(a, &t, span)?.value();
             let bf = coerce(b2, &t, span)?.value();
@@ -254,10 +232,7 @@ pub(crate) fn apply(f: &StdFunction, args: Vec<TExpr>, rt: Option<Type>, span: S
             let rest: Vec<TExpr> = args.collect();
             let t = rt.clone().unwrap_or_else(|| rest[0].ty.clone());
             let kf = k.int();
-            let fs: Vec<ValFn> = rest
-                .into_iter()
-                .map(|a| coerce(a, &t, span).map(TExpr::value))
-                .collect::<C<_>>()?;
+            let fs: Vec<ValFn> = rest.into_iter().map(|a| coerce(a, &t, span).map(TExpr::value)).collect::<C<_>>()?;
             let v: ValFn = Box::new(move |x, b| {
                 let sel = kf(x, b)?;
                 let mut chosen = None;
@@ -267,60 +242,33 @@ pub(crate) fn apply(f: &StdFunction, args: Vec<TExpr>, rt: Option<Type>, span: S
                         chosen = Some(v);
                     }
                 }
-                chosen.ok_or_else(|| {
-                    fault(
-                        format!("MUX selector {sel} is out of range 0..{}", fs.len() - 1),
-                        span,
-                    )
-                })
+                chosen.ok_or_else(|| fault(format!("MUX selector {sel} is out of range 0..{}", fs.len() - 1), span))
             });
             Ok(TExpr::from_val(t, v, false))
         }
         "MIN" | "MAX" | "LIMIT" => {
             let all: Vec<TExpr> = args.collect();
             if all.len() < 2 || (name == "LIMIT" && all.len() != 3) {
-                return Err(err(
-                    span,
-                    format!("`{name}` has the wrong number of inputs"),
-                ));
+                return Err(err(span, format!("`{name}` has the wrong number of inputs")));
             }
             let t = rt
                 .clone()
-                .or_else(|| {
-                    all.iter()
-                        .skip(1)
-                        .try_fold(all[0].ty.clone(), |a, b| Type::common(&a, &b.ty))
-                })
+                .or_else(|| all.iter().skip(1).try_fold(all[0].ty.clone(), |a, b| Type::common(&a, &b.ty)))
                 .unwrap_or_else(|| all[0].ty.clone());
             let c = all.iter().all(|a| a.constant);
             let kind = kind_of(&t);
             let w = W::of(&t);
-            let fs: Vec<ValFn> = all
-                .into_iter()
-                .map(|a| coerce(a, &t, span).map(TExpr::value))
-                .collect::<C<_>>()?;
+            let fs: Vec<ValFn> = all.into_iter().map(|a| coerce(a, &t, span).map(TExpr::value)).collect::<C<_>>()?;
             let v: ValFn = match name {
                 "LIMIT" => Box::new(move |x, b| {
                     let mn = fs[0](x, b)?;
                     let v = fs[1](x, b)?;
                     let mx = fs[2](x, b)?;
-                    let v = if cmp_values(kind, w, &v, &mx) == Ordering::Greater {
-                        mx
-                    } else {
-                        v
-                    };
-                    Ok(if cmp_values(kind, w, &v, &mn) == Ordering::Less {
-                        mn
-                    } else {
-                        v
-                    })
+                    let v = if cmp_values(kind, w, &v, &mx) == Ordering::Greater { mx } else { v };
+                    Ok(if cmp_values(kind, w, &v, &mn) == Ordering::Less { mn } else { v })
                 }),
                 _ => {
-                    let want = if name == "MIN" {
-                        Ordering::Less
-                    } else {
-                        Ordering::Greater
-                    };
+                    let want = if name == "MIN" { Ordering::Less } else { Ordering::Greater };
                     Box::new(move |x, b| {
                         let mut best = fs[0](x, b)?;
                         for f in &fs[1..] {
@@ -340,9 +288,7 @@ pub(crate) fn apply(f: &StdFunction, args: Vec<TExpr>, rt: Option<Type>, span: S
             let a = args.next().expect("checked");
             let c = a.constant;
             let g = a.str();
-            let e = CExpr::Int(Box::new(move |x, b| {
-                Ok(W::I16.wrap(g(x, b)?.chars().count() as i64))
-            }));
+            let e = CExpr::Int(Box::new(move |x, b| Ok(W::I16.wrap(g(x, b)?.chars().count() as i64))));
             Ok(TExpr::new(e, Type::Int, c).fold())
         }
         "LEFT" | "RIGHT" => {
@@ -358,11 +304,8 @@ pub(crate) fn apply(f: &StdFunction, args: Vec<TExpr>, rt: Option<Type>, span: S
                 let n = lf(x, b)?.max(0) as usize;
                 let chars: Vec<char> = s.chars().collect();
                 let n = n.min(chars.len());
-                let part: String = if left {
-                    chars[..n].iter().collect()
-                } else {
-                    chars[chars.len() - n..].iter().collect()
-                };
+                let part: String =
+                    if left { chars[..n].iter().collect() } else { chars[chars.len() - n..].iter().collect() };
                 Ok(Arc::from(part))
             }));
             Ok(TExpr::new(e, t, c).fold())
@@ -427,11 +370,7 @@ pub(crate) fn apply(f: &StdFunction, args: Vec<TExpr>, rt: Option<Type>, span: S
             let replace = name == "REPLACE";
             need(if replace { 4 } else { 3 })?;
             let a = args.next().expect("checked");
-            let r = if replace {
-                Some(args.next().expect("checked"))
-            } else {
-                None
-            };
+            let r = if replace { Some(args.next().expect("checked")) } else { None };
             let l = args.next().expect("checked");
             let p = args.next().expect("checked");
             let t = rt_or(&a);
@@ -477,8 +416,7 @@ pub(crate) fn apply(f: &StdFunction, args: Vec<TExpr>, rt: Option<Type>, span: S
             let (a, b2) = (args.next().expect("checked"), args.next().expect("checked"));
             ops::binary(BinaryOp::Add, a, b2, rt, span)
         }
-        "SUB_TIME" | "SUB_DATE_DATE" | "SUB_TOD_TIME" | "SUB_TOD_TOD" | "SUB_DT_TIME"
-        | "SUB_DT_DT" => {
+        "SUB_TIME" | "SUB_DATE_DATE" | "SUB_TOD_TIME" | "SUB_TOD_TOD" | "SUB_DT_TIME" | "SUB_DT_DT" => {
             need(2)?;
             let (a, b2) = (args.next().expect("checked"), args.next().expect("checked"));
             ops::binary(BinaryOp::Sub, a, b2, rt, span)
@@ -486,11 +424,7 @@ pub(crate) fn apply(f: &StdFunction, args: Vec<TExpr>, rt: Option<Type>, span: S
         "MUL_TIME" | "DIV_TIME" => {
             need(2)?;
             let (a, b2) = (args.next().expect("checked"), args.next().expect("checked"));
-            let op = if name == "MUL_TIME" {
-                BinaryOp::Mul
-            } else {
-                BinaryOp::Div
-            };
+            let op = if name == "MUL_TIME" { BinaryOp::Mul } else { BinaryOp::Div };
             ops::binary(op, a, b2, rt, span)
         }
         _ => {
@@ -507,10 +441,7 @@ fn operator(op: BinaryOp, args: Vec<TExpr>, rt: Option<Type>, span: Span, name: 
     if args.len() < 2 {
         return Err(err(span, format!("`{name}` needs two inputs")));
     }
-    let cmp = matches!(
-        op,
-        BinaryOp::Eq | BinaryOp::Ne | BinaryOp::Lt | BinaryOp::Gt | BinaryOp::Le | BinaryOp::Ge
-    );
+    let cmp = matches!(op, BinaryOp::Eq | BinaryOp::Ne | BinaryOp::Lt | BinaryOp::Gt | BinaryOp::Le | BinaryOp::Ge);
     if cmp {
         if args.len() == 2 {
             let mut it = args.into_iter();
@@ -524,10 +455,7 @@ fn operator(op: BinaryOp, args: Vec<TExpr>, rt: Option<Type>, span: Span, name: 
             .ok_or_else(|| err(span, format!("`{name}` on mixed types")))?;
         let kind = kind_of(&t);
         let w = W::of(&t);
-        let fs: Vec<ValFn> = args
-            .into_iter()
-            .map(|a| coerce(a, &t, span).map(TExpr::value))
-            .collect::<C<_>>()?;
+        let fs: Vec<ValFn> = args.into_iter().map(|a| coerce(a, &t, span).map(TExpr::value)).collect::<C<_>>()?;
         let e = CExpr::Bool(Box::new(move |x, b| {
             let mut prev = fs[0](x, b)?;
             let mut ok = true;
@@ -594,20 +522,14 @@ fn conversion(name: &str, a: TExpr, rt: Option<Type>, span: Span) -> C<TExpr> {
         let e = CExpr::Int(Box::new(move |x, b| {
             let v = wi.wide(g(x, b)?);
             if v < 0 {
-                return Err(fault(
-                    format!("{fname}: {v} is negative and cannot be BCD-coded"),
-                    span,
-                ));
+                return Err(fault(format!("{fname}: {v} is negative and cannot be BCD-coded"), span));
             }
             let mut out: u128 = 0;
             let mut shift = 0u32;
             let mut rest = v as u128;
             while rest != 0 {
                 if shift >= bits {
-                    return Err(fault(
-                        format!("{fname}: {v} has too many digits for {bits} bits"),
-                        span,
-                    ));
+                    return Err(fault(format!("{fname}: {v} has too many digits for {bits} bits"), span));
                 }
                 out |= (rest % 10) << shift;
                 rest /= 10;

@@ -50,10 +50,7 @@ pub(crate) fn to_block(mut v: Vec<StmtFn>) -> Block {
 }
 
 fn endless(span: sfc_diagnostics::Span) -> Box<super::Fault> {
-    fault(
-        format!("loop did not terminate (more than {MAX_ITERATIONS} iterations)"),
-        span,
-    )
+    fault(format!("loop did not terminate (more than {MAX_ITERATIONS} iterations)"), span)
 }
 
 impl Cx<'_, '_> {
@@ -82,10 +79,7 @@ impl Cx<'_, '_> {
                 Ok(write(p, v, size))
             }
             StmtKind::Call(e) => self.call_stmt(e),
-            StmtKind::If {
-                branches,
-                else_body,
-            } => {
+            StmtKind::If { branches, else_body } => {
                 let mut bs = Vec::new();
                 for (c, body) in branches {
                     bs.push((self.cond(c)?, self.stmts(body)?));
@@ -97,9 +91,7 @@ impl Cx<'_, '_> {
                 if bs.len() == 1 {
                     let (c, t) = bs.pop().expect("one branch");
                     return Ok(match els {
-                        None => {
-                            Box::new(move |x, b| if c(x, b)? { t(x, b) } else { Ok(Flow::Next) })
-                        }
+                        None => Box::new(move |x, b| if c(x, b)? { t(x, b) } else { Ok(Flow::Next) }),
                         Some(e) => Box::new(move |x, b| if c(x, b)? { t(x, b) } else { e(x, b) }),
                     });
                 }
@@ -115,18 +107,8 @@ impl Cx<'_, '_> {
                     }
                 }))
             }
-            StmtKind::Case {
-                selector,
-                arms,
-                else_body,
-            } => self.case(selector, arms, else_body.as_deref()),
-            StmtKind::For {
-                var,
-                from,
-                to,
-                by,
-                body,
-            } => self.for_loop(var, from, to, by.as_deref(), body, s),
+            StmtKind::Case { selector, arms, else_body } => self.case(selector, arms, else_body.as_deref()),
+            StmtKind::For { var, from, to, by, body } => self.for_loop(var, from, to, by.as_deref(), body, s),
             StmtKind::While { cond, body } => {
                 let c = self.cond(cond)?;
                 let body = self.stmts(body)?;
@@ -182,12 +164,8 @@ impl Cx<'_, '_> {
         let w = W::of(&sel_ty);
         let sf = sel.int();
         let label = |e: &Expr| -> C<i128> {
-            let v = self
-                .expr_as(e, &sel_ty)
-                .or_else(|_| self.expr(e, Some(&sel_ty)))?;
-            let c = v
-                .const_value()
-                .ok_or_else(|| self.error(e.span, "a CASE label must be a constant"))?;
+            let v = self.expr_as(e, &sel_ty).or_else(|_| self.expr(e, Some(&sel_ty)))?;
+            let c = v.const_value().ok_or_else(|| self.error(e.span, "a CASE label must be a constant"))?;
             Ok(w.wide(int_of(&c)))
         };
         let mut compiled: Vec<(Vec<(i128, i128)>, StmtFn)> = Vec::new();
@@ -225,20 +203,9 @@ impl Cx<'_, '_> {
     /// `FOR v := a TO b BY s`: the bound and the step are evaluated once; the variable is
     /// incremented (wrapping in its type) after each run of the body and tested before each;
     /// after the loop it holds the first value past the bound (or its value at EXIT).
-    fn for_loop(
-        &self,
-        var: &Ident,
-        from: &Expr,
-        to: &Expr,
-        by: Option<&Expr>,
-        body: &[Stmt],
-        s: &Stmt,
-    ) -> C<StmtFn> {
+    fn for_loop(&self, var: &Ident, from: &Expr, to: &Expr, by: Option<&Expr>, body: &[Stmt], s: &Stmt) -> C<StmtFn> {
         let Some(Sym::Var { place, ty, .. }) = self.lookup(&var.text) else {
-            return Err(self.error(
-                var.span,
-                format!("the FOR variable `{}` is not a variable", var.text),
-            ));
+            return Err(self.error(var.span, format!("the FOR variable `{}` is not a variable", var.text)));
         };
         let w = W::of(&ty);
         let start = self.expr_as(from, &ty)?.int();

@@ -79,17 +79,13 @@ pub(crate) enum Opd<T> {
     F(Fx<T>),
 }
 
-pub(crate) fn bool_fn<F: Fn(&mut Ctx<'_>, usize) -> R<bool> + Send + Sync + 'static>(
-    f: F,
-) -> BoolFn {
+pub(crate) fn bool_fn<F: Fn(&mut Ctx<'_>, usize) -> R<bool> + Send + Sync + 'static>(f: F) -> BoolFn {
     Box::new(f)
 }
 pub(crate) fn int_fn<F: Fn(&mut Ctx<'_>, usize) -> R<i64> + Send + Sync + 'static>(f: F) -> IntFn {
     Box::new(f)
 }
-pub(crate) fn real_fn<F: Fn(&mut Ctx<'_>, usize) -> R<f64> + Send + Sync + 'static>(
-    f: F,
-) -> RealFn {
+pub(crate) fn real_fn<F: Fn(&mut Ctx<'_>, usize) -> R<f64> + Send + Sync + 'static>(f: F) -> RealFn {
     Box::new(f)
 }
 
@@ -97,34 +93,26 @@ pub(crate) fn real_fn<F: Fn(&mut Ctx<'_>, usize) -> R<f64> + Send + Sync + 'stat
 macro_rules! opd2 {
     ($mk:path, $a:expr, $b:expr, $ga:path, $gb:path, |$x:ident, $y:ident| $body:expr) => {
         match ($a, $b) {
-            ($crate::code::texpr::Opd::Leaf(l1), $crate::code::texpr::Opd::Leaf(l2)) => {
-                $mk(move |c, base| {
-                    let $x = $ga(l1, c, base);
-                    let $y = $gb(l2, c, base);
-                    $body
-                })
-            }
-            ($crate::code::texpr::Opd::Leaf(l1), $crate::code::texpr::Opd::F(f2)) => {
-                $mk(move |c, base| {
-                    let $x = $ga(l1, c, base);
-                    let $y = f2(c, base)?;
-                    $body
-                })
-            }
-            ($crate::code::texpr::Opd::F(f1), $crate::code::texpr::Opd::Leaf(l2)) => {
-                $mk(move |c, base| {
-                    let $x = f1(c, base)?;
-                    let $y = $gb(l2, c, base);
-                    $body
-                })
-            }
-            ($crate::code::texpr::Opd::F(f1), $crate::code::texpr::Opd::F(f2)) => {
-                $mk(move |c, base| {
-                    let $x = f1(c, base)?;
-                    let $y = f2(c, base)?;
-                    $body
-                })
-            }
+            ($crate::code::texpr::Opd::Leaf(l1), $crate::code::texpr::Opd::Leaf(l2)) => $mk(move |c, base| {
+                let $x = $ga(l1, c, base);
+                let $y = $gb(l2, c, base);
+                $body
+            }),
+            ($crate::code::texpr::Opd::Leaf(l1), $crate::code::texpr::Opd::F(f2)) => $mk(move |c, base| {
+                let $x = $ga(l1, c, base);
+                let $y = f2(c, base)?;
+                $body
+            }),
+            ($crate::code::texpr::Opd::F(f1), $crate::code::texpr::Opd::Leaf(l2)) => $mk(move |c, base| {
+                let $x = f1(c, base)?;
+                let $y = $gb(l2, c, base);
+                $body
+            }),
+            ($crate::code::texpr::Opd::F(f1), $crate::code::texpr::Opd::F(f2)) => $mk(move |c, base| {
+                let $x = f1(c, base)?;
+                let $y = f2(c, base)?;
+                $body
+            }),
         }
     };
 }
@@ -149,11 +137,7 @@ pub(crate) use opd1;
 
 /// Runs `f` against an empty memory (for folding constants at compile time).
 pub(crate) fn with_scratch_ctx<T>(f: impl FnOnce(&mut Ctx<'_>) -> T) -> T {
-    let prog = Program {
-        pous: Vec::new(),
-        globals: Layout::default(),
-        support: Default::default(),
-    };
+    let prog = Program { pous: Vec::new(), globals: Layout::default(), support: Default::default() };
     let mut mem = Vec::new();
     let mut charts = Vec::new();
     let mut sink = ScanSink::default();
@@ -171,12 +155,7 @@ pub(crate) fn with_scratch_ctx<T>(f: impl FnOnce(&mut Ctx<'_>) -> T) -> T {
 
 impl TExpr {
     pub(crate) fn new(e: CExpr, ty: Type, constant: bool) -> TExpr {
-        TExpr {
-            e,
-            ty,
-            constant,
-            leaf: None,
-        }
+        TExpr { e, ty, constant, leaf: None }
     }
 
     pub(crate) fn int_opd(self) -> Opd<i64> {
@@ -238,12 +217,7 @@ impl TExpr {
                 CExpr::Agg(Box::new(move |_, _| Ok(one.clone())))
             }
         };
-        TExpr {
-            e,
-            ty,
-            constant: true,
-            leaf,
-        }
+        TExpr { e, ty, constant: true, leaf }
     }
 
     /// A generic value computation viewed as an expression of type `ty`.
@@ -337,9 +311,7 @@ impl TExpr {
             CExpr::Int(f) => Box::new(move |c, b| Ok(Value::Int(f(c, b)?))),
             CExpr::Real(f) => Box::new(move |c, b| Ok(Value::Real(f(c, b)?))),
             CExpr::Str(f) => Box::new(move |c, b| Ok(Value::Str(f(c, b)?))),
-            CExpr::Agg(f) => {
-                Box::new(move |c, b| Ok(f(c, b)?.into_iter().next().unwrap_or_default()))
-            }
+            CExpr::Agg(f) => Box::new(move |c, b| Ok(f(c, b)?.into_iter().next().unwrap_or_default())),
         }
     }
 }

@@ -57,10 +57,7 @@ impl PouMeta<'_> {
         self.ast.kind
     }
     pub(crate) fn var(&self, name: &str) -> Option<&VarSlot> {
-        self.layout
-            .vars
-            .iter()
-            .find(|v| v.name.eq_ignore_ascii_case(name))
+        self.layout.vars.iter().find(|v| v.name.eq_ignore_ascii_case(name))
     }
 }
 
@@ -114,11 +111,7 @@ impl<'a> Unit<'a> {
             Type::Struct { fields, .. } => fields.iter().map(|(_, t)| self.type_size(t)).sum(),
             Type::FunctionBlock(name) => match self.fb_pou(name) {
                 Some(i) => self.pous[i].layout.size,
-                None => self
-                    .std_layouts
-                    .get(&name.to_ascii_uppercase())
-                    .map(|(l, _)| l.size)
-                    .unwrap_or(1),
+                None => self.std_layouts.get(&name.to_ascii_uppercase()).map(|(l, _)| l.size).unwrap_or(1),
             },
             _ => 1,
         }
@@ -134,11 +127,7 @@ impl<'a> Unit<'a> {
     }
 
     pub(crate) fn error(&self, span: Span, msg: impl Into<String>) -> Box<Diagnostic> {
-        Box::new(Diagnostic::error(
-            "SFC0320",
-            span,
-            format!("cannot be simulated: {}", msg.into()),
-        ))
+        Box::new(Diagnostic::error("SFC0320", span, format!("cannot be simulated: {}", msg.into())))
     }
 
     #[allow(clippy::boxed_local)]
@@ -147,15 +136,9 @@ impl<'a> Unit<'a> {
     }
 
     /// Parameter `name` of the function block type `fb`: frame offset, type.
-    pub(crate) fn fb_param(
-        &self,
-        fb: &str,
-        name: &str,
-    ) -> Option<(u32, Type, sfc_syntax::ast::VarKind)> {
+    pub(crate) fn fb_param(&self, fb: &str, name: &str) -> Option<(u32, Type, sfc_syntax::ast::VarKind)> {
         match self.fb_pou(fb) {
-            Some(i) => self.pous[i]
-                .var(name)
-                .map(|v| (v.offset, v.ty.clone(), v.kind)),
+            Some(i) => self.pous[i].var(name).map(|v| (v.offset, v.ty.clone(), v.kind)),
             None => super::stdfb::std_param(fb, name),
         }
     }
@@ -185,11 +168,7 @@ impl<'u, 'a> Cx<'u, 'a> {
             }
         }
         let (slot, ty, konst) = self.u.global(name)?;
-        Some(Sym::Var {
-            place: Place::Global(slot),
-            ty,
-            konst,
-        })
+        Some(Sym::Var { place: Place::Global(slot), ty, konst })
     }
 
     /// The type the checker recorded for an expression.
