@@ -193,6 +193,61 @@ negation `NOT c5` / `!c5`.";
         "Step tags are distinct non-negative integers below the state limit, and the initial \
 step must be state 0.";
 
+    "SFC0501" Error "unsafe chart"
+        "With the guards taken as free inputs, some firing sequence activates a step that is \
+already active (IEC 61131-3: an \"unsafe SFC\"). The step then holds two tokens; the simulator \
+keeps it active (set semantics) and emits an `unsafe` event. The witness is the shortest firing \
+sequence from the initial situation; a note says whether the simulator could follow it with the \
+real guards (confirmed, with the input schedule) or not (possible). A typical cause is a \
+selection branch that leaves a simultaneous branch, so one token goes round while the other \
+branch still runs:\n\n    TRANSITION FROM S1 TO (S2, S3) := Start; END_TRANSITION\n    \
+TRANSITION FROM S2 TO S1 := Abort; END_TRANSITION   (* leaves S3 active *)\n\nLeave a \
+simultaneous sequence only through its convergence: `TRANSITION FROM (S2, S3) TO S1`.";
+    "SFC0502" Error "unreachable step"
+        "No firing sequence from the initial situation ever activates the step, even with every \
+guard free: it hangs from a dead transition or from nothing at all. (IEC 61131-3 calls such \
+charts erroneous.) A typical cause is a simultaneous convergence that waits for a step of a \
+selection branch that was not taken:\n\n    TRANSITION FROM S1 TO S2 := A; END_TRANSITION\n    \
+TRANSITION FROM S1 TO S3 := B; END_TRANSITION\n    TRANSITION FROM (S2, S3) TO S4 := TRUE; \
+END_TRANSITION   (* S2 and S3 are never active together: S4 is unreachable *)\n\nConverge a \
+selection with a selection convergence (`FROM S2 TO S4` and `FROM S3 TO S4`).";
+    "SFC0503" Error "dead transition"
+        "The transition is never enabled: in no reachable situation are all its preceding steps \
+active together. Usually a simultaneous convergence whose input steps lie in different branches \
+of a selection, or a step that is itself unreachable. Connect the transition to steps that can be \
+active together.";
+    "SFC0504" Error "lock-up"
+        "A reachable situation in which some active step has outgoing transitions but none of them \
+can ever be enabled: the chart stops for good (a situation where no active step has any outgoing \
+transition is a normal end, not a lock-up). Typical: a simultaneous branch ends, or jumps away, \
+while its convergence still waits for it. The witness is the shortest firing sequence that \
+reaches the situation; a note gives the input schedule that makes the simulator reach it.";
+    "SFC0505" Warning "non-exclusive alternatives"
+        "Two transitions leaving the same step can be true in the same scan: then only one fires, \
+chosen by explicit PRIORITY or, without it, silently by declaration order. The witness is an \
+input valuation under which both guards hold. Make the guards exclusive, or state the order:\n\n    \
+TRANSITION T1 (PRIORITY := 1) FROM S1 TO S2 := Full; END_TRANSITION\n    TRANSITION T2 \
+(PRIORITY := 2) FROM S1 TO S3 := Full OR Timeout; END_TRANSITION\n\nWith explicit priorities \
+the finding is a note.";
+    "SFC0506" Note "incomplete alternatives"
+        "There is an input valuation (the witness) under which no transition leaving the step is \
+true, so the step waits. That is normal SFC behaviour; the note helps to check that waiting is \
+intended in that case, e.g. that `Level < 10` and `Level > 90` really should leave the chart \
+waiting for `Level` between 10 and 90.";
+    "SFC0507" Warning "condition always true"
+        "The transition condition holds for every input valuation whenever its preceding steps \
+are active (for example `Ready OR NOT Ready`), so the transition fires in the first scan after \
+its step is activated. Write `TRUE` if that is intended. (A literal `TRUE` is not reported.)";
+    "SFC0508" Warning "condition always false"
+        "The transition condition can never hold when its preceding steps are active (for \
+example `Level > 90 AND Level < 10`, or `S2.X` of a step that is never active together with the \
+preceding step), so the transition never fires. (A literal `FALSE` is not reported.)";
+    "SFC0509" Note "analysis incomplete"
+        "The chart has more reachable situations than the analysis explores explicitly and is not \
+structured enough for the cheap proofs; the findings listed are real, but the absence of others \
+is not proven. Split the chart into function blocks, or structure its branches as matched \
+divergences and convergences.";
+
     "SFC0601" Error "invalid attribute value"
         "An `sfc.*` attribute has a value of the wrong form: `sfc.tag` an integer, `sfc.timeout` \
 a duration, `sfc.target` one of blank, atmt, eatmt.";
