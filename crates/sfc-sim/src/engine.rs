@@ -779,11 +779,10 @@ fn evolve(ctx: &mut Ctx<'_>, chart: usize, code: &ChartCode, plan: &ChartPlan) -
     let now = ctx.now;
     if cand.len() == 1 {
         let t = cand[0];
-        let (pre, post) = (plan.pre.get(t), plan.post.get(t));
         // The common case, a transition between two steps of a sequence (or a self-loop) whose
         // target is not active: fire it without the general bookkeeping.
-        if let ([from], [to]) = (pre, post) {
-            let (from, to) = (*from, *to);
+        let (from, to) = plan.links[t as usize];
+        if from != u32::MAX {
             if from == to || !st.steps[to as usize].x {
                 st.left.clear();
                 st.left.push(from);
