@@ -2,11 +2,12 @@
 
 use clap::{Parser, Subcommand, ValueEnum};
 use sfc_diagnostics::{render_human, render_json, RenderOptions, Severity, SourceFile};
-use sfc_model::{check_source, CheckOptions, Target};
+use sfc_model::{CheckOptions, Target};
 use std::io::{IsTerminal, Read, Write};
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
+mod build;
 mod sim;
 
 #[derive(Parser)]
@@ -22,6 +23,8 @@ enum Command {
     Check(CheckArgs),
     /// Rewrite textual SFC in canonical layout.
     Fmt(FmtArgs),
+    /// Compile a chart: REX ATMT/EATMT table, Structured Text, S7-200 STL, PLCopen XML, SVG or text.
+    Build(BuildArgs),
     /// Simulate a chart on virtual time, optionally against a scenario, writing a trace.
     Sim(SimArgs),
     /// Run every `*.scenario.toml` under the given files and directories.
@@ -100,7 +103,7 @@ enum TargetArg {
 
 #[derive(clap::Args)]
 struct CheckArgs {
-    /// IEC 61131-3 source files (`.st`).
+    /// IEC 61131-3 source files (`.st`) or PLCopen XML files (`.xml`).
     #[arg(required_unless_present = "explain")]
     files: Vec<PathBuf>,
     /// Output format: rustc-like text on stderr, or a JSON array on stdout.
@@ -121,6 +124,41 @@ struct CheckArgs {
     /// Print what a diagnostic code means and how to fix it.
     #[arg(long, value_name = "CODE")]
     explain: Option<String>,
+}
+
+#[derive(Clone, Copy, ValueEnum)]
+enum BuildTargetArg {
+    Atmt,
+    Eatmt,
+    St,
+    Stl,
+    Plcopen,
+    Svg,
+    Text,
+}
+
+#[derive(clap::Args)]
+struct BuildArgs {
+    /// The chart: IEC 61131-3 text (`.st`) or PLCopen XML (`.xml`).
+    file: PathBuf,
+    /// What to produce.
+    #[arg(long, value_enum)]
+    target: BuildTargetArg,
+    /// Write the result here (atomically) instead of standard output.
+    #[arg(short = 'o', long = "output", value_name = "OUT")]
+    out: Option<PathBuf>,
+    /// The SFC POU to build when the file has several.
+    #[arg(long, value_name = "NAME")]
+    pou: Option<String>,
+    /// ATMT/EATMT: compile simultaneous branches into one automaton, one state per reachable situation.
+    #[arg(long)]
+    flatten: bool,
+    /// State limit override for ATMT/EATMT.
+    #[arg(long)]
+    nstep: Option<u32>,
+    /// Rule limit override for ATMT/EATMT.
+    #[arg(long)]
+    ntr: Option<u32>,
 }
 
 #[derive(clap::Args)]
@@ -157,6 +195,23 @@ fn run() -> u8 {
     match cli.command {
         Command::Check(a) => check(a),
         Command::Fmt(a) => fmt(a),
+        Command::Build(a) => build::build(build::BuildRequest {
+            file: a.file,
+            target: match a.target {
+                BuildTargetArg::Atmt => build::BuildTarget::Atmt,
+                BuildTargetArg::Eatmt => build::BuildTarget::Eatmt,
+                BuildTargetArg::St => build::BuildTarget::St,
+                BuildTargetArg::Stl => build::BuildTarget::Stl,
+                BuildTargetArg::Plcopen => build::BuildTarget::Plcopen,
+                BuildTargetArg::Svg => build::BuildTarget::Svg,
+                BuildTargetArg::Text => build::BuildTarget::Text,
+            },
+            out: a.out,
+            pou: a.pou,
+            flatten: a.flatten,
+            nstep: a.nstep,
+            ntr: a.ntr,
+        }),
         Command::Sim(a) => sim::sim(sim::SimRequest {
             file: a.file,
             scenario: a.scenario,
@@ -225,9 +280,9 @@ fn check(a: CheckArgs) -> u8 {
             }
         };
         let id = files.len() as u32;
-        let checked = check_source(id, &path.display().to_string(), &text, &opts);
-        files.push(checked.file);
-        diags.extend(checked.diagnostics);
+        let (file, _, found) = build::check_any(id, path, &text, &opts);
+        files.push(file);
+        diags.extend(found);
     }
     let errors = diags.iter().filter(|d| d.severity == Severity::Error).count();
     let warnings = diags.iter().filter(|d| d.severity == Severity::Warning).count();
@@ -245,6 +300,16 @@ fn check(a: CheckArgs) -> u8 {
         }
     }
     u8::from(errors > 0)
+}
+
+/// Prints diagnostics in the human form on stderr; returns the number of errors.
+fn print_diagnostics(diags: &[sfc_diagnostics::Diagnostic], files: &[SourceFile]) -> usize {
+    let color = std::io::stderr().is_terminal();
+    let mut err = std::io::stderr().lock();
+    for d in diags {
+        let _ = writeln!(err, "{}", render_human(d, files, RenderOptions { color }));
+    }
+    diags.iter().filter(|d| d.severity == Severity::Error).count()
 }
 
 fn plural(n: usize, word: &str) -> String {

@@ -2,7 +2,7 @@
 //!
 //! Ranges: `SFC00xx` lexical, `SFC01xx` syntax, `SFC02xx` chart structure, `SFC03xx` names and
 //! types, `SFC04xx` ATMT/EATMT target rules, `SFC05xx` analysis, `SFC06xx` pragmas and attributes,
-//! `SFC07xx` import (PLCopen XML).
+//! `SFC07xx` import (PLCopen XML), `SFC08xx` code generation.
 
 use crate::Severity;
 
@@ -192,6 +192,36 @@ negation `NOT c5` / `!c5`.";
     "SFC0409" Error "invalid state tag"
         "Step tags are distinct non-negative integers below the state limit, and the initial \
 step must be state 0.";
+    "SFC0410" Error "chart cannot be compiled to a transition table"
+        "A transition table needs the target `atmt` or `eatmt`, an initial step (it becomes \
+state 0) and a condition input on every transition (a transition whose condition was lost to a \
+syntax error has none). Fix the chart, or build for another target.";
+    "SFC0411" Error "simultaneous firings cannot be flattened"
+        "`--flatten` turns every reachable situation of a chart with simultaneous branches into \
+one state of the automaton. An ATMT/EATMT rule tests ONE condition and the block takes the first \
+true rule of its state, so the flattened table can follow the chart only when, in every \
+situation, what happens next is decided condition by condition. Two parallel branches waiting \
+for different inputs are not: when both inputs are TRUE in the same scan both transitions fire \
+together, which needs `C1 AND C2`. The witness is the firing sequence that reaches the \
+situation. Make the branches wait on the same input, use exclusive conditions (EATMT: `c1` and \
+`NOT c1`), or sequence them:\n\n    TRANSITION FROM S0 TO (A1, B1) := C0; END_TRANSITION\n    \
+TRANSITION FROM A1 TO A2 := C1; END_TRANSITION   (* may fire together with ... *)\n    \
+TRANSITION FROM B1 TO B2 := C2; END_TRANSITION   (* ... this one: refused *)";
+    "SFC0412" Error "flattened automaton has too many states"
+        "The chart has more reachable situations than the block has states (ATMT 16, EATMT 256, \
+`--nstep` overrides). Each combination of active steps of parallel branches is one state, so \
+their number multiplies; split the chart or shorten the parallel branches.";
+    "SFC0413" Error "flattened automaton has too many rules"
+        "The rules of all states of the flattened automaton exceed the block's limit (ATMT 64, \
+EATMT 1024, `--ntr` overrides).";
+    "SFC0414" Error "too many inputs in one situation to flatten"
+        "Flattening examines every valuation of the inputs that the transitions enabled in one \
+situation test; it handles at most 16 different inputs per situation.";
+    "SFC0415" Note "states of the flattened automaton"
+        "Lists which set of active steps each state number of a flattened table stands for. State \
+0 is the initial situation; the others are numbered in the order they are first reached. A \
+state's timeout is the smallest `sfc.timeout` of its steps, and the block restarts it at every \
+state change, including a move of another parallel branch.";
 
     "SFC0501" Error "unsafe chart"
         "With the guards taken as free inputs, some firing sequence activates a step that is \
@@ -255,6 +285,114 @@ a duration, `sfc.target` one of blank, atmt, eatmt.";
         "The attribute is in the `sfc.` namespace but sfc does not know it; check its spelling.";
     "SFC0603" Warning "misplaced attribute"
         "The attribute pragma is not directly before an element it can describe.";
+
+    "SFC0701" Error "malformed XML"
+        "The file is not well-formed XML (an unclosed element, a stray `<` or `&`, a mismatched end \
+tag), so nothing can be imported. The location is where the XML parser stopped; the mistake is \
+often just before it:\n\n    <step localId=\"1\" name=\"Init\">    <!-- neither `/>` nor `</step>` -->";
+    "SFC0702" Error "not a PLCopen project"
+        "The document element of a PLCopen TC6 file is `project` (with `fileHeader`, \
+`contentHeader`, `types` and `instances`); this file has another one and is not imported.";
+    "SFC0703" Warning "unknown PLCopen namespace"
+        "The `project` element is not in one of the PLCopen TC6 namespaces sfc reads \
+(`http://www.plcopen.org/xml/tc6_0201`, `…/tc6_0200`, `http://www.plcopen.org/xml/tc6.xsd` for \
+v1.0). The file is read by element names anyway; check the result.";
+    "SFC0704" Error "invalid IEC name"
+        "A name in the XML (of a step, variable, action, POU, type) is not an IEC 61131-3 \
+identifier: letters, digits and single underscores, starting with a letter or `_`, not ending \
+with `_`, not a keyword. It is imported under a repaired name (`Step 1` becomes `Step_1`); rename \
+it in the source tool.";
+    "SFC0705" Error "unsupported PLCopen element"
+        "The element has no counterpart in textual IEC 61131-3 and is not imported (or imported \
+as the message says): FBD jumps, labels and returns, vendor elements, pointer types, an action or \
+condition written in SFC, a macro step without a body, a block enabled through `EN`. The rest of \
+the file is imported; rewrite this part in ST or as plain SFC.";
+    "SFC0706" Error "broken connection"
+        "A connection of a graphical body refers to a `localId` that does not exist, joins \
+elements that cannot follow each other (a transition after a transition, a step after a step), \
+or a transition lacks a preceding or following step. The element is not imported. PLCopen stores \
+each link on its consumer: `connectionPointIn/connection@refLocalId` names the producer.";
+    "SFC0707" Note "condition network calls function blocks"
+        "A transition condition drawn in FBD or LD uses function block instances (a timer, a \
+flip-flop). A condition is an expression and cannot call them, so, as Beremiz does when it \
+compiles the chart, the calls are put into the action `COMPUTE_FUNCTION_BLOCKS`, associated with \
+the initial step with qualifier S: they run in every cycle, and the condition reads their \
+outputs:\n\n    INITIAL_STEP Init:\n        COMPUTE_FUNCTION_BLOCKS(S);\n    END_STEP\n    \
+TRANSITION FROM Green TO Orange := TON3.Q OR WarnCars; END_TRANSITION";
+    "SFC0708" Error "missing transition condition"
+        "The transition has no usable condition: no `condition` element, a reference to a name \
+missing from the POU's `transitions`, a condition body that never assigns the transition's name, \
+or nothing wired to the condition input. It is imported as `FALSE`, so the transition never \
+fires; supply the condition in the source tool.";
+    "SFC0709" Note "macro step flattened"
+        "Textual IEC 61131-3 has no macro steps: the macro step's body is imported in its place. \
+Transitions into the macro step go to the first step of its body, transitions out of it leave \
+from the body's last step. Exporting the chart again writes the flattened steps.";
+    "SFC0710" Warning "XML content not imported"
+        "Part of the file has no effect in the imported program and is left out: a named \
+transition condition nothing refers to, a second body of a POU, an element that does not belong \
+in an SFC body, a coil on the path of a transition condition (a condition cannot assign it), \
+the `persistent` attribute of a variable list.";
+
+    "SFC0801" Error "chart cannot be translated to ST"
+        "The Structured Text target (`--target st`) replaces the chart's POU by a plain ST POU of \
+the same kind and name. It needs an error-free file, a PROGRAM or FUNCTION_BLOCK (a FUNCTION \
+keeps no state between calls, so it cannot hold a chart), and a condition on every transition.";
+    "SFC0802" Error "IL current result after a label"
+        "The ST translation follows IL's current result as an expression. After a label the \
+current result depends on how control got there (the line before or a jump), so an instruction \
+that uses it right after the label cannot be translated; jumps inside transition conditions or \
+inside parentheses cannot either. Load a value after the label:\n\n    \
+JMPC Skip\n    LDN  X\nSkip:   LD   Y      (* not: Skip: ST X *)\n    ST   X";
+    "SFC0803" Error "IL current result may have changed"
+        "The ST translation writes IL's current result as the expression that computed it. An \
+instruction before this one may have changed a variable that expression reads (`LD X  R X  ST \
+Y`: Y gets the old X in IL), so reusing the expression would give another value. Load the value \
+again, or store it in a variable and load that.";
+    "SFC0804" Error "IL instruction not translatable"
+        "The instruction has no ST translation here: a statement (ST, S, R, CAL, JMP, RET) inside \
+a transition condition or a parenthesised operand, an operator without the operand it needs, or \
+a jump to a label that does not exist.";
+
+    "SFC0810" Error "not expressible in S7-200 bit logic"
+        "The S7-200 statement-list target (`--target stl`) turns conditions and action bodies \
+into bit logic over inputs, outputs, memory bits, step bits and timer bits. This expression reads \
+something that is not a bit: an integer or REAL variable, a comparison of numbers, arithmetic, a \
+function or function block output, an array element, or an IL instruction other than LD, AND, \
+OR, XOR (also with N) and NOT. Compute the number elsewhere and give the chart a BOOL:\n\n    \
+TRANSITION FROM Fill TO Full := LevelHigh; END_TRANSITION   (* LevelHigh : BOOL *)";
+    "SFC0811" Error "statement not supported by the STL target"
+        "S7-200 action bodies are BOOL assignments (`Lamp := Start AND NOT Fault;`), IF / ELSIF / \
+ELSE around them, and in IL the instructions LD, AND, OR, XOR, NOT, ST, STN, S and R on BOOL \
+variables. Assignments to other types, calls of functions or function blocks, CASE, FOR, WHILE, \
+REPEAT, EXIT, RETURN and jumps have no translation. A timer block is usually an action \
+qualifier (`Lamp(L, T#2s)`); otherwise build for `st`.";
+    "SFC0812" Error "step time not representable by an S7-200 timer"
+        "A step time becomes the bit of a 100 ms S7-200 timer whose preset is fixed in the \
+program, so `S.T` must be compared (>=, >, <, <=, =, <>) with a constant duration, a literal or \
+a CONSTANT, that is a multiple of 100 ms and needs a preset of at most +32767 \
+(T#54m36s700ms):\n\n    TRANSITION FROM Heat TO Hold := Heat.T >= T#1m30s; END_TRANSITION";
+    "SFC0813" Error "action association not supported by the STL target"
+        "Timed qualifiers (L, D, SD, DS, SL) use one S7-200 100 ms TON per action, so the \
+duration must be a constant (literal or CONSTANT) multiple of 100 ms up to T#54m36s700ms, and the \
+timed associations of one action must all have the same qualifier and duration: different ones \
+contend at run time, and the simulator's choice between them has no fixed program form.\n\n    \
+Horn(L, T#2s);   (* in every step that sounds the horn *)";
+    "SFC0814" Error "address not available on the S7-200"
+        "A BOOL variable located `AT` a direct address is that S7-200 bit: `%IXb.i` is `Ib.i`, \
+`%QXb.i` is `Qb.i`, `%MXb.i` is `Mb.i`, with bytes I0-I15, Q0-Q15, M0-M31 and bits 0-7. Other \
+addresses (byte or word sizes, a partly specified `%I*`) name no bit. The input image is \
+read-only for the program: no action or assignment may write a variable located in `%I`.";
+    "SFC0815" Error "S7-200 resources exceeded"
+        "The program needs more than the S7-200 has: 100 ms timers (182 TON: T37-T63 and \
+T101-T255; 54 TONR: T5-T31 and T69-T95; one per distinct step-time comparison and one per \
+action with a timed qualifier) or bit memory (M0.0-M31.7, then V0.0-V2047.7). Split the chart, \
+or use fewer distinct step-time constants.";
+    "SFC0816" Error "chart control variable not supported by the STL target"
+        "`SFCInit`, `SFCPause`, `SFCQuitError`, `SFCError`, `SFCErrorStep` and `SFCCurrentStep` \
+hold, pause and supervise the chart in the simulator; the S7-200 program implements none of \
+them, so a chart that declares or reads one is refused rather than run differently. Drive the \
+chart with ordinary transitions instead (an abort transition on a BOOL input).";
 }
 
 /// Looks a code up.

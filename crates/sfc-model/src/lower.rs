@@ -38,6 +38,9 @@ const KNOWN_ATTRIBUTES: &[&str] = &[
     "sfc.tag", "sfc.timeout", "sfc.target", "sfc.final", "sfc.x", "sfc.y", "sfc.width", "sfc.height",
     "sfc.description", "sfc.background", "sfc.foreground", "sfc.linewidth", "sfc.hidelabel", "sfc.font",
     "sfc.align", "sfc.pins", "sfc.bends", "sfc.label", "sfc.name",
+    // Written by the PLCopen import (`sfc-plcopen`, see its `attrs` module): size, foreign
+    // addData, action block and jump positions, condition references, inline actions, comments.
+    "sfc.w", "sfc.h", "sfc.adddata", "sfc.actionblock", "sfc.jump", "sfc.reference", "sfc.inline", "sfc.comment",
 ];
 
 fn attr<'a>(attrs: &'a [ast::Attribute], name: &str) -> Option<&'a ast::Attribute> {

@@ -1,0 +1,732 @@
+//! IEC Structured Text from charts.
+//!
+//! * Fixtures `tests/st/NAME.st`: every chart of the file is translated (one after the other,
+//!   so a chart FB and the PROGRAM calling it both end up plain ST); the result must pass
+//!   `sfc_model::check_source` without errors and equal `NAME.st.expected` byte for byte (or,
+//!   when the translation is refused, the rendered errors). `UPDATE_EXPECT=1` rewrites them.
+//! * Differential tests: the original and the translation run in the simulator side by side,
+//!   with the same inputs, compared after every scan: every declared variable of the simulated
+//!   POU, every step's `X` and `T`, every action's `Q` and `A` (also inside chart instances),
+//!   the chart control variables, and runtime errors. Inputs come from
+//!   - every scenario of `examples/` and of the simulator's semantics fixtures (profile `iec`),
+//!   - random inputs on the fixtures of `tests/st/`,
+//!   - random block-structured charts (sequences, selections with priorities, simultaneous
+//!     branches, loops, jumps; all eleven qualifiers with literal and variable durations, BOOL
+//!     variables as actions, bodies in ST with RETURN and in IL with jumps, guards in ST and
+//!     IL reading inputs, step times, step flags, action flags and counters; supervision
+//!     times, SFCInit/SFCPause/SFCQuitError; sometimes the chart is a FUNCTION_BLOCK called by
+//!     a PROGRAM only in some scans).
+//!
+//! `SFC_ST_CASES=N` changes the number of random charts (default 200); `SFC_ST_CASE=K` runs
+//! case `K` alone and prints both texts.
+
+use sfc_codegen::st::build_st;
+use sfc_diagnostics::Diagnostic;
+use sfc_model::{check_source, CheckOptions, Checked};
+use sfc_sim::scenario::{self, Scenario};
+use sfc_sim::{SimOptions, Simulation, Value};
+use std::fmt::Write as _;
+use std::path::{Path, PathBuf};
+
+fn root() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../..")
+}
+
+fn check(name: &str, text: &str) -> Checked {
+    check_source(0, name, text, &CheckOptions::default())
+}
+
+/// Translates every chart of `text`, one after the other; the errors rendered as text.
+fn translate_all(name: &str, text: &str) -> Result<String, String> {
+    let first = check(name, text);
+    if first.has_errors() {
+        return Err(render(&first, &first.diagnostics));
+    }
+    let pous: Vec<String> = first.charts.iter().map(|c| c.pou.clone()).collect();
+    let mut cur = text.to_string();
+    for pou in pous {
+        let c = check(name, &cur);
+        let Some(chart) = c.charts.iter().find(|ch| ch.pou == pou) else {
+            return Err(format!("chart {pou} disappeared"));
+        };
+        match build_st(&c, chart) {
+            Ok(t) => cur = t,
+            Err(d) => return Err(render(&c, &d)),
+        }
+        let after = check(name, &cur);
+        let errors: Vec<Diagnostic> = after.diagnostics.iter().filter(|d| d.is_error()).cloned().collect();
+        assert!(errors.is_empty(), "the translation of {pou} does not check:\n{}\n{cur}", render(&after, &errors));
+        assert!(after.charts.iter().all(|c| c.pou != pou), "{pou} is still a chart");
+    }
+    Ok(cur)
+}
+
+fn render(c: &Checked, diags: &[Diagnostic]) -> String {
+    let mut out = String::new();
+    for d in diags.iter().filter(|d| d.is_error()) {
+        let lc = c.file.line_col(d.span.start);
+        writeln!(out, "{} {}:{} {}", d.code, lc.line, lc.column, d.message).unwrap();
+    }
+    out
+}
+
+// ---------------------------------------------------------------------------------------------
+// Fixtures
+
+fn fixtures() -> Vec<PathBuf> {
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/st");
+    let mut v: Vec<PathBuf> = std::fs::read_dir(&dir)
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .filter(|p| p.extension().is_some_and(|e| e == "st"))
+        .collect();
+    v.sort();
+    v
+}
+
+#[test]
+fn fixtures_match_expected() {
+    let update = std::env::var_os("UPDATE_EXPECT").is_some();
+    let mut failures = Vec::new();
+    let all = fixtures();
+    assert!(all.len() >= 6, "fixtures missing");
+    for path in all {
+        let text = std::fs::read_to_string(&path).unwrap();
+        let got = match translate_all(&path.display().to_string(), &text) {
+            Ok(t) => t,
+            Err(e) => format!("(* refused *)\n{e}"),
+        };
+        let exp_path = PathBuf::from(format!("{}.expected", path.display()));
+        if update {
+            std::fs::write(&exp_path, &got).unwrap();
+            continue;
+        }
+        let want = std::fs::read_to_string(&exp_path).unwrap_or_default();
+        if want != got {
+            failures.push(format!("{}: differs from {}\n{got}", path.display(), exp_path.display()));
+        }
+    }
+    assert!(failures.is_empty(), "{}", failures.join("\n\n"));
+}
+
+#[test]
+fn time_literals_are_canonical() {
+    use sfc_codegen::st::time_literal;
+    assert_eq!(time_literal(0), "T#0s");
+    assert_eq!(time_literal(1_500_000), "T#1s500ms");
+    assert_eq!(time_literal(2_500), "T#2ms500us");
+    assert_eq!(time_literal(-200_000), "T#-200ms");
+    assert_eq!(time_literal(90_061_001_001), "T#1d1h1m1s1ms1us");
+}
+
+// ---------------------------------------------------------------------------------------------
+// Running both
+
+/// The names compared after every scan, resolved once against the original simulation.
+struct Probe {
+    keys: Vec<String>,
+}
+
+impl Probe {
+    fn new(orig: &Simulation, checked: &Checked, generated: &Simulation) -> Probe {
+        let mut keys: Vec<String> = orig.trace_vars().into_iter().map(|(n, _)| n).collect();
+        let steps = orig.step_names();
+        for s in &steps {
+            keys.push(format!("{s}.X"));
+            keys.push(format!("{s}.T"));
+        }
+        // Instance prefixes of every chart: those under which all its steps exist.
+        for chart in &checked.charts {
+            let Some(first) = chart.steps.first() else { continue };
+            let prefixes: Vec<String> = steps
+                .iter()
+                .filter_map(|q| {
+                    let p = q.strip_suffix(&first.name)?;
+                    (p.is_empty() || p.ends_with('.')).then(|| p.to_string())
+                })
+                .filter(|p| chart.steps.iter().all(|s| steps.contains(&format!("{p}{}", s.name))))
+                .collect();
+            for p in prefixes {
+                for a in &chart.actions {
+                    keys.push(format!("{p}{}.Q", a.name));
+                    keys.push(format!("{p}{}.A", a.name));
+                }
+                for (v, _, _) in sfc_st::sfc_control_variables() {
+                    let k = format!("{p}{v}");
+                    if generated.type_of(&k).is_some() {
+                        keys.push(k);
+                    }
+                }
+            }
+        }
+        Probe { keys }
+    }
+
+    fn diffs(&self, a: &Simulation, b: &Simulation) -> Vec<String> {
+        let mut out = Vec::new();
+        for k in &self.keys {
+            let (x, y) = (a.get(k), b.get(k));
+            if format!("{x:?}") != format!("{y:?}") {
+                out.push(format!("{k}: chart {x:?}, translation {y:?}"));
+            }
+        }
+        out
+    }
+}
+
+/// A run of the original and of the translation: `inputs(scan)` gives the writes before each
+/// scan. Returns a report of the first divergence.
+fn run_pair(
+    name: &str,
+    original: &str,
+    translated: &str,
+    pou: Option<&str>,
+    opts: SimOptions,
+    scans: u64,
+    inputs: &mut dyn FnMut(u64) -> Vec<(String, Value)>,
+) -> Result<(), String> {
+    let mut a = Simulation::from_source(name, original, pou, opts).map_err(|(_, d)| format!("original: {d:?}"))?;
+    let pou = a.pou_name().to_string();
+    let mut b =
+        Simulation::from_source(name, translated, Some(&pou), opts).map_err(|(_, d)| format!("translation: {d:?}"))?;
+    let checked = check(name, original);
+    let probe = Probe::new(&a, &checked, &b);
+    let mut log = String::new();
+    for scan in 0..scans {
+        for (k, v) in inputs(scan) {
+            let ra = a.set(&k, v.clone());
+            let rb = b.set(&k, v.clone());
+            if ra.is_ok() != rb.is_ok() {
+                return Err(format!("scan {scan}: setting {k}: chart {ra:?}, translation {rb:?}"));
+            }
+            if ra.is_ok() {
+                write!(log, "{k}={v:?} ").unwrap();
+            }
+        }
+        let ra = a.scan().clone();
+        b.scan();
+        writeln!(log, "| scan {scan}: {:?} fired {:?}", ra.active, ra.fired).unwrap();
+        let diffs = probe.diffs(&a, &b);
+        if !diffs.is_empty() {
+            return Err(format!(
+                "scan {scan} ({} µs):\n  {}\nrun:\n{log}",
+                scan as i64 * opts.period,
+                diffs.join("\n  ")
+            ));
+        }
+        match (a.error(), b.error()) {
+            (None, None) => {}
+            (Some(_), Some(_)) => return Ok(()),
+            (x, y) => return Err(format!("scan {scan}: runtime error: chart {x:?}, translation {y:?}\n{log}")),
+        }
+    }
+    Ok(())
+}
+
+/// Every `*.scenario.toml` under `dir` whose profile is `iec`.
+fn scenarios(dir: &Path) -> Vec<Scenario> {
+    let mut paths = Vec::new();
+    let mut stack = vec![dir.to_path_buf()];
+    while let Some(d) = stack.pop() {
+        for e in std::fs::read_dir(&d).unwrap() {
+            let p = e.unwrap().path();
+            if p.is_dir() {
+                stack.push(p);
+            } else if p.to_string_lossy().ends_with(".scenario.toml") {
+                paths.push(p);
+            }
+        }
+    }
+    paths.sort();
+    paths
+        .into_iter()
+        .map(|p| scenario::load(&p).unwrap_or_else(|e| panic!("{}: {}", p.display(), e.message)))
+        .filter(|s| s.options.profile == sfc_sim::Profile::Iec)
+        .collect()
+}
+
+#[test]
+fn examples_and_semantics_scenarios_behave_identically() {
+    let mut list = scenarios(&root().join("examples"));
+    let examples = list.len();
+    list.extend(scenarios(&root().join("crates/sfc-sim/tests/semantics")));
+    assert!(examples >= 4 && list.len() >= 30, "{examples} example scenarios, {} in all", list.len());
+    let mut failures = Vec::new();
+    for s in &list {
+        let name = s.chart_name();
+        let translated = match translate_all(&name, s.chart_text()) {
+            Ok(t) => t,
+            Err(e) => {
+                failures.push(format!("{}: not translated:\n{e}", s.name));
+                continue;
+            }
+        };
+        let entries = s.entries.clone();
+        let period = s.options.period.max(1);
+        let mut applied = 0;
+        let mut inputs = |scan: u64| {
+            let now = scan as i64 * period;
+            let mut out = Vec::new();
+            while applied < entries.len() && entries[applied].time <= now {
+                out.extend(entries[applied].set.iter().cloned());
+                applied += 1;
+            }
+            out
+        };
+        if let Err(e) =
+            run_pair(&name, s.chart_text(), &translated, Some(&s.pou), s.options, s.total_scans(), &mut inputs)
+        {
+            failures.push(format!("{} ({}): {e}\n{translated}", s.name, s.pou));
+        }
+    }
+    assert!(failures.is_empty(), "{}", failures.join("\n\n"));
+}
+
+struct Rng(u64);
+
+impl Rng {
+    fn next(&mut self) -> u64 {
+        let mut x = self.0;
+        x ^= x << 13;
+        x ^= x >> 7;
+        x ^= x << 17;
+        self.0 = x;
+        x
+    }
+    fn below(&mut self, n: usize) -> usize {
+        (self.next() % n.max(1) as u64) as usize
+    }
+    fn chance(&mut self, percent: usize) -> bool {
+        self.below(100) < percent
+    }
+    fn pick<T: Clone>(&mut self, v: &[T]) -> T {
+        v[self.below(v.len())].clone()
+    }
+}
+
+/// The BOOL inputs of the top POU of `text` (VAR_INPUT and VAR declarations of BOOL variables
+/// not written by the chart are flipped at random).
+fn random_inputs(sim: &Simulation, checked: &Checked) -> Vec<String> {
+    let written: Vec<String> = checked
+        .charts
+        .iter()
+        .flat_map(|c| c.steps.iter().flat_map(|s| s.associations.iter().map(|a| a.action.to_ascii_uppercase())))
+        .collect();
+    sim.trace_vars()
+        .into_iter()
+        .filter(|(n, t)| *t == sfc_st::Type::Bool && !written.contains(&n.to_ascii_uppercase()))
+        .map(|(n, _)| n)
+        .collect()
+}
+
+#[test]
+fn fixtures_behave_identically_on_random_inputs() {
+    let mut rng = Rng(0x57C0_DE0A_7A7E_0003);
+    let mut failures = Vec::new();
+    for path in fixtures() {
+        let text = std::fs::read_to_string(&path).unwrap();
+        let name = path.display().to_string();
+        let Ok(translated) = translate_all(&name, &text) else { continue };
+        let Ok(sim) = Simulation::from_source(&name, &text, None, SimOptions::default()) else { continue };
+        let inputs = random_inputs(&sim, &check(&name, &text));
+        for round in 0..5 {
+            let mut values = vec![false; inputs.len()];
+            let seq: Vec<Vec<(String, Value)>> = (0..300)
+                .map(|_| {
+                    let mut w = Vec::new();
+                    for (k, v) in values.iter_mut().enumerate() {
+                        let p = if inputs[k].to_ascii_uppercase().starts_with("SFC") { 3 } else { 15 };
+                        if rng.chance(p) {
+                            *v = !*v;
+                            w.push((inputs[k].clone(), Value::Bool(*v)));
+                        }
+                    }
+                    w
+                })
+                .collect();
+            let mut f = |scan: u64| seq[scan as usize].clone();
+            if let Err(e) = run_pair(&name, &text, &translated, None, SimOptions::default(), 300, &mut f) {
+                failures.push(format!("{name} round {round}: {e}"));
+                break;
+            }
+        }
+    }
+    assert!(failures.is_empty(), "{}", failures.join("\n\n"));
+}
+
+// ---------------------------------------------------------------------------------------------
+// Random charts
+
+const INPUTS: usize = 6;
+const DURATIONS_MS: [i64; 7] = [0, 10, 20, 25, 30, 50, 80];
+const GUARD_MS: [i64; 6] = [0, 10, 20, 30, 40, 60];
+const QUALS: [&str; 11] = ["N", "R", "S", "L", "D", "P", "SD", "DS", "SL", "P1", "P0"];
+const VAR_QUALS: [&str; 9] = ["N", "R", "S", "L", "D", "P", "SD", "DS", "SL"];
+
+struct Tr {
+    from: Vec<usize>,
+    to: Vec<usize>,
+    priority: Option<u32>,
+    guard: String,
+    il: Option<String>,
+}
+
+struct Gen<'r> {
+    rng: &'r mut Rng,
+    steps: Vec<(bool, usize)>,
+    trs: Vec<Tr>,
+    actions: usize,
+    max_steps: usize,
+}
+
+impl Gen<'_> {
+    fn step(&mut self, initial: bool, network: usize) -> usize {
+        self.steps.push((initial, network));
+        self.steps.len() - 1
+    }
+
+    fn atom(&mut self, from: &[usize]) -> String {
+        match self.rng.below(14) {
+            0 => "TRUE".into(),
+            1..=3 => format!("S{}.T >= T#{}ms", self.rng.pick(from), self.rng.pick(&GUARD_MS)),
+            4 => format!("S{}.X", self.rng.below(self.steps.len())),
+            5 if self.actions > 0 => {
+                format!("a{}.{}", self.rng.below(self.actions), if self.rng.chance(50) { "Q" } else { "A" })
+            }
+            6 => format!("o{}", self.rng.below(3)),
+            7 => format!("n{} > {}", self.rng.below(2), self.rng.below(6)),
+            8 => format!("n{} / 2 >= {}", self.rng.below(2), self.rng.below(3)),
+            _ => format!("i{}", self.rng.below(INPUTS)),
+        }
+    }
+
+    fn guard(&mut self, from: &[usize], depth: u32) -> String {
+        if depth < 2 && self.rng.chance(35) {
+            let a = self.guard(from, depth + 1);
+            return match self.rng.below(4) {
+                0 => format!("NOT ({a})"),
+                1 => format!("({a}) AND ({})", self.guard(from, depth + 1)),
+                2 => format!("({a}) XOR ({})", self.guard(from, depth + 1)),
+                _ => format!("({a}) OR ({})", self.guard(from, depth + 1)),
+            };
+        }
+        self.atom(from)
+    }
+
+    fn il_guard(&mut self) -> String {
+        let mut s = format!("        LD{} i{}\n", if self.rng.chance(30) { "N" } else { "" }, self.rng.below(INPUTS));
+        for _ in 0..self.rng.below(3) {
+            let op = self.rng.pick(&["AND", "ANDN", "OR", "ORN", "XOR"]);
+            if self.rng.chance(25) {
+                s.push_str(&format!(
+                    "        {op}( i{}\n        OR o{}\n        )\n",
+                    self.rng.below(INPUTS),
+                    self.rng.below(3)
+                ));
+            } else {
+                s.push_str(&format!("        {op} i{}\n", self.rng.below(INPUTS)));
+            }
+        }
+        s
+    }
+
+    fn transition(&mut self, from: Vec<usize>, to: Vec<usize>) {
+        let (guard, il) =
+            if self.rng.chance(15) { (String::new(), Some(self.il_guard())) } else { (self.guard(&from, 0), None) };
+        let key = |t: &Tr| (t.from.clone(), t.to.clone(), t.guard.clone(), t.il.clone());
+        let tr = Tr { from, to, priority: None, guard, il };
+        if self.trs.iter().any(|t| key(t) == key(&tr)) {
+            return;
+        }
+        self.trs.push(tr);
+    }
+
+    fn sequence(&mut self, entry: usize, depth: u32, net: usize) -> usize {
+        let mut cur = entry;
+        let mut chain = vec![entry];
+        for _ in 0..1 + self.rng.below(3) {
+            if self.steps.len() >= self.max_steps {
+                break;
+            }
+            match self.rng.below(10) {
+                4 | 5 if depth < 2 => {
+                    let join = self.step(false, net);
+                    let mut ends = Vec::new();
+                    for b in 0..2 + self.rng.below(2) {
+                        if b > 0 && self.rng.chance(15) {
+                            self.transition(vec![cur], vec![join]);
+                            continue;
+                        }
+                        let first = self.step(false, net);
+                        self.transition(vec![cur], vec![first]);
+                        ends.push(self.sequence(first, depth + 1, net));
+                    }
+                    for e in ends {
+                        self.transition(vec![e], vec![join]);
+                    }
+                    cur = join;
+                    chain.push(join);
+                }
+                6 | 7 if depth < 2 => {
+                    let firsts: Vec<usize> = (0..2 + self.rng.below(2)).map(|_| self.step(false, net)).collect();
+                    self.transition(vec![cur], firsts.clone());
+                    let ends: Vec<usize> = firsts.iter().map(|&f| self.sequence(f, depth + 1, net)).collect();
+                    let join = self.step(false, net);
+                    self.transition(ends, vec![join]);
+                    cur = join;
+                    chain.push(join);
+                }
+                8 | 9 if chain.len() >= 2 => {
+                    let target = self.rng.pick(&chain);
+                    self.transition(vec![cur], vec![target]);
+                }
+                _ => {
+                    let next = self.step(false, net);
+                    self.transition(vec![cur], vec![next]);
+                    cur = next;
+                    chain.push(next);
+                }
+            }
+        }
+        cur
+    }
+}
+
+/// Action bodies: counters, copies of flags, RETURN inside and outside loops, IL with jumps.
+fn action_body(rng: &mut Rng, a: usize) -> String {
+    match rng.below(6) {
+        0 => format!(
+            "        n{a2} := n{a2} + 1;\n        q{a} := a{a}.Q;\n        IF i{i} THEN\n            RETURN;\n        END_IF;\n        n2 := n2 + 1;\n",
+            a2 = a % 2,
+            i = rng.below(INPUTS)
+        ),
+        1 => format!(
+            "        FOR k := 1 TO 3 DO\n            IF i{i} AND k = 2 THEN\n                RETURN; (* leaves the action *)\n            END_IF;\n            n2 := n2 + 1;\n        END_FOR;\n        q{a} := a{a}.Q;\n",
+            i = rng.below(INPUTS)
+        ),
+        2 => format!(
+            "        LD n{a2}\n        ADD 1\n        ST n{a2}\n        GT 4\n        JMPC Big\n        LD a{a}.Q\n        ST q{a}\n        RET\nBig:    LD 0\n        ST n{a2}\n        LD i{i}\n        ANDN q{a}\n        ST q{a}\n",
+            a2 = a % 2,
+            i = rng.below(INPUTS)
+        ),
+        3 => format!("        LD i{i}\n        OR( a{a}.Q\n        AND S{s}.X\n        )\n        ST q{a}\n        S o{o}\n        LD n2\n        ADD 2\n        ST n2\n", i = rng.below(INPUTS), s = 0, o = rng.below(3)),
+        _ => format!(
+            "        n{a2} := n{a2} + 1;\n        q{a} := a{a}.Q AND NOT a{a}.A OR S0.X;\n        IF S0.T > T#20ms THEN\n            n2 := n2 + 10;\n        END_IF;\n        IF i3 THEN\n            d0 := d0 + T#10ms; (* a duration that changes while its timer runs *)\n        ELSE\n            d0 := T#20ms;\n        END_IF;\n",
+            a2 = a % 2
+        ),
+    }
+}
+
+/// A random chart as IEC text, and whether it is a FUNCTION_BLOCK called by `Main`.
+fn random_chart(rng: &mut Rng, max_steps: usize) -> (String, bool) {
+    let actions = rng.below(4);
+    let mut g = Gen { rng, steps: Vec::new(), trs: Vec::new(), actions, max_steps };
+    let networks = if g.rng.chance(20) { 2 } else { 1 };
+    for net in 0..networks {
+        let init = g.step(true, net);
+        let last = g.sequence(init, 0, net);
+        g.transition(vec![last], vec![init]);
+    }
+    if g.rng.chance(20) {
+        let from = g.rng.below(g.steps.len());
+        let same: Vec<usize> = (0..g.steps.len()).filter(|&s| g.steps[s].1 == g.steps[from].1).collect();
+        let to = g.rng.pick(&same);
+        g.transition(vec![from], vec![to]);
+    }
+    if g.rng.chance(40) {
+        for t in 0..g.trs.len() {
+            if g.rng.chance(50) {
+                g.trs[t].priority = Some(g.rng.below(4) as u32);
+            }
+        }
+    }
+    let supervised = g.rng.chance(30);
+    let control = supervised || g.rng.chance(20);
+    let fb = g.rng.chance(30);
+    let rng = g.rng;
+    let mut t = String::new();
+    let kind = if fb { "FUNCTION_BLOCK" } else { "PROGRAM" };
+    writeln!(t, "{kind} Chart").unwrap();
+    writeln!(t, "    VAR_INPUT").unwrap();
+    for i in 0..INPUTS {
+        writeln!(t, "        i{i} : BOOL;").unwrap();
+    }
+    writeln!(t, "    END_VAR").unwrap();
+    writeln!(t, "    VAR_OUTPUT\n        o0, o1, o2 : BOOL;\n        n0, n1 : INT;\n    END_VAR").unwrap();
+    writeln!(t, "    VAR\n        n2 : INT;\n        k : INT;\n        d0 : TIME := T#30ms;").unwrap();
+    for a in 0..actions {
+        writeln!(t, "        q{a} : BOOL;").unwrap();
+    }
+    writeln!(t, "    END_VAR").unwrap();
+    if control {
+        writeln!(t, "    (* driven through SFCInit, SFCPause and SFCQuitError; SFCError reports timeouts *)").unwrap();
+    }
+    for (s, (initial, _)) in g.steps.iter().enumerate() {
+        if supervised && rng.chance(40) {
+            writeln!(t, "    {{attribute 'sfc.timeout' := 'T#{}ms'}}", rng.pick(&[20, 40, 70])).unwrap();
+        }
+        writeln!(t, "    {} S{s}:", if *initial { "INITIAL_STEP" } else { "STEP" }).unwrap();
+        let mut used = Vec::new();
+        for _ in 0..rng.pick(&[0, 0, 1, 1, 2, 3]) {
+            let target = rng.below(actions + 3);
+            if used.contains(&target) {
+                continue;
+            }
+            used.push(target);
+            let (name, q) = if target < actions {
+                (format!("a{target}"), rng.pick(&QUALS))
+            } else {
+                (format!("o{}", target - actions), rng.pick(&VAR_QUALS))
+            };
+            let timed = matches!(q, "L" | "D" | "SD" | "DS" | "SL");
+            if timed {
+                let d = if rng.chance(20) { "d0".to_string() } else { format!("T#{}ms", rng.pick(&DURATIONS_MS)) };
+                writeln!(t, "        {name}({q}, {d});").unwrap();
+            } else {
+                writeln!(t, "        {name}({q});").unwrap();
+            }
+        }
+        writeln!(t, "    END_STEP").unwrap();
+    }
+    for (k, tr) in g.trs.iter().enumerate() {
+        let list = |v: &[usize]| {
+            let n: Vec<String> = v.iter().map(|s| format!("S{s}")).collect();
+            if n.len() > 1 {
+                format!("({})", n.join(", "))
+            } else {
+                n[0].clone()
+            }
+        };
+        let prio = tr.priority.map(|p| format!(" (PRIORITY := {p})")).unwrap_or_default();
+        let guard = if supervised && rng.chance(15) { format!("({}) OR SFCError", tr.guard) } else { tr.guard.clone() };
+        match &tr.il {
+            Some(il) => writeln!(
+                t,
+                "    TRANSITION Tr{k}{prio} FROM {} TO {}:\n{il}    END_TRANSITION",
+                list(&tr.from),
+                list(&tr.to)
+            )
+            .unwrap(),
+            None => writeln!(
+                t,
+                "    TRANSITION Tr{k}{prio} FROM {} TO {} := {guard}; END_TRANSITION",
+                list(&tr.from),
+                list(&tr.to)
+            )
+            .unwrap(),
+        }
+    }
+    for a in 0..actions {
+        writeln!(t, "    ACTION a{a}:\n{}    END_ACTION", action_body(rng, a)).unwrap();
+    }
+    writeln!(t, "END_{kind}").unwrap();
+    if fb {
+        let ins: Vec<String> = (0..INPUTS).map(|i| format!("i{i} := i{i}")).collect();
+        let ctl = if control { ", SFCInit := init, SFCPause := pause, SFCQuitError := quit" } else { "" };
+        writeln!(
+            t,
+            "\nPROGRAM Main\n    VAR_INPUT\n        i0, i1, i2, i3, i4, i5, run, init, pause, quit : BOOL;\n    END_VAR\n    VAR\n        c : Chart;\n        busy : BOOL;\n        m0 : INT;\n    END_VAR\n    IF run THEN\n        c({}{ctl});\n    END_IF;\n    busy := c.o0;\n    m0 := c.n0;\nEND_PROGRAM",
+            ins.join(", ")
+        )
+        .unwrap();
+    }
+    (t, fb)
+}
+
+#[test]
+fn random_charts_behave_identically() {
+    let cases: usize = std::env::var("SFC_ST_CASES").ok().and_then(|v| v.parse().ok()).unwrap_or(200);
+    let only: Option<usize> = std::env::var("SFC_ST_CASE").ok().and_then(|v| v.parse().ok());
+    let mut failures = Vec::new();
+    for case in 0..cases {
+        if only.is_some_and(|o| o != case) {
+            continue;
+        }
+        let mut rng = Rng((case as u64 + 1).wrapping_mul(0x2545_F491_4F6C_DD1D) ^ 0x5DEE_CE66_D1CE_5EED);
+        let (text, fb) = random_chart(&mut rng, 14);
+        let c = check("random.st", &text);
+        if c.has_errors() {
+            failures
+                .push(format!("case {case}: the random chart does not check:\n{}\n{text}", render(&c, &c.diagnostics)));
+            continue;
+        }
+        let translated = match translate_all("random.st", &text) {
+            Ok(t) => t,
+            Err(e) => {
+                failures.push(format!("case {case}: not translated:\n{e}\n{text}"));
+                continue;
+            }
+        };
+        if only.is_some() {
+            println!("{text}\n----\n{translated}");
+        }
+        let control = text.contains("SFCInit");
+        let mut names: Vec<String> = (0..INPUTS).map(|i| format!("i{i}")).collect();
+        if fb {
+            names.push("run".into());
+            if control {
+                names.extend(["init", "pause", "quit"].map(String::from));
+            }
+        } else if control {
+            names.extend(["SFCInit", "SFCPause", "SFCQuitError"].map(String::from));
+        }
+        let mut values = vec![false; names.len()];
+        let mut inputs = |scan: u64| {
+            let mut w = Vec::new();
+            for (k, v) in values.iter_mut().enumerate() {
+                let n = &names[k];
+                let p = match n.as_str() {
+                    "run" => 25,
+                    "init" | "pause" | "quit" | "SFCInit" | "SFCPause" | "SFCQuitError" => {
+                        if *v {
+                            50
+                        } else {
+                            4
+                        }
+                    }
+                    _ => 20,
+                };
+                if scan == 0 && n == "run" || rng.chance(p) {
+                    *v = !*v;
+                    w.push((n.clone(), Value::Bool(*v)));
+                }
+            }
+            w
+        };
+        let pou = if fb { "Main" } else { "Chart" };
+        if let Err(e) = run_pair("random.st", &text, &translated, Some(pou), SimOptions::default(), 120, &mut inputs) {
+            failures.push(format!("case {case}: {e}\n{text}\n----\n{translated}"));
+        }
+        if failures.len() >= 3 {
+            break;
+        }
+    }
+    assert!(failures.is_empty(), "{} failures; first:\n{}", failures.len(), failures.join("\n\n=====\n"));
+}
+
+#[test]
+fn a_large_chart_translates() {
+    let n: usize = std::env::var("SFC_ST_LARGE").ok().and_then(|v| v.parse().ok()).unwrap_or(2000);
+    let mut t = String::from("PROGRAM Big\n    VAR_INPUT Go : BOOL; END_VAR\n    VAR_OUTPUT Count : INT; END_VAR\n");
+    for s in 0..n {
+        let kw = if s == 0 { "INITIAL_STEP" } else { "STEP" };
+        writeln!(t, "    {kw} S{s}: Tick(N); END_STEP").unwrap();
+        writeln!(t, "    TRANSITION FROM S{s} TO S{} := Go AND S{s}.T >= T#10ms; END_TRANSITION", (s + 1) % n).unwrap();
+        if s % 10 == 0 {
+            writeln!(t, "    TRANSITION (PRIORITY := 1) FROM S{s} TO S0 := NOT Go; END_TRANSITION").unwrap();
+        }
+    }
+    t.push_str("    ACTION Tick: Count := Count + 1; END_ACTION\nEND_PROGRAM\n");
+    let c = check("big.st", &t);
+    let started = std::time::Instant::now();
+    let direct = build_st(&c, &c.charts[0]).unwrap();
+    let took = started.elapsed();
+    let out = translate_all("big.st", &t).unwrap();
+    assert_eq!(direct, out);
+    println!("{n} steps: build_st took {took:?}, {} bytes", out.len());
+    if n <= 2000 {
+        // (the comparison reads every step of both simulations by name after each scan)
+        let mut inputs = |scan: u64| vec![("Go".to_string(), Value::Bool(scan % 7 != 0))];
+        run_pair("big.st", &t, &out, None, SimOptions::default(), 60, &mut inputs).unwrap();
+    }
+}

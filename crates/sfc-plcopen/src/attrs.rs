@@ -1,0 +1,111 @@
+//! The `sfc.*` attributes this crate reads and writes, and how their values are written.
+//!
+//! | attribute | on | holds |
+//! |---|---|---|
+//! | `sfc.x`, `sfc.y`, `sfc.w`, `sfc.h` | step, transition | position (top left) and size, PLCopen units |
+//! | `sfc.description` | POU, variable, step, transition, action | the PLCopen `documentation` text |
+//! | `sfc.adddata` | POU, variable, step, transition, action | foreign `addData` `<data>` elements, as XML |
+//! | `sfc.actionblock` | step | `x y w h n` per action block (n = its number of associations), `;`-separated |
+//! | `sfc.jump` | transition | `Target x y` per successor drawn as a jump, `;`-separated |
+//! | `sfc.reference` | transition | the name of the `transitions` entry the condition came from |
+//! | `sfc.inline` | action | `true`: written inline in its action block |
+//! | `sfc.comment` | POU | one comment box of the SFC body: `x y w h` then a line break and the text |
+//!
+//! Those are written in PLCopen's own elements where the element has them (a position, a
+//! `documentation`, an inline action, a `reference` condition). Every other attribute (`sfc.tag`,
+//! `sfc.timeout`, `sfc.final`, `sfc.target`, editor attributes, and any of the above that could
+//! not be written natively) travels in the element's `addData` under [`DATA_NAME`] and comes
+//! back from there on import. Attribute pragmas have no
+//! escape syntax and end at a quote, so values that may hold any text are written with IEC
+//! string escapes (`$$`, `$27` for a quote, `$N`, `$R`, `$T`) and read back with [`unescape`].
+
+pub const X: &str = "sfc.x";
+pub const Y: &str = "sfc.y";
+pub const W: &str = "sfc.w";
+pub const H: &str = "sfc.h";
+pub const DESCRIPTION: &str = "sfc.description";
+pub const ADDDATA: &str = "sfc.adddata";
+pub const ACTIONBLOCK: &str = "sfc.actionblock";
+pub const JUMP: &str = "sfc.jump";
+pub const REFERENCE: &str = "sfc.reference";
+pub const INLINE: &str = "sfc.inline";
+pub const COMMENT: &str = "sfc.comment";
+
+/// The `name` of the `addData/data` element that carries the other `sfc.*` attributes.
+pub const DATA_NAME: &str = "urn:sfc-toolchain:attributes";
+/// The namespace of its content.
+pub const DATA_NS: &str = "urn:sfc-toolchain:attributes";
+
+/// Writes a value so it survives inside `'…'` of an attribute pragma.
+pub fn escape(v: &str) -> String {
+    let mut out = String::with_capacity(v.len());
+    for c in v.chars() {
+        match c {
+            '$' => out.push_str("$$"),
+            '\'' => out.push_str("$27"),
+            '\n' => out.push_str("$N"),
+            '\r' => out.push_str("$R"),
+            '\t' => out.push_str("$T"),
+            '}' => out.push_str("$7D"),
+            _ => out.push(c),
+        }
+    }
+    out
+}
+
+/// Reads a value written by [`escape`]; a `$` not starting a known escape is kept as it is.
+pub fn unescape(v: &str) -> String {
+    let mut out = String::with_capacity(v.len());
+    let mut it = v.char_indices().peekable();
+    while let Some((i, c)) = it.next() {
+        if c != '$' {
+            out.push(c);
+            continue;
+        }
+        let rest = &v[i + 1..];
+        let (rep, skip) = match rest.chars().next() {
+            Some('$') => ("$".to_string(), 1),
+            Some('N' | 'n' | 'L' | 'l') => ("\n".to_string(), 1),
+            Some('R' | 'r') => ("\r".to_string(), 1),
+            Some('T' | 't') => ("\t".to_string(), 1),
+            _ => match rest.get(..2).and_then(|h| u8::from_str_radix(h, 16).ok()) {
+                Some(b) if b.is_ascii() => ((b as char).to_string(), 2),
+                _ => ("$".to_string(), 0),
+            },
+        };
+        out.push_str(&rep);
+        for _ in 0..skip {
+            it.next();
+        }
+    }
+    out
+}
+
+/// A number as PLCopen writes it (`xsd:decimal`): integers without a fraction.
+pub fn fmt_num(v: f64) -> String {
+    if !v.is_finite() {
+        return "0".into();
+    }
+    let r = (v * 1000.0).round() / 1000.0;
+    if r.fract() == 0.0 && r.abs() < 1e15 {
+        format!("{}", r as i64)
+    } else {
+        let s = format!("{r:.3}");
+        s.trim_end_matches('0').trim_end_matches('.').to_string()
+    }
+}
+
+/// The value of the last attribute `name` (case-insensitive), unescaped.
+pub fn get<'a>(attrs: &'a [sfc_syntax::ast::Attribute], name: &str) -> Option<&'a str> {
+    attrs.iter().rev().find(|a| a.name.eq_ignore_ascii_case(name)).and_then(|a| a.value.as_deref())
+}
+
+/// Every value of attribute `name`, in order.
+pub fn all<'a>(attrs: &'a [sfc_syntax::ast::Attribute], name: &'a str) -> impl Iterator<Item = &'a str> + 'a {
+    attrs.iter().filter(move |a| a.name.eq_ignore_ascii_case(name)).filter_map(|a| a.value.as_deref())
+}
+
+/// A numeric attribute.
+pub fn get_num(attrs: &[sfc_syntax::ast::Attribute], name: &str) -> Option<f64> {
+    get(attrs, name).and_then(|v| v.trim().parse::<f64>().ok()).filter(|v| v.is_finite())
+}

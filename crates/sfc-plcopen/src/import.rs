@@ -1,0 +1,899 @@
+//! PLCopen XML → textual IEC 61131-3: the project, data types, global variables, POUs with their
+//! interfaces and bodies, configurations. SFC bodies are in [`sfc`], FBD/LD networks in
+//! [`network`].
+
+mod network;
+mod sfc;
+
+use crate::attrs;
+use crate::emit::{Emitter, Frag, SourceMap};
+use crate::xml::{self, anchor, attr, attr_range, child, children, elements, XText};
+use roxmltree::Node;
+use sfc_diagnostics::{Diagnostic, Span};
+use std::collections::HashSet;
+use std::ops::Range;
+
+/// PLCopen TC6 namespaces: v2.01, v2.0, v1.0.
+pub const NAMESPACES: &[&str] = &[
+    "http://www.plcopen.org/xml/tc6_0201",
+    "http://www.plcopen.org/xml/tc6_0200",
+    "http://www.plcopen.org/xml/tc6.xsd",
+];
+
+/// Words that cannot name a step, transition, action, variable or POU.
+const RESERVED: &[&str] = &[
+    "END_IF",
+    "END_CASE",
+    "END_FOR",
+    "END_WHILE",
+    "END_REPEAT",
+    "END_VAR",
+    "END_STEP",
+    "END_TRANSITION",
+    "END_ACTION",
+    "END_PROGRAM",
+    "END_FUNCTION",
+    "END_FUNCTION_BLOCK",
+    "END_TYPE",
+    "END_STRUCT",
+    "END_CONFIGURATION",
+    "END_RESOURCE",
+    "IF",
+    "THEN",
+    "ELSIF",
+    "ELSE",
+    "CASE",
+    "OF",
+    "FOR",
+    "DO",
+    "BY",
+    "WHILE",
+    "REPEAT",
+    "UNTIL",
+    "EXIT",
+    "RETURN",
+    "VAR",
+    "VAR_INPUT",
+    "VAR_OUTPUT",
+    "VAR_IN_OUT",
+    "VAR_GLOBAL",
+    "VAR_EXTERNAL",
+    "VAR_ACCESS",
+    "VAR_TEMP",
+    "STEP",
+    "INITIAL_STEP",
+    "TRANSITION",
+    "ACTION",
+    "PROGRAM",
+    "FUNCTION",
+    "FUNCTION_BLOCK",
+    "TYPE",
+    "STRUCT",
+    "ARRAY",
+    "AND",
+    "OR",
+    "XOR",
+    "NOT",
+    "MOD",
+    "AND_THEN",
+    "OR_ELSE",
+    "CONFIGURATION",
+    "RESOURCE",
+    "FROM",
+    "TO",
+    "TRUE",
+    "FALSE",
+    "AT",
+    "CONSTANT",
+    "RETAIN",
+    "NON_RETAIN",
+    "TASK",
+    "WITH",
+    "ON",
+    "PRIORITY",
+];
+
+/// Whether `s` is an IEC identifier (letters, digits, single underscores, not a keyword).
+pub(crate) fn is_ident(s: &str) -> bool {
+    let b = s.as_bytes();
+    !b.is_empty()
+        && (b[0].is_ascii_alphabetic() || b[0] == b'_')
+        && b.iter().all(|c| c.is_ascii_alphanumeric() || *c == b'_')
+        && !s.contains("__")
+        && !s.ends_with('_')
+        && !RESERVED.iter().any(|k| k.eq_ignore_ascii_case(s))
+}
+
+/// A usable identifier made from `s` (invalid characters become `_`).
+pub(crate) fn sanitize(s: &str) -> String {
+    let mut out = String::new();
+    for c in s.chars() {
+        let c = if c.is_ascii_alphanumeric() { c } else { '_' };
+        if c == '_' && (out.is_empty() || out.ends_with('_')) {
+            continue;
+        }
+        out.push(c);
+    }
+    while out.ends_with('_') {
+        out.pop();
+    }
+    if out.is_empty() || out.as_bytes()[0].is_ascii_digit() || RESERVED.iter().any(|k| k.eq_ignore_ascii_case(&out)) {
+        out.insert_str(0, "X_");
+    }
+    out
+}
+
+/// The state of one import: the XML, the text being written, the diagnostics.
+pub(crate) struct Ctx<'i> {
+    pub file: u32,
+    pub src: &'i str,
+    pub em: Emitter,
+    pub diags: Vec<Diagnostic>,
+    /// Names declared in the POU being imported, upper-cased (one namespace per POU).
+    pub used: HashSet<String>,
+    /// Variables the translation of networks declares (`R_TRIG1 : R_TRIG`).
+    pub extra_vars: Vec<(String, String)>,
+    /// Function block calls needed by condition networks (for `COMPUTE_FUNCTION_BLOCKS`).
+    pub compute: Vec<Frag>,
+}
+
+impl<'i> Ctx<'i> {
+    /// `base`, or `base_1`, `base_2`, … : a name not yet used in the POU, now taken.
+    pub fn fresh_name(&mut self, base: &str) -> String {
+        let mut name = base.to_string();
+        let mut k = 0;
+        while self.used.contains(&name.to_ascii_uppercase()) {
+            k += 1;
+            name = format!("{base}_{k}");
+        }
+        self.used.insert(name.to_ascii_uppercase());
+        name
+    }
+
+    /// A new variable `base1`, `base2`, … of type `ty`, declared in the POU.
+    pub fn fresh_var(&mut self, base: &str, ty: &str) -> String {
+        let mut k = 1;
+        let mut name = format!("{base}{k}");
+        while self.used.contains(&name.to_ascii_uppercase()) {
+            k += 1;
+            name = format!("{base}{k}");
+        }
+        self.used.insert(name.to_ascii_uppercase());
+        self.extra_vars.push((name.clone(), ty.to_string()));
+        name
+    }
+
+    pub fn diag(&mut self, code: &'static str, at: Range<u32>, msg: impl Into<String>) -> &mut Diagnostic {
+        self.diags.push(Diagnostic::new(code, Span::new(self.file, at.start, at.end), msg));
+        let n = self.diags.len() - 1;
+        &mut self.diags[n]
+    }
+
+    /// A name from attribute `name` of `n` as a located fragment; reports and repairs a name
+    /// that is not an IEC identifier. `what` says what it names.
+    pub fn name(&mut self, n: Node, name: &str, what: &str) -> Frag {
+        let range = attr_range(n, name).unwrap_or_else(|| anchor(n));
+        let raw = attr(n, name).unwrap_or("").trim();
+        if is_ident(raw) && attr(n, name).is_some_and(|v| v == raw) {
+            let mut f = Frag::plain(raw);
+            f.marks.push(crate::emit::MapEntry { text: 0..raw.len() as u32, xml: range, exact: true });
+            return f;
+        }
+        let fixed = sanitize(raw);
+        self.diag(
+            "SFC0704",
+            range.clone(),
+            format!("`{raw}` is not an IEC 61131-3 identifier; the {what} is imported as `{fixed}`"),
+        )
+        .notes
+        .push(
+            "identifiers are letters, digits and single underscores, start with a letter, and are not keywords".into(),
+        );
+        Frag::located(fixed, range)
+    }
+
+    /// Writes `{attribute 'name' := 'value'}` lines at `indent`.
+    pub fn attributes(&mut self, list: &[(String, String)], indent: &str) {
+        for (k, v) in list {
+            let v = if v.contains(['\'', '}']) { v.replace('\'', "$27").replace('}', "$7D") } else { v.clone() };
+            self.em.str(&format!("{indent}{{attribute '{k}' := '{v}'}}\n"));
+        }
+    }
+}
+
+/// Attributes kept for an element: `documentation` → `sfc.description`, our `addData` → its
+/// attributes, foreign `addData` → `sfc.adddata`.
+pub(crate) fn element_attrs(n: Node) -> Vec<(String, String)> {
+    let mut out = Vec::new();
+    if let Some(add) = child(n, "addData") {
+        let mut foreign = String::new();
+        for data in children(add, "data") {
+            if attr(data, "name") == Some(attrs::DATA_NAME) {
+                for payload in elements(data) {
+                    for a in children(payload, "attribute") {
+                        if let (Some(k), Some(v)) = (attr(a, "name"), attr(a, "value")) {
+                            // Attributes the export could not write natively (say `sfc.inline`
+                            // of an action used twice) come back from here too.
+                            if k.to_ascii_lowercase().starts_with("sfc.") && !k.eq_ignore_ascii_case(attrs::ADDDATA) {
+                                out.push((k.to_string(), v.to_string()));
+                            }
+                        }
+                    }
+                }
+            } else {
+                foreign.push_str(&xml::serialize(data));
+            }
+        }
+        if !foreign.is_empty() {
+            out.push((attrs::ADDDATA.to_string(), attrs::escape(&foreign)));
+        }
+    }
+    if let Some(doc) = child(n, "documentation") {
+        let text = xml::formatted_text(doc).text;
+        let text = text.trim();
+        if !text.is_empty() {
+            out.push((attrs::DESCRIPTION.to_string(), attrs::escape(text)));
+        }
+    }
+    out
+}
+
+/// A special entry of our `addData` (`<name value="…"/>`, `<access path="…" mode="…"/>`).
+pub(crate) fn own_data<'a, 'i: 'a>(n: Node<'a, 'i>, what: &str) -> Option<Node<'a, 'i>> {
+    let add = child(n, "addData")?;
+    children(add, "data")
+        .filter(|d| attr(*d, "name") == Some(attrs::DATA_NAME))
+        .flat_map(elements)
+        .flat_map(|p| elements(p).collect::<Vec<_>>())
+        .find(|e| e.tag_name().name() == what)
+}
+
+/// Imports a document; `root` is its `project` element.
+pub(crate) fn project(cx: &mut Ctx, root: Node) {
+    let types = child(root, "types");
+    // Data types.
+    if let Some(dt) = types.and_then(|t| child(t, "dataTypes")) {
+        let list: Vec<Node> = children(dt, "dataType").collect();
+        if !list.is_empty() {
+            cx.em.open(anchor(dt));
+            cx.em.str("TYPE\n");
+            for d in list {
+                cx.em.open(anchor(d));
+                let name = cx.name(d, "name", "data type");
+                cx.em.str("    ");
+                cx.em.frag(&name);
+                cx.em.str(" : ");
+                match child(d, "baseType") {
+                    Some(b) => {
+                        let t = type_text(cx, b, "    ");
+                        cx.em.frag(&t);
+                    }
+                    None => {
+                        cx.diag("SFC0705", anchor(d), "the data type has no `baseType`");
+                        cx.em.str("INT");
+                    }
+                }
+                if let Some(v) = child(d, "initialValue") {
+                    cx.em.str(" := ");
+                    let f = value_text(cx, v);
+                    cx.em.frag(&f);
+                }
+                cx.em.str(";\n");
+                cx.em.close();
+            }
+            cx.em.str("END_TYPE\n\n");
+            cx.em.close();
+        }
+    }
+    // Global variables of configurations and resources become file-level VAR_GLOBAL blocks.
+    let configs: Vec<Node> = child(root, "instances")
+        .and_then(|i| child(i, "configurations"))
+        .map(|c| children(c, "configuration").collect())
+        .unwrap_or_default();
+    for c in &configs {
+        let lists = children(*c, "globalVars").chain(children(*c, "resource").flat_map(|r| children(r, "globalVars")));
+        for g in lists.collect::<Vec<_>>() {
+            cx.em.open(anchor(g));
+            var_list(cx, g, "VAR_GLOBAL", "");
+            cx.em.str("\n");
+            cx.em.close();
+        }
+    }
+    // POUs.
+    if let Some(pous) = types.and_then(|t| child(t, "pous")) {
+        for p in children(pous, "pou") {
+            pou(cx, p);
+        }
+    }
+    // Configurations with resources keep their tasks and program instances as text.
+    for c in &configs {
+        configuration(cx, *c);
+    }
+}
+
+/// `CONFIGURATION … END_CONFIGURATION` for a configuration with resources (its global
+/// variables are at file level already).
+fn configuration(cx: &mut Ctx, c: Node) {
+    let resources: Vec<Node> = children(c, "resource").collect();
+    if resources.is_empty() {
+        return;
+    }
+    cx.em.open(anchor(c));
+    let name = cx.name(c, "name", "configuration");
+    cx.em.str("CONFIGURATION ");
+    cx.em.frag(&name);
+    cx.em.str("\n");
+    for r in resources {
+        cx.em.open(anchor(r));
+        let rname = cx.name(r, "name", "resource");
+        cx.em.str("    RESOURCE ");
+        cx.em.frag(&rname);
+        cx.em.str(" ON PLC\n");
+        let tasks: Vec<Node> = children(r, "task").collect();
+        for t in &tasks {
+            cx.em.open(anchor(*t));
+            let tname = cx.name(*t, "name", "task");
+            cx.em.str("        TASK ");
+            cx.em.frag(&tname);
+            let mut args = Vec::new();
+            if let Some(s) = attr(*t, "single").filter(|s| !s.trim().is_empty()) {
+                args.push(format!("SINGLE := {}", s.trim()));
+            }
+            if let Some(i) = attr(*t, "interval").filter(|s| !s.trim().is_empty()) {
+                args.push(format!("INTERVAL := {}", interval(i.trim())));
+            }
+            args.push(format!("PRIORITY := {}", attr(*t, "priority").map(str::trim).unwrap_or("0")));
+            cx.em.str(&format!("({});\n", args.join(", ")));
+            cx.em.close();
+        }
+        for t in &tasks {
+            for pi in children(*t, "pouInstance") {
+                let tname = attr(*t, "name").unwrap_or("");
+                pou_instance(cx, pi, Some(tname));
+            }
+        }
+        for pi in children(r, "pouInstance") {
+            pou_instance(cx, pi, None);
+        }
+        cx.em.str("    END_RESOURCE\n");
+        cx.em.close();
+    }
+    cx.em.str("END_CONFIGURATION\n\n");
+    cx.em.close();
+}
+
+fn pou_instance(cx: &mut Ctx, pi: Node, task: Option<&str>) {
+    cx.em.open(anchor(pi));
+    let name = cx.name(pi, "name", "program instance");
+    let ty_attr = if attr(pi, "typeName").is_some() { "typeName" } else { "type" };
+    let ty = cx.name(pi, ty_attr, "program type");
+    cx.em.str("        PROGRAM ");
+    cx.em.frag(&name);
+    if let Some(t) = task.filter(|t| is_ident(t)) {
+        cx.em.str(&format!(" WITH {t}"));
+    }
+    cx.em.str(" : ");
+    cx.em.frag(&ty);
+    cx.em.str(";\n");
+    cx.em.close();
+}
+
+/// A task interval as an IEC duration: v2 writes `T#100ms`, v1.0 `00:00:00.100000`.
+fn interval(s: &str) -> String {
+    let parts: Vec<&str> = s.split(':').collect();
+    if parts.len() == 3 {
+        let h: Option<u64> = parts[0].parse().ok();
+        let m: Option<u64> = parts[1].parse().ok();
+        let sec: Option<f64> = parts[2].parse().ok();
+        if let (Some(h), Some(m), Some(sec)) = (h, m, sec) {
+            let us = ((h * 3600 + m * 60) as f64 * 1e6 + sec * 1e6).round() as i64;
+            return crate::export::fmt_duration(us);
+        }
+    }
+    s.to_string()
+}
+
+/// One POU.
+fn pou(cx: &mut Ctx, p: Node) {
+    cx.em.open(anchor(p));
+    let kind = match attr(p, "pouType").unwrap_or("") {
+        "program" => "PROGRAM",
+        "functionBlock" => "FUNCTION_BLOCK",
+        "function" => "FUNCTION",
+        other => {
+            cx.diag(
+                "SFC0705",
+                attr_range(p, "pouType").unwrap_or_else(|| anchor(p)),
+                format!("unknown POU type `{other}`; imported as a program"),
+            );
+            "PROGRAM"
+        }
+    };
+    let attrs_list = element_attrs(p);
+    cx.used.clear();
+    cx.extra_vars.clear();
+    cx.compute.clear();
+    for d in p.descendants().filter(|d| d.is_element()) {
+        let key = match d.tag_name().name() {
+            "variable" if d.parent().is_some_and(|l| l.tag_name().name().ends_with("Vars")) => "name",
+            "step" | "macroStep" | "action" | "transition" => "name",
+            _ => continue,
+        };
+        if let Some(n) = attr(d, key) {
+            cx.used.insert(n.trim().to_ascii_uppercase());
+        }
+    }
+    let body = child(p, "body");
+    let lang = body.and_then(|b| elements(b).find(|e| ["IL", "ST", "FBD", "LD", "SFC"].contains(&e.tag_name().name())));
+    let is_sfc = lang.is_some_and(|l| l.tag_name().name() == "SFC");
+    // Comment boxes of an SFC body are kept on the POU.
+    let mut pou_attrs = attrs_list;
+    if let Some(l) = lang.filter(|_| is_sfc) {
+        for c in children(l, "comment") {
+            let pos = xml::position(c).unwrap_or((0.0, 0.0));
+            let w = xml::num(c, "width").unwrap_or(0.0);
+            let h = xml::num(c, "height").unwrap_or(0.0);
+            let text = child(c, "content").map(|t| xml::formatted_text(t).text).unwrap_or_default();
+            let v = format!(
+                "{} {} {} {}\n{}",
+                attrs::fmt_num(pos.0),
+                attrs::fmt_num(pos.1),
+                attrs::fmt_num(w),
+                attrs::fmt_num(h),
+                text
+            );
+            pou_attrs.push((attrs::COMMENT.to_string(), attrs::escape(&v)));
+        }
+    }
+    cx.attributes(&pou_attrs, "");
+    let name = cx.name(p, "name", "POU");
+    cx.em.str(kind);
+    cx.em.str(" ");
+    cx.em.frag(&name);
+    let iface = child(p, "interface");
+    if kind == "FUNCTION" {
+        cx.em.str(" : ");
+        match iface.and_then(|i| child(i, "returnType")) {
+            Some(rt) => {
+                let t = type_text(cx, rt, "    ");
+                cx.em.frag(&t);
+            }
+            None => {
+                cx.diag("SFC0705", anchor(p), "the function has no `returnType`; imported as returning BOOL");
+                cx.em.str("BOOL");
+            }
+        }
+    }
+    cx.em.str("\n");
+    if let Some(i) = iface {
+        for l in elements(i) {
+            let kw = match l.tag_name().name() {
+                "localVars" => "VAR",
+                "tempVars" => "VAR_TEMP",
+                "inputVars" => "VAR_INPUT",
+                "outputVars" => "VAR_OUTPUT",
+                "inOutVars" => "VAR_IN_OUT",
+                "externalVars" => "VAR_EXTERNAL",
+                "globalVars" => "VAR_GLOBAL",
+                "accessVars" => "VAR_ACCESS",
+                _ => continue,
+            };
+            cx.em.open(anchor(l));
+            var_list(cx, l, kw, "    ");
+            cx.em.close();
+        }
+    }
+    let actions: Vec<Node> = child(p, "actions").map(|a| children(a, "action").collect()).unwrap_or_default();
+    // The body is written apart, so the variables its translation declares can go before it.
+    let head = std::mem::replace(&mut cx.em, Emitter::new(anchor(p)));
+    let transitions: Vec<Node> =
+        child(p, "transitions").map(|a| children(a, "transition").collect()).unwrap_or_default();
+    match lang {
+        None => {
+            if body.is_some() {
+                cx.diag(
+                    "SFC0705",
+                    body.map(anchor).unwrap_or_else(|| anchor(p)),
+                    "the body has no IL, ST, FBD, LD or SFC",
+                );
+            }
+        }
+        Some(l) => {
+            cx.em.open(anchor(l));
+            match l.tag_name().name() {
+                "ST" | "IL" => cx.em.lines(&xml::formatted_text(l), "    "),
+                "SFC" => sfc::chart(cx, l, &actions, &transitions),
+                _ => {
+                    let stmts = network::statements(cx, l, "    ");
+                    cx.em.frag(&stmts);
+                }
+            }
+            cx.em.close();
+        }
+    }
+    for extra in children(p, "body").skip(1).collect::<Vec<_>>() {
+        cx.diag("SFC0710", anchor(extra), "only the first body of a POU is imported");
+    }
+    if !is_sfc {
+        for a in &actions {
+            cx.diag(
+                "SFC0705",
+                anchor(*a),
+                "an action of a POU whose body is not SFC has no place in IEC 61131-3 text; it is not imported",
+            );
+        }
+        for t in &transitions {
+            cx.diag("SFC0710", anchor(*t), "a transition condition of a POU whose body is not SFC is never used");
+        }
+    }
+    let body_text = std::mem::replace(&mut cx.em, head);
+    if !cx.extra_vars.is_empty() {
+        cx.em.str("    VAR\n");
+        for (n, t) in std::mem::take(&mut cx.extra_vars) {
+            cx.em.str(&format!("        {n} : {t};\n"));
+        }
+        cx.em.str("    END_VAR\n");
+    }
+    cx.em.str("\n");
+    cx.em.append(body_text);
+    cx.em.str(match kind {
+        "FUNCTION_BLOCK" => "END_FUNCTION_BLOCK\n\n",
+        "FUNCTION" => "END_FUNCTION\n\n",
+        _ => "END_PROGRAM\n\n",
+    });
+    cx.em.close();
+}
+
+/// The body of an action (`body` element): ST or IL copied, FBD or LD translated.
+pub(crate) fn action_body(cx: &mut Ctx, body: Node, indent: &str) {
+    let lang = elements(body).find(|e| ["IL", "ST", "FBD", "LD", "SFC"].contains(&e.tag_name().name()));
+    match lang {
+        None => {
+            cx.diag("SFC0705", anchor(body), "the action body has no IL, ST, FBD or LD");
+        }
+        Some(l) => {
+            cx.em.open(anchor(l));
+            match l.tag_name().name() {
+                "ST" | "IL" => cx.em.lines(&xml::formatted_text(l), indent),
+                "SFC" => {
+                    cx.diag("SFC0705", anchor(l), "an action body written in SFC cannot be imported");
+                }
+                _ => {
+                    let stmts = network::statements(cx, l, indent);
+                    cx.em.frag(&stmts);
+                }
+            }
+            cx.em.close();
+        }
+    }
+}
+
+/// `VAR … END_VAR` from a `varList`.
+fn var_list(cx: &mut Ctx, l: Node, kw: &str, indent: &str) {
+    let vars: Vec<Node> = children(l, "variable").collect();
+    let mut head = kw.to_string();
+    if xml::flag(l, "constant") {
+        head.push_str(" CONSTANT");
+    }
+    if xml::flag(l, "retain") {
+        head.push_str(" RETAIN");
+    } else if xml::flag(l, "nonretain") {
+        head.push_str(" NON_RETAIN");
+    }
+    if xml::flag(l, "persistent") {
+        cx.diag("SFC0710", anchor(l), "`persistent` has no IEC 61131-3 keyword; the variables are imported without it");
+    }
+    cx.em.str(&format!("{indent}{head}\n"));
+    let inner = format!("{indent}    ");
+    for v in vars {
+        cx.em.open(anchor(v));
+        let list = element_attrs(v);
+        cx.attributes(&list, &inner);
+        cx.em.str(&inner);
+        let access = own_data(v, "access");
+        let raw_name = attr(v, "name").unwrap_or("");
+        let has_name = !raw_name.trim().is_empty();
+        if has_name {
+            let n = cx.name(v, "name", "variable");
+            cx.em.frag(&n);
+        }
+        if let Some(a) = attr(v, "address").map(str::trim).filter(|a| !a.is_empty()) {
+            let range = attr_range(v, "address").unwrap_or_else(|| anchor(v));
+            if has_name {
+                cx.em.str(" ");
+            }
+            cx.em.str("AT ");
+            let f = if a.starts_with('%') { Frag::located(a, range) } else { Frag::located(format!("%{a}"), range) };
+            cx.em.frag(&f);
+        } else if !has_name {
+            cx.diag("SFC0704", anchor(v), "a variable without a name or an address");
+            cx.em.str("Unnamed");
+        }
+        if kw == "VAR_ACCESS" {
+            let path = access.and_then(|a| attr(a, "path")).unwrap_or("");
+            cx.em.str(&format!(" : {path}"));
+        }
+        cx.em.str(" : ");
+        match child(v, "type") {
+            Some(t) => {
+                let f = type_text(cx, t, &inner);
+                cx.em.frag(&f);
+            }
+            None => {
+                cx.diag("SFC0705", anchor(v), "the variable has no type; imported as BOOL");
+                cx.em.str("BOOL");
+            }
+        }
+        if kw == "VAR_ACCESS" {
+            if let Some(m) = access.and_then(|a| attr(a, "mode")).filter(|m| is_ident(m) || m.contains('_')) {
+                cx.em.str(&format!(" {m}"));
+            }
+        }
+        if let Some(iv) = child(v, "initialValue") {
+            cx.em.str(" := ");
+            let f = value_text(cx, iv);
+            cx.em.frag(&f);
+        }
+        cx.em.str(";\n");
+        cx.em.close();
+    }
+    cx.em.str(&format!("{indent}END_VAR\n"));
+}
+
+/// The type inside a `type`, `baseType` or `returnType` element.
+pub(crate) fn type_text(cx: &mut Ctx, t: Node, indent: &str) -> Frag {
+    let Some(e) = elements(t).find(|e| e.tag_name().name() != "addData" && e.tag_name().name() != "documentation")
+    else {
+        cx.diag("SFC0705", anchor(t), "an empty type; imported as BOOL");
+        return Frag::located("BOOL", anchor(t));
+    };
+    let at = anchor(e);
+    let name = e.tag_name().name();
+    let f = match name {
+        "BOOL" | "BYTE" | "WORD" | "DWORD" | "LWORD" | "SINT" | "INT" | "DINT" | "LINT" | "USINT" | "UINT"
+        | "UDINT" | "ULINT" | "REAL" | "LREAL" | "TIME" | "DATE" | "DT" | "TOD" => Frag::located(name, at),
+        "string" | "wstring" => {
+            let kw = if name == "string" { "STRING" } else { "WSTRING" };
+            match attr(e, "length").map(str::trim).filter(|l| !l.is_empty()) {
+                Some(l) => Frag::located(format!("{kw}[{l}]"), at),
+                None => Frag::located(kw, at),
+            }
+        }
+        "derived" => cx.name(e, "name", "type"),
+        "array" => {
+            let mut f = Frag::plain("ARRAY [");
+            for (i, d) in children(e, "dimension").enumerate() {
+                if i > 0 {
+                    f.push_str(", ");
+                }
+                let lo = attr(d, "lower").unwrap_or("0").trim().to_string();
+                let hi = attr(d, "upper").unwrap_or("0").trim().to_string();
+                f.push(&Frag::located(format!("{lo}..{hi}"), anchor(d)));
+            }
+            f.push_str("] OF ");
+            match child(e, "baseType") {
+                Some(b) => {
+                    let bt = type_text(cx, b, indent);
+                    f.push(&bt);
+                }
+                None => {
+                    cx.diag("SFC0705", at.clone(), "an array without `baseType`; imported as ARRAY OF BOOL");
+                    f.push_str("BOOL");
+                }
+            }
+            f.locate(at)
+        }
+        "enum" => {
+            let mut f = Frag::default();
+            if let Some(b) = child(e, "baseType") {
+                let bt = type_text(cx, b, indent);
+                f.push(&bt);
+                f.push_str(" ");
+            }
+            f.push_str("(");
+            let values = child(e, "values").map(|v| children(v, "value").collect::<Vec<_>>()).unwrap_or_default();
+            for (i, v) in values.iter().enumerate() {
+                if i > 0 {
+                    f.push_str(", ");
+                }
+                let n = cx.name(*v, "name", "enumerated value");
+                f.push(&n);
+                if let Some(val) = attr(*v, "value").map(str::trim).filter(|s| !s.is_empty()) {
+                    f.push_str(" := ");
+                    f.push(&Frag::located(val, attr_range(*v, "value").unwrap_or_else(|| anchor(*v))));
+                }
+            }
+            f.push_str(")");
+            f.locate(at)
+        }
+        "struct" => {
+            let mut f = Frag::plain("STRUCT\n");
+            for v in children(e, "variable") {
+                let inner = format!("{indent}    ");
+                f.push_str(&inner);
+                let n = cx.name(v, "name", "structure member");
+                f.push(&n);
+                f.push_str(" : ");
+                match child(v, "type") {
+                    Some(tt) => {
+                        let tf = type_text(cx, tt, &inner);
+                        f.push(&tf);
+                    }
+                    None => {
+                        cx.diag("SFC0705", anchor(v), "a structure member without a type; imported as BOOL");
+                        f.push_str("BOOL");
+                    }
+                }
+                if let Some(iv) = child(v, "initialValue") {
+                    f.push_str(" := ");
+                    let vf = value_text(cx, iv);
+                    f.push(&vf);
+                }
+                f.push_str(";\n");
+            }
+            f.push_str(indent);
+            f.push_str("END_STRUCT");
+            f.locate(at)
+        }
+        "subrangeSigned" | "subrangeUnsigned" => {
+            let mut f = Frag::default();
+            match child(e, "baseType") {
+                Some(b) => {
+                    let bt = type_text(cx, b, indent);
+                    f.push(&bt);
+                }
+                None => f.push_str(if name == "subrangeSigned" { "DINT" } else { "UDINT" }),
+            }
+            let r = child(e, "range");
+            let lo = r.and_then(|r| attr(r, "lower")).unwrap_or("0").trim();
+            let hi = r.and_then(|r| attr(r, "upper")).unwrap_or("0").trim();
+            f.push_str(&format!(" ({lo}..{hi})"));
+            f.locate(at)
+        }
+        "pointer" => {
+            cx.diag("SFC0705", at.clone(), "pointer types are not IEC 61131-3; imported as the pointed-to type");
+            match child(e, "baseType") {
+                Some(b) => type_text(cx, b, indent),
+                None => Frag::located("BOOL", at),
+            }
+        }
+        other => {
+            cx.diag("SFC0705", at.clone(), format!("`{other}` cannot be the type of a variable"));
+            Frag::located(other.to_ascii_uppercase(), at)
+        }
+    };
+    f
+}
+
+/// An initial value (`initialValue` or `value` element).
+pub(crate) fn value_text(cx: &mut Ctx, v: Node) -> Frag {
+    let Some(e) = elements(v).find(|e| e.tag_name().name().ends_with("Value")) else {
+        cx.diag("SFC0705", anchor(v), "an empty initial value");
+        return Frag::located("0", anchor(v));
+    };
+    match e.tag_name().name() {
+        "simpleValue" => match attr(e, "value") {
+            Some(val) => {
+                let range = attr_range(e, "value").unwrap_or_else(|| anchor(e));
+                let t = val.trim();
+                let lead = val.len() - val.trim_start().len();
+                let mut f = Frag::plain(t);
+                if attr_is_raw(cx.src, &range, val) {
+                    let s = range.start + lead as u32;
+                    f.marks.push(crate::emit::MapEntry {
+                        text: 0..t.len() as u32,
+                        xml: s..s + t.len() as u32,
+                        exact: true,
+                    });
+                } else {
+                    f = f.locate(range);
+                }
+                f
+            }
+            None => Frag::plain(""),
+        },
+        "arrayValue" => {
+            let mut f = Frag::plain("[");
+            for (i, item) in children(e, "value").enumerate() {
+                if i > 0 {
+                    f.push_str(", ");
+                }
+                let rep = attr(item, "repetitionValue").map(str::trim).filter(|r| !r.is_empty() && *r != "1");
+                let inner = if elements(item).next().is_some() { value_text(cx, item) } else { Frag::plain("") };
+                match rep {
+                    Some(r) => {
+                        f.push_str(&format!("{r}("));
+                        f.push(&inner);
+                        f.push_str(")");
+                    }
+                    None => f.push(&inner),
+                }
+            }
+            f.push_str("]");
+            f.locate(anchor(e))
+        }
+        "structValue" => {
+            let mut f = Frag::plain("(");
+            for (i, item) in children(e, "value").enumerate() {
+                if i > 0 {
+                    f.push_str(", ");
+                }
+                let m = cx.name(item, "member", "structure member");
+                f.push(&m);
+                f.push_str(" := ");
+                let inner = value_text(cx, item);
+                f.push(&inner);
+            }
+            f.push_str(")");
+            f.locate(anchor(e))
+        }
+        other => {
+            cx.diag("SFC0705", anchor(e), format!("unknown initial value `{other}`"));
+            Frag::located("0", anchor(e))
+        }
+    }
+}
+
+/// Whether an attribute value appears in the source exactly as decoded (no entities).
+pub(crate) fn attr_is_raw(src: &str, range: &Range<u32>, value: &str) -> bool {
+    src.get(range.start as usize..range.end as usize) == Some(value)
+}
+
+/// The located text of an attribute value, exact when the source holds it verbatim.
+pub(crate) fn attr_xtext(cx: &Ctx, n: Node, name: &str) -> Option<XText> {
+    let v = attr(n, name)?;
+    let range = attr_range(n, name)?;
+    let mut t = XText::synthetic(v, range.clone());
+    if attr_is_raw(cx.src, &range, v) {
+        t.runs.push(xml::Run { text: 0, raw: range.start, len: v.len() as u32 });
+    }
+    Some(t)
+}
+
+/// Runs the whole import: XML text to IEC text, source map, diagnostics.
+pub(crate) fn run(file: u32, xml_text: &str) -> (String, SourceMap, Vec<Diagnostic>) {
+    let opts = roxmltree::ParsingOptions { allow_dtd: false, ..Default::default() };
+    let doc = match roxmltree::Document::parse_with_options(xml_text, opts) {
+        Ok(d) => d,
+        Err(e) => {
+            let pos = e.pos();
+            let at = xml::offset_of(xml_text, pos.row, pos.col);
+            let end = (at as usize + xml_text[at as usize..].chars().next().map_or(0, char::len_utf8)) as u32;
+            let d = Diagnostic::new("SFC0701", Span::new(file, at, end), format!("malformed XML: {e}"));
+            return (String::new(), SourceMap::default(), vec![d]);
+        }
+    };
+    let root = doc.root_element();
+    let mut cx = Ctx {
+        file,
+        src: xml_text,
+        em: Emitter::new(anchor(root)),
+        diags: Vec::new(),
+        used: HashSet::new(),
+        extra_vars: Vec::new(),
+        compute: Vec::new(),
+    };
+    if root.tag_name().name() != "project" {
+        cx.diag(
+            "SFC0702",
+            anchor(root),
+            format!("the document element is `{}`, not a PLCopen `project`", root.tag_name().name()),
+        );
+    } else {
+        match root.tag_name().namespace() {
+            Some(ns) if NAMESPACES.contains(&ns) => {}
+            ns => {
+                cx.diag(
+                    "SFC0703",
+                    anchor(root),
+                    format!("unknown namespace `{}`; reading the file as PLCopen TC6 XML anyway", ns.unwrap_or("")),
+                )
+                .notes
+                .push(format!("known namespaces: {}", NAMESPACES.join(", ")));
+            }
+        }
+        project(&mut cx, root);
+    }
+    let (text, map) = cx.em.finish();
+    (text, map, cx.diags)
+}
