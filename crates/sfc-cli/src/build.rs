@@ -105,6 +105,7 @@ pub fn build(r: BuildRequest) -> u8 {
                     let target = table_target.unwrap_or(Target::Atmt);
                     let limits = Limits::of(target, r.nstep, r.ntr);
                     sfc_codegen::atmt::build_table(chart, target, limits, r.flatten).map(|t| {
+                        print_diagnostics(&t.notes, std::slice::from_ref(&checked.file));
                         if let Some(n) = t.flattened {
                             eprintln!("flattened into {n} states");
                         }

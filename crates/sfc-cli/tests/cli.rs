@@ -24,10 +24,91 @@ const BROKEN: &str = "PROGRAM P\n    VAR_INPUT Start : BOOL; END_VAR\n    INITIA
 
 #[test]
 fn clean_chart_is_silent_and_exits_0() {
-    let ex = root().join("examples/blinker/blinker.st");
+    // The traffic light has no selection divergence, so not even a note about waiting.
+    let ex = root().join("examples/traffic/traffic.st");
     let out = sfc(&["check", ex.to_str().unwrap()]);
     assert_eq!(out.status.code(), Some(0), "{}", String::from_utf8_lossy(&out.stderr));
-    assert!(out.stdout.is_empty() && out.stderr.is_empty());
+    assert!(out.stdout.is_empty() && out.stderr.is_empty(), "{}", String::from_utf8_lossy(&out.stderr));
+}
+
+/// Every example checks without errors or warnings; the only findings allowed are SFC0506
+/// notes (a divergence that waits for some inputs, which is normal).
+#[test]
+fn examples_have_no_errors_or_warnings() {
+    for ex in ["blinker/blinker.st", "carwash/carwash.st", "spindle/spindle.st", "traffic/traffic.st"] {
+        let path = root().join("examples").join(ex);
+        let out = sfc(&["check", "--format", "json", path.to_str().unwrap()]);
+        assert_eq!(out.status.code(), Some(0), "{ex}: {}", String::from_utf8_lossy(&out.stderr));
+        let v: serde_json::Value = serde_json::from_slice(&out.stdout).expect("JSON array");
+        for d in v.as_array().expect("array") {
+            assert_eq!(d["code"], "SFC0506", "{ex}: unexpected finding {d}");
+            assert_eq!(d["severity"], "note");
+            assert!(d["witness"].is_object(), "{ex}: an incomplete divergence has a valuation witness");
+        }
+    }
+}
+
+const UNSAFE: &str = "PROGRAM P\n    VAR_INPUT a, b, c : BOOL; END_VAR\n    INITIAL_STEP S0: END_STEP\n    STEP S1: END_STEP\n    STEP S2: END_STEP\n    TRANSITION T1 FROM S0 TO (S1, S2) := a; END_TRANSITION\n    TRANSITION T2 FROM S1 TO S0 := b; END_TRANSITION\n    TRANSITION T3 FROM S2 TO S0 := c; END_TRANSITION\nEND_PROGRAM\n";
+
+/// An unsafe chart: an error with the firing sequence as JSON witness, confirmed in the
+/// simulator with an input schedule.
+#[test]
+fn analysis_reports_unsafe_with_witness() {
+    let d = temp_dir("unsafe");
+    let f = d.join("unsafe.st");
+    std::fs::write(&f, UNSAFE).unwrap();
+    let out = sfc(&["check", "--format", "json", f.to_str().unwrap()]);
+    assert_eq!(out.status.code(), Some(1));
+    let v: serde_json::Value = serde_json::from_slice(&out.stdout).expect("JSON array");
+    let unsafe_s0 = v
+        .as_array()
+        .unwrap()
+        .iter()
+        .find(|d| d["code"] == "SFC0501" && d["element"] == "S0")
+        .unwrap_or_else(|| panic!("no unsafe finding for S0 in {v}"));
+    assert_eq!(unsafe_s0["severity"], "error");
+    assert_eq!(unsafe_s0["witness"], serde_json::json!(["T1", "T2", "T3"]));
+    let notes: Vec<&str> = unsafe_s0["notes"].as_array().unwrap().iter().filter_map(|n| n.as_str()).collect();
+    assert!(notes.iter().any(|n| n.starts_with("confirmed")), "{notes:?}");
+    // Without analysis only the structural checks run.
+    let out = sfc(&["check", "--no-analysis", f.to_str().unwrap()]);
+    assert_eq!(out.status.code(), Some(0), "{}", String::from_utf8_lossy(&out.stderr));
+}
+
+/// `sfc build`: the seed's ATMT table byte for byte, PLCopen XML that checks again, SVG, ST
+/// that checks, and a clear refusal for a target that cannot express the chart.
+#[test]
+fn build_targets() {
+    let d = temp_dir("build");
+    let seed = root().join("crates/sfc-codegen/tests/atmt/seed.st");
+    let out = sfc(&["build", seed.to_str().unwrap(), "--target", "atmt"]);
+    assert_eq!(out.status.code(), Some(0), "{}", String::from_utf8_lossy(&out.stderr));
+    assert_eq!(String::from_utf8_lossy(&out.stdout), "3[0 0 1;1 1 2;2 2 1][8.1 2 1]");
+
+    let carwash = root().join("examples/carwash/carwash.st");
+    let xml = d.join("carwash.xml");
+    let out = sfc(&["build", carwash.to_str().unwrap(), "--target", "plcopen", "-o", xml.to_str().unwrap()]);
+    assert_eq!(out.status.code(), Some(0), "{}", String::from_utf8_lossy(&out.stderr));
+    let out = sfc(&["check", "--format", "json", xml.to_str().unwrap()]);
+    assert_eq!(out.status.code(), Some(0), "{}", String::from_utf8_lossy(&out.stderr));
+    let out = sfc(&["build", xml.to_str().unwrap(), "--target", "text"]);
+    assert_eq!(out.status.code(), Some(0));
+    assert!(String::from_utf8_lossy(&out.stdout).contains("INITIAL_STEP Idle"));
+
+    let out = sfc(&["build", carwash.to_str().unwrap(), "--target", "svg"]);
+    assert_eq!(out.status.code(), Some(0));
+    assert!(String::from_utf8_lossy(&out.stdout).contains("<svg"));
+
+    let st = d.join("carwash_st.st");
+    let out = sfc(&["build", carwash.to_str().unwrap(), "--target", "st", "-o", st.to_str().unwrap()]);
+    assert_eq!(out.status.code(), Some(0), "{}", String::from_utf8_lossy(&out.stderr));
+    let out = sfc(&["check", "--no-analysis", st.to_str().unwrap()]);
+    assert_eq!(out.status.code(), Some(0), "{}", String::from_utf8_lossy(&out.stderr));
+
+    // The car wash counts washes with integer arithmetic: not S7-200 bit logic.
+    let out = sfc(&["build", carwash.to_str().unwrap(), "--target", "stl"]);
+    assert_eq!(out.status.code(), Some(1));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("SFC081"));
 }
 
 #[test]

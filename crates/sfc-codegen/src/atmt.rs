@@ -111,11 +111,9 @@ pub fn build_table(
     }
     if flattening {
         let f = flatten::flatten(chart, target, limits)?;
-        let timeouts: Vec<i64> = f.timeouts.clone();
-        let text = format_table(&f.rules, &timeouts);
         return Ok(TableOutput {
-            text,
-            states: timeouts.len(),
+            text: format_table(&f.rules, &f.timeouts),
+            states: f.timeouts.len(),
             rules: f.rules.len(),
             flattened: Some(f.states.len()),
             notes: f.notes(chart),

@@ -75,11 +75,11 @@ pub fn layout(chart: &Chart, sizes: &Sizes) -> Layout {
     let mut down: Vec<(usize, usize)> = Vec::new();
     let mut ups: Vec<(usize, usize)> = Vec::new();
     let mut jumps: Vec<(usize, usize)> = Vec::new();
-    for v in 0..n {
-        for (i, &w) in net.succ[v].iter().enumerate() {
-            if !back[v][i] {
+    for (v, succ) in net.succ.iter().enumerate() {
+        for (&w, &is_back) in succ.iter().zip(&back[v]) {
+            if !is_back {
                 down.push((v, w));
-            } else if v >= ns && net.succ[v].len() == 1 {
+            } else if v >= ns && succ.len() == 1 {
                 jumps.push((v - ns, w));
             } else {
                 ups.push((v, w));
@@ -189,24 +189,21 @@ pub fn layout(chart: &Chart, sizes: &Sizes) -> Layout {
         l.sort_by_key(|&i| key(&slots[i]));
     }
     let mut pos = vec![0usize; slots.len()];
-    let index = |layers: &Vec<Vec<usize>>, pos: &mut Vec<usize>| {
-        for l in layers {
-            for (p, &i) in l.iter().enumerate() {
-                pos[i] = p;
-            }
+    for layer in &layers {
+        for (p, &i) in layer.iter().enumerate() {
+            pos[i] = p;
         }
-    };
-    index(&layers, &mut pos);
+    }
     for _ in 0..ORDER_PASSES {
-        for l in 1..layers_n {
-            reorder(&mut layers[l], &slots, &pos, true);
-            for (p, &i) in layers[l].iter().enumerate() {
+        for layer in layers.iter_mut().skip(1) {
+            reorder(layer, &slots, &pos, true);
+            for (p, &i) in layer.iter().enumerate() {
                 pos[i] = p;
             }
         }
-        for l in (0..layers_n.saturating_sub(1)).rev() {
-            reorder(&mut layers[l], &slots, &pos, false);
-            for (p, &i) in layers[l].iter().enumerate() {
+        for layer in layers.iter_mut().rev().skip(1) {
+            reorder(layer, &slots, &pos, false);
+            for (p, &i) in layer.iter().enumerate() {
                 pos[i] = p;
             }
         }
@@ -215,10 +212,10 @@ pub fn layout(chart: &Chart, sizes: &Sizes) -> Layout {
     // x: each slot under the mean of its upper neighbours, pushed right to keep its order and
     // the column gap, and off every x of the layer above that it is not linked to straight.
     for l in 0..layers_n {
-        let above: Vec<(f64, usize)> = if l > 0 { layers[l - 1].iter().map(|&i| (slots[i].x, i)).collect() } else { Vec::new() };
+        let above: Vec<(f64, usize)> =
+            if l > 0 { layers[l - 1].iter().map(|&i| (slots[i].x, i)).collect() } else { Vec::new() };
         let mut edge = f64::NEG_INFINITY;
-        for idx in 0..layers[l].len() {
-            let i = layers[l][idx];
+        for &i in &layers[l] {
             let s = &slots[i];
             let desired = if s.up.is_empty() {
                 f64::NEG_INFINITY
@@ -432,10 +429,7 @@ pub fn layout(chart: &Chart, sizes: &Sizes) -> Layout {
         } else {
             let y = track_y.get(&Track::Free(si)).copied().unwrap_or(0.0);
             let (a, b) = (out_port(u), in_port(l));
-            wires.push(Wire {
-                points: vec![a, Point::new(a.x, y), Point::new(b.x, y), b],
-                upward_arrow: false,
-            });
+            wires.push(Wire { points: vec![a, Point::new(a.x, y), Point::new(b.x, y), b], upward_arrow: false });
         }
     }
     // Upward links along lanes right of everything.
@@ -505,11 +499,8 @@ fn reorder(layer: &mut [usize], slots: &[Slot], pos: &[usize], from_above: bool)
         .enumerate()
         .map(|(p, &i)| {
             let nb = if from_above { &slots[i].up } else { &slots[i].down };
-            let k = if nb.is_empty() {
-                p as f64
-            } else {
-                nb.iter().map(|&j| pos[j] as f64).sum::<f64>() / nb.len() as f64
-            };
+            let k =
+                if nb.is_empty() { p as f64 } else { nb.iter().map(|&j| pos[j] as f64).sum::<f64>() / nb.len() as f64 };
             (k, p, i)
         })
         .collect();
@@ -519,6 +510,9 @@ fn reorder(layer: &mut [usize], slots: &[Slot], pos: &[usize], from_above: bool)
     }
 }
 
+/// A track's horizontal extent and the x of its lines up and down.
+type TrackSpan = (f64, f64, Vec<f64>, Vec<f64>);
+
 /// Orders the tracks of one channel that join its two layers (divergence lines, convergence
 /// lines and single links) so that few lines cross: a track above another crosses the other's
 /// lines coming down from the upper layer where its own line spans them, and the other's line
@@ -526,7 +520,7 @@ fn reorder(layer: &mut [usize], slots: &[Slot], pos: &[usize], from_above: bool)
 /// that lowers the count (a local optimum, deterministic). Upward links stay at the edges.
 /// `ends` gives a track's upper and lower vertical lines (their x), `None` for fixed tracks.
 fn order_tracks(tracks: &mut [Track], ends: impl Fn(Track) -> Option<(Vec<f64>, Vec<f64>)>) {
-    let info: Vec<Option<(f64, f64, Vec<f64>, Vec<f64>)>> = tracks
+    let info: Vec<Option<TrackSpan>> = tracks
         .iter()
         .map(|&t| {
             ends(t).map(|(upper, lower)| {

@@ -324,9 +324,8 @@ pub fn layout_with(chart: &Chart, opts: &LayoutOptions) -> Layout {
 /// a hand-made one could say anything; the layout never indexes out of range.
 fn sanitized(chart: &Chart) -> Option<Chart> {
     let ns = chart.steps.len();
-    let clean = |list: &[StepId]| {
-        list.iter().all(|&s| s < ns) && list.iter().enumerate().all(|(i, s)| !list[..i].contains(s))
-    };
+    let clean =
+        |list: &[StepId]| list.iter().all(|&s| s < ns) && list.iter().enumerate().all(|(i, s)| !list[..i].contains(s));
     if chart.transitions.iter().all(|t| clean(&t.from) && clean(&t.to)) {
         return None;
     }

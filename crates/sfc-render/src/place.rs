@@ -134,10 +134,7 @@ pub fn link(from: Point, to: Point) -> Wire {
         Wire { points: vec![from, to], upward_arrow: false }
     } else {
         let mid = ((from.y + to.y) / 2.0).round();
-        Wire {
-            points: vec![from, Point::new(from.x, mid), Point::new(to.x, mid), to],
-            upward_arrow: to.y < from.y,
-        }
+        Wire { points: vec![from, Point::new(from.x, mid), Point::new(to.x, mid), to], upward_arrow: to.y < from.y }
     }
 }
 
@@ -338,7 +335,11 @@ impl Placer<'_> {
                 let hi = reached.iter().copied().fold(f64::NEG_INFINITY, f64::max);
                 if reached.len() > 1 {
                     self.branches.push(BranchBar {
-                        kind: if double { BranchKind::SimultaneousConvergence } else { BranchKind::SelectionConvergence },
+                        kind: if double {
+                            BranchKind::SimultaneousConvergence
+                        } else {
+                            BranchKind::SelectionConvergence
+                        },
                         x1: lo - overhang,
                         x2: hi + overhang,
                         y: conv_y,

@@ -108,7 +108,8 @@ pub fn layout(chart: &Chart, sizes: &Sizes, pos: &Positions) -> Layout {
         .fold(f64::NEG_INFINITY, f64::max);
     // Steps to transitions.
     for (s, step) in steps.iter().enumerate() {
-        let outs: Vec<usize> = (0..chart.transitions.len()).filter(|&t| chart.transitions[t].from.contains(&s)).collect();
+        let outs: Vec<usize> =
+            (0..chart.transitions.len()).filter(|&t| chart.transitions[t].from.contains(&s)).collect();
         let ends: Vec<(Point, f64)> = outs
             .iter()
             .map(|&t| (transitions[t].in_port(), conv_line(&transitions[t], chart.transitions[t].from.len())))
@@ -136,7 +137,13 @@ pub fn layout(chart: &Chart, sizes: &Sizes, pos: &Positions) -> Layout {
         let xs: Vec<f64> = r.arrivals(s.top(), s.rect.y - STUB);
         if xs.len() > 1 {
             let (x1, x2) = span(xs.iter().copied().chain([s.top().x]));
-            r.bars.push(BranchBar { kind: BranchKind::SelectionConvergence, x1, x2, y: s.rect.y - STUB, y2: s.rect.y - STUB });
+            r.bars.push(BranchBar {
+                kind: BranchKind::SelectionConvergence,
+                x1,
+                x2,
+                y: s.rect.y - STUB,
+                y2: s.rect.y - STUB,
+            });
         }
     }
     for (t, tr) in transitions.iter().enumerate() {

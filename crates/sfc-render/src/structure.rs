@@ -8,12 +8,25 @@
 //! last steps of those branches. A link to a step that is drawn elsewhere (a loop back, or a
 //! link across to another branch) becomes a *jump*.
 //!
-//! The matching convergence of a divergence is its immediate post-dominator in the net without
-//! its back edges (found by a depth-first search from the initial steps): the first node every
-//! path from the divergence passes through. Branches that leave the construct instead (with a
-//! jump) are fine; a simultaneous convergence whose predecessors are not exactly the ends of
-//! the branches of its divergence is not, and neither is a selection branch that runs into a
-//! simultaneous convergence: then [`recover`] gives up and the layered layout draws the chart.
+//! Convergences are found with post-dominators of the net without its back edges (the back
+//! edges of a depth-first search from the initial steps, which become jumps):
+//!
+//! * a selection converges at the nearest node that all paths from its branches pass through,
+//!   counting only the branches that meet another branch at all (a branch that loops back on
+//!   its own does not keep the others from converging), and a transition that only jumps does
+//!   not hide the convergence of an enclosing construct ([`PostDominators::convergence`]);
+//! * simultaneous branches join at the nearest node that all their paths pass through, counting
+//!   only paths that can still reach a node two branches share ([`PostDominators::join`]):
+//!   loops, jumps out and dead ends inside a branch do not hide the join.
+//!
+//! The parser then checks what it finds: a simultaneous convergence must join exactly the last
+//! steps of the branches that reach it, and no selection branch may run into a simultaneous
+//! convergence (nor several alternatives into one). When that fails the chart is not well
+//! nested: [`recover`] gives up and the layered layout draws it.
+//!
+//! A selection without a convergence whose branches all end at once but one lets that one
+//! carry the sequence on below it (`Parser::main_branch`), so long chains of steps with
+//! loop-back branches are not nested ever deeper.
 
 use sfc_model::{Chart, StepId, TransitionId};
 
@@ -30,15 +43,24 @@ pub enum Elem {
     Step(StepId),
     Transition(TransitionId),
     /// The end of a sequence after `transition`: an arrow to `target`, which is drawn elsewhere.
-    Jump { transition: TransitionId, target: StepId },
+    Jump {
+        transition: TransitionId,
+        target: StepId,
+    },
     /// A selection divergence after a step: each branch starts with a transition. With
     /// `merges`, the branches that reach the convergence meet on a convergence line and the
     /// sequence goes on below it (with the convergence step, unless an enclosing construct
     /// places that step).
-    Selection { branches: Vec<Branch>, merges: bool },
+    Selection {
+        branches: Vec<Branch>,
+        merges: bool,
+    },
     /// A simultaneous divergence after a transition: each branch starts with a step. With
     /// `merges`, the next element is the convergence transition.
-    Simultaneous { branches: Vec<Branch>, merges: bool },
+    Simultaneous {
+        branches: Vec<Branch>,
+        merges: bool,
+    },
 }
 
 /// One branch of a divergence.
@@ -210,9 +232,8 @@ impl Net {
         let n = self.ns + self.nt;
         let exit = n;
         let (_, back) = self.dfs();
-        let fwd: Vec<Vec<usize>> = (0..n)
-            .map(|v| self.succ[v].iter().zip(&back[v]).filter(|(_, &b)| !b).map(|(&w, _)| w).collect())
-            .collect();
+        let fwd: Vec<Vec<usize>> =
+            (0..n).map(|v| self.succ[v].iter().zip(&back[v]).filter(|(_, &b)| !b).map(|(&w, _)| w).collect()).collect();
         // Topological order (Kahn), then nodes in reverse.
         let mut indeg = vec![0usize; n];
         for f in &fwd {
@@ -289,7 +310,9 @@ impl PostDominators {
         for i in 0..starts.len() {
             for j in i + 1..starts.len() {
                 let (a, b) = (starts[i], starts[j]);
-                if self.idom[a] != LOOPS && self.idom[b] != LOOPS && intersect(&self.idom, &self.depth, a, b) != self.exit
+                if self.idom[a] != LOOPS
+                    && self.idom[b] != LOOPS
+                    && intersect(&self.idom, &self.depth, a, b) != self.exit
                 {
                     meets[i] = true;
                     meets[j] = true;
@@ -519,16 +542,12 @@ impl Parser<'_> {
                                     return Err(NotNested);
                                 }
                             }
-                            let conv = self
-                                .pdom
-                                .join(&to)
-                                .and_then(|j| j.checked_sub(self.net.ns))
-                                .filter(|&j| {
-                                    j < self.net.nt
-                                        && !self.placed_transition[j]
-                                        && self.chart.transitions[j].from.len() > 1
-                                        && !self.stops.contains(&Stop::Transition(j))
-                                });
+                            let conv = self.pdom.join(&to).and_then(|j| j.checked_sub(self.net.ns)).filter(|&j| {
+                                j < self.net.nt
+                                    && !self.placed_transition[j]
+                                    && self.chart.transitions[j].from.len() > 1
+                                    && !self.stops.contains(&Stop::Transition(j))
+                            });
                             if let Some(j) = conv {
                                 self.stops.push(Stop::Transition(j));
                             }

@@ -53,10 +53,8 @@ fn compare(name: &str, got: &Pixmap, reference: &Path) -> Result<(), String> {
 }
 
 fn sources() -> Vec<(String, PathBuf)> {
-    let mut out: Vec<(String, PathBuf)> = st_files(&repo_dir().join("examples"))
-        .into_iter()
-        .map(|p| ("example".to_string(), p))
-        .collect();
+    let mut out: Vec<(String, PathBuf)> =
+        st_files(&repo_dir().join("examples")).into_iter().map(|p| ("example".to_string(), p)).collect();
     out.extend(st_files(&crate_dir().join("tests/svg")).into_iter().map(|p| ("svg".to_string(), p)));
     out
 }

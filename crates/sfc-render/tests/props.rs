@@ -7,7 +7,7 @@ mod common;
 
 use common::check_layout;
 use proptest::prelude::*;
-use sfc_model::{check_source, CheckOptions, Chart};
+use sfc_model::{check_source, Chart, CheckOptions};
 use sfc_render::{layout, svg, LayoutKind, SvgOptions};
 
 /// A small deterministic generator (xorshift), so one proptest seed gives one chart.

@@ -708,6 +708,17 @@ fn reset(ctx: &mut Ctx<'_>, chart: usize, code: &ChartCode) {
     }
     ctx.mem[frame + code.control.error as usize] = Value::Bool(false);
     ctx.mem[frame + code.control.error_step as usize] = Value::Str(Arc::from(""));
+    // SFCCurrentStep follows the initial situation while SFCInit holds it.
+    let st = &mut ctx.charts[chart];
+    if st.track_current {
+        st.changed = false;
+        let first = st.active.iter().copied().min();
+        st.current = first;
+        ctx.mem[frame + code.control.current_step as usize] = match first {
+            Some(s) => plan.step_values[s as usize].clone(),
+            None => Value::Str(Arc::from("")),
+        };
+    }
 }
 
 /// Evaluates the guard of `t` on the current memory: plain BOOL reads inline, the rest through

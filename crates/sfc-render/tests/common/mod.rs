@@ -1,7 +1,7 @@
 //! Shared by the tests: loading charts, and the geometric checks every layout must pass.
 #![allow(dead_code)]
 
-use sfc_model::{check_source, CheckOptions, Chart};
+use sfc_model::{check_source, Chart, CheckOptions};
 use sfc_render::{Layout, LayoutKind, Point, Rect};
 use std::collections::BTreeSet;
 use std::path::{Path, PathBuf};
@@ -113,6 +113,7 @@ impl Seg {
 /// of one lies on the other or where they overlap; lines that merely cross do not join.
 struct Flow<'a> {
     segs: &'a [Seg],
+    grid: Grid,
     bar_of: &'a [Option<usize>],
     /// For every segment, the segments it joins and the junction (a point or an overlap).
     joins: Vec<Vec<(usize, Point, Point)>>,
@@ -125,15 +126,53 @@ struct Reach<'a> {
     entered: Vec<bool>,
 }
 
+/// Segments by grid cell (of their bounding box grown by `GROW`), so that pairs of segments
+/// that may touch are found without comparing all pairs.
+struct Grid {
+    cells: std::collections::HashMap<(i64, i64), Vec<usize>>,
+}
+
+const CELL: f64 = 64.0;
+const GROW: f64 = 4.0;
+
+impl Grid {
+    fn new(segs: &[Seg]) -> Grid {
+        let mut cells: std::collections::HashMap<(i64, i64), Vec<usize>> = Default::default();
+        for (i, s) in segs.iter().enumerate() {
+            for key in Grid::keys(s.a.x.min(s.b.x), s.a.y.min(s.b.y), s.a.x.max(s.b.x), s.a.y.max(s.b.y)) {
+                cells.entry(key).or_default().push(i);
+            }
+        }
+        Grid { cells }
+    }
+    fn keys(x1: f64, y1: f64, x2: f64, y2: f64) -> impl Iterator<Item = (i64, i64)> {
+        let c = |v: f64| (v / CELL).floor() as i64;
+        let (cx1, cy1, cx2, cy2) = (c(x1 - GROW), c(y1 - GROW), c(x2 + GROW), c(y2 + GROW));
+        (cx1..=cx2).flat_map(move |x| (cy1..=cy2).map(move |y| (x, y)))
+    }
+    /// Segments whose cells meet those of the box, each once, in index order.
+    fn near(&self, x1: f64, y1: f64, x2: f64, y2: f64) -> Vec<usize> {
+        let mut out: Vec<usize> =
+            Grid::keys(x1, y1, x2, y2).filter_map(|k| self.cells.get(&k)).flatten().copied().collect();
+        out.sort_unstable();
+        out.dedup();
+        out
+    }
+    fn near_seg(&self, s: &Seg) -> Vec<usize> {
+        self.near(s.a.x.min(s.b.x), s.a.y.min(s.b.y), s.a.x.max(s.b.x), s.a.y.max(s.b.y))
+    }
+}
+
 fn param(s: &Seg, p: Point) -> f64 {
     (p.x - s.a.x).abs() + (p.y - s.a.y).abs()
 }
 
 impl<'a> Flow<'a> {
     fn new(segs: &'a [Seg], bar_of: &'a [Option<usize>]) -> Flow<'a> {
+        let grid = Grid::new(segs);
         let mut joins = vec![Vec::new(); segs.len()];
         for i in 0..segs.len() {
-            for j in 0..segs.len() {
+            for j in grid.near_seg(&segs[i]) {
                 if i == j {
                     continue;
                 }
@@ -150,14 +189,15 @@ impl<'a> Flow<'a> {
                 }
             }
         }
-        Flow { segs, bar_of, joins }
+        Flow { segs, grid, bar_of, joins }
     }
 
     fn from(&'a self, port: Point) -> Reach<'a> {
         let n = self.segs.len();
         let mut r = Reach { flow: self, entry: vec![f64::INFINITY; n], entered: vec![false; n] };
         let mut queue = Vec::new();
-        for (i, s) in self.segs.iter().enumerate() {
+        for i in self.grid.near(port.x, port.y, port.x, port.y) {
+            let s = &self.segs[i];
             if self.bar_of[i].is_none() && s.contains(port) {
                 r.entry[i] = param(s, port);
                 r.entered[i] = true;
@@ -214,7 +254,8 @@ impl<'a> Flow<'a> {
 
 impl Reach<'_> {
     fn reaches(&self, p: Point) -> bool {
-        self.flow.segs.iter().enumerate().any(|(i, s)| {
+        self.flow.grid.near(p.x, p.y, p.x, p.y).into_iter().any(|i| {
+            let s = &self.flow.segs[i];
             self.entered[i] && s.contains(p) && (self.flow.bar_of[i].is_some() || param(s, p) >= self.entry[i] - EPS)
         })
     }
@@ -266,7 +307,8 @@ pub fn check_layout(chart: &Chart, l: &Layout) -> Result<(), String> {
     if l.steps.len() != chart.steps.len() || l.steps.iter().enumerate().any(|(i, s)| s.step != i) {
         return Err("steps are not drawn once each, in order".into());
     }
-    if l.transitions.len() != chart.transitions.len() || l.transitions.iter().enumerate().any(|(i, t)| t.transition != i)
+    if l.transitions.len() != chart.transitions.len()
+        || l.transitions.iter().enumerate().any(|(i, t)| t.transition != i)
     {
         return Err("transitions are not drawn once each, in order".into());
     }
@@ -337,8 +379,9 @@ pub fn check_layout(chart: &Chart, l: &Layout) -> Result<(), String> {
         }
     }
     // Distinct parallel lines closer than this look like one.
+    let grid = Grid::new(&segs);
     for i in 0..segs.len() {
-        for j in i + 1..segs.len() {
+        for j in grid.near_seg(&segs[i]).into_iter().filter(|&j| j > i) {
             let (a, b) = (&segs[i], &segs[j]);
             let near = if a.vertical() && b.vertical() {
                 let d = (a.a.x - b.a.x).abs();
@@ -360,7 +403,7 @@ pub fn check_layout(chart: &Chart, l: &Layout) -> Result<(), String> {
     }
     if l.kind == LayoutKind::Structured {
         for i in 0..segs.len() {
-            for j in i + 1..segs.len() {
+            for j in grid.near_seg(&segs[i]).into_iter().filter(|&j| j > i) {
                 if segs[i].crosses(&segs[j]) {
                     return Err(format!("lines cross: {:?} and {:?}", segs[i], segs[j]));
                 }
@@ -380,7 +423,10 @@ pub fn check_layout(chart: &Chart, l: &Layout) -> Result<(), String> {
                 drawn_st.insert((s.step, t.transition));
             }
             if reach.reaches(t.out_port()) {
-                return Err(format!("the output of step {} runs into the output of transition {}", s.name, t.transition));
+                return Err(format!(
+                    "the output of step {} runs into the output of transition {}",
+                    s.name, t.transition
+                ));
             }
         }
         for o in &l.steps {
@@ -400,7 +446,10 @@ pub fn check_layout(chart: &Chart, l: &Layout) -> Result<(), String> {
         }
         for o in &l.transitions {
             if reach.reaches(o.in_port()) {
-                return Err(format!("transition {} is linked to transition {} without a step", t.transition, o.transition));
+                return Err(format!(
+                    "transition {} is linked to transition {} without a step",
+                    t.transition, o.transition
+                ));
             }
         }
         for (k, j) in l.jumps.iter().enumerate() {

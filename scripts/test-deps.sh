@@ -1,0 +1,19 @@
+#!/usr/bin/env bash
+# Installs the programs the test suite calls besides cargo, when they are missing:
+#   xmllint (Debian libxml2-utils) validates every PLCopen export against the TC6 v2.01 schema.
+# Part of the README's test command, so a fresh machine needs no manual step.
+set -euo pipefail
+need=()
+command -v xmllint >/dev/null 2>&1 || need+=(libxml2-utils)
+if [ ${#need[@]} -eq 0 ]; then
+    exit 0
+fi
+if ! command -v apt-get >/dev/null 2>&1; then
+    echo "test-deps: please install ${need[*]} (xmllint) with your package manager" >&2
+    exit 1
+fi
+sudo=""
+if [ "$(id -u)" -ne 0 ]; then sudo="sudo"; fi
+echo "test-deps: installing ${need[*]}" >&2
+$sudo apt-get install -y --no-install-recommends "${need[@]}" >/dev/null 2>&1 ||
+    { $sudo apt-get update >/dev/null 2>&1 && $sudo apt-get install -y --no-install-recommends "${need[@]}" >/dev/null; }
