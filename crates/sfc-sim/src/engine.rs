@@ -363,6 +363,8 @@ pub(crate) struct StepState {
     /// (otherwise [`Simulation::get`] answers from the step state).
     mirror_x: bool,
     mirror_t: bool,
+    /// The step associates actions (its activation makes them live).
+    has_entities: bool,
 }
 
 impl StepState {
@@ -434,6 +436,7 @@ impl ChartState {
                 t_slot: (frame + plan.t_slots[s] as usize) as u32,
                 mirror_x: true,
                 mirror_t: true,
+                has_entities: !plan.step_entities.get(s as u32).is_empty(),
                 ..StepState::default()
             })
             .collect();
@@ -508,8 +511,10 @@ impl ChartState {
         }
         st.t = 0;
         st.overdue = false;
+        if st.has_entities {
+            self.entered.push(s);
+        }
         self.tally[s as usize].activations += 1;
-        self.entered.push(s);
         self.changed = true;
     }
 
@@ -787,7 +792,6 @@ fn evolve(ctx: &mut Ctx<'_>, chart: usize, code: &ChartCode, plan: &ChartPlan) -
         st.cand = cand;
         return Ok(false);
     }
-    let now = ctx.now;
     if cand.len() == 1 {
         let t = cand[0];
         // The common case, a transition between two steps of a sequence (or a self-loop) whose
@@ -795,23 +799,8 @@ fn evolve(ctx: &mut Ctx<'_>, chart: usize, code: &ChartCode, plan: &ChartPlan) -
         let (from, to) = plan.links[t as usize];
         if from != u32::MAX {
             if from == to || !st.steps[to as usize].x {
-                st.left.clear();
-                st.left.push(from);
-                if from == to {
-                    st.complete(from);
-                } else {
-                    st.deactivate(from);
-                    st.steps[from as usize].publish_x(ctx.mem, false);
-                }
-                st.activate(to);
-                let step = &st.steps[to as usize];
-                step.publish_x(ctx.mem, true);
-                step.publish_t(ctx.mem);
-                if st.log.len() < LOG_LIMIT {
-                    st.log.push((now, t));
-                }
-                ctx.sink.fired.push((chart as u32, t));
                 st.cand = cand;
+                fire_links(ctx, chart, plan, &[t], epoch);
                 return Ok(true);
             }
         }
@@ -953,26 +942,52 @@ fn fire_links(ctx: &mut Ctx<'_>, chart: usize, plan: &ChartPlan, accepted: &[u32
         }
         return fire_general(ctx, chart, plan, accepted, epoch);
     }
+    // One pass: each transition leaves its step and enters the next, which takes the left
+    // step's place in `active`. A step of both D and A (left by one transition, entered by
+    // another, or a self-loop) carries both marks: it is not deactivated, and its entry restarts
+    // its time. The marks stay until the next epoch, so the order of the transitions does not
+    // matter.
     st.left.clear();
-    for &t in accepted {
-        let from = plan.links[t as usize].0;
-        let step = &mut st.steps[from as usize];
-        if step.amark == epoch {
-            st.complete(from);
-        } else {
-            st.deactivate(from);
-            st.steps[from as usize].publish_x(ctx.mem, false);
-        }
-        st.left.push(from);
-    }
     let now = ctx.now;
     for &t in accepted {
-        let to = plan.links[t as usize].1;
-        st.steps[to as usize].amark = 0;
-        st.activate(to);
-        let step = &st.steps[to as usize];
+        let (from, to) = plan.links[t as usize];
+        let step = &mut st.steps[from as usize];
+        let mut free = None;
+        if step.amark != epoch {
+            step.x = false;
+            free = Some(step.pos);
+            step.publish_x(ctx.mem, false);
+        }
+        st.complete(from);
+        st.left.push(from);
+        let step = &mut st.steps[to as usize];
+        if !step.x {
+            step.x = true;
+            match free.take() {
+                Some(pos) => {
+                    step.pos = pos;
+                    st.active[pos as usize] = to;
+                }
+                None => {
+                    step.pos = st.active.len() as u32;
+                    st.active.push(to);
+                }
+            }
+        }
+        step.t = 0;
+        step.overdue = false;
         step.publish_x(ctx.mem, true);
         step.publish_t(ctx.mem);
+        if step.has_entities {
+            st.entered.push(to);
+        }
+        st.tally[to as usize].activations += 1;
+        if let Some(pos) = free {
+            st.active.swap_remove(pos as usize);
+            if let Some(&moved) = st.active.get(pos as usize) {
+                st.steps[moved as usize].pos = pos;
+            }
+        }
         if st.log.len() < LOG_LIMIT {
             st.log.push((now, t));
         }
@@ -1100,7 +1115,7 @@ fn step_flags_read(lower: &str) -> std::collections::HashSet<(String, u8)> {
 /// Writes the `X` and `T` slots of the initial steps (evolutions write them as they fire).
 fn publish_initial(ctx: &mut Ctx<'_>, chart: usize) {
     let st = &ctx.charts[chart];
-    for &s in &st.entered {
+    for &s in &st.active {
         let step = &st.steps[s as usize];
         put_bool(ctx.mem, step.x_slot as usize, true);
         put_time(ctx.mem, step.t_slot as usize, step.t);
@@ -1108,7 +1123,16 @@ fn publish_initial(ctx: &mut Ctx<'_>, chart: usize) {
 }
 
 /// Steps 6–7: action control for every live entity, then the bodies with `A` TRUE.
+#[inline]
 fn action_phase(ctx: &mut Ctx<'_>, chart: usize, code: &ChartCode, plan: &ChartPlan) -> Result<(), Fault> {
+    let st = &ctx.charts[chart];
+    if st.entered.is_empty() && st.live.is_empty() {
+        return Ok(()); // no action holds state and none was activated
+    }
+    run_actions(ctx, chart, code, plan)
+}
+
+fn run_actions(ctx: &mut Ctx<'_>, chart: usize, code: &ChartCode, plan: &ChartPlan) -> Result<(), Fault> {
     let now = ctx.now;
     let profile = ctx.profile;
     let frame = ctx.charts[chart].frame;
@@ -1235,7 +1259,15 @@ fn action_phase(ctx: &mut Ctx<'_>, chart: usize, code: &ChartCode, plan: &ChartP
 }
 
 /// After the scan: supervision times, SFCError/SFCErrorStep, SFCCurrentStep.
+#[inline]
 fn finish_scan(ctx: &mut Ctx<'_>, chart: usize, code: &ChartCode, plan: &ChartPlan) {
+    let st = &ctx.charts[chart];
+    if plan.supervised || (st.changed && st.track_current) {
+        supervise(ctx, chart, code, plan);
+    }
+}
+
+fn supervise(ctx: &mut Ctx<'_>, chart: usize, code: &ChartCode, plan: &ChartPlan) {
     let frame = ctx.charts[chart].frame;
     let st = &mut ctx.charts[chart];
     if plan.supervised {
