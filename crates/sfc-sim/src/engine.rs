@@ -365,6 +365,8 @@ pub(crate) struct StepState {
     mirror_t: bool,
     /// The step associates actions (its activation makes them live).
     has_entities: bool,
+    /// Time analysis: activations and active times.
+    tally: StepTally,
 }
 
 impl StepState {
@@ -409,7 +411,6 @@ pub struct ChartState {
     /// (writing a STRING every scan costs more than the rest of a scan). Readers from outside
     /// (`Simulation::get`) get it computed.
     pub(crate) track_current: bool,
-    tally: Vec<StepTally>,
     // Scratch buffers, kept to avoid allocation per scan.
     stamp: Vec<u32>,
     /// Number of evolutions so far, modulo 2^32: the epoch marking scratch fields.
@@ -454,7 +455,6 @@ impl ChartState {
             entered: Vec::new(),
             changed: true,
             track_current: true,
-            tally: vec![StepTally::default(); n],
             stamp: vec![0; nt],
             evolutions: 0,
             cand: Vec::new(),
@@ -514,7 +514,7 @@ impl ChartState {
         if st.has_entities {
             self.entered.push(s);
         }
-        self.tally[s as usize].activations += 1;
+        self.steps[s as usize].tally.activations += 1;
         self.changed = true;
     }
 
@@ -537,7 +537,7 @@ impl ChartState {
     /// re-entered).
     fn complete(&mut self, s: u32) {
         let d = self.steps[s as usize].t;
-        let tl = &mut self.tally[s as usize];
+        let tl = &mut self.steps[s as usize].tally;
         if tl.completed == 0 {
             tl.min = d;
             tl.max = d;
@@ -614,29 +614,30 @@ pub fn run_chart(ctx: &mut Ctx<'_>, chart: usize) -> Result<(), Fault> {
     let st = &mut ctx.charts[chart];
     let delta = now - st.last_time;
     st.last_time = now;
-    if !paused && delta != 0 {
-        for &s in &st.active {
-            let step = &mut st.steps[s as usize];
-            step.t += delta;
-            step.publish_t(ctx.mem);
-        }
-    }
+    // Step times advance unless paused; the evolution does it in its pass over the active steps.
     match ctx.profile {
         Profile::Codesys => {
+            if !paused && delta != 0 {
+                for &s in &st.active {
+                    let step = &mut st.steps[s as usize];
+                    step.t += delta;
+                    step.publish_t(ctx.mem);
+                }
+            }
             action_phase(ctx, chart, code, plan)?;
             if !paused {
-                evolve(ctx, chart, code, plan)?;
+                evolve(ctx, chart, code, plan, 0)?;
             }
         }
         Profile::Grafcet => {
             if !paused {
-                evolve_until_stable(ctx, chart, code, plan)?;
+                evolve_until_stable(ctx, chart, code, plan, delta)?;
             }
             action_phase(ctx, chart, code, plan)?;
         }
         Profile::Iec | Profile::Matiec => {
             if !paused {
-                evolve(ctx, chart, code, plan)?;
+                evolve(ctx, chart, code, plan, delta)?;
             }
             action_phase(ctx, chart, code, plan)?;
         }
@@ -740,7 +741,8 @@ fn eval_guard(ctx: &mut Ctx<'_>, code: &ChartCode, frame: usize, t: u32) -> Resu
 
 /// Steps 3–5: enabled and true transitions against one snapshot, conflicts, firing.
 /// Returns whether anything fired.
-fn evolve(ctx: &mut Ctx<'_>, chart: usize, code: &ChartCode, plan: &ChartPlan) -> Result<bool, Fault> {
+/// `delta`: first advance the time of every active step by this much (in the same pass).
+fn evolve(ctx: &mut Ctx<'_>, chart: usize, code: &ChartCode, plan: &ChartPlan, delta: i64) -> Result<bool, Fault> {
     let frame = ctx.charts[chart].frame;
     let (mut cand, epoch) = {
         let st = &mut ctx.charts[chart];
@@ -748,6 +750,11 @@ fn evolve(ctx: &mut Ctx<'_>, chart: usize, code: &ChartCode, plan: &ChartPlan) -
         cand.clear();
         let epoch = st.next_epoch();
         for &s in &st.active {
+            if delta != 0 {
+                let step = &mut st.steps[s as usize];
+                step.t += delta;
+                step.publish_t(ctx.mem);
+            }
             for &t in plan.outgoing.get(s) {
                 // A transition with one preceding step is met only from that (active) step.
                 if plan.single_pre[t as usize] {
@@ -981,7 +988,7 @@ fn fire_links(ctx: &mut Ctx<'_>, chart: usize, plan: &ChartPlan, accepted: &[u32
         if step.has_entities {
             st.entered.push(to);
         }
-        st.tally[to as usize].activations += 1;
+        step.tally.activations += 1;
         if let Some(pos) = free {
             st.active.swap_remove(pos as usize);
             if let Some(&moved) = st.active.get(pos as usize) {
@@ -1062,7 +1069,13 @@ fn resolve_conflicts(
 
 /// GRAFCET (IEC 60848): evolve on frozen inputs until nothing fires; a situation met twice
 /// is an endless cycle and stops the run.
-fn evolve_until_stable(ctx: &mut Ctx<'_>, chart: usize, code: &ChartCode, plan: &ChartPlan) -> Result<(), Fault> {
+fn evolve_until_stable(
+    ctx: &mut Ctx<'_>,
+    chart: usize,
+    code: &ChartCode,
+    plan: &ChartPlan,
+    mut delta: i64,
+) -> Result<(), Fault> {
     let mut seen: Vec<Vec<u32>> = Vec::new();
     loop {
         let mut now_active = ctx.charts[chart].active.clone();
@@ -1074,7 +1087,9 @@ fn evolve_until_stable(ctx: &mut Ctx<'_>, chart: usize, code: &ChartCode, plan: 
             });
         }
         seen.push(now_active);
-        if !evolve(ctx, chart, code, plan)? {
+        let fired = evolve(ctx, chart, code, plan, delta)?;
+        delta = 0;
+        if !fired {
             return Ok(());
         }
     }
@@ -1734,7 +1749,7 @@ impl Simulation {
         let mut steps = Vec::new();
         for st in &self.charts {
             for (s, name) in st.plan.step_names.iter().enumerate() {
-                let tl = st.tally[s];
+                let tl = st.steps[s].tally;
                 let mut count = tl.completed;
                 let (mut min, mut max, mut sum) = (tl.min, tl.max, tl.sum);
                 if st.steps[s].x {
@@ -1769,7 +1784,7 @@ impl Simulation {
             .iter()
             .map(|c| {
                 let mut v = vec![false; c.plan.step_names.len()];
-                if c.started || !c.log.is_empty() || c.tally.iter().any(|t| t.activations > 0) {
+                if c.started || !c.log.is_empty() || c.steps.iter().any(|s| s.tally.activations > 0) {
                     for &s in &c.plan.initial {
                         v[s as usize] = true;
                     }
