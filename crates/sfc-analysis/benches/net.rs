@@ -120,7 +120,11 @@ fn time(chart: &sfc_model::Chart, strategy: Strategy, runs: usize) -> (f64, NetR
     let mut last = None;
     for _ in 0..runs {
         let t = Instant::now();
-        let r = if strategy == Strategy::Auto { analyze_net(chart, &opts) } else { analyze_net_with(chart, &opts, strategy) };
+        let r = if strategy == Strategy::Auto {
+            analyze_net(chart, &opts)
+        } else {
+            analyze_net_with(chart, &opts, strategy)
+        };
         times.push(t.elapsed().as_secs_f64() * 1e3);
         last = Some(r);
     }
@@ -168,7 +172,8 @@ fn main() {
     }
     let k = if full { 40 } else { 6 };
     if wanted("loops-nested") {
-        let _ = case(&format!("{k} parallel 10-step loops, well-nested"), &loops(k, 10, true, false), Strategy::Auto, runs);
+        let _ =
+            case(&format!("{k} parallel 10-step loops, well-nested"), &loops(k, 10, true, false), Strategy::Auto, runs);
     }
     if wanted("loops-irregular") {
         let label = format!("{k} parallel 10-step loops, irregular");
@@ -179,7 +184,8 @@ fn main() {
         }
     }
     if wanted("loops-unsafe") {
-        let _ = case(&format!("{k} parallel 10-step loops, unsafe jump"), &loops(k, 10, false, true), Strategy::Auto, runs);
+        let _ =
+            case(&format!("{k} parallel 10-step loops, unsafe jump"), &loops(k, 10, false, true), Strategy::Auto, runs);
     }
     if wanted("branches") {
         let (b, len) = if full { (200, 10) } else { (20, 5) };

@@ -65,6 +65,21 @@ pub fn analyze_chart(checked: &Checked, chart: &Chart, opts: &Options) -> Vec<Di
     out
 }
 
+/// The situation a lock-up witness reaches in the whole chart: a lock-up is a situation of one
+/// network, and the witness fires only that network's transitions (replay fires nothing else),
+/// so the other networks are still in their initial steps.
+pub fn lockup_goal(chart: &Chart, situation: &[StepId]) -> Goal {
+    let mut steps: Vec<StepId> = situation.to_vec();
+    for net in chart.networks() {
+        if !net.iter().any(|s| situation.contains(s)) {
+            steps.extend(net.iter().copied().filter(|&s| chart.steps[s].initial));
+        }
+    }
+    steps.sort_unstable();
+    steps.dedup();
+    Goal::Situation(steps)
+}
+
 fn names(chart: &Chart, witness: &[TransitionId]) -> Vec<String> {
     witness.iter().map(|&t| chart.transitions[t].name.clone()).collect()
 }
@@ -174,7 +189,7 @@ fn net_diagnostics(checked: &Checked, chart: &Chart, report: &NetReport, opts: &
         )
         .with_element(step.name.clone())
         .with_witness(Witness::Firing(names(chart, &l.witness)));
-        for n in confirm.notes(&l.witness, &Goal::Situation(l.situation.clone())) {
+        for n in confirm.notes(&l.witness, &lockup_goal(chart, &l.situation)) {
             d = d.with_note(n);
         }
         out.push(d);

@@ -52,10 +52,18 @@
 //!    single step; when it succeeds the network is safe, every step is reachable, no transition is
 //!    dead, there is no lock-up, and the concurrency relation comes from the blocks.
 //! 3. An **explicit breadth-first search** (`net/explicit.rs`) over bit-packed situations, with
-//!    parent pointers for witnesses, within [`NetOptions::max_states`].
+//!    parent pointers for witnesses. [`analyze_net`] first tries it on at most 50,000 situations.
 //! 4. A **symbolic search** (`net/symbolic.rs`) with BDDs (`biodivine-lib-bdd`) for networks whose
-//!    situations do not fit: chained reachability, then breadth-first layers only when a finding
-//!    needs a witness.
+//!    situations do not fit: chained reachability, verdicts read off the reachable set, and
+//!    backward breadth-first layers only when a finding needs a witness (or, when the network has
+//!    no more situations than the budget, the explicit search run to the end for them).
+//! 5. When the diagrams outgrow their node limit, the explicit search goes on with the whole of
+//!    [`NetOptions::max_states`]; when that runs out too, the report is incomplete.
+//!
+//! Group scans are enumerated from each situation where unsafe-capable transitions feed each
+//! other; when more than [`MAX_GROUP_CANDIDATES`] subsets would have to be tried from one
+//! situation (charts that multiply tokens everywhere), the search stops there and the report is
+//! incomplete.
 //!
 //! # Conventions for erroneous charts
 //! Step ids outside the chart are ignored and duplicates removed. A transition whose `from` is
@@ -459,7 +467,7 @@ fn prepare(chart: &Chart) -> Prepared {
     let mut place = vec![(u32::MAX, 0u32); n];
     let mut root_net = vec![u32::MAX; n];
     let mut nets: Vec<Net> = Vec::new();
-    for s in 0..n {
+    for (s, step) in chart.steps.iter().enumerate() {
         let r = find(&mut parent, s);
         if root_net[r] == u32::MAX {
             root_net[r] = nets.len() as u32;
@@ -480,7 +488,7 @@ fn prepare(chart: &Chart) -> Prepared {
         net.steps.push(s);
         net.out.push(Vec::new());
         net.inc.push(Vec::new());
-        if chart.steps[s].initial {
+        if step.initial {
             net.initial.push(local);
         }
     }
@@ -658,7 +666,8 @@ pub(crate) fn groups_among(net: &Net, cands: &[u32]) -> Option<Vec<Vec<u32>>> {
             if chosen & !possible != 0 || possible.count_ones() < 2 {
                 continue;
             }
-            let Some(pos) = (idx..members.len()).find(|&i| possible >> members[i] & 1 == 1 && chosen >> members[i] & 1 == 0)
+            let Some(pos) =
+                (idx..members.len()).find(|&i| possible >> members[i] & 1 == 1 && chosen >> members[i] & 1 == 0)
             else {
                 if chosen.count_ones() >= 2 && closed(chosen, &edge) && closed(chosen, &redge) {
                     out.push((0..k).filter(|&j| chosen >> j & 1 == 1).map(|j| cands[j]).collect::<Vec<u32>>());
@@ -679,4 +688,4 @@ pub(crate) fn groups_among(net: &Net, cands: &[u32]) -> Option<Vec<Vec<u32>>> {
 
 /// Subsets of unsafe-capable transitions that may be tried as group scans from one situation;
 /// beyond it the search reports itself incomplete.
-pub(crate) const MAX_GROUP_CANDIDATES: usize = 1 << 10;
+pub const MAX_GROUP_CANDIDATES: usize = 1 << 10;

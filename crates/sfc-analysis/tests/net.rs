@@ -367,9 +367,10 @@ fn compare(chart: &Chart, b: &Brute, r: &NetReport, what: &str) -> Result<(), St
         }
         let t = u.transition;
         let prefix = &u.witness[..u.witness.len() - 1];
-        let ok = b.replay(init, prefix).into_iter().any(|(x, k)| {
-            k + 1 == want && b.enabled(x, t) && ((b.post[t] & x & !b.pre[t]) >> u.step) & 1 == 1
-        });
+        let ok = b
+            .replay(init, prefix)
+            .into_iter()
+            .any(|(x, k)| k + 1 == want && b.enabled(x, t) && ((b.post[t] & x & !b.pre[t]) >> u.step) & 1 == 1);
         if !ok {
             return Err(format!("{what}: unsafe witness {:?} for S{} is not a shortest ({want})", u.witness, u.step));
         }
@@ -798,7 +799,11 @@ fn actual(chart: &Chart, r: &NetReport) -> Expected {
     let step = |s: usize| chart.steps[s].name.to_ascii_uppercase();
     let tr = |t: usize| chart.transitions[t].name.to_ascii_uppercase();
     Expected {
-        unsafe_steps: r.unsafe_steps.iter().map(|u| (step(u.step), u.witness.iter().map(|&t| tr(t)).collect())).collect(),
+        unsafe_steps: r
+            .unsafe_steps
+            .iter()
+            .map(|u| (step(u.step), u.witness.iter().map(|&t| tr(t)).collect()))
+            .collect(),
         unreachable: r.unreachable.iter().map(|&s| step(s)).collect(),
         dead: r.dead.iter().map(|&t| tr(t)).collect(),
         lockups: r
@@ -886,7 +891,9 @@ fn run_fixture(path: &Path) -> Result<(), String> {
     }
     for (together, pair) in relations {
         let [a, b] = pair.as_slice() else { return Err("together/apart needs two steps".into()) };
-        let (Some(a), Some(b)) = (chart.step(a), chart.step(b)) else { return Err(format!("unknown step in {pair:?}")) };
+        let (Some(a), Some(b)) = (chart.step(a), chart.step(b)) else {
+            return Err(format!("unknown step in {pair:?}"));
+        };
         if auto.concurrency.together(a, b) != together {
             return Err(format!("together({pair:?}) should be {together}"));
         }

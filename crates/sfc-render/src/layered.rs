@@ -92,13 +92,11 @@ pub fn layout(chart: &Chart, sizes: &Sizes) -> Layout {
         out_down[a] += 1;
         in_down[b] += 1;
     }
-    let has_jump: Vec<bool> = {
-        let mut h = vec![false; nt];
-        for &(t, _) in &jumps {
-            h[t] = true;
-        }
-        h
-    };
+    // The jump target of each transition that jumps.
+    let mut jump_of: Vec<Option<usize>> = vec![None; nt];
+    for &(t, target) in &jumps {
+        jump_of[t] = Some(target);
+    }
 
     // Longest-path layers over the downward links, in topological order.
     let mut down_succ: Vec<Vec<usize>> = vec![Vec::new(); n];
@@ -131,12 +129,10 @@ pub fn layout(chart: &Chart, sizes: &Sizes) -> Layout {
             (s.left(), s.right(), s.height())
         } else {
             let t = &sizes.transitions[v - ns];
-            let jump = jumps.iter().find(|j| j.0 == v - ns);
-            let right = match jump {
-                Some(&(_, target)) => t.right().max(jump_right(sizes.jump_label(chart, target).1)),
-                None => t.right(),
+            let (right, extra) = match jump_of[v - ns] {
+                Some(target) => (t.right().max(jump_right(sizes.jump_label(chart, target).1)), LINK + JUMP_H + 4.0),
+                None => (t.right(), 0.0),
             };
-            let extra = if has_jump[v - ns] { LINK + JUMP_H + 4.0 } else { 0.0 };
             (t.left(), right, t.row_h + extra)
         };
         slots.push(Slot {
@@ -360,7 +356,7 @@ pub fn layout(chart: &Chart, sizes: &Sizes) -> Layout {
                 let size = &sizes.transitions[t];
                 let bar_y = top + (size.row_h / 2.0).round();
                 let geom = transition_geom(t, size, s.x, bar_y, lh);
-                if let Some(&(_, target)) = jumps.iter().find(|j| j.0 == t) {
+                if let Some(target) = jump_of[t] {
                     let (label, w) = sizes.jump_label(chart, target);
                     let tip = Point::new(s.x, top + size.row_h + LINK + JUMP_H);
                     let label_rect = Rect::new(s.x + ARROW_HALF + 4.0, tip.y - ARROW_LEN / 2.0 - lh / 2.0, w, lh);

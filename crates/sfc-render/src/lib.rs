@@ -11,8 +11,9 @@
 //! Three ways to lay a chart out, tried in this order ([`LayoutKind`]):
 //!
 //! 1. **Stored**: when every step and transition carries `sfc.x` and `sfc.y` attributes (written
-//!    by the PLCopen import or the editor), the elements are drawn where they are and the links
-//!    are routed orthogonally between them.
+//!    by the PLCopen import or the editor: pixels, top-left corner; sizes in `sfc.w`/`sfc.h` or
+//!    `sfc.width`/`sfc.height` are optional), the elements are drawn where they are and the
+//!    links are routed orthogonally between them (`stored.rs`).
 //! 2. **Structured**: the block structure is recovered from the net (sequences, selections and
 //!    simultaneous branches with their matching convergences, jumps for links back up or across)
 //!    and drawn as nested columns whose widths are computed bottom-up (`structure.rs`,

@@ -278,3 +278,34 @@ fn stored_coordinates_are_used_only_when_complete() {
     let chart = chart_of(&with(false));
     assert_eq!(layout(&chart).kind, LayoutKind::Structured);
 }
+
+/// `Chart` has public fields: a hand-made chart with links to steps that do not exist, links
+/// named twice, or no steps at all still lays out and draws, without panicking.
+#[test]
+fn hand_made_charts_never_panic() {
+    let source = std::fs::read_to_string(common::repo_dir().join("examples/traffic/traffic.st")).expect("example");
+    let mut chart = chart_of(&source);
+    chart.transitions[0].to.push(999);
+    let first = chart.transitions[1].from[0];
+    chart.transitions[1].from.push(first);
+    chart.transitions[2].to.clear();
+    chart.transitions[3].from.clear();
+    let l = layout(&chart);
+    assert_eq!(l.steps.len(), chart.steps.len());
+    assert_eq!(l.transitions.len(), chart.transitions.len());
+    assert!(svg(&chart, &l, &SvgOptions::default()).ends_with("</svg>\n"));
+
+    chart.steps.clear();
+    chart.transitions.clear();
+    let l = layout(&chart);
+    assert!(l.steps.is_empty() && l.width > 0.0 && l.height > 0.0);
+    assert!(svg(&chart, &l, &SvgOptions::default()).ends_with("</svg>\n"));
+
+    // Absurd font sizes are tamed.
+    let chart = chart_of(&source);
+    for font_size in [f64::NAN, -3.0, 0.0, 1.0e9] {
+        let opts = sfc_render::LayoutOptions { font_size, ..Default::default() };
+        let l = sfc_render::layout_with(&chart, &opts);
+        assert!(l.width.is_finite() && l.height.is_finite() && l.font_size > 0.0 && l.font_size <= 200.0);
+    }
+}

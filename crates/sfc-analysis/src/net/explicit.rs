@@ -27,7 +27,8 @@ pub(crate) struct Search<'a> {
     states: Vec<u64>,
     parent: Vec<u32>,
     label: Vec<u32>,
-    table: Vec<u32>,
+    /// Open addressing: `hash >> 32 << 32 | index + 1`, 0 for empty.
+    table: Vec<u64>,
     groups: Vec<Vec<u32>>,
     group_ids: std::collections::HashMap<Vec<u32>, u32>,
     head: usize,
@@ -40,12 +41,17 @@ pub(crate) struct Search<'a> {
     broken: bool,
 }
 
+/// A bit set's hash (words mixed, then the 64-bit finaliser of MurmurHash3).
 fn hash(words: &[u64]) -> u64 {
-    let mut h = 0xcbf2_9ce4_8422_2325u64;
+    let mut h = 0x9e37_79b9_7f4a_7c15u64;
     for &w in words {
-        h = (h.rotate_left(5) ^ w).wrapping_mul(0x517c_c1b7_2722_0a95);
+        h = (h ^ w).wrapping_mul(0xff51_afd7_ed55_8ccd).rotate_left(29);
     }
-    h ^ (h >> 29)
+    h ^= h >> 33;
+    h = h.wrapping_mul(0xff51_afd7_ed55_8ccd);
+    h ^= h >> 33;
+    h = h.wrapping_mul(0xc4ce_b9fe_1a85_ec53);
+    h ^ (h >> 33)
 }
 
 impl<'a> Search<'a> {
@@ -107,29 +113,35 @@ impl<'a> Search<'a> {
         let count = self.parent.len();
         if (count + 1) * 2 > self.table.len() {
             let size = self.table.len() * 2;
-            let mut table = vec![0u32; size];
-            for i in 0..count {
+            let mut table = vec![0u64; size];
+            for &e in &self.table {
+                if e == 0 {
+                    continue;
+                }
+                let i = (e & 0xffff_ffff) as usize - 1;
                 let mut k = hash(self.state(i)) as usize & (size - 1);
                 while table[k] != 0 {
                     k = (k + 1) & (size - 1);
                 }
-                table[k] = i as u32 + 1;
+                table[k] = e;
             }
             self.table = table;
         }
         let mask = self.table.len() - 1;
-        let mut k = hash(x) as usize & mask;
+        let h = hash(x);
+        let tag = h & !0xffff_ffff;
+        let mut k = h as usize & mask;
         loop {
             let e = self.table[k];
             if e == 0 {
                 break;
             }
-            if self.state(e as usize - 1) == x {
+            if e & !0xffff_ffff == tag && self.state((e & 0xffff_ffff) as usize - 1) == x {
                 return false;
             }
             k = (k + 1) & mask;
         }
-        self.table[k] = count as u32 + 1;
+        self.table[k] = tag | (count as u64 + 1);
         self.states.extend_from_slice(x);
         self.parent.push(parent);
         self.label.push(label);
@@ -192,16 +204,16 @@ impl<'a> Search<'a> {
                 return;
             }
             self.head += 1;
-            for k in 0..w {
-                self.reach[k] |= x[k];
+            for (r, &xk) in self.reach.iter_mut().zip(&x) {
+                *r |= xk;
             }
             for (wi, &word) in x.iter().enumerate() {
                 let mut bits = word;
                 while bits != 0 {
                     let a = wi * 64 + bits.trailing_zeros() as usize;
                     bits &= bits - 1;
-                    for k in 0..w {
-                        self.conc[a * w + k] |= x[k];
+                    for (c, &xk) in self.conc[a * w..(a + 1) * w].iter_mut().zip(&x) {
+                        *c |= xk;
                     }
                 }
             }
@@ -233,13 +245,13 @@ impl<'a> Search<'a> {
                     let g = &groups[gi];
                     y.copy_from_slice(&x);
                     for &m in g {
-                        for k in 0..w {
-                            y[k] &= !self.pre[m as usize * w + k];
+                        for (yk, p) in y.iter_mut().zip(&self.pre[m as usize * w..(m as usize + 1) * w]) {
+                            *yk &= !p;
                         }
                     }
                     for &m in g {
-                        for k in 0..w {
-                            y[k] |= self.post[m as usize * w + k];
+                        for (yk, q) in y.iter_mut().zip(&self.post[m as usize * w..(m as usize + 1) * w]) {
+                            *yk |= q;
                         }
                     }
                     let id = match self.group_ids.get(g) {
@@ -274,9 +286,7 @@ impl<'a> Search<'a> {
         let n = self.net.steps.len();
         let w = self.w;
         let complete = self.finished();
-        let unsafe_steps = (0..n)
-            .filter_map(|s| self.unsafe_at[s].map(|(i, t)| (s as u32, self.path(i), t)))
-            .collect();
+        let unsafe_steps = (0..n).filter_map(|s| self.unsafe_at[s].map(|(i, t)| (s as u32, self.path(i), t))).collect();
         let lockups = self
             .lockups
             .iter()

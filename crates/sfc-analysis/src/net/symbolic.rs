@@ -14,14 +14,19 @@
 //!   empty for a transition `t` with `s ∈ post(t) \ pre(t)`, lock-ups are `R` without any enabled
 //!   transition but with an active step that has one, and the concurrency row of `a` is the set of
 //!   variables that can be 1 in `R|a=1` (read off the diagram in one pass).
-//! * **Witnesses** only when there are findings: breadth-first layers `L_k` (situations at exactly
-//!   `k` scans) are built until every finding is met; for a target in layer `k` the sets
-//!   `G_j = L_j ∧ pre-image(G_{j+1})` are computed backwards and the path is then chosen forwards,
-//!   taking at each scan the smallest scan label whose successor lies in `G_{j+1}`: the
-//!   lexicographically smallest shortest path, the same as the explicit search's.
+//! * **Witnesses** only when there are findings. When the network has no more reachable
+//!   situations than the explicit budget left, the caller is asked to run the explicit search
+//!   instead (same witnesses, cheaper). Otherwise, per finding, breadth-first layers are built
+//!   *backwards* from the target (situations at exactly `j` scans from it) until the initial
+//!   situation is met, and the path is chosen forwards, taking at each scan the smallest scan label
+//!   whose successor lies in the next layer: the lexicographically smallest shortest path, the
+//!   same as the explicit search's. Backward layers only constrain the steps the target depends
+//!   on; forward layers would count the progress of every concurrent branch (40 loops of 10 steps
+//!   give layers of hundreds of thousands of nodes and minutes of work; backwards it takes
+//!   milliseconds).
 //!
-//! Every diagram is kept under a node limit; when one would exceed it the search gives up
-//! (`None`) and the caller falls back to the explicit budget.
+//! Every diagram is kept under a node limit; when one would exceed it, or when group scans are
+//! too many to enumerate, the search gives up and the caller falls back to the explicit budget.
 
 use super::{groups_among, Net, Outcome, SearchMethod, MAX_LOCKUPS};
 use biodivine_lib_bdd::{op_function, Bdd, BddPartialValuation, BddVariable, BddVariableSet};
@@ -44,6 +49,8 @@ type Label = Vec<u32>;
 /// A scan with its image and pre-image ingredients.
 struct Scan {
     label: Label,
+    /// The variables of the consumed and activated steps.
+    vars: Vec<BddVariable>,
     /// Consumed steps set to 1.
     restrict: Vec<(BddVariable, bool)>,
     /// Activated steps that were not consumed.
@@ -93,6 +100,7 @@ impl<'a> Sym<'a> {
         post_lits.extend(d.iter().filter(|x| a.binary_search(x).is_err()).map(|&x| (self.var[x as usize], false)));
         Scan {
             label: label.to_vec(),
+            vars: d.iter().chain(a.iter()).map(|&x| self.var[x as usize]).collect(),
             effect: self.cube(&post_lits),
             pre_cube: self.cube(&restrict),
             restrict,
@@ -199,31 +207,49 @@ impl<'a> Sym<'a> {
         y
     }
 
-    /// The lexicographically smallest shortest path to `target ⊆ layers[k]`, and its end.
-    fn extract(&self, layers: &[Bdd], labels: &[Scan], k: usize, target: Bdd) -> Option<(Vec<Label>, Vec<bool>)> {
-        let mut g = vec![target];
-        for j in (0..k).rev() {
-            let next = g.last()?;
+    /// The lexicographically smallest among the shortest paths from the initial situation `x0`
+    /// into `target`, and its end: backward breadth-first layers `B_j` (situations at exactly `j`
+    /// scans from `target`) until `x0` is met at `B_d`, then forwards, at each scan the smallest
+    /// label whose successor lies in the next layer. Every successor of a reachable situation is
+    /// reachable, so distances need no restriction to the reachable set, and the layers only
+    /// constrain the steps the target depends on: they stay small where forward layers (which
+    /// count the progress of every concurrent branch) would not, and scans touching none of
+    /// those steps are skipped. `None` when a diagram would exceed the limit.
+    fn nearest(&self, x0: &[bool], labels: &[Scan], target: &Bdd) -> Option<(Vec<Label>, Vec<bool>)> {
+        let mut layers = vec![target.clone()];
+        let mut seen = target.clone();
+        while !self.eval(layers.last()?, x0) {
+            let last = layers.last()?;
+            // A scan touching no variable the layer depends on leads from the layer into itself.
+            let support = last.support_set();
             let mut pre = self.vars.mk_false();
             for l in labels {
-                let p = self.preimage(next, l)?;
-                pre = self.or(&pre, &p)?;
+                if !l.vars.iter().any(|v| support.contains(v)) {
+                    continue;
+                }
+                let p = self.preimage(last, l)?;
+                if !p.is_false() {
+                    pre = self.or(&pre, &p)?;
+                }
             }
-            g.push(self.and(&layers[j], &pre)?);
+            let new = self.and_not(&pre, &seen)?;
+            if new.is_false() {
+                return None;
+            }
+            seen = self.or(&seen, &new)?;
+            layers.push(new);
         }
-        g.reverse();
-        let mut x = vec![false; self.n];
-        for &s in &self.net.initial {
-            x[s as usize] = true;
-        }
-        let mut path = Vec::with_capacity(k);
-        for gj in g.iter().skip(1) {
+        let d = layers.len() - 1;
+        let mut x = x0.to_vec();
+        let mut path = Vec::with_capacity(d);
+        for i in 0..d {
+            let goal = &layers[d - 1 - i];
             let step = labels.iter().find_map(|sc| {
                 if !self.enabled_in(&x, &sc.label) {
                     return None;
                 }
                 let y = self.fire(&x, &sc.label);
-                self.eval(gj, &y).then_some((sc.label.clone(), y))
+                self.eval(goal, &y).then_some((sc.label.clone(), y))
             })?;
             path.push(step.0);
             x = step.1;
@@ -317,8 +343,7 @@ fn search(net: &Net, limit: usize, explicit_witnesses: Option<usize>) -> Option<
         }
         let mut capable = Vec::new();
         for t in 0..nt {
-            let restrict: Vec<(BddVariable, bool)> =
-                net.pre[t].iter().map(|&s| (sym.var[s as usize], true)).collect();
+            let restrict: Vec<(BddVariable, bool)> = net.pre[t].iter().map(|&s| (sym.var[s as usize], true)).collect();
             let rt = r.restrict(&restrict);
             if rt.is_false() {
                 continue;
@@ -342,20 +367,18 @@ fn search(net: &Net, limit: usize, explicit_witnesses: Option<usize>) -> Option<
         groups = found;
     }
 
-    let tm = std::time::Instant::now();
-    if std::env::var("SYMDBG").is_ok() { eprintln!("reach done groups {} size {}", groups.len(), r.size()); }
     // Verdicts.
     let reach_var = sym.true_vars(&r);
     let reachable: Vec<bool> = (0..n).map(|s| reach_var[sym.var[s].to_index()]).collect();
     let mut enabled = vec![false; nt];
     let mut unsafe_by: Vec<Vec<u32>> = vec![Vec::new(); n];
-    for t in 0..nt {
+    for (t, en) in enabled.iter_mut().enumerate() {
         let restrict: Vec<(BddVariable, bool)> = net.pre[t].iter().map(|&s| (sym.var[s as usize], true)).collect();
         let rt = r.restrict(&restrict);
         if rt.is_false() {
             continue;
         }
-        enabled[t] = true;
+        *en = true;
         let tv = sym.true_vars(&rt);
         for &s in &net.post[t] {
             if net.pre[t].binary_search(&s).is_err() && tv[sym.var[s as usize].to_index()] {
@@ -393,11 +416,10 @@ fn search(net: &Net, limit: usize, explicit_witnesses: Option<usize>) -> Option<
         }
     }
 
-    if std::env::var("SYMDBG").is_ok() { eprintln!("verdicts {:?}", tm.elapsed()); }
     // Witnesses, by breadth-first layers, only for the findings.
     let mut unsafe_steps: Vec<(u32, Vec<Label>, u32)> = Vec::new();
     let mut lockups: Vec<(Vec<u32>, Vec<Label>)> = Vec::new();
-    let mut pending: Vec<u32> = (0..n as u32).filter(|&s| !unsafe_by[s as usize].is_empty()).collect();
+    let pending: Vec<u32> = (0..n as u32).filter(|&s| !unsafe_by[s as usize].is_empty()).collect();
     let mut lock_left = if locked.is_false() { 0 } else { MAX_LOCKUPS };
     let count = r.cardinality();
     if (!pending.is_empty() || lock_left > 0) && explicit_witnesses.is_some_and(|k| count <= k as f64) {
@@ -415,56 +437,25 @@ fn search(net: &Net, limit: usize, explicit_witnesses: Option<usize>) -> Option<
             }
             cap.push(c);
         }
-        let mut layers = vec![init.clone()];
-        let mut seen = init.clone();
-        let mut k = 0;
-        loop {
-            let layer = layers[k].clone();
-            let mut i = 0;
-            while i < pending.len() {
-                let hit = sym.and(&layer, &cap[i])?;
-                if hit.is_false() {
-                    i += 1;
-                    continue;
-                }
-                let s = pending[i];
-                let (path, x) = sym.extract(&layers, &labels, k, hit)?;
-                let t = *unsafe_by[s as usize]
-                    .iter()
-                    .filter(|&&t| sym.enabled_in(&x, &[t]))
-                    .min()
-                    .filter(|_| x[s as usize])?;
-                unsafe_steps.push((s, path, t));
-                pending.remove(i);
-                cap.remove(i);
-            }
-            if lock_left > 0 {
-                let mut hit = sym.and(&layer, &locked)?;
-                while lock_left > 0 && !hit.is_false() {
-                    let (path, x) = sym.extract(&layers, &labels, k, hit.clone())?;
-                    hit = sym.and_not(&hit, &sym.situation_cube(&x))?;
-                    lockups.push(((0..n as u32).filter(|&s| x[s as usize]).collect(), path));
-                    lock_left -= 1;
-                }
-            }
-            if pending.is_empty() && lock_left == 0 {
-                break;
-            }
-            let mut next = sym.vars.mk_false();
-            for l in &labels {
-                let img = sym.image(&layer, l)?;
-                next = sym.or(&next, &img)?;
-            }
-            let next = sym.and_not(&next, &seen)?;
-            if next.is_false() {
-                break;
-            }
-            seen = sym.or(&seen, &next)?;
-            layers.push(next);
-            k += 1;
+        for (i, &s) in pending.iter().enumerate() {
+            let (path, x) = sym.nearest(&init_x, &labels, &cap[i])?;
+            let t =
+                *unsafe_by[s as usize].iter().filter(|&&t| sym.enabled_in(&x, &[t])).min().filter(|_| x[s as usize])?;
+            unsafe_steps.push((s, path, t));
+        }
+        // Situations without an enabled transition but with an active step that has one; the
+        // nearest of them are reachable (the reachable set need not be part of the target).
+        let mut left = sym.and_not(&has_out, &any_enabled)?;
+        let mut left_reachable = locked.clone();
+        while lock_left > 0 && !left_reachable.is_false() {
+            let (path, x) = sym.nearest(&init_x, &labels, &left)?;
+            let found = sym.situation_cube(&x);
+            left = sym.and_not(&left, &found)?;
+            left_reachable = sym.and_not(&left_reachable, &found)?;
+            lockups.push(((0..n as u32).filter(|&s| x[s as usize]).collect(), path));
+            lock_left -= 1;
         }
         unsafe_steps.sort_by_key(|u| u.0);
-        if std::env::var("SYMDBG").is_ok() { eprintln!("witness {:?} layers {} labels {}", tm.elapsed(), layers.len(), labels.len()); }
     }
     Some(Some(Outcome {
         complete: true,
