@@ -336,16 +336,7 @@ pub fn layout(chart: &Chart, sizes: &Sizes) -> Layout {
                 if let Some(a) = &size.actions {
                     let block = Rect::new(rect.right() + ACTION_GAP, top + size.action_dy(), a.w(), a.h());
                     let cy = top + (size.h / 2.0).round();
-                    actions.push(ActionBlockGeom {
-                        step: v,
-                        rect: block,
-                        row_height: a.row_h,
-                        qualifier_width: a.qualifier_w,
-                        action_width: a.action_w,
-                        indicator_width: a.indicator_w,
-                        rows: a.rows.clone(),
-                        link: (Point::new(rect.right(), cy), Point::new(block.x, cy)),
-                    });
+                    actions.push(a.geom(v, block, rect, cy));
                 }
                 let step = &chart.steps[v];
                 steps[v] = Some(BoxGeom { step: v, name: step.name.clone(), initial: step.initial, rect });

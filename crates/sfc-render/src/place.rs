@@ -267,16 +267,7 @@ impl Placer<'_> {
                 if let Some(a) = &size.actions {
                     let block = Rect::new(rect.right() + ACTION_GAP, y + size.action_dy(), a.w(), a.h());
                     let cy = y + (size.h / 2.0).round();
-                    self.actions.push(ActionBlockGeom {
-                        step: *s,
-                        rect: block,
-                        row_height: a.row_h,
-                        qualifier_width: a.qualifier_w,
-                        action_width: a.action_w,
-                        indicator_width: a.indicator_w,
-                        rows: a.rows.clone(),
-                        link: (Point::new(rect.right(), cy), Point::new(block.x, cy)),
-                    });
+                    self.actions.push(a.geom(*s, block, rect, cy));
                 }
                 let out = geom.bottom();
                 self.steps[*s] = Some(geom);

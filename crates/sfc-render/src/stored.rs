@@ -14,7 +14,7 @@
 
 use crate::place::transition_geom;
 use crate::text::{dim::*, line_height, Sizes};
-use crate::{ActionBlockGeom, BoxGeom, BranchBar, BranchKind, Layout, LayoutKind, Point, Rect, TransitionGeom, Wire};
+use crate::{BoxGeom, BranchBar, BranchKind, Layout, LayoutKind, Point, Rect, TransitionGeom, Wire};
 use sfc_model::Chart;
 use sfc_syntax::ast::Attribute;
 
@@ -71,16 +71,7 @@ pub fn layout(chart: &Chart, sizes: &Sizes, pos: &Positions) -> Layout {
         if let Some(a) = &size.actions {
             let cy = (p.y + h / 2.0).round();
             let block = Rect::new(rect.right() + ACTION_GAP, cy - (a.row_h / 2.0).round(), a.w(), a.h());
-            actions.push(ActionBlockGeom {
-                step: s,
-                rect: block,
-                row_height: a.row_h,
-                qualifier_width: a.qualifier_w,
-                action_width: a.action_w,
-                indicator_width: a.indicator_w,
-                rows: a.rows.clone(),
-                link: (Point::new(rect.right(), cy), Point::new(block.x, cy)),
-            });
+            actions.push(a.geom(s, block, rect, cy));
         }
         steps.push(BoxGeom { step: s, name: step.name.clone(), initial: step.initial, rect });
     }

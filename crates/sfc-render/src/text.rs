@@ -264,6 +264,20 @@ impl ActionSize {
     pub fn h(&self) -> f64 {
         self.row_h * self.rows.len() as f64
     }
+    /// The block of `step` placed at `block`, linked from the right side of the step box `rect`
+    /// at height `cy`.
+    pub fn geom(&self, step: usize, block: crate::Rect, rect: crate::Rect, cy: f64) -> crate::ActionBlockGeom {
+        crate::ActionBlockGeom {
+            step,
+            rect: block,
+            row_height: self.row_h,
+            qualifier_width: self.qualifier_w,
+            action_width: self.action_w,
+            indicator_width: self.indicator_w,
+            rows: self.rows.clone(),
+            link: (crate::Point::new(rect.right(), cy), crate::Point::new(block.x, cy)),
+        }
+    }
 }
 
 /// Size of a transition: its bar and the texts beside it.
