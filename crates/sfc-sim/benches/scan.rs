@@ -115,7 +115,9 @@ fn main() {
     let filter: Vec<String> = std::env::args().skip(1).filter(|a| !a.starts_with("--")).collect();
     let wanted = |name: &str| filter.is_empty() || filter.iter().any(|f| name.contains(f.as_str()));
     let (scale, rounds) = if full { (1u64, 7) } else { (0, 1) };
-    let scans = |n: u64| if scale == 0 { 20 } else { n };
+    // SFC_BENCH_SCANS overrides the number of scans per round (e.g. small, under callgrind).
+    let fixed: Option<u64> = std::env::var("SFC_BENCH_SCANS").ok().and_then(|v| v.parse().ok());
+    let scans = |n: u64| fixed.unwrap_or(if scale == 0 { 20 } else { n });
 
     println!("sfc-sim scan benchmark ({} build)", if cfg!(debug_assertions) { "debug" } else { "release" });
     let mut ring_ns = Vec::new();

@@ -729,7 +729,7 @@ fn reset(ctx: &mut Ctx<'_>, chart: usize, code: &ChartCode) {
 
 /// Evaluates the guard of `t` on the current memory: plain BOOL reads inline, the rest through
 /// the compiled closure.
-#[inline]
+#[inline(always)]
 fn eval_guard(ctx: &mut Ctx<'_>, code: &ChartCode, frame: usize, t: u32) -> Result<bool, Fault> {
     match code.fast[t as usize] {
         FastGuard::Local(o, neg) => Ok(read_bool(ctx.mem, frame + o as usize) != neg),
@@ -807,7 +807,8 @@ fn evolve(ctx: &mut Ctx<'_>, chart: usize, code: &ChartCode, plan: &ChartPlan, d
         if from != u32::MAX {
             if from == to || !st.steps[to as usize].x {
                 st.cand = cand;
-                fire_links(ctx, chart, plan, &[t], epoch);
+                st.left.clear();
+                take_link(st, ctx.mem, ctx.sink, chart, ctx.now, t, from, to, from == to);
                 return Ok(true);
             }
         }
@@ -958,48 +959,69 @@ fn fire_links(ctx: &mut Ctx<'_>, chart: usize, plan: &ChartPlan, accepted: &[u32
     let now = ctx.now;
     for &t in accepted {
         let (from, to) = plan.links[t as usize];
-        let step = &mut st.steps[from as usize];
-        let mut free = None;
-        if step.amark != epoch {
-            step.x = false;
-            free = Some(step.pos);
-            step.publish_x(ctx.mem, false);
-        }
-        st.complete(from);
-        st.left.push(from);
-        let step = &mut st.steps[to as usize];
-        if !step.x {
-            step.x = true;
-            match free.take() {
-                Some(pos) => {
-                    step.pos = pos;
-                    st.active[pos as usize] = to;
-                }
-                None => {
-                    step.pos = st.active.len() as u32;
-                    st.active.push(to);
-                }
-            }
-        }
-        step.t = 0;
-        step.overdue = false;
-        step.publish_x(ctx.mem, true);
-        step.publish_t(ctx.mem);
-        if step.has_entities {
-            st.entered.push(to);
-        }
-        step.tally.activations += 1;
-        if let Some(pos) = free {
-            st.active.swap_remove(pos as usize);
-            if let Some(&moved) = st.active.get(pos as usize) {
-                st.steps[moved as usize].pos = pos;
-            }
-        }
-        if st.log.len() < LOG_LIMIT {
-            st.log.push((now, t));
-        }
-        ctx.sink.fired.push((chart as u32, t));
+        let stay = st.steps[from as usize].amark == epoch;
+        take_link(st, ctx.mem, ctx.sink, chart, now, t, from, to, stay);
     }
+}
+
+/// Fires the one-step-to-one-step transition `t`: leaves `from` (unless `stay`: it is entered
+/// again in the same scan) and enters `to`, which takes `from`'s place in the active list; the
+/// `X`/`T` slots, the time analysis, the action queue and the firing log follow. The caller
+/// has checked that the firing is safe.
+#[inline(always)]
+#[allow(clippy::too_many_arguments)]
+fn take_link(
+    st: &mut ChartState,
+    mem: &mut [Value],
+    sink: &mut ScanSink,
+    chart: usize,
+    now: i64,
+    t: u32,
+    from: u32,
+    to: u32,
+    stay: bool,
+) {
+    let step = &mut st.steps[from as usize];
+    let mut free = None;
+    if !stay {
+        step.x = false;
+        free = Some(step.pos);
+        step.publish_x(mem, false);
+    }
+    st.complete(from);
+    st.left.push(from);
+    let step = &mut st.steps[to as usize];
+    if !step.x {
+        step.x = true;
+        match free.take() {
+            Some(pos) => {
+                step.pos = pos;
+                st.active[pos as usize] = to;
+            }
+            None => {
+                step.pos = st.active.len() as u32;
+                st.active.push(to);
+            }
+        }
+    }
+    step.t = 0;
+    step.overdue = false;
+    step.publish_x(mem, true);
+    step.publish_t(mem);
+    step.tally.activations += 1;
+    if step.has_entities {
+        st.entered.push(to);
+    }
+    if let Some(pos) = free {
+        st.active.swap_remove(pos as usize);
+        if let Some(&moved) = st.active.get(pos as usize) {
+            st.steps[moved as usize].pos = pos;
+        }
+    }
+    if st.log.len() < LOG_LIMIT {
+        st.log.push((now, t));
+    }
+    sink.fired.push((chart as u32, t));
 }
 
 /// Step 4 for two or more true transitions: `conflict` events, then acceptance in priority
@@ -1138,7 +1160,7 @@ fn publish_initial(ctx: &mut Ctx<'_>, chart: usize) {
 }
 
 /// Steps 6–7: action control for every live entity, then the bodies with `A` TRUE.
-#[inline]
+#[inline(always)]
 fn action_phase(ctx: &mut Ctx<'_>, chart: usize, code: &ChartCode, plan: &ChartPlan) -> Result<(), Fault> {
     let st = &ctx.charts[chart];
     if st.entered.is_empty() && st.live.is_empty() {
@@ -1274,7 +1296,7 @@ fn run_actions(ctx: &mut Ctx<'_>, chart: usize, code: &ChartCode, plan: &ChartPl
 }
 
 /// After the scan: supervision times, SFCError/SFCErrorStep, SFCCurrentStep.
-#[inline]
+#[inline(always)]
 fn finish_scan(ctx: &mut Ctx<'_>, chart: usize, code: &ChartCode, plan: &ChartPlan) {
     let st = &ctx.charts[chart];
     if plan.supervised || (st.changed && st.track_current) {
