@@ -935,14 +935,25 @@ fn fire_general(ctx: &mut Ctx<'_>, chart: usize, plan: &ChartPlan, accepted: &[u
 #[inline(never)]
 fn fire_links(ctx: &mut Ctx<'_>, chart: usize, plan: &ChartPlan, accepted: &[u32], epoch: u32) {
     let st = &mut ctx.charts[chart];
-    for &t in accepted {
-        st.steps[plan.links[t as usize].0 as usize].dmark = epoch;
-    }
+    // A = the entered steps (marked); two transitions entering one step are unsafe.
     let mut safe = true;
+    let mut entering_active = false;
     for &t in accepted {
         let step = &mut st.steps[plan.links[t as usize].1 as usize];
-        safe &= step.amark != epoch && (!step.x || step.dmark == epoch);
+        safe &= step.amark != epoch;
+        entering_active |= step.x;
         step.amark = epoch;
+    }
+    // Entering an active step is unsafe unless that step is also left (D) in this scan; D is
+    // only needed then.
+    if safe && entering_active {
+        for &t in accepted {
+            st.steps[plan.links[t as usize].0 as usize].dmark = epoch;
+        }
+        for &t in accepted {
+            let step = &st.steps[plan.links[t as usize].1 as usize];
+            safe &= !step.x || step.dmark == epoch;
+        }
     }
     if !safe {
         // Rare: clear the activation marks and take the general path, which names the unsafe
