@@ -401,8 +401,9 @@ pub struct ChartState {
     pub(crate) steps: Vec<StepState>,
     pub(crate) controls: Vec<Control>,
     live: Vec<u32>,
-    /// Steps left by the last evolution (CODESYS body order, publishing).
+    /// Steps left by the last evolution (CODESYS body order), kept only under that profile.
     left: Vec<u32>,
+    track_left: bool,
     /// Steps activated since the last action phase.
     entered: Vec<u32>,
     /// The active set changed since the last `finish_scan`.
@@ -452,6 +453,7 @@ impl ChartState {
             controls: vec![Control::default(); m],
             live: Vec::new(),
             left: Vec::new(),
+            track_left: true,
             entered: Vec::new(),
             changed: true,
             track_current: true,
@@ -1003,7 +1005,9 @@ fn take_link(
         step.publish_x(mem, false);
     }
     st.complete(from);
-    st.left.push(from);
+    if st.track_left {
+        st.left.push(from);
+    }
     let step = &mut st.steps[to as usize];
     if !step.x {
         step.x = true;
@@ -1458,6 +1462,7 @@ impl Simulation {
         let flags = step_flags_read(&lower);
         for c in &mut charts {
             c.track_current = mentioned;
+            c.track_left = opts.profile == Profile::Codesys;
             for (step, name) in c.steps.iter_mut().zip(&c.plan.step_names) {
                 let name = name.to_ascii_lowercase();
                 step.mirror_x = flags.contains(&(name.clone(), b'x'));
