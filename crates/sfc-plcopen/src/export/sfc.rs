@@ -342,6 +342,28 @@ fn round(v: f64) -> f64 {
 }
 
 /// Builds every graphical element of the chart.
+/// The connections into the input pin at `top`: the wires `ps` themselves, or, when several
+/// meet there, one selection convergence just above `top` that gathers them.
+fn converge(els: &mut Vec<El>, new_id: &mut impl FnMut() -> u64, ps: Vec<P>, top: Pt) -> Vec<P> {
+    if ps.len() <= 1 {
+        return ps;
+    }
+    let max_y = ps.iter().map(|p| p.at.1).fold(f64::NEG_INFINITY, f64::max);
+    let y = round(top.1 - ((top.1 - max_y) / 2.0).max(1.0));
+    let xs: Vec<f64> = ps.iter().map(|p| p.at.0).chain([top.0]).collect();
+    let x0 = xs.iter().copied().fold(f64::INFINITY, f64::min);
+    let x1 = xs.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+    let id = new_id();
+    els.push(El {
+        id,
+        kind: Kind::SelConv,
+        geo: Geo { x: x0, y, w: x1 - x0, h: 1.0 },
+        ins: ps.iter().map(|p| In { at: (p.at.0, y), conns: vec![*p] }).collect(),
+        outs: vec![(top.0, y + 1.0)],
+    });
+    vec![P { id, at: (top.0, y + 1.0) }]
+}
+
 fn build(chart: &Chart, pou_attrs: &[ast::Attribute]) -> Vec<El> {
     let (sg, tg, targets, stored) = geometry(chart);
     let ns = chart.steps.len();
@@ -506,47 +528,16 @@ fn build(chart: &Chart, pou_attrs: &[ast::Attribute]) -> Vec<El> {
     for s in 0..ns {
         let ps = std::mem::take(&mut incoming[s]);
         let top = sg[s].top();
-        if ps.len() > 1 {
-            let max_y = ps.iter().map(|p| p.at.1).fold(f64::NEG_INFINITY, f64::max);
-            let y = round(top.1 - ((top.1 - max_y) / 2.0).max(1.0));
-            let xs: Vec<f64> = ps.iter().map(|p| p.at.0).chain([top.0]).collect();
-            let x0 = xs.iter().copied().fold(f64::INFINITY, f64::min);
-            let x1 = xs.iter().copied().fold(f64::NEG_INFINITY, f64::max);
-            let id = new_id();
-            els.push(El {
-                id,
-                kind: Kind::SelConv,
-                geo: Geo { x: x0, y, w: x1 - x0, h: 1.0 },
-                ins: ps.iter().map(|p| In { at: (p.at.0, y), conns: vec![*p] }).collect(),
-                outs: vec![(top.0, y + 1.0)],
-            });
-            els[s].ins.push(In { at: top, conns: vec![P { id, at: (top.0, y + 1.0) }] });
-        } else if let Some(p) = ps.first() {
-            els[s].ins.push(In { at: top, conns: vec![*p] });
+        if !ps.is_empty() {
+            let conns = converge(&mut els, &mut new_id, ps, top);
+            els[s].ins.push(In { at: top, conns });
         }
     }
     // Jumps (several transitions jumping from one place share a convergence).
     for (name, at, ps) in jump_groups {
         let geo = Geo { x: at.0, y: at.1, w: JUMP_W, h: JUMP_H };
         let top = geo.top();
-        let input = if ps.len() > 1 {
-            let max_y = ps.iter().map(|p| p.at.1).fold(f64::NEG_INFINITY, f64::max);
-            let y = round(top.1 - ((top.1 - max_y) / 2.0).max(1.0));
-            let xs: Vec<f64> = ps.iter().map(|p| p.at.0).chain([top.0]).collect();
-            let x0 = xs.iter().copied().fold(f64::INFINITY, f64::min);
-            let x1 = xs.iter().copied().fold(f64::NEG_INFINITY, f64::max);
-            let id = new_id();
-            els.push(El {
-                id,
-                kind: Kind::SelConv,
-                geo: Geo { x: x0, y, w: x1 - x0, h: 1.0 },
-                ins: ps.iter().map(|p| In { at: (p.at.0, y), conns: vec![*p] }).collect(),
-                outs: vec![(top.0, y + 1.0)],
-            });
-            vec![P { id, at: (top.0, y + 1.0) }]
-        } else {
-            ps
-        };
+        let input = converge(&mut els, &mut new_id, ps, top);
         let id = new_id();
         els.push(El { id, kind: Kind::Jump(name), geo, ins: vec![In { at: top, conns: input }], outs: Vec::new() });
     }
