@@ -15,6 +15,8 @@ use sfc_model::{ActionTarget, Qualifier};
 use sfc_st::Type;
 use std::sync::Arc;
 
+mod monitor;
+
 /// Fired transitions and events collected during one scan (from every chart instance).
 #[derive(Debug, Default)]
 pub struct ScanSink {

@@ -1,0 +1,295 @@
+//! The editor's document: one SFC POU as blocks with pins and the connections between them, the
+//! way the SFC Editor draws it, and its conversion to and from textual SFC.
+//!
+//! CONTRACT (shared with `sfc-server` and `web/src/doc.ts`; the JSON form is camelCase):
+//!
+//! * Block kinds and their pins (inputs on the top edge, outputs on the bottom edge, numbered
+//!   left to right from 0):
+//!
+//!   | kind | inputs | outputs |
+//!   |---|---|---|
+//!   | `step` | 1 | 1 |
+//!   | `transition` | 1 | 1 |
+//!   | `selectionDivergence`, `simultaneousDivergence` | 1 | `pins` (≥ 2) |
+//!   | `selectionConvergence`, `simultaneousConvergence` | `pins` (≥ 2) | 1 |
+//!   | `jump` | 1 | 0 |
+//!   | `text`, `actionBlock` | 0 | 0 |
+//!
+//! * A connection goes from an output pin to an input pin of another block; every pin holds at
+//!   most one connection. Valid pairs: step → transition, step → selection divergence,
+//!   step → simultaneous convergence, selection divergence → transition,
+//!   simultaneous convergence → transition, transition → step, transition → simultaneous
+//!   divergence, transition → selection convergence, transition → jump,
+//!   simultaneous divergence → step, selection convergence → step.
+//! * An action block belongs to the step whose element id is in `step`; its rows are the step's
+//!   action associations, in order.
+//! * Element ids are unique in a document and stable while it is edited; a document opened
+//!   from text gets ids derived from declaration order (`step:NAME`, `transition:NAME` or
+//!   `transition#K` for unnamed ones, `b1`, `b2`, … for the other blocks).
+//!
+//! Saving writes the POU as textual SFC with `sfc.*` attribute pragmas (see `docs/editor.md`);
+//! opening that text again gives back an equal document (lossless round trip).
+
+use serde::{Deserialize, Serialize};
+
+/// The whole chart of one SFC POU as the editor shows it.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(rename_all = "camelCase")]
+pub struct EditorDoc {
+    /// The POU's name.
+    pub pou: String,
+    pub pou_kind: PouKind,
+    /// The target device (`sfc.target` before the POU).
+    pub target: ChartTarget,
+    #[serde(default, skip_serializing_if = "String::is_empty")]
+    pub description: String,
+    /// The POU's declarations (its `VAR … END_VAR` blocks) verbatim, as written between the POU
+    /// header line and its first SFC element.
+    #[serde(default)]
+    pub declarations: String,
+    /// Named actions with their bodies, in declaration order.
+    #[serde(default)]
+    pub actions: Vec<ActionDef>,
+    pub elements: Vec<Element>,
+    pub connections: Vec<Connection>,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "camelCase")]
+pub enum PouKind {
+    Program,
+    FunctionBlock,
+}
+
+/// `sfc.target`: what the chart is built for (seed 001: Blank, ATMT, EATMT).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
+#[serde(rename_all = "camelCase")]
+pub enum ChartTarget {
+    #[default]
+    Blank,
+    Atmt,
+    Eatmt,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
+pub enum Language {
+    #[default]
+    #[serde(rename = "ST")]
+    St,
+    #[serde(rename = "IL")]
+    Il,
+}
+
+/// A named action: `ACTION name: … END_ACTION`.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(rename_all = "camelCase")]
+pub struct ActionDef {
+    pub name: String,
+    #[serde(default)]
+    pub language: Language,
+    /// The statements (ST) or instructions (IL), without the `ACTION`/`END_ACTION` lines.
+    pub body: String,
+    #[serde(default, skip_serializing_if = "String::is_empty")]
+    pub description: String,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "camelCase")]
+pub enum ElementKind {
+    Step,
+    Transition,
+    SelectionDivergence,
+    SelectionConvergence,
+    SimultaneousDivergence,
+    SimultaneousConvergence,
+    Jump,
+    Text,
+    ActionBlock,
+}
+
+/// One block. Fields that do not apply to a kind stay at their defaults.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, Default)]
+#[serde(rename_all = "camelCase", default)]
+pub struct Element {
+    pub id: String,
+    pub kind: Option<ElementKind>,
+    /// Top-left corner and size, in canvas units (1 unit = 1 CSS pixel at zoom 1).
+    pub x: f64,
+    pub y: f64,
+    pub w: f64,
+    pub h: f64,
+    /// Step or transition name (empty for an unnamed transition and for other blocks).
+    #[serde(skip_serializing_if = "String::is_empty")]
+    pub name: String,
+    /// Steps: the initial step.
+    #[serde(skip_serializing_if = "is_false")]
+    pub initial: bool,
+    /// `sfc.tag`: state number of a step, condition index of a transition.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub tag: Option<u32>,
+    /// `sfc.timeout` of a step, an IEC duration literal (`T#8.1s`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub timeout: Option<String>,
+    /// Shown as the tooltip.
+    #[serde(skip_serializing_if = "String::is_empty")]
+    pub description: String,
+    /// CSS colours (`#rrggbb`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub background: Option<String>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub foreground: Option<String>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub line_width: Option<f64>,
+    #[serde(skip_serializing_if = "is_false")]
+    pub hide_label: bool,
+    /// Divergences and convergences: the number of branch pins (≥ 2).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub pins: Option<u32>,
+    /// Jumps: the name of the target step.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub target: Option<String>,
+    /// Transitions: the condition, an ST expression (language ST) or IL instructions (IL).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub condition: Option<String>,
+    #[serde(skip_serializing_if = "is_st")]
+    pub condition_language: Language,
+    /// Transitions: explicit `PRIORITY`.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub priority: Option<u32>,
+    /// Text labels: the text, its alignment (`left`, `center`, `right`) and CSS font.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub text: Option<String>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub align: Option<String>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub font: Option<String>,
+    /// Action blocks: the id of the step they belong to, and the associations.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub step: Option<String>,
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub associations: Vec<Association>,
+}
+
+fn is_false(b: &bool) -> bool {
+    !*b
+}
+
+fn is_st(l: &Language) -> bool {
+    *l == Language::St
+}
+
+/// One row of an action block: `qualifier[, duration] action` with optional indicator.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, Default)]
+#[serde(rename_all = "camelCase", default)]
+pub struct Association {
+    /// `N`, `R`, `S`, `L`, `D`, `P`, `P0`, `P1`, `SD`, `DS`, `SL`.
+    pub qualifier: String,
+    /// A duration literal or a TIME variable, for the timed qualifiers.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub duration: Option<String>,
+    /// The action name (or a BOOL variable).
+    pub action: String,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub indicator: Option<String>,
+}
+
+/// A wire from an output pin to an input pin.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, Default)]
+#[serde(rename_all = "camelCase", default)]
+pub struct Connection {
+    pub id: String,
+    pub source: String,
+    pub source_pin: u32,
+    pub target: String,
+    pub target_pin: u32,
+    /// The whole orthogonal polyline, both ends included, absolute; empty: the editor routes it.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub waypoints: Vec<Point>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub color: Option<String>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub line_width: Option<f64>,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, Default)]
+pub struct Point {
+    pub x: f64,
+    pub y: f64,
+}
+
+// ---- The API used by `sfc-server` (signatures are the contract; bodies are sfc-doc's) ----
+
+use sfc_diagnostics::{Diagnostic, Severity, SourceFile};
+
+/// A file opened in the editor.
+#[derive(Debug, Clone)]
+pub struct Opened {
+    /// One document per SFC POU, in file order.
+    pub charts: Vec<EditorDoc>,
+    /// The check's diagnostics, located in `file` (the IEC text given to [`open`]).
+    pub diagnostics: Vec<Diagnostic>,
+    pub file: SourceFile,
+}
+
+/// Opens IEC text (PLCopen XML is imported to text by the caller first): one document per SFC
+/// POU. Blocks get the positions stored in the text; a chart without them is laid out.
+pub fn open(file_id: u32, name: &str, text: &str) -> Opened {
+    let _ = (file_id, name, text);
+    todo!("sfc-doc: open")
+}
+
+/// Something in a document that cannot be said in IEC text as drawn (a dangling pin, a
+/// transition with no step before it, a jump to no step…), located on a block.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+#[serde(rename_all = "camelCase")]
+pub struct Problem {
+    /// Stable code from the `SFC02xx` range (see `sfc_diagnostics::codes`).
+    pub code: &'static str,
+    pub severity: Severity,
+    /// The id of the block or connection.
+    pub element: String,
+    pub message: String,
+}
+
+/// A document written as text.
+#[derive(Debug, Clone)]
+pub struct Written {
+    /// The POU as textual SFC with `sfc.*` pragmas, from its attributes to `END_PROGRAM` /
+    /// `END_FUNCTION_BLOCK` (with a final line break). Never lossy: what IEC text cannot hold
+    /// (blocks not yet connected, bends, text labels) travels in pragmas.
+    pub text: String,
+    pub problems: Vec<Problem>,
+}
+
+/// Writes a document as the text of its POU.
+pub fn to_text(doc: &EditorDoc) -> Written {
+    let _ = doc;
+    todo!("sfc-doc: to_text")
+}
+
+/// `file_text` with the POU named `doc.pou` replaced by the document's text (appended at the
+/// end when the file has no such POU); everything else in the file is kept byte for byte.
+pub fn splice(file_text: &str, doc: &EditorDoc) -> String {
+    let _ = (file_text, doc);
+    todo!("sfc-doc: splice")
+}
+
+/// Positions every block and routes every connection again (the structured layout of
+/// `sfc-render`); names, properties and connectivity are kept.
+pub fn auto_layout(doc: &EditorDoc) -> EditorDoc {
+    let _ = doc;
+    todo!("sfc-doc: auto_layout")
+}
+
+/// The ids of the blocks a diagnostic's `element` (a step, transition or action name) designates:
+/// the step or transition, or the action blocks that use the action.
+pub fn element_ids(doc: &EditorDoc, element: &str) -> Vec<String> {
+    let _ = (doc, element);
+    todo!("sfc-doc: element_ids")
+}
+
+/// A new chart (seed 001 "New…"): the POU `name` for `target` with one initial step `Init`.
+pub fn blank(name: &str, target: ChartTarget) -> EditorDoc {
+    let _ = (name, target);
+    todo!("sfc-doc: blank")
+}

@@ -1,0 +1,69 @@
+// CONTRACT between the canvas (web/src/diagram, built on diagram-js) and the app shell
+// (web/src/app). The app only talks to the canvas through this interface.
+import type { EditorDoc, Element } from '../doc';
+
+export type HighlightKind =
+  | 'error' // red frame: a diagnostic's block
+  | 'warning' // orange frame
+  | 'selected-diagnostic' // the block of the error-list row the user clicked
+  | 'witness' // the current transition/step of a witness being stepped through
+  | 'active' // monitor: active step (green frame)
+  | 'enabled' // monitor: transition whose condition holds
+  | 'breakpoint' // monitor: breakpoint set (red dot)
+  | 'hit'; // monitor: breakpoint hit (orange frame)
+
+export interface CanvasEvents {
+  /** The document changed (any command executed, undone or redone). */
+  change: () => void;
+  /** The selection changed; ids of the selected blocks and connections. */
+  selection: (ids: string[]) => void;
+  /** Zoom level changed (1 = 100 %). */
+  zoom: (level: number) => void;
+  /** The user asked for the properties of a block (double click or Enter). */
+  properties: (id: string) => void;
+}
+
+export interface CanvasOptions {
+  /** Translates UI keys (palette titles, tooltips); called again after `relabel()`. */
+  t: (key: string) => string;
+  /** Read-only canvas (monitor mode, print preview). */
+  readOnly?: boolean;
+}
+
+export interface CanvasHandle {
+  /** Replaces the contents with `doc` and clears the undo history. */
+  load(doc: EditorDoc): void;
+  /** The current document (blocks, connections, geometry, and the doc-level fields). */
+  getDoc(): EditorDoc;
+  /** Changes properties of a block or connection (one undoable command). */
+  updateElement(id: string, props: Partial<Element> & Record<string, unknown>): void;
+  /** Changes document-level fields (one undoable command). */
+  updateDoc(props: Partial<Pick<EditorDoc, 'pou' | 'target' | 'description' | 'declarations' | 'actions'>>): void;
+  /** Replaces all geometry with that of `laidOut` (same ids), as one undoable command. */
+  applyLayout(laidOut: EditorDoc): void;
+  undo(): void;
+  redo(): void;
+  canUndo(): boolean;
+  canRedo(): boolean;
+  /** True when there are changes since `load()` or the last `markSaved()`. */
+  isDirty(): boolean;
+  markSaved(): void;
+  select(ids: string[]): void;
+  selection(): string[];
+  /** Frames blocks; replaces the previous set of that kind. `labels` adds a small text (elapsed time) per id. */
+  highlight(kind: HighlightKind, ids: string[], labels?: Record<string, string>): void;
+  clearHighlights(kind?: HighlightKind): void;
+  /** Scrolls a block into view. */
+  reveal(id: string): void;
+  /** 'fit' fits the whole chart. */
+  zoom(level: number | 'fit'): void;
+  getZoom(): number;
+  /** Standalone SVG of the chart as drawn (no selection, no grid). */
+  exportSvg(): string;
+  /** Re-translates palette and tooltips after a language switch. */
+  relabel(): void;
+  on<K extends keyof CanvasEvents>(event: K, cb: CanvasEvents[K]): () => void;
+  destroy(): void;
+}
+
+export type CreateCanvas = (container: HTMLElement, opts: CanvasOptions) => CanvasHandle;

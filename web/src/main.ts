@@ -1,0 +1,1 @@
+// Entry point of the SFC Editor (the app shell in src/app mounts everything).
