@@ -65,6 +65,28 @@ impl Rows {
     }
 }
 
+/// One transition as the evolution sees it.
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct TrInfo {
+    /// The guard, when it can be evaluated without calling its closure.
+    guard: FastGuard,
+    /// `from` and `to` of a transition between one step and one step; `from` is `u32::MAX` for
+    /// the others.
+    from: u32,
+    to: u32,
+    /// One preceding step: enabled whenever that step is active.
+    single_pre: bool,
+    /// Leaves a step that has other outgoing transitions: only such transitions can conflict.
+    may_conflict: bool,
+}
+
+impl TrInfo {
+    #[inline(always)]
+    fn is_link(&self) -> bool {
+        self.from != u32::MAX
+    }
+}
+
 /// What every instance of one SFC POU shares: the net and the action control plan. Built once
 /// per POU ([`ChartCode::plan`]).
 #[derive(Debug)]
@@ -72,13 +94,11 @@ pub struct ChartPlan {
     pub(crate) outgoing: Rows,
     pub(crate) pre: Rows,
     pub(crate) post: Rows,
-    /// Transitions with one preceding step: enabled whenever that step is active.
-    single_pre: Vec<bool>,
-    /// `(from, to)` of each transition between one step and one step; `(u32::MAX, _)` for the
-    /// others.
-    links: Vec<(u32, u32)>,
-    /// Transitions leaving a step that has other outgoing transitions: only those can conflict.
-    may_conflict: Vec<bool>,
+    /// What the evolution reads of each transition, packed so one transition is one load.
+    tr: Vec<TrInfo>,
+    /// Per step: its only outgoing transition when that transition has no other preceding
+    /// step (a candidate whenever the step is active), `u32::MAX` otherwise.
+    single_out: Vec<u32>,
     /// Frame offsets of the `X` and `T` slots of each step.
     x_slots: Vec<u32>,
     t_slots: Vec<u32>,
@@ -175,21 +195,32 @@ impl ChartPlan {
             }
         }
         let timeouts: Vec<Option<i64>> = chart.steps.iter().map(|s| s.timeout).collect();
-        let single_pre = (0..chart.transitions.len()).map(|t| pre.get(t as u32).len() == 1).collect();
-        let may_conflict = (0..chart.transitions.len())
-            .map(|t| pre.get(t as u32).iter().any(|&s| outgoing[s as usize].len() > 1))
+        let tr: Vec<TrInfo> = (0..chart.transitions.len() as u32)
+            .map(|t| {
+                let (from, to) = match (pre.get(t), post.get(t)) {
+                    ([from], [to]) => (*from, *to),
+                    _ => (u32::MAX, 0),
+                };
+                TrInfo {
+                    guard: code.fast[t as usize],
+                    from,
+                    to,
+                    single_pre: pre.get(t).len() == 1,
+                    may_conflict: pre.get(t).iter().any(|&s| outgoing[s as usize].len() > 1),
+                }
+            })
             .collect();
-        let links = (0..chart.transitions.len() as u32)
-            .map(|t| match (pre.get(t), post.get(t)) {
-                ([from], [to]) => (*from, *to),
-                _ => (u32::MAX, 0),
+        let single_out = outgoing
+            .iter()
+            .map(|o| match o.as_slice() {
+                [t] if tr[*t as usize].single_pre => *t,
+                _ => u32::MAX,
             })
             .collect();
         ChartPlan {
             outgoing: Rows::from_lists(outgoing.into_iter()),
-            single_pre,
-            links,
-            may_conflict,
+            tr,
+            single_out,
             x_slots: code.step_x.clone(),
             t_slots: code.step_t.clone(),
             pre,
@@ -734,8 +765,8 @@ fn reset(ctx: &mut Ctx<'_>, chart: usize, code: &ChartCode) {
 /// Evaluates the guard of `t` on the current memory: plain BOOL reads inline, the rest through
 /// the compiled closure.
 #[inline(always)]
-fn eval_guard(ctx: &mut Ctx<'_>, code: &ChartCode, frame: usize, t: u32) -> Result<bool, Fault> {
-    match code.fast[t as usize] {
+fn eval_guard(ctx: &mut Ctx<'_>, code: &ChartCode, guard: FastGuard, frame: usize, t: u32) -> Result<bool, Fault> {
+    match guard {
         FastGuard::Local(o, neg) => Ok(read_bool(ctx.mem, frame + o as usize) != neg),
         FastGuard::Global(g, neg) => Ok(read_bool(ctx.mem, g as usize) != neg),
         FastGuard::Const(b) => Ok(b),
@@ -759,9 +790,14 @@ fn evolve(ctx: &mut Ctx<'_>, chart: usize, code: &ChartCode, plan: &ChartPlan, d
                 step.t += delta;
                 step.publish_t(ctx.mem);
             }
+            let only = plan.single_out[s as usize];
+            if only != u32::MAX {
+                cand.push(only);
+                continue;
+            }
             for &t in plan.outgoing.get(s) {
                 // A transition with one preceding step is met only from that (active) step.
-                if plan.single_pre[t as usize] {
+                if plan.tr[t as usize].single_pre {
                     cand.push(t);
                     continue;
                 }
@@ -779,19 +815,29 @@ fn evolve(ctx: &mut Ctx<'_>, chart: usize, code: &ChartCode, plan: &ChartPlan, d
     };
     // Guards against the snapshot. They have no side effects, so their order does not matter;
     // when one faults, the first faulting guard in declaration order is reported.
+    // The same pass notes whether the true transitions are all links and whether two of them
+    // can share a step, so the firing needs no further pass to decide its path.
     let mut e_len = 0;
+    let mut links_only = true;
+    let mut may_conflict = false;
     for k in 0..cand.len() {
         let t = cand[k];
-        match eval_guard(ctx, code, frame, t) {
+        let info = plan.tr[t as usize];
+        match eval_guard(ctx, code, info.guard, frame, t) {
             Ok(true) => {
                 cand[e_len] = t;
                 e_len += 1;
+                links_only &= info.is_link();
+                may_conflict |= info.may_conflict;
             }
             Ok(false) => {}
             Err(f) => {
                 let mut all = cand[k..].to_vec();
                 all.sort_unstable();
-                let first = all.into_iter().find_map(|t| eval_guard(ctx, code, frame, t).err()).unwrap_or(f);
+                let first = all
+                    .into_iter()
+                    .find_map(|t| eval_guard(ctx, code, plan.tr[t as usize].guard, frame, t).err())
+                    .unwrap_or(f);
                 ctx.charts[chart].cand = cand;
                 return Err(first);
             }
@@ -807,7 +853,7 @@ fn evolve(ctx: &mut Ctx<'_>, chart: usize, code: &ChartCode, plan: &ChartPlan, d
         let t = cand[0];
         // The common case, a transition between two steps of a sequence (or a self-loop) whose
         // target is not active: fire it without the general bookkeeping.
-        let (from, to) = plan.links[t as usize];
+        let TrInfo { from, to, .. } = plan.tr[t as usize];
         if from != u32::MAX {
             if from == to || !st.steps[to as usize].x {
                 st.cand = cand;
@@ -821,7 +867,7 @@ fn evolve(ctx: &mut Ctx<'_>, chart: usize, code: &ChartCode, plan: &ChartPlan, d
     // Two true transitions sharing a step are a conflict; without one, all of them fire. Only
     // transitions leaving a divergence can share a step.
     let mut shared = false;
-    if cand.len() > 1 && cand.iter().any(|&t| plan.may_conflict[t as usize]) {
+    if cand.len() > 1 && may_conflict {
         for &t in &cand {
             for &p in plan.pre.get(t) {
                 let step = &mut st.steps[p as usize];
@@ -840,7 +886,13 @@ fn evolve(ctx: &mut Ctx<'_>, chart: usize, code: &ChartCode, plan: &ChartPlan, d
     } else {
         cand
     };
-    fire(ctx, chart, plan, &accepted, epoch, !shared || ctx.profile != Profile::Matiec);
+    // Accepted transitions share no preceding step (always, except MatIEC's firing of every
+    // true alternative); when they are all links, the link path fires them.
+    if links_only && (!shared || ctx.profile != Profile::Matiec) {
+        fire_links(ctx, chart, plan, &accepted, epoch);
+    } else {
+        fire_general(ctx, chart, plan, &accepted, epoch);
+    }
     let st = &mut ctx.charts[chart];
     if shared {
         st.accepted = accepted;
@@ -854,16 +906,8 @@ fn evolve(ctx: &mut Ctx<'_>, chart: usize, code: &ChartCode, plan: &ChartPlan, d
 /// `A = ∪ post` with `amark`; a step of `A` that is active and not in `D`, or that two
 /// transitions activate, is unsafe. Steps of `D` not in `A` are deactivated, then every step of
 /// `A` is activated once (a step left and re-entered stays active, its time restarts).
-/// `disjoint`: no two accepted transitions share a preceding step (always, except MatIEC's
-/// firing of every true alternative).
-fn fire(ctx: &mut Ctx<'_>, chart: usize, plan: &ChartPlan, accepted: &[u32], epoch: u32, disjoint: bool) {
-    if disjoint && accepted.iter().all(|&t| plan.links[t as usize].0 != u32::MAX) {
-        fire_links(ctx, chart, plan, accepted, epoch);
-    } else {
-        fire_general(ctx, chart, plan, accepted, epoch);
-    }
-}
-
+/// Also handles accepted transitions that share a preceding step (MatIEC accepts every true
+/// alternative).
 fn fire_general(ctx: &mut Ctx<'_>, chart: usize, plan: &ChartPlan, accepted: &[u32], epoch: u32) {
     let st = &mut ctx.charts[chart];
     for &t in accepted {
@@ -934,7 +978,7 @@ fn fire_general(ctx: &mut Ctx<'_>, chart: usize, plan: &ChartPlan, accepted: &[u
     }
 }
 
-/// [`fire`] for transitions that each link one step to one step (sequences, loops, the
+/// [`fire_general`] for disjoint transitions that each link one step to one step (sequences, loops, the
 /// branches of a selection): the same rule without walking the pre/post lists.
 #[inline(never)]
 fn fire_links(ctx: &mut Ctx<'_>, chart: usize, plan: &ChartPlan, accepted: &[u32], epoch: u32) {
@@ -943,7 +987,7 @@ fn fire_links(ctx: &mut Ctx<'_>, chart: usize, plan: &ChartPlan, accepted: &[u32
     let mut safe = true;
     let mut entering_active = false;
     for &t in accepted {
-        let step = &mut st.steps[plan.links[t as usize].1 as usize];
+        let step = &mut st.steps[plan.tr[t as usize].to as usize];
         safe &= step.amark != epoch;
         entering_active |= step.x;
         step.amark = epoch;
@@ -952,10 +996,10 @@ fn fire_links(ctx: &mut Ctx<'_>, chart: usize, plan: &ChartPlan, accepted: &[u32
     // only needed then.
     if safe && entering_active {
         for &t in accepted {
-            st.steps[plan.links[t as usize].0 as usize].dmark = epoch;
+            st.steps[plan.tr[t as usize].from as usize].dmark = epoch;
         }
         for &t in accepted {
-            let step = &st.steps[plan.links[t as usize].1 as usize];
+            let step = &st.steps[plan.tr[t as usize].to as usize];
             safe &= !step.x || step.dmark == epoch;
         }
     }
@@ -963,7 +1007,7 @@ fn fire_links(ctx: &mut Ctx<'_>, chart: usize, plan: &ChartPlan, accepted: &[u32
         // Rare: clear the activation marks and take the general path, which names the unsafe
         // steps.
         for &t in accepted {
-            st.steps[plan.links[t as usize].1 as usize].amark = 0;
+            st.steps[plan.tr[t as usize].to as usize].amark = 0;
         }
         return fire_general(ctx, chart, plan, accepted, epoch);
     }
@@ -975,7 +1019,7 @@ fn fire_links(ctx: &mut Ctx<'_>, chart: usize, plan: &ChartPlan, accepted: &[u32
     st.left.clear();
     let now = ctx.now;
     for &t in accepted {
-        let (from, to) = plan.links[t as usize];
+        let TrInfo { from, to, .. } = plan.tr[t as usize];
         take_link(st, ctx.mem, ctx.sink, chart, now, t, from, to, epoch);
     }
 }
