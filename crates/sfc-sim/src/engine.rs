@@ -403,6 +403,21 @@ pub(crate) struct StepState {
 }
 
 impl StepState {
+    /// Ends the current activation in the time analysis.
+    #[inline(always)]
+    fn complete(&mut self) {
+        let d = self.t;
+        let tl = &mut self.tally;
+        if tl.completed == 0 {
+            tl.min = d;
+            tl.max = d;
+        } else {
+            tl.min = tl.min.min(d);
+            tl.max = tl.max.max(d);
+        }
+        tl.completed += 1;
+        tl.sum = tl.sum.saturating_add(d);
+    }
     #[inline]
     fn publish_x(&self, mem: &mut [Value], x: bool) {
         if self.mirror_x {
@@ -571,17 +586,7 @@ impl ChartState {
     /// Ends the current activation of `s` in the time analysis (the step is left, or left and
     /// re-entered).
     fn complete(&mut self, s: u32) {
-        let d = self.steps[s as usize].t;
-        let tl = &mut self.steps[s as usize].tally;
-        if tl.completed == 0 {
-            tl.min = d;
-            tl.max = d;
-        } else {
-            tl.min = tl.min.min(d);
-            tl.max = tl.max.max(d);
-        }
-        tl.completed += 1;
-        tl.sum = tl.sum.saturating_add(d);
+        self.steps[s as usize].complete();
         self.changed = true;
     }
 }
@@ -1050,7 +1055,8 @@ fn take_link(
         free = Some(step.pos);
         step.publish_x(mem, false);
     }
-    st.complete(from);
+    step.complete();
+    st.changed = true;
     if st.track_left {
         st.left.push(from);
     }
