@@ -15,6 +15,9 @@
 //!   | `jump` | 1 | 0 |
 //!   | `text`, `actionBlock` | 0 | 0 |
 //!
+//! * Pin positions are those of the canvas (`web/src/diagram/geometry.ts`): a single pin in
+//!   the middle of its edge; the branch pins of a bar equidistant from 10 units after its left
+//!   end to 10 units before its right end, each offset rounded to the grid of 10.
 //! * A connection goes from an output pin to an input pin of another block; every pin holds at
 //!   most one connection. Valid pairs: step → transition, step → selection divergence,
 //!   step → simultaneous convergence, selection divergence → transition,
@@ -52,6 +55,21 @@ pub struct EditorDoc {
     pub actions: Vec<ActionDef>,
     pub elements: Vec<Element>,
     pub connections: Vec<Connection>,
+    /// Attribute pragmas before the POU that the editor does not edit (added to the contract by
+    /// sfc-doc: kept so that saving does not drop them).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub attributes: Vec<OtherAttribute>,
+}
+
+/// An attribute pragma the editor does not edit, kept as read (`{attribute 'name' := 'value'}`,
+/// the value as written between the quotes): foreign PLCopen `addData`, condition references,
+/// inline actions, other tools' attributes.
+#[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize, Default)]
+#[serde(rename_all = "camelCase", default)]
+pub struct OtherAttribute {
+    pub name: String,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub value: Option<String>,
 }
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
@@ -91,6 +109,9 @@ pub struct ActionDef {
     pub body: String,
     #[serde(default, skip_serializing_if = "String::is_empty")]
     pub description: String,
+    /// Attribute pragmas the editor does not edit (see [`OtherAttribute`]).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub attributes: Vec<OtherAttribute>,
 }
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
@@ -142,6 +163,10 @@ pub struct Element {
     pub line_width: Option<f64>,
     #[serde(skip_serializing_if = "is_false")]
     pub hide_label: bool,
+    /// Steps: `sfc.final`, a step intentionally without a way out (added to the contract by
+    /// sfc-doc so files using it keep it when saved from the editor).
+    #[serde(rename = "final", skip_serializing_if = "is_false")]
+    pub is_final: bool,
     /// Divergences and convergences: the number of branch pins (≥ 2).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub pins: Option<u32>,
@@ -168,6 +193,10 @@ pub struct Element {
     pub step: Option<String>,
     #[serde(skip_serializing_if = "Vec::is_empty")]
     pub associations: Vec<Association>,
+    /// Steps and transitions: attribute pragmas the editor does not edit (see
+    /// [`OtherAttribute`]).
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub attributes: Vec<OtherAttribute>,
 }
 
 fn is_false(b: &bool) -> bool {
@@ -221,6 +250,16 @@ pub struct Point {
 
 use sfc_diagnostics::{Diagnostic, Severity, SourceFile};
 
+mod graph;
+mod layout;
+mod open;
+mod pragma;
+mod readback;
+mod region;
+mod sidecar;
+mod splice;
+mod write;
+
 /// A file opened in the editor.
 #[derive(Debug, Clone)]
 pub struct Opened {
@@ -233,9 +272,22 @@ pub struct Opened {
 
 /// Opens IEC text (PLCopen XML is imported to text by the caller first): one document per SFC
 /// POU. Blocks get the positions stored in the text; a chart without them is laid out.
+///
+/// Element ids are re-derived on every open (see [`normalize_ids`]): a document saved with
+/// [`to_text`] and opened again equals `normalize_ids` of the saved document, and a document
+/// that `open` returned is already normalised, so for it the round trip is exact equality.
 pub fn open(file_id: u32, name: &str, text: &str) -> Opened {
-    let _ = (file_id, name, text);
-    todo!("sfc-doc: open")
+    let checked = sfc_model::check_source(file_id, name, text, &sfc_model::CheckOptions::default());
+    let mut charts = Vec::new();
+    for chart in &checked.charts {
+        let Some(sfc_syntax::ast::Item::Pou(pou)) = checked.unit.items.get(chart.item) else { continue };
+        // A FUNCTION cannot hold a chart (SFC0218 says so); the editor has no document for it.
+        if pou.kind == sfc_syntax::ast::PouKind::Function {
+            continue;
+        }
+        charts.push(open::document(&open::read(text, chart, pou)));
+    }
+    Opened { charts, diagnostics: checked.diagnostics, file: checked.file }
 }
 
 /// Something in a document that cannot be said in IEC text as drawn (a dangling pin, a
@@ -243,7 +295,8 @@ pub fn open(file_id: u32, name: &str, text: &str) -> Opened {
 #[derive(Debug, Clone, PartialEq, Serialize)]
 #[serde(rename_all = "camelCase")]
 pub struct Problem {
-    /// Stable code from the `SFC02xx` range (see `sfc_diagnostics::codes`).
+    /// Stable code from the `SFC02xx` range (see `sfc_diagnostics::codes`), or SFC0101 for a
+    /// name or text the IEC syntax does not accept.
     pub code: &'static str,
     pub severity: Severity,
     /// The id of the block or connection.
@@ -263,33 +316,66 @@ pub struct Written {
 
 /// Writes a document as the text of its POU.
 pub fn to_text(doc: &EditorDoc) -> Written {
-    let _ = doc;
-    todo!("sfc-doc: to_text")
+    write::write(doc)
 }
 
 /// `file_text` with the POU named `doc.pou` replaced by the document's text (appended at the
 /// end when the file has no such POU); everything else in the file is kept byte for byte.
 pub fn splice(file_text: &str, doc: &EditorDoc) -> String {
-    let _ = (file_text, doc);
-    todo!("sfc-doc: splice")
+    let kept: Vec<String> = doc.attributes.iter().map(|a| a.name.clone()).collect();
+    splice::splice(file_text, &doc.pou, &to_text(doc).text, &kept)
 }
 
 /// Positions every block and routes every connection again (the structured layout of
 /// `sfc-render`); names, properties and connectivity are kept.
 pub fn auto_layout(doc: &EditorDoc) -> EditorDoc {
-    let _ = doc;
-    todo!("sfc-doc: auto_layout")
+    open::auto_layout(doc)
 }
 
 /// The ids of the blocks a diagnostic's `element` (a step, transition or action name) designates:
 /// the step or transition, or the action blocks that use the action.
 pub fn element_ids(doc: &EditorDoc, element: &str) -> Vec<String> {
-    let _ = (doc, element);
-    todo!("sfc-doc: element_ids")
+    graph::element_ids(doc, element, &mut readback::Probe::default())
 }
 
 /// A new chart (seed 001 "New…"): the POU `name` for `target` with one initial step `Init`.
 pub fn blank(name: &str, target: ChartTarget) -> EditorDoc {
-    let _ = (name, target);
-    todo!("sfc-doc: blank")
+    let (w, h) = layout::step_size("Init");
+    EditorDoc {
+        pou: name.to_string(),
+        pou_kind: PouKind::Program,
+        target,
+        description: String::new(),
+        declarations: "VAR\nEND_VAR".to_string(),
+        actions: Vec::new(),
+        elements: vec![Element {
+            id: "step:Init".to_string(),
+            kind: Some(ElementKind::Step),
+            x: 100.0,
+            y: 40.0,
+            w,
+            h,
+            name: "Init".to_string(),
+            initial: true,
+            ..Element::default()
+        }],
+        connections: Vec::new(),
+        attributes: Vec::new(),
+    }
+}
+
+/// The document with the element ids [`open`] derives: `step:NAME` and `transition:NAME` (or
+/// `transition#K`, K its 0-based index among the transitions of the text) for the steps and
+/// transitions the text holds, `b1`, `b2`, … for every other block and `c1`, `c2`, … for the
+/// connections, in document order. References follow; references to missing blocks become
+/// `missing:ID`.
+pub fn normalize_ids(doc: &EditorDoc) -> EditorDoc {
+    let mut probe = readback::Probe::default();
+    let d = graph::derive(doc, &mut probe);
+    graph::normalize(doc, &d)
+}
+
+/// The problems [`to_text`] reports for a document, without writing it.
+pub fn problems(doc: &EditorDoc) -> Vec<Problem> {
+    graph::derive(doc, &mut readback::Probe::default()).problems
 }

@@ -41,6 +41,8 @@ const KNOWN_ATTRIBUTES: &[&str] = &[
     // Written by the PLCopen import (`sfc-plcopen`, see its `attrs` module): size, foreign
     // addData, action block and jump positions, condition references, inline actions, comments.
     "sfc.w", "sfc.h", "sfc.adddata", "sfc.actionblock", "sfc.jump", "sfc.reference", "sfc.inline", "sfc.comment",
+    // Written by the editor (`sfc-doc`): the blocks, connections and bends the text cannot hold.
+    "sfc.graph",
 ];
 
 fn attr<'a>(attrs: &'a [ast::Attribute], name: &str) -> Option<&'a ast::Attribute> {

@@ -1,0 +1,309 @@
+//! Geometry: block sizes and pin positions as the canvas draws them, and placing a document's
+//! blocks on a layout of its chart made by `sfc-render` (steps, transitions and branch bars
+//! where the layout has them, jumps below their transitions, action blocks right of their
+//! steps, orthogonal routes for connections whose ends are not aligned).
+
+use crate::graph::{pin_counts, Derived};
+use crate::{Association, EditorDoc, Element, ElementKind, Point};
+use sfc_render::{BranchKind, Layout, LayoutKind};
+
+/// Canvas grid.
+pub const GRID: f64 = 10.0;
+pub const STEP_MIN_W: f64 = 80.0;
+pub const STEP_H: f64 = 40.0;
+pub const TRANSITION_W: f64 = 40.0;
+pub const TRANSITION_H: f64 = 20.0;
+/// Height of every divergence and convergence bar.
+pub const BAR_H: f64 = 10.0;
+/// Distance from a bar's end to its outermost pin.
+pub const BAR_PAD: f64 = 10.0;
+pub const JUMP_SIZE: f64 = 20.0;
+pub const ROW_H: f64 = 24.0;
+/// Font size the text widths are estimated for.
+const FONT: f64 = 12.0;
+/// `sfc-render`'s structured layout is drawn with smaller boxes; its coordinates are scaled
+/// by these factors so the editor's sizes fit.
+const SX: f64 = 1.75;
+const SY: f64 = 1.5;
+
+fn ceil_to(v: f64, step: f64) -> f64 {
+    (v / step).ceil() * step
+}
+
+/// A step box: 80×40, wider for long names (even multiples of the grid so the axis stays on it).
+pub fn step_size(name: &str) -> (f64, f64) {
+    let w = ceil_to(sfc_render::text_width(name, FONT) + 30.0, 2.0 * GRID).max(STEP_MIN_W);
+    (w, STEP_H)
+}
+
+/// An action block: one row per association, wide enough for the longest row.
+pub fn action_block_size(assocs: &[Association]) -> (f64, f64) {
+    let row = |a: &Association| {
+        let q = match &a.duration {
+            Some(d) => format!("{} {d}", a.qualifier),
+            None => a.qualifier.clone(),
+        };
+        let ind = a.indicator.as_deref().unwrap_or("");
+        sfc_render::text_width(&q, FONT).max(20.0)
+            + sfc_render::text_width(&a.action, FONT)
+            + sfc_render::text_width(ind, FONT)
+            + 36.0
+    };
+    let w = assocs.iter().map(row).fold(100.0, f64::max);
+    (ceil_to(w, GRID), ROW_H * assocs.len().max(1) as f64)
+}
+
+/// Where pin `k` of a block is, as the canvas draws it (`web/src/diagram/geometry.ts`): inputs
+/// on the top edge, outputs on the bottom edge; a single pin in the middle, several pins
+/// equidistant from [`BAR_PAD`] after the left end to `BAR_PAD` before the right end, each
+/// offset rounded to the grid.
+pub fn pin_pos(e: &Element, input: bool, k: u32) -> Point {
+    let (i, o) = pin_counts(e);
+    let n = if input { i } else { o };
+    let y = if input { e.y } else { e.y + e.h };
+    if n <= 1 {
+        return Point { x: e.x + e.w / 2.0, y };
+    }
+    let off = BAR_PAD + (e.w - 2.0 * BAR_PAD) * f64::from(k) / f64::from(n - 1);
+    let snapped = ((off / GRID).round() * GRID).max(BAR_PAD).min(e.w - BAR_PAD);
+    Point { x: e.x + snapped, y }
+}
+
+/// An orthogonal route between two pins: none when the input is straight below the output,
+/// two bends half way down when it is lower elsewhere, round the right side when it is not
+/// lower.
+pub fn route(from: Point, to: Point) -> Vec<Point> {
+    if (from.x - to.x).abs() < 0.5 && to.y >= from.y {
+        return Vec::new();
+    }
+    if to.y > from.y {
+        let mid = ((from.y + to.y) / 2.0).round();
+        return vec![from, Point { x: from.x, y: mid }, Point { x: to.x, y: mid }, to];
+    }
+    let lane = from.x.max(to.x) + 6.0 * GRID;
+    let (y1, y2) = (from.y + GRID, to.y - GRID);
+    vec![
+        from,
+        Point { x: from.x, y: y1 },
+        Point { x: lane, y: y1 },
+        Point { x: lane, y: y2 },
+        Point { x: to.x, y: y2 },
+        to,
+    ]
+}
+
+/// How layout coordinates map to canvas coordinates.
+#[derive(Debug, Clone, Copy)]
+pub struct Frame {
+    scaled: bool,
+}
+
+impl Frame {
+    pub fn of(layout: &Layout) -> Frame {
+        Frame { scaled: layout.kind != LayoutKind::Stored }
+    }
+    fn x(self, v: f64) -> f64 {
+        if self.scaled {
+            (v * SX / GRID).round() * GRID
+        } else {
+            v
+        }
+    }
+    fn y(self, v: f64) -> f64 {
+        if self.scaled {
+            (v * SY / GRID).round() * GRID
+        } else {
+            v
+        }
+    }
+}
+
+/// Which step or transition of the laid-out chart each block is.
+pub struct Model<'a> {
+    pub step_of: &'a [Option<usize>],
+    pub transition_of: &'a [Option<usize>],
+}
+
+fn branch_kind(k: Option<ElementKind>) -> Option<BranchKind> {
+    match k? {
+        ElementKind::SelectionDivergence => Some(BranchKind::SelectionDivergence),
+        ElementKind::SelectionConvergence => Some(BranchKind::SelectionConvergence),
+        ElementKind::SimultaneousDivergence => Some(BranchKind::SimultaneousDivergence),
+        ElementKind::SimultaneousConvergence => Some(BranchKind::SimultaneousConvergence),
+        _ => None,
+    }
+}
+
+/// The layout's geometry of a step or transition block: axis x, top and bottom.
+fn layout_geom(layout: &Layout, m: &Model, i: usize) -> Option<(f64, f64, f64)> {
+    if let Some(k) = m.step_of.get(i).copied().flatten() {
+        let r = layout.steps.get(k)?.rect;
+        return Some((r.x + r.w / 2.0, r.y, r.y + r.h));
+    }
+    let k = m.transition_of.get(i).copied().flatten()?;
+    let g = layout.transitions.get(k)?;
+    Some((g.x, g.y - g.thickness / 2.0, g.y + g.thickness / 2.0))
+}
+
+/// The block at the other end of the connection on a pin.
+fn across(doc: &EditorDoc, d: &Derived, i: usize, input: bool, pin: usize) -> Option<(usize, u32)> {
+    let c = if input { *d.ins.get(i)?.get(pin)? } else { *d.outs.get(i)?.get(pin)? }?;
+    let c = &doc.connections[c];
+    if input {
+        Some((*d.by_id.get(&c.source)?, c.source_pin))
+    } else {
+        Some((*d.by_id.get(&c.target)?, c.target_pin))
+    }
+}
+
+/// Places every block not marked `keep` on `layout` and routes every connection read.
+// Blocks are written by index while their neighbours are read.
+#[allow(clippy::needless_range_loop)]
+pub fn place(doc: &mut EditorDoc, d: &Derived, m: &Model, layout: &Layout, keep: &[bool]) {
+    let f = Frame::of(layout);
+    let n = doc.elements.len();
+    let mut placed: Vec<bool> = keep.to_vec();
+    placed.resize(n, false);
+    // Steps and transitions.
+    for i in 0..n {
+        if placed[i] {
+            continue;
+        }
+        let e = &mut doc.elements[i];
+        if let Some(r) = m.step_of[i].and_then(|k| layout.steps.get(k)).map(|g| g.rect) {
+            let (w, h) = step_size(&e.name);
+            e.x = f.x(r.x + r.w / 2.0) - w / 2.0;
+            e.y = f.y(r.y + r.h / 2.0) - h / 2.0;
+            (e.w, e.h) = (w, h);
+            placed[i] = true;
+        } else if let Some(g) = m.transition_of[i].and_then(|k| layout.transitions.get(k)) {
+            e.x = f.x(g.x) - TRANSITION_W / 2.0;
+            e.y = f.y(g.y) - TRANSITION_H / 2.0;
+            (e.w, e.h) = (TRANSITION_W, TRANSITION_H);
+            placed[i] = true;
+        }
+    }
+    // Branch bars.
+    let mut used = vec![false; layout.branches.len()];
+    for i in 0..n {
+        let Some(kind) = branch_kind(doc.elements[i].kind) else { continue };
+        if placed[i] {
+            continue;
+        }
+        let diverging = matches!(kind, BranchKind::SelectionDivergence | BranchKind::SimultaneousDivergence);
+        let (ins, outs) = pin_counts(&doc.elements[i]);
+        let single = across(doc, d, i, diverging, 0);
+        let branch_pins = if diverging { outs } else { ins };
+        let branches: Vec<Option<(usize, u32)>> =
+            (0..branch_pins as usize).map(|k| across(doc, d, i, !diverging, k)).collect();
+        // The layout's bar of this kind at the single side, spanning the branches.
+        let single_geom = single.and_then(|(s, _)| layout_geom(layout, m, s));
+        let mut best: Option<(f64, usize)> = None;
+        for (b, bar) in layout.branches.iter().enumerate() {
+            if used[b] || bar.kind != kind {
+                continue;
+            }
+            let mut score = 0.0;
+            if let Some((_, top, bottom)) = single_geom {
+                if diverging {
+                    if bar.y < bottom - 1.0 {
+                        continue;
+                    }
+                    score += bar.y - bottom;
+                } else {
+                    if bar.y2 > top + 1.0 {
+                        continue;
+                    }
+                    score += top - bar.y2;
+                }
+            }
+            for (x, _, _) in branches.iter().flatten().filter_map(|(e, _)| layout_geom(layout, m, *e)) {
+                score += 10.0 * ((bar.x1 - 1.0 - x).max(0.0) + (x - bar.x2 - 1.0).max(0.0));
+            }
+            if best.is_none_or(|(s, _)| score < s) {
+                best = Some((score, b));
+            }
+        }
+        let h = BAR_H;
+        let single_pin = single.filter(|(s, _)| placed[*s]).map(|(s, p)| pin_pos(&doc.elements[s], !diverging, p));
+        let cy = match best {
+            Some((_, b)) => {
+                used[b] = true;
+                f.y((layout.branches[b].y + layout.branches[b].y2) / 2.0)
+            }
+            None => match single_pin {
+                Some(p) if diverging => p.y + 2.0 * GRID,
+                Some(p) => p.y - 2.0 * GRID,
+                None => 0.0,
+            },
+        };
+        let xs: Vec<f64> = branches
+            .iter()
+            .map(|b| b.filter(|(e, _)| placed[*e]).map(|(e, p)| pin_pos(&doc.elements[e], diverging, p).x))
+            .collect::<Option<Vec<f64>>>()
+            .unwrap_or_default();
+        // The outer pins on the outer branches (the canvas spreads the others evenly between).
+        let np = f64::from(branch_pins.max(2));
+        let (x, w) = match (xs.first(), xs.last()) {
+            (Some(&a), Some(&z)) if z - a >= 2.0 * GRID * (np - 1.0) => (a - BAR_PAD, z - a + 2.0 * BAR_PAD),
+            _ => {
+                let centre = match single_pin {
+                    Some(p) => p.x,
+                    None if !xs.is_empty() => xs.iter().sum::<f64>() / xs.len() as f64,
+                    None => 0.0,
+                };
+                let w = 6.0 * GRID * (np - 1.0) + 2.0 * BAR_PAD;
+                (centre - w / 2.0, w)
+            }
+        };
+        let e = &mut doc.elements[i];
+        (e.x, e.y, e.w, e.h) = (x.round(), cy - h / 2.0, w.round(), h);
+        placed[i] = true;
+    }
+    // Jumps, below the pin they leave.
+    for i in 0..n {
+        if placed[i] || doc.elements[i].kind != Some(ElementKind::Jump) {
+            continue;
+        }
+        let from = across(doc, d, i, true, 0).map(|(s, p)| pin_pos(&doc.elements[s], false, p));
+        let e = &mut doc.elements[i];
+        if let Some(p) = from {
+            (e.x, e.y) = (p.x - JUMP_SIZE / 2.0, p.y + 2.0 * GRID);
+        }
+        (e.w, e.h) = (JUMP_SIZE, JUMP_SIZE);
+        placed[i] = true;
+    }
+    // Action blocks, right of their step, one under the other.
+    let mut next_y: std::collections::HashMap<usize, f64> = std::collections::HashMap::new();
+    for i in 0..n {
+        if placed[i] || doc.elements[i].kind != Some(ElementKind::ActionBlock) {
+            continue;
+        }
+        let step = doc.elements[i].step.as_ref().and_then(|s| d.by_id.get(s)).copied();
+        let (w, h) = action_block_size(&doc.elements[i].associations);
+        let (x, y) = match step {
+            Some(s) => {
+                let st = &doc.elements[s];
+                let y = *next_y.entry(s).or_insert(st.y + st.h / 2.0 - ROW_H / 2.0);
+                (st.x + st.w + 3.0 * GRID, y)
+            }
+            None => (doc.elements[i].x, doc.elements[i].y),
+        };
+        if let Some(s) = step {
+            next_y.insert(s, y + h + GRID);
+        }
+        let e = &mut doc.elements[i];
+        (e.x, e.y, e.w, e.h) = (x, y, w, h);
+    }
+    // Routes.
+    for c in 0..doc.connections.len() {
+        if !d.used[c] {
+            continue;
+        }
+        let con = &doc.connections[c];
+        let (Some(&s), Some(&t)) = (d.by_id.get(&con.source), d.by_id.get(&con.target)) else { continue };
+        let from = pin_pos(&doc.elements[s], false, con.source_pin);
+        let to = pin_pos(&doc.elements[t], true, con.target_pin);
+        doc.connections[c].waypoints = route(from, to);
+    }
+}

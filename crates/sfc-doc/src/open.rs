@@ -1,0 +1,639 @@
+//! Opening: each SFC POU of checked IEC text as a document. With a saved layout
+//! (`sfc.graph`) that agrees with the text, the document is rebuilt from it; otherwise the
+//! chart is laid out (`layout.rs`), keeping the positions stored in `sfc.x`/`sfc.y` (PLCopen
+//! import), `sfc.jump`, `sfc.actionblock` and `sfc.comment`.
+
+use crate::graph::{self, Role};
+use crate::layout::{self, Model};
+use crate::pragma;
+use crate::readback::Probe;
+use crate::region;
+use crate::sidecar::{self, End, Sidecar};
+use crate::write::as_read;
+use crate::{ActionDef, Association, ChartTarget, Connection, EditorDoc, Element, ElementKind, PouKind};
+use sfc_model::{Chart, Target};
+use sfc_render::LayoutKind;
+use sfc_syntax::ast;
+use std::collections::{HashMap, HashSet};
+
+/// One chart as read from the text, before it becomes a document.
+pub struct ReadChart<'a> {
+    pub chart: &'a Chart,
+    pub pou_kind: PouKind,
+    pub target: ChartTarget,
+    pub description: String,
+    pub declarations: String,
+    pub steps: Vec<Element>,
+    pub step_stored: Vec<bool>,
+    pub step_assocs: Vec<Vec<Association>>,
+    /// `sfc.actionblock`: `x y w h n` per block.
+    pub step_blocks: Vec<Option<Vec<[f64; 5]>>>,
+    pub transitions: Vec<Element>,
+    pub transition_stored: Vec<bool>,
+    /// `sfc.jump`: target name and position per jump.
+    pub jumps: Vec<Option<Vec<(String, f64, f64)>>>,
+    pub actions: Vec<ActionDef>,
+    pub comments: Vec<Element>,
+    pub graph: Option<String>,
+    pub attributes: Vec<crate::OtherAttribute>,
+}
+
+fn chart_target(attrs: &[ast::Attribute]) -> ChartTarget {
+    match pragma::raw(attrs, "sfc.target").and_then(|v| Target::from_name(v.trim())) {
+        Some(Target::Atmt) => ChartTarget::Atmt,
+        Some(Target::Eatmt) => ChartTarget::Eatmt,
+        _ => ChartTarget::Blank,
+    }
+}
+
+/// The properties every step and transition may carry in attributes.
+fn common(attrs: &[ast::Attribute], kind: ElementKind, name: &str) -> (Element, bool) {
+    let x = pragma::number(attrs, "sfc.x");
+    let y = pragma::number(attrs, "sfc.y");
+    let (dw, dh) = match kind {
+        ElementKind::Step => layout::step_size(name),
+        _ => (layout::TRANSITION_W, layout::TRANSITION_H),
+    };
+    let e = Element {
+        kind: Some(kind),
+        name: name.to_string(),
+        x: x.unwrap_or(0.0),
+        y: y.unwrap_or(0.0),
+        w: pragma::number(attrs, "sfc.w").or_else(|| pragma::number(attrs, "sfc.width")).unwrap_or(dw),
+        h: pragma::number(attrs, "sfc.h").or_else(|| pragma::number(attrs, "sfc.height")).unwrap_or(dh),
+        tag: pragma::raw(attrs, "sfc.tag").and_then(|v| v.trim().parse::<u32>().ok()),
+        description: pragma::text(attrs, "sfc.description").unwrap_or_default(),
+        background: pragma::text(attrs, "sfc.background"),
+        foreground: pragma::text(attrs, "sfc.foreground"),
+        line_width: pragma::number(attrs, "sfc.linewidth"),
+        hide_label: pragma::flag(attrs, "sfc.hidelabel"),
+        ..Element::default()
+    };
+    (e, x.is_some() && y.is_some())
+}
+
+fn numbers(s: &str) -> Option<Vec<f64>> {
+    s.split_whitespace().map(|p| p.parse::<f64>().ok().filter(|v| v.is_finite())).collect()
+}
+
+/// Reads one chart of a checked file.
+pub fn read<'a>(text: &str, chart: &'a Chart, pou: &ast::Pou) -> ReadChart<'a> {
+    let ast_steps: HashMap<(u32, u32), &ast::Step> = pou
+        .body
+        .sfc()
+        .unwrap_or(&[])
+        .iter()
+        .filter_map(|e| match e {
+            ast::SfcElement::Step(s) => Some(((s.span.start, s.span.end), s)),
+            _ => None,
+        })
+        .collect();
+    let mut steps = Vec::new();
+    let mut step_stored = Vec::new();
+    let mut step_assocs = Vec::new();
+    let mut step_blocks = Vec::new();
+    for s in &chart.steps {
+        let (mut e, stored) = common(&s.attributes, ElementKind::Step, &s.name);
+        e.initial = s.initial;
+        e.timeout = pragma::text(&s.attributes, "sfc.timeout");
+        e.is_final = pragma::flag(&s.attributes, "sfc.final");
+        e.attributes = pragma::others(&s.attributes, pragma::STEP);
+        steps.push(e);
+        step_stored.push(stored);
+        let assocs = ast_steps
+            .get(&(s.span.start, s.span.end))
+            .map(|a| a.associations.iter().map(|x| region::association(text, x)).collect())
+            .unwrap_or_default();
+        step_assocs.push(assocs);
+        step_blocks.push(pragma::raw(&s.attributes, "sfc.actionblock").and_then(|v| {
+            pragma::unescape(v)
+                .split(';')
+                .map(|b| numbers(b).filter(|n| n.len() == 5).map(|n| [n[0], n[1], n[2], n[3], n[4]]))
+                .collect::<Option<Vec<_>>>()
+        }));
+    }
+    let mut transitions = Vec::new();
+    let mut transition_stored = Vec::new();
+    let mut jumps = Vec::new();
+    for t in &chart.transitions {
+        let name = if t.named { t.name.as_str() } else { "" };
+        let (mut e, stored) = common(&t.attributes, ElementKind::Transition, name);
+        let (cond, lang) = region::condition(text, &t.condition);
+        e.condition = cond;
+        e.condition_language = lang;
+        e.priority = t.priority.and_then(|p| u32::try_from(p).ok());
+        e.attributes = pragma::others(&t.attributes, pragma::TRANSITION);
+        transitions.push(e);
+        transition_stored.push(stored);
+        jumps.push(pragma::raw(&t.attributes, "sfc.jump").map(|v| {
+            pragma::unescape(v)
+                .split(';')
+                .filter_map(|j| {
+                    let mut it = j.split_whitespace();
+                    let name = it.next()?.to_string();
+                    let x = it.next()?.parse::<f64>().ok().filter(|v| v.is_finite())?;
+                    let y = it.next()?.parse::<f64>().ok().filter(|v| v.is_finite())?;
+                    Some((name, x, y))
+                })
+                .collect()
+        }));
+    }
+    let actions = chart
+        .actions
+        .iter()
+        .map(|a| ActionDef {
+            name: a.name.clone(),
+            language: region::action_language(&a.body),
+            body: region::action_body(text, a.span, a.name_span),
+            description: pragma::text(&a.attributes, "sfc.description").unwrap_or_default(),
+            attributes: pragma::others(&a.attributes, pragma::ACTION),
+        })
+        .collect();
+    let comments = pragma::all(&pou.attributes, "sfc.comment")
+        .into_iter()
+        .filter_map(|v| {
+            let (head, body) = v.split_once('\n').unwrap_or((v.as_str(), ""));
+            let n = numbers(head).filter(|n| n.len() == 4)?;
+            Some(Element {
+                kind: Some(ElementKind::Text),
+                x: n[0],
+                y: n[1],
+                w: n[2],
+                h: n[3],
+                text: Some(body.to_string()),
+                ..Element::default()
+            })
+        })
+        .collect();
+    ReadChart {
+        chart,
+        pou_kind: if pou.kind == ast::PouKind::FunctionBlock { PouKind::FunctionBlock } else { PouKind::Program },
+        target: chart_target(&pou.attributes),
+        description: pragma::text(&pou.attributes, "sfc.description").unwrap_or_default(),
+        declarations: region::declarations(text, pou),
+        steps,
+        step_stored,
+        step_assocs,
+        step_blocks,
+        transitions,
+        transition_stored,
+        jumps,
+        actions,
+        comments,
+        graph: pragma::text(&pou.attributes, sidecar::NAME),
+        attributes: pragma::others(&pou.attributes, pragma::POU),
+    }
+}
+
+/// The document of a chart read from text, with canonical ids.
+pub fn document(r: &ReadChart) -> EditorDoc {
+    let mut probe = Probe::default();
+    let doc = from_sidecar(r, &mut probe).unwrap_or_else(|| laid_out(r, &mut probe));
+    let d = graph::derive(&doc, &mut probe);
+    graph::normalize(&doc, &d)
+}
+
+fn empty_doc(r: &ReadChart) -> EditorDoc {
+    EditorDoc {
+        pou: r.chart.pou.clone(),
+        pou_kind: r.pou_kind,
+        target: r.target,
+        description: r.description.clone(),
+        declarations: r.declarations.clone(),
+        actions: r.actions.clone(),
+        elements: Vec::new(),
+        connections: Vec::new(),
+        attributes: r.attributes.clone(),
+    }
+}
+
+/// The document as saved, when the saved layout describes the chart of the text.
+fn from_sidecar(r: &ReadChart, probe: &mut Probe) -> Option<EditorDoc> {
+    let car: Sidecar = serde_json::from_str(r.graph.as_deref()?).ok()?;
+    if car.v != sidecar::VERSION || !r.step_stored.iter().chain(&r.transition_stored).all(|&s| s) {
+        return None;
+    }
+    let n = car.e.len();
+    // Which step / transition of the text each entry is.
+    let mut step_of = vec![None; n];
+    let mut transition_of = vec![None; n];
+    let (mut ns, mut nt) = (0, 0);
+    for (i, en) in car.e.iter().enumerate() {
+        if let Some(name) = &en.s {
+            if r.steps.get(ns)?.name != *name {
+                return None;
+            }
+            step_of[i] = Some(ns);
+            ns += 1;
+        } else if let Some(name) = &en.t {
+            if r.transitions.get(nt)?.name != *name {
+                return None;
+            }
+            transition_of[i] = Some(nt);
+            nt += 1;
+        }
+    }
+    if ns != r.steps.len() || nt != r.transitions.len() {
+        return None;
+    }
+    let tmp = |i: usize| format!("#{i}");
+    let mut cursor = vec![0usize; r.steps.len()];
+    let mut elements = Vec::with_capacity(n);
+    for (i, en) in car.e.iter().enumerate() {
+        let restore = |mut x: Element| -> Option<Element> {
+            match (en.st, &en.sr) {
+                (Some(s), _) if s < n && x.step.is_some() => x.step = Some(tmp(s)),
+                (None, Some(raw)) if x.step.is_some() => x.step = Some(raw.clone()),
+                (None, None) if x.step.as_deref().is_none_or(|s| s.is_empty()) => x.step = None,
+                _ => return None,
+            }
+            Some(x)
+        };
+        let typed = match &en.o {
+            Some(o) => Some(restore(o.clone())?),
+            None => None,
+        };
+        let e = if let Some(k) = step_of[i] {
+            chosen(&r.steps[k], typed.as_ref(), probe)
+        } else if let Some(k) = transition_of[i] {
+            chosen(&r.transitions[k], typed.as_ref(), probe)
+        } else if let Some(a) = &en.a {
+            let k = step_of.get(en.st?).copied().flatten()?;
+            let count = en.n?;
+            let list = &r.step_assocs[k];
+            let assocs = list.get(cursor[k]..cursor[k].checked_add(count)?)?.to_vec();
+            cursor[k] += count;
+            Element { kind: Some(ElementKind::ActionBlock), step: Some(tmp(en.st?)), associations: assocs, ..a.clone() }
+        } else if let Some(x) = &en.x {
+            restore(x.clone())?
+        } else {
+            return None;
+        };
+        elements.push(Element { id: tmp(i), ..e });
+    }
+    if cursor.iter().zip(&r.step_assocs).any(|(c, a)| *c != a.len()) {
+        return None;
+    }
+    let end = |e: &End| -> Option<String> {
+        match e {
+            End::At(i) if *i < n => Some(tmp(*i)),
+            End::At(_) => None,
+            End::Missing(raw) => Some(raw.clone()),
+        }
+    };
+    let connections = car
+        .c
+        .iter()
+        .map(|w| {
+            Some(Connection {
+                id: String::new(),
+                source: end(&w.s)?,
+                source_pin: w.sp,
+                target: end(&w.t)?,
+                target_pin: w.tp,
+                waypoints: w.w.clone(),
+                color: w.col.clone(),
+                line_width: w.lw,
+            })
+        })
+        .collect::<Option<Vec<_>>>()?;
+    let mut doc = EditorDoc { elements, connections, ..empty_doc(r) };
+    if let Some(p) = &car.pou {
+        if r.chart.pou == "Unnamed" {
+            doc.pou = p.clone();
+        }
+    }
+    if let Some(attrs) = &car.attrs {
+        if pragma::readable(attrs, pragma::POU) == r.attributes {
+            doc.attributes = attrs.clone();
+        }
+    }
+    if let Some(decl) = &car.decl {
+        if probe.declarations(decl).1 == r.declarations {
+            doc.declarations = decl.clone();
+        }
+    }
+    if let Some(acts) = &car.acts {
+        doc.actions = actions(r, acts, probe).unwrap_or_else(|| r.actions.clone());
+    }
+
+    // The graph must say what the text says.
+    let d = graph::derive(&doc, probe);
+    for (i, role) in d.roles.iter().enumerate() {
+        let agrees = match role {
+            Role::Step(k) => step_of[i] == Some(*k),
+            Role::Transition(k) => transition_of[i] == Some(*k),
+            Role::Other => step_of[i].is_none() && transition_of[i].is_none(),
+        };
+        if !agrees {
+            return None;
+        }
+    }
+    let step_index: HashMap<usize, usize> = (0..n).filter_map(|i| step_of[i].map(|k| (i, k))).collect();
+    for (k, t) in d.transitions.iter().enumerate() {
+        let model = &r.chart.transitions[k];
+        let set = |l: &[usize]| l.iter().filter_map(|i| step_index.get(i)).copied().collect::<HashSet<usize>>();
+        let (from, to) = (set(&t.from), set(&t.to));
+        if from != model.from.iter().copied().collect() || to != model.to.iter().copied().collect() {
+            return None;
+        }
+    }
+    Some(doc)
+}
+
+/// A step or transition as read, or as typed when the text still reads as it would.
+fn chosen(read: &Element, typed: Option<&Element>, probe: &mut Probe) -> Element {
+    match typed {
+        Some(o) if as_read(o, probe) == *read => o.clone(),
+        _ => read.clone(),
+    }
+}
+
+fn actions(r: &ReadChart, acts: &[sidecar::ActEntry], probe: &mut Probe) -> Option<Vec<ActionDef>> {
+    let mut k = 0;
+    let mut out = Vec::new();
+    for a in acts {
+        if let Some(name) = &a.n {
+            let read = r.actions.get(k)?;
+            if read.name != *name {
+                return None;
+            }
+            k += 1;
+            out.push(match &a.o {
+                Some(o) if probe.action(o).1 == *read => o.clone(),
+                _ => read.clone(),
+            });
+        } else {
+            out.push(a.x.clone()?);
+        }
+    }
+    (k == r.actions.len()).then_some(out)
+}
+
+/// The chart laid out afresh (stored positions kept): steps, transitions, the bars their
+/// FROM/TO lists need, jumps where the layout draws them, action blocks and comments.
+// Steps and transitions are numbered as in the chart; parallel tables are indexed by them.
+#[allow(clippy::needless_range_loop)]
+fn laid_out(r: &ReadChart, probe: &mut Probe) -> EditorDoc {
+    let chart = r.chart;
+    let lay = sfc_render::layout_with(chart, &sfc_render::LayoutOptions::default());
+    let (ns, nt) = (chart.steps.len(), chart.transitions.len());
+    let step_x = |s: usize| lay.steps.get(s).map(|g| g.rect.x + g.rect.w / 2.0).unwrap_or(0.0);
+    let trans_x = |t: usize| lay.transitions.get(t).map(|g| g.x).unwrap_or(0.0);
+
+    // Successors drawn as jumps: stored ones, else the layout's.
+    let mut jump_at: HashMap<(usize, usize), Option<(f64, f64)>> = HashMap::new();
+    for (t, tr) in chart.transitions.iter().enumerate() {
+        if let Some(list) = &r.jumps[t] {
+            for (name, x, y) in list {
+                if let Some(s) = chart.step(name).filter(|s| tr.to.contains(s)) {
+                    jump_at.insert((t, s), Some((*x, *y)));
+                }
+            }
+        }
+    }
+    if lay.kind != LayoutKind::Stored {
+        for j in &lay.jumps {
+            if r.jumps.get(j.transition).is_some_and(|l| l.is_none()) {
+                jump_at.entry((j.transition, j.target)).or_insert(None);
+            }
+        }
+    }
+    let jump_x = |t: usize, s: usize| match jump_at.get(&(t, s)) {
+        Some(Some((x, _))) => *x,
+        Some(None) => {
+            lay.jumps.iter().find(|j| j.transition == t && j.target == s).map(|j| j.tip.x).unwrap_or(trans_x(t))
+        }
+        None => step_x(s),
+    };
+    let adj = chart.adjacency();
+    let sorted = |mut v: Vec<usize>, key: &dyn Fn(usize) -> f64| {
+        v.sort_by(|a, b| key(*a).total_cmp(&key(*b)));
+        v
+    };
+    let outgoing: Vec<Vec<usize>> = adj.outgoing.iter().map(|o| sorted(o.clone(), &trans_x)).collect();
+    let incoming: Vec<Vec<usize>> = (0..ns)
+        .map(|s| {
+            sorted(adj.incoming[s].iter().copied().filter(|&t| !jump_at.contains_key(&(t, s))).collect(), &trans_x)
+        })
+        .collect();
+    let froms: Vec<Vec<usize>> = chart.transitions.iter().map(|t| sorted(t.from.clone(), &step_x)).collect();
+    let tos: Vec<Vec<usize>> =
+        chart.transitions.iter().enumerate().map(|(t, tr)| sorted(tr.to.clone(), &|s| jump_x(t, s))).collect();
+
+    let mut doc = empty_doc(r);
+    let mut keep = Vec::new();
+    let mut step_of = Vec::new();
+    let mut transition_of = Vec::new();
+    let mut push = |doc: &mut EditorDoc, e: Element, k: bool, s: Option<usize>, t: Option<usize>| -> String {
+        let id = format!("#{}", doc.elements.len());
+        doc.elements.push(Element { id: id.clone(), ..e });
+        keep.push(k);
+        step_of.push(s);
+        transition_of.push(t);
+        id
+    };
+    let step_ids: Vec<String> =
+        (0..ns).map(|s| push(&mut doc, r.steps[s].clone(), r.step_stored[s], Some(s), None)).collect();
+    let trans_ids: Vec<String> =
+        (0..nt).map(|t| push(&mut doc, r.transitions[t].clone(), r.transition_stored[t], None, Some(t))).collect();
+    let bar = |kind: ElementKind, pins: usize| Element {
+        kind: Some(kind),
+        pins: Some(pins as u32),
+        h: layout::BAR_H,
+        ..Element::default()
+    };
+    let mut sel_conv = vec![None; ns];
+    let mut sel_div = vec![None; ns];
+    for s in 0..ns {
+        if incoming[s].len() > 1 {
+            sel_conv[s] =
+                Some(push(&mut doc, bar(ElementKind::SelectionConvergence, incoming[s].len()), false, None, None));
+        }
+        if outgoing[s].len() > 1 {
+            sel_div[s] =
+                Some(push(&mut doc, bar(ElementKind::SelectionDivergence, outgoing[s].len()), false, None, None));
+        }
+    }
+    let mut sim_conv = vec![None; nt];
+    let mut sim_div = vec![None; nt];
+    for t in 0..nt {
+        if froms[t].len() > 1 {
+            sim_conv[t] =
+                Some(push(&mut doc, bar(ElementKind::SimultaneousConvergence, froms[t].len()), false, None, None));
+        }
+        if tos[t].len() > 1 {
+            sim_div[t] =
+                Some(push(&mut doc, bar(ElementKind::SimultaneousDivergence, tos[t].len()), false, None, None));
+        }
+    }
+    let mut jump_ids: HashMap<(usize, usize), String> = HashMap::new();
+    for t in 0..nt {
+        for &s in &tos[t] {
+            if let Some(at) = jump_at.get(&(t, s)) {
+                let (x, y) = at.unwrap_or((0.0, 0.0));
+                let e = Element {
+                    kind: Some(ElementKind::Jump),
+                    target: Some(chart.steps[s].name.clone()),
+                    x,
+                    y,
+                    w: layout::JUMP_SIZE,
+                    h: layout::JUMP_SIZE,
+                    ..Element::default()
+                };
+                jump_ids.insert((t, s), push(&mut doc, e, at.is_some(), None, None));
+            }
+        }
+    }
+    for s in 0..ns {
+        let assocs = &r.step_assocs[s];
+        // Each block's count must be a whole number of this step's associations, all shown.
+        let fits = |b: &Vec<[f64; 5]>| {
+            let mut total = 0usize;
+            for n in b {
+                if n[4] < 0.0 || n[4].fract() != 0.0 || n[4] > assocs.len() as f64 {
+                    return false;
+                }
+                total += n[4] as usize;
+            }
+            !b.is_empty() && total == assocs.len()
+        };
+        let stored = r.step_blocks[s].as_ref().filter(|b| fits(b));
+        match stored {
+            Some(blocks) => {
+                let mut from = 0;
+                for b in blocks {
+                    let count = b[4].max(0.0) as usize;
+                    let e = Element {
+                        kind: Some(ElementKind::ActionBlock),
+                        x: b[0],
+                        y: b[1],
+                        w: b[2],
+                        h: b[3],
+                        step: Some(step_ids[s].clone()),
+                        associations: assocs[from..from + count].to_vec(),
+                        ..Element::default()
+                    };
+                    from += count;
+                    push(&mut doc, e, true, None, None);
+                }
+            }
+            None if !assocs.is_empty() => {
+                let e = Element {
+                    kind: Some(ElementKind::ActionBlock),
+                    step: Some(step_ids[s].clone()),
+                    associations: assocs.clone(),
+                    ..Element::default()
+                };
+                push(&mut doc, e, false, None, None);
+            }
+            None => {}
+        }
+    }
+    for c in &r.comments {
+        push(&mut doc, c.clone(), true, None, None);
+    }
+
+    // Connections: bars to their step or transition, then every FROM and TO link.
+    let mut wires: Vec<(String, u32, String, u32)> = Vec::new();
+    for s in 0..ns {
+        if let Some(b) = &sel_conv[s] {
+            wires.push((b.clone(), 0, step_ids[s].clone(), 0));
+        }
+        if let Some(b) = &sel_div[s] {
+            wires.push((step_ids[s].clone(), 0, b.clone(), 0));
+        }
+    }
+    for t in 0..nt {
+        if let Some(b) = &sim_conv[t] {
+            wires.push((b.clone(), 0, trans_ids[t].clone(), 0));
+        }
+        if let Some(b) = &sim_div[t] {
+            wires.push((trans_ids[t].clone(), 0, b.clone(), 0));
+        }
+    }
+    let pos = |l: &[usize], x: usize| l.iter().position(|&y| y == x).unwrap_or(0) as u32;
+    for t in 0..nt {
+        for &s in &froms[t] {
+            let src = match &sel_div[s] {
+                Some(b) => (b.clone(), pos(&outgoing[s], t)),
+                None => (step_ids[s].clone(), 0),
+            };
+            let dst = match &sim_conv[t] {
+                Some(b) => (b.clone(), pos(&froms[t], s)),
+                None => (trans_ids[t].clone(), 0),
+            };
+            wires.push((src.0, src.1, dst.0, dst.1));
+        }
+        for &s in &tos[t] {
+            let src = match &sim_div[t] {
+                Some(b) => (b.clone(), pos(&tos[t], s)),
+                None => (trans_ids[t].clone(), 0),
+            };
+            let dst = match (jump_ids.get(&(t, s)), &sel_conv[s]) {
+                (Some(j), _) => (j.clone(), 0),
+                (None, Some(b)) => (b.clone(), pos(&incoming[s], t)),
+                (None, None) => (step_ids[s].clone(), 0),
+            };
+            wires.push((src.0, src.1, dst.0, dst.1));
+        }
+    }
+    doc.connections = wires
+        .into_iter()
+        .enumerate()
+        .map(|(k, (source, source_pin, target, target_pin))| Connection {
+            id: format!("#c{k}"),
+            source,
+            source_pin,
+            target,
+            target_pin,
+            ..Connection::default()
+        })
+        .collect();
+
+    let d = graph::derive(&doc, probe);
+    layout::place(&mut doc, &d, &Model { step_of: &step_of, transition_of: &transition_of }, &lay, &keep);
+    doc
+}
+
+/// See [`crate::auto_layout`]: the chart the document's text describes is laid out, and the
+/// document's own blocks are placed on that layout (text labels, and steps or transitions the
+/// text cannot hold yet, stay where they are).
+pub fn auto_layout(doc: &EditorDoc) -> EditorDoc {
+    let mut probe = Probe::default();
+    let d = graph::derive(doc, &mut probe);
+    let mut out = doc.clone();
+    for c in &mut out.connections {
+        c.waypoints.clear();
+    }
+    let written = crate::write::write(doc);
+    let checked = sfc_model::check_source(0, "", &written.text, &sfc_model::CheckOptions::default());
+    let Some(chart) = checked.charts.first() else { return out };
+    if chart.steps.len() != d.steps.len() || chart.transitions.len() != d.transitions.len() {
+        return out;
+    }
+    let mut chart = chart.clone();
+    let positional = |a: &ast::Attribute| ["sfc.x", "sfc.y"].iter().any(|n| a.name.eq_ignore_ascii_case(n));
+    for s in &mut chart.steps {
+        s.attributes.retain(|a| !positional(a));
+    }
+    for t in &mut chart.transitions {
+        t.attributes.retain(|a| !positional(a));
+    }
+    let lay = sfc_render::layout_with(&chart, &sfc_render::LayoutOptions::default());
+    let step_of: Vec<Option<usize>> =
+        d.roles.iter().map(|r| if let Role::Step(k) = r { Some(*k) } else { None }).collect();
+    let transition_of: Vec<Option<usize>> =
+        d.roles.iter().map(|r| if let Role::Transition(k) = r { Some(*k) } else { None }).collect();
+    let keep: Vec<bool> = doc
+        .elements
+        .iter()
+        .zip(&d.roles)
+        .map(|(e, r)| {
+            e.kind == Some(ElementKind::Text)
+                || (*r == Role::Other && matches!(e.kind, Some(ElementKind::Step | ElementKind::Transition)))
+        })
+        .collect();
+    layout::place(&mut out, &d, &Model { step_of: &step_of, transition_of: &transition_of }, &lay, &keep);
+    out
+}

@@ -1,0 +1,115 @@
+//! The `sfc.graph` attribute: everything of a document the IEC text cannot hold, as compact
+//! JSON. Steps and transitions of the text are referred to by name (their properties are in
+//! the text and their own attributes); every other block is stored whole; connections refer to
+//! blocks by their position in the document.
+
+use crate::{ActionDef, Element, OtherAttribute, Point};
+use serde::{Deserialize, Serialize};
+
+/// The attribute's name.
+pub const NAME: &str = "sfc.graph";
+/// The format version written in `v`.
+pub const VERSION: u32 = 1;
+
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, Default)]
+#[serde(default)]
+pub struct Sidecar {
+    pub v: u32,
+    /// The POU name as typed, when the text holds another one (it was no valid name).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub pou: Option<String>,
+    /// The declarations as typed, when they read back differently.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub decl: Option<String>,
+    /// The POU's other attributes as typed, when some cannot be written.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub attrs: Option<Vec<OtherAttribute>>,
+    /// The actions, when any of them is not in the text as typed (absent: the text's actions).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub acts: Option<Vec<ActEntry>>,
+    /// The blocks, in document order.
+    pub e: Vec<Entry>,
+    /// The connections, in document order.
+    pub c: Vec<Wire>,
+}
+
+/// One block.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, Default)]
+#[serde(default)]
+pub struct Entry {
+    /// A step of the text, by name.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub s: Option<String>,
+    /// A transition of the text, by name (empty: unnamed).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub t: Option<String>,
+    /// A step or transition as typed, when the text reads back differently (a condition that
+    /// does not parse, say); used when the text still reads as this element would.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub o: Option<Element>,
+    /// An action block whose associations are the next `n` associations of the step at block
+    /// position `st` in the text (the element without id, step and associations).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub a: Option<Element>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub n: Option<usize>,
+    /// Any other block, whole (without id; an action block's step as `st` or `sr`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub x: Option<Element>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub st: Option<usize>,
+    /// An action block's step that is no block of the document.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub sr: Option<String>,
+}
+
+/// One action.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, Default)]
+#[serde(default)]
+pub struct ActEntry {
+    /// An action of the text, by name.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub n: Option<String>,
+    /// The action as typed, when the text reads back differently.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub o: Option<ActionDef>,
+    /// An action the text cannot hold (no valid or a duplicate name).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub x: Option<ActionDef>,
+}
+
+/// A block by its position in the document, or a reference to a block that is not there.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(untagged)]
+pub enum End {
+    At(usize),
+    Missing(String),
+}
+
+impl Default for End {
+    fn default() -> Self {
+        End::At(0)
+    }
+}
+
+/// One connection.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, Default)]
+#[serde(default)]
+pub struct Wire {
+    pub s: End,
+    #[serde(skip_serializing_if = "is_zero")]
+    pub sp: u32,
+    pub t: End,
+    #[serde(skip_serializing_if = "is_zero")]
+    pub tp: u32,
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub w: Vec<Point>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub col: Option<String>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub lw: Option<f64>,
+}
+
+fn is_zero(v: &u32) -> bool {
+    *v == 0
+}
