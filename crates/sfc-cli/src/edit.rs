@@ -1,0 +1,101 @@
+//! `sfc edit [FILE…]`: serve the SFC Editor on 127.0.0.1, print its URL and open a browser.
+//! Host mode (`--fb … --result PATH`, seed 001 chapter 12) edits one chart for a host
+//! application, which reads the built transition table from `PATH`.
+
+use clap::ValueEnum;
+use sfc_server::{EditOptions, HostBlock, HostMode};
+use std::io::Write;
+use std::path::PathBuf;
+
+#[derive(Clone, Copy, ValueEnum)]
+pub enum FbArg {
+    Atmt,
+    Eatmt,
+}
+
+#[derive(clap::Args)]
+pub struct EditArgs {
+    /// Charts (`.st`, `.xml`) and directories to edit; the editor may read and write files under
+    /// these directories and the files' directories (default: the current directory).
+    files: Vec<PathBuf>,
+    /// Port on 127.0.0.1 (default: any free port).
+    #[arg(long)]
+    port: Option<u16>,
+    /// Only print the URL; do not open a browser.
+    #[arg(long)]
+    no_open: bool,
+    /// Host mode: build for this REX block; needs one FILE (created if missing) and --result.
+    #[arg(long, value_enum, requires = "result")]
+    fb: Option<FbArg>,
+    /// Host mode: state limit (default 16 for atmt, 256 for eatmt).
+    #[arg(long, value_name = "N", requires = "fb")]
+    nstep: Option<u32>,
+    /// Host mode: rule limit (default 64 for atmt, 1024 for eatmt).
+    #[arg(long, value_name = "N", requires = "fb")]
+    ntr: Option<u32>,
+    /// Host mode: file the one-line transition table is written to after each successful build.
+    #[arg(long, value_name = "PATH", requires = "fb")]
+    result: Option<PathBuf>,
+}
+
+/// Whether a browser can be shown: a graphical session on Unix, always on macOS and Windows.
+fn has_display() -> bool {
+    cfg!(any(target_os = "macos", windows))
+        || ["DISPLAY", "WAYLAND_DISPLAY"].iter().any(|v| std::env::var_os(v).is_some_and(|s| !s.is_empty()))
+}
+
+/// Starts the system's browser on `url`; a failure only means the user opens the URL by hand.
+fn open_browser(url: &str) {
+    let mut cmd = if cfg!(target_os = "macos") {
+        std::process::Command::new("open")
+    } else if cfg!(windows) {
+        let mut c = std::process::Command::new("cmd");
+        c.args(["/C", "start", ""]);
+        c
+    } else {
+        std::process::Command::new("xdg-open")
+    };
+    cmd.arg(url)
+        .stdin(std::process::Stdio::null())
+        .stdout(std::process::Stdio::null())
+        .stderr(std::process::Stdio::null());
+    if let Ok(mut child) = cmd.spawn() {
+        // Reap it when it ends, so it does not linger as a zombie while the editor runs.
+        std::thread::spawn(move || child.wait());
+    }
+}
+
+pub fn edit(a: EditArgs) -> u8 {
+    let host = match (a.fb, a.result) {
+        (Some(fb), Some(result)) => {
+            if a.files.len() != 1 {
+                eprintln!("error: host mode (--fb) edits exactly one chart: give one FILE");
+                return 2;
+            }
+            let fb = match fb {
+                FbArg::Atmt => HostBlock::Atmt,
+                FbArg::Eatmt => HostBlock::Eatmt,
+            };
+            Some(HostMode { fb, nstep: a.nstep, ntr: a.ntr, result })
+        }
+        // clap enforces that --fb and --result come together.
+        _ => None,
+    };
+    let opts = EditOptions { files: a.files, port: a.port, host };
+    let open = !a.no_open && has_display();
+    let result = sfc_server::serve(opts, |url| {
+        let mut out = std::io::stdout().lock();
+        let _ = writeln!(out, "SFC Editor: {url}");
+        let _ = out.flush();
+        if open {
+            open_browser(url);
+        }
+    });
+    match result {
+        Ok(()) => 0,
+        Err(e) => {
+            eprintln!("error: {e}");
+            2
+        }
+    }
+}
