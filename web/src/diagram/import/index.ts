@@ -1,0 +1,5 @@
+import { DocImporter } from './DocImporter';
+
+export default {
+  sfcImporter: ['type', DocImporter],
+};

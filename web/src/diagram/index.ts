@@ -1,0 +1,227 @@
+// The SFC Editor canvas: diagram-js with SFC blocks, pins and wires. The app uses it only
+// through `CreateCanvas` (types.ts).
+import Diagram from 'diagram-js/lib/Diagram.js';
+import BendpointsModule from 'diagram-js/lib/features/bendpoints/index.js';
+import CopyPasteModule from 'diagram-js/lib/features/copy-paste/index.js';
+import EditorActionsModule from 'diagram-js/lib/features/editor-actions/index.js';
+import GridSnappingModule from 'diagram-js/lib/features/grid-snapping/index.js';
+import KeyboardModule from 'diagram-js/lib/features/keyboard/index.js';
+import KeyboardMoveSelectionModule from 'diagram-js/lib/features/keyboard-move-selection/index.js';
+import LassoToolModule from 'diagram-js/lib/features/lasso-tool/index.js';
+import MoveModule from 'diagram-js/lib/features/move/index.js';
+import OutlineModule from 'diagram-js/lib/features/outline/index.js';
+import ResizeModule from 'diagram-js/lib/features/resize/index.js';
+import SelectionModule from 'diagram-js/lib/features/selection/index.js';
+import ZoomScrollModule from 'diagram-js/lib/navigation/zoomscroll/index.js';
+import 'diagram-js/assets/diagram-js.css';
+import '../diagram.css';
+
+import type { EditorDoc } from '../doc';
+import ConnectModule from './connect';
+import CoreModule from './core';
+import type { DocFields } from './core/DocState';
+import EditingModule from './editing';
+import { exportSvg } from './export/SvgExport';
+import type { Highlights } from './highlight/Highlights';
+import type { DocImporter } from './import/DocImporter';
+import ImportModule from './import';
+import { isConnection, type Service } from './model';
+import ModelingModule from './modeling';
+import PaletteModule from './palette';
+import RenderModule from './render';
+import RulesModule from './rules';
+import type { CanvasEvents, CanvasHandle, CanvasOptions, CreateCanvas } from './types';
+import ViewModule from './view';
+import type { ViewTracker } from './view/ViewTracker';
+import { chartBounds } from './view/bounds';
+
+export type { CanvasHandle, CanvasOptions, CreateCanvas } from './types';
+
+const MIN_ZOOM = 0.1;
+const MAX_ZOOM = 4;
+/** Width the palette covers on the canvas's left edge, in pixels. */
+const PALETTE_ROOM = 190;
+
+export const createCanvas: CreateCanvas = (container: HTMLElement, opts: CanvasOptions): CanvasHandle => {
+  const readOnly = !!opts.readOnly;
+  const config = { t: opts.t, readOnly };
+  const host = document.createElement('div');
+  host.className = 'sfc-canvas' + (readOnly ? ' sfc-readonly' : '');
+  container.appendChild(host);
+
+  const editing = readOnly
+    ? []
+    : [MoveModule, ResizeModule, BendpointsModule, CopyPasteModule, KeyboardMoveSelectionModule, GridSnappingModule, PaletteModule, ConnectModule];
+  const diagram = new Diagram({
+    // Deferred: diagram-js measures the whole drawing for each `viewbox.changed`; the grid,
+    // scrollbars and zoom events follow the view through `sfc.view` instead.
+    canvas: { container: host, deferUpdate: true },
+    keyboard: { bind: true },
+    keyboardMoveSelection: { moveSpeed: 10, moveSpeedAccelerated: 1 },
+    zoomScroll: { enabled: true },
+    sfc: config,
+    modules: [
+      CoreModule,
+      RenderModule,
+      SelectionModule,
+      OutlineModule,
+      RulesModule,
+      ModelingModule,
+      ImportModule,
+      KeyboardModule,
+      EditorActionsModule,
+      LassoToolModule,
+      ZoomScrollModule,
+      ViewModule,
+      EditingModule,
+      ...editing,
+    ],
+  } as Service);
+
+  const get = <T = Service>(name: string): T => diagram.get(name) as T;
+  const eventBus = get('eventBus');
+  const canvas = get('canvas');
+  const elementRegistry = get('elementRegistry');
+  const commandStack = get('commandStack');
+  const modeling = get('modeling');
+  const selection = get('selection');
+  const importer = get<DocImporter>('sfcImporter');
+  const highlights = get<Highlights>('sfcHighlights');
+  const view = get<ViewTracker>('sfcView');
+
+  type Listener = (...args: unknown[]) => void;
+  const listeners = new Map<keyof CanvasEvents, Set<Listener>>();
+  const emit = (event: keyof CanvasEvents, ...args: unknown[]) => {
+    for (const cb of [...(listeners.get(event) ?? [])]) cb(...args);
+  };
+
+  eventBus.on('commandStack.changed', () => emit('change'));
+  eventBus.on('selection.changed', (e: Service) => emit('selection', (e.newSelection as Service[]).map((x) => x.id)));
+  eventBus.on('sfc.properties', (e: Service) => emit('properties', e.id));
+  let lastZoom = 1;
+  eventBus.on('sfc.view', (e: Service) => {
+    const z = e.view.scale;
+    if (z !== lastZoom) {
+      lastZoom = z;
+      emit('zoom', z);
+    }
+  });
+
+  // Where the saved state sits in the undo stack: the action on top when saved.
+  let savedTop: unknown = undefined;
+  const top = () => commandStack._stack[commandStack._stackIdx];
+
+  const find = (id: string, where: string) => {
+    const e = elementRegistry.get(id);
+    if (!e || (!isConnection(e) && !e.businessObject)) throw new Error(`${where}: no block or connection "${id}"`);
+    return e;
+  };
+
+  /** Shows the chart from its top, centred: all of it (`whole`, never beyond 100 %), or on
+   *  load all of it when that stays readable, else its top at 100 %. */
+  const showChart = (whole: boolean) => {
+    const b = chartBounds(elementRegistry);
+    const { width, height } = view.size();
+    if (!b || width === 0 || height === 0) return;
+    const m = 40;
+    // The palette floats over the left edge: centre the chart in the room beside it.
+    const inset = readOnly ? 0 : Math.min(PALETTE_ROOM, width / 3);
+    const room = width - inset;
+    let scale = Math.max(MIN_ZOOM, Math.min(1, room / (b.width + 2 * m), height / (b.height + 2 * m)));
+    if (!whole && scale < 0.6) scale = 1;
+    const w = width / scale;
+    const h = height / scale;
+    const x = b.width + 2 * m <= room / scale ? b.x + b.width / 2 - (inset + room / 2) / scale : b.x - m - inset / scale;
+    canvas.viewbox({ x, y: b.y - m, width: w, height: h });
+    view.tick();
+  };
+
+  const handle: CanvasHandle = {
+    load(doc: EditorDoc) {
+      importer.load(doc);
+      savedTop = top();
+      showChart(false);
+    },
+    getDoc: () => importer.getDoc(),
+    updateElement(id, props) {
+      modeling.updateElement(find(id, 'updateElement'), props as Record<string, unknown>);
+    },
+    updateDoc(props) {
+      modeling.updateDoc(props as Partial<DocFields>);
+    },
+    applyLayout(laidOut) {
+      for (const e of laidOut.elements) {
+        const s = elementRegistry.get(e.id);
+        if (!s || isConnection(s)) throw new Error(`applyLayout: no block "${e.id}" on the canvas`);
+      }
+      for (const c of laidOut.connections) {
+        if (!isConnection(elementRegistry.get(c.id))) throw new Error(`applyLayout: no connection "${c.id}" on the canvas`);
+      }
+      modeling.applyLayout(laidOut);
+    },
+    undo: () => commandStack.undo(),
+    redo: () => commandStack.redo(),
+    canUndo: () => commandStack.canUndo(),
+    canRedo: () => commandStack.canRedo(),
+    isDirty: () => top() !== savedTop,
+    markSaved() {
+      savedTop = top();
+    },
+    select(ids) {
+      selection.select(ids.map((id) => find(id, 'select')));
+    },
+    selection: () => (selection.get() as Service[]).map((e) => e.id),
+    highlight(kind, ids, labels) {
+      highlights.set(kind, ids, labels);
+    },
+    clearHighlights(kind) {
+      highlights.clear(kind);
+    },
+    reveal(id) {
+      const e = find(id, 'reveal');
+      if (isConnection(e)) {
+        const xs = e.waypoints.map((p) => p.x);
+        const ys = e.waypoints.map((p) => p.y);
+        const box = { x: Math.min(...xs), y: Math.min(...ys), width: Math.max(...xs) - Math.min(...xs) + 1, height: Math.max(...ys) - Math.min(...ys) + 1 };
+        canvas.scrollToElement({ ...box, id }, 60);
+      } else {
+        canvas.scrollToElement(e, 60);
+      }
+    },
+    zoom(level) {
+      if (level === 'fit') {
+        showChart(true);
+        return;
+      } else {
+        // About the middle of the view (diagram-js takes the centre in screen units).
+        canvas.zoom(Math.max(MIN_ZOOM, Math.min(MAX_ZOOM, level)));
+      }
+      view.tick();
+    },
+    getZoom: () => view.view().scale,
+    exportSvg: () => exportSvg(elementRegistry),
+    relabel() {
+      eventBus.fire('i18n.changed');
+    },
+    on(event, cb) {
+      let set = listeners.get(event);
+      if (!set) listeners.set(event, (set = new Set()));
+      set.add(cb as Listener);
+      return () => set!.delete(cb as Listener);
+    },
+    destroy() {
+      listeners.clear();
+      diagram.destroy();
+      host.remove();
+    },
+  };
+  diagrams.set(handle, diagram);
+  return handle;
+};
+
+const diagrams = new WeakMap<CanvasHandle, Service>();
+
+/** The diagram-js instance behind a handle (for tests and the demo page; the app uses the handle). */
+export function diagramOf(handle: CanvasHandle): Service {
+  return diagrams.get(handle);
+}

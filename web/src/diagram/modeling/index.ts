@@ -1,0 +1,16 @@
+import ModelingModule from 'diagram-js/lib/features/modeling/index.js';
+import { SfcModeling } from './SfcModeling';
+import { SfcLayouter } from '../layout/SfcLayouter';
+import { WireBehavior } from './behavior/WireBehavior';
+import { BlockBehavior } from './behavior/BlockBehavior';
+import { EditBehavior } from './behavior/EditBehavior';
+
+export default {
+  __depends__: [ModelingModule],
+  __init__: ['sfcWireBehavior', 'sfcBlockBehavior', 'sfcEditBehavior'],
+  modeling: ['type', SfcModeling],
+  layouter: ['type', SfcLayouter],
+  sfcWireBehavior: ['type', WireBehavior],
+  sfcBlockBehavior: ['type', BlockBehavior],
+  sfcEditBehavior: ['type', EditBehavior],
+};

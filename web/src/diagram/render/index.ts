@@ -1,0 +1,6 @@
+import { SfcRenderer } from './SfcRenderer';
+
+export default {
+  __init__: ['sfcRenderer'],
+  sfcRenderer: ['type', SfcRenderer],
+};

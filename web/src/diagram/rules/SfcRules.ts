@@ -1,0 +1,106 @@
+// What the user may do: the valid connections of sfc-doc (an output pin to an input pin of
+// another block, one wire per pin), which sides of a block can be resized, and nothing at all
+// on a read-only canvas.
+import RuleProvider from 'diagram-js/lib/features/rules/RuleProvider.js';
+import { pinCounts, VALID_TARGETS, type Point } from '../../doc';
+import { inputPin, limits, outputPin, PIN_SNAP } from '../geometry';
+import { isConnection, type Service, type SfcConnection, type SfcShape } from '../model';
+
+export class SfcRules extends RuleProvider {
+  static $inject = ['eventBus', 'config.sfc'];
+
+  constructor(
+    eventBus: Service,
+    private config: { readOnly?: boolean },
+  ) {
+    super(eventBus);
+  }
+
+  init() {
+    const ro = () => !!this.config?.readOnly;
+    this.addRule(['shape.create', 'elements.create', 'elements.move', 'elements.delete', 'element.copy'], () => !ro());
+    this.addRule('connection.create', (ctx: Service) => {
+      if (ro()) return false;
+      const { source, target } = ctx;
+      if (!isBlock(source) || !isBlock(target)) return false;
+      return kindsMayConnect(source, target) && freeOutputs(source).length > 0 && freeInputs(target).length > 0;
+    });
+    this.addRule('connection.reconnect', (ctx: Service) => {
+      if (ro()) return false;
+      const { connection, source, target } = ctx;
+      if (!isBlock(source) || !isBlock(target)) return false;
+      if (!kindsMayConnect(source, target)) return false;
+      const c = connection as SfcConnection;
+      // The moved end needs a free pin on its new block (its own pin counts as free).
+      if (target !== c.target && freeInputs(target, c).length === 0) return false;
+      if (source !== c.source && freeOutputs(source, c).length === 0) return false;
+      return true;
+    });
+    this.addRule('connection.updateWaypoints', () => !ro());
+    this.addRule('shape.resize', (ctx: Service) => {
+      if (ro()) return false;
+      const shape = ctx.shape;
+      if (!isBlock(shape)) return false;
+      const lim = limits(shape.businessObject);
+      if (lim.resize === 'none') return false;
+      if (lim.resize === 'width' && ctx.direction && ctx.direction !== 'e' && ctx.direction !== 'w') return false;
+      const b = ctx.newBounds;
+      if (b) {
+        if (b.width < lim.min.w || b.width > lim.max.w || b.height < lim.min.h || b.height > lim.max.h) return false;
+      }
+      return true;
+    });
+  }
+}
+
+function isBlock(e: unknown): e is SfcShape {
+  return !!e && !isConnection(e) && !!(e as SfcShape).businessObject;
+}
+
+/** The kinds may be wired source → target (VALID_TARGETS) and they are two blocks. */
+export function kindsMayConnect(source: SfcShape, target: SfcShape): boolean {
+  if (source === target) return false;
+  return VALID_TARGETS[source.businessObject.kind].includes(target.businessObject.kind);
+}
+
+/** Free input pins of `shape`; `ignore`'s pin counts as free (it is being reconnected). */
+export function freeInputs(shape: SfcShape, ignore?: SfcConnection): number[] {
+  const taken = new Set(shape.incoming.filter((c) => c !== ignore).map((c) => c.businessObject.targetPin));
+  const out: number[] = [];
+  for (let i = 0; i < pinCounts(shape.businessObject).inputs; i++) if (!taken.has(i)) out.push(i);
+  return out;
+}
+
+export function freeOutputs(shape: SfcShape, ignore?: SfcConnection): number[] {
+  const taken = new Set(shape.outgoing.filter((c) => c !== ignore).map((c) => c.businessObject.sourcePin));
+  const out: number[] = [];
+  for (let i = 0; i < pinCounts(shape.businessObject).outputs; i++) if (!taken.has(i)) out.push(i);
+  return out;
+}
+
+/** Whether a new wire from output `sourcePin` of `source` to input `targetPin` of `target` is valid. */
+export function canWire(source: SfcShape, sourcePin: number, target: SfcShape, targetPin: number, ignore?: SfcConnection): boolean {
+  return (
+    kindsMayConnect(source, target) &&
+    freeOutputs(source, ignore).includes(sourcePin) &&
+    freeInputs(target, ignore).includes(targetPin)
+  );
+}
+
+/** The free pin of `shape` (inputs or outputs) nearest to `p`, within `radius`. */
+export function nearestFreePin(
+  shape: SfcShape,
+  side: 'in' | 'out',
+  p: Point,
+  radius = PIN_SNAP,
+  ignore?: SfcConnection,
+): { pin: number; at: Point; dist: number } | undefined {
+  const pins = side === 'in' ? freeInputs(shape, ignore) : freeOutputs(shape, ignore);
+  let best: { pin: number; at: Point; dist: number } | undefined;
+  for (const pin of pins) {
+    const at = side === 'in' ? inputPin(shape.businessObject, shape, pin) : outputPin(shape.businessObject, shape, pin);
+    const dist = Math.hypot(at.x - p.x, at.y - p.y);
+    if (dist <= radius && (!best || dist < best.dist)) best = { pin, at, dist };
+  }
+  return best;
+}

@@ -1,0 +1,98 @@
+import { describe, expect, it } from 'vitest';
+import { mount } from './harness';
+import { conveyorDoc } from './fixtures';
+import { makeBigDoc } from './big';
+import { inputPin, outputPin } from '../../src/diagram/geometry';
+import type { EditorDoc } from '../../src/doc';
+
+function orthogonal(points: { x: number; y: number }[]): boolean {
+  return points.every((p, i) => i === 0 || p.x === points[i - 1].x || p.y === points[i - 1].y);
+}
+
+describe('load → getDoc', () => {
+  it('gives back the conveyor document unchanged', () => {
+    const { canvas } = mount();
+    const d = conveyorDoc();
+    canvas.load(d);
+    expect(canvas.getDoc()).toStrictEqual(d);
+    expect(JSON.stringify(canvas.getDoc())).toBe(JSON.stringify(d));
+  });
+
+  it('gives back a 500-step document unchanged, and loads it fast enough', () => {
+    const { canvas } = mount();
+    const d = makeBigDoc(500);
+    expect(d.elements.filter((e) => e.kind === 'step')).toHaveLength(500);
+    const t0 = performance.now();
+    canvas.load(d);
+    const ms = performance.now() - t0;
+    expect(canvas.getDoc()).toStrictEqual(d);
+    // jsdom is several times slower than a browser; the browser budget is checked by the demo.
+    expect(ms).toBeLessThan(5000);
+  });
+
+  it('keeps doc-level fields and clears the undo history', () => {
+    const { canvas } = mount();
+    canvas.load(conveyorDoc());
+    canvas.updateDoc({ pou: 'Other' });
+    expect(canvas.canUndo()).toBe(true);
+    canvas.load(conveyorDoc());
+    expect(canvas.canUndo()).toBe(false);
+    expect(canvas.getDoc().pou).toBe('Conveyor');
+    expect(canvas.isDirty()).toBe(false);
+  });
+
+  it('routes wires that come without waypoints, orthogonally from pin to pin', () => {
+    const { canvas } = mount();
+    const d = conveyorDoc();
+    for (const c of d.connections) delete c.waypoints;
+    canvas.load(d);
+    const out = canvas.getDoc();
+    const byId = new Map(out.elements.map((e) => [e.id, e]));
+    for (const c of out.connections) {
+      const wp = c.waypoints!;
+      expect(wp.length).toBeGreaterThanOrEqual(2);
+      expect(orthogonal(wp)).toBe(true);
+      const s = byId.get(c.source)!;
+      const t = byId.get(c.target)!;
+      expect(wp[0]).toEqual(outputPin(s, { x: s.x, y: s.y, width: s.w, height: s.h }, c.sourcePin));
+      expect(wp[wp.length - 1]).toEqual(inputPin(t, { x: t.x, y: t.y, width: t.w, height: t.h }, c.targetPin));
+    }
+    // Everything else is as loaded.
+    const strip = (doc: EditorDoc) => ({ ...doc, connections: doc.connections.map(({ waypoints: _w, ...c }) => c) });
+    expect(strip(out)).toStrictEqual(strip(d));
+  });
+
+  it('routes a loop back around the right side', () => {
+    const { canvas } = mount();
+    const d = conveyorDoc();
+    d.connections.push({ id: 'back', source: 'step:A', sourcePin: 0, target: 'transition:Go', targetPin: 0 });
+    d.connections = d.connections.filter((c) => c.id !== 'c1');
+    canvas.load(d);
+    const wp = canvas.getDoc().connections.find((c) => c.id === 'back')!.waypoints!;
+    expect(orthogonal(wp)).toBe(true);
+    expect(wp[1].y).toBeGreaterThan(wp[0].y); // leaves downwards
+    expect(wp[wp.length - 2].y).toBeLessThan(wp[wp.length - 1].y); // enters from above
+    expect(Math.max(...wp.map((p) => p.x))).toBeGreaterThan(160);
+  });
+});
+
+describe('load rejects what it cannot show, naming the culprit', () => {
+  const cases: [string, (d: EditorDoc) => void, RegExp][] = [
+    ['duplicate element id', (d) => d.elements.push({ ...d.elements[0] }), /element #12 "step:Init": duplicate id/],
+    ['unknown kind', (d) => ((d.elements[1] as { kind: string }).kind = 'blob'), /unknown kind "blob"/],
+    ['size not a number', (d) => ((d.elements[2] as { w: unknown }).w = 'wide'), /"step:Run": "w" is not a number/],
+    ['missing source block', (d) => (d.connections[0].source = 'nope'), /connection #0 "c1": no source block "nope"/],
+    ['no such output pin', (d) => (d.connections[3].sourcePin = 2), /"b2" has no output pin 2/],
+    ['no such input pin', (d) => (d.connections[0].targetPin = 1), /"transition:Go" has no input pin 1/],
+    ['input pin wired twice', (d) => d.connections.push({ id: 'x', source: 'step:A', sourcePin: 0, target: 'transition:Go', targetPin: 0 }), /input pin 0 of "transition:Go" already has a wire/],
+    ['connection id equal to a block id', (d) => (d.connections[0].id = 'b1'), /id already used/],
+  ];
+  for (const [what, spoil, message] of cases) {
+    it(what, () => {
+      const { canvas } = mount();
+      const d = conveyorDoc();
+      spoil(d);
+      expect(() => canvas.load(d)).toThrow(message);
+    });
+  }
+});

@@ -1,0 +1,101 @@
+// Highlights, zoom and grid, the SVG export.
+import { describe, expect, it } from 'vitest';
+import { mount } from './harness';
+import { conveyorDoc } from './fixtures';
+import { makeBigDoc } from './big';
+
+describe('highlights', () => {
+  it('frames blocks by kind, labels them, and replaces the set of a kind', () => {
+    const m = mount();
+    m.canvas.load(conveyorDoc());
+    const gfx = (id: string) => m.get('elementRegistry').getGraphics(id) as Element;
+    const strokes = (id: string) => [...gfx(id).querySelectorAll('rect')].map((r) => r.getAttribute('stroke'));
+    m.canvas.highlight('active', ['step:Run', 'step:A'], { 'step:Run': '3.4 s' });
+    expect(strokes('step:Run')).toContain('#16a34a');
+    expect(gfx('step:Run').textContent).toContain('3.4 s');
+    m.canvas.highlight('active', ['step:B']);
+    expect(strokes('step:Run')).not.toContain('#16a34a');
+    expect(strokes('step:B')).toContain('#16a34a');
+    m.canvas.highlight('error', ['step:B']);
+    m.canvas.highlight('warning', ['b4']);
+    m.canvas.highlight('hit', ['step:A']);
+    m.canvas.highlight('witness', ['transition:Go']);
+    m.canvas.highlight('enabled', ['transition:Box']);
+    m.canvas.highlight('breakpoint', ['transition#3']);
+    expect(strokes('step:B')).toEqual(expect.arrayContaining(['#dc2626', '#16a34a']));
+    expect([...gfx('b4').querySelectorAll('rect')].some((r) => r.getAttribute('stroke-dasharray'))).toBe(true);
+    expect(strokes('step:A')).toContain('#f97316');
+    expect(strokes('transition:Go')).toContain('#2563eb');
+    expect(gfx('transition:Box').querySelector('rect')!.getAttribute('fill')).toBe('#16a34a');
+    expect(gfx('transition#3').querySelector('circle[fill="#dc2626"]')).not.toBeNull();
+    m.canvas.clearHighlights('error');
+    expect(strokes('step:B')).not.toContain('#dc2626');
+    m.canvas.clearHighlights();
+    expect(strokes('step:B')).not.toContain('#16a34a');
+    expect(gfx('transition#3').querySelector('circle[fill="#dc2626"]')).toBeNull();
+    // Highlights are not edits.
+    expect(m.canvas.canUndo()).toBe(false);
+  });
+});
+
+describe('zoom and grid', () => {
+  it('zooms, reports it, and hides the grid below 75 %', () => {
+    const m = mount();
+    // jsdom does no layout: give the canvas a size.
+    const box = m.get('canvas').getContainer() as HTMLElement;
+    Object.defineProperty(box, 'clientWidth', { value: 800 });
+    Object.defineProperty(box, 'clientHeight', { value: 600 });
+    m.canvas.load(conveyorDoc());
+    expect(m.canvas.getZoom()).toBe(1); // fitted, but never blown up beyond 100 %
+    const levels: number[] = [];
+    m.canvas.on('zoom', (z) => levels.push(z));
+    m.canvas.zoom(2);
+    expect(m.canvas.getZoom()).toBeCloseTo(2);
+    expect(levels.at(-1)).toBeCloseTo(2);
+    const grid = m.get('sfcGrid');
+    expect(grid.isVisible()).toBe(true);
+    m.canvas.zoom(0.5);
+    expect(grid.isVisible()).toBe(false);
+    m.canvas.zoom(0.75);
+    expect(grid.isVisible()).toBe(true);
+    // The grid is a pattern on a layer under the blocks.
+    const layer = m.container.querySelector('.sfc-grid')!;
+    expect(layer.querySelector('pattern')).not.toBeNull();
+    const base = m.get('canvas').getActiveLayer() as Element;
+    expect(layer.parentElement!.compareDocumentPosition(base) & Node.DOCUMENT_POSITION_FOLLOWING).toBeTruthy();
+  });
+
+  it('has scrollbars over the canvas edges', () => {
+    const m = mount();
+    m.canvas.load(conveyorDoc());
+    expect(m.container.querySelector('.sfc-scrollbar-h .sfc-scrollbar-thumb')).not.toBeNull();
+    expect(m.container.querySelector('.sfc-scrollbar-v .sfc-scrollbar-thumb')).not.toBeNull();
+  });
+});
+
+describe('exportSvg', () => {
+  it('is a standalone SVG of the chart with every step name and nothing of the editor', () => {
+    const m = mount();
+    const doc = makeBigDoc(60);
+    m.canvas.load(doc);
+    m.canvas.select(['step:S3']);
+    const svg = m.canvas.exportSvg();
+    expect(svg).toMatch(/^<\?xml[^>]*>\n<svg [^>]*xmlns="http:\/\/www.w3.org\/2000\/svg"/);
+    expect(svg).toMatch(/viewBox="-?\d+ -?\d+ \d+ \d+"/);
+    const parsed = new DOMParser().parseFromString(svg, 'image/svg+xml');
+    expect(parsed.querySelector('parsererror')).toBeNull();
+    const texts = new Set([...parsed.querySelectorAll('text')].map((t) => t.textContent));
+    for (const e of doc.elements.filter((x) => x.kind === 'step')) expect(texts.has(e.name!)).toBe(true);
+    for (const bad of ['djs-hit', 'djs-outline', 'selected', 'sfc-grid', 'djs-resizer', 'class=']) expect(svg).not.toContain(bad);
+    // Every block and wire is there, at its place.
+    expect(parsed.querySelectorAll('g[data-id]')).toHaveLength(doc.elements.length + doc.connections.length);
+    expect(parsed.querySelector('g[data-id="step:S1"]')!.getAttribute('transform')).toBe('translate(200,140)');
+  });
+
+  it('keeps the tooltip as an SVG title', () => {
+    const m = mount();
+    m.canvas.load(conveyorDoc());
+    const svg = m.canvas.exportSvg();
+    expect(svg).toContain('<title>Waiting for start</title>');
+  });
+});
