@@ -1,0 +1,780 @@
+// The SFC Editor's shell: menus, toolbar, chart tabs (MDI) or the single chart (host mode), the
+// canvas of each chart, the Properties, Error List and Result panels, dialogs and status bar.
+import { useEffect, useMemo, useRef, useState } from 'preact/hooks';
+import type { BuildTarget, Diag, FileFormat, Session } from '../api';
+import type { CanvasHandle, CreateCanvas } from '../diagram/types';
+import type { ChartTarget, EditorDoc } from '../doc';
+import { currentLanguage, i18n, LANGUAGES, nextLanguage, setLanguage, t, type Lang } from '../i18n';
+import { ApiError, type Api } from './api';
+import { targetsFor } from './buildResult';
+import { witnessSituations } from './chart';
+import { AboutDialog, CloseDialog, ConflictDialog, NewDialog, OpenDialog, SaveAsDialog, ShortcutsDialog, type NewChartRequest } from './dialogs';
+import { ErrorList, type WitnessView } from './ErrorList';
+import { Icon } from './icons';
+import { MenuBar, type MenuDef } from './Menu';
+import { PrintDialog } from './PrintDialog';
+import { PropertiesPanel } from './Properties';
+import { download, ResultPanel } from './ResultPanel';
+import { baseName, formatOf, isDirty, mayClose, tabTitle, TabStore, unloadGuard, type CloseChoice, type NewTab, type TabState } from './store';
+import { toasts } from './toast';
+
+type Dialog =
+  | { kind: 'new'; target: ChartTarget }
+  | { kind: 'open' }
+  | { kind: 'saveAs'; path: string; format: FileFormat; resolve: (r: { path: string; format: FileFormat } | null) => void }
+  | { kind: 'close'; name: string; resolve: (c: CloseChoice) => void }
+  | { kind: 'conflict'; path: string; resolve: (overwrite: boolean) => void }
+  | { kind: 'print'; svg: string; doc: EditorDoc; path: string | null }
+  | { kind: 'about' }
+  | { kind: 'shortcuts' };
+
+type BuildMode = 'validate' | 'build';
+
+/** A function that re-renders the component. */
+function useForceUpdate(): () => void {
+  const [, set] = useState(0);
+  return () => set((n) => n + 1);
+}
+
+/** Re-renders the component when `source` reports a change. */
+function useSubscription(source: { subscribe: (l: () => void) => () => void }): void {
+  const force = useForceUpdate();
+  useEffect(() => source.subscribe(force), [source]);
+}
+
+/** A valid POU name from a file name (`my chart.st` → `my_chart`). */
+export function pouFromFile(path: string): string {
+  const stem = baseName(path).replace(/\.[^.]*$/, '');
+  const cleaned = stem.replace(/[^A-Za-z0-9_]+/g, '_').replace(/_+/g, '_').replace(/^_|_$/g, '');
+  return /^[A-Za-z_]/.test(cleaned) ? cleaned : `Chart_${cleaned || '1'}`;
+}
+
+export interface AppProps {
+  api: Api;
+  createCanvas: CreateCanvas;
+}
+
+export function App({ api, createCanvas }: AppProps) {
+  const store = useMemo(() => new TabStore(), []);
+  useSubscription(store);
+  useSubscription(toasts);
+  const relabel = useForceUpdate();
+  const [session, setSession] = useState<Session | null>(null);
+  const [startError, setStartError] = useState('');
+  const canvases = useRef(new Map<string, CanvasHandle>());
+  const containers = useRef(new Map<string, HTMLElement>());
+  const pending = useRef(new Map<string, EditorDoc>());
+  const [selection, setSelection] = useState<string[]>([]);
+  const docChanged = useForceUpdate();
+  const [zoom, setZoom] = useState(1);
+  const [panels, setPanels] = useState({ tools: true, properties: true, bottom: true });
+  const [bottomTab, setBottomTab] = useState<'errors' | 'result'>('errors');
+  const [buildMode, setBuildMode] = useState<BuildMode>('build');
+  const [dialog, setDialog] = useState<Dialog | null>(null);
+  const [selectedDiag, setSelectedDiag] = useState<number | null>(null);
+  const [highlightOn, setHighlightOn] = useState(true);
+  const [witness, setWitness] = useState<WitnessView | null>(null);
+  const [busy, setBusy] = useState(false);
+
+  const host = session?.mode === 'host' ? session.host ?? null : null;
+  const tab = store.active();
+  const canvas = tab ? canvases.current.get(tab.id) : undefined;
+
+  // Language: every string is re-read on render; the canvases re-translate their palettes.
+  useEffect(() => {
+    const onChange = () => {
+      relabel();
+      for (const c of canvases.current.values()) c.relabel();
+      document.documentElement.lang = currentLanguage();
+    };
+    i18n.on('languageChanged', onChange);
+    document.documentElement.lang = currentLanguage();
+    return () => i18n.off('languageChanged', onChange);
+  }, []);
+
+  useEffect(() => {
+    const guard = unloadGuard(store);
+    window.addEventListener('beforeunload', guard);
+    return () => window.removeEventListener('beforeunload', guard);
+  }, [store]);
+
+  // Start: the session, then the files named on the command line (or the host chart).
+  useEffect(() => {
+    api.session().then(
+      async (s) => {
+        setSession(s);
+        if (s.mode === 'host' && s.host) await openHost(s);
+        else for (const path of s.open) await openFile(path);
+      },
+      (e: Error) => setStartError(e.message),
+    );
+  }, []);
+
+  // Switching tabs shows that chart's selection, zoom and diagnostics.
+  useEffect(() => {
+    setSelection(canvas ? canvas.selection() : []);
+    setZoom(canvas ? canvas.getZoom() : 1);
+    setSelectedDiag(null);
+    setWitness(null);
+  }, [tab?.id, canvas]);
+
+  // Every error and warning block framed.
+  const diagnostics = tab?.diagnostics ?? [];
+  useEffect(() => {
+    if (!canvas) return;
+    const ids = (sev: Diag['severity']) => [...new Set(diagnostics.filter((d) => d.severity === sev).flatMap((d) => d.elementIds))];
+    canvas.highlight('error', ids('error'));
+    canvas.highlight('warning', ids('warning'));
+  }, [canvas, diagnostics]);
+
+  // The clicked diagnostic's blocks.
+  useEffect(() => {
+    if (!canvas) return;
+    const d = selectedDiag === null ? undefined : diagnostics[selectedDiag];
+    if (highlightOn && d && d.elementIds.length > 0) {
+      canvas.highlight('selected-diagnostic', d.elementIds);
+      canvas.reveal(d.elementIds[0]);
+    } else canvas.clearHighlights('selected-diagnostic');
+  }, [canvas, selectedDiag, highlightOn, diagnostics]);
+
+  // Stepping through a witness: the transition fired at step k and the steps active after it.
+  useEffect(() => {
+    if (!canvas) return;
+    const ids = witness ? diagnostics[witness.diag]?.witnessIds : undefined;
+    if (!witness || !ids) {
+      canvas.clearHighlights('witness');
+      canvas.clearHighlights('active');
+      return;
+    }
+    const doc = canvas.getDoc();
+    const fired = witness.step > 0 ? ids[witness.step - 1] : undefined;
+    canvas.highlight('witness', fired ? [fired] : [], fired ? { [fired]: String(witness.step) } : undefined);
+    const active =
+      witness.step === 0 ? doc.elements.filter((e) => e.kind === 'step' && e.initial).map((e) => e.id) : witnessSituations(doc, ids)[witness.step - 1];
+    canvas.highlight('active', active);
+    if (fired) canvas.reveal(fired);
+  }, [canvas, witness, diagnostics]);
+
+  function addTab(init: NewTab, doc: EditorDoc): TabState {
+    const created = store.add(init);
+    pending.current.set(created.id, doc);
+    return created;
+  }
+
+  function attachCanvas(id: string, container: HTMLElement): () => void {
+    const c = createCanvas(container, { t: (key) => t(key) });
+    canvases.current.set(id, c);
+    containers.current.set(id, container);
+    const doc = pending.current.get(id);
+    pending.current.delete(id);
+    if (doc) c.load(doc);
+    const offs = [
+      c.on('change', () => {
+        const d = c.getDoc();
+        store.update(id, { canvasDirty: c.isDirty(), outcome: 'none', pou: d.pou, chartTarget: d.target });
+        docChanged();
+      }),
+      c.on('selection', (ids) => {
+        if (store.activeId === id) setSelection(ids);
+      }),
+      c.on('zoom', (level) => {
+        if (store.activeId === id) setZoom(level);
+      }),
+      c.on('properties', () => setPanels((p) => ({ ...p, properties: true }))),
+    ];
+    docChanged();
+    return () => {
+      offs.forEach((off) => off());
+      c.destroy();
+      canvases.current.delete(id);
+      containers.current.delete(id);
+    };
+  }
+
+  async function openFile(path: string): Promise<void> {
+    const already = store.tabs.find((x) => x.path === path);
+    if (already) {
+      store.activate(already.id);
+      return;
+    }
+    try {
+      const r = await api.open(path);
+      if (r.charts.length === 0) toasts.show('info', t('open.noCharts', { file: baseName(path) }));
+      for (const chart of r.charts) {
+        addTab({ path: r.path, format: r.format, hash: r.hash, pou: chart.pou, chartTarget: chart.target, diagnostics: r.diagnostics }, chart);
+      }
+    } catch (e) {
+      if (e instanceof ApiError && e.status === 404) toasts.show('error', t('open.missing', { file: path }));
+    }
+  }
+
+  async function openHost(s: Session): Promise<void> {
+    const h = s.host!;
+    try {
+      const r = await api.open(h.file);
+      const chart = r.charts[0];
+      if (!chart) {
+        setStartError(t('host.noChart', { file: h.file }));
+        return;
+      }
+      if (r.charts.length > 1) toasts.show('info', t('host.firstChart', { pou: chart.pou }));
+      addTab({ path: r.path, format: r.format, hash: r.hash, pou: chart.pou, chartTarget: h.fb, diagnostics: r.diagnostics }, { ...chart, target: h.fb });
+      store.update(store.activeId!, { buildTarget: h.fb });
+    } catch (e) {
+      if (!(e instanceof ApiError) || e.status !== 404) return;
+      // The file does not exist yet: the host asked for a new chart there (seed 001, 12.1).
+      const pou = pouFromFile(h.file);
+      let doc: EditorDoc;
+      try {
+        doc = await api.newChart(pou, h.fb);
+      } catch {
+        return;
+      }
+      addTab({ path: h.file, format: formatOf(h.file), hash: null, pou: doc.pou, chartTarget: h.fb, unsaved: true }, doc);
+      store.update(store.activeId!, { buildTarget: h.fb });
+      toasts.show('info', t('host.created', { file: baseName(h.file) }));
+    }
+  }
+
+  function askClose(x: TabState): Promise<CloseChoice> {
+    return new Promise((resolve) => setDialog({ kind: 'close', name: tabTitle(x).replace(/\*$/, ''), resolve }));
+  }
+
+  function askSaveAs(x: TabState): Promise<{ path: string; format: FileFormat } | null> {
+    const dir = x.path ? x.path.replace(/[\\/][^\\/]*$/, '') : session?.roots[0] ?? '';
+    const ext = x.format === 'xml' ? '.xml' : '.st';
+    const path = x.path ?? `${dir}/${x.pou}${ext}`;
+    return new Promise((resolve) => setDialog({ kind: 'saveAs', path, format: x.format, resolve }));
+  }
+
+  async function save(x: TabState, saveAs = false): Promise<boolean> {
+    const c = canvases.current.get(x.id);
+    if (!c) return false;
+    // A code editor still being typed in commits on blur, so the save includes its text.
+    (document.activeElement as HTMLElement | null)?.blur?.();
+    let path = x.path;
+    let format = x.format;
+    if (!path || saveAs) {
+      if (host) return false;
+      const chosen = await askSaveAs(x);
+      if (!chosen) return false;
+      ({ path, format } = chosen);
+    }
+    const doc = c.getDoc();
+    const hash = path === x.path ? x.hash : store.tabs.find((o) => o.path === path)?.hash ?? null;
+    const request = { path, format, doc, hash };
+    let result;
+    try {
+      result = await api.save(request);
+    } catch (e) {
+      if (!(e instanceof ApiError) || !e.conflict) return false;
+      const overwrite = await new Promise<boolean>((resolve) => setDialog({ kind: 'conflict', path: path!, resolve }));
+      if (!overwrite) return false;
+      try {
+        result = await api.save({ ...request, overwrite: true });
+      } catch {
+        return false;
+      }
+    }
+    c.markSaved();
+    store.update(x.id, { path: result.path, format, hash: result.hash, unsaved: false, canvasDirty: false, pou: doc.pou, diagnostics: result.diagnostics });
+    // Other charts of the same file now compare against the new contents.
+    for (const o of store.tabs) if (o.id !== x.id && o.path === result.path) store.update(o.id, { hash: result.hash });
+    toasts.show('success', t('save.saved', { file: baseName(result.path) }));
+    return true;
+  }
+
+  async function closeTab(id: string): Promise<void> {
+    const x = store.get(id);
+    if (!x || host) return;
+    if (await mayClose(x, askClose, (y) => save(y))) store.remove(id);
+  }
+
+  async function createChart(r: NewChartRequest): Promise<void> {
+    setDialog(null);
+    try {
+      const doc = await api.newChart(r.pou, r.target);
+      addTab({ path: null, format: r.format, hash: null, pou: doc.pou, chartTarget: doc.target, unsaved: true }, doc);
+    } catch {
+      // The API client has shown the server's message.
+    }
+  }
+
+  /** Validate (check with analysis) or Validate & build, by the toolbar's mode unless given. */
+  async function runBuild(mode: BuildMode = buildMode): Promise<void> {
+    if (!tab || !canvas || busy) return;
+    (document.activeElement as HTMLElement | null)?.blur?.();
+    const doc = canvas.getDoc();
+    const id = tab.id;
+    setBusy(true);
+    setWitness(null);
+    setSelectedDiag(null);
+    try {
+      if (mode === 'validate') {
+        const diags = await api.check(doc, true);
+        store.update(id, { diagnostics: diags, outcome: diags.some((d) => d.severity === 'error') ? 'failed' : 'succeeded' });
+        setBottomTab('errors');
+      } else {
+        const target: BuildTarget = host ? host.fb : tab.buildTarget;
+        const r = await api.build(doc, target, host ? { nstep: host.nstep, ntr: host.ntr } : undefined);
+        store.update(id, { diagnostics: r.diagnostics, outcome: r.ok ? 'succeeded' : 'failed', result: { target, result: r } });
+        setBottomTab(r.ok ? 'result' : 'errors');
+        if (r.resultWritten) toasts.show('success', t('result.written', { path: r.resultWritten }));
+      }
+      setPanels((p) => ({ ...p, bottom: true }));
+    } catch {
+      store.update(id, { outcome: 'failed' });
+    } finally {
+      setBusy(false);
+    }
+  }
+
+  async function autoLayout(): Promise<void> {
+    if (!canvas) return;
+    try {
+      canvas.applyLayout(await api.layout(canvas.getDoc()));
+    } catch {
+      // The API client has shown the server's message; the chart is unchanged.
+    }
+  }
+
+  function liveCheck(doc: EditorDoc): void {
+    const id = tab?.id;
+    if (!id) return;
+    api.check(doc, false).then(
+      (diags) => store.update(id, { diagnostics: diags }),
+      () => undefined,
+    );
+  }
+
+  /** Sends a key to the canvas' own keyboard handling (copy, paste, delete). */
+  function canvasKey(key: string, ctrl = false): void {
+    const container = tab ? containers.current.get(tab.id) : undefined;
+    // diagram-js listens on its canvas <svg> (not on the palette's icons).
+    const target = container?.querySelector('.djs-container > svg') ?? container;
+    target?.dispatchEvent(new KeyboardEvent('keydown', { key, ctrlKey: ctrl, bubbles: true, cancelable: true }));
+  }
+
+  const selectAll = () => {
+    if (!canvas) return;
+    const d = canvas.getDoc();
+    canvas.select([...d.elements.map((e) => e.id), ...d.connections.map((c) => c.id)]);
+  };
+  const zoomBy = (f: number) => canvas?.zoom(Math.min(4, Math.max(0.2, canvas.getZoom() * f)));
+  const exportSvg = () => canvas && tab && download(`${tab.pou}.svg`, canvas.exportSvg(), 'image/svg+xml');
+  const print = () => canvas && tab && setDialog({ kind: 'print', svg: canvas.exportSvg(), doc: canvas.getDoc(), path: tab.path });
+  const mdi = session !== null && !host;
+  const hasChart = !!canvas;
+
+  // Keyboard shortcuts of the shell; the canvas handles its own keys first when it has focus.
+  const keys = useRef<(e: KeyboardEvent) => void>(() => undefined);
+  keys.current = (e: KeyboardEvent) => {
+    if (dialog) return;
+    const ctrl = e.ctrlKey || e.metaKey;
+    const k = e.key.toLowerCase();
+    const editing = e.target instanceof HTMLElement && e.target.closest('input, textarea, select, [contenteditable]') !== null;
+    const run = (f: () => void) => {
+      e.preventDefault();
+      f();
+    };
+    if (e.key === 'F7') return run(() => void runBuild());
+    if (ctrl && e.shiftKey && k === 'n' && mdi) return run(() => setDialog({ kind: 'new', target: 'blank' }));
+    if (ctrl && e.shiftKey && k === 'a' && mdi) return run(() => setDialog({ kind: 'new', target: 'atmt' }));
+    if (ctrl && e.shiftKey && k === 'e' && mdi) return run(() => setDialog({ kind: 'new', target: 'eatmt' }));
+    if (ctrl && !e.shiftKey && k === 's' && tab) return run(() => void save(tab));
+    if (ctrl && k === 'p' && hasChart) return run(() => ((document.activeElement as HTMLElement | null)?.blur?.(), print()));
+    if (editing || e.defaultPrevented || !canvas) return;
+    if (ctrl && !e.shiftKey && k === 'z') return run(() => canvas.undo());
+    if (ctrl && (k === 'y' || (e.shiftKey && k === 'z'))) return run(() => canvas.redo());
+    if (ctrl && k === 'a') return run(selectAll);
+    if (ctrl && (k === '+' || k === '=')) return run(() => zoomBy(1.2));
+    if (ctrl && k === '-') return run(() => zoomBy(1 / 1.2));
+    if (ctrl && k === '0') return run(() => canvas.zoom('fit'));
+  };
+  useEffect(() => {
+    const onKey = (e: KeyboardEvent) => keys.current(e);
+    window.addEventListener('keydown', onKey);
+    return () => window.removeEventListener('keydown', onKey);
+  }, []);
+
+  const lang = currentLanguage();
+  const menus: MenuDef[] = [
+    {
+      id: 'file',
+      label: t('menu.file'),
+      items: [
+        { label: t('menu.new'), shortcut: 'Ctrl+Shift+N', icon: 'new', disabled: !mdi, action: () => setDialog({ kind: 'new', target: 'blank' }) },
+        { label: t('menu.newAtmt'), shortcut: 'Ctrl+Shift+A', disabled: !mdi, action: () => setDialog({ kind: 'new', target: 'atmt' }) },
+        { label: t('menu.newEatmt'), shortcut: 'Ctrl+Shift+E', disabled: !mdi, action: () => setDialog({ kind: 'new', target: 'eatmt' }) },
+        { label: t('menu.open'), icon: 'open', disabled: !mdi, action: () => setDialog({ kind: 'open' }) },
+        { separator: true, label: '' },
+        { label: t('menu.save'), shortcut: 'Ctrl+S', icon: 'save', disabled: !tab, action: () => tab && void save(tab) },
+        { label: t('menu.saveAs'), disabled: !tab || !!host, action: () => tab && void save(tab, true) },
+        { separator: true, label: '' },
+        { label: t('menu.exportSvg'), icon: 'svg', disabled: !hasChart, action: exportSvg },
+        { label: t('menu.print'), shortcut: 'Ctrl+P', icon: 'print', disabled: !hasChart, action: print },
+        { separator: true, label: '' },
+        { label: t('menu.closeTab'), disabled: !tab || !!host, action: () => tab && void closeTab(tab.id) },
+      ],
+    },
+    {
+      id: 'edit',
+      label: t('menu.edit'),
+      items: [
+        { label: t('menu.undo'), shortcut: 'Ctrl+Z', icon: 'undo', disabled: !canvas?.canUndo(), action: () => canvas?.undo() },
+        { label: t('menu.redo'), shortcut: 'Ctrl+Y', icon: 'redo', disabled: !canvas?.canRedo(), action: () => canvas?.redo() },
+        { separator: true, label: '' },
+        { label: t('menu.cut'), shortcut: 'Ctrl+X', icon: 'cut', disabled: selection.length === 0, action: () => (canvasKey('c', true), canvasKey('Delete')) },
+        { label: t('menu.copy'), shortcut: 'Ctrl+C', icon: 'copy', disabled: selection.length === 0, action: () => canvasKey('c', true) },
+        { label: t('menu.paste'), shortcut: 'Ctrl+V', icon: 'paste', disabled: !hasChart, action: () => canvasKey('v', true) },
+        { label: t('menu.delete'), shortcut: 'Del', icon: 'delete', disabled: selection.length === 0, action: () => canvasKey('Delete') },
+        { label: t('menu.selectAll'), shortcut: 'Ctrl+A', disabled: !hasChart, action: selectAll },
+        { separator: true, label: '' },
+        { label: t('menu.autoLayout'), icon: 'layout', disabled: !hasChart, action: () => void autoLayout() },
+        { label: t('menu.validate'), icon: 'validate', disabled: !hasChart, action: () => void runBuild('validate') },
+        { label: t('menu.build'), shortcut: 'F7', icon: 'build', disabled: !hasChart, action: () => void runBuild() },
+      ],
+    },
+    {
+      id: 'view',
+      label: t('menu.view'),
+      items: [
+        { label: t('panel.tools'), checked: panels.tools, action: () => setPanels({ ...panels, tools: !panels.tools }) },
+        { label: t('panel.properties'), checked: panels.properties, action: () => setPanels({ ...panels, properties: !panels.properties }) },
+        { label: t('panel.errors'), checked: panels.bottom && bottomTab === 'errors', action: () => showBottom('errors') },
+        { label: t('panel.result'), checked: panels.bottom && bottomTab === 'result', action: () => showBottom('result') },
+        { separator: true, label: '' },
+        { label: t('menu.zoomIn'), shortcut: 'Ctrl++', icon: 'zoomIn', disabled: !hasChart, action: () => zoomBy(1.2) },
+        { label: t('menu.zoomOut'), shortcut: 'Ctrl+-', icon: 'zoomOut', disabled: !hasChart, action: () => zoomBy(1 / 1.2) },
+        { label: t('menu.zoomFit'), shortcut: 'Ctrl+0', icon: 'fit', disabled: !hasChart, action: () => canvas?.zoom('fit') },
+        { separator: true, label: '' },
+        ...LANGUAGES.map((l) => ({ label: t(`lang.${l}`), checked: lang === l, action: () => setLanguage(l) })),
+      ],
+    },
+    {
+      id: 'help',
+      label: t('menu.help'),
+      items: [
+        { label: t('menu.shortcuts'), action: () => setDialog({ kind: 'shortcuts' }) },
+        { label: t('menu.about'), action: () => setDialog({ kind: 'about' }) },
+      ],
+    },
+  ];
+
+  function showBottom(which: 'errors' | 'result'): void {
+    if (panels.bottom && bottomTab === which) setPanels({ ...panels, bottom: false });
+    else {
+      setBottomTab(which);
+      setPanels({ ...panels, bottom: true });
+    }
+  }
+
+  const counts = { error: 0, warning: 0, note: 0 };
+  for (const d of diagnostics) counts[d.severity]++;
+  const doc = canvas?.getDoc();
+
+  return (
+    <>
+    <div class="app-shell no-print">
+      <MenuBar menus={menus} />
+      <div class="toolbar no-print" role="toolbar">
+        {mdi && (
+          <>
+            <ToolButton icon="new" label={t('toolbar.new')} title={`${t('menu.new')} (Ctrl+Shift+N)`} onClick={() => setDialog({ kind: 'new', target: 'blank' })} />
+            <ToolButton icon="open" label={t('toolbar.open')} title={t('menu.open')} onClick={() => setDialog({ kind: 'open' })} />
+          </>
+        )}
+        <ToolButton icon="save" label={t('toolbar.save')} title={`${t('menu.save')} (Ctrl+S)`} disabled={!tab} onClick={() => tab && void save(tab)} />
+        <span class="tool-separator" />
+        <ToolButton icon="undo" title={`${t('menu.undo')} (Ctrl+Z)`} disabled={!canvas?.canUndo()} onClick={() => canvas?.undo()} />
+        <ToolButton icon="redo" title={`${t('menu.redo')} (Ctrl+Y)`} disabled={!canvas?.canRedo()} onClick={() => canvas?.redo()} />
+        <ToolButton icon="layout" label={t('toolbar.layout')} title={t('menu.autoLayout')} disabled={!hasChart} onClick={() => void autoLayout()} />
+        <span class="tool-separator" />
+        <ToolButton icon="svg" title={t('menu.exportSvg')} disabled={!hasChart} onClick={exportSvg} />
+        <ToolButton icon="print" title={`${t('menu.print')} (Ctrl+P)`} disabled={!hasChart} onClick={print} />
+        <span class="tool-separator" />
+        <select class="tool-select" aria-label={t('toolbar.buildMode')} title={t('toolbar.buildMode')} value={buildMode} onChange={(e) => setBuildMode(e.currentTarget.value as BuildMode)}>
+          <option value="validate">{t('toolbar.validate')}</option>
+          <option value="build">{t('toolbar.validateBuild')}</option>
+        </select>
+        <select
+          class="tool-select"
+          aria-label={t('toolbar.target')}
+          title={t('toolbar.target')}
+          disabled={!tab || !!host || buildMode === 'validate'}
+          value={host ? host.fb : tab?.buildTarget}
+          onChange={(e) => tab && store.update(tab.id, { buildTarget: e.currentTarget.value as BuildTarget })}
+        >
+          {(host ? [host.fb] : targetsFor(tab?.chartTarget ?? 'blank')).map((x) => (
+            <option key={x} value={x}>
+              {t(`buildTarget.${x}`)}
+            </option>
+          ))}
+        </select>
+        <ToolButton
+          icon={buildMode === 'validate' ? 'validate' : 'build'}
+          label={buildMode === 'validate' ? t('toolbar.runValidate') : t('toolbar.runBuild')}
+          title={`${t('menu.build')} (F7)`}
+          disabled={!hasChart || busy}
+          primary
+          onClick={() => void runBuild()}
+        />
+        {busy && <span class="spinner" aria-label={t('common.working')} />}
+      </div>
+
+      {mdi && store.tabs.length > 0 && (
+        <div class="tabstrip no-print" role="tablist">
+          {store.tabs.map((x) => (
+            <div
+              key={x.id}
+              role="tab"
+              aria-selected={x.id === store.activeId}
+              class={`tab ${x.id === store.activeId ? 'active' : ''} ${isDirty(x) ? 'dirty' : ''}`}
+              title={x.path ?? t('tabs.unsaved')}
+              onClick={() => store.activate(x.id)}
+              onAuxClick={(e) => e.button === 1 && void closeTab(x.id)}
+            >
+              <span class={`tab-target target-${x.chartTarget}`}>{t(`target.${x.chartTarget}`)}</span>
+              <span class="tab-title">{tabTitle(x)}</span>
+              <button
+                class="tab-close"
+                title={t('tabs.close')}
+                onClick={(e) => {
+                  e.stopPropagation();
+                  void closeTab(x.id);
+                }}
+              >
+                <Icon name="close" />
+              </button>
+            </div>
+          ))}
+        </div>
+      )}
+      {host && tab && (
+        <div class="host-title no-print">
+          <span class={`tab-target target-${tab.chartTarget}`}>{t(`target.${tab.chartTarget}`)}</span>
+          <span>{tabTitle(tab)}</span>
+          <span class="muted">{tab.path}</span>
+        </div>
+      )}
+
+      <div class="workspace">
+        <div class="main-column">
+          <div class={`canvas-area ${panels.tools ? '' : 'hide-palette'}`}>
+            {store.tabs.map((x) => (
+              <CanvasPane key={x.id} id={x.id} active={x.id === store.activeId} attach={attachCanvas} />
+            ))}
+            {tab && tab.outcome !== 'none' && (
+              <div class={`outcome ${tab.outcome}`} role="status">
+                {t(`outcome.${tab.outcome}`)}
+              </div>
+            )}
+            {store.tabs.length === 0 && (
+              <div class="welcome">
+                {startError ? (
+                  <div class="field-error">{t('start.failed', { message: startError })}</div>
+                ) : !session ? (
+                  <div class="muted">{t('common.loading')}</div>
+                ) : (
+                  <>
+                    <h1>{t('app.name')}</h1>
+                    <p class="muted">{t('start.hint')}</p>
+                    {mdi && (
+                      <div class="welcome-buttons">
+                        <button class="button primary" onClick={() => setDialog({ kind: 'new', target: 'blank' })}>
+                          <Icon name="new" /> {t('menu.new')}
+                        </button>
+                        <button class="button" onClick={() => setDialog({ kind: 'open' })}>
+                          <Icon name="open" /> {t('menu.open')}
+                        </button>
+                      </div>
+                    )}
+                  </>
+                )}
+              </div>
+            )}
+          </div>
+          {panels.bottom && (
+            <div class="bottom-panel no-print">
+              <div class="panel-tabs">
+                <button class={`panel-tab ${bottomTab === 'errors' ? 'active' : ''}`} onClick={() => setBottomTab('errors')}>
+                  {t('panel.errors')}
+                  {counts.error + counts.warning > 0 && <span class={`badge ${counts.error ? 'badge-error' : 'badge-warning'}`}>{counts.error + counts.warning}</span>}
+                </button>
+                <button class={`panel-tab ${bottomTab === 'result' ? 'active' : ''}`} onClick={() => setBottomTab('result')}>
+                  {t('panel.result')}
+                </button>
+                <span class="spacer" />
+                <button class="icon-button" title={t('common.close')} onClick={() => setPanels({ ...panels, bottom: false })}>
+                  <Icon name="close" />
+                </button>
+              </div>
+              <div class="panel-body">
+                {bottomTab === 'errors' ? (
+                  <ErrorList
+                    diagnostics={diagnostics}
+                    selected={selectedDiag}
+                    onSelect={setSelectedDiag}
+                    highlightOn={highlightOn}
+                    onToggleHighlight={() => setHighlightOn(!highlightOn)}
+                    witness={witness}
+                    onWitness={setWitness}
+                  />
+                ) : (
+                  <ResultPanel pou={tab?.pou ?? ''} result={tab?.result ?? null} />
+                )}
+              </div>
+            </div>
+          )}
+        </div>
+        {panels.properties && (
+          <aside class="side-panel no-print" aria-label={t('panel.properties')}>
+            <div class="panel-header">
+              <span>{t('panel.properties')}</span>
+              <button class="icon-button" title={t('common.close')} onClick={() => setPanels({ ...panels, properties: false })}>
+                <Icon name="close" />
+              </button>
+            </div>
+            <div class="panel-body">
+              {canvas && doc ? (
+                <PropertiesPanel doc={doc} selection={selection} canvas={canvas} diagnostics={diagnostics} onDraft={liveCheck} targetFixed={!!host} />
+              ) : (
+                <div class="empty">{t('props.noChart')}</div>
+              )}
+            </div>
+          </aside>
+        )}
+      </div>
+
+      <StatusBar
+        tab={tab}
+        host={host}
+        selection={selection.length}
+        zoom={zoom}
+        hasChart={hasChart}
+        onZoom={(z) => (z === 'fit' ? canvas?.zoom('fit') : zoomBy(z))}
+        lang={lang}
+      />
+
+    </div>
+      <div class="toasts no-print" aria-live="polite">
+        {toasts.items.map((x) => (
+          <div key={x.id} class={`toast toast-${x.kind}`} onClick={() => toasts.dismiss(x.id)}>
+            <Icon name={x.kind === 'error' ? 'error' : x.kind === 'success' ? 'validate' : 'note'} />
+            <span>{x.text}</span>
+          </div>
+        ))}
+      </div>
+
+      {dialog?.kind === 'new' && <NewDialog initialTarget={dialog.target} onCreate={(r) => void createChart(r)} onClose={() => setDialog(null)} />}
+      {dialog?.kind === 'open' && (
+        <OpenDialog
+          load={api.files}
+          onClose={() => setDialog(null)}
+          onOpen={(p) => {
+            setDialog(null);
+            void openFile(p);
+          }}
+        />
+      )}
+      {dialog?.kind === 'saveAs' && session && (
+        <SaveAsDialog
+          session={session}
+          initialPath={dialog.path}
+          initialFormat={dialog.format}
+          onSave={(path, format) => {
+            setDialog(null);
+            dialog.resolve({ path, format });
+          }}
+          onClose={() => {
+            setDialog(null);
+            dialog.resolve(null);
+          }}
+        />
+      )}
+      {dialog?.kind === 'close' && (
+        <CloseDialog
+          name={dialog.name}
+          onChoose={(c) => {
+            setDialog(null);
+            dialog.resolve(c);
+          }}
+        />
+      )}
+      {dialog?.kind === 'conflict' && (
+        <ConflictDialog
+          path={dialog.path}
+          onChoose={(o) => {
+            setDialog(null);
+            dialog.resolve(o);
+          }}
+        />
+      )}
+      {dialog?.kind === 'print' && <PrintDialog svg={dialog.svg} doc={dialog.doc} path={dialog.path} onClose={() => setDialog(null)} />}
+      {dialog?.kind === 'about' && <AboutDialog version={session?.version ?? ''} onClose={() => setDialog(null)} />}
+      {dialog?.kind === 'shortcuts' && <ShortcutsDialog onClose={() => setDialog(null)} />}
+    </>
+  );
+}
+
+function ToolButton(props: { icon: Parameters<typeof Icon>[0]['name']; label?: string; title: string; onClick: () => void; disabled?: boolean; primary?: boolean }) {
+  return (
+    <button class={`tool-button ${props.primary ? 'primary' : ''}`} title={props.title} aria-label={props.title} disabled={props.disabled} onClick={props.onClick}>
+      <Icon name={props.icon} />
+      {props.label && <span>{props.label}</span>}
+    </button>
+  );
+}
+
+/** One chart's canvas; kept mounted while its tab is open so each chart keeps its undo history. */
+function CanvasPane(props: { id: string; active: boolean; attach: (id: string, el: HTMLElement) => () => void }) {
+  const ref = useRef<HTMLDivElement>(null);
+  useEffect(() => props.attach(props.id, ref.current!), []);
+  return <div ref={ref} class={`canvas-pane ${props.active ? 'active' : ''}`} aria-hidden={!props.active} />;
+}
+
+function StatusBar(props: {
+  tab: TabState | undefined;
+  host: Session['host'] | null;
+  selection: number;
+  zoom: number;
+  hasChart: boolean;
+  onZoom: (z: number | 'fit') => void;
+  lang: Lang;
+}) {
+  return (
+    <div class="statusbar no-print">
+      <span class="status-item">{props.tab ? (props.tab.path ?? t('tabs.unsaved')) : t('status.ready')}</span>
+      {props.host && <span class="status-item">{t('status.limits', { fb: props.host.fb.toUpperCase(), nstep: props.host.nstep, ntr: props.host.ntr })}</span>}
+      {props.selection > 0 && <span class="status-item">{t('status.selected', { count: props.selection })}</span>}
+      <span class="spacer" />
+      <span class="status-zoom">
+        <button class="icon-button" title={t('menu.zoomOut')} disabled={!props.hasChart} onClick={() => props.onZoom(1 / 1.2)}>
+          <Icon name="zoomOut" />
+        </button>
+        <span class="zoom-value">{Math.round(props.zoom * 100)} %</span>
+        <button class="icon-button" title={t('menu.zoomIn')} disabled={!props.hasChart} onClick={() => props.onZoom(1.2)}>
+          <Icon name="zoomIn" />
+        </button>
+        <button class="icon-button" title={t('menu.zoomFit')} disabled={!props.hasChart} onClick={() => props.onZoom('fit')}>
+          <Icon name="fit" />
+        </button>
+      </span>
+      <span class="status-lang">
+        <button class="lang-cycle" title={t('status.langCycle')} onClick={() => setLanguage(nextLanguage(props.lang))}>
+          {t(`lang.${props.lang}`)}
+        </button>
+        <span class="lang-drop" title={t('status.language')}>
+          ▾
+          <select aria-label={t('status.language')} value={props.lang} onChange={(e) => setLanguage(e.currentTarget.value as Lang)}>
+            {LANGUAGES.map((l) => (
+              <option key={l} value={l}>
+                {t(`lang.${l}`)}
+              </option>
+            ))}
+          </select>
+        </span>
+      </span>
+    </div>
+  );
+}

@@ -1,0 +1,101 @@
+// Client of the editor's HTTP API (contract: docs/editor.md "HTTP API", types in src/api.ts).
+// Every call sends the token from the page URL; a failed call throws an ApiError and shows the
+// server's message as a toast, and never touches the document being edited.
+import type { BuildResult, BuildTarget, Diag, FileFormat, OpenResult, SaveResult, Session } from '../api';
+import type { ChartTarget, EditorDoc } from '../doc';
+import { toasts } from './toast';
+
+/** A failed API call: the HTTP status (0 when the server could not be reached) and its message. */
+export class ApiError extends Error {
+  constructor(
+    message: string,
+    readonly status: number,
+    /** `409` on save: the file changed on disk since it was read. */
+    readonly conflict = false,
+  ) {
+    super(message);
+    this.name = 'ApiError';
+  }
+}
+
+/** The token of `?token=…` in the page's query string. */
+export function tokenFromSearch(search: string): string | null {
+  return new URLSearchParams(search).get('token');
+}
+
+export interface ApiOptions {
+  token: string | null;
+  /** Defaults to the global fetch. */
+  fetch?: typeof fetch;
+  /** Shows an error to the user; defaults to a toast. */
+  notify?: (message: string) => void;
+  /** Base URL of the server; defaults to the page's origin. */
+  base?: string;
+}
+
+export interface SaveRequest {
+  path: string;
+  format: FileFormat;
+  doc: EditorDoc;
+  hash: string | null;
+  overwrite?: boolean;
+}
+
+export type Api = ReturnType<typeof createApi>;
+
+export function createApi(opts: ApiOptions) {
+  const doFetch = opts.fetch ?? ((input: RequestInfo | URL, init?: RequestInit) => fetch(input, init));
+  const notify = opts.notify ?? ((m: string) => toasts.show('error', m));
+  const base = opts.base ?? '';
+
+  /** One call; statuses in `quiet` throw without a toast (the caller handles them). */
+  async function call<T>(method: 'GET' | 'POST', path: string, body?: unknown, quiet: number[] = []): Promise<T> {
+    const headers: Record<string, string> = { Accept: 'application/json' };
+    if (opts.token) headers['X-Sfc-Token'] = opts.token;
+    if (body !== undefined) headers['Content-Type'] = 'application/json';
+    let res: Response;
+    try {
+      res = await doFetch(base + path, { method, headers, body: body === undefined ? undefined : JSON.stringify(body) });
+    } catch (e) {
+      const err = new ApiError(`${method} ${path}: the server cannot be reached (${(e as Error).message})`, 0);
+      notify(err.message);
+      throw err;
+    }
+    const text = await res.text();
+    let data: unknown = null;
+    try {
+      data = text === '' ? null : JSON.parse(text);
+    } catch {
+      if (res.ok) {
+        const err = new ApiError(`${method} ${path}: the answer is not JSON`, res.status);
+        notify(err.message);
+        throw err;
+      }
+    }
+    if (!res.ok) {
+      const obj = (data ?? {}) as { error?: string; conflict?: boolean };
+      const message = obj.error ?? (text.trim() || res.statusText || `HTTP ${res.status}`);
+      const err = new ApiError(message, res.status, obj.conflict === true);
+      if (!quiet.includes(res.status)) notify(`${path}: ${message}`);
+      throw err;
+    }
+    return data as T;
+  }
+
+  return {
+    session: () => call<Session>('GET', '/api/session'),
+    files: () => call<{ files: { path: string; format: FileFormat }[] }>('GET', '/api/files').then((r) => r.files),
+    /** `404` (missing file) throws without a toast: host mode then creates the chart. */
+    open: (path: string) => call<OpenResult>('POST', '/api/open', { path }, [404]),
+    /** `409` (changed on disk) throws without a toast: the caller asks whether to overwrite. */
+    save: (req: SaveRequest) => call<SaveResult>('POST', '/api/save', req, [409]),
+    check: (doc: EditorDoc, analysis: boolean) =>
+      call<{ diagnostics: Diag[] }>('POST', '/api/check', { doc, analysis }).then((r) => r.diagnostics),
+    build: (doc: EditorDoc, target: BuildTarget, limits?: { nstep: number; ntr: number }) =>
+      call<BuildResult>('POST', '/api/build', { doc, target, ...(limits ?? {}) }),
+    layout: (doc: EditorDoc) => call<{ doc: EditorDoc }>('POST', '/api/layout', { doc }).then((r) => r.doc),
+    codes: () => call<{ code: string; severity: string; title: string }[]>('GET', '/api/codes'),
+    /** The document of a new chart (an initial step), as `sfc-doc` makes it. */
+    newChart: (name: string, target: ChartTarget) => call<{ doc: EditorDoc }>('POST', '/api/new', { name, target }).then((r) => r.doc),
+  };
+}

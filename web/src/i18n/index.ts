@@ -1,0 +1,74 @@
+// Localisation: i18next with the Czech, English and German catalogues of this directory. The
+// language is switched at run time (status bar); components re-render on `languageChanged`.
+import i18next from 'i18next';
+import cs from './cs.json';
+import de from './de.json';
+import en from './en.json';
+
+export const LANGUAGES = ['cs', 'en', 'de'] as const;
+export type Lang = (typeof LANGUAGES)[number];
+
+const STORAGE_KEY = 'sfc.language';
+
+export const i18n = i18next.createInstance();
+
+/** The stored choice, else the browser's language (cs, de, anything else English). */
+export function detectLanguage(stored: string | null, browser: string | undefined): Lang {
+  if (stored && (LANGUAGES as readonly string[]).includes(stored)) return stored as Lang;
+  const primary = (browser ?? '').toLowerCase().split('-')[0];
+  return primary === 'cs' || primary === 'de' ? primary : 'en';
+}
+
+/** Language after `lang` when the status bar label is clicked: cs → en → de → cs. */
+export function nextLanguage(lang: Lang): Lang {
+  return LANGUAGES[(LANGUAGES.indexOf(lang) + 1) % LANGUAGES.length];
+}
+
+function storage(): Storage | null {
+  try {
+    return typeof localStorage === 'undefined' ? null : localStorage;
+  } catch {
+    // Storage can be disabled (privacy settings); the language then lasts for the session.
+    return null;
+  }
+}
+
+/** Initialises i18next synchronously with the detected language. */
+export function initI18n(lang?: Lang): Lang {
+  const chosen = lang ?? detectLanguage(storage()?.getItem(STORAGE_KEY) ?? null, globalThis.navigator?.language);
+  if (!i18n.isInitialized) {
+    void i18n.init({
+      lng: chosen,
+      fallbackLng: 'en',
+      initAsync: false,
+      resources: { en: { translation: en }, cs: { translation: cs }, de: { translation: de } },
+      interpolation: { escapeValue: false },
+      returnNull: false,
+    });
+  } else {
+    void i18n.changeLanguage(chosen);
+  }
+  return chosen;
+}
+
+/** Switches the language (takes effect at once) and remembers it. */
+export function setLanguage(lang: Lang): void {
+  void i18n.changeLanguage(lang);
+  storage()?.setItem(STORAGE_KEY, lang);
+}
+
+export function currentLanguage(): Lang {
+  const l = i18n.language as Lang;
+  return (LANGUAGES as readonly string[]).includes(l) ? l : 'en';
+}
+
+/** Translates a UI key. */
+export function t(key: string, options?: Record<string, unknown>): string {
+  return i18n.t(key, options ?? {}) as string;
+}
+
+/** The translated title of a diagnostic code, else the server's English title. */
+export function diagTitle(code: string, english: string): string {
+  const key = `diag.${code}`;
+  return i18n.exists(key) ? t(key) : english;
+}
