@@ -8,6 +8,8 @@ use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
 mod build;
+mod edit;
+mod run;
 mod sim;
 
 #[derive(Parser)]
@@ -29,6 +31,10 @@ enum Command {
     Sim(SimArgs),
     /// Run every `*.scenario.toml` under the given files and directories.
     Test(TestArgs),
+    /// Open the SFC Editor in a browser, served on 127.0.0.1 (Ctrl-C stops it).
+    Edit(edit::EditArgs),
+    /// Run a chart as a soft-PLC on the wall clock, with Modbus TCP I/O and the monitor protocol.
+    Run(run::RunArgs),
 }
 
 #[derive(Clone, Copy, ValueEnum)]
@@ -232,6 +238,8 @@ fn run() -> u8 {
             set: a.set,
         }),
         Command::Test(a) => sim::test(&a.paths, a.coverage),
+        Command::Edit(a) => edit::edit(a),
+        Command::Run(a) => run::run(a),
     }
 }
 

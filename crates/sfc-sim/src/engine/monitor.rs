@@ -1,2 +1,173 @@
 //! What a runtime and its monitor need from a simulation beyond the scan itself (used by
 //! `sfc-runtime`): forced variables, guard values, elapsed step times and located variables.
+//!
+//! Steps and transitions are numbered globally here: every step (transition) of every chart
+//! instance in the order of [`Simulation::step_names`] ([`Simulation::transition_names`]), so a
+//! runtime can keep a scan's state as plain numbers and name them only when it talks.
+
+use super::{code_of, fit, ScanSink, Simulation};
+use crate::code::Ctx;
+use crate::value::Value;
+use crate::Event;
+use sfc_st::Type;
+
+/// The steps (qualified name, initial) and transitions (qualified name, preceding steps,
+/// following steps) of [`Simulation::outline`], in global numbers.
+pub type OutlineParts = (Vec<(String, bool)>, Vec<(String, Vec<u32>, Vec<u32>)>);
+
+// The module is private to `engine`, so its API uses only types the crate already exports:
+// a variable handle is its absolute memory slot with its type, which [`Simulation::write_slot`]
+// and [`Simulation::read_slot`] check.
+
+impl Simulation {
+    /// Resolves a writable elementary variable (not a step or action flag) once: its memory
+    /// slot and type.
+    pub fn handle(&self, name: &str) -> Option<(usize, Type)> {
+        if self.is_chart_flag(name) {
+            return None;
+        }
+        let (slot, ty) = self.prog.resolve(self.top, self.top_frame, name)?;
+        ty.is_elementary().then_some((slot, ty))
+    }
+
+    /// Writes the slot of a [`Simulation::handle`]; the value must fit `ty` (as in
+    /// [`Simulation::set`]).
+    pub fn write_slot(&mut self, slot: usize, ty: &Type, value: Value) -> Result<(), String> {
+        let v = fit(value, ty).map_err(|why| format!("{ty}: {why}"))?;
+        let cell = self.mem.get_mut(slot).ok_or_else(|| format!("no memory slot {slot}"))?;
+        *cell = v;
+        Ok(())
+    }
+
+    /// `value` converted to a value of `ty` as [`Simulation::set`] would store it, or why it
+    /// does not fit.
+    pub fn fit_to(ty: &Type, value: Value) -> Result<Value, String> {
+        fit(value, ty).map_err(|why| format!("{ty}: {why}"))
+    }
+
+    /// Reads the slot of a [`Simulation::handle`].
+    pub fn read_slot(&self, slot: usize) -> Option<&Value> {
+        self.mem.get(slot)
+    }
+
+    /// Every located variable of elementary type of the simulated POU, then the global ones, in
+    /// declaration order: (name, or the address for a nameless declaration; address as
+    /// written; slot; type).
+    pub fn located_vars(&self) -> Vec<(String, String, usize, Type)> {
+        let top = &self.prog.pous[self.top].layout.vars;
+        let local = top.iter().filter_map(|v| {
+            let loc = v.location.as_ref()?;
+            (v.size == 1 && v.ty.is_elementary()).then(|| {
+                let name = if v.name.is_empty() { loc.clone() } else { v.name.clone() };
+                (name, loc.clone(), self.top_frame + v.offset as usize, v.ty.clone())
+            })
+        });
+        let global = self.prog.globals.vars.iter().filter_map(|v| {
+            let loc = v.location.as_ref()?;
+            (v.size == 1 && v.ty.is_elementary()).then(|| {
+                let name = if v.name.is_empty() { loc.clone() } else { v.name.clone() };
+                (name, loc.clone(), v.offset as usize, v.ty.clone())
+            })
+        });
+        let mut out: Vec<(String, String, usize, Type)> = local.chain(global).collect();
+        // A direct address used in code and declared with AT resolves to one slot: keep it once.
+        let mut seen = std::collections::HashSet::new();
+        out.retain(|l| seen.insert(l.2));
+        out
+    }
+
+    /// Moves the scan counter forward to `scan` (virtual time `scan · period`): periods a
+    /// wall-clock runtime missed are skipped rather than run late. Never moves backwards.
+    pub fn skip_to(&mut self, scan: u64) {
+        self.next_scan = self.next_scan.max(scan);
+    }
+
+    /// Steps and transitions with their links, in global numbers.
+    pub fn outline(&self) -> OutlineParts {
+        let mut out: OutlineParts = Default::default();
+        let mut base = 0u32;
+        for c in &self.charts {
+            let plan = &c.plan;
+            for (s, name) in plan.step_names.iter().enumerate() {
+                out.0.push((c.qualify(name), plan.initial.contains(&(s as u32))));
+            }
+            for (t, name) in plan.transition_names.iter().enumerate() {
+                let t = t as u32;
+                let pre = plan.pre.get(t).iter().map(|&s| base + s).collect();
+                let post = plan.post.get(t).iter().map(|&s| base + s).collect();
+                out.1.push((c.qualify(name), pre, post));
+            }
+            base += plan.step_names.len() as u32;
+        }
+        out
+    }
+
+    /// The active steps with their elapsed times (µs), in global numbers, ascending.
+    pub fn active_times(&self, out: &mut Vec<(u32, i64)>) {
+        out.clear();
+        let mut base = 0u32;
+        for c in &self.charts {
+            out.extend(c.active.iter().map(|&s| (base + s, c.steps[s as usize].t)));
+            base += c.plan.step_names.len() as u32;
+        }
+        out.sort_unstable();
+    }
+
+    /// The transitions the last scan fired, in global numbers, in firing order.
+    pub fn fired_ids(&self, out: &mut Vec<u32>) {
+        out.clear();
+        let bases = self.transition_bases();
+        out.extend(self.sink.fired.iter().map(|&(c, t)| bases[c as usize] + t));
+    }
+
+    /// The events of the last scan (conflict, unsafe, contention, error), unsorted.
+    pub fn last_events(&self) -> &[Event] {
+        &self.sink.events
+    }
+
+    /// The value of the guard of every transition leaving an active step (enabled or not),
+    /// evaluated on the memory as the last scan left it, in global numbers, ascending; `Err`
+    /// holds the message of a guard that faults.
+    pub fn guard_values(&mut self, out: &mut Vec<(u32, Result<bool, String>)>) {
+        out.clear();
+        let bases = self.transition_bases();
+        let mut sink = ScanSink::default();
+        let now = (self.next_time() - self.opts.period).max(0);
+        for (c, &base) in bases.iter().enumerate() {
+            let mut ts: Vec<u32> = {
+                let st = &self.charts[c];
+                st.active.iter().flat_map(|&s| st.plan.outgoing.get(s).iter().copied()).collect()
+            };
+            ts.sort_unstable();
+            ts.dedup();
+            let pou = self.charts[c].pou;
+            let frame = self.charts[c].frame;
+            let mut ctx = Ctx {
+                mem: &mut self.mem,
+                prog: &self.prog,
+                charts: &mut self.charts,
+                sink: &mut sink,
+                now,
+                scan: self.next_scan.saturating_sub(1),
+                profile: self.opts.profile,
+            };
+            for t in ts {
+                let code = code_of(ctx.prog, pou);
+                // The compiled closure exists for every guard (the engine's inline fast paths
+                // are shortcuts of it).
+                let v = (code.guards[t as usize])(&mut ctx, frame).map_err(|f| f.message);
+                out.push((base + t, v));
+            }
+        }
+    }
+
+    fn transition_bases(&self) -> Vec<u32> {
+        let mut bases = Vec::with_capacity(self.charts.len());
+        let mut base = 0u32;
+        for c in &self.charts {
+            bases.push(base);
+            base += c.plan.transition_names.len() as u32;
+        }
+        bases
+    }
+}

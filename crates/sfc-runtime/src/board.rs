@@ -1,0 +1,197 @@
+//! The board between a runtime (the scan thread, or the ATMT adapter) and the monitor clients:
+//! the last 100 scan states, the event log, and the command channel. The runtime side never
+//! waits on it: it publishes with `try_lock` and keeps what it could not publish for the next
+//! scan; the clients copy `Arc`s out under the lock and build their JSON outside it.
+
+use sfc_sim::Value;
+use std::collections::VecDeque;
+use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
+use std::sync::{mpsc, Arc, Mutex};
+
+/// How many scan states the runtime keeps for `history`.
+pub const HISTORY: usize = 100;
+/// How many events the runtime keeps for clients that paused or lag.
+pub const EVENT_LOG: usize = 1000;
+
+/// What one scan left, in the numbers of the [`ChartInfo`].
+#[derive(Debug, Clone, Default)]
+pub struct ScanState {
+    pub scan: u64,
+    /// Virtual time, µs.
+    pub time: i64,
+    /// Active steps with elapsed time (µs), ascending by step.
+    pub active: Vec<(u32, i64)>,
+    /// Transitions fired in this scan.
+    pub fired: Vec<u32>,
+    /// Guard values of the transitions leaving active steps; `None` when the guard faulted.
+    pub guards: Vec<(u32, Option<bool>)>,
+    /// Values of [`ChartInfo::variables`], same order.
+    pub values: Vec<Value>,
+    /// Forced variables (indices into [`ChartInfo::variables`]).
+    pub forced: Vec<u32>,
+}
+
+/// A variable the monitor shows.
+#[derive(Debug, Clone)]
+pub struct VarInfo {
+    pub name: String,
+    /// IEC type name.
+    pub ty: String,
+    /// `%IX0.0` for a located variable.
+    pub location: Option<String>,
+}
+
+/// The static description of what a runtime runs (the `hello` message).
+#[derive(Debug, Clone)]
+pub struct ChartInfo {
+    /// `sfc run` or `atmt`.
+    pub runtime: &'static str,
+    pub pou: String,
+    /// Scan period, µs (0 when the runtime does not scan on a grid: the ATMT adapter).
+    pub period: i64,
+    /// Step names and whether each is initial.
+    pub steps: Vec<(String, bool)>,
+    /// Transition names with their preceding and following steps.
+    pub transitions: Vec<(String, Vec<u32>, Vec<u32>)>,
+    pub variables: Vec<VarInfo>,
+    /// The runtime can halt, single-step, force and write (`false` for the ATMT adapter).
+    pub control: bool,
+}
+
+impl ChartInfo {
+    pub fn step_index(&self, name: &str) -> Option<u32> {
+        self.steps.iter().position(|(n, _)| n.eq_ignore_ascii_case(name)).map(|i| i as u32)
+    }
+    pub fn transition_index(&self, name: &str) -> Option<u32> {
+        self.transitions.iter().position(|(n, _, _)| n.eq_ignore_ascii_case(name)).map(|i| i as u32)
+    }
+}
+
+/// A runtime event, already in its JSON form (`docs/monitor.md`, "event").
+#[derive(Debug, Clone)]
+pub struct LoggedEvent {
+    pub seq: u64,
+    pub json: Arc<serde_json::Value>,
+}
+
+/// Shared, lock-protected part of the board.
+#[derive(Debug, Default)]
+pub struct Board {
+    pub history: VecDeque<Arc<ScanState>>,
+    pub events: VecDeque<LoggedEvent>,
+    pub next_event: u64,
+    /// Scanning is stopped (halt, breakpoint, error or end of run).
+    pub halted: bool,
+    /// Why, when halted.
+    pub reason: String,
+    pub stats: serde_json::Value,
+}
+
+impl Board {
+    pub fn push_state(&mut self, s: Arc<ScanState>) {
+        if self.history.len() == HISTORY {
+            self.history.pop_front();
+        }
+        self.history.push_back(s);
+    }
+    pub fn push_event(&mut self, json: serde_json::Value) {
+        if self.events.len() == EVENT_LOG {
+            self.events.pop_front();
+        }
+        self.events.push_back(LoggedEvent { seq: self.next_event, json: Arc::new(json) });
+        self.next_event += 1;
+    }
+}
+
+/// A command a client sends to the runtime side.
+#[derive(Debug)]
+pub enum Command {
+    Halt,
+    Continue,
+    Step,
+    Breakpoint { op: BreakOp, target: Option<BreakTarget> },
+    Breakpoints,
+    Force { var: u32, value: serde_json::Value },
+    Unforce { var: Option<u32> },
+    Set { var: u32, value: serde_json::Value },
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum BreakOp {
+    Set,
+    Disable,
+    Enable,
+    Delete,
+    DeleteAll,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub enum BreakTarget {
+    Step(u32),
+    Transition(u32),
+}
+
+/// A command with where its reply goes: the client's bounded outgoing queue. The runtime
+/// answers with `try_send`; a client whose queue is full is being dropped anyway.
+#[derive(Debug)]
+pub struct Request {
+    pub id: serde_json::Value,
+    pub command: Command,
+    pub reply: tokio::sync::mpsc::Sender<String>,
+}
+
+/// What the runtime side and the network side share.
+#[derive(Debug)]
+pub struct Hub {
+    pub info: ChartInfo,
+    pub board: Mutex<Board>,
+    pub commands: Mutex<Option<mpsc::Sender<Request>>>,
+    /// The secret a client needs to force or write.
+    pub token: String,
+    /// Set to end the run (every task watches it).
+    pub stop: AtomicBool,
+    /// Monitor clients dropped for misbehaving (flooding, garbage, slow reading).
+    pub dropped: AtomicU64,
+    pub connected: AtomicU64,
+}
+
+impl Hub {
+    pub fn new(info: ChartInfo, token: String) -> (Arc<Hub>, mpsc::Receiver<Request>) {
+        let (tx, rx) = mpsc::channel();
+        let hub = Hub {
+            info,
+            board: Mutex::new(Board::default()),
+            commands: Mutex::new(Some(tx)),
+            token,
+            stop: AtomicBool::new(false),
+            dropped: AtomicU64::new(0),
+            connected: AtomicU64::new(0),
+        };
+        (Arc::new(hub), rx)
+    }
+
+    /// Sends a command to the runtime side; `false` when the run has ended.
+    pub fn send(&self, r: Request) -> bool {
+        let tx = self.commands.lock().unwrap_or_else(|e| e.into_inner()).clone();
+        tx.is_some_and(|tx| tx.send(r).is_ok())
+    }
+
+    pub fn stopping(&self) -> bool {
+        self.stop.load(Ordering::Relaxed)
+    }
+
+    /// Locks the board (a poisoned lock only means a client task panicked while copying).
+    pub fn lock(&self) -> std::sync::MutexGuard<'_, Board> {
+        self.board.lock().unwrap_or_else(|e| e.into_inner())
+    }
+}
+
+/// Makes a reply line `{"type":"reply","re":id,"ok":true,"result":…}`.
+pub fn reply_ok(id: &serde_json::Value, result: serde_json::Value) -> String {
+    serde_json::json!({"type": "reply", "re": id, "ok": true, "result": result}).to_string()
+}
+
+/// Makes an error reply line `{"type":"reply","re":id,"ok":false,"error":…}`.
+pub fn reply_err(id: &serde_json::Value, error: impl Into<String>) -> String {
+    serde_json::json!({"type": "reply", "re": id, "ok": false, "error": error.into()}).to_string()
+}

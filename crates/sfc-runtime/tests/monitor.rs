@@ -1,0 +1,181 @@
+//! The monitor protocol against the car wash running in `sfc run` (docs/monitor.md).
+
+mod common;
+
+use common::{active, carwash, Client, TOKEN};
+use serde_json::json;
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn hello_then_snapshot_describe_the_chart() {
+    let rt = carwash(10_000, false);
+    let mut c = Client::connect(rt.monitor_addr().unwrap(), None).await;
+    let hello = c.next(5.0).await.unwrap();
+    assert_eq!(hello["type"], "hello");
+    assert_eq!(hello["protocol"], "sfc-monitor");
+    assert_eq!(hello["version"], 1);
+    assert_eq!(hello["pou"], "CarWash");
+    assert_eq!(hello["period"], "T#10ms");
+    assert_eq!(hello["authorized"], false);
+    assert!(hello["steps"].as_array().unwrap().contains(&json!({"name": "Idle", "initial": true})));
+    assert!(hello["transitions"]
+        .as_array()
+        .unwrap()
+        .contains(&json!({"name": "TStart", "from": ["Idle"], "to": ["Spraying"]})));
+    let vars = hello["variables"].as_array().unwrap();
+    assert!(vars.contains(&json!({"name": "StartButton", "type": "BOOL", "location": "%IX0.0"})), "{vars:?}");
+    assert!(vars.contains(&json!({"name": "Washes", "type": "UDINT"})), "{vars:?}");
+    let snap = c.until_type("snapshot").await;
+    assert_eq!(active(&snap), vec!["Idle"]);
+    assert_eq!(snap["guards"]["TStart"], false);
+    assert_eq!(snap["guards"]["TGoHome"], false);
+    assert_eq!(snap["vars"]["MaxTravelTime"], "T#1m");
+    // Deltas follow, with the elapsed time of Idle growing.
+    let d1 = c.until_type("delta").await;
+    let d2 = c.until("a later delta", |m| m["type"] == "delta" && m["scan"].as_u64() > d1["scan"].as_u64()).await;
+    assert!(d2["active"][0]["elapsedUs"].as_i64() > d1["active"][0]["elapsedUs"].as_i64());
+    drop(c);
+    rt.stop();
+    assert_eq!(rt.wait().error, None);
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn breakpoints_halt_step_and_continue() {
+    let rt = carwash(10_000, false);
+    let mut c = Client::connect(rt.monitor_addr().unwrap(), Some(TOKEN)).await;
+    assert_eq!(c.until_type("hello").await["authorized"], true);
+    let r = c.cmd(json!({"cmd": "breakpoint", "op": "set", "kind": "step", "name": "Spraying"})).await;
+    assert_eq!(r["ok"], true, "{r}");
+    assert_eq!(r["result"], json!([{"kind": "step", "name": "Spraying", "enabled": true}]));
+    let r = c.cmd(json!({"cmd": "breakpoint", "op": "set", "kind": "transition", "name": "TCarAtBrush"})).await;
+    assert_eq!(r["result"].as_array().unwrap().len(), 2);
+    let r = c.cmd(json!({"cmd": "breakpoint", "op": "set", "kind": "step", "name": "Nowhere"})).await;
+    assert_eq!((r["ok"].clone(), r["error"].clone()), (json!(false), json!("no step `Nowhere`")));
+    for (n, v) in [("CarPresent", true), ("AtHome", true), ("StartButton", true)] {
+        let r = c.cmd(json!({"cmd": "set", "name": n, "value": v})).await;
+        assert_eq!(r["ok"], true, "{r}");
+    }
+    let hit = c.until("breakpoint event", |m| m["type"] == "event" && m["kind"] == "breakpoint").await;
+    assert_eq!(hit["step"], "Spraying");
+    let halted = c.until_type("halted").await;
+    assert_eq!(halted["reason"], "breakpoint");
+    // Halted: the scan number stands still.
+    let h1 = c.cmd(json!({"cmd": "history", "count": 1})).await;
+    tokio::time::sleep(std::time::Duration::from_millis(200)).await;
+    let h2 = c.cmd(json!({"cmd": "history", "count": 1})).await;
+    let scan = h1["states"][0]["scan"].as_u64().unwrap();
+    assert_eq!(h2["states"][0]["scan"].as_u64(), Some(scan));
+    assert_eq!(active(&h1["states"][0]), vec!["Spraying"]);
+    // One scan at a time.
+    let r = c.cmd(json!({"cmd": "step"})).await;
+    assert_eq!(r["result"]["scan"].as_u64(), Some(scan + 1), "{r} {h1} {h2} {:?}", c.seen);
+    let h3 = c.cmd(json!({"cmd": "history", "count": 1})).await;
+    assert_eq!(h3["states"][0]["scan"].as_u64(), Some(scan + 1));
+    // The transition breakpoint: it fires during a single step, and the step reports it.
+    c.cmd(json!({"cmd": "set", "name": "CarAtBrush", "value": true})).await;
+    c.cmd(json!({"cmd": "step"})).await;
+    let hit = c.until("transition breakpoint", |m| m["type"] == "event" && m["kind"] == "breakpoint").await;
+    assert_eq!(hit["transition"], "TCarAtBrush");
+    let r = c.cmd(json!({"cmd": "continue"})).await;
+    assert_eq!(r["ok"], true);
+    c.until_type("resumed").await;
+    let d = c.until("scanning again", |m| m["type"] == "delta" && m["scan"].as_u64() > Some(scan + 2)).await;
+    assert_eq!(active(&d), vec!["Brushing"]);
+    // step is refused while running; disable, enable, delete, deleteAll.
+    let r = c.cmd(json!({"cmd": "step"})).await;
+    assert_eq!(r["ok"], false);
+    let r = c.cmd(json!({"cmd": "breakpoint", "op": "disable", "kind": "step", "name": "Spraying"})).await;
+    assert!(r["result"].as_array().unwrap().contains(&json!({"kind": "step", "name": "Spraying", "enabled": false})));
+    let r = c.cmd(json!({"cmd": "breakpoint", "op": "delete", "kind": "transition", "name": "TCarAtBrush"})).await;
+    assert_eq!(r["result"].as_array().unwrap().len(), 1);
+    let r = c.cmd(json!({"cmd": "breakpoint", "op": "deleteAll"})).await;
+    assert_eq!(r["result"], json!([]));
+    rt.stop();
+    assert_eq!(rt.wait().error, None);
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn forcing_needs_the_token() {
+    let rt = carwash(10_000, false);
+    let addr = rt.monitor_addr().unwrap();
+    let mut anon = Client::connect(addr, None).await;
+    anon.until_type("hello").await;
+    let r = anon.cmd(json!({"cmd": "force", "name": "Washes", "value": 7})).await;
+    assert_eq!((r["ok"].clone(), r["error"].clone()), (json!(false), json!("`force` needs the run's token")));
+    let r = anon.cmd(json!({"cmd": "set", "name": "StartButton", "value": true})).await;
+    assert_eq!(r["error"], "`set` needs the run's token");
+    let r = anon.cmd(json!({"cmd": "force", "name": "Washes", "value": 7, "token": "guess"})).await;
+    assert_eq!(r["error"], "wrong token");
+    // The token in a command authorises the connection from then on.
+    let r = anon.cmd(json!({"cmd": "force", "name": "Washes", "value": 7, "token": TOKEN})).await;
+    assert_eq!(r["ok"], true, "{r}");
+    let r = anon.cmd(json!({"cmd": "force", "name": "Washes", "value": -1})).await;
+    assert_eq!(r["ok"], false);
+    assert!(r["error"].as_str().unwrap().contains("out of range"), "{r}");
+    let r = anon.cmd(json!({"cmd": "force", "name": "Nothing", "value": 1})).await;
+    assert_eq!(r["error"], "no variable `Nothing`");
+    let d = anon.until("forced value", |m| m["type"] == "delta" && m["forced"] == json!(["Washes"])).await;
+    assert!(d.get("forced").is_some());
+    let h = anon.cmd(json!({"cmd": "history", "count": 1})).await;
+    assert_eq!(h["states"][0]["vars"]["Washes"], 7);
+    let r = anon.cmd(json!({"cmd": "unforce", "name": "Washes"})).await;
+    assert_eq!(r["ok"], true);
+    anon.until("unforced", |m| m["type"] == "delta" && m["forced"] == json!([])).await;
+    rt.stop();
+    rt.wait();
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn history_holds_the_last_100_states_and_pause_keeps_buffering() {
+    let rt = carwash(2_000, false);
+    let mut c = Client::connect(rt.monitor_addr().unwrap(), None).await;
+    c.until_type("snapshot").await;
+    let r = c.cmd(json!({"cmd": "pause"})).await;
+    assert_eq!(r["result"]["paused"], true);
+    let h1 = c.cmd(json!({"cmd": "history", "count": 1})).await;
+    // While paused nothing but replies arrives.
+    let t0 = tokio::time::Instant::now();
+    while t0.elapsed() < std::time::Duration::from_millis(400) {
+        if let Some(m) = c.next(0.05).await {
+            panic!("paused, yet received {m}");
+        }
+    }
+    let h = c.cmd(json!({"cmd": "history"})).await;
+    let states = h["states"].as_array().unwrap();
+    assert_eq!(states.len(), 100, "400 ms at 2 ms fill the history");
+    let scans: Vec<u64> = states.iter().map(|s| s["scan"].as_u64().unwrap()).collect();
+    assert!(scans.windows(2).all(|w| w[0] < w[1]), "{scans:?}");
+    assert!(scans[0] > h1["states"][0]["scan"].as_u64().unwrap(), "the runtime kept buffering while paused");
+    assert!(states[0]["vars"].get("StartButton").is_some());
+    let r = c.cmd(json!({"cmd": "resume"})).await;
+    assert_eq!(r["ok"], true);
+    let snap = c.until_type("snapshot").await;
+    assert!(snap["scan"].as_u64() >= Some(*scans.last().unwrap()));
+    let bad = c.cmd(json!({"cmd": "history", "count": "all"})).await;
+    assert_eq!(bad["ok"], false);
+    rt.stop();
+    rt.wait();
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn a_halted_start_waits_for_continue() {
+    let rt = carwash(10_000, true);
+    let mut anon = Client::connect(rt.monitor_addr().unwrap(), None).await;
+    assert_eq!(anon.until_type("hello").await["halted"], true);
+    for cmd in ["step", "continue", "halt"] {
+        let r = anon.cmd(json!({"cmd": cmd})).await;
+        assert_eq!(r["error"], format!("`{cmd}` needs the run's token"));
+    }
+    let r = anon.cmd(json!({"cmd": "breakpoint", "op": "set", "name": "Idle"})).await;
+    assert_eq!(r["error"], "`breakpoint` needs the run's token");
+    let mut c = Client::connect(rt.monitor_addr().unwrap(), Some(TOKEN)).await;
+    assert_eq!(c.until_type("hello").await["authorized"], true);
+    let r = c.cmd(json!({"cmd": "step"})).await;
+    assert_eq!(r["result"]["scan"], 0);
+    let s = c.until("scan 0", |m| (m["type"] == "snapshot" || m["type"] == "delta") && m["scan"] == 0).await;
+    assert_eq!(active(&s), vec!["Idle"]);
+    c.cmd(json!({"cmd": "continue"})).await;
+    c.until_type("resumed").await;
+    c.until("scanning", |m| m["type"] == "delta" && m["scan"].as_u64() > Some(3)).await;
+    rt.stop();
+    rt.wait();
+}
