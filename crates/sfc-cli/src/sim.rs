@@ -179,35 +179,6 @@ fn stats_text(stats: &TimeStats) -> String {
     out
 }
 
-fn stats_json(stats: &TimeStats) -> serde_json::Value {
-    use serde_json::json;
-    let t = |v: Option<i64>| v.map_or(serde_json::Value::Null, |x| json!(format_time(x)));
-    json!({
-        "steps": stats.steps.iter().map(|s| json!({
-            "step": s.step, "activations": s.activations, "min": t(s.min), "mean": t(s.mean), "max": t(s.max)
-        })).collect::<Vec<_>>(),
-        "sequence": stats.sequence.iter().map(|(time, active)| json!({"time": format_time(*time), "active": active})).collect::<Vec<_>>(),
-    })
-}
-
-fn report_json(r: &StepReport) -> serde_json::Value {
-    use serde_json::json;
-    json!({
-        "step": r.step,
-        "elapsed": format_time(r.elapsed),
-        "timeout": r.timeout.map(format_time),
-        "transitions": r.transitions.iter().map(|t| json!({
-            "transition": t.transition,
-            "guard": t.guard,
-            "value": t.value,
-            "operands": t.operands.iter().map(|(n, v)| json!({"operand": n, "value": v})).collect::<Vec<_>>(),
-            "change": t.change,
-            "missing": t.missing,
-            "masked_by": t.masked_by,
-        })).collect::<Vec<_>>(),
-    })
-}
-
 /// Opens the trace output: a file (created or truncated) or, for `-`, standard output.
 fn open_trace(path: &Path, format: TraceFormat) -> Result<Box<dyn TraceSink>, String> {
     if path.as_os_str() == "-" {
@@ -290,7 +261,7 @@ pub fn sim(r: SimRequest) -> u8 {
             }
             let Some(x) = &sim.explain_step(step) else { continue };
             if json {
-                let mut v = report_json(x);
+                let mut v = x.to_json();
                 v["scan"] = rec.scan.into();
                 v["time"] = format_time(rec.time).into();
                 overdue_json.push(v);
@@ -337,10 +308,10 @@ pub fn sim(r: SimRequest) -> u8 {
             v["failures"] = outcome.failures.clone().into();
         }
         if r.stats {
-            v["stats"] = stats_json(&sim.stats());
+            v["stats"] = sim.stats().to_json();
         }
         if r.explain {
-            v["explain"] = sim.explain().iter().map(report_json).collect::<Vec<_>>().into();
+            v["explain"] = sim.explain().iter().map(|r| r.to_json()).collect::<Vec<_>>().into();
         }
         report(&v.to_string());
     } else {

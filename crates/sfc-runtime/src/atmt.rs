@@ -277,8 +277,7 @@ impl Adapter {
         }
         {
             let mut b = self.hub.lock();
-            b.halted = true;
-            b.reason = "end".into();
+            b.push_halt(true, "end".into());
         }
         // The command thread ends when the hub drops its sender (Runtime::wait).
         drop(cmd);
@@ -455,6 +454,12 @@ fn commands(rx: Receiver<Request>, hub: &Hub, shared: &Mutex<Observed>) {
                 }
             },
             Command::Breakpoints => Ok(()),
+            Command::Explain { step } => Err(format!(
+                "the ATMT adapter sees only the block's state and condition bits, not its guards: it cannot explain `{step}`"
+            )),
+            Command::Timing => Err(
+                "the ATMT adapter keeps no time analysis: the block's own step times are not reported to it".into(),
+            ),
             _ => {
                 Err("the ATMT adapter observes a block running elsewhere: it cannot halt, step, force or write".into())
             }

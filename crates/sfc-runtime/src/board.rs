@@ -67,6 +67,18 @@ impl ChartInfo {
     }
 }
 
+/// How many halts and resumes the board keeps for clients between two ticks.
+pub const HALT_LOG: usize = 64;
+
+/// One halt or resume of the runtime.
+#[derive(Debug, Clone)]
+pub struct HaltChange {
+    pub seq: u64,
+    pub halted: bool,
+    /// `halt`, `breakpoint`, `error` or `end`; empty for a resume.
+    pub reason: String,
+}
+
 /// A runtime event, already in its JSON form (`docs/monitor.md`, "event").
 #[derive(Debug, Clone)]
 pub struct LoggedEvent {
@@ -84,6 +96,10 @@ pub struct Board {
     pub halted: bool,
     /// Why, when halted.
     pub reason: String,
+    /// Every halt and resume, in order (the last [`HALT_LOG`]): a client that looks only every
+    /// tick still tells each one, even a resume followed by a breakpoint hit within a tick.
+    pub halts: VecDeque<HaltChange>,
+    pub next_halt: u64,
     pub stats: serde_json::Value,
 }
 
@@ -93,6 +109,16 @@ impl Board {
             self.history.pop_front();
         }
         self.history.push_back(s);
+    }
+    /// Records a halt (`halted`, with its reason) or a resume.
+    pub fn push_halt(&mut self, halted: bool, reason: String) {
+        if self.halts.len() == HALT_LOG {
+            self.halts.pop_front();
+        }
+        self.halted = halted;
+        self.reason.clone_from(&reason);
+        self.halts.push_back(HaltChange { seq: self.next_halt, halted, reason });
+        self.next_halt += 1;
     }
     pub fn push_event(&mut self, json: serde_json::Value) {
         if self.events.len() == EVENT_LOG {
@@ -109,11 +135,35 @@ pub enum Command {
     Halt,
     Continue,
     Step,
-    Breakpoint { op: BreakOp, target: Option<BreakTarget> },
+    Breakpoint {
+        op: BreakOp,
+        target: Option<BreakTarget>,
+    },
     Breakpoints,
-    Force { var: u32, value: serde_json::Value },
-    Unforce { var: Option<u32> },
-    Set { var: u32, value: serde_json::Value },
+    Force {
+        var: u32,
+        value: serde_json::Value,
+    },
+    Unforce {
+        var: Option<u32>,
+    },
+    Set {
+        var: u32,
+        value: serde_json::Value,
+    },
+    /// Condition analysis of an active step (its name as in [`ChartInfo::steps`]).
+    Explain {
+        step: String,
+    },
+    /// Time analysis per step.
+    Timing,
+}
+
+impl Command {
+    /// Whether a client without the run's token may send it (it only reads the run).
+    pub fn watches(&self) -> bool {
+        matches!(self, Command::Breakpoints | Command::Explain { .. } | Command::Timing)
+    }
 }
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]

@@ -188,6 +188,10 @@ impl Runtime {
         };
         let token = opts.token.clone().unwrap_or_else(random_token);
         let (hub, rx) = Hub::new(info, token);
+        if opts.halted {
+            // Before any client can connect: the first `hello` already says halted.
+            hub.lock().push_halt(true, "halt".into());
+        }
         let image = Arc::new(Mutex::new(Image::new(&points)));
         let modbus_l = opts.modbus.map(|a| bind("Modbus", a)).transpose()?;
         let monitor_l = opts.monitor.map(|a| bind("the monitor", a)).transpose()?;
@@ -214,7 +218,7 @@ impl Runtime {
             stats: ScanStats::default(),
             unpublished_states: Vec::new(),
             unpublished_events: Vec::new(),
-            halt_change: None,
+            halt_change: Vec::new(),
             error: None,
             steps_requested: Vec::new(),
         };

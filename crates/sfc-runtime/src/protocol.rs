@@ -266,6 +266,8 @@ struct Session<'a> {
     last: Option<Arc<ScanState>>,
     next_event: u64,
     halted: Option<bool>,
+    /// The next halt or resume of [`crate::board::Board::halts`] to tell.
+    next_halt: u64,
     bad_in_row: u32,
     window: tokio::time::Instant,
     in_window: u32,
@@ -316,6 +318,7 @@ async fn session(stream: TcpStream, hub: &Hub) -> bool {
         last: None,
         next_event: 0,
         halted: None,
+        next_halt: 0,
         bad_in_row: 0,
         window: tokio::time::Instant::now(),
         in_window: 0,
@@ -390,6 +393,7 @@ impl Session<'_> {
     fn send_snapshot(&mut self) -> bool {
         let (latest, halted, stats) = {
             let b = self.hub.lock();
+            self.next_halt = b.next_halt;
             (b.history.back().cloned(), b.halted, b.stats.clone())
         };
         self.halted = Some(halted);
@@ -409,15 +413,22 @@ impl Session<'_> {
             return true;
         }
         let last_scan = self.last.as_ref().map(|s| s.scan);
-        let (events, between, halted, reason) = {
+        let (events, between, mut halts, halted, reason) = {
             let b = self.hub.lock();
+            let halts: Vec<(bool, String)> =
+                b.halts.iter().filter(|h| h.seq >= self.next_halt).map(|h| (h.halted, h.reason.clone())).collect();
+            self.next_halt = b.next_halt;
             let events: Vec<_> = b.events.iter().filter(|e| e.seq >= self.next_event).cloned().collect();
             let between: Vec<Arc<ScanState>> = match last_scan {
                 Some(l) => b.history.iter().filter(|s| s.scan > l).cloned().collect(),
                 None => b.history.back().cloned().into_iter().collect(),
             };
-            (events, between, b.halted, b.reason.clone())
+            (events, between, halts, b.halted, b.reason.clone())
         };
+        // Older changes than the log holds: the state now is what counts.
+        if halts.last().map(|h| h.0) != Some(halted) {
+            halts.push((halted, reason));
+        }
         for e in events {
             self.next_event = e.seq + 1;
             let mut j = (*e.json).clone();
@@ -440,7 +451,10 @@ impl Session<'_> {
             }
             self.last = Some(new.clone());
         }
-        if self.halted != Some(halted) {
+        for (halted, reason) in halts {
+            if self.halted == Some(halted) {
+                continue;
+            }
             self.halted = Some(halted);
             let scan = self.last.as_ref().map_or(0, |s| s.scan);
             let j = if halted {
@@ -562,6 +576,12 @@ impl Session<'_> {
                 j["ok"] = serde_json::json!(true);
                 return Ok(Some(j.to_string()));
             }
+            "explain" => {
+                let name = str_field("step").ok_or("`explain` needs `step`")?;
+                let s = info.step_index(name).ok_or_else(|| format!("no step `{name}`"))?;
+                Command::Explain { step: info.steps[s as usize].0.clone() }
+            }
+            "timing" => Command::Timing,
             "halt" => Command::Halt,
             "continue" => Command::Continue,
             "step" => Command::Step,
@@ -615,8 +635,8 @@ impl Session<'_> {
             other => return Err(format!("unknown command `{other}`")),
         };
         // Whatever changes the run needs the token; watching (hello, snapshot, pause, resume,
-        // history, the breakpoint list) does not.
-        if !self.authorized && !matches!(command, Command::Breakpoints) {
+        // history, the breakpoint list, explain, timing) does not.
+        if !self.authorized && !command.watches() {
             return Err(format!("`{cmd}` needs the run's token"));
         }
         if matches!(command, Command::Halt | Command::Continue | Command::Step) && !info.control {

@@ -56,7 +56,8 @@ pub(crate) struct ScanThread {
     pub stats: ScanStats,
     pub unpublished_states: Vec<Arc<ScanState>>,
     pub unpublished_events: Vec<serde_json::Value>,
-    pub halt_change: Option<(bool, String)>,
+    /// Halts and resumes not yet published, in order.
+    pub halt_change: Vec<(bool, String)>,
     pub error: Option<String>,
     pub steps_requested: Vec<Request>,
 }
@@ -72,9 +73,6 @@ impl ScanThread {
         let mut origin = started;
         let mut k = self.sim.next_scan();
         self.inputs = self.points.iter().map(|p| p.slot.default_value()).collect();
-        if self.halted {
-            self.halt_change = Some((true, "halt".into()));
-        }
         self.publish();
         while !self.hub.stopping() {
             if self.limits.scans.is_some_and(|n| self.stats.scans >= n)
@@ -156,7 +154,7 @@ impl ScanThread {
             k = next;
             self.publish();
         }
-        self.halt_change = Some((true, if self.error.is_some() { "error".into() } else { "end".into() }));
+        self.halt_change.push((true, if self.error.is_some() { "error".into() } else { "end".into() }));
         self.publish_blocking();
         RunReport { stats: self.stats.clone(), error: self.error.take(), dropped: 0, realtime }
     }
@@ -249,7 +247,7 @@ impl ScanThread {
         }
         if !hits.is_empty() && !self.halted {
             self.halted = true;
-            self.halt_change = Some((true, "breakpoint".into()));
+            self.halt_change.push((true, "breakpoint".into()));
         }
         if let Err(e) = result {
             self.error = Some(format!("{}:{}: {} (scan {})", e.line, e.column, e.message, e.scan));
@@ -291,7 +289,7 @@ impl ScanThread {
             Command::Halt => {
                 if !self.halted {
                     self.halted = true;
-                    self.halt_change = Some((true, "halt".into()));
+                    self.halt_change.push((true, "halt".into()));
                 }
                 Ok(serde_json::json!({"scan": self.sim.next_scan()}))
             }
@@ -301,7 +299,7 @@ impl ScanThread {
                 } else {
                     if self.halted {
                         self.halted = false;
-                        self.halt_change = Some((false, String::new()));
+                        self.halt_change.push((false, String::new()));
                     }
                     Ok(serde_json::Value::Null)
                 }
@@ -368,6 +366,22 @@ impl ScanThread {
                 }
                 value_json(&v)
             }),
+            Command::Explain { step } => match self.sim.explain_step(&step) {
+                Some(report) => {
+                    let mut j = report.to_json();
+                    j["elapsedUs"] = serde_json::json!(report.elapsed);
+                    j["timeoutUs"] = serde_json::json!(report.timeout);
+                    j["lines"] = serde_json::json!(report.lines());
+                    j["scan"] = serde_json::json!(self.sim.next_scan().saturating_sub(1));
+                    Ok(j)
+                }
+                None => Err(format!("step `{step}` is not active: only an active step can be stuck")),
+            },
+            Command::Timing => {
+                let stats = self.sim.stats();
+                let steps: Vec<serde_json::Value> = stats.steps.iter().map(|s| s.to_json()).collect();
+                Ok(serde_json::json!({"scan": self.sim.next_scan().saturating_sub(1), "steps": steps}))
+            }
         };
         let line = match answer {
             Ok(v) => reply_ok(&r.id, v),
@@ -406,9 +420,8 @@ impl ScanThread {
         for e in self.unpublished_events.drain(..) {
             b.push_event(e);
         }
-        if let Some((halted, reason)) = self.halt_change.take() {
-            b.halted = halted;
-            b.reason = reason;
+        for (halted, reason) in self.halt_change.drain(..) {
+            b.push_halt(halted, reason);
         }
         if self.stats.scans.is_multiple_of(50) || b.halted {
             b.stats = self.stats.to_json();

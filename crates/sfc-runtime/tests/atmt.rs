@@ -59,6 +59,13 @@ async fn a_line_stream_is_served_as_the_monitor_protocol() {
     assert_eq!(r["error"], "this runtime (atmt) observes only: it cannot halt");
     let r = c.cmd(json!({"cmd": "force", "name": "c1", "value": true})).await;
     assert_eq!(r["error"], "this runtime (atmt) cannot force variables");
+    // Nor can it explain a step or time the steps: it sees only states and condition bits.
+    let r = c.cmd(json!({"cmd": "explain", "step": "Down"})).await;
+    assert_eq!(r["ok"], false, "{r}");
+    assert!(r["error"].as_str().unwrap().contains("cannot explain `Down`"), "{r}");
+    let r = c.cmd(json!({"cmd": "timing"})).await;
+    assert_eq!(r["ok"], false, "{r}");
+    assert!(r["error"].as_str().unwrap().contains("keeps no time analysis"), "{r}");
 
     let text = fixture("press.lines");
     std::thread::spawn(move || {

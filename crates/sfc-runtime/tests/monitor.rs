@@ -179,3 +179,55 @@ async fn a_halted_start_waits_for_continue() {
     rt.stop();
     rt.wait();
 }
+
+/// `explain` and `timing` are for watchers too; the expected analysis of the halted car wash
+/// is `fixtures/carwash_idle.explain.json` (Idle with a car present at home, before Start).
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn explain_and_timing_answer_watchers() {
+    let rt = carwash(10_000, true);
+    let addr = rt.monitor_addr().unwrap();
+    let mut ctl = Client::connect(addr, Some(TOKEN)).await;
+    ctl.until_type("hello").await;
+    let mut watcher = Client::connect(addr, None).await;
+    assert_eq!(watcher.until_type("hello").await["authorized"], false);
+    for (n, v) in [("CarPresent", true), ("AtHome", true)] {
+        assert_eq!(ctl.cmd(json!({"cmd": "set", "name": n, "value": v})).await["ok"], true);
+    }
+    for _ in 0..3 {
+        assert_eq!(ctl.cmd(json!({"cmd": "step"})).await["ok"], true);
+    }
+    let r = watcher.cmd(json!({"cmd": "explain", "step": "idle"})).await;
+    assert_eq!(r["ok"], true, "{r}");
+    let mut got = r["result"].clone();
+    assert_eq!(got["scan"], 2);
+    assert_eq!(got["elapsedUs"], 20_000);
+    got.as_object_mut().unwrap().remove("scan");
+    let path = common::root().join("crates/sfc-runtime/tests/fixtures/carwash_idle.explain.json");
+    let want: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&path).unwrap()).unwrap();
+    assert_eq!(got, want, "{}", serde_json::to_string_pretty(&got).unwrap());
+    // A step that is not active is not stuck; an unknown one is a bad command.
+    let r = watcher.cmd(json!({"cmd": "explain", "step": "Brushing"})).await;
+    assert_eq!(r["error"], "step `Brushing` is not active: only an active step can be stuck");
+    let r = watcher.cmd(json!({"cmd": "explain", "step": "Nowhere"})).await;
+    assert_eq!(r["error"], "no step `Nowhere`");
+    let r = watcher.cmd(json!({"cmd": "explain"})).await;
+    assert_eq!(r["error"], "`explain` needs `step`");
+
+    // Start, then the time analysis: Idle was active for 3 scans once, Spraying is active now.
+    ctl.cmd(json!({"cmd": "set", "name": "StartButton", "value": true})).await;
+    ctl.cmd(json!({"cmd": "step"})).await;
+    ctl.cmd(json!({"cmd": "step"})).await;
+    let r = watcher.cmd(json!({"cmd": "timing"})).await;
+    assert_eq!(r["ok"], true, "{r}");
+    let steps = r["result"]["steps"].as_array().unwrap();
+    let of = |n: &str| steps.iter().find(|s| s["step"] == n).unwrap_or_else(|| panic!("no {n} in {r}")).clone();
+    assert_eq!(of("Idle")["activations"], 1, "{r}");
+    assert_eq!(of("Idle")["maxUs"], 30_000, "{r}");
+    assert_eq!(of("Idle")["max"], "T#30ms", "{r}");
+    assert_eq!(of("Spraying")["activations"], 1, "{r}");
+    assert_eq!(of("Spraying")["meanUs"], 10_000, "{r}");
+    assert_eq!(of("Brushing")["activations"], 0, "{r}");
+    assert_eq!(of("Brushing")["min"], serde_json::Value::Null, "{r}");
+    rt.stop();
+    assert_eq!(rt.wait().error, None);
+}

@@ -5,9 +5,9 @@
 //! instance in the order of [`Simulation::step_names`] ([`Simulation::transition_names`]), so a
 //! runtime can keep a scan's state as plain numbers and name them only when it talks.
 
-use super::{code_of, fit, ScanSink, Simulation};
+use super::{code_of, fit, ScanSink, Simulation, StepStats, TimeStats};
 use crate::code::Ctx;
-use crate::value::Value;
+use crate::value::{format_time, Value};
 use crate::Event;
 use sfc_st::Type;
 
@@ -169,5 +169,38 @@ impl Simulation {
             base += c.plan.transition_names.len() as u32;
         }
         bases
+    }
+}
+
+impl StepStats {
+    /// The step's time analysis as JSON: `{"step","activations","min","mean","max"}` as TIME
+    /// literals (`null` when never active), with the microseconds beside them (`minUs`, …).
+    pub fn to_json(&self) -> serde_json::Value {
+        let lit = |v: Option<i64>| v.map_or(serde_json::Value::Null, |x| serde_json::json!(format_time(x)));
+        serde_json::json!({
+            "step": self.step,
+            "activations": self.activations,
+            "min": lit(self.min),
+            "mean": lit(self.mean),
+            "max": lit(self.max),
+            "minUs": self.min,
+            "meanUs": self.mean,
+            "maxUs": self.max,
+        })
+    }
+}
+
+impl TimeStats {
+    /// The time analysis as JSON: `{"steps":[StepStats::to_json…],"sequence":[{"time","active"}…]}`
+    /// (the form of `sfc sim --format json`, plus the microseconds).
+    pub fn to_json(&self) -> serde_json::Value {
+        serde_json::json!({
+            "steps": self.steps.iter().map(StepStats::to_json).collect::<Vec<_>>(),
+            "sequence": self
+                .sequence
+                .iter()
+                .map(|(time, active)| serde_json::json!({"time": format_time(*time), "timeUs": time, "active": active}))
+                .collect::<Vec<_>>(),
+        })
     }
 }

@@ -1,0 +1,357 @@
+// The monitor's side panels: variables (watch list, force, set), breakpoints, the condition
+// analysis of a stuck step, the time analysis per step, and the runtime's events.
+import { useEffect, useState } from 'preact/hooks';
+import { t } from '../i18n';
+import { toasts } from '../app/toast';
+import type { MonitorClient } from './client';
+import { parseValue, showValue, type ScanState, type StepReport, type Timing, type VariableInfo } from './protocol';
+
+const WATCH_KEY = 'sfc.monitor.watch';
+
+/** The variables watched at first: the located ones (the I/O), else the first ten. */
+export function defaultWatch(vars: VariableInfo[]): string[] {
+  const located = vars.filter((v) => v.location).map((v) => v.name);
+  return located.length ? located : vars.slice(0, 10).map((v) => v.name);
+}
+
+function storedWatch(pou: string): string[] | null {
+  try {
+    const raw = globalThis.localStorage?.getItem(`${WATCH_KEY}.${pou}`);
+    const list = raw ? (JSON.parse(raw) as unknown) : null;
+    return Array.isArray(list) ? list.filter((x): x is string => typeof x === 'string') : null;
+  } catch {
+    return null;
+  }
+}
+
+function storeWatch(pou: string, list: string[]): void {
+  try {
+    globalThis.localStorage?.setItem(`${WATCH_KEY}.${pou}`, JSON.stringify(list));
+  } catch {
+    // Storage disabled: the list lasts for this session.
+  }
+}
+
+function fail(e: Error): void {
+  toasts.show('error', t('monitor.refused', { message: e.message }));
+}
+
+export function VariablesPanel({ client, state }: { client: MonitorClient; state: ScanState | null }) {
+  const info = client.info;
+  const [watch, setWatch] = useState<string[] | null>(null);
+  const [adding, setAdding] = useState('');
+  useEffect(() => {
+    if (info && watch === null) {
+      const known = new Set(info.variables.map((v) => v.name));
+      setWatch((storedWatch(info.pou) ?? defaultWatch(info.variables)).filter((n) => known.has(n)));
+    }
+  }, [info]);
+  if (!info) return <div class="empty">{t('monitor.waiting')}</div>;
+  const list = watch ?? [];
+  const update = (next: string[]) => {
+    setWatch(next);
+    storeWatch(info.pou, next);
+  };
+  const others = info.variables.filter((v) => !list.includes(v.name));
+  const control = client.canControl();
+  return (
+    <div class="mon-vars">
+      {!control && <div class="mon-note">{info.control ? t('monitor.vars.noToken') : t('monitor.vars.watchOnly')}</div>}
+      <table class="mon-table">
+        <thead>
+          <tr>
+            <th>{t('monitor.vars.name')}</th>
+            <th>{t('monitor.vars.value')}</th>
+            <th>{t('monitor.vars.write')}</th>
+            <th />
+          </tr>
+        </thead>
+        <tbody>
+          {list.map((name) => {
+            const v = info.variables.find((x) => x.name === name);
+            if (!v) return null;
+            return <VariableRow key={name} v={v} client={client} state={state} control={control} onRemove={() => update(list.filter((n) => n !== name))} />;
+          })}
+        </tbody>
+      </table>
+      {others.length > 0 && (
+        <div class="mon-add">
+          <select aria-label={t('monitor.vars.addWhich')} value={adding} onChange={(e) => setAdding(e.currentTarget.value)}>
+            <option value="">{t('monitor.vars.addWhich')}</option>
+            {others.map((v) => (
+              <option key={v.name} value={v.name}>
+                {v.name} : {v.type}
+              </option>
+            ))}
+          </select>
+          <button
+            class="button"
+            disabled={!adding}
+            onClick={() => {
+              update([...list, adding]);
+              setAdding('');
+            }}
+          >
+            {t('monitor.vars.add')}
+          </button>
+        </div>
+      )}
+    </div>
+  );
+}
+
+function VariableRow(props: { v: VariableInfo; client: MonitorClient; state: ScanState | null; control: boolean; onRemove: () => void }) {
+  const { v, client, state, control } = props;
+  const isBool = v.type.toUpperCase() === 'BOOL';
+  // The chart writes its outputs every scan: a one-time write would not last, forcing does.
+  const output = /^%Q/i.test(v.location ?? '');
+  const value = state?.vars[v.name];
+  const forced = !!state?.forced.some((f) => f.toLowerCase() === v.name.toLowerCase());
+  const [text, setText] = useState(isBool ? (value === true ? 'FALSE' : 'TRUE') : '');
+  const [error, setError] = useState('');
+  const typed = () => {
+    const p = parseValue(v.type, text);
+    if (p instanceof Error) {
+      setError(t('monitor.vars.badValue', { type: v.type }));
+      return null;
+    }
+    setError('');
+    return p;
+  };
+  const send = (op: 'set' | 'force') => {
+    const p = typed();
+    if (p === null) return;
+    (op === 'set' ? client.set(v.name, p) : client.force(v.name, p)).catch((e: Error) => setError(e.message));
+  };
+  return (
+    <tr class={forced ? 'forced' : ''} data-var={v.name}>
+      <td class="mon-var-name" title={`${v.name} : ${v.type}${v.location ? ` AT ${v.location}` : ''}`}>
+        <span>{v.name}</span>
+        <span class="muted mon-type">
+          {v.type}
+          {v.location ? ` ${v.location}` : ''}
+        </span>
+      </td>
+      <td class="mon-var-value">
+        <span class={`mon-val ${value === true ? 'on' : value === false ? 'off' : ''}`}>{showValue(value)}</span>
+        {forced && (
+          <span class="mon-forced" title={t('monitor.vars.forcedTip')}>
+            {t('monitor.vars.forced')}
+          </span>
+        )}
+      </td>
+      <td class="mon-var-write">
+        {control && (
+          <form
+            class="mon-write"
+            onSubmit={(e) => {
+              e.preventDefault();
+              send(output ? 'force' : 'set');
+            }}
+          >
+            {isBool ? (
+              <select aria-label={t('monitor.vars.newValue', { name: v.name })} value={text} onChange={(e) => setText(e.currentTarget.value)}>
+                <option value="TRUE">TRUE</option>
+                <option value="FALSE">FALSE</option>
+              </select>
+            ) : (
+              <input
+                aria-label={t('monitor.vars.newValue', { name: v.name })}
+                class={error ? 'invalid' : ''}
+                value={text}
+                placeholder={showValue(value)}
+                onInput={(e) => setText(e.currentTarget.value)}
+              />
+            )}
+            {!output && (
+              <button type="submit" class="mini" title={t('monitor.vars.setTip')}>
+                {t('monitor.vars.set')}
+              </button>
+            )}
+            <button type="button" class="mini" title={t('monitor.vars.forceTip')} onClick={() => send('force')}>
+              {t('monitor.vars.force')}
+            </button>
+            {forced && (
+              <button type="button" class="mini" title={t('monitor.vars.unforceTip')} onClick={() => client.unforce(v.name).catch(fail)}>
+                {t('monitor.vars.unforce')}
+              </button>
+            )}
+          </form>
+        )}
+        {error && <div class="field-error">{error}</div>}
+      </td>
+      <td>
+        <button class="icon-button" title={t('monitor.vars.remove')} aria-label={t('monitor.vars.remove')} onClick={props.onRemove}>
+          ×
+        </button>
+      </td>
+    </tr>
+  );
+}
+
+export function BreakpointsPanel({ client, onReveal }: { client: MonitorClient; onReveal: (name: string) => void }) {
+  if (client.breakpoints.length === 0) return <div class="empty">{t('monitor.bp.none')}</div>;
+  return (
+    <table class="mon-table">
+      <tbody>
+        {client.breakpoints.map((b) => (
+          <tr key={`${b.kind}:${b.name}`} class={b.enabled ? '' : 'disabled'}>
+            <td>
+              <span class={`mon-dot ${b.enabled ? 'on' : 'off'}`} />
+            </td>
+            <td>
+              <button class="link" onClick={() => onReveal(b.name)}>
+                {b.name}
+              </button>
+              <span class="muted"> {t(`monitor.bp.kind.${b.kind}`)}</span>
+            </td>
+            <td class="mon-actions">
+              <button class="mini" onClick={() => client.breakpoint(b.enabled ? 'disable' : 'enable', b.kind, b.name).catch(fail)}>
+                {b.enabled ? t('monitor.bp.disable') : t('monitor.bp.enable')}
+              </button>
+              <button class="mini" onClick={() => client.breakpoint('delete', b.kind, b.name).catch(fail)}>
+                {t('monitor.bp.delete')}
+              </button>
+            </td>
+          </tr>
+        ))}
+      </tbody>
+    </table>
+  );
+}
+
+export function ExplainPanel(props: { report: StepReport | null; error: string; selectedStep: string | null; canExplain: boolean; onExplain: () => void }) {
+  const r = props.report;
+  return (
+    <div class="mon-why">
+      <div class="mon-why-head">
+        <button class="button" disabled={!props.canExplain} onClick={props.onExplain}>
+          {props.selectedStep ? t('monitor.explain.ask', { step: props.selectedStep }) : t('monitor.explain.select')}
+        </button>
+      </div>
+      {props.error && <div class="field-error">{props.error}</div>}
+      {!r && !props.error && <div class="empty">{t('monitor.explain.hint')}</div>}
+      {r && (
+        <>
+          <h3>
+            {t('monitor.explain.title', { step: r.step })} <span class="muted">{t('monitor.explain.activeFor', { time: r.elapsed })}</span>
+          </h3>
+          {r.timeout && <div class="muted">{t('monitor.explain.timeout', { time: r.timeout })}</div>}
+          {r.transitions.length === 0 && <div class="muted">{t('monitor.explain.none')}</div>}
+          {r.transitions.map((x) => (
+            <div key={x.transition} class="mon-why-tr">
+              <div>
+                <b>{x.transition}</b> <span class={`mon-val ${x.value ? 'on' : 'off'}`}>{x.value ? 'TRUE' : 'FALSE'}</span>
+              </div>
+              <code class="mon-guard">{x.guard}</code>
+              <table class="mon-table">
+                <tbody>
+                  {x.operands.map((o) => (
+                    <tr key={o.operand}>
+                      <td>
+                        <code>{o.operand}</code>
+                      </td>
+                      <td>
+                        <span class={`mon-val ${o.value === 'TRUE' ? 'on' : o.value === 'FALSE' ? 'off' : ''}`}>{o.value}</span>
+                      </td>
+                    </tr>
+                  ))}
+                </tbody>
+              </table>
+              {x.change.length > 0 && <div class="mon-fires">{t('monitor.explain.firesWhen', { change: x.change.join(', ') })}</div>}
+              {x.missing.length > 0 && <div class="mon-fires">{t('monitor.explain.waitsFor', { steps: x.missing.join(', ') })}</div>}
+              {x.masked_by && <div class="mon-fires">{t('monitor.explain.masked', { by: x.masked_by })}</div>}
+            </div>
+          ))}
+        </>
+      )}
+    </div>
+  );
+}
+
+export function TimingPanel({ client }: { client: MonitorClient }) {
+  const [timing, setTiming] = useState<Timing | null>(null);
+  const [error, setError] = useState('');
+  const load = () =>
+    client.timing().then(
+      (x) => {
+        setTiming(x);
+        setError('');
+      },
+      (e: Error) => setError(e.message),
+    );
+  useEffect(() => {
+    void load();
+    // While the panel is open and the run moves, the figures follow once a second.
+    const every = setInterval(() => {
+      if (!client.halted && client.status === 'open') void load();
+    }, 1000);
+    return () => clearInterval(every);
+  }, [client]);
+  return (
+    <div class="mon-timing">
+      <div class="mon-why-head">
+        <button class="button" onClick={() => void load()}>
+          {t('monitor.timing.refresh')}
+        </button>
+        {timing && <span class="muted">{t('monitor.timing.at', { scan: timing.scan })}</span>}
+      </div>
+      {error && <div class="field-error">{error}</div>}
+      {timing && (
+        <table class="mon-table mon-numbers">
+          <thead>
+            <tr>
+              <th>{t('monitor.timing.step')}</th>
+              <th>{t('monitor.timing.activations')}</th>
+              <th>{t('monitor.timing.min')}</th>
+              <th>{t('monitor.timing.mean')}</th>
+              <th>{t('monitor.timing.max')}</th>
+            </tr>
+          </thead>
+          <tbody>
+            {timing.steps.map((s) => (
+              <tr key={s.step} class={s.activations === 0 ? 'never' : ''}>
+                <td>{s.step}</td>
+                <td>{s.activations}</td>
+                <td>{s.min ?? '–'}</td>
+                <td>{s.mean ?? '–'}</td>
+                <td>{s.max ?? '–'}</td>
+              </tr>
+            ))}
+          </tbody>
+        </table>
+      )}
+    </div>
+  );
+}
+
+/** One event as a line of text. */
+function eventText(e: Record<string, unknown>): string {
+  switch (e.kind) {
+    case 'breakpoint':
+      return t('monitor.events.breakpoint', { name: String(e.step ?? e.transition) });
+    case 'conflict':
+      return t('monitor.events.conflict', { step: String(e.step), transitions: ((e.transitions as string[]) ?? []).join(', ') });
+    case 'unsafe':
+      return t('monitor.events.unsafe', { step: String(e.step) });
+    case 'overrun':
+      return t('monitor.events.overrun', { us: String(e.scanUs), skipped: String(e.skipped) });
+    case 'jump':
+      return t('monitor.events.jump', { from: String(e.from), to: String(e.to) });
+    default:
+      return `${String(e.kind)}: ${String(e.message ?? JSON.stringify(e))}`;
+  }
+}
+
+export function EventsPanel({ client }: { client: MonitorClient }) {
+  if (client.events.length === 0) return <div class="empty">{t('monitor.events.none')}</div>;
+  return (
+    <ol class="mon-events" reversed>
+      {[...client.events].reverse().map((e, i) => (
+        <li key={client.events.length - i} class={`mon-event mon-event-${e.kind}`}>
+          <span class="muted">{e.scan !== undefined ? t('monitor.events.scan', { scan: e.scan }) : ''}</span> {eventText(e)}
+        </li>
+      ))}
+    </ol>
+  );
+}

@@ -1,0 +1,200 @@
+// The monitor protocol, version 1 (docs/monitor.md): the messages a runtime (`sfc run`, the
+// editor's simulator, the ATMT adapter) sends, as the client keeps them.
+
+/** A variable's value: BOOL as boolean, integers and reals as numbers, TIME as "T#…", strings. */
+export type MonValue = boolean | number | string;
+
+export interface StepInfo {
+  name: string;
+  initial: boolean;
+}
+
+export interface TransitionInfo {
+  name: string;
+  from: string[];
+  to: string[];
+}
+
+export interface VariableInfo {
+  name: string;
+  /** IEC type name (BOOL, INT, UDINT, TIME, REAL, STRING …). */
+  type: string;
+  /** `%IX0.0` for a located variable. */
+  location?: string;
+}
+
+/** The `hello` message. */
+export interface Hello {
+  type: 'hello';
+  protocol: string;
+  version: number;
+  runtime: string;
+  pou: string;
+  period: string;
+  /** False when the runtime can only be watched (no halt, step, force or set). */
+  control: boolean;
+  tokenRequired: boolean;
+  authorized: boolean;
+  halted: boolean;
+  history: number;
+  steps: StepInfo[];
+  transitions: TransitionInfo[];
+  variables: VariableInfo[];
+}
+
+export interface ActiveStep {
+  step: string;
+  elapsed: string;
+  elapsedUs: number;
+}
+
+/** One scan's state in full (a `snapshot`, a `history` entry, or deltas merged). */
+export interface ScanState {
+  scan: number;
+  time: string;
+  timeUs: number;
+  active: ActiveStep[];
+  fired: string[];
+  /** Guard of every transition leaving an active step; null when evaluating it faulted. */
+  guards: Record<string, boolean | null>;
+  vars: Record<string, MonValue>;
+  forced: string[];
+}
+
+/** What changed since the last message (`delta`): `guards`, `vars`, `forced` only when changed. */
+export interface Delta {
+  type: 'delta';
+  scan: number;
+  time: string;
+  timeUs: number;
+  active: ActiveStep[];
+  fired: string[];
+  guards?: Record<string, boolean | null>;
+  vars?: Record<string, MonValue>;
+  forced?: string[];
+}
+
+export interface MonEvent {
+  type: 'event';
+  kind: string;
+  scan?: number;
+  step?: string;
+  transition?: string;
+  transitions?: string[];
+  message?: string;
+  [k: string]: unknown;
+}
+
+export interface Breakpoint {
+  kind: 'step' | 'transition';
+  name: string;
+  enabled: boolean;
+}
+
+/** Why one transition leaving a stuck step does not fire (`explain`). */
+export interface TransitionReport {
+  transition: string;
+  guard: string;
+  value: boolean;
+  operands: { operand: string; value: string }[];
+  change: string[];
+  missing: string[];
+  masked_by: string | null;
+}
+
+export interface StepReport {
+  step: string;
+  elapsed: string;
+  elapsedUs: number;
+  timeout: string | null;
+  transitions: TransitionReport[];
+  lines: string[];
+  scan: number;
+}
+
+export interface StepTiming {
+  step: string;
+  activations: number;
+  min: string | null;
+  mean: string | null;
+  max: string | null;
+  minUs: number | null;
+  meanUs: number | null;
+  maxUs: number | null;
+}
+
+export interface Timing {
+  scan: number;
+  steps: StepTiming[];
+}
+
+/** Merges a `delta` into the state it follows: a new object, the old one untouched. */
+export function mergeDelta(base: ScanState, d: Delta): ScanState {
+  return {
+    scan: d.scan,
+    time: d.time,
+    timeUs: d.timeUs,
+    active: d.active,
+    fired: d.fired,
+    guards: d.guards ?? base.guards,
+    vars: d.vars ? { ...base.vars, ...d.vars } : base.vars,
+    forced: d.forced ?? base.forced,
+  };
+}
+
+/** A `snapshot` or `history` entry as a state (extra fields such as `stats` dropped). */
+export function toState(m: Record<string, unknown>): ScanState {
+  return {
+    scan: Number(m.scan ?? 0),
+    time: String(m.time ?? 'T#0s'),
+    timeUs: Number(m.timeUs ?? 0),
+    active: (m.active as ActiveStep[] | undefined) ?? [],
+    fired: (m.fired as string[] | undefined) ?? [],
+    guards: (m.guards as Record<string, boolean | null> | undefined) ?? {},
+    vars: (m.vars as Record<string, MonValue> | undefined) ?? {},
+    forced: (m.forced as string[] | undefined) ?? [],
+  };
+}
+
+/**
+ * A value typed by the user for a variable of IEC type `type`, as the protocol carries it;
+ * an Error with the reason when it is not one.
+ */
+export function parseValue(type: string, text: string): MonValue | Error {
+  const s = text.trim();
+  const ty = type.toUpperCase();
+  if (ty === 'BOOL') {
+    if (/^(true|1)$/i.test(s)) return true;
+    if (/^(false|0)$/i.test(s)) return false;
+    return new Error('BOOL');
+  }
+  if (/^(S|D|L|U|US|UD|UL)?INT$|^(BYTE|WORD|DWORD|LWORD)$/.test(ty)) {
+    if (!/^[+-]?\d+$/.test(s)) return new Error(ty);
+    return Number(s);
+  }
+  if (ty === 'REAL' || ty === 'LREAL') {
+    const n = Number(s);
+    if (s === '' || !Number.isFinite(n)) return new Error(ty);
+    return n;
+  }
+  if (ty === 'TIME' || ty === 'LTIME') {
+    if (!/^(L?T|L?TIME)#[-+]?[\d._a-z]+$/i.test(s)) return new Error(ty);
+    return s;
+  }
+  return text;
+}
+
+/** A value as the user reads it: TRUE/FALSE, numbers, TIME literals, 'strings'. */
+export function showValue(v: MonValue | undefined): string {
+  if (v === undefined) return '';
+  if (typeof v === 'boolean') return v ? 'TRUE' : 'FALSE';
+  return String(v);
+}
+
+/** An elapsed time compactly, for the label beside an active step: 250 ms, 12.3 s, 2:05 min. */
+export function shortDuration(us: number): string {
+  if (us < 1_000_000) return `${Math.round(us / 1000)} ms`;
+  if (us < 60_000_000) return `${(us / 1_000_000).toFixed(1)} s`;
+  const s = Math.floor(us / 1_000_000);
+  return `${Math.floor(s / 60)}:${String(s % 60).padStart(2, '0')} min`;
+}
