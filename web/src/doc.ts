@@ -15,11 +15,19 @@ export type ElementKind =
   | 'text'
   | 'actionBlock';
 
+/** An attribute pragma the editor does not edit (`{attribute 'name' := 'value'}`), kept as read
+ *  so that saving does not drop it (PLCopen `addData`, other tools' attributes). */
+export interface OtherAttribute {
+  name: string;
+  value?: string;
+}
+
 export interface ActionDef {
   name: string;
   language?: Language;
   body: string;
   description?: string;
+  attributes?: OtherAttribute[];
 }
 
 export interface Association {
@@ -51,6 +59,8 @@ export interface Element {
   foreground?: string;
   lineWidth?: number;
   hideLabel?: boolean;
+  /** Steps: `sfc.final`, a step intentionally without a way out. */
+  final?: boolean;
   pins?: number;
   target?: string;
   condition?: string;
@@ -61,6 +71,8 @@ export interface Element {
   font?: string;
   step?: string;
   associations?: Association[];
+  /** Steps and transitions: attribute pragmas the editor does not edit. */
+  attributes?: OtherAttribute[];
 }
 
 export interface Connection {
@@ -83,6 +95,8 @@ export interface EditorDoc {
   actions: ActionDef[];
   elements: Element[];
   connections: Connection[];
+  /** Attribute pragmas before the POU that the editor does not edit. */
+  attributes?: OtherAttribute[];
 }
 
 /** Number of input and output pins of a block (see the table in sfc-doc). */
@@ -108,10 +122,14 @@ export function pinCounts(e: Pick<Element, 'kind' | 'pins'>): { inputs: number; 
 /** Which block kinds an output of `source` may feed (the valid pairs of sfc-doc). */
 export const VALID_TARGETS: Record<ElementKind, ElementKind[]> = {
   step: ['transition', 'selectionDivergence', 'simultaneousConvergence'],
-  selectionDivergence: ['transition'],
+  // Beyond the plain pairs, IEC draws a selection divergence feeding a simultaneous
+  // convergence (one step's branch joins a simultaneous transition) and a simultaneous
+  // divergence feeding a selection convergence or a jump (a simultaneous branch re-enters a
+  // step that has other predecessors); sfc-doc reads and writes all three.
+  selectionDivergence: ['transition', 'simultaneousConvergence'],
   simultaneousConvergence: ['transition'],
   transition: ['step', 'simultaneousDivergence', 'selectionConvergence', 'jump'],
-  simultaneousDivergence: ['step'],
+  simultaneousDivergence: ['step', 'selectionConvergence', 'jump'],
   selectionConvergence: ['step'],
   jump: [],
   text: [],

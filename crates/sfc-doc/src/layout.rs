@@ -156,6 +156,99 @@ fn across(doc: &EditorDoc, d: &Derived, i: usize, input: bool, pin: usize) -> Op
     }
 }
 
+fn is_run_block(doc: &EditorDoc, i: usize) -> bool {
+    matches!(doc.elements[i].kind, Some(ElementKind::Step | ElementKind::Transition))
+}
+
+/// Straightens the wires at the single pin of a branch bar. That pin sits in the middle of the
+/// bar, while the layout puts the step above a divergence over its first branch (and the step
+/// below a convergence over the first branch too), so the wire would bend twice on its way. A
+/// vertical run of steps and transitions placed here is moved sideways onto the bar's single
+/// pin when its ends are that pin, a jump or nothing (never a branch pin of a bar, which would
+/// bend in turn), both ends agree, and it lands on no other block.
+fn centre_runs(doc: &mut EditorDoc, d: &Derived, placed: &[bool], keep: &[bool]) {
+    let n = doc.elements.len();
+    let kind = |doc: &EditorDoc, i: usize| doc.elements[i].kind;
+    let mut seen = vec![false; n];
+    for start in 0..n {
+        if seen[start] || !placed[start] || !is_run_block(doc, start) {
+            continue;
+        }
+        // Up to the top of the run (a loop of steps and transitions alone has none).
+        let mut top = start;
+        let mut path = vec![start];
+        while let Some((p, _)) = across(doc, d, top, true, 0) {
+            if !is_run_block(doc, p) || path.contains(&p) {
+                break;
+            }
+            top = p;
+            path.push(p);
+        }
+        let mut run = vec![top];
+        let mut bottom = top;
+        while let Some((next, _)) = across(doc, d, bottom, false, 0) {
+            if !is_run_block(doc, next) || run.contains(&next) {
+                break;
+            }
+            run.push(next);
+            bottom = next;
+        }
+        for &i in &run {
+            seen[i] = true;
+        }
+        if run.iter().any(|&i| keep.get(i).copied().unwrap_or(false) || !placed[i]) {
+            continue;
+        }
+        // What each end asks for: Some(Some(x)) a bar's single pin at x, Some(None) nothing
+        // (no wire, or a jump), None a wire that must stay where it is.
+        let above = match across(doc, d, top, true, 0) {
+            None => Some(None),
+            Some((b, _)) if is_run_block(doc, b) => None, // a loop
+            Some((b, _)) => match kind(doc, b) {
+                Some(ElementKind::SelectionConvergence | ElementKind::SimultaneousConvergence) if placed[b] => {
+                    Some(Some(pin_pos(&doc.elements[b], false, 0).x))
+                }
+                _ => None,
+            },
+        };
+        let below = match across(doc, d, bottom, false, 0) {
+            None => Some(None),
+            Some((b, _)) => match kind(doc, b) {
+                Some(ElementKind::Jump) => Some(None),
+                Some(ElementKind::SelectionDivergence | ElementKind::SimultaneousDivergence) if placed[b] => {
+                    Some(Some(pin_pos(&doc.elements[b], true, 0).x))
+                }
+                _ => None,
+            },
+        };
+        let target = match (above, below) {
+            (Some(Some(a)), Some(Some(b))) if (a - b).abs() < 0.5 => a,
+            (Some(Some(a)), Some(None)) | (Some(None), Some(Some(a))) => a,
+            _ => continue,
+        };
+        let axis = |e: &Element| e.x + e.w / 2.0;
+        let x0 = axis(&doc.elements[top]);
+        if run.iter().any(|&i| (axis(&doc.elements[i]) - x0).abs() > 0.5) || (target - x0).abs() < 0.5 {
+            continue;
+        }
+        let dx = target - x0;
+        let overlaps = run.iter().any(|&i| {
+            let e = &doc.elements[i];
+            let (l, r, t, b) = (e.x + dx - GRID / 2.0, e.x + e.w + dx + GRID / 2.0, e.y, e.y + e.h);
+            (0..n).any(|j| {
+                let o = &doc.elements[j];
+                placed[j] && !run.contains(&j) && o.x < r && o.x + o.w > l && o.y < b && o.y + o.h > t
+            })
+        });
+        if overlaps {
+            continue;
+        }
+        for &i in &run {
+            doc.elements[i].x += dx;
+        }
+    }
+}
+
 /// Places every block not marked `keep` on `layout` and routes every connection read.
 // Blocks are written by index while their neighbours are read.
 #[allow(clippy::needless_range_loop)]
@@ -260,6 +353,7 @@ pub fn place(doc: &mut EditorDoc, d: &Derived, m: &Model, layout: &Layout, keep:
         (e.x, e.y, e.w, e.h) = (x.round(), cy - h / 2.0, w.round(), h);
         placed[i] = true;
     }
+    centre_runs(doc, d, &placed, keep);
     // Jumps, below the pin they leave.
     for i in 0..n {
         if placed[i] || doc.elements[i].kind != Some(ElementKind::Jump) {

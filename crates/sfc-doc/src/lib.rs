@@ -21,9 +21,10 @@
 //! * A connection goes from an output pin to an input pin of another block; every pin holds at
 //!   most one connection. Valid pairs: step → transition, step → selection divergence,
 //!   step → simultaneous convergence, selection divergence → transition,
-//!   simultaneous convergence → transition, transition → step, transition → simultaneous
-//!   divergence, transition → selection convergence, transition → jump,
-//!   simultaneous divergence → step, selection convergence → step.
+//!   selection divergence → simultaneous convergence, simultaneous convergence → transition,
+//!   transition → step, transition → simultaneous divergence, transition → selection
+//!   convergence, transition → jump, simultaneous divergence → step, simultaneous divergence →
+//!   selection convergence, simultaneous divergence → jump, selection convergence → step.
 //! * An action block belongs to the step whose element id is in `step`; its rows are the step's
 //!   action associations, in order.
 //! * Element ids are unique in a document and stable while it is edited; a document opened
@@ -322,8 +323,20 @@ pub fn to_text(doc: &EditorDoc) -> Written {
 /// `file_text` with the POU named `doc.pou` replaced by the document's text (appended at the
 /// end when the file has no such POU); everything else in the file is kept byte for byte.
 pub fn splice(file_text: &str, doc: &EditorDoc) -> String {
+    splice_replacing(file_text, doc, &doc.pou)
+}
+
+/// [`splice`] for a POU renamed in the editor: the POU named `replacing` (the name it had when
+/// opened) is replaced by the document, whose name may differ; appended when the file has no
+/// such POU.
+pub fn splice_replacing(file_text: &str, doc: &EditorDoc, replacing: &str) -> String {
     let kept: Vec<String> = doc.attributes.iter().map(|a| a.name.clone()).collect();
-    splice::splice(file_text, &doc.pou, &to_text(doc).text, &kept)
+    splice::splice(file_text, replacing, &to_text(doc).text, &kept)
+}
+
+/// Whether IEC text holds a POU named `name` (compared as IEC does, ignoring case).
+pub fn holds_pou(file_text: &str, name: &str) -> bool {
+    splice::holds_pou(file_text, name)
 }
 
 /// Positions every block and routes every connection again (the structured layout of

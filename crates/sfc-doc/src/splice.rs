@@ -3,7 +3,16 @@
 
 use sfc_syntax::ast::Item;
 
-/// See [`crate::splice`]. `kept`: the names of the attributes the POU's new text holds.
+/// See [`crate::holds_pou`].
+pub fn holds_pou(file_text: &str, name: &str) -> bool {
+    if file_text.trim().is_empty() {
+        return false;
+    }
+    let (unit, _) = sfc_syntax::parse(0, file_text);
+    unit.items.iter().any(|item| matches!(item, Item::Pou(p) if p.name.text.eq_ignore_ascii_case(name)))
+}
+
+/// See [`crate::splice_replacing`]. `kept`: the names of the attributes the POU's new text holds.
 pub fn splice(file_text: &str, pou: &str, pou_text: &str, kept: &[String]) -> String {
     if file_text.trim().is_empty() {
         return pou_text.to_string();
@@ -62,6 +71,16 @@ mod tests {
             out,
             "(* head *)\nPROGRAM A\n    INITIAL_STEP X: END_STEP\nEND_PROGRAM\n\n{attribute 'other' := '1'}\nPROGRAM B\n    INITIAL_STEP S: END_STEP\nEND_PROGRAM\n(* tail *)\n"
         );
+    }
+
+    #[test]
+    fn replaces_a_renamed_pou_by_its_old_name() {
+        let file = "PROGRAM A\n    INITIAL_STEP X: END_STEP\nEND_PROGRAM\n\nPROGRAM Old\n    INITIAL_STEP O: END_STEP\nEND_PROGRAM\n";
+        let out = splice(file, "old", POU, &[]);
+        assert_eq!(out, "PROGRAM A\n    INITIAL_STEP X: END_STEP\nEND_PROGRAM\n\nPROGRAM B\n    INITIAL_STEP S: END_STEP\nEND_PROGRAM\n");
+        assert!(holds_pou(file, "OLD"));
+        assert!(!holds_pou(file, "B"));
+        assert!(!holds_pou("", "B"));
     }
 
     #[test]

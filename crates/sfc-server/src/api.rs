@@ -344,6 +344,9 @@ struct SaveRequest {
     hash: Option<String>,
     #[serde(default)]
     overwrite: bool,
+    /// The POU's name as opened, when the page renamed it: that POU is the one replaced.
+    #[serde(default)]
+    pou: Option<String>,
 }
 
 pub async fn save(State(s): State<AppState>, body: Result<Bytes, BytesRejection>) -> Response {
@@ -383,8 +386,15 @@ fn save_file(s: &AppState, req: SaveRequest) -> Answer {
         return Err(ApiError::new(StatusCode::NOT_FOUND, format!("the directory of `{name}` does not exist")));
     }
     let plain = CheckOptions { analysis: false, ..CheckOptions::default() };
+    // The POU replaced in the file: the one opened, which the page may have renamed since.
+    let replacing = req.pou.clone().unwrap_or_else(|| req.doc.pou.clone());
+    let renamed = !replacing.eq_ignore_ascii_case(&req.doc.pou);
     let bytes = match req.format {
-        FileFormat::St => sfc_doc::splice(current.as_deref().unwrap_or(""), &req.doc),
+        FileFormat::St => {
+            let text = current.as_deref().unwrap_or("");
+            refuse_rename_onto(&name, text, renamed, &req.doc.pou)?;
+            sfc_doc::splice_replacing(text, &req.doc, &replacing)
+        }
         FileFormat::Xml => {
             // The other POUs come through the import; a file that does not import cleanly would
             // lose them, so it is not overwritten.
@@ -403,7 +413,8 @@ fn save_file(s: &AppState, req: SaveRequest) -> Answer {
                     imported.text
                 }
             };
-            let spliced = sfc_doc::splice(&base, &req.doc);
+            refuse_rename_onto(&name, &base, renamed, &req.doc.pou)?;
+            let spliced = sfc_doc::splice_replacing(&base, &req.doc, &replacing);
             let checked = sfc_analysis::check_source(0, &format!("{name} (as text)"), &spliced, &plain);
             match sfc_plcopen::export(&checked) {
                 Ok(xml) => xml,
@@ -433,6 +444,17 @@ fn save_file(s: &AppState, req: SaveRequest) -> Answer {
         diagnostics.extend(page_diagnostics(&name, &bytes, None, &checked.diagnostics, charts));
     }
     Ok(json!({ "path": path_string(&path), "hash": content_hash(bytes.as_bytes()), "diagnostics": diagnostics }))
+}
+
+/// A renamed POU may not take the name of another POU of its file: saving would leave two.
+fn refuse_rename_onto(file: &str, text: &str, renamed: bool, pou: &str) -> Result<(), ApiError> {
+    if renamed && sfc_doc::holds_pou(text, pou) {
+        return Err(ApiError::new(
+            StatusCode::UNPROCESSABLE_ENTITY,
+            format!("`{file}` already holds a POU named `{pou}`; rename the chart to another name"),
+        ));
+    }
+    Ok(())
 }
 
 #[derive(Deserialize)]

@@ -12,6 +12,7 @@ pub mod compile;
 mod confine;
 mod diag;
 mod disk;
+mod sim;
 
 pub use access::TOKEN_HEADER;
 pub use confine::{confine, Refusal};
@@ -106,6 +107,8 @@ struct Session {
     /// Saves run one at a time, so the conflict check and the write of one are not interleaved
     /// with another's.
     save_lock: Arc<tokio::sync::Mutex<()>>,
+    /// The built-in simulator's runs (monitor mode), stopped with the session.
+    sims: sim::Simulations,
 }
 
 /// The server's state, shared by every request.
@@ -147,6 +150,7 @@ impl AppState {
             token,
             port,
             save_lock: Arc::new(tokio::sync::Mutex::new(())),
+            sims: sim::Simulations::default(),
         })))
     }
 
@@ -183,6 +187,8 @@ pub fn app(state: AppState) -> Router {
         .route("/api/build", post(api::build))
         .route("/api/layout", post(api::layout))
         .route("/api/new", post(api::new_chart))
+        .route("/api/sim/start", post(sim::start))
+        .route("/api/sim/stop", post(sim::stop))
         .route("/api", any(api::not_found))
         .route("/api/{*rest}", any(api::not_found))
         .method_not_allowed_fallback(api::method_not_allowed)
@@ -221,6 +227,7 @@ pub fn serve(opts: EditOptions, ready: impl FnOnce(&str)) -> Result<(), String> 
         ready(&state.url());
         tokio::signal::ctrl_c().await.map_err(|e| format!("cannot wait for Ctrl-C: {e}"))?;
         let _ = stop_tx.send(());
+        state.0.sims.stop_all();
         // Open keep-alive connections of a browser must not hold the exit up for long.
         match tokio::time::timeout(std::time::Duration::from_secs(3), server).await {
             Ok(Ok(Err(e))) => Err(format!("the server failed: {e}")),

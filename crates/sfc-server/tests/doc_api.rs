@@ -107,6 +107,35 @@ async fn save_splices_atomically_and_detects_changes() {
 }
 
 #[tokio::test]
+async fn save_of_a_renamed_pou_replaces_it_by_its_old_name() {
+    let d = scratch_with("rename", &["two_pous.st"]);
+    let path = d.join("two_pous.st");
+    let s = state(&[&d], None);
+    let opened = open_ok(&s, &path).await;
+    let mut first = chart(&opened, "First");
+    // Onto the name of the other POU of the file: refused, nothing written.
+    first["pou"] = json!("second");
+    let onto = json!({ "path": path_str(&path), "format": "st", "doc": first, "hash": opened["hash"], "pou": "First" });
+    let a = post(&s, "/api/save", &onto).await;
+    assert_eq!(a.status, 422, "{}", a.text);
+    assert!(a.body["error"].as_str().unwrap().contains("already holds a POU named `second`"), "{}", a.text);
+    assert_eq!(std::fs::read_to_string(&path).unwrap(), fixture_text("two_pous.st"));
+    // A fresh name: the old POU is replaced, not kept beside the renamed one.
+    first["pou"] = json!("Renamed");
+    let a = post(
+        &s,
+        "/api/save",
+        &json!({ "path": path_str(&path), "format": "st", "doc": first, "hash": opened["hash"], "pou": "First" }),
+    )
+    .await;
+    assert_eq!(a.status, 200, "{}", a.text);
+    let reopened = open_ok(&s, &path).await;
+    let pous: Vec<&str> = reopened["charts"].as_array().unwrap().iter().map(|c| c["pou"].as_str().unwrap()).collect();
+    assert_eq!(pous, ["Renamed", "Second"]);
+    assert_eq!(chart(&reopened, "Renamed"), first);
+}
+
+#[tokio::test]
 async fn save_new_text_and_xml_files() {
     let d = scratch_with("savenew", &["seed.st", "seed.xml"]);
     let s = state(&[&d], None);

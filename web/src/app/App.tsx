@@ -13,6 +13,8 @@ import { ErrorList, type WitnessView } from './ErrorList';
 import { Icon } from './icons';
 import { MenuBar, type MenuDef } from './Menu';
 import { PrintDialog } from './PrintDialog';
+import { useMonitor } from '../monitor';
+import { installProbe } from './probe';
 import { PropertiesPanel } from './Properties';
 import { download, ResultPanel } from './ResultPanel';
 import { baseName, formatOf, isDirty, mayClose, tabTitle, TabStore, unloadGuard, type CloseChoice, type NewTab, type TabState } from './store';
@@ -79,6 +81,8 @@ export function App({ api, createCanvas }: AppProps) {
   const host = session?.mode === 'host' ? session.host ?? null : null;
   const tab = store.active();
   const canvas = tab ? canvases.current.get(tab.id) : undefined;
+  // Monitor mode (web/src/monitor): its menu, toolbar button and view over the workspace.
+  const monitor = useMonitor({ createCanvas, current: () => (canvas && tab ? { doc: canvas.getDoc(), title: tabTitle(tab).replace(/\*$/, '') } : null) });
 
   // Language: every string is re-read on render; the canvases re-translate their palettes.
   useEffect(() => {
@@ -97,6 +101,9 @@ export function App({ api, createCanvas }: AppProps) {
     window.addEventListener('beforeunload', guard);
     return () => window.removeEventListener('beforeunload', guard);
   }, [store]);
+
+  // Read-only views for the browser tests (window.__sfc).
+  useEffect(() => installProbe(store, canvases.current), [store]);
 
   // Start: the session, then the files named on the command line (or the host chart).
   useEffect(() => {
@@ -201,7 +208,7 @@ export function App({ api, createCanvas }: AppProps) {
       const r = await api.open(path);
       if (r.charts.length === 0) toasts.show('info', t('open.noCharts', { file: baseName(path) }));
       for (const chart of r.charts) {
-        addTab({ path: r.path, format: r.format, hash: r.hash, pou: chart.pou, chartTarget: chart.target, diagnostics: r.diagnostics }, chart);
+        addTab({ path: r.path, format: r.format, hash: r.hash, pou: chart.pou, filePou: chart.pou, chartTarget: chart.target, diagnostics: r.diagnostics }, chart);
       }
     } catch (e) {
       if (e instanceof ApiError && e.status === 404) toasts.show('error', t('open.missing', { file: path }));
@@ -218,7 +225,7 @@ export function App({ api, createCanvas }: AppProps) {
         return;
       }
       if (r.charts.length > 1) toasts.show('info', t('host.firstChart', { pou: chart.pou }));
-      addTab({ path: r.path, format: r.format, hash: r.hash, pou: chart.pou, chartTarget: h.fb, diagnostics: r.diagnostics }, { ...chart, target: h.fb });
+      addTab({ path: r.path, format: r.format, hash: r.hash, pou: chart.pou, filePou: chart.pou, chartTarget: h.fb, diagnostics: r.diagnostics }, { ...chart, target: h.fb });
       store.update(store.activeId!, { buildTarget: h.fb });
     } catch (e) {
       if (!(e instanceof ApiError) || e.status !== 404) return;
@@ -262,7 +269,9 @@ export function App({ api, createCanvas }: AppProps) {
     }
     const doc = c.getDoc();
     const hash = path === x.path ? x.hash : store.tabs.find((o) => o.path === path)?.hash ?? null;
-    const request = { path, format, doc, hash };
+    // Into its own file, the POU replaced is the one there, whatever the chart is called now.
+    const replacing = path === x.path && x.filePou !== null ? { pou: x.filePou } : {};
+    const request = { path, format, doc, hash, ...replacing };
     let result;
     try {
       result = await api.save(request);
@@ -277,7 +286,7 @@ export function App({ api, createCanvas }: AppProps) {
       }
     }
     c.markSaved();
-    store.update(x.id, { path: result.path, format, hash: result.hash, unsaved: false, canvasDirty: false, pou: doc.pou, diagnostics: result.diagnostics });
+    store.update(x.id, { path: result.path, format, hash: result.hash, unsaved: false, canvasDirty: false, pou: doc.pou, filePou: doc.pou, diagnostics: result.diagnostics });
     // Other charts of the same file now compare against the new contents.
     for (const o of store.tabs) if (o.id !== x.id && o.path === result.path) store.update(o.id, { hash: result.hash });
     toasts.show('success', t('save.saved', { file: baseName(result.path) }));
@@ -451,6 +460,7 @@ export function App({ api, createCanvas }: AppProps) {
         ...LANGUAGES.map((l) => ({ label: t(`lang.${l}`), checked: lang === l, action: () => setLanguage(l) })),
       ],
     },
+    monitor.menu,
     {
       id: 'help',
       label: t('menu.help'),
@@ -520,6 +530,8 @@ export function App({ api, createCanvas }: AppProps) {
           onClick={() => void runBuild()}
         />
         {busy && <span class="spinner" aria-label={t('common.working')} />}
+        <span class="tool-separator" />
+        {monitor.button}
       </div>
 
       {mdi && store.tabs.length > 0 && (
@@ -559,6 +571,7 @@ export function App({ api, createCanvas }: AppProps) {
       )}
 
       <div class="workspace">
+        {monitor.overlay}
         <div class="main-column">
           <div class={`canvas-area ${panels.tools ? '' : 'hide-palette'}`}>
             {store.tabs.map((x) => (

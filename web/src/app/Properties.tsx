@@ -5,7 +5,7 @@ import { useEffect, useState } from 'preact/hooks';
 import type { Diag } from '../api';
 import type { CanvasHandle } from '../diagram/types';
 import type { ActionDef, Association, ChartTarget, Connection, EditorDoc, Element, Language } from '../doc';
-import { t } from '../i18n';
+import { currentLanguage, diagTitle, t } from '../i18n';
 import { freshName, isIecName, stepNames } from './chart';
 import { CodeEditor } from './CodeEditor';
 import { parseDuration, secondsToLiteral } from './duration';
@@ -223,7 +223,8 @@ function ElementProperties(props: PanelProps & { element: Element }) {
     <div class="properties">
       <div class="prop-heading">
         <span class="kind-badge">{t(`kind.${e.kind}`)}</span>
-        <span>{e.name || e.id}</span>
+        {/* Unnamed blocks: a jump by its target, an action block by its step, others by id. */}
+        <span title={e.id}>{e.name || (e.kind === 'jump' ? `→ ${e.target ?? '?'}` : owner?.name ?? e.id)}</span>
       </div>
       {diags.length > 0 && (
         <ul class="inline-diagnostics">
@@ -231,7 +232,8 @@ function ElementProperties(props: PanelProps & { element: Element }) {
             <li key={k} class={`sev-${d.severity}`} title={d.message}>
               <Icon name={d.severity} />
               <span class="diag-code">{d.code}</span>
-              <span>{d.message}</span>
+              {/* In Czech and German the code's translated title; the English message is the tooltip. */}
+              <span>{currentLanguage() === 'en' ? d.message : diagTitle(d.code, d.title)}</span>
             </li>
           ))}
         </ul>
@@ -351,17 +353,17 @@ function ElementProperties(props: PanelProps & { element: Element }) {
       )}
 
       <Section title={t('props.layout')}>
-        <Field label={t('props.position')}>
+        <Field label={t('props.position')} for="p-pos-x">
           <div class="pair">
-            <NumberInput value={e.x} onCommit={(v) => v !== undefined && set({ x: v })} />
-            <NumberInput value={e.y} onCommit={(v) => v !== undefined && set({ y: v })} />
+            <NumberInput id="p-pos-x" value={e.x} onCommit={(v) => v !== undefined && set({ x: v })} />
+            <NumberInput id="p-pos-y" value={e.y} onCommit={(v) => v !== undefined && set({ y: v })} />
           </div>
         </Field>
         {!isTransition && (
-          <Field label={t('props.size')}>
+          <Field label={t('props.size')} for="p-size-w">
             <div class="pair">
-              <NumberInput value={e.w} min={1} onCommit={(v) => v !== undefined && set({ w: v })} />
-              <NumberInput value={e.h} min={1} onCommit={(v) => v !== undefined && set({ h: v })} />
+              <NumberInput id="p-size-w" value={e.w} min={1} onCommit={(v) => v !== undefined && set({ w: v })} />
+              <NumberInput id="p-size-h" value={e.h} min={1} onCommit={(v) => v !== undefined && set({ h: v })} />
             </div>
           </Field>
         )}
@@ -424,6 +426,8 @@ function AssociationTable(props: { doc: EditorDoc; block: Element; canvas: Canva
     commit(next);
   };
   const listId = `actions-${props.block.id}`;
+  // The duration column only when a row needs one, so the action names get the room.
+  const anyTimed = rows.some((r) => TIMED_QUALIFIERS.has(r.qualifier));
   return (
     <div class="assoc">
       <datalist id={listId}>
@@ -434,11 +438,11 @@ function AssociationTable(props: { doc: EditorDoc; block: Element; canvas: Canva
       <table class="assoc-table">
         <thead>
           <tr>
-            <th>{t('props.qualifier')}</th>
-            <th>{t('props.duration')}</th>
-            <th>{t('props.action')}</th>
-            <th>{t('props.indicator')}</th>
-            <th />
+            <th class="col-qualifier">{t('props.qualifier')}</th>
+            {anyTimed && <th class="col-duration">{t('props.duration')}</th>}
+            <th class="col-action">{t('props.action')}</th>
+            <th class="col-indicator">{t('props.indicator')}</th>
+            <th class="col-buttons" />
           </tr>
         </thead>
         <tbody>
@@ -456,18 +460,20 @@ function AssociationTable(props: { doc: EditorDoc; block: Element; canvas: Canva
                     ))}
                   </select>
                 </td>
-                <td>
-                  {timed && (
-                    <input
-                      aria-label={t('props.duration')}
-                      class={durationError ? 'invalid' : ''}
-                      title={durationError}
-                      placeholder="T#1s"
-                      value={r.duration ?? ''}
-                      onChange={(e) => change(k, { duration: e.currentTarget.value.trim() || undefined })}
-                    />
-                  )}
-                </td>
+                {anyTimed && (
+                  <td>
+                    {timed && (
+                      <input
+                        aria-label={t('props.duration')}
+                        class={durationError ? 'invalid' : ''}
+                        title={durationError}
+                        placeholder="T#1s"
+                        value={r.duration ?? ''}
+                        onChange={(e) => change(k, { duration: e.currentTarget.value.trim() || undefined })}
+                      />
+                    )}
+                  </td>
+                )}
                 <td>
                   <input aria-label={t('props.action')} list={listId} value={r.action} onChange={(e) => change(k, { action: e.currentTarget.value.trim() })} />
                 </td>

@@ -39,6 +39,8 @@ export interface SaveRequest {
   doc: EditorDoc;
   hash: string | null;
   overwrite?: boolean;
+  /** The POU's name in the file when the chart was renamed since: that POU is replaced. */
+  pou?: string;
 }
 
 export type Api = ReturnType<typeof createApi>;

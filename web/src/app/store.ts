@@ -14,6 +14,9 @@ export interface TabState {
   /** Hash of the file as last read or written (the save conflict check), null for a new file. */
   hash: string | null;
   pou: string;
+  /** The POU's name in the file as last opened or saved (null: not in the file yet). A save
+   *  replaces that POU, so renaming the chart does not leave the old one behind. */
+  filePou: string | null;
   chartTarget: ChartTarget;
   /** The chart has changes no file holds (a new chart), whatever the canvas' undo history says. */
   unsaved: boolean;
@@ -26,7 +29,7 @@ export interface TabState {
   buildTarget: BuildTarget;
 }
 
-export type NewTab = Pick<TabState, 'path' | 'format' | 'hash' | 'pou' | 'chartTarget'> & Partial<Pick<TabState, 'unsaved' | 'diagnostics'>>;
+export type NewTab = Pick<TabState, 'path' | 'format' | 'hash' | 'pou' | 'chartTarget'> & Partial<Pick<TabState, 'unsaved' | 'diagnostics' | 'filePou'>>;
 
 export class TabStore {
   tabs: TabState[] = [];
@@ -49,6 +52,7 @@ export class TabStore {
     const tab: TabState = {
       id: `tab${this.counter}`,
       unsaved: false,
+      filePou: null,
       canvasDirty: false,
       diagnostics: [],
       outcome: 'none',

@@ -4,6 +4,9 @@ import i18next from 'i18next';
 import cs from './cs.json';
 import de from './de.json';
 import en from './en.json';
+import monitorCs from './monitor.cs.json';
+import monitorDe from './monitor.de.json';
+import monitorEn from './monitor.en.json';
 
 export const LANGUAGES = ['cs', 'en', 'de'] as const;
 export type Lang = (typeof LANGUAGES)[number];
@@ -41,7 +44,12 @@ export function initI18n(lang?: Lang): Lang {
       lng: chosen,
       fallbackLng: 'en',
       initAsync: false,
-      resources: { en: { translation: en }, cs: { translation: cs }, de: { translation: de } },
+      // The monitor's strings live in their own catalogues (monitor.*.json), under `monitor.`.
+      resources: {
+        en: { translation: { ...en, ...monitorEn } },
+        cs: { translation: { ...cs, ...monitorCs } },
+        de: { translation: { ...de, ...monitorDe } },
+      },
       interpolation: { escapeValue: false },
       returnNull: false,
     });

@@ -157,6 +157,23 @@ describe('shell', () => {
     expect(server.calls.filter((c) => c.url === '/api/save').map((c) => (c.body as { hash: string }).hash)).toEqual(['h1', 'h2']);
   });
 
+  it('saves a renamed chart over the POU it was opened as, then under its new name', async () => {
+    await start();
+    await act(async () => void canvases[0].updateDoc({ pou: 'Renamed' }));
+    await flush();
+    await act(async () => void root.ownerDocument.defaultView!.dispatchEvent(new KeyboardEvent('keydown', { key: 's', ctrlKey: true, bubbles: true })));
+    await flush();
+    await act(async () => void canvases[0].updateDoc({ description: 'again' }));
+    await flush();
+    await act(async () => void root.ownerDocument.defaultView!.dispatchEvent(new KeyboardEvent('keydown', { key: 's', ctrlKey: true, bubbles: true })));
+    await flush();
+    const saves = server.calls.filter((c) => c.url === '/api/save').map((c) => c.body as { pou?: string; doc: EditorDoc });
+    expect(saves.map((b) => [b.pou, b.doc.pou])).toEqual([
+      ['Mixer', 'Renamed'],
+      ['Renamed', 'Renamed'],
+    ]);
+  });
+
   it('builds: Succeeded overlay until the next change, the table in the Result panel', async () => {
     server.files['/w/mixer.st'].charts = [{ ...doc, target: 'atmt' }];
     await start();

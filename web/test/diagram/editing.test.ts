@@ -6,6 +6,20 @@ import { inputPin, limits, minBarWidth, outputPin, pinX } from '../../src/diagra
 import { constrainResize } from '../../src/diagram/modeling/behavior/EditBehavior';
 import type { SfcShape } from '../../src/diagram/model';
 import type { ElementKind } from '../../src/doc';
+import csJson from '../../src/i18n/cs.json';
+import enJson from '../../src/i18n/en.json';
+
+type Tree = { [k: string]: string | Tree };
+
+/** A catalogue as flat `a.b` keys. */
+function catalogue(tree: Tree, prefix = ''): Record<string, string> {
+  const out: Record<string, string> = {};
+  for (const [k, v] of Object.entries(tree)) {
+    if (typeof v === 'string') out[prefix + k] = v;
+    else Object.assign(out, catalogue(v, `${prefix}${k}.`));
+  }
+  return out;
+}
 
 function paste(m: Mounted, ids: string[], at = { x: 600, y: 600 }) {
   const reg = m.get('elementRegistry');
@@ -183,10 +197,11 @@ describe('keyboard', () => {
 describe('palette', () => {
   it('shows translated group titles and every block, and re-translates on relabel', () => {
     let lang = 'en';
-    const cs: Record<string, string> = { 'SFC blocks': 'SFC bloky', 'SFC groups': 'Skupiny SFC bloků', Special: 'Speciální bloky', Step: 'Krok' };
-    const m = mount({ t: (k) => (lang === 'cs' ? (cs[k] ?? k) : k) });
+    const en = catalogue(enJson);
+    const cs = catalogue(csJson);
+    const m = mount({ t: (k) => (lang === 'cs' ? cs[k] : en[k]) ?? `!${k}` });
     const titles = () => [...m.container.querySelectorAll('.sfc-palette-title')].map((e) => e.textContent);
-    expect(titles()).toEqual(['SFC blocks', 'SFC groups', 'Special']);
+    expect(titles()).toEqual(['SFC blocks', 'SFC groups', 'Special blocks']);
     const entries = [...m.container.querySelectorAll('.sfc-entry')].map((e) => e.textContent);
     expect(entries).toEqual([
       'Initial step', 'Step', 'Transition', 'Jump',
@@ -195,8 +210,32 @@ describe('palette', () => {
     ]);
     lang = 'cs';
     m.canvas.relabel();
-    expect(titles()).toEqual(['SFC bloky', 'Skupiny SFC bloků', 'Speciální bloky']);
-    expect([...m.container.querySelectorAll('.sfc-entry')].map((e) => e.textContent)).toContain('Krok');
+    expect(titles()).toEqual([cs['palette.blocks'], cs['palette.groups'], cs['palette.special']]);
+    expect([...m.container.querySelectorAll('.sfc-entry')].map((e) => e.textContent)).toContain(cs['palette.step']);
+  });
+
+  it('offers no simultaneous branches on ATMT and EATMT charts, and refuses to create them there', () => {
+    const m = mount();
+    const kinds = () => [...m.container.querySelectorAll('.djs-palette [data-action^="create."]')].map((e) => e.getAttribute('data-action'));
+    m.canvas.load({ ...conveyorDoc(), target: 'atmt' });
+    expect(kinds()).not.toContain('create.simultaneous-divergence');
+    expect(kinds()).not.toContain('create.simultaneous-convergence');
+    expect(kinds()).toContain('create.selection-divergence');
+    const palette = m.get('sfcPalette');
+    const rules = m.get('rules');
+    const shape = (id: string) => palette.newShape(palette['specs']().find((s: { id: string }) => s.id === id));
+    const root = m.get('canvas').getRootElement();
+    expect(rules.allowed('shape.create', { shape: shape('simultaneous-divergence'), target: root })).toBe(false);
+    expect(rules.allowed('elements.create', { elements: [shape('step'), shape('simultaneous-convergence')], target: root })).toBe(false);
+    expect(rules.allowed('shape.create', { shape: shape('selection-divergence'), target: root })).toBe(true);
+    // Changing the chart's target back (an undoable edit) offers them again.
+    m.canvas.updateDoc({ target: 'blank' });
+    expect(kinds()).toContain('create.simultaneous-divergence');
+    expect(rules.allowed('shape.create', { shape: shape('simultaneous-divergence'), target: root })).toBe(true);
+    m.canvas.undo();
+    expect(kinds()).not.toContain('create.simultaneous-divergence');
+    m.canvas.load({ ...conveyorDoc(), target: 'eatmt' });
+    expect(kinds()).not.toContain('create.simultaneous-convergence');
   });
 
   it('new steps and transitions get unique names', () => {

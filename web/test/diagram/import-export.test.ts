@@ -18,6 +18,32 @@ describe('load → getDoc', () => {
     expect(JSON.stringify(canvas.getDoc())).toBe(JSON.stringify(d));
   });
 
+  it("keeps sfc-doc's additions: final steps and the attributes the editor does not edit", () => {
+    const { canvas } = mount();
+    const d = conveyorDoc();
+    const attrs = [{ name: 'sfc.adddata', value: '<data/>' }, { name: 'vendor.flag' }];
+    d.attributes = [{ name: 'vendor.pou', value: '1' }];
+    d.actions = [{ name: 'Horn', language: 'ST', body: 'x := 1;', attributes: attrs }];
+    const step = d.elements.find((e) => e.kind === 'step' && !e.initial)!;
+    step.final = true;
+    step.attributes = attrs;
+    const transition = d.elements.find((e) => e.kind === 'transition')!;
+    transition.attributes = [{ name: 'sfc.reference', value: 'Cond' }];
+    canvas.load(d);
+    expect(canvas.getDoc()).toStrictEqual(d);
+    // Through edits of other fields, of the chart, and their undo.
+    canvas.updateElement(step.id, { description: 'moved' });
+    canvas.updateDoc({ description: 'changed' });
+    const edited = canvas.getDoc();
+    expect(edited.attributes).toEqual(d.attributes);
+    expect(edited.actions[0].attributes).toEqual(attrs);
+    const s = edited.elements.find((e) => e.id === step.id)!;
+    expect([s.final, s.attributes, s.description]).toEqual([true, attrs, 'moved']);
+    canvas.undo();
+    canvas.undo();
+    expect(canvas.getDoc()).toStrictEqual(d);
+  });
+
   it('gives back a 500-step document unchanged, and loads it fast enough', () => {
     const { canvas } = mount();
     const d = makeBigDoc(500);

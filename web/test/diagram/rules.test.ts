@@ -25,7 +25,31 @@ function twoBlocks(a: ElementKind, b: ElementKind): EditorDoc {
   };
 }
 
+/** sfc-doc's `valid_pair` (crates/sfc-doc/src/graph.rs), pair by pair: the canvas accepts
+ *  exactly these wires, the three mixed branch structures included. */
+const SFC_DOC_PAIRS: [ElementKind, ElementKind][] = [
+  ['step', 'transition'],
+  ['step', 'selectionDivergence'],
+  ['step', 'simultaneousConvergence'],
+  ['selectionDivergence', 'transition'],
+  ['selectionDivergence', 'simultaneousConvergence'],
+  ['simultaneousConvergence', 'transition'],
+  ['transition', 'step'],
+  ['transition', 'simultaneousDivergence'],
+  ['transition', 'selectionConvergence'],
+  ['transition', 'jump'],
+  ['simultaneousDivergence', 'step'],
+  ['simultaneousDivergence', 'selectionConvergence'],
+  ['simultaneousDivergence', 'jump'],
+  ['selectionConvergence', 'step'],
+];
+
 describe('connection rules', () => {
+  it("are sfc-doc's valid pairs", () => {
+    const pairs = KINDS.flatMap((a) => VALID_TARGETS[a].map((b) => `${a} → ${b}`)).sort();
+    expect(pairs).toEqual(SFC_DOC_PAIRS.map(([a, b]) => `${a} → ${b}`).sort());
+  });
+
   for (const a of KINDS) {
     for (const b of KINDS) {
       const expected = VALID_TARGETS[a].includes(b);
@@ -45,6 +69,28 @@ describe('connection rules', () => {
       });
     }
   }
+
+  it('keeps the chart flat: nothing is created or moved into a block or a wire', () => {
+    const { canvas, get } = mount();
+    const doc = twoBlocks('step', 'transition');
+    doc.connections.push({ id: 'w', source: 'a', sourcePin: 0, target: 'b', targetPin: 0 });
+    canvas.load(doc);
+    const reg = get('elementRegistry');
+    const rules = get('rules');
+    const root = get('canvas').getRootElement();
+    const shape = get('sfcPalette').newShape(get('sfcPalette')['specs']().find((x: { id: string }) => x.id === 'step'));
+    for (const target of [reg.get('a'), reg.get('w')]) {
+      expect(rules.allowed('shape.create', { shape, target })).toBe(false);
+      expect(rules.allowed('elements.move', { shapes: [reg.get('b')], target })).toBe(false);
+    }
+    expect(rules.allowed('shape.create', { shape, target: root })).toBe(true);
+    expect(rules.allowed('elements.move', { shapes: [reg.get('b')], target: root })).toBe(true);
+    // Dragged over a block, the block under the cursor is not the new parent: the chart is.
+    let seen: unknown;
+    get('eventBus').on('create.hover', 100, (e: { hover: unknown }) => void (seen = e.hover));
+    get('eventBus').fire('create.hover', { hover: reg.get('a'), context: {} });
+    expect(seen).toBe(root);
+  });
 
   it('refuses a wire from a block to itself', () => {
     const { canvas, get } = mount();

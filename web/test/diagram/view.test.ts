@@ -3,6 +3,7 @@ import { describe, expect, it } from 'vitest';
 import { mount } from './harness';
 import { conveyorDoc } from './fixtures';
 import { makeBigDoc } from './big';
+import { wrapCondition } from '../../src/diagram/render/SfcRenderer';
 
 describe('highlights', () => {
   it('frames blocks by kind, labels them, and replaces the set of a kind', () => {
@@ -35,6 +36,27 @@ describe('highlights', () => {
     expect(gfx('transition#3').querySelector('circle[fill="#dc2626"]')).toBeNull();
     // Highlights are not edits.
     expect(m.canvas.canUndo()).toBe(false);
+  });
+
+  it('frames a block with a tooltip, drawn in its visual, as often as it is redrawn', () => {
+    const m = mount();
+    m.canvas.load(conveyorDoc());
+    // step:Init has a description: its tooltip must not take the place of the visual.
+    const gfx = m.get('elementRegistry').getGraphics('step:Init') as Element;
+    const visual = () => gfx.firstElementChild!;
+    const frames = () => [...visual().querySelectorAll('rect')].filter((r) => r.getAttribute('stroke') === '#dc2626').length;
+    for (let k = 0; k < 3; k++) {
+      m.canvas.highlight('error', ['step:Init']);
+      expect(visual().classList.contains('djs-visual')).toBe(true);
+      expect(frames()).toBe(1);
+      m.canvas.clearHighlights('error');
+      expect(frames()).toBe(0);
+    }
+    m.canvas.updateElement('step:Init', { description: 'Changed' });
+    m.canvas.highlight('warning', ['step:Init']);
+    expect(visual().classList.contains('djs-visual')).toBe(true);
+    expect(gfx.querySelectorAll(':scope > title')).toHaveLength(1);
+    expect(gfx.querySelector(':scope > title')!.textContent).toBe('Changed');
   });
 });
 
@@ -97,5 +119,17 @@ describe('exportSvg', () => {
     m.canvas.load(conveyorDoc());
     const svg = m.canvas.exportSvg();
     expect(svg).toContain('<title>Waiting for start</title>');
+  });
+});
+
+describe('transition labels', () => {
+  it('wrap a long one-line condition at words into two lines, the second cut with an ellipsis', () => {
+    expect(wrapCondition('Start')).toEqual(['Start']);
+    expect(wrapCondition('CarLeft AND NOT DryerSelect AND NOT StopButton')).toEqual(['CarLeft AND NOT DryerSelect AND', 'NOT StopButton']);
+    const long = wrapCondition('Brushing.T >= MaxBrushTime AND NOT CarLeft AND NOT StopButton AND NOT Reset');
+    expect(long).toHaveLength(2);
+    expect(long[0]).toBe('Brushing.T >= MaxBrushTime AND');
+    expect(long[1].endsWith('…')).toBe(true);
+    expect(long[1].length).toBeLessThanOrEqual(32);
   });
 });

@@ -5,6 +5,9 @@ import { detectLanguage, initI18n, nextLanguage, setLanguage, t } from '../../sr
 import cs from '../../src/i18n/cs.json';
 import de from '../../src/i18n/de.json';
 import en from '../../src/i18n/en.json';
+import monitorCs from '../../src/i18n/monitor.cs.json';
+import monitorDe from '../../src/i18n/monitor.de.json';
+import monitorEn from '../../src/i18n/monitor.en.json';
 
 type Tree = { [k: string]: string | Tree };
 
@@ -18,7 +21,12 @@ function flatten(tree: Tree, prefix = ''): Record<string, string> {
 }
 
 const PLURAL = /_(zero|one|two|few|many|other)$/;
-const catalogues = { en: flatten(en), cs: flatten(cs), de: flatten(de) };
+// The monitor's catalogues (monitor.*.json) are merged in: every check below covers them too.
+const catalogues = {
+  en: { ...flatten(en), ...flatten(monitorEn) },
+  cs: { ...flatten(cs), ...flatten(monitorCs) },
+  de: { ...flatten(de), ...flatten(monitorDe) },
+};
 const base = (keys: string[]) => [...new Set(keys.map((k) => k.replace(PLURAL, '')))].sort();
 
 // codes.rs lies outside the web app (Vite refuses `?raw` there), so it is read with node:fs; the

@@ -22,6 +22,21 @@ export class SfcModeling extends BaseModeling {
     };
   }
 
+  /** A moved block keeps its place among the chart's children. diagram-js would append it:
+   *  that changes the drawing order, and bringing the DOM in line then re-inserts every
+   *  block drawn after it (a full restyle and layout, about 0.4 s on a 500-step chart). */
+  moveShape(shape: Service, delta: Service, newParent?: Service, newParentIndex?: Service, hints?: Service) {
+    if (typeof newParentIndex === 'object' && newParentIndex !== null) {
+      hints = newParentIndex;
+      newParentIndex = undefined;
+    }
+    const parent = newParent || shape.parent;
+    if ((newParentIndex === undefined || newParentIndex === null) && parent === shape.parent && parent?.children) {
+      newParentIndex = parent.children.indexOf(shape);
+    }
+    return (BaseModeling.prototype as Service).moveShape.call(this, shape, delta, newParent, newParentIndex, hints);
+  }
+
   updateElement(element: SfcElement, props: Record<string, unknown>) {
     this._commandStack.execute('sfc.element.update', { element, props });
   }

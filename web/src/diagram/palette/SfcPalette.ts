@@ -1,13 +1,17 @@
 // The palette (seed 001 §7.1, panel "Nástroje"): SFC blocks, SFC groups (divergences and
 // convergences) and special blocks (text, action block). Drag an entry onto the chart, or
-// click it and click where the block goes.
+// click it and click where the block goes. ATMT and EATMT charts have no simultaneous
+// (AND) branches, so their palette does not offer them.
 import type { Element, ElementKind } from '../../doc';
+import type { DocState } from '../core/DocState';
 import { defaultSize } from '../geometry';
 import { freshName, usedNames, type Service } from '../model';
+import { kindsRefusedBy } from '../rules/SfcRules';
 
 interface EntrySpec {
   id: string;
   group: 'blocks' | 'groups' | 'special';
+  /** Catalogue key of the entry's label (`palette.*`). */
   label: string;
   icon: string;
   make: () => Partial<Element> & { kind: ElementKind };
@@ -29,14 +33,18 @@ const ICONS: Record<string, string> = {
   actionBlock: I('<rect x="2" y="8" width="24" height="12"/><line x1="9" y1="8" x2="9" y2="20"/><line x1="20" y1="8" x2="20" y2="20"/>'),
 };
 
+/** Catalogue keys of the group titles. */
 export const GROUP_TITLES: Record<EntrySpec['group'], string> = {
-  blocks: 'SFC blocks',
-  groups: 'SFC groups',
-  special: 'Special',
+  blocks: 'palette.blocks',
+  groups: 'palette.groups',
+  special: 'palette.special',
 };
 
 export class SfcPalette {
-  static $inject = ['palette', 'create', 'elementFactory', 'elementRegistry', 'config.sfc'];
+  static $inject = ['palette', 'create', 'elementFactory', 'elementRegistry', 'config.sfc', 'sfcDocState', 'eventBus'];
+
+  /** Whether the entries shown are those of a table target (ATMT/EATMT). */
+  private shownForTable = false;
 
   constructor(
     palette: Service,
@@ -44,8 +52,15 @@ export class SfcPalette {
     private elementFactory: Service,
     private elementRegistry: Service,
     private config: { t: (key: string) => string },
+    private state: DocState,
+    eventBus: Service,
   ) {
     palette.registerProvider(this);
+    // The chart's target comes with a load and changes by an (undoable) edit of the chart.
+    eventBus.on(['sfc.loaded', 'commandStack.changed'], () => {
+      const forTable = kindsRefusedBy(this.state.fields.target).length > 0;
+      if (forTable !== this.shownForTable) palette._update();
+    });
   }
 
   private specs(): EntrySpec[] {
@@ -55,17 +70,23 @@ export class SfcPalette {
       ...extra,
     });
     return [
-      { id: 'initial-step', group: 'blocks', label: 'Initial step', icon: ICONS.initialStep, make: named('step', 'S', { initial: true }) },
-      { id: 'step', group: 'blocks', label: 'Step', icon: ICONS.step, make: named('step', 'S') },
-      { id: 'transition', group: 'blocks', label: 'Transition', icon: ICONS.transition, make: named('transition', 'T', { condition: 'TRUE' }) },
-      { id: 'jump', group: 'blocks', label: 'Jump', icon: ICONS.jump, make: () => ({ kind: 'jump' }) },
-      { id: 'selection-divergence', group: 'groups', label: 'Selection divergence', icon: ICONS.selectionDivergence, make: () => ({ kind: 'selectionDivergence', pins: 2 }) },
-      { id: 'selection-convergence', group: 'groups', label: 'Selection convergence', icon: ICONS.selectionConvergence, make: () => ({ kind: 'selectionConvergence', pins: 2 }) },
-      { id: 'simultaneous-divergence', group: 'groups', label: 'Simultaneous divergence', icon: ICONS.simultaneousDivergence, make: () => ({ kind: 'simultaneousDivergence', pins: 2 }) },
-      { id: 'simultaneous-convergence', group: 'groups', label: 'Simultaneous convergence', icon: ICONS.simultaneousConvergence, make: () => ({ kind: 'simultaneousConvergence', pins: 2 }) },
-      { id: 'text', group: 'special', label: 'Text', icon: ICONS.text, make: () => ({ kind: 'text', text: 'Text', align: 'left' }) },
-      { id: 'action-block', group: 'special', label: 'Action block', icon: ICONS.actionBlock, make: () => ({ kind: 'actionBlock', associations: [{ qualifier: 'N', action: 'Action' }] }) },
+      { id: 'initial-step', group: 'blocks', label: 'palette.initialStep', icon: ICONS.initialStep, make: named('step', 'S', { initial: true }) },
+      { id: 'step', group: 'blocks', label: 'palette.step', icon: ICONS.step, make: named('step', 'S') },
+      { id: 'transition', group: 'blocks', label: 'palette.transition', icon: ICONS.transition, make: named('transition', 'T', { condition: 'TRUE' }) },
+      { id: 'jump', group: 'blocks', label: 'palette.jump', icon: ICONS.jump, make: () => ({ kind: 'jump' }) },
+      { id: 'selection-divergence', group: 'groups', label: 'palette.selectionDivergence', icon: ICONS.selectionDivergence, make: () => ({ kind: 'selectionDivergence', pins: 2 }) },
+      { id: 'selection-convergence', group: 'groups', label: 'palette.selectionConvergence', icon: ICONS.selectionConvergence, make: () => ({ kind: 'selectionConvergence', pins: 2 }) },
+      { id: 'simultaneous-divergence', group: 'groups', label: 'palette.simultaneousDivergence', icon: ICONS.simultaneousDivergence, make: () => ({ kind: 'simultaneousDivergence', pins: 2 }) },
+      { id: 'simultaneous-convergence', group: 'groups', label: 'palette.simultaneousConvergence', icon: ICONS.simultaneousConvergence, make: () => ({ kind: 'simultaneousConvergence', pins: 2 }) },
+      { id: 'text', group: 'special', label: 'palette.text', icon: ICONS.text, make: () => ({ kind: 'text', text: 'Text', align: 'left' }) },
+      { id: 'action-block', group: 'special', label: 'palette.actionBlock', icon: ICONS.actionBlock, make: () => ({ kind: 'actionBlock', associations: [{ qualifier: 'N', action: 'Action' }] }) },
     ];
+  }
+
+  /** The entries the current chart's target allows. */
+  private allowedSpecs(): EntrySpec[] {
+    const refused = kindsRefusedBy(this.state.fields.target);
+    return this.specs().filter((spec) => !refused.includes(spec.make().kind));
   }
 
   /** A new block of the entry's kind with default size, ready for the create tool. */
@@ -80,8 +101,9 @@ export class SfcPalette {
     const t = this.config.t;
     // diagram-js marks the active tool (lasso) inside a "tools" group; keep an empty one.
     const entries: Record<string, Service> = { 'tools-anchor': { group: 'tools', html: '<div class="sfc-palette-tools"></div>', action: {} } };
+    this.shownForTable = kindsRefusedBy(this.state.fields.target).length > 0;
     let group = '';
-    for (const spec of this.specs()) {
+    for (const spec of this.allowedSpecs()) {
       if (spec.group !== group) {
         group = spec.group;
         entries[`title-${group}`] = {

@@ -148,7 +148,9 @@ export class SfcRenderer extends BaseRenderer {
     const condition = e.condition?.trim();
     if (condition) {
       const lines = condition.split('\n').map((l) => l.trim()).filter((l) => l !== '');
-      const shown = lines.slice(0, 3);
+      // A long one-line condition wraps at words into two lines, so it does not run into the
+      // next branch's labels; beyond that it ends with an ellipsis (Properties shows it whole).
+      const shown = lines.length === 1 ? wrapCondition(lines[0]) : lines.slice(0, 3);
       if (lines.length > 3) shown[2] = shown[2] + ' …';
       const top = cy - ((shown.length - 1) * 14) / 2;
       shown.forEach((line, i) => {
@@ -299,7 +301,9 @@ export class SfcRenderer extends BaseRenderer {
     }
   }
 
-  /** The description as the native tooltip; on the element group so hovering its hit area shows it. */
+  /** The description as the native tooltip; on the element group so hovering its hit area shows
+   *  it. Appended, never first: diagram-js takes the group's first child as the block's visual
+   *  (getVisual), and a title there would receive every later redraw, highlights included. */
   private setTooltip(visual: SVGElement, description: string | undefined) {
     const group = visual.parentNode as SVGElement | null;
     if (!group) return;
@@ -310,7 +314,7 @@ export class SfcRenderer extends BaseRenderer {
     }
     if (!title) {
       title = document.createElementNS('http://www.w3.org/2000/svg', 'title');
-      group.insertBefore(title, group.firstChild);
+      group.appendChild(title);
     }
     title.textContent = description;
   }
@@ -325,6 +329,28 @@ export function nameWithTag(e: Element): string {
   const name = e.name ?? '';
   if (e.tag === undefined) return name;
   return name ? `${name} : ${e.tag}` : `: ${e.tag}`;
+}
+
+/** Characters of a condition line (monospace) before it wraps: about 230 px at 12 px. */
+const CONDITION_CHARS = 32;
+
+/** A one-line condition as at most two lines of whole words (the second cut with `…`). */
+export function wrapCondition(line: string, max = CONDITION_CHARS): string[] {
+  if (line.length <= max) return [line];
+  const out: string[] = [];
+  let cur = '';
+  for (const word of line.split(/\s+/)) {
+    if (cur !== '' && cur.length + 1 + word.length > max) {
+      out.push(cur);
+      cur = word;
+    } else {
+      cur = cur === '' ? word : `${cur} ${word}`;
+    }
+  }
+  if (cur !== '') out.push(cur);
+  if (out.length <= 2) return out;
+  const rest = out.slice(1).join(' ');
+  return [out[0], rest.length <= max ? rest : `${rest.slice(0, max - 1).trimEnd()}…`];
 }
 
 function qualifierText(q: string, duration?: string): string {

@@ -1,24 +1,37 @@
 // What the user may do: the valid connections of sfc-doc (an output pin to an input pin of
-// another block, one wire per pin), which sides of a block can be resized, and nothing at all
+// another block, one wire per pin), which blocks the chart's target allows (no simultaneous
+// branches in ATMT/EATMT charts), which sides of a block can be resized, and nothing at all
 // on a read-only canvas.
 import RuleProvider from 'diagram-js/lib/features/rules/RuleProvider.js';
-import { pinCounts, VALID_TARGETS, type Point } from '../../doc';
+import { pinCounts, VALID_TARGETS, type ChartTarget, type ElementKind, type Point } from '../../doc';
+import type { DocState } from '../core/DocState';
 import { inputPin, limits, outputPin, PIN_SNAP } from '../geometry';
 import { isConnection, type Service, type SfcConnection, type SfcShape } from '../model';
 
 export class SfcRules extends RuleProvider {
-  static $inject = ['eventBus', 'config.sfc'];
+  static $inject = ['eventBus', 'config.sfc', 'sfcDocState'];
 
   constructor(
     eventBus: Service,
     private config: { readOnly?: boolean },
+    private state: DocState,
   ) {
     super(eventBus);
   }
 
   init() {
     const ro = () => !!this.config?.readOnly;
-    this.addRule(['shape.create', 'elements.create', 'elements.move', 'elements.delete', 'element.copy'], () => !ro());
+    /** Whether the chart's target allows every block among `shapes`. */
+    const allowedHere = (shapes: unknown[]) => {
+      const refused = kindsRefusedBy(this.state?.fields.target);
+      return shapes.every((s) => !isBlock(s) || !refused.includes(s.businessObject.kind));
+    };
+    // A chart is flat: blocks go into the chart itself, never into another block or a wire.
+    const intoChart = (target: unknown) => !target || (!isBlock(target) && !isConnection(target));
+    this.addRule('shape.create', (ctx: Service) => !ro() && intoChart(ctx.target) && allowedHere([ctx.shape]));
+    this.addRule('elements.create', (ctx: Service) => !ro() && intoChart(ctx.target) && allowedHere(ctx.elements ?? []));
+    this.addRule('elements.move', (ctx: Service) => !ro() && intoChart(ctx.target));
+    this.addRule(['elements.delete', 'element.copy'], () => !ro());
     this.addRule('connection.create', (ctx: Service) => {
       if (ro()) return false;
       const { source, target } = ctx;
@@ -51,6 +64,11 @@ export class SfcRules extends RuleProvider {
       return true;
     });
   }
+}
+
+/** Block kinds a chart of `target` may not hold (interfaces.md: no AND branches in ATMT/EATMT). */
+export function kindsRefusedBy(target: ChartTarget | undefined): ElementKind[] {
+  return target === 'atmt' || target === 'eatmt' ? ['simultaneousDivergence', 'simultaneousConvergence'] : [];
 }
 
 function isBlock(e: unknown): e is SfcShape {

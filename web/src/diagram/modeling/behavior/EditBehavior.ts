@@ -1,15 +1,22 @@
-// Interactive editing details: blocks snap to the grid by their top-left corner; resizing
-// keeps each kind within its limits, bars change only their width, Shift resizes
-// symmetrically about the centre.
+// Interactive editing details: blocks snap to the grid by their top-left corner; a block
+// created or moved over another block or a wire stays a block of the chart (never a child of
+// the block under it); resizing keeps each kind within its limits, bars change only their
+// width, Shift resizes symmetrically about the centre.
 import { limits } from '../../geometry';
 import type { Service, SfcShape } from '../../model';
 
 export class EditBehavior {
-  static $inject = ['eventBus', 'injector'];
+  static $inject = ['eventBus', 'injector', 'canvas'];
 
-  constructor(eventBus: Service, injector: Service) {
+  constructor(eventBus: Service, injector: Service, canvas: Service) {
     // Absent on a read-only canvas.
     const resize = injector.get('resize', false);
+    // diagram-js makes the hovered element the new parent: a chart is flat, so whatever is
+    // under the cursor, the parent is the chart (before Create and Move read the hover).
+    eventBus.on(['create.hover', 'create.move', 'shape.move.hover', 'shape.move.move'], 2000, (event: Service) => {
+      const root = canvas.getRootElement();
+      if (event.hover && event.hover !== root) event.hover = root;
+    });
     eventBus.on(['shape.move.start', 'create.start'], 1500, (event: Service) => {
       const ctx = event.context;
       ctx.gridSnappingContext = { ...(ctx.gridSnappingContext ?? {}), snapLocation: 'top-left' };
