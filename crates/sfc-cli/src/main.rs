@@ -178,6 +178,14 @@ struct FmtArgs {
 }
 
 fn main() -> ExitCode {
+    // Like other Unix tools, end quietly when the reader of our output goes away
+    // (`sfc check --format json | head`) instead of failing on the broken pipe: Rust ignores
+    // SIGPIPE by default, which turns that into a panic in `println!`.
+    #[cfg(unix)]
+    // SAFETY: restoring the default disposition of one signal before any thread starts.
+    unsafe {
+        libc::signal(libc::SIGPIPE, libc::SIG_DFL);
+    }
     // Parsing and checking recurse along the (depth-capped) syntax tree: give them room.
     let child = std::thread::Builder::new().stack_size(64 << 20).spawn(run);
     match child.map(|h| h.join()) {
