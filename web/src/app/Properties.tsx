@@ -259,6 +259,9 @@ function ElementProperties(props: PanelProps & { element: Element }) {
           <Field label={t('props.initial')}>
             <input type="checkbox" checked={!!e.initial} onChange={(ev) => set({ initial: ev.currentTarget.checked })} />
           </Field>
+          <Field label={t('props.final')} hint={t('props.finalHint')}>
+            <input type="checkbox" checked={!!e.final} onChange={(ev) => set({ final: ev.currentTarget.checked })} />
+          </Field>
           <Field label={t('props.timeout')} for="p-timeout" hint={t('props.timeoutHint')} error={timeoutCheck.error ? t(timeoutCheck.error) : undefined}>
             <input
               id="p-timeout"
