@@ -65,9 +65,9 @@ export const tests = [
       const czech = await texts(page);
       expectLanguage(czech, 'cs');
       const cs = catalogue('cs');
-      assert(czech.message === cs.diag.SFC0301, `Czech diagnostic title: ${czech.message} (expected ${cs.diag.SFC0301})`);
+      assert(czech.message === `${cs.diag.SFC0301}: Buton`, `Czech diagnostic: ${czech.message} (expected ${cs.diag.SFC0301}: Buton)`);
       assert(czech.tooltip === 'undeclared variable `Buton`', `the English message as tooltip: ${czech.tooltip}`);
-      assert(czech.inline === cs.diag.SFC0301, `Czech diagnostic in the properties: ${czech.inline}`);
+      assert(czech.inline === `${cs.diag.SFC0301}: Buton`, `Czech diagnostic in the properties: ${czech.inline}`);
       assert((await page.locator('.statusbar .lang-cycle').textContent()).trim() === cs.lang.cs, 'the status bar names Czech');
       await page.screenshot({ path: shotPath(t, 'czech-ui.png') });
 
@@ -78,7 +78,7 @@ export const tests = [
       await page.waitForFunction(() => document.documentElement.lang === 'de');
       const german = await texts(page);
       expectLanguage(german, 'de');
-      assert(german.message === catalogue('de').diag.SFC0301, `German diagnostic title: ${german.message}`);
+      assert(german.message === `${catalogue('de').diag.SFC0301}: Buton`, `German diagnostic: ${german.message}`);
       assert(loads.length === 0, `the page was reloaded: ${loads}`);
       // The choice is remembered for the next start.
       assert((await page.evaluate(() => localStorage.getItem('sfc.language'))) === 'de', 'language not remembered');

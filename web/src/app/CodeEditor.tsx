@@ -2,7 +2,7 @@
 // text transparent), with squiggles where diagnostics fall and the diagnostics listed below.
 import { useEffect, useRef, useState } from 'preact/hooks';
 import type { Diag } from '../api';
-import { diagTitle, currentLanguage, t } from '../i18n';
+import { t, diagMessage } from '../i18n';
 import { locateInText, segments } from './highlight';
 import { Icon } from './icons';
 
@@ -103,7 +103,7 @@ export function CodeEditor(props: {
             <li key={k} class={`sev-${d.severity}`} title={d.message}>
               <Icon name={d.severity} />
               <span class="diag-code">{d.code}</span>
-              <span>{currentLanguage() === 'en' ? d.message : diagTitle(d.code, d.title)}</span>
+              <span>{diagMessage(d)}</span>
             </li>
           ))}
         </ul>

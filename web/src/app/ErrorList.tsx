@@ -2,7 +2,7 @@
 // the diagnostic's blocks on the canvas; analysis witnesses can be stepped through.
 import { useState } from 'preact/hooks';
 import type { Diag, Severity } from '../api';
-import { currentLanguage, diagTitle, t } from '../i18n';
+import { currentLanguage, t, diagMessage } from '../i18n';
 import { Icon } from './icons';
 
 export interface WitnessView {
@@ -82,7 +82,7 @@ export function ErrorList(props: {
                   <td class="col-code">{d.code}</td>
                   <td class="col-element">{d.element ?? ''}</td>
                   <td class="col-message" title={en ? d.notes.join('\n') || undefined : d.message}>
-                    {en ? d.message : diagTitle(d.code, d.title)}
+                    {diagMessage(d)}
                   </td>
                   <td class="col-line">{d.line > 0 ? `${d.line}:${d.column}` : ''}</td>
                   <td class="col-action">

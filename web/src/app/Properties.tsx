@@ -5,7 +5,7 @@ import { useEffect, useState } from 'preact/hooks';
 import type { Diag } from '../api';
 import type { CanvasHandle } from '../diagram/types';
 import type { ActionDef, Association, ChartTarget, Connection, EditorDoc, Element, Language } from '../doc';
-import { currentLanguage, diagTitle, t } from '../i18n';
+import { t, diagMessage } from '../i18n';
 import { freshName, isIecName, stepNames } from './chart';
 import { CodeEditor } from './CodeEditor';
 import { parseDuration, secondsToLiteral } from './duration';
@@ -233,7 +233,7 @@ function ElementProperties(props: PanelProps & { element: Element }) {
               <Icon name={d.severity} />
               <span class="diag-code">{d.code}</span>
               {/* In Czech and German the code's translated title; the English message is the tooltip. */}
-              <span>{currentLanguage() === 'en' ? d.message : diagTitle(d.code, d.title)}</span>
+              <span>{diagMessage(d)}</span>
             </li>
           ))}
         </ul>

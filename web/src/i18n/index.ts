@@ -80,3 +80,15 @@ export function diagTitle(code: string, english: string): string {
   const key = `diag.${code}`;
   return i18n.exists(key) ? t(key) : english;
 }
+
+/**
+ * A diagnostic in the current language. English shows the server's message as `sfc check`
+ * prints it; the other languages show the code's translated title followed by the names the
+ * message quotes (`nedeklarovaná proměnná: Buton`), so the specifics are not lost.
+ */
+export function diagMessage(d: { code: string; title: string; message: string }): string {
+  if (currentLanguage() === 'en') return d.message;
+  const names = [...new Set([...d.message.matchAll(/`([^`]+)`/g)].map((m) => m[1].trim()).filter((q) => q !== ''))];
+  const title = diagTitle(d.code, d.title);
+  return names.length ? `${title}: ${names.join(', ')}` : title;
+}

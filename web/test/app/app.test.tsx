@@ -213,7 +213,7 @@ describe('shell', () => {
     expect(c.highlights['selected-diagnostic']).toBeUndefined();
   });
 
-  it('translates the error list in Czech, keeping the English message as the tooltip', async () => {
+  it('translates the error list in Czech, naming what the message quotes, with the English message as the tooltip', async () => {
     server.build = { ok: false, diagnostics: [diag({})] };
     await start();
     await click(button('Build (F7)'));
@@ -221,7 +221,7 @@ describe('shell', () => {
     await act(async () => setLanguage('cs'));
     await flush();
     const cell = root.querySelector('.col-message') as HTMLElement;
-    expect(cell.textContent).toBe('nedeklarovaná proměnná');
+    expect(cell.textContent).toBe('nedeklarovaná proměnná: Strt');
     expect(cell.title).toBe('undeclared variable `Strt`');
     expect(text()).toContain('Soubor');
   });
