@@ -66,4 +66,49 @@ export const tests = [
       assert(errors.length === 0, `script errors: ${errors.join('\n')}`);
     },
   },
+  {
+    name: 'zoom with Ctrl+wheel and the status-bar slider; the grid shows from 75 %',
+    run: async (t) => {
+      const { page } = t;
+      await openEditor(t, ['examples/traffic/traffic.st']);
+      await waitChart(page);
+      const zoom = () => page.evaluate(() => window.__sfc.zoom());
+      const gridShown = () =>
+        page.evaluate(() => {
+          const g = document.querySelector('.canvas-pane.active .sfc-grid');
+          return !!g && getComputedStyle(g).display !== 'none' && g.getAttribute('visibility') !== 'hidden';
+        });
+      // The slider sets an absolute level (logarithmic, in hundredths of ln zoom).
+      const slider = page.getByTestId('zoom-slider');
+      await slider.fill(String(Math.round(100 * Math.log(0.5))));
+      await page.waitForFunction(() => Math.abs(window.__sfc.zoom() - 0.5) < 0.02);
+      assert(!(await gridShown()), 'no grid at 50 %');
+      await slider.fill(String(Math.round(100 * Math.log(1.5))));
+      await page.waitForFunction(() => Math.abs(window.__sfc.zoom() - 1.5) < 0.02);
+      assert(await gridShown(), 'the grid at 150 %');
+      const shown = (await page.locator('.statusbar .zoom-value').textContent()).trim();
+      assert(shown === `${Math.round((await zoom()) * 100)} %`, `the status bar shows the zoom: ${shown}`);
+      // Ctrl+wheel over the chart zooms out; a plain wheel scrolls without zooming.
+      const pane = await page.locator('.canvas-pane.active').boundingBox();
+      await page.mouse.move(pane.x + pane.width / 2, pane.y + pane.height / 2);
+      const before = await zoom();
+      await page.keyboard.down('Control');
+      await page.mouse.wheel(0, 300);
+      await page.keyboard.up('Control');
+      await page.waitForFunction((z) => window.__sfc.zoom() < z - 0.05, before);
+      // The wheel arrives as several events: wait until the zoom settles.
+      let zoomed = await zoom();
+      for (let settled = 0; settled < 3; ) {
+        await page.waitForTimeout(100);
+        const z = await zoom();
+        settled = z === zoomed ? settled + 1 : 0;
+        zoomed = z;
+      }
+      const view = await page.evaluate(() => window.__sfc.view());
+      await page.mouse.wheel(0, 200);
+      await page.waitForFunction((y) => window.__sfc.view().y !== y, view.y);
+      const after = await zoom();
+      assert(Math.abs(after - zoomed) < 1e-6, `a plain wheel does not zoom: ${zoomed} → ${after}`);
+    },
+  },
 ];

@@ -666,6 +666,7 @@ export function App({ api, createCanvas }: AppProps) {
         zoom={zoom}
         hasChart={hasChart}
         onZoom={(z) => (z === 'fit' ? canvas?.zoom('fit') : zoomBy(z))}
+        onZoomTo={(z) => canvas?.zoom(Math.min(4, Math.max(0.2, z)))}
         lang={lang}
       />
 
@@ -753,6 +754,8 @@ function StatusBar(props: {
   zoom: number;
   hasChart: boolean;
   onZoom: (z: number | 'fit') => void;
+  /** An absolute zoom level, from the slider. */
+  onZoomTo: (z: number) => void;
   lang: Lang;
 }) {
   return (
@@ -765,6 +768,20 @@ function StatusBar(props: {
         <button class="icon-button" title={t('menu.zoomOut')} disabled={!props.hasChart} onClick={() => props.onZoom(1 / 1.2)}>
           <Icon name="zoomOut" />
         </button>
+        {/* Logarithmic (hundredths of ln zoom), so 50 % and 200 % sit equally far from 100 %. */}
+        <input
+          type="range"
+          class="zoom-slider"
+          data-testid="zoom-slider"
+          title={t('status.zoom')}
+          aria-label={t('status.zoom')}
+          disabled={!props.hasChart}
+          min={Math.round(100 * Math.log(0.2))}
+          max={Math.round(100 * Math.log(4))}
+          step={1}
+          value={Math.round(100 * Math.log(props.zoom))}
+          onInput={(ev) => props.onZoomTo(Math.exp(Number(ev.currentTarget.value) / 100))}
+        />
         <span class="zoom-value">{Math.round(props.zoom * 100)} %</span>
         <button class="icon-button" title={t('menu.zoomIn')} disabled={!props.hasChart} onClick={() => props.onZoom(1.2)}>
           <Icon name="zoomIn" />
