@@ -46,50 +46,7 @@ pub const ACTION: &[&str] = &["sfc.description"];
 /// The attributes the editor reads into the document (before the POU).
 pub const POU: &[&str] = &["sfc.target", "sfc.description", "sfc.comment", "sfc.graph"];
 
-/// Writes a value so it survives inside `'…'` of an attribute pragma.
-pub fn escape(v: &str) -> String {
-    let mut out = String::with_capacity(v.len());
-    for c in v.chars() {
-        match c {
-            '$' => out.push_str("$$"),
-            '\'' => out.push_str("$27"),
-            '\n' => out.push_str("$N"),
-            '\r' => out.push_str("$R"),
-            '\t' => out.push_str("$T"),
-            '}' => out.push_str("$7D"),
-            _ => out.push(c),
-        }
-    }
-    out
-}
-
-/// Reads a value written by [`escape`]; a `$` not starting a known escape is kept as it is.
-pub fn unescape(v: &str) -> String {
-    let mut out = String::with_capacity(v.len());
-    let mut it = v.char_indices().peekable();
-    while let Some((i, c)) = it.next() {
-        if c != '$' {
-            out.push(c);
-            continue;
-        }
-        let rest = &v[i + 1..];
-        let (rep, skip) = match rest.chars().next() {
-            Some('$') => ('$', 1),
-            Some('N' | 'n' | 'L' | 'l') => ('\n', 1),
-            Some('R' | 'r') => ('\r', 1),
-            Some('T' | 't') => ('\t', 1),
-            _ => match rest.get(..2).and_then(|h| u8::from_str_radix(h, 16).ok()) {
-                Some(b) if b.is_ascii() => (b as char, 2),
-                _ => ('$', 0),
-            },
-        };
-        out.push(rep);
-        for _ in 0..skip {
-            it.next();
-        }
-    }
-    out
-}
+pub use sfc_syntax::attr_value::{escape, unescape};
 
 /// A number written so that parsing it gives back the same `f64` (shortest round-trip form,
 /// integers without a fraction).

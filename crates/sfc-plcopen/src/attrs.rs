@@ -36,50 +36,7 @@ pub const DATA_NAME: &str = "urn:sfc-toolchain:attributes";
 /// The namespace of its content.
 pub const DATA_NS: &str = "urn:sfc-toolchain:attributes";
 
-/// Writes a value so it survives inside `'…'` of an attribute pragma.
-pub fn escape(v: &str) -> String {
-    let mut out = String::with_capacity(v.len());
-    for c in v.chars() {
-        match c {
-            '$' => out.push_str("$$"),
-            '\'' => out.push_str("$27"),
-            '\n' => out.push_str("$N"),
-            '\r' => out.push_str("$R"),
-            '\t' => out.push_str("$T"),
-            '}' => out.push_str("$7D"),
-            _ => out.push(c),
-        }
-    }
-    out
-}
-
-/// Reads a value written by [`escape`]; a `$` not starting a known escape is kept as it is.
-pub fn unescape(v: &str) -> String {
-    let mut out = String::with_capacity(v.len());
-    let mut it = v.char_indices().peekable();
-    while let Some((i, c)) = it.next() {
-        if c != '$' {
-            out.push(c);
-            continue;
-        }
-        let rest = &v[i + 1..];
-        let (rep, skip) = match rest.chars().next() {
-            Some('$') => ("$".to_string(), 1),
-            Some('N' | 'n' | 'L' | 'l') => ("\n".to_string(), 1),
-            Some('R' | 'r') => ("\r".to_string(), 1),
-            Some('T' | 't') => ("\t".to_string(), 1),
-            _ => match rest.get(..2).and_then(|h| u8::from_str_radix(h, 16).ok()) {
-                Some(b) if b.is_ascii() => ((b as char).to_string(), 2),
-                _ => ("$".to_string(), 0),
-            },
-        };
-        out.push_str(&rep);
-        for _ in 0..skip {
-            it.next();
-        }
-    }
-    out
-}
+pub use sfc_syntax::attr_value::{escape, unescape};
 
 /// A number as PLCopen writes it (`xsd:decimal`): integers without a fraction.
 pub fn fmt_num(v: f64) -> String {

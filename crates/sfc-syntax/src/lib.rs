@@ -3,6 +3,7 @@
 //! never panics: every function returns a result plus located diagnostics.
 
 pub mod ast;
+pub mod attr_value;
 pub mod lexer;
 pub mod literal;
 mod parser;
