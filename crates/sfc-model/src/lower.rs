@@ -41,28 +41,50 @@ const KNOWN_ATTRIBUTES: &[&str] = &[
     // Written by the PLCopen import (`sfc-plcopen`, see its `attrs` module): size, foreign
     // addData, action block and jump positions, condition references, inline actions, comments.
     "sfc.w", "sfc.h", "sfc.adddata", "sfc.actionblock", "sfc.jump", "sfc.reference", "sfc.inline", "sfc.comment",
-    // Written by the editor (`sfc-doc`): the blocks, connections and bends the text cannot hold.
-    "sfc.graph",
+    // Written by the editor (`sfc-doc`): the blocks, connections and bends the text cannot hold;
+    // the build output of an "IEC 61131-3" chart (a blank one), kept for the editor's toolbar.
+    "sfc.graph", "sfc.build",
 ];
+
+/// The values `sfc.build` may take: the outputs `sfc build` makes of a blank chart.
+const BUILD_OUTPUTS: &[&str] = &["st", "stl", "plcopen", "svg", "text"];
 
 fn attr<'a>(attrs: &'a [ast::Attribute], name: &str) -> Option<&'a ast::Attribute> {
     attrs.iter().rev().find(|a| a.name.eq_ignore_ascii_case(name))
 }
 
 /// Reports unknown and misplaced `sfc.*` attributes; `allowed` lists those meaningful here.
+/// `sfc.build` belongs where `sfc.target` does (before a POU), and its value is checked there.
 pub fn check_attributes(attrs: &[ast::Attribute], allowed: &[&str], what: &str, diags: &mut Vec<Diagnostic>) {
     for a in attrs {
         let lname = a.name.to_ascii_lowercase();
         if !lname.starts_with("sfc.") {
             continue;
         }
+        let meaningful = match lname.as_str() {
+            "sfc.build" => allowed.contains(&"sfc.target"),
+            "sfc.tag" | "sfc.timeout" | "sfc.target" | "sfc.final" => allowed.contains(&lname.as_str()),
+            _ => true,
+        };
         if !KNOWN_ATTRIBUTES.contains(&lname.as_str()) {
             diags.push(Diagnostic::warning("SFC0602", a.span, format!("unknown attribute `{}`", a.name)));
-        } else if ["sfc.tag", "sfc.timeout", "sfc.target", "sfc.final"].contains(&lname.as_str())
-            && !allowed.contains(&lname.as_str())
-        {
+        } else if !meaningful {
             diags.push(Diagnostic::warning("SFC0603", a.span, format!("attribute `{}` has no meaning on {what}", a.name)));
+        } else if lname == "sfc.build" {
+            build_attr(a, diags);
         }
+    }
+}
+
+/// Checks the value of a POU's `sfc.build` (the editor's build output of an IEC chart).
+fn build_attr(a: &ast::Attribute, diags: &mut Vec<Diagnostic>) {
+    let v = a.value.as_deref().unwrap_or("").trim();
+    if !BUILD_OUTPUTS.iter().any(|b| b.eq_ignore_ascii_case(v)) {
+        diags.push(Diagnostic::error(
+            "SFC0601",
+            a.span,
+            format!("`sfc.build` is one of 'st', 'stl', 'plcopen', 'svg', 'text', found {v:?}"),
+        ));
     }
 }
 

@@ -3,10 +3,11 @@
 import { useEffect, useMemo, useRef, useState } from 'preact/hooks';
 import type { BuildTarget, Diag, FileFormat, Session } from '../api';
 import type { CanvasHandle, CreateCanvas } from '../diagram/types';
-import type { ChartTarget, EditorDoc } from '../doc';
+import type { EditorDoc } from '../doc';
 import { currentLanguage, i18n, LANGUAGES, nextLanguage, setLanguage, t, type Lang } from '../i18n';
 import { ApiError, type Api } from './api';
 import { targetsFor } from './buildResult';
+import { chartBuild, chartKind, kindFields, withBuild, type ChartKind } from './chartKind';
 import { witnessSituations } from './chart';
 import { AboutDialog, CloseDialog, ConflictDialog, NewDialog, OpenDialog, SaveAsDialog, ShortcutsDialog, type NewChartRequest } from './dialogs';
 import { ErrorList, type WitnessView } from './ErrorList';
@@ -21,7 +22,7 @@ import { baseName, formatOf, isDirty, mayClose, tabTitle, TabStore, unloadGuard,
 import { toasts } from './toast';
 
 type Dialog =
-  | { kind: 'new'; target: ChartTarget }
+  | { kind: 'new'; target: ChartKind }
   | { kind: 'open' }
   | { kind: 'saveAs'; path: string; format: FileFormat; resolve: (r: { path: string; format: FileFormat } | null) => void }
   | { kind: 'close'; name: string; resolve: (c: CloseChoice) => void }
@@ -42,6 +43,18 @@ function useForceUpdate(): () => void {
 function useSubscription(source: { subscribe: (l: () => void) => () => void }): void {
   const force = useForceUpdate();
   useEffect(() => source.subscribe(force), [source]);
+}
+
+/** The tab fields that follow the document: its kind and, for an IEC chart, the build target
+ *  its `sfc.build` names (other charts keep the target chosen in the toolbar). */
+function kindOfTab(doc: EditorDoc): Pick<TabState, 'chartTarget'> & Partial<Pick<TabState, 'buildTarget'>> {
+  const kind = chartKind(doc);
+  return kind === 'iec' ? { chartTarget: kind, buildTarget: chartBuild(doc) } : { chartTarget: kind };
+}
+
+/** The badge of a chart's tab: the target's name, `IEC` for IEC 61131-3 charts. */
+function badge(kind: ChartKind): string {
+  return kind === 'iec' ? t('target.iecShort') : t(`target.${kind}`);
 }
 
 /** A valid POU name from a file name (`my chart.st` → `my_chart`). */
@@ -178,7 +191,7 @@ export function App({ api, createCanvas }: AppProps) {
     const offs = [
       c.on('change', () => {
         const d = c.getDoc();
-        store.update(id, { canvasDirty: c.isDirty(), outcome: 'none', pou: d.pou, chartTarget: d.target });
+        store.update(id, { canvasDirty: c.isDirty(), outcome: 'none', pou: d.pou, ...kindOfTab(d) });
         docChanged();
       }),
       c.on('selection', (ids) => {
@@ -208,7 +221,7 @@ export function App({ api, createCanvas }: AppProps) {
       const r = await api.open(path);
       if (r.charts.length === 0) toasts.show('info', t('open.noCharts', { file: baseName(path) }));
       for (const chart of r.charts) {
-        addTab({ path: r.path, format: r.format, hash: r.hash, pou: chart.pou, filePou: chart.pou, chartTarget: chart.target, diagnostics: r.diagnostics }, chart);
+        addTab({ path: r.path, format: r.format, hash: r.hash, pou: chart.pou, filePou: chart.pou, ...kindOfTab(chart), diagnostics: r.diagnostics }, chart);
       }
     } catch (e) {
       if (e instanceof ApiError && e.status === 404) toasts.show('error', t('open.missing', { file: path }));
@@ -302,11 +315,23 @@ export function App({ api, createCanvas }: AppProps) {
   async function createChart(r: NewChartRequest): Promise<void> {
     setDialog(null);
     try {
-      const doc = await api.newChart(r.pou, r.target);
-      addTab({ path: null, format: r.format, hash: null, pou: doc.pou, chartTarget: doc.target, unsaved: true }, doc);
+      const made = await api.newChart(r.pou, r.target === 'iec' ? 'blank' : r.target);
+      // An IEC chart is a Blank one that names its build output (`sfc.build`, default ST).
+      const doc = r.target === 'iec' ? { ...made, ...kindFields(made, 'iec') } : made;
+      addTab({ path: null, format: r.format, hash: null, pou: doc.pou, ...kindOfTab(doc), unsaved: true }, doc);
     } catch {
       // The API client has shown the server's message.
     }
+  }
+
+  /** The toolbar's build target: an IEC chart keeps it in `sfc.build` (one undoable change of the
+   *  chart; the canvas' change event brings the tab along), other charts in the tab. */
+  function chooseBuildTarget(x: TabState, target: BuildTarget): void {
+    const c = canvases.current.get(x.id);
+    if (x.chartTarget === 'iec' && c && !host) {
+      const d = c.getDoc();
+      if (chartBuild(d) !== target) c.updateDoc({ attributes: withBuild(d.attributes, target) });
+    } else store.update(x.id, { buildTarget: target });
   }
 
   /** Validate (check with analysis) or Validate & build, by the toolbar's mode unless given. */
@@ -513,7 +538,7 @@ export function App({ api, createCanvas }: AppProps) {
           title={t('toolbar.target')}
           disabled={!tab || !!host || buildMode === 'validate'}
           value={host ? host.fb : tab?.buildTarget}
-          onChange={(e) => tab && store.update(tab.id, { buildTarget: e.currentTarget.value as BuildTarget })}
+          onChange={(e) => tab && chooseBuildTarget(tab, e.currentTarget.value as BuildTarget)}
         >
           {(host ? [host.fb] : targetsFor(tab?.chartTarget ?? 'blank')).map((x) => (
             <option key={x} value={x}>
@@ -546,7 +571,7 @@ export function App({ api, createCanvas }: AppProps) {
               onClick={() => store.activate(x.id)}
               onAuxClick={(e) => e.button === 1 && void closeTab(x.id)}
             >
-              <span class={`tab-target target-${x.chartTarget}`}>{t(`target.${x.chartTarget}`)}</span>
+              <span class={`tab-target target-${x.chartTarget}`}>{badge(x.chartTarget)}</span>
               <span class="tab-title">{tabTitle(x)}</span>
               <button
                 class="tab-close"
@@ -564,7 +589,7 @@ export function App({ api, createCanvas }: AppProps) {
       )}
       {host && tab && (
         <div class="host-title no-print">
-          <span class={`tab-target target-${tab.chartTarget}`}>{t(`target.${tab.chartTarget}`)}</span>
+          <span class={`tab-target target-${tab.chartTarget}`}>{badge(tab.chartTarget)}</span>
           <span>{tabTitle(tab)}</span>
           <span class="muted">{tab.path}</span>
         </div>

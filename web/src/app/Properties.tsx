@@ -4,9 +4,10 @@ import type { ComponentChildren } from 'preact';
 import { useEffect, useState } from 'preact/hooks';
 import type { Diag } from '../api';
 import type { CanvasHandle } from '../diagram/types';
-import type { ActionDef, Association, ChartTarget, Connection, EditorDoc, Element, Language } from '../doc';
+import type { ActionDef, Association, Connection, EditorDoc, Element, Language } from '../doc';
 import { t, diagMessage } from '../i18n';
 import { freshName, isIecName, stepNames } from './chart';
+import { CHART_KINDS, chartKind, kindFields, type ChartKind } from './chartKind';
 import { CodeEditor } from './CodeEditor';
 import { parseDuration, secondsToLiteral } from './duration';
 import { Icon } from './icons';
@@ -547,8 +548,8 @@ function ChartProperties(props: PanelProps) {
           <span class="readonly">{t(`pouKind.${doc.pouKind}`)}</span>
         </Field>
         <Field label={t('props.target')} for="p-target">
-          <select id="p-target" value={doc.target} disabled={props.targetFixed} onChange={(e) => canvas.updateDoc({ target: e.currentTarget.value as ChartTarget })}>
-            {(['blank', 'atmt', 'eatmt'] as ChartTarget[]).map((k) => (
+          <select id="p-target" value={chartKind(doc)} disabled={props.targetFixed} onChange={(e) => canvas.updateDoc(kindFields(doc, e.currentTarget.value as ChartKind))}>
+            {CHART_KINDS.map((k) => (
               <option key={k} value={k}>
                 {t(`target.${k}`)}
               </option>

@@ -2,6 +2,7 @@
 // fig. 21), parsed from the one-line form `N[s c n;…][t0 … tM-1]` of interfaces.md, and the
 // download file names per target.
 import type { BuildTarget, TableRule } from '../api';
+import { IEC_BUILDS, type ChartKind } from './chartKind';
 
 export interface TransitionTable {
   rules: TableRule[];
@@ -80,7 +81,7 @@ export function resultMime(target: BuildTarget): string {
   return MIME[target];
 }
 
-/** Build targets offered for a chart: its table for ATMT/EATMT charts, the generators for blank ones. */
-export function targetsFor(chart: 'blank' | 'atmt' | 'eatmt'): BuildTarget[] {
-  return chart === 'blank' ? ['st', 'stl', 'plcopen', 'text', 'svg'] : [chart];
+/** Build targets offered for a chart: its table for ATMT/EATMT charts, the generators for Blank and IEC ones. */
+export function targetsFor(chart: ChartKind): BuildTarget[] {
+  return chart === 'blank' || chart === 'iec' ? [...IEC_BUILDS] : [chart];
 }

@@ -3,9 +3,9 @@
 import type { ComponentChildren } from 'preact';
 import { useEffect, useMemo, useRef, useState } from 'preact/hooks';
 import type { FileFormat, Session } from '../api';
-import type { ChartTarget } from '../doc';
 import { t } from '../i18n';
 import { isIecName } from './chart';
+import { CHART_KINDS, type ChartKind } from './chartKind';
 import type { CloseChoice } from './store';
 import { baseName, formatOf, underRoot } from './store';
 
@@ -48,13 +48,14 @@ export function Modal(props: {
 
 export interface NewChartRequest {
   pou: string;
-  target: ChartTarget;
+  /** `iec`: a Blank chart with `sfc.build` (see chartKind.ts). */
+  target: ChartKind;
   format: FileFormat;
 }
 
-export function NewDialog(props: { initialTarget: ChartTarget; onCreate: (r: NewChartRequest) => void; onClose: () => void }) {
+export function NewDialog(props: { initialTarget: ChartKind; onCreate: (r: NewChartRequest) => void; onClose: () => void }) {
   const [pou, setPou] = useState('Chart1');
-  const [target, setTarget] = useState<ChartTarget>(props.initialTarget);
+  const [target, setTarget] = useState<ChartKind>(props.initialTarget);
   const [format, setFormat] = useState<FileFormat>('st');
   const valid = isIecName(pou);
   const submit = () => valid && props.onCreate({ pou, target, format });
@@ -87,7 +88,7 @@ export function NewDialog(props: { initialTarget: ChartTarget; onCreate: (r: New
         </div>
         <span>{t('new.target')}</span>
         <div class="target-choice" role="radiogroup">
-          {(['blank', 'atmt', 'eatmt'] as ChartTarget[]).map((k) => (
+          {CHART_KINDS.map((k) => (
             <label class={`target-option ${target === k ? 'checked' : ''}`} key={k}>
               <input type="radio" name="new-target" checked={target === k} onChange={() => setTarget(k)} />
               <span class="target-name">{t(`target.${k}`)}</span>

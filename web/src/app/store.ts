@@ -1,8 +1,8 @@
 // The open charts (one tab each in MDI mode, the only one in host mode), their dirty state,
 // last diagnostics and build result, and the guard that asks before unsaved changes are lost.
 import type { BuildResult, BuildTarget, Diag, FileFormat } from '../api';
-import type { ChartTarget } from '../doc';
 import { targetsFor } from './buildResult';
+import type { ChartKind } from './chartKind';
 
 export type Outcome = 'none' | 'succeeded' | 'failed';
 
@@ -17,7 +17,8 @@ export interface TabState {
   /** The POU's name in the file as last opened or saved (null: not in the file yet). A save
    *  replaces that POU, so renaming the chart does not leave the old one behind. */
   filePou: string | null;
-  chartTarget: ChartTarget;
+  /** The chart's kind as the badge shows it: its `sfc.target`, or IEC (see chartKind.ts). */
+  chartTarget: ChartKind;
   /** The chart has changes no file holds (a new chart), whatever the canvas' undo history says. */
   unsaved: boolean;
   /** The canvas reports changes since load or the last save. */
@@ -26,10 +27,11 @@ export interface TabState {
   /** The Succeeded/Failed overlay, cleared by the next change. */
   outcome: Outcome;
   result: { target: BuildTarget; result: BuildResult } | null;
+  /** The toolbar's build target; an IEC chart's mirrors its `sfc.build` attribute. */
   buildTarget: BuildTarget;
 }
 
-export type NewTab = Pick<TabState, 'path' | 'format' | 'hash' | 'pou' | 'chartTarget'> & Partial<Pick<TabState, 'unsaved' | 'diagnostics' | 'filePou'>>;
+export type NewTab = Pick<TabState, 'path' | 'format' | 'hash' | 'pou' | 'chartTarget'> & Partial<Pick<TabState, 'unsaved' | 'diagnostics' | 'filePou' | 'buildTarget'>>;
 
 export class TabStore {
   tabs: TabState[] = [];

@@ -6,6 +6,7 @@ import { afterEach, beforeEach, describe, expect, it, vi } from 'vitest';
 import type { BuildResult, Diag, OpenResult, Session } from '../../src/api';
 import { createApi } from '../../src/app/api';
 import { App, pouFromFile } from '../../src/app/App';
+import { chartKind } from '../../src/app/chartKind';
 import type { EditorDoc } from '../../src/doc';
 import { initI18n, setLanguage } from '../../src/i18n';
 import { createFakeCanvas, type FakeCanvas } from './fakeCanvas';
@@ -91,6 +92,7 @@ async function start() {
 }
 
 const text = () => root.textContent ?? '';
+const chartOf = (c: FakeCanvas) => chartKind(c.getDoc());
 /** A button by its text or title, inside the open dialog when there is one. */
 const button = (label: string) => {
   const scope = root.ownerDocument.querySelector('.modal') ?? root.ownerDocument;
@@ -272,6 +274,76 @@ describe('shell', () => {
     expect([...root.querySelectorAll('.assoc-table tbody tr')].length).toBe(2);
     c.undo();
     expect(c.getDoc().elements.find((e) => e.id === 'step:A')?.timeout).toBe('T#8.1s');
+  });
+});
+
+describe('IEC 61131-3 charts', () => {
+  const choose = async (select: HTMLSelectElement, value: string) => {
+    await act(async () => {
+      select.value = value;
+      select.dispatchEvent(new Event('change', { bubbles: true }));
+    });
+    await flush();
+  };
+  const buildSelect = () => root.querySelectorAll('select.tool-select')[1] as HTMLSelectElement;
+
+  it('New → IEC 61131-3 makes a Blank chart with sfc.build = st, badge IEC, built to ST', async () => {
+    server.session.open = [];
+    await start();
+    await click(button('New…'));
+    const iec = [...root.ownerDocument.querySelectorAll('.target-option')].find((l) => l.querySelector('.target-name')?.textContent === 'IEC 61131-3');
+    expect(iec?.textContent).toContain('Structured Text');
+    await click(iec!.querySelector('input')!);
+    await click(button('Create'));
+    expect(server.calls.find((c) => c.url === '/api/new')?.body).toEqual({ name: 'Chart1', target: 'blank' });
+    const d = canvases[0].getDoc();
+    expect(d.target).toBe('blank');
+    expect(d.attributes).toEqual([{ name: 'sfc.build', value: 'st' }]);
+    // Created with the attribute, not as an edit to undo.
+    expect(canvases[0].canUndo()).toBe(false);
+    expect(root.querySelector('.tab.active .tab-target')?.textContent).toBe('IEC');
+    expect(buildSelect().value).toBe('st');
+    await click(button('Build (F7)'));
+    expect(server.calls.find((c) => c.url === '/api/build')?.body).toMatchObject({ target: 'st', doc: { attributes: [{ name: 'sfc.build', value: 'st' }] } });
+  });
+
+  it('the build select writes sfc.build as one undoable change of the chart', async () => {
+    server.files['/w/mixer.st'].charts = [{ ...doc, attributes: [{ name: 'vendor.x', value: '1' }, { name: 'sfc.build', value: 'plcopen' }] }];
+    await start();
+    const c = canvases[0];
+    expect(root.querySelector('.tab.active .tab-target')?.textContent).toBe('IEC');
+    expect(buildSelect().value).toBe('plcopen');
+    await choose(buildSelect(), 'stl');
+    expect(c.getDoc().attributes).toEqual([{ name: 'vendor.x', value: '1' }, { name: 'sfc.build', value: 'stl' }]);
+    expect(root.querySelector('.tab.active .tab-title')?.textContent).toBe('mixer.st: Mixer*');
+    await click(button('Build (F7)'));
+    expect(server.calls.find((c) => c.url === '/api/build')?.body).toMatchObject({ target: 'stl' });
+    await act(async () => c.undo());
+    await flush();
+    expect(c.canUndo()).toBe(false);
+    expect(c.getDoc().attributes).toEqual([{ name: 'vendor.x', value: '1' }, { name: 'sfc.build', value: 'plcopen' }]);
+    expect(buildSelect().value).toBe('plcopen');
+  });
+
+  it('a Blank chart keeps its build target in the tab; Properties switches Blank and IEC', async () => {
+    await start();
+    const c = canvases[0];
+    expect(root.querySelector('.tab.active .tab-target')?.textContent).toBe('Blank');
+    await choose(buildSelect(), 'svg');
+    expect(c.canUndo()).toBe(false);
+    expect(c.getDoc().attributes).toBeUndefined();
+    const target = root.querySelector('#p-target') as HTMLSelectElement;
+    expect([...target.options].map((o) => o.value)).toEqual(['blank', 'atmt', 'eatmt', 'iec']);
+    await choose(target, 'iec');
+    expect(c.getDoc()).toMatchObject({ target: 'blank', attributes: [{ name: 'sfc.build', value: 'st' }] });
+    expect(root.querySelector('.tab.active .tab-target')?.textContent).toBe('IEC');
+    expect(buildSelect().value).toBe('st');
+    await choose(root.querySelector('#p-target') as HTMLSelectElement, 'blank');
+    expect(c.getDoc().attributes).toEqual([]);
+    expect(root.querySelector('.tab.active .tab-target')?.textContent).toBe('Blank');
+    c.undo();
+    await flush();
+    expect(chartOf(c)).toBe('iec');
   });
 });
 

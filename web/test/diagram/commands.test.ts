@@ -136,6 +136,11 @@ describe('undo/redo of every command', () => {
     expect(a.pou).toBe('Belt');
     expect(a.actions).toEqual([]);
   });
+  // An IEC chart's build output (`sfc.build`) is a POU attribute; undo removes it again.
+  undoable('updateDoc attributes', ({ canvas }) => canvas.updateDoc({ attributes: [{ name: 'sfc.build', value: 'stl' }] }), (b, a) => {
+    expect(b.attributes).toBeUndefined();
+    expect(a.attributes).toEqual([{ name: 'sfc.build', value: 'stl' }]);
+  });
   undoable('applyLayout', ({ canvas }) => {
     const laid = canvas.getDoc();
     for (const e of laid.elements) e.y += 100;
