@@ -15,7 +15,7 @@ use guard::{GuardContext, GuardFinding, GuardFindingKind};
 use net::{Method, NetOptions, NetReport};
 use replay::{Goal, ReplayFailure, ReplayOptions};
 use sfc_diagnostics::{Diagnostic, Severity, Span, Witness};
-use sfc_model::{CheckOptions, Chart, Checked, StepId, TransitionId};
+use sfc_model::{Chart, CheckOptions, Checked, StepId, TransitionId};
 
 /// How much work the analysis may do.
 #[derive(Debug, Clone)]
@@ -185,7 +185,10 @@ fn net_diagnostics(checked: &Checked, chart: &Chart, report: &NetReport, opts: &
         let mut d = Diagnostic::error(
             "SFC0504",
             step.name_span,
-            format!("lock-up: in the situation {{{}}} no transition can ever be enabled", step_list(chart, &l.situation)),
+            format!(
+                "lock-up: in the situation {{{}}} no transition can ever be enabled",
+                step_list(chart, &l.situation)
+            ),
         )
         .with_element(step.name.clone())
         .with_witness(Witness::Firing(names(chart, &l.witness)));

@@ -13,7 +13,11 @@ mod run;
 mod sim;
 
 #[derive(Parser)]
-#[command(name = "sfc", version, about = "Check, format, build, simulate and run IEC 61131-3 Sequential Function Charts")]
+#[command(
+    name = "sfc",
+    version,
+    about = "Check, format, build, simulate and run IEC 61131-3 Sequential Function Charts"
+)]
 struct Cli {
     #[command(subcommand)]
     command: Command,

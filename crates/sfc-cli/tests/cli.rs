@@ -134,7 +134,19 @@ fn json_has_the_contract_keys() {
     let v: serde_json::Value = serde_json::from_slice(&out.stdout).expect("stdout is JSON");
     let arr = v.as_array().expect("an array");
     let d0 = arr.iter().find(|d| d["code"] == "SFC0208").expect("SFC0208 reported");
-    for key in ["code", "severity", "message", "file", "line", "column", "end_line", "end_column", "element", "notes", "witness"] {
+    for key in [
+        "code",
+        "severity",
+        "message",
+        "file",
+        "line",
+        "column",
+        "end_line",
+        "end_column",
+        "element",
+        "notes",
+        "witness",
+    ] {
         assert!(d0.get(key).is_some(), "missing key {key} in {d0}");
     }
     assert_eq!(d0["severity"], "error");
@@ -216,7 +228,10 @@ fn fmt_filters_standard_input() {
     child.stdin.take().unwrap().write_all(b"program p\nvar x:int;end_var\nx:=x+1;\nend_program").unwrap();
     let out = child.wait_with_output().unwrap();
     assert_eq!(out.status.code(), Some(0));
-    assert_eq!(String::from_utf8_lossy(&out.stdout), "PROGRAM p\n    VAR\n        x : int;\n    END_VAR\n\n    x := x + 1;\nEND_PROGRAM\n");
+    assert_eq!(
+        String::from_utf8_lossy(&out.stdout),
+        "PROGRAM p\n    VAR\n        x : int;\n    END_VAR\n\n    x := x + 1;\nEND_PROGRAM\n"
+    );
 }
 
 #[test]

@@ -543,10 +543,13 @@ fn stats_and_explain() {
 #[test]
 fn every_example_has_a_passing_scenario() {
     let examples = root().join("examples");
-    let mut dirs: Vec<_> = std::fs::read_dir(&examples).unwrap().map(|e| e.unwrap().path()).filter(|p| p.is_dir()).collect();
+    let mut dirs: Vec<_> =
+        std::fs::read_dir(&examples).unwrap().map(|e| e.unwrap().path()).filter(|p| p.is_dir()).collect();
     dirs.sort();
     for dir in &dirs {
-        let has = std::fs::read_dir(dir).unwrap().any(|e| e.unwrap().file_name().to_string_lossy().ends_with(".scenario.toml"));
+        let has = std::fs::read_dir(dir)
+            .unwrap()
+            .any(|e| e.unwrap().file_name().to_string_lossy().ends_with(".scenario.toml"));
         assert!(has, "{} has no scenario", dir.display());
     }
     let out = sfc(&["test", "examples"]);

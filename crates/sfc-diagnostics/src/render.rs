@@ -82,7 +82,10 @@ pub fn render_human(diag: &Diagnostic, files: &[SourceFile], opts: RenderOptions
         // labels in other files follow, each under its own `:::` header.
         let mut local: Vec<(crate::Span, char, Severity, &str)> = vec![(diag.span, '^', diag.severity, "")];
         local.extend(
-            diag.labels.iter().filter(|l| l.span.file == diag.span.file).map(|l| (l.span, '-', Severity::Note, l.message.as_str())),
+            diag.labels
+                .iter()
+                .filter(|l| l.span.file == diag.span.file)
+                .map(|l| (l.span, '-', Severity::Note, l.message.as_str())),
         );
         local.sort_by_key(|(sp, ..)| sp.start);
         let mut last_line: Option<u32> = None;
@@ -116,9 +119,7 @@ pub fn render_human(diag: &Diagnostic, files: &[SourceFile], opts: RenderOptions
         let text = match w {
             Witness::Firing(ts) if ts.is_empty() => "the initial situation".to_string(),
             Witness::Firing(ts) => ts.join(" -> "),
-            Witness::Valuation(vs) => {
-                vs.iter().map(|(k, v)| format!("{k} = {v}")).collect::<Vec<_>>().join(", ")
-            }
+            Witness::Valuation(vs) => vs.iter().map(|(k, v)| format!("{k} = {v}")).collect::<Vec<_>>().join(", "),
         };
         let _ = writeln!(out, "{pad} {} {}: {text}", st.blue("="), st.bold("witness"));
     }
@@ -146,11 +147,8 @@ fn snippet(
     let prefix: String = line_text.chars().take(start.column as usize - 1).collect();
     let indent = prefix.chars().map(|c| if c == '\t' { 4 } else { 1 }).sum::<usize>();
     let len = if end.line == start.line {
-        let inner: String = line_text
-            .chars()
-            .skip(start.column as usize - 1)
-            .take((end.column - start.column) as usize)
-            .collect();
+        let inner: String =
+            line_text.chars().skip(start.column as usize - 1).take((end.column - start.column) as usize).collect();
         inner.chars().map(|c| if c == '\t' { 4 } else { 1 }).sum::<usize>().max(1)
     } else {
         (shown.chars().count().saturating_sub(indent)).max(1)

@@ -16,10 +16,22 @@ fn chart(n: usize) -> String {
         let _ = writeln!(s, "    ACTION A{i}:\n        Count := Count + {i};\n        Timer(IN := TRUE, PT := T#1s);\n        Out := Timer.Q AND Level > {};\n    END_ACTION\n", i % 100);
         let next = (i + 1) % n;
         if i % 10 == 5 && i + 2 < n {
-            let _ = writeln!(s, "    TRANSITION FROM S{i} TO S{}\n        := Go AND Level > {};\n    END_TRANSITION\n", i + 2, i % 50);
-            let _ = writeln!(s, "    TRANSITION FROM S{i} TO S{next}\n        := NOT Go AND S{i}.T >= T#100ms;\n    END_TRANSITION\n");
+            let _ = writeln!(
+                s,
+                "    TRANSITION FROM S{i} TO S{}\n        := Go AND Level > {};\n    END_TRANSITION\n",
+                i + 2,
+                i % 50
+            );
+            let _ = writeln!(
+                s,
+                "    TRANSITION FROM S{i} TO S{next}\n        := NOT Go AND S{i}.T >= T#100ms;\n    END_TRANSITION\n"
+            );
         } else {
-            let _ = writeln!(s, "    TRANSITION FROM S{i} TO S{next}\n        := Go OR S{i}.T >= T#{}ms;\n    END_TRANSITION\n", 10 + i % 90);
+            let _ = writeln!(
+                s,
+                "    TRANSITION FROM S{i} TO S{next}\n        := Go OR S{i}.T >= T#{}ms;\n    END_TRANSITION\n",
+                10 + i % 90
+            );
         }
     }
     s.push_str("END_PROGRAM\n");
@@ -85,10 +97,9 @@ fn main() {
         return;
     }
     println!("sfc check, release build, median of 5 runs (peak memory of the whole process, text included)");
-    for (case, what, target) in [
-        ("steps", "10,000-step chart", "target < 200 ms, < 100 MB"),
-        ("lines", "100,000-line file", "no target"),
-    ] {
+    for (case, what, target) in
+        [("steps", "10,000-step chart", "target < 200 ms, < 100 MB"), ("lines", "100,000-line file", "no target")]
+    {
         let exe = std::env::current_exe().expect("own executable");
         let out = std::process::Command::new(exe).args(["--case", case]).output().expect("child run");
         let line = String::from_utf8_lossy(&out.stdout);

@@ -35,15 +35,39 @@ pub fn pou_variables(pou: &ast::Pou) -> Vec<VarInfo> {
 
 /// Attributes sfc knows; unknown `sfc.*` ones are reported as likely misspellings.
 const KNOWN_ATTRIBUTES: &[&str] = &[
-    "sfc.tag", "sfc.timeout", "sfc.target", "sfc.final", "sfc.x", "sfc.y", "sfc.width", "sfc.height",
-    "sfc.description", "sfc.background", "sfc.foreground", "sfc.linewidth", "sfc.hidelabel", "sfc.font",
-    "sfc.align", "sfc.pins", "sfc.bends", "sfc.label", "sfc.name",
+    "sfc.tag",
+    "sfc.timeout",
+    "sfc.target",
+    "sfc.final",
+    "sfc.x",
+    "sfc.y",
+    "sfc.width",
+    "sfc.height",
+    "sfc.description",
+    "sfc.background",
+    "sfc.foreground",
+    "sfc.linewidth",
+    "sfc.hidelabel",
+    "sfc.font",
+    "sfc.align",
+    "sfc.pins",
+    "sfc.bends",
+    "sfc.label",
+    "sfc.name",
     // Written by the PLCopen import (`sfc-plcopen`, see its `attrs` module): size, foreign
     // addData, action block and jump positions, condition references, inline actions, comments.
-    "sfc.w", "sfc.h", "sfc.adddata", "sfc.actionblock", "sfc.jump", "sfc.reference", "sfc.inline", "sfc.comment",
+    "sfc.w",
+    "sfc.h",
+    "sfc.adddata",
+    "sfc.actionblock",
+    "sfc.jump",
+    "sfc.reference",
+    "sfc.inline",
+    "sfc.comment",
     // Written by the editor (`sfc-doc`): the blocks, connections and bends the text cannot hold;
     // the build output of an "IEC 61131-3" chart (a blank one), kept for the editor's toolbar.
-    "sfc.graph", "sfc.build",
+    "sfc.graph",
+    "sfc.build",
 ];
 
 /// The values `sfc.build` may take: the outputs `sfc build` makes of a blank chart.
@@ -69,7 +93,11 @@ pub fn check_attributes(attrs: &[ast::Attribute], allowed: &[&str], what: &str, 
         if !KNOWN_ATTRIBUTES.contains(&lname.as_str()) {
             diags.push(Diagnostic::warning("SFC0602", a.span, format!("unknown attribute `{}`", a.name)));
         } else if !meaningful {
-            diags.push(Diagnostic::warning("SFC0603", a.span, format!("attribute `{}` has no meaning on {what}", a.name)));
+            diags.push(Diagnostic::warning(
+                "SFC0603",
+                a.span,
+                format!("attribute `{}` has no meaning on {what}", a.name),
+            ));
         } else if lname == "sfc.build" {
             build_attr(a, diags);
         }
@@ -420,13 +448,16 @@ fn lower_association(
                 return None;
             }
             None => {
-                let mut d = Diagnostic::error("SFC0207", a.action.span, format!("undeclared action `{}`", a.action.text))
-                    .with_element(&a.action.text);
+                let mut d =
+                    Diagnostic::error("SFC0207", a.action.span, format!("undeclared action `{}`", a.action.text))
+                        .with_element(&a.action.text);
                 let candidates = action_names.iter().map(String::as_str);
                 if let Some(s) = closest(&a.action.text, candidates) {
                     d = d.with_note(format!("did you mean `{s}`?"));
                 } else {
-                    d = d.with_note("declare it with `ACTION name: … END_ACTION`, or declare a BOOL variable of that name");
+                    d = d.with_note(
+                        "declare it with `ACTION name: … END_ACTION`, or declare a BOOL variable of that name",
+                    );
                 }
                 diags.push(d);
                 ok = false;
@@ -456,7 +487,12 @@ fn lower_association(
                 Diagnostic::error(
                     "SFC0210",
                     a.span,
-                    format!("qualifier {} needs a duration, e.g. `{}({}, T#5s)`", qualifier.name(), a.action.text, qualifier.name()),
+                    format!(
+                        "qualifier {} needs a duration, e.g. `{}({}, T#5s)`",
+                        qualifier.name(),
+                        a.action.text,
+                        qualifier.name()
+                    ),
                 )
                 .with_element(&a.action.text),
             );

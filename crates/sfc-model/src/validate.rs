@@ -55,14 +55,24 @@ pub fn structure(chart: &Chart, source: &str, diags: &mut Vec<Diagnostic>) {
         let inc = &adj.incoming[i];
         if !s.initial && out.is_empty() && inc.is_empty() {
             diags.push(
-                Diagnostic::error("SFC0203", s.name_span, format!("step `{}` is not connected to any transition", s.name))
-                    .with_element(&s.name),
+                Diagnostic::error(
+                    "SFC0203",
+                    s.name_span,
+                    format!("step `{}` is not connected to any transition", s.name),
+                )
+                .with_element(&s.name),
             );
-        } else if out.is_empty() && !s.is_final && (!inc.is_empty() || chart.steps.len() > 1) && !(s.initial && inc.is_empty()) {
+        } else if out.is_empty()
+            && !s.is_final
+            && (!inc.is_empty() || chart.steps.len() > 1)
+            && !(s.initial && inc.is_empty())
+        {
             diags.push(
                 Diagnostic::warning("SFC0213", s.name_span, format!("step `{}` has no outgoing transition", s.name))
                     .with_element(&s.name)
-                    .with_note("the sequence ends here; if that is intended, mark it with {attribute 'sfc.final' := 'true'}"),
+                    .with_note(
+                        "the sequence ends here; if that is intended, mark it with {attribute 'sfc.final' := 'true'}",
+                    ),
             );
         }
     }
@@ -87,9 +97,13 @@ pub fn structure(chart: &Chart, source: &str, diags: &mut Vec<Diagnostic>) {
             std::collections::hash_map::Entry::Occupied(first) => {
                 let a = &chart.transitions[*first.get()];
                 diags.push(
-                    Diagnostic::error("SFC0215", b.header_span, format!("transition `{}` repeats transition `{}`", b.name, a.name))
-                        .with_element(&b.name)
-                        .with_label(a.header_span, "same steps and condition here"),
+                    Diagnostic::error(
+                        "SFC0215",
+                        b.header_span,
+                        format!("transition `{}` repeats transition `{}`", b.name, a.name),
+                    )
+                    .with_element(&b.name)
+                    .with_label(a.header_span, "same steps and condition here"),
                 );
             }
             std::collections::hash_map::Entry::Vacant(v) => {
@@ -209,7 +223,12 @@ pub fn target_rules(chart: &Chart, limits: Limits, diags: &mut Vec<Diagnostic>) 
             Diagnostic::error(
                 "SFC0403",
                 chart.name_span,
-                format!("{tname} allows at most {} rules, chart `{}` has {} transitions", limits.rules, chart.pou, chart.transitions.len()),
+                format!(
+                    "{tname} allows at most {} rules, chart `{}` has {} transitions",
+                    limits.rules,
+                    chart.pou,
+                    chart.transitions.len()
+                ),
             )
             .with_element(&chart.pou),
         );
@@ -230,15 +249,23 @@ pub fn target_rules(chart: &Chart, limits: Limits, diags: &mut Vec<Diagnostic>) 
     for s in &chart.steps {
         for a in &s.associations {
             diags.push(
-                Diagnostic::error("SFC0405", a.span, format!("{tname} charts have no actions: remove `{}` from step `{}`", a.action, s.name))
-                    .with_element(&s.name),
+                Diagnostic::error(
+                    "SFC0405",
+                    a.span,
+                    format!("{tname} charts have no actions: remove `{}` from step `{}`", a.action, s.name),
+                )
+                .with_element(&s.name),
             );
         }
     }
     for a in &chart.actions {
         diags.push(
-            Diagnostic::error("SFC0405", a.name_span, format!("{tname} charts have no actions: remove action `{}`", a.name))
-                .with_element(&a.name),
+            Diagnostic::error(
+                "SFC0405",
+                a.name_span,
+                format!("{tname} charts have no actions: remove action `{}`", a.name),
+            )
+            .with_element(&a.name),
         );
     }
     // Conditions.
@@ -266,15 +293,24 @@ pub fn target_rules(chart: &Chart, limits: Limits, diags: &mut Vec<Diagnostic>) 
                         Diagnostic::error(
                             "SFC0402",
                             span,
-                            format!("{tname} has condition inputs 0 to {}, `{}` uses input {}", max - 1, t.name, ci.index),
+                            format!(
+                                "{tname} has condition inputs 0 to {}, `{}` uses input {}",
+                                max - 1,
+                                t.name,
+                                ci.index
+                            ),
                         )
                         .with_element(&t.name),
                     );
                 }
                 if ci.negated && target == Target::Atmt {
                     diags.push(
-                        Diagnostic::error("SFC0407", span, format!("ATMT cannot negate a condition (in `{}`); use EATMT", t.name))
-                            .with_element(&t.name),
+                        Diagnostic::error(
+                            "SFC0407",
+                            span,
+                            format!("ATMT cannot negate a condition (in `{}`); use EATMT", t.name),
+                        )
+                        .with_element(&t.name),
                     );
                 }
                 if let Some(tag) = t.tag {
@@ -283,7 +319,10 @@ pub fn target_rules(chart: &Chart, limits: Limits, diags: &mut Vec<Diagnostic>) 
                             Diagnostic::error(
                                 "SFC0408",
                                 t.header_span,
-                                format!("transition `{}` has tag {tag} but its condition is input {}", t.name, ci.index),
+                                format!(
+                                    "transition `{}` has tag {tag} but its condition is input {}",
+                                    t.name, ci.index
+                                ),
                             )
                             .with_element(&t.name),
                         );
@@ -297,7 +336,12 @@ pub fn target_rules(chart: &Chart, limits: Limits, diags: &mut Vec<Diagnostic>) 
         diags.push(Diagnostic::error(
             "SFC0402",
             chart.name_span,
-            format!("{tname} allows at most {} conditions, chart `{}` uses {}", limits.conditions, chart.pou, used.len()),
+            format!(
+                "{tname} allows at most {} conditions, chart `{}` uses {}",
+                limits.conditions,
+                chart.pou,
+                used.len()
+            ),
         ));
     }
     // State tags.
@@ -312,15 +356,23 @@ pub fn target_rules(chart: &Chart, limits: Limits, diags: &mut Vec<Diagnostic>) 
         if let Some(tag) = s.tag {
             if tag >= limits.states {
                 diags.push(
-                    Diagnostic::error("SFC0409", s.name_span, format!("step `{}` has tag {tag}, beyond the {} states of {tname}", s.name, limits.states))
-                        .with_element(&s.name),
+                    Diagnostic::error(
+                        "SFC0409",
+                        s.name_span,
+                        format!("step `{}` has tag {tag}, beyond the {} states of {tname}", s.name, limits.states),
+                    )
+                    .with_element(&s.name),
                 );
             }
             if let Some(&j) = first_with_tag.get(&tag).filter(|&&j| j != i) {
                 diags.push(
-                    Diagnostic::error("SFC0409", s.name_span, format!("steps `{}` and `{}` have the same tag {tag}", chart.steps[j].name, s.name))
-                        .with_element(&s.name)
-                        .with_label(chart.steps[j].name_span, "tag first used here"),
+                    Diagnostic::error(
+                        "SFC0409",
+                        s.name_span,
+                        format!("steps `{}` and `{}` have the same tag {tag}", chart.steps[j].name, s.name),
+                    )
+                    .with_element(&s.name)
+                    .with_label(chart.steps[j].name_span, "tag first used here"),
                 );
             }
         }

@@ -107,7 +107,10 @@ fn invalid_fixtures_report_what_they_announce() {
         }
         if expected != actual {
             let fmt = |m: &BTreeMap<(u32, String), usize>| {
-                m.iter().map(|((l, c), n)| format!("{c}@{l}{}", if *n > 1 { format!("x{n}") } else { String::new() })).collect::<Vec<_>>().join(" ")
+                m.iter()
+                    .map(|((l, c), n)| format!("{c}@{l}{}", if *n > 1 { format!("x{n}") } else { String::new() }))
+                    .collect::<Vec<_>>()
+                    .join(" ")
             };
             failures.push(format!(
                 "{}\n  expected: {}\n  actual:   {}\n{}",
@@ -147,7 +150,11 @@ fn corpus_text_files() {
         return;
     }
     let (_, diags, file) = check(&corpus.join("matiec/sfc.txt"));
-    assert!(diags.iter().all(|d| !d.is_error() && d.severity != sfc_diagnostics::Severity::Warning), "{}", render_all(&diags, &file));
+    assert!(
+        diags.iter().all(|d| !d.is_error() && d.severity != sfc_diagnostics::Severity::Warning),
+        "{}",
+        render_all(&diags, &file)
+    );
     assert_eq!(diags.iter().map(|d| d.code).collect::<Vec<_>>(), vec!["SFC0104"]);
 
     let path = corpus.join("verifaps/single_sfc2st_tests.st");

@@ -61,11 +61,51 @@ fn two_megabytes_of_random_bytes() {
 fn random_chart_fragments() {
     // Real tokens in random order reach the checker and the model, not just the parser.
     const WORDS: &[&str] = &[
-        "PROGRAM P", "END_PROGRAM", "VAR x : BOOL; i : INT; t : TON; END_VAR", "INITIAL_STEP", "STEP", "S1", "S2",
-        ":", "END_STEP", "A(N);", "B(L, T#1s);", "TRANSITION", "FROM", "TO", "(S1, S2)", ":=", "x", "i > 3", ";",
-        "END_TRANSITION", "ACTION", "A", "B", "END_ACTION", "i := i + 1;", "t(IN := x, PT := T#1s);", "IF", "THEN",
-        "END_IF;", "S1.X", "S2.T > T#1s", "NOT", "AND", "(", ")", "{attribute 'sfc.tag' := '1'}", "LD x", "ST x",
-        "\n", "CASE i OF 1: x := TRUE; END_CASE;", "FUNCTION_BLOCK F", "END_FUNCTION_BLOCK", "[", "]", ".",
+        "PROGRAM P",
+        "END_PROGRAM",
+        "VAR x : BOOL; i : INT; t : TON; END_VAR",
+        "INITIAL_STEP",
+        "STEP",
+        "S1",
+        "S2",
+        ":",
+        "END_STEP",
+        "A(N);",
+        "B(L, T#1s);",
+        "TRANSITION",
+        "FROM",
+        "TO",
+        "(S1, S2)",
+        ":=",
+        "x",
+        "i > 3",
+        ";",
+        "END_TRANSITION",
+        "ACTION",
+        "A",
+        "B",
+        "END_ACTION",
+        "i := i + 1;",
+        "t(IN := x, PT := T#1s);",
+        "IF",
+        "THEN",
+        "END_IF;",
+        "S1.X",
+        "S2.T > T#1s",
+        "NOT",
+        "AND",
+        "(",
+        ")",
+        "{attribute 'sfc.tag' := '1'}",
+        "LD x",
+        "ST x",
+        "\n",
+        "CASE i OF 1: x := TRUE; END_CASE;",
+        "FUNCTION_BLOCK F",
+        "END_FUNCTION_BLOCK",
+        "[",
+        "]",
+        ".",
     ];
     for seed in 1..300u64 {
         let raw = bytes(seed, 300);
@@ -80,7 +120,9 @@ fn a_hundred_thousand_line_valid_file() {
     let n = 12_500; // 8 lines per step: 100,000 lines
     for i in 0..n {
         let kw = if i == 0 { "INITIAL_STEP" } else { "STEP" };
-        s.push_str(&format!("{kw} S{i}:\n    A{i}(N);\nEND_STEP\nACTION A{i}:\n    Count := Count + {i};\nEND_ACTION\n"));
+        s.push_str(&format!(
+            "{kw} S{i}:\n    A{i}(N);\nEND_STEP\nACTION A{i}:\n    Count := Count + {i};\nEND_ACTION\n"
+        ));
         s.push_str(&format!("TRANSITION FROM S{i} TO S{} := Go; END_TRANSITION\n\n", (i + 1) % n));
     }
     s.push_str("END_PROGRAM\n");

@@ -61,7 +61,11 @@ impl StepReport {
                 line.push_str(&format!("; fires when {}", t.change.join(" and ")));
             }
             if !t.missing.is_empty() {
-                line.push_str(&format!("; waits for step{} {} to be active", if t.missing.len() > 1 { "s" } else { "" }, t.missing.join(", ")));
+                line.push_str(&format!(
+                    "; waits for step{} {} to be active",
+                    if t.missing.len() > 1 { "s" } else { "" },
+                    t.missing.join(", ")
+                ));
             }
             if let Some(m) = &t.masked_by {
                 line.push_str(&format!("; masked by {m}, which takes precedence"));
@@ -352,7 +356,8 @@ pub(crate) fn report(view: View<'_>, chart: usize, s: u32) -> StepReport {
         let tr = &code.chart.transitions[t as usize];
         let (guard, value, operands, change) = match &tr.condition {
             Condition::St(e) => {
-                let mut atoms = Atoms { view: &view, path: &st.path, texts: Vec::new(), values: Vec::new(), operands: Vec::new() };
+                let mut atoms =
+                    Atoms { view: &view, path: &st.path, texts: Vec::new(), values: Vec::new(), operands: Vec::new() };
                 let f = atoms.formula(e, 0);
                 let value = value_of(t).unwrap_or(false);
                 let change = if value {
@@ -384,7 +389,9 @@ pub(crate) fn report(view: View<'_>, chart: usize, s: u32) -> StepReport {
             }
             Condition::Missing => (String::new(), false, Vec::new(), Vec::new()),
         };
-        let missing: Vec<String> = plan.pre.get(t)
+        let missing: Vec<String> = plan
+            .pre
+            .get(t)
             .iter()
             .filter(|&&p| !st.is_active(p))
             .map(|&p| st.qualify(&plan.step_names[p as usize]))

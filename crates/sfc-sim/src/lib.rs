@@ -5,10 +5,12 @@
 //! Nothing here prints, exits or reads the clock: time is virtual (`scan · period`).
 
 pub mod code;
+pub mod coverage;
 pub mod engine;
 pub mod explain;
+pub mod scenario;
+pub mod trace;
 pub mod value;
-pub mod scenario; pub mod trace; pub mod coverage;
 
 pub use engine::{ScanSink, Simulation, Snapshot, StepStats, TimeStats};
 pub use explain::{StepReport, TransitionReport};
@@ -84,7 +86,9 @@ impl Event {
     pub fn to_json(&self) -> serde_json::Value {
         use serde_json::json;
         match self {
-            Event::Conflict { step, transitions } => json!({"kind": "conflict", "step": step, "transitions": transitions}),
+            Event::Conflict { step, transitions } => {
+                json!({"kind": "conflict", "step": step, "transitions": transitions})
+            }
             Event::Unsafe { step, transitions } => json!({"kind": "unsafe", "step": step, "transitions": transitions}),
             Event::Contention { action, steps, qualifiers } => {
                 json!({"kind": "contention", "action": action, "steps": steps, "qualifiers": qualifiers})

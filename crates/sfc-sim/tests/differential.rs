@@ -232,11 +232,7 @@ fn generate(rng: &mut Rng, max_steps: usize) -> Chart {
                 ActionKind::Variable => g.rng.pick(&Qual::FOR_VARIABLES),
                 ActionKind::Body { .. } => g.rng.pick(&Qual::ALL),
             };
-            let duration = if qual.timed() {
-                g.rng.pick(&DURATIONS_MS) * 1000
-            } else {
-                0
-            };
+            let duration = if qual.timed() { g.rng.pick(&DURATIONS_MS) * 1000 } else { 0 };
             g.chart.steps[s].assocs.push(Assoc { action, qual, duration });
         }
     }

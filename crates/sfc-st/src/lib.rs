@@ -39,10 +39,10 @@ mod value;
 mod tests;
 
 pub use check::Checker;
-pub use il::{parse_il_op, IlOp};
-pub use suggest::closest;
 pub use env::{is_sfc_control_variable, sfc_control_variables, PouInterface, TypeDef, TypeEnv, VarInfo};
+pub use il::{parse_il_op, IlOp};
 pub use scope::{Binding, Scope, Usage};
+pub use suggest::closest;
 pub use types::{Generic, Type};
 pub use value::{const_eval, ConstLookup, NoConstants, Value};
 

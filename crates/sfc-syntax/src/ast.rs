@@ -270,9 +270,15 @@ pub enum TypeSpecKind {
 pub enum Initializer {
     Expr(Expr),
     /// `[10(1), 2, 3(4)]`
-    Array { elements: Vec<ArrayInitElement>, span: Span },
+    Array {
+        elements: Vec<ArrayInitElement>,
+        span: Span,
+    },
     /// `(a := 1, b := (c := 2))`
-    Struct { fields: Vec<(Ident, Initializer)>, span: Span },
+    Struct {
+        fields: Vec<(Ident, Initializer)>,
+        span: Span,
+    },
 }
 
 impl Initializer {
@@ -404,19 +410,41 @@ pub struct Stmt {
 #[derive(Debug, Clone, PartialEq)]
 pub enum StmtKind {
     /// `target := value;`
-    Assign { target: Box<Expr>, value: Box<Expr> },
+    Assign {
+        target: Box<Expr>,
+        value: Box<Expr>,
+    },
     /// A call used as a statement: `Timer(IN := x, PT := T#1s);`, `F(1);`
     Call(Box<Expr>),
     /// `IF c THEN … ELSIF c THEN … ELSE … END_IF`
-    If { branches: Vec<(Expr, Vec<Stmt>)>, else_body: Option<Vec<Stmt>> },
+    If {
+        branches: Vec<(Expr, Vec<Stmt>)>,
+        else_body: Option<Vec<Stmt>>,
+    },
     /// `CASE sel OF 1, 2..5: … ELSE … END_CASE`
-    Case { selector: Box<Expr>, arms: Vec<CaseArm>, else_body: Option<Vec<Stmt>> },
+    Case {
+        selector: Box<Expr>,
+        arms: Vec<CaseArm>,
+        else_body: Option<Vec<Stmt>>,
+    },
     /// `FOR i := a TO b BY c DO … END_FOR`
-    For { var: Ident, from: Box<Expr>, to: Box<Expr>, by: Option<Box<Expr>>, body: Vec<Stmt> },
+    For {
+        var: Ident,
+        from: Box<Expr>,
+        to: Box<Expr>,
+        by: Option<Box<Expr>>,
+        body: Vec<Stmt>,
+    },
     /// `WHILE c DO … END_WHILE`
-    While { cond: Box<Expr>, body: Vec<Stmt> },
+    While {
+        cond: Box<Expr>,
+        body: Vec<Stmt>,
+    },
     /// `REPEAT … UNTIL c END_REPEAT`
-    Repeat { body: Vec<Stmt>, until: Box<Expr> },
+    Repeat {
+        body: Vec<Stmt>,
+        until: Box<Expr>,
+    },
     Exit,
     Return,
     /// A lone `;`.
@@ -451,13 +479,29 @@ pub enum ExprKind {
     Address(DirectAddress),
     /// `base.member` (struct field, FB output, `Step.X`, `Step.T`, `Action.Q`); also bit access
     /// `w.3` with `member` = "3".
-    Member { base: Box<Expr>, member: Ident },
+    Member {
+        base: Box<Expr>,
+        member: Ident,
+    },
     /// `a[i, j]`
-    Index { base: Box<Expr>, indices: Vec<Expr> },
+    Index {
+        base: Box<Expr>,
+        indices: Vec<Expr>,
+    },
     /// `F(1, 2)`, `Fb(IN := x, Q => y)`
-    Call { callee: Ident, args: Vec<Arg> },
-    Unary { op: UnaryOp, operand: Box<Expr> },
-    Binary { op: BinaryOp, lhs: Box<Expr>, rhs: Box<Expr> },
+    Call {
+        callee: Ident,
+        args: Vec<Arg>,
+    },
+    Unary {
+        op: UnaryOp,
+        operand: Box<Expr>,
+    },
+    Binary {
+        op: BinaryOp,
+        lhs: Box<Expr>,
+        rhs: Box<Expr>,
+    },
     /// `( e )`, kept so the printer reproduces the user's grouping.
     Paren(Box<Expr>),
     /// Placeholder after a syntax error (a diagnostic has been reported).
@@ -564,7 +608,10 @@ pub enum LiteralKind {
     Real(f64),
     Bool(bool),
     /// Decoded characters; `wide` for `"…"`.
-    String { value: String, wide: bool },
+    String {
+        value: String,
+        wide: bool,
+    },
     /// Microseconds (TIME / LTIME).
     Duration(i64),
     /// Days since 1970-01-01.

@@ -375,9 +375,8 @@ impl<'a> Lexer<'a> {
                         break;
                     }
                     let c = self.src[end];
-                    let starts_token = c.is_ascii_whitespace()
-                        || c.is_ascii_alphanumeric()
-                        || b"_()[],;:.+-*/=<>&!'\"%{".contains(&c);
+                    let starts_token =
+                        c.is_ascii_whitespace() || c.is_ascii_alphanumeric() || b"_()[],;:.+-*/=<>&!'\"%{".contains(&c);
                     if starts_token {
                         break;
                     }
@@ -387,7 +386,16 @@ impl<'a> Lexer<'a> {
                     }
                 }
                 let shown: String = self.text[start..end].chars().take(20).collect();
-                self.error("SFC0003", start, end, format!("invalid character{} `{}`", if end - start > 1 && self.text[start..end].chars().count() > 1 { "s" } else { "" }, shown.escape_debug()));
+                self.error(
+                    "SFC0003",
+                    start,
+                    end,
+                    format!(
+                        "invalid character{} `{}`",
+                        if end - start > 1 && self.text[start..end].chars().count() > 1 { "s" } else { "" },
+                        shown.escape_debug()
+                    ),
+                );
                 self.pos = end;
                 self.push(TokenKind::Unknown, start);
                 return;

@@ -6,9 +6,35 @@ use sfc_diagnostics::{Diagnostic, Span};
 
 /// Elementary type names that may prefix a literal (`INT#5`).
 pub const ELEMENTARY_TYPES: &[&str] = &[
-    "BOOL", "SINT", "INT", "DINT", "LINT", "USINT", "UINT", "UDINT", "ULINT", "BYTE", "WORD", "DWORD", "LWORD",
-    "REAL", "LREAL", "TIME", "LTIME", "DATE", "LDATE", "TIME_OF_DAY", "TOD", "LTOD", "DATE_AND_TIME", "DT", "LDT",
-    "STRING", "WSTRING", "CHAR", "WCHAR",
+    "BOOL",
+    "SINT",
+    "INT",
+    "DINT",
+    "LINT",
+    "USINT",
+    "UINT",
+    "UDINT",
+    "ULINT",
+    "BYTE",
+    "WORD",
+    "DWORD",
+    "LWORD",
+    "REAL",
+    "LREAL",
+    "TIME",
+    "LTIME",
+    "DATE",
+    "LDATE",
+    "TIME_OF_DAY",
+    "TOD",
+    "LTOD",
+    "DATE_AND_TIME",
+    "DT",
+    "LDT",
+    "STRING",
+    "WSTRING",
+    "CHAR",
+    "WCHAR",
 ];
 
 /// The result of decoding: the value, the upper-cased type prefix, or an error.
@@ -31,7 +57,13 @@ pub fn decode_int(text: &str, span: Span) -> Result<u128, Diagnostic> {
                 "2" => 2,
                 "8" => 8,
                 "16" => 16,
-                _ => return Err(err("SFC0004", span, format!("invalid base `{base}`: IEC integers are based 2, 8 or 16"))),
+                _ => {
+                    return Err(err(
+                        "SFC0004",
+                        span,
+                        format!("invalid base `{base}`: IEC integers are based 2, 8 or 16"),
+                    ))
+                }
             };
             (radix, digits)
         }
@@ -42,9 +74,9 @@ pub fn decode_int(text: &str, span: Span) -> Result<u128, Diagnostic> {
     }
     let mut value: u128 = 0;
     for c in digits.chars().filter(|&c| c != '_') {
-        let d = c.to_digit(radix).ok_or_else(|| {
-            err("SFC0004", span, format!("invalid digit `{c}` in base-{radix} literal `{text}`"))
-        })?;
+        let d = c
+            .to_digit(radix)
+            .ok_or_else(|| err("SFC0004", span, format!("invalid digit `{c}` in base-{radix} literal `{text}`")))?;
         value = value * radix as u128 + d as u128;
         if value > u64::MAX as u128 {
             return Err(err("SFC0004", span, format!("integer literal `{text}` does not fit in 64 bits")));
@@ -170,16 +202,16 @@ pub fn decode_duration(body: &str, span: Span) -> Result<i64, Diagnostic> {
         let unit = &upper[unit_start..i];
         let Some(rank) = US_PER.iter().position(|(u, _)| *u == unit) else {
             let shown = &rest[unit_start..i];
-            return Err(bad(format!(
-                "invalid duration `T#{body}`: unknown unit `{shown}` (use d, h, m, s, ms, us)"
-            )));
+            return Err(bad(format!("invalid duration `T#{body}`: unknown unit `{shown}` (use d, h, m, s, ms, us)")));
         };
         if had_fraction {
             return Err(bad(format!("invalid duration `T#{body}`: only the last unit may have a fraction")));
         }
         if let Some(prev) = last_rank {
             if rank <= prev {
-                return Err(bad(format!("invalid duration `T#{body}`: units must go from largest to smallest, each once")));
+                return Err(bad(format!(
+                    "invalid duration `T#{body}`: units must go from largest to smallest, each once"
+                )));
             }
         }
         last_rank = Some(rank);
@@ -187,7 +219,8 @@ pub fn decode_duration(body: &str, span: Span) -> Result<i64, Diagnostic> {
         if int_s.is_empty() || int_s.contains("__") || (num.contains('.') && frac_s.is_empty()) {
             return Err(bad(format!("invalid number `{num}` in duration `T#{body}`")));
         }
-        let int_v: i128 = int_s.replace('_', "").parse().map_err(|_| bad(format!("duration `T#{body}` is too large")))?;
+        let int_v: i128 =
+            int_s.replace('_', "").parse().map_err(|_| bad(format!("duration `T#{body}` is too large")))?;
         let scale = US_PER[rank].1;
         if unit == "NS" {
             // Nanoseconds: allowed only when they make whole microseconds.
@@ -257,7 +290,13 @@ fn parse_date(s: &str, span: Span, whole: &str) -> Result<i64, Diagnostic> {
 }
 
 fn parse_tod(s: &str, span: Span, whole: &str) -> Result<i64, Diagnostic> {
-    let bad = || err("SFC0008", span, format!("invalid time of day in `{whole}`: expected hours:minutes:seconds such as 10:42:23.78"));
+    let bad = || {
+        err(
+            "SFC0008",
+            span,
+            format!("invalid time of day in `{whole}`: expected hours:minutes:seconds such as 10:42:23.78"),
+        )
+    };
     let parts: Vec<&str> = s.split(':').collect();
     if parts.len() != 3 {
         return Err(bad());
@@ -305,7 +344,11 @@ pub fn decode_typed(text: &str, span: Span) -> Decoded {
                 }
             }
             let Some(i) = idx else {
-                return Err(err("SFC0008", span, format!("invalid date and time `{text}`: expected 2006-03-20-10:42:23.78")));
+                return Err(err(
+                    "SFC0008",
+                    span,
+                    format!("invalid date and time `{text}`: expected 2006-03-20-10:42:23.78"),
+                ));
             };
             let days = parse_date(&rest[..i], span, text)?;
             let tod = parse_tod(&rest[i + 1..], span, text)?;
@@ -326,7 +369,13 @@ pub fn decode_typed(text: &str, span: Span) -> Decoded {
                 match body.to_ascii_uppercase().as_str() {
                     "TRUE" | "1" => LiteralKind::Bool(true),
                     "FALSE" | "0" => LiteralKind::Bool(false),
-                    _ => return Err(err("SFC0004", span, format!("invalid BOOL literal `{text}`: use TRUE, FALSE, 1 or 0"))),
+                    _ => {
+                        return Err(err(
+                            "SFC0004",
+                            span,
+                            format!("invalid BOOL literal `{text}`: use TRUE, FALSE, 1 or 0"),
+                        ))
+                    }
                 }
             } else if body.contains('.') || (!body.contains('#') && body.contains(['e', 'E'])) {
                 let v = decode_real(body, span)?;

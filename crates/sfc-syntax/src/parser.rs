@@ -17,29 +17,107 @@ const STMT_WEIGHT: u32 = (MAX_DEPTH * 3 / 4) / MAX_STMT_DEPTH;
 
 /// Words that end or start a construct and therefore never name a variable.
 const RESERVED: &[&str] = &[
-    "END_IF", "END_CASE", "END_FOR", "END_WHILE", "END_REPEAT", "END_VAR", "END_STEP", "END_TRANSITION",
-    "END_ACTION", "END_PROGRAM", "END_FUNCTION", "END_FUNCTION_BLOCK", "END_TYPE", "END_STRUCT",
-    "END_CONFIGURATION", "END_RESOURCE", "IF", "THEN", "ELSIF", "ELSE", "CASE", "OF", "FOR", "DO", "BY",
-    "WHILE", "REPEAT", "UNTIL", "EXIT", "RETURN", "VAR", "VAR_INPUT", "VAR_OUTPUT", "VAR_IN_OUT",
-    "VAR_GLOBAL", "VAR_EXTERNAL", "VAR_ACCESS", "VAR_TEMP", "STEP", "INITIAL_STEP", "TRANSITION", "ACTION",
-    "PROGRAM", "FUNCTION", "FUNCTION_BLOCK", "TYPE", "STRUCT", "ARRAY", "AND", "OR", "XOR", "NOT", "MOD",
-    "AND_THEN", "OR_ELSE", "CONFIGURATION", "RESOURCE",
+    "END_IF",
+    "END_CASE",
+    "END_FOR",
+    "END_WHILE",
+    "END_REPEAT",
+    "END_VAR",
+    "END_STEP",
+    "END_TRANSITION",
+    "END_ACTION",
+    "END_PROGRAM",
+    "END_FUNCTION",
+    "END_FUNCTION_BLOCK",
+    "END_TYPE",
+    "END_STRUCT",
+    "END_CONFIGURATION",
+    "END_RESOURCE",
+    "IF",
+    "THEN",
+    "ELSIF",
+    "ELSE",
+    "CASE",
+    "OF",
+    "FOR",
+    "DO",
+    "BY",
+    "WHILE",
+    "REPEAT",
+    "UNTIL",
+    "EXIT",
+    "RETURN",
+    "VAR",
+    "VAR_INPUT",
+    "VAR_OUTPUT",
+    "VAR_IN_OUT",
+    "VAR_GLOBAL",
+    "VAR_EXTERNAL",
+    "VAR_ACCESS",
+    "VAR_TEMP",
+    "STEP",
+    "INITIAL_STEP",
+    "TRANSITION",
+    "ACTION",
+    "PROGRAM",
+    "FUNCTION",
+    "FUNCTION_BLOCK",
+    "TYPE",
+    "STRUCT",
+    "ARRAY",
+    "AND",
+    "OR",
+    "XOR",
+    "NOT",
+    "MOD",
+    "AND_THEN",
+    "OR_ELSE",
+    "CONFIGURATION",
+    "RESOURCE",
 ];
 
 /// Keywords at which statement and element lists stop.
 const STOPPERS: &[&str] = &[
-    "END_IF", "END_CASE", "END_FOR", "END_WHILE", "END_REPEAT", "END_STEP", "END_TRANSITION", "END_ACTION",
-    "END_PROGRAM", "END_FUNCTION", "END_FUNCTION_BLOCK", "ELSIF", "ELSE", "UNTIL", "STEP", "INITIAL_STEP",
-    "TRANSITION", "ACTION", "PROGRAM", "FUNCTION", "FUNCTION_BLOCK", "TYPE", "CONFIGURATION", "END_VAR",
-    "VAR", "VAR_INPUT", "VAR_OUTPUT", "VAR_IN_OUT", "VAR_GLOBAL", "VAR_EXTERNAL", "VAR_ACCESS", "VAR_TEMP",
-    "END_TYPE", "END_STRUCT",
+    "END_IF",
+    "END_CASE",
+    "END_FOR",
+    "END_WHILE",
+    "END_REPEAT",
+    "END_STEP",
+    "END_TRANSITION",
+    "END_ACTION",
+    "END_PROGRAM",
+    "END_FUNCTION",
+    "END_FUNCTION_BLOCK",
+    "ELSIF",
+    "ELSE",
+    "UNTIL",
+    "STEP",
+    "INITIAL_STEP",
+    "TRANSITION",
+    "ACTION",
+    "PROGRAM",
+    "FUNCTION",
+    "FUNCTION_BLOCK",
+    "TYPE",
+    "CONFIGURATION",
+    "END_VAR",
+    "VAR",
+    "VAR_INPUT",
+    "VAR_OUTPUT",
+    "VAR_IN_OUT",
+    "VAR_GLOBAL",
+    "VAR_EXTERNAL",
+    "VAR_ACCESS",
+    "VAR_TEMP",
+    "END_TYPE",
+    "END_STRUCT",
 ];
 
 /// IL operators that may start an instruction list body.
 const IL_OPERATORS: &[&str] = &[
-    "LD", "LDN", "ST", "STN", "S", "R", "AND", "ANDN", "OR", "ORN", "XOR", "XORN", "NOT", "ADD", "SUB", "MUL",
-    "DIV", "MOD", "GT", "GE", "EQ", "NE", "LE", "LT", "JMP", "JMPC", "JMPCN", "CAL", "CALC", "CALCN", "RET",
-    "RETC", "RETCN",
+    "LD", "LDN", "ST", "STN", "S", "R", "AND", "ANDN", "OR", "ORN", "XOR", "XORN", "NOT", "ADD", "SUB", "MUL", "DIV",
+    "MOD", "GT", "GE", "EQ", "NE", "LE", "LT", "JMP", "JMPC", "JMPCN", "CAL", "CALC", "CALCN", "RET", "RETC", "RETCN",
 ];
 
 const VAR_KEYWORDS: &[(&str, VarKind)] = &[
@@ -311,9 +389,8 @@ impl<'a> Parser<'a> {
         if self.last_error_at != Some(self.pos) {
             self.last_error_at = Some(self.pos);
             let line = self.line_of(opened.start);
-            self.diags.push(
-                Diagnostic::error("SFC0102", span, msg).with_label(opened, format!("opened here (line {line})")),
-            );
+            self.diags
+                .push(Diagnostic::error("SFC0102", span, msg).with_label(opened, format!("opened here (line {line})")));
         }
     }
 
@@ -380,7 +457,10 @@ impl<'a> Parser<'a> {
                 self.diags.push(Diagnostic::warning(
                     "SFC0603",
                     a.span,
-                    format!("attribute `{}` is not directly before a POU, variable, step, transition or action", a.name),
+                    format!(
+                        "attribute `{}` is not directly before a POU, variable, step, transition or action",
+                        a.name
+                    ),
                 ));
             }
             self.attr_cursor += 1;
@@ -402,13 +482,21 @@ impl<'a> Parser<'a> {
             } else if self.at_kw("CONFIGURATION") || self.at_kw("RESOURCE") {
                 items.push(Item::Verbatim(self.verbatim()));
             } else if self.at_any_kw(&["STEP", "INITIAL_STEP", "TRANSITION", "ACTION"]) {
-                self.error_here("expected PROGRAM, FUNCTION_BLOCK, FUNCTION or TYPE (SFC elements belong inside a POU)");
-                self.recover_to(&["PROGRAM", "FUNCTION_BLOCK", "FUNCTION", "TYPE", "CONFIGURATION", "VAR_GLOBAL"], false);
+                self.error_here(
+                    "expected PROGRAM, FUNCTION_BLOCK, FUNCTION or TYPE (SFC elements belong inside a POU)",
+                );
+                self.recover_to(
+                    &["PROGRAM", "FUNCTION_BLOCK", "FUNCTION", "TYPE", "CONFIGURATION", "VAR_GLOBAL"],
+                    false,
+                );
                 // Skip the keyword we stopped on if it is not a top-level one.
             } else {
                 self.error_here("expected PROGRAM, FUNCTION_BLOCK, FUNCTION, TYPE or CONFIGURATION");
                 self.bump();
-                self.recover_to(&["PROGRAM", "FUNCTION_BLOCK", "FUNCTION", "TYPE", "CONFIGURATION", "VAR_GLOBAL"], false);
+                self.recover_to(
+                    &["PROGRAM", "FUNCTION_BLOCK", "FUNCTION", "TYPE", "CONFIGURATION", "VAR_GLOBAL"],
+                    false,
+                );
             }
             let end = self.prev_end();
             self.drop_attrs_before(end);
@@ -605,7 +693,11 @@ impl<'a> Parser<'a> {
             // `name : path : type [READ_WRITE];`
             // Rebuilt from the tokens, so comments and spaces inside the path are not part of it.
             let mut path = String::new();
-            while !self.at(TokenKind::Colon) && !self.at(TokenKind::Semi) && !self.at(TokenKind::Eof) && !self.at_kw("END_VAR") {
+            while !self.at(TokenKind::Colon)
+                && !self.at(TokenKind::Semi)
+                && !self.at(TokenKind::Eof)
+                && !self.at_kw("END_VAR")
+            {
                 let t = self.bump();
                 path.push_str(self.text_of(t));
             }
@@ -876,12 +968,24 @@ impl<'a> Parser<'a> {
                 elements.push(SfcElement::Transition(self.transition()));
             } else if self.at_kw("ACTION") {
                 elements.push(SfcElement::Action(self.action()));
-            } else if self.at_any_kw(&["PROGRAM", "FUNCTION", "FUNCTION_BLOCK", "TYPE", "CONFIGURATION", "END_PROGRAM", "END_FUNCTION", "END_FUNCTION_BLOCK"]) {
+            } else if self.at_any_kw(&[
+                "PROGRAM",
+                "FUNCTION",
+                "FUNCTION_BLOCK",
+                "TYPE",
+                "CONFIGURATION",
+                "END_PROGRAM",
+                "END_FUNCTION",
+                "END_FUNCTION_BLOCK",
+            ]) {
                 break;
             } else {
                 self.error_here("expected STEP, INITIAL_STEP, TRANSITION or ACTION");
                 self.bump();
-                self.recover_to(&["STEP", "INITIAL_STEP", "TRANSITION", "ACTION", end_kw, "PROGRAM", "FUNCTION", "FUNCTION_BLOCK"], false);
+                self.recover_to(
+                    &["STEP", "INITIAL_STEP", "TRANSITION", "ACTION", end_kw, "PROGRAM", "FUNCTION", "FUNCTION_BLOCK"],
+                    false,
+                );
             }
             let end = self.prev_end();
             self.drop_attrs_before(end);
@@ -930,10 +1034,8 @@ impl<'a> Parser<'a> {
                 let t = self.bump();
                 qualifier = Some(Ident::new(self.text_of(t), self.span_of(t)));
             }
-            let timed = qualifier
-                .as_ref()
-                .map(|q| ["L", "D", "SD", "DS", "SL"].iter().any(|k| q.is(k)))
-                .unwrap_or(false);
+            let timed =
+                qualifier.as_ref().map(|q| ["L", "D", "SD", "DS", "SL"].iter().any(|k| q.is(k))).unwrap_or(false);
             let mut first = true;
             while self.eat(TokenKind::Comma) {
                 let t = self.tok();
@@ -952,7 +1054,13 @@ impl<'a> Parser<'a> {
             }
             if !self.expect(TokenKind::RParen, "`)` after the action qualifier") {
                 self.recover_to(&["END_STEP"], true);
-                return Some(ActionAssociation { action, qualifier, duration, indicators, span: self.span_from(start) });
+                return Some(ActionAssociation {
+                    action,
+                    qualifier,
+                    duration,
+                    indicators,
+                    span: self.span_from(start),
+                });
             }
         } else {
             self.error_here("expected `(` and an action qualifier, e.g. `(N)`");
@@ -1029,14 +1137,27 @@ impl<'a> Parser<'a> {
                 self.diags.push(Diagnostic::error(
                     "SFC0217",
                     span,
-                    format!("expected the transition condition (`:= expression;` or `:` and IL), found {}", self.describe(t)),
+                    format!(
+                        "expected the transition condition (`:= expression;` or `:` and IL), found {}",
+                        self.describe(t)
+                    ),
                 ));
             }
             self.recover_to(&["END_TRANSITION", "STEP", "INITIAL_STEP", "TRANSITION", "ACTION"], false);
             Condition::Missing
         };
         self.expect_end("END_TRANSITION", self.span_of(kw));
-        Transition { name, priority, from, from_parens, to, to_parens, condition, attributes, span: self.span_from(start) }
+        Transition {
+            name,
+            priority,
+            from,
+            from_parens,
+            to,
+            to_parens,
+            condition,
+            attributes,
+            span: self.span_from(start),
+        }
     }
 
     fn action(&mut self) -> Action {
@@ -1099,7 +1220,14 @@ impl<'a> Parser<'a> {
             label = Some(self.ident_of(t));
             self.bump();
             if self.tok().nl_before || self.at_any_kw(ends) || self.at(TokenKind::Eof) {
-                return Some(IlInstruction { label, op: None, operands: vec![], nested: None, call_args: None, span: self.span_from(start) });
+                return Some(IlInstruction {
+                    label,
+                    op: None,
+                    operands: vec![],
+                    nested: None,
+                    call_args: None,
+                    span: self.span_from(start),
+                });
             }
         }
         let op_tok = match self.kind() {
@@ -1139,14 +1267,24 @@ impl<'a> Parser<'a> {
                 call_args = Some(self.call_args());
             }
         } else {
-            while !self.tok().nl_before && !self.at(TokenKind::Eof) && !self.at(TokenKind::Semi) && !self.at(TokenKind::RParen) && !self.at_any_kw(ends) {
+            while !self.tok().nl_before
+                && !self.at(TokenKind::Eof)
+                && !self.at(TokenKind::Semi)
+                && !self.at(TokenKind::RParen)
+                && !self.at_any_kw(ends)
+            {
                 operands.push(self.unary());
                 if !self.eat(TokenKind::Comma) {
                     break;
                 }
             }
         }
-        if !self.tok().nl_before && !self.at(TokenKind::Eof) && !self.at(TokenKind::Semi) && !self.at(TokenKind::RParen) && !self.at_any_kw(ends) {
+        if !self.tok().nl_before
+            && !self.at(TokenKind::Eof)
+            && !self.at(TokenKind::Semi)
+            && !self.at(TokenKind::RParen)
+            && !self.at_any_kw(ends)
+        {
             self.error_here("expected the end of the IL instruction (one instruction per line)");
             self.skip_line();
         }
@@ -1316,7 +1454,8 @@ split it with intermediate variables"
             let mut arms = Vec::new();
             let mut else_body = None;
             loop {
-                if self.at(TokenKind::Eof) || self.at_kw("END_CASE") || self.at_any_kw(STOPPERS) && !self.at_kw("ELSE") {
+                if self.at(TokenKind::Eof) || self.at_kw("END_CASE") || self.at_any_kw(STOPPERS) && !self.at_kw("ELSE")
+                {
                     break;
                 }
                 if self.eat_kw("ELSE") {
@@ -1533,7 +1672,9 @@ split it with intermediate variables"
             _ => literal::decode_typed(text, span),
         };
         match decoded {
-            Ok((kind, type_prefix)) => Expr { kind: ExprKind::Literal(Literal { kind, type_prefix, text: text.into() }), span },
+            Ok((kind, type_prefix)) => {
+                Expr { kind: ExprKind::Literal(Literal { kind, type_prefix, text: text.into() }), span }
+            }
             Err(d) => {
                 self.diags.push(d);
                 Expr { kind: ExprKind::Error, span }
@@ -1578,9 +1719,13 @@ split it with intermediate variables"
             }
             _ => {
                 self.error_here("expected an expression");
-                let span = if t.kind == TokenKind::Eof { Span::new(self.file, t.start, t.start) } else { self.span_of(t) };
+                let span =
+                    if t.kind == TokenKind::Eof { Span::new(self.file, t.start, t.start) } else { self.span_of(t) };
                 // Consume a stray operator token so recovery makes progress, but never a keyword.
-                if !matches!(t.kind, TokenKind::Ident | TokenKind::Semi | TokenKind::Eof | TokenKind::RParen | TokenKind::RBracket) {
+                if !matches!(
+                    t.kind,
+                    TokenKind::Ident | TokenKind::Semi | TokenKind::Eof | TokenKind::RParen | TokenKind::RBracket
+                ) {
                     self.bump();
                 }
                 return Expr { kind: ExprKind::Error, span };
@@ -1592,7 +1737,11 @@ split it with intermediate variables"
             if self.at(TokenKind::Dot) || self.at(TokenKind::LBracket) {
                 chain += 1;
                 if self.chain_too_deep(chain) {
-                    while self.at(TokenKind::Dot) || self.at(TokenKind::LBracket) || self.at(TokenKind::Ident) || self.at(TokenKind::Int) {
+                    while self.at(TokenKind::Dot)
+                        || self.at(TokenKind::LBracket)
+                        || self.at(TokenKind::Ident)
+                        || self.at(TokenKind::Int)
+                    {
                         if self.at(TokenKind::LBracket) {
                             self.bump();
                             self.skip_nested();
@@ -1638,7 +1787,8 @@ split it with intermediate variables"
         }
         loop {
             let astart = self.tok().start;
-            let negated_out = self.at_kw("NOT") && self.nth(1).kind == TokenKind::Ident && self.nth(2).kind == TokenKind::Arrow;
+            let negated_out =
+                self.at_kw("NOT") && self.nth(1).kind == TokenKind::Ident && self.nth(2).kind == TokenKind::Arrow;
             if negated_out {
                 self.bump();
             }
@@ -1648,11 +1798,21 @@ split it with intermediate variables"
                 self.bump();
                 let name = Some(self.ident_of(t));
                 let output = self.bump().kind == TokenKind::Arrow;
-                let value = if output && matches!(self.kind(), TokenKind::Comma | TokenKind::RParen) { None } else { Some(self.expr()) };
+                let value = if output && matches!(self.kind(), TokenKind::Comma | TokenKind::RParen) {
+                    None
+                } else {
+                    Some(self.expr())
+                };
                 args.push(Arg { name, output, negated: negated_out, value, span: self.span_from(astart) });
             } else {
                 let v = self.expr();
-                args.push(Arg { name: None, output: false, negated: false, value: Some(v), span: self.span_from(astart) });
+                args.push(Arg {
+                    name: None,
+                    output: false,
+                    negated: false,
+                    value: Some(v),
+                    span: self.span_from(astart),
+                });
             }
             if !self.eat(TokenKind::Comma) {
                 break;
@@ -1680,11 +1840,7 @@ fn parse_attribute(text: &str, span: Span) -> Option<Attribute> {
     let rest = inner.get(..9).filter(|k| k.eq_ignore_ascii_case("attribute")).map(|_| inner[9..].trim_start())?;
     let (name, rest) = quoted(rest)?;
     let rest = rest.trim_start();
-    let value = if let Some(r) = rest.strip_prefix(":=") {
-        Some(quoted(r.trim_start())?.0)
-    } else {
-        None
-    };
+    let value = if let Some(r) = rest.strip_prefix(":=") { Some(quoted(r.trim_start())?.0) } else { None };
     Some(Attribute { name, value, span })
 }
 

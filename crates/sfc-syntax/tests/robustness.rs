@@ -41,7 +41,9 @@ fn deeply_nested_types_and_initialisers() {
     let ty = format!("{}INT", "ARRAY [1..2] OF ".repeat(n));
     assert!(codes(&format!("TYPE T : {ty}; END_TYPE")).contains(&"SFC0103"));
     let init = format!("{}1{}", "[".repeat(n), "]".repeat(n));
-    assert!(codes(&format!("PROGRAM P VAR a : ARRAY [1..2] OF INT := {init}; END_VAR END_PROGRAM")).contains(&"SFC0103"));
+    assert!(
+        codes(&format!("PROGRAM P VAR a : ARRAY [1..2] OF INT := {init}; END_VAR END_PROGRAM")).contains(&"SFC0103")
+    );
 }
 
 #[test]
@@ -77,11 +79,65 @@ fn two_megabytes_of_random_bytes() {
 fn random_token_soup() {
     // Random sequences of real tokens reach deeper into the parser than random bytes.
     const WORDS: &[&str] = &[
-        "PROGRAM", "END_PROGRAM", "STEP", "END_STEP", "INITIAL_STEP", "TRANSITION", "FROM", "TO", "END_TRANSITION",
-        "ACTION", "END_ACTION", "VAR", "END_VAR", "IF", "THEN", "ELSE", "END_IF", "CASE", "OF", "END_CASE", "FOR",
-        "WHILE", "DO", "(", ")", "[", "]", ":", ":=", ";", ",", "..", "x", "S1", "T#1s", "16#FF", "'a'", "+", "*",
-        "AND", "NOT", "(*c*)", "{attribute 'sfc.tag' := '1'}", "%IX1.0", "LD", "ST", "\n", "FUNCTION_BLOCK", "TYPE",
-        "STRUCT", "END_STRUCT", "ARRAY", "=>", "N", "L", "PRIORITY", ".", "1.5", "D#2020-01-01",
+        "PROGRAM",
+        "END_PROGRAM",
+        "STEP",
+        "END_STEP",
+        "INITIAL_STEP",
+        "TRANSITION",
+        "FROM",
+        "TO",
+        "END_TRANSITION",
+        "ACTION",
+        "END_ACTION",
+        "VAR",
+        "END_VAR",
+        "IF",
+        "THEN",
+        "ELSE",
+        "END_IF",
+        "CASE",
+        "OF",
+        "END_CASE",
+        "FOR",
+        "WHILE",
+        "DO",
+        "(",
+        ")",
+        "[",
+        "]",
+        ":",
+        ":=",
+        ";",
+        ",",
+        "..",
+        "x",
+        "S1",
+        "T#1s",
+        "16#FF",
+        "'a'",
+        "+",
+        "*",
+        "AND",
+        "NOT",
+        "(*c*)",
+        "{attribute 'sfc.tag' := '1'}",
+        "%IX1.0",
+        "LD",
+        "ST",
+        "\n",
+        "FUNCTION_BLOCK",
+        "TYPE",
+        "STRUCT",
+        "END_STRUCT",
+        "ARRAY",
+        "=>",
+        "N",
+        "L",
+        "PRIORITY",
+        ".",
+        "1.5",
+        "D#2020-01-01",
     ];
     for seed in 1..200u64 {
         let raw = bytes(seed, 400);
