@@ -28,6 +28,8 @@ export interface ActionDef {
   body: string;
   description?: string;
   attributes?: OtherAttribute[];
+  /** The comments written before the action in the text, each whole (`(* … *)`, `// …`). */
+  comments?: string[];
 }
 
 export interface Association {
@@ -73,6 +75,9 @@ export interface Element {
   associations?: Association[];
   /** Steps and transitions: attribute pragmas the editor does not edit. */
   attributes?: OtherAttribute[];
+  /** The comments written before the element in the text, each whole (`(* … *)`, `// …`);
+   *  they move and are deleted with the block, and a pasted copy has none. */
+  comments?: string[];
 }
 
 export interface Connection {
@@ -97,6 +102,8 @@ export interface EditorDoc {
   connections: Connection[];
   /** Attribute pragmas before the POU that the editor does not edit. */
   attributes?: OtherAttribute[];
+  /** The comments after the chart's last element, before `END_PROGRAM`. */
+  trailingComments?: string[];
 }
 
 /** Number of input and output pins of a block (see the table in sfc-doc). */

@@ -33,6 +33,14 @@
 //!
 //! Saving writes the POU as textual SFC with `sfc.*` attribute pragmas (see `docs/editor.md`);
 //! opening that text again gives back an equal document (lossless round trip).
+//!
+//! Comments: those inside the declarations, a condition or an action body are part of that
+//! text. Every other comment of the POU (between elements, inside a step's or transition's
+//! header or association list, between the POU header and the declarations) belongs to the
+//! element after it (`Element::comments`, `ActionDef::comments`), those after the last element
+//! to `EditorDoc::trailing_comments`. A comment that ends the line of an element (after
+//! `END_STEP`, say) belongs to that element. Saving writes an element's comments on their own
+//! lines right before it.
 
 use serde::{Deserialize, Serialize};
 
@@ -60,6 +68,10 @@ pub struct EditorDoc {
     /// sfc-doc: kept so that saving does not drop them).
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub attributes: Vec<OtherAttribute>,
+    /// The comments after the chart's last element, before `END_PROGRAM` / `END_FUNCTION_BLOCK`
+    /// (each whole, delimiters included, in order).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub trailing_comments: Vec<String>,
 }
 
 /// An attribute pragma the editor does not edit, kept as read (`{attribute 'name' := 'value'}`,
@@ -113,6 +125,9 @@ pub struct ActionDef {
     /// Attribute pragmas the editor does not edit (see [`OtherAttribute`]).
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub attributes: Vec<OtherAttribute>,
+    /// The comments written before the action in the text (each whole, delimiters included).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub comments: Vec<String>,
 }
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
@@ -198,6 +213,10 @@ pub struct Element {
     /// [`OtherAttribute`]).
     #[serde(skip_serializing_if = "Vec::is_empty")]
     pub attributes: Vec<OtherAttribute>,
+    /// Steps and transitions: the comments written before the element in the text (each whole,
+    /// delimiters included, in order); on other blocks they travel in the layout attribute.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub comments: Vec<String>,
 }
 
 fn is_false(b: &bool) -> bool {
@@ -286,7 +305,7 @@ pub fn open(file_id: u32, name: &str, text: &str) -> Opened {
         if pou.kind == sfc_syntax::ast::PouKind::Function {
             continue;
         }
-        charts.push(open::document(&open::read(text, chart, pou)));
+        charts.push(open::document(&open::read(text, chart, pou, &checked.unit.trivia)));
     }
     Opened { charts, diagnostics: checked.diagnostics, file: checked.file }
 }
@@ -374,6 +393,7 @@ pub fn blank(name: &str, target: ChartTarget) -> EditorDoc {
         }],
         connections: Vec::new(),
         attributes: Vec::new(),
+        trailing_comments: Vec::new(),
     }
 }
 

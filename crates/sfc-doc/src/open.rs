@@ -34,8 +34,54 @@ pub struct ReadChart<'a> {
     pub jumps: Vec<Option<Vec<(String, f64, f64)>>>,
     pub actions: Vec<ActionDef>,
     pub comments: Vec<Element>,
+    /// The comments after the last element.
+    pub trailing_comments: Vec<String>,
     pub graph: Option<String>,
     pub attributes: Vec<crate::OtherAttribute>,
+}
+
+/// The element of the text a comment belongs to.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Owner {
+    Step(usize),
+    Transition(usize),
+    Action(usize),
+    Trailing,
+}
+
+/// The comments of a POU that no text of the document holds (see the crate docs), by the
+/// element they belong to, in source order: comments in the declarations, a condition or an
+/// action are part of that text; every other one belongs to the element it is inside of, the
+/// element whose line it ends, or else the element after it.
+fn comments_by_owner(text: &str, chart: &Chart, pou: &ast::Pou, trivia: &[ast::Trivia]) -> Vec<(Owner, String)> {
+    let start = pou.attributes.iter().map(|a| a.span.start).chain([pou.span.start]).min().unwrap_or(0);
+    let end = pou.span.end;
+    let mut anchors: Vec<(u32, u32, Owner)> = Vec::new();
+    anchors.extend(chart.steps.iter().enumerate().map(|(k, s)| (s.span.start, s.span.end, Owner::Step(k))));
+    anchors.extend(chart.transitions.iter().enumerate().map(|(k, t)| (t.span.start, t.span.end, Owner::Transition(k))));
+    anchors.extend(chart.actions.iter().enumerate().map(|(k, a)| (a.span.start, a.span.end, Owner::Action(k))));
+    anchors.sort_by_key(|a| (a.0, a.1));
+    let mut held: Vec<Option<(usize, usize)>> = vec![region::declarations_range(text, pou)];
+    held.extend(chart.transitions.iter().map(|t| region::condition_range(text, &t.condition)));
+    held.extend(chart.actions.iter().map(|a| Some((a.span.start as usize, a.span.end as usize))));
+    let mut out = Vec::new();
+    for t in trivia.iter().filter(|t| region::is_comment(t)) {
+        let at = t.span.start;
+        if at < start || t.span.end > end || held.iter().any(|r| region::within(t, *r)) {
+            continue;
+        }
+        // The element whose line the comment ends (only white space between them).
+        let trailed = anchors.iter().rev().find(|a| a.1 <= at).filter(|a| {
+            !t.own_line
+                && text.get(a.1 as usize..at as usize).is_some_and(|gap| gap.trim().is_empty() && !gap.contains('\n'))
+        });
+        let owner = trailed
+            .or_else(|| anchors.iter().find(|a| a.0 <= at && at < a.1))
+            .or_else(|| anchors.iter().find(|a| a.0 > at))
+            .map_or(Owner::Trailing, |a| a.2);
+        out.push((owner, t.text.clone()));
+    }
+    out
 }
 
 fn chart_target(attrs: &[ast::Attribute]) -> ChartTarget {
@@ -76,8 +122,8 @@ fn numbers(s: &str) -> Option<Vec<f64>> {
     s.split_whitespace().map(|p| p.parse::<f64>().ok().filter(|v| v.is_finite())).collect()
 }
 
-/// Reads one chart of a checked file.
-pub fn read<'a>(text: &str, chart: &'a Chart, pou: &ast::Pou) -> ReadChart<'a> {
+/// Reads one chart of a checked file (`trivia`: the file's comments and pragmas).
+pub fn read<'a>(text: &str, chart: &'a Chart, pou: &ast::Pou, trivia: &[ast::Trivia]) -> ReadChart<'a> {
     let ast_steps: HashMap<(u32, u32), &ast::Step> = pou
         .body
         .sfc()
@@ -138,7 +184,7 @@ pub fn read<'a>(text: &str, chart: &'a Chart, pou: &ast::Pou) -> ReadChart<'a> {
                 .collect()
         }));
     }
-    let actions = chart
+    let mut actions: Vec<ActionDef> = chart
         .actions
         .iter()
         .map(|a| ActionDef {
@@ -147,8 +193,19 @@ pub fn read<'a>(text: &str, chart: &'a Chart, pou: &ast::Pou) -> ReadChart<'a> {
             body: region::action_body(text, a.span, a.name_span),
             description: pragma::text(&a.attributes, "sfc.description").unwrap_or_default(),
             attributes: pragma::others(&a.attributes, pragma::ACTION),
+            comments: Vec::new(),
         })
         .collect();
+    let mut trailing_comments = Vec::new();
+    for (owner, c) in comments_by_owner(text, chart, pou, trivia) {
+        let list = match owner {
+            Owner::Step(k) => steps.get_mut(k).map(|e| &mut e.comments),
+            Owner::Transition(k) => transitions.get_mut(k).map(|e| &mut e.comments),
+            Owner::Action(k) => actions.get_mut(k).map(|a| &mut a.comments),
+            Owner::Trailing => None,
+        };
+        list.unwrap_or(&mut trailing_comments).push(c);
+    }
     let comments = pragma::all(&pou.attributes, "sfc.comment")
         .into_iter()
         .filter_map(|v| {
@@ -180,6 +237,7 @@ pub fn read<'a>(text: &str, chart: &'a Chart, pou: &ast::Pou) -> ReadChart<'a> {
         jumps,
         actions,
         comments,
+        trailing_comments,
         graph: pragma::text(&pou.attributes, sidecar::NAME),
         attributes: pragma::others(&pou.attributes, pragma::POU),
     }
@@ -204,6 +262,7 @@ fn empty_doc(r: &ReadChart) -> EditorDoc {
         elements: Vec::new(),
         connections: Vec::new(),
         attributes: r.attributes.clone(),
+        trailing_comments: r.trailing_comments.clone(),
     }
 }
 
@@ -306,6 +365,11 @@ fn from_sidecar(r: &ReadChart, probe: &mut Probe) -> Option<EditorDoc> {
     if let Some(attrs) = &car.attrs {
         if pragma::readable(attrs, pragma::POU) == r.attributes {
             doc.attributes = attrs.clone();
+        }
+    }
+    if let Some(tc) = &car.tc {
+        if probe.comments(tc) == r.trailing_comments {
+            doc.trailing_comments = tc.clone();
         }
     }
     if let Some(decl) = &car.decl {

@@ -14,15 +14,22 @@ use std::collections::HashMap;
 /// next element shows up on it.
 const END: &str = "    STEP Zz_probe_end: END_STEP\n";
 
-/// Probes, with a cache for names (charts repeat them in FROM/TO lists and jumps).
+/// Probes, with a cache for names (charts repeat them in FROM/TO lists and jumps) and comments.
 #[derive(Default)]
 pub struct Probe {
     names: HashMap<String, bool>,
+    comments: HashMap<String, bool>,
 }
 
 /// The SFC elements of the only POU of a probe, when it parsed without any diagnostic.
 fn parse_probe(text: &str) -> Option<(ast::Pou, Vec<SfcElement>)> {
+    parse_probe_with_trivia(text).map(|(pou, elements, _)| (pou, elements))
+}
+
+/// [`parse_probe`] with the probe's comments.
+fn parse_probe_with_trivia(text: &str) -> Option<(ast::Pou, Vec<SfcElement>, Vec<ast::Trivia>)> {
     let (unit, diags) = sfc_syntax::parse(0, text);
+    let comments: Vec<ast::Trivia> = unit.trivia.iter().filter(|t| region::is_comment(t)).cloned().collect();
     if !diags.is_empty() || unit.items.len() != 1 {
         return None;
     }
@@ -34,7 +41,7 @@ fn parse_probe(text: &str) -> Option<(ast::Pou, Vec<SfcElement>)> {
         Some(SfcElement::Step(s)) if s.name.text == "Zz_probe_end" && s.attributes.is_empty() => {}
         _ => return None,
     }
-    Some((pou, elements))
+    Some((pou, elements, comments))
 }
 
 impl Probe {
@@ -64,21 +71,52 @@ impl Probe {
         step_ok && transition_ok
     }
 
+    /// Whether `c` can be written on a line of its own and reads back as exactly this one
+    /// comment.
+    pub fn is_comment(&mut self, c: &str) -> bool {
+        if let Some(&v) = self.comments.get(c) {
+            return v;
+        }
+        let ok = c.len() <= 100_000 && Self::comment_probe(c);
+        self.comments.insert(c.to_string(), ok);
+        ok
+    }
+
+    fn comment_probe(c: &str) -> bool {
+        let text = format!("PROGRAM P\n    INITIAL_STEP S: END_STEP\n\n    {c}\n{END}END_PROGRAM\n");
+        match parse_probe_with_trivia(&text) {
+            Some((_, elements, comments)) => elements.len() == 2 && comments.len() == 1 && comments[0].text == c,
+            None => false,
+        }
+    }
+
+    /// The comments of a list that can be written (see [`Probe::is_comment`]), in order.
+    pub fn comments(&mut self, list: &[String]) -> Vec<String> {
+        list.iter().filter(|c| self.is_comment(c)).cloned().collect()
+    }
+
     /// What to write after a transition's `FROM … TO …` for a condition, and what it reads
-    /// back as. A condition that does not parse is written `FALSE`.
+    /// back as. A condition that does not parse is written `FALSE`; one with a comment outside
+    /// the condition (`go (* c *)`: the comment would belong to the transition) is written as
+    /// it reads back.
     pub fn condition(&mut self, cond: Option<&str>, lang: Language) -> (String, Option<String>, Language) {
-        if let Some(c) = cond {
-            let fragment = condition_fragment(c, lang);
+        let mut cond = cond.map(str::to_string);
+        for _ in 0..2 {
+            let Some(c) = cond.take() else { break };
+            let fragment = condition_fragment(&c, lang);
             let text = format!(
                 "PROGRAM P\n    INITIAL_STEP S: END_STEP\n\n    TRANSITION FROM S TO S{fragment}    END_TRANSITION\n\n{END}END_PROGRAM\n"
             );
-            if let Some((_, elements)) = parse_probe(&text) {
-                if let (2.., SfcElement::Transition(t)) = (elements.len(), &elements[1]) {
-                    if elements.len() == 3 {
-                        let (read, read_lang) = region::condition(&text, &t.condition);
+            if let Some((_, elements, comments)) = parse_probe_with_trivia(&text) {
+                if let (3, SfcElement::Transition(t)) = (elements.len(), &elements[1]) {
+                    let (read, read_lang) = region::condition(&text, &t.condition);
+                    let range = region::condition_range(&text, &t.condition);
+                    if comments.iter().all(|k| region::within(k, range)) {
                         if read.is_some() {
                             return (fragment, read, read_lang);
                         }
+                    } else if read_lang == lang {
+                        cond = read;
                     }
                 }
             }
@@ -100,6 +138,7 @@ impl Probe {
                     body: region::action_body(&text, a.span, a.name.span),
                     description: def.description.clone(),
                     attributes: pragma::readable(&def.attributes, pragma::ACTION),
+                    comments: self.comments(&def.comments),
                 };
                 return (action, read);
             }
@@ -110,23 +149,33 @@ impl Probe {
             body: String::new(),
             description: def.description.clone(),
             attributes: pragma::readable(&def.attributes, pragma::ACTION),
+            comments: self.comments(&def.comments),
         };
         (text_of(""), empty)
     }
 
     /// The declarations as written (indented, with a final line break, or empty) and what they
-    /// read back as. Declarations that do not parse are not written.
+    /// read back as. Declarations that do not parse are not written; those with a comment
+    /// outside their `VAR … END_VAR` blocks (it would belong to the first element) are written
+    /// as they read back.
     pub fn declarations(&mut self, decl: &str) -> (String, String) {
-        let written = declarations_text(decl);
-        if written.is_empty() {
-            return (written, String::new());
-        }
-        let text = format!("PROGRAM P\n{written}\n{END}END_PROGRAM\n");
-        if let Some((pou, elements)) = parse_probe(&text) {
-            if elements.len() == 1 {
-                let read = region::declarations(&text, &pou);
+        let mut decl = decl.to_string();
+        for _ in 0..2 {
+            let written = declarations_text(&decl);
+            if written.is_empty() {
+                return (written, String::new());
+            }
+            let text = format!("PROGRAM P\n{written}\n{END}END_PROGRAM\n");
+            let Some((pou, elements, comments)) = parse_probe_with_trivia(&text) else { break };
+            if elements.len() != 1 {
+                break;
+            }
+            let read = region::declarations(&text, &pou);
+            let range = region::declarations_range(&text, &pou);
+            if comments.iter().all(|k| region::within(k, range)) {
                 return (written, read);
             }
+            decl = read;
         }
         (String::new(), String::new())
     }
@@ -214,10 +263,33 @@ mod tests {
             body: "x := 1;\nIF y THEN\n    z := 2;\nEND_IF;".into(),
             description: String::new(),
             attributes: Vec::new(),
+            comments: vec!["(* fills *)".into()],
         };
         assert_eq!(p.action(&def).1, def);
         let broken = ActionDef { body: "x := ;".into(), ..def.clone() };
         assert_eq!(p.action(&broken).1.body, "");
+    }
+
+    #[test]
+    fn comments_read_back() {
+        let mut p = Probe::default();
+        for ok in ["(* a *)", "// b", "(* two\n   lines *)", "(**)", "//"] {
+            assert!(p.is_comment(ok), "{ok}");
+        }
+        for bad in ["", "x", "(* a", "(* a *) b", "// a\nb", "{attribute 'x'}", "(* a *)(* b *)", "a *)"] {
+            assert!(!p.is_comment(bad), "{bad}");
+        }
+        let (_, read, _) = p.condition(Some("go (* c *)"), Language::St);
+        assert_eq!(read.as_deref(), Some("go"));
+        let (fragment, read, _) = p.condition(Some("go (* c *) AND x"), Language::St);
+        assert_eq!(
+            (fragment.as_str(), read.as_deref()),
+            ("\n        := go (* c *) AND x;\n", Some("go (* c *) AND x"))
+        );
+        assert_eq!(
+            p.declarations("VAR\nEND_VAR\n(* trailing *)"),
+            ("    VAR\n    END_VAR\n".into(), "VAR\nEND_VAR".into())
+        );
     }
 
     #[test]

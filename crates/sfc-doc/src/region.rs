@@ -65,25 +65,49 @@ pub fn indent(block: &str, indent: &str) -> String {
         .join("\n")
 }
 
+/// Where the POU's declarations lie in `text` (byte offsets), when it has any.
+pub fn declarations_range(text: &str, pou: &ast::Pou) -> Option<(usize, usize)> {
+    let (first, last) = (pou.var_blocks.first()?, pou.var_blocks.last()?);
+    let end = (last.span.end as usize).min(text.len());
+    Some((line_start_if_blank(text, first.span.start as usize).min(end), end))
+}
+
 /// The POU's `VAR … END_VAR` blocks (with the comments between them), dedented.
 pub fn declarations(text: &str, pou: &ast::Pou) -> String {
-    let (Some(first), Some(last)) = (pou.var_blocks.first(), pou.var_blocks.last()) else {
-        return String::new();
-    };
-    let start = line_start_if_blank(text, first.span.start as usize);
-    dedent(text.get(start..last.span.end as usize).unwrap_or(""))
+    match declarations_range(text, pou) {
+        Some((start, end)) => dedent(text.get(start..end).unwrap_or("")),
+        None => String::new(),
+    }
+}
+
+/// Where a transition's condition text lies in `text` (byte offsets), when it has one.
+pub fn condition_range(text: &str, condition: &ast::Condition) -> Option<(usize, usize)> {
+    match condition {
+        ast::Condition::St(e) => Some((e.span.start as usize, e.span.end as usize)),
+        ast::Condition::Il(b) => Some((line_start_if_blank(text, b.span.start as usize), b.span.end as usize)),
+        ast::Condition::Missing => None,
+    }
 }
 
 /// A transition's condition as written: the ST expression, or the IL instructions dedented.
 pub fn condition(text: &str, condition: &ast::Condition) -> (Option<String>, Language) {
-    match condition {
-        ast::Condition::St(e) => (Some(slice(text, e.span).to_string()), Language::St),
-        ast::Condition::Il(b) => {
-            let start = line_start_if_blank(text, b.span.start as usize);
-            (Some(dedent(text.get(start..b.span.end as usize).unwrap_or(""))), Language::Il)
-        }
-        ast::Condition::Missing => (None, Language::St),
+    let range = condition_range(text, condition);
+    let cut = |(start, end): (usize, usize)| text.get(start..end).unwrap_or("");
+    match (condition, range) {
+        (ast::Condition::St(_), Some(r)) => (Some(cut(r).to_string()), Language::St),
+        (ast::Condition::Il(_), Some(r)) => (Some(dedent(cut(r))), Language::Il),
+        _ => (None, Language::St),
     }
+}
+
+/// Whether a comment lies in a range (the text it belongs to).
+pub fn within(t: &ast::Trivia, range: Option<(usize, usize)>) -> bool {
+    range.is_some_and(|(start, end)| start <= t.span.start as usize && t.span.end as usize <= end)
+}
+
+/// Whether a trivia is a comment (pragmas are read as attributes).
+pub fn is_comment(t: &ast::Trivia) -> bool {
+    matches!(t.kind, ast::TriviaKind::BlockComment | ast::TriviaKind::LineComment)
 }
 
 /// An action's body: the text between `ACTION name:` and `END_ACTION`, dedented.

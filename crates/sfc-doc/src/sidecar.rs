@@ -27,6 +27,9 @@ pub struct Sidecar {
     /// The actions, when any of them is not in the text as typed (absent: the text's actions).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub acts: Option<Vec<ActEntry>>,
+    /// The comments after the last element as typed, when some cannot be written.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub tc: Option<Vec<String>>,
     /// The blocks, in document order.
     pub e: Vec<Entry>,
     /// The connections, in document order.

@@ -29,6 +29,9 @@ pub fn as_read(e: &Element, probe: &mut Probe) -> Element {
         hide_label: e.hide_label,
         ..Element::default()
     };
+    if matches!(e.kind, Some(ElementKind::Step | ElementKind::Transition)) {
+        r.comments = probe.comments(&e.comments);
+    }
     match e.kind {
         Some(ElementKind::Step) => {
             r.attributes = pragma::readable(&e.attributes, pragma::STEP);
@@ -59,6 +62,15 @@ pub fn target_name(t: ChartTarget) -> &'static str {
 
 fn problem(code: &'static str, element: &str, message: impl Into<String>) -> Problem {
     Problem { code, severity: Severity::Error, element: element.to_string(), message: message.into() }
+}
+
+/// The comments that can be written, each on its own line (see [`Probe::is_comment`]).
+fn comment_lines(list: &[String], probe: &mut Probe, out: &mut String) {
+    for c in list.iter().filter(|c| probe.is_comment(c)) {
+        out.push_str(IND);
+        out.push_str(c);
+        out.push('\n');
+    }
 }
 
 /// The attributes every step and transition of the text carries, in a fixed order.
@@ -151,6 +163,7 @@ pub fn write(doc: &EditorDoc) -> Written {
             plain_acts = false;
         }
         let mut t = String::new();
+        comment_lines(&a.comments, &mut probe, &mut t);
         if !a.description.is_empty() {
             t.push_str(&line(IND, "sfc.description", &escape(&a.description)));
         }
@@ -192,6 +205,9 @@ pub fn write(doc: &EditorDoc) -> Written {
         entries.push(entry);
     }
     car.e = entries;
+    if probe.comments(&doc.trailing_comments) != doc.trailing_comments {
+        car.tc = Some(doc.trailing_comments.clone());
+    }
     car.c = doc
         .connections
         .iter()
@@ -239,10 +255,11 @@ pub fn write(doc: &EditorDoc) -> Written {
     out.push_str(&decl_text);
 
     let mut blocks: Vec<String> = Vec::new();
-    let step_text = |k: usize| -> String {
+    let step_text = |k: usize, probe: &mut Probe| -> String {
         let i = d.steps[k];
         let e = &doc.elements[i];
         let mut t = String::new();
+        comment_lines(&e.comments, probe, &mut t);
         let extra: Vec<(&str, String)> =
             step_blocks.get(&i).map(|b| vec![("sfc.actionblock", b.join(";"))]).unwrap_or_default();
         element_attributes(e, &mut t, &extra);
@@ -263,6 +280,7 @@ pub fn write(doc: &EditorDoc) -> Written {
         let tt = &d.transitions[k];
         let e = &doc.elements[tt.element];
         let mut t = String::new();
+        comment_lines(&e.comments, probe, &mut t);
         let extra: Vec<(&str, String)> =
             jumps.get(&tt.element).map(|j| vec![("sfc.jump", j.join(";"))]).unwrap_or_default();
         element_attributes(e, &mut t, &extra);
@@ -298,7 +316,7 @@ pub fn write(doc: &EditorDoc) -> Written {
         .collect();
     let mut next_t = 0;
     for k in 0..d.steps.len() {
-        blocks.push(step_text(k));
+        blocks.push(step_text(k, &mut probe));
         while next_t < d.transitions.len() && ready_after[next_t] <= k {
             blocks.push(transition_text(next_t, &mut probe));
             next_t += 1;
@@ -309,10 +327,15 @@ pub fn write(doc: &EditorDoc) -> Written {
         next_t += 1;
     }
     blocks.extend(actions_text);
+    let mut trailing = String::new();
+    comment_lines(&doc.trailing_comments, &mut probe, &mut trailing);
     if blocks.is_empty() {
         problems.push(problem("SFC0201", "", "the chart has no step: its text has no SFC body"));
     } else if !decl_text.is_empty() {
         out.push('\n');
+    }
+    if !trailing.is_empty() {
+        blocks.push(trailing);
     }
     out.push_str(&blocks.join("\n"));
     out.push_str(match doc.pou_kind {

@@ -215,3 +215,33 @@ fn plcopen_export_and_import_keep_the_document() {
         assert_eq!(back, d, "{f}");
     }
 }
+
+#[test]
+fn comments_between_elements_belong_to_the_element_after_them_or_the_line_they_end() {
+    let text = "PROGRAM P\n    VAR go : BOOL; END_VAR\n    (* one *)\n    INITIAL_STEP S: END_STEP // ends S\n    // two\n    TRANSITION T FROM S TO S\n        := go;\n    END_TRANSITION (* ends T *)\n    (* last *)\nEND_PROGRAM\n";
+    let d = open(0, "p", text).charts.remove(0);
+    let of = |name: &str| d.elements.iter().find(|e| e.name == name).unwrap().comments.clone();
+    assert_eq!(of("S"), ["(* one *)", "// ends S"]);
+    assert_eq!(of("T"), ["// two", "(* ends T *)"]);
+    assert_eq!(d.trailing_comments, ["(* last *)"]);
+    let saved = to_text(&d).text;
+    assert!(saved.contains("    (* one *)\n    // ends S\n    {attribute 'sfc.x'"), "{saved}");
+    assert!(saved.contains("END_TRANSITION\n\n    (* last *)\nEND_PROGRAM\n"), "{saved}");
+    assert_eq!(open(0, "p", &saved).charts, vec![d]);
+}
+
+#[test]
+fn comments_the_text_cannot_hold_travel_in_the_layout() {
+    let mut d = blank("P", ChartTarget::Blank);
+    d.elements[0].comments = vec!["(* kept *)".into(), "(* unterminated".into(), "not a comment".into()];
+    d.trailing_comments = vec!["// x\ny".into(), "(* end *)".into()];
+    let saved = to_text(&d);
+    assert!(saved.problems.is_empty(), "{:?}", saved.problems);
+    assert!(
+        saved.text.contains("    (* kept *)\n") && saved.text.contains("    (* end *)\nEND_PROGRAM"),
+        "{}",
+        saved.text
+    );
+    assert!(!saved.text.contains("\n    (* unterminated"), "{}", saved.text);
+    assert_eq!(open(0, "p", &saved.text).charts, vec![d]);
+}

@@ -45,6 +45,18 @@ fn expect(path: &Path, actual: &str, failures: &mut Vec<String>) {
     }
 }
 
+/// The comments of a text, in order (pragmas are not comments).
+fn comments(text: &str) -> Vec<String> {
+    let (unit, _) = sfc_syntax::parse(0, text);
+    unit.trivia
+        .into_iter()
+        .filter(|t| {
+            matches!(t.kind, sfc_syntax::ast::TriviaKind::BlockComment | sfc_syntax::ast::TriviaKind::LineComment)
+        })
+        .map(|t| t.text)
+        .collect()
+}
+
 fn problems(w: &Written) -> String {
     w.problems.iter().map(|p| format!("{} {}: {}\n", p.code, p.element, p.message)).collect()
 }
@@ -93,6 +105,15 @@ fn charts_open_and_save_as_expected() {
         expect(&stem.with_extension("saved.st"), &w.text, &mut failures);
         assert!(w.problems.is_empty(), "{name}: {:?}", w.problems);
         round_trip(&name, d, &w, &mut failures);
+        // Saved into its file, the chart keeps every comment of the file.
+        let file = sfc_doc::splice(&text, d);
+        for c in comments(&text) {
+            if comments(&file).iter().filter(|k| **k == c).count()
+                != comments(&text).iter().filter(|k| **k == c).count()
+            {
+                failures.push(format!("{name}: the saved file lost the comment {c:?}:\n{file}"));
+            }
+        }
         // The saved text checks like the original: no new diagnostics.
         let before = opened.diagnostics.len();
         let after = sfc_model::check_source(0, &name, &w.text, &Default::default()).diagnostics;

@@ -74,14 +74,20 @@ impl Chart {
         if c.pick(2) == 0 {
             c.transitions.push((vec![end], vec![init]));
         }
-        let mut out = String::from("PROGRAM P\n    VAR\n        go : BOOL;\n    END_VAR\n\n");
+        let mut out = String::from("PROGRAM P\n");
+        out.push_str(Chart::comment(c.pick(6)));
+        out.push_str("    VAR\n        go : BOOL;\n    END_VAR\n\n");
         for s in 0..c.steps {
             let kw = if s == 0 { "INITIAL_STEP" } else { "STEP" };
+            out.push_str(Chart::comment(c.pick(6)));
             if c.pick(3) == 0 {
-                out.push_str(&format!("    {kw} S{s}:\n        Act(N);\n    END_STEP\n\n"));
+                let inner = Chart::comment(c.pick(6));
+                out.push_str(&format!("    {kw} S{s}:\n{inner}        Act(N);\n    END_STEP"));
             } else {
-                out.push_str(&format!("    {kw} S{s}: END_STEP\n\n"));
+                out.push_str(&format!("    {kw} S{s}: END_STEP"));
             }
+            // A comment ending the step's line.
+            out.push_str(if c.pick(4) == 0 { " // after the step\n\n" } else { "\n\n" });
         }
         let list = |l: &[usize]| {
             let names: Vec<String> = l.iter().map(|s| format!("S{s}")).collect();
@@ -94,14 +100,26 @@ impl Chart {
         let transitions = c.transitions.clone();
         for (k, (from, to)) in transitions.iter().enumerate() {
             let name = if c.pick(2) == 0 { format!(" T_{k}") } else { String::new() };
+            out.push_str(Chart::comment(c.pick(6)));
             out.push_str(&format!(
                 "    TRANSITION{name} FROM {} TO {}\n        := go;\n    END_TRANSITION\n\n",
                 list(from),
                 list(to)
             ));
         }
-        out.push_str("    ACTION Act:\n        go := NOT go;\n    END_ACTION\nEND_PROGRAM\n");
+        out.push_str(Chart::comment(c.pick(6)));
+        out.push_str("    ACTION Act:\n        go := NOT go;\n    END_ACTION\n");
+        out.push_str(Chart::comment(c.pick(6)));
+        out.push_str("END_PROGRAM\n");
         out
+    }
+    /// Nothing, or comment lines as a user writes them between elements.
+    fn comment(choice: u8) -> &'static str {
+        match choice {
+            0 => "    (* fill the tank *)\n",
+            1 => "    // a line comment\n    (* and a block\n       comment over two lines *)\n",
+            _ => "",
+        }
     }
 }
 
@@ -168,6 +186,7 @@ fn element() -> impl Strategy<Value = Element> {
             text: (extra == 0).then(|| "label\nline".to_string()),
             step: Some(pick_id(x)),
             attributes: others(y),
+            comments: comments(x.wrapping_add(y)),
             associations: assocs
                 .into_iter()
                 .map(|(q, d, a)| Association {
@@ -192,6 +211,21 @@ fn others(seed: i32) -> Vec<OtherAttribute> {
         3 => vec![a("other", Some("a'b")), a("sfc.inline", Some("true"))],
         _ => Vec::new(),
     }
+}
+
+/// Comments as an editor document may hold them: ones the text can hold, ones it cannot
+/// (unterminated, two in one, not a comment at all), none.
+fn comments(seed: i32) -> Vec<String> {
+    let list: &[&str] = match seed.rem_euclid(9) {
+        0 => &["(* fill the tank *)"],
+        1 => &["// one line", "(* two\n       lines *)"],
+        2 => &["(* open"],
+        3 => &["(* a *) (* b *)", "// ok"],
+        4 => &["not a comment", "// x\ny"],
+        5 => &["{attribute 'x'}", "(**)"],
+        _ => &[],
+    };
+    list.iter().map(|c| c.to_string()).collect()
 }
 
 fn pick_id(seed: i32) -> String {
@@ -249,9 +283,11 @@ fn document() -> impl Strategy<Value = EditorDoc> {
                         body: b.to_string(),
                         description: String::new(),
                         attributes: others(b.len() as i32),
+                        comments: comments(b.len() as i32),
                     })
                     .collect(),
                 attributes: others(elements.len() as i32 + 1),
+                trailing_comments: comments(connections.len() as i32),
                 elements,
                 connections,
             }
@@ -273,6 +309,10 @@ proptest! {
         let again = open(0, "p", &saved.text);
         prop_assert_eq!(again.charts.len(), 1);
         prop_assert!(again.charts[0] == *d, "{}\n{}", text, saved.text);
+        // Every comment of the original is in the saved text, as often.
+        for k in ["(* fill the tank *)", "// a line comment", "// after the step", "comment over two lines *)"] {
+            prop_assert_eq!(saved.text.matches(k).count(), text.matches(k).count(), "{}\n{}", text, saved.text);
+        }
         prop_assert_eq!(to_text(&again.charts[0]).text, saved.text);
     }
 

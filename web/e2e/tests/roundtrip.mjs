@@ -107,6 +107,87 @@ export const tests = [
     },
   },
   {
+    name: 'comments between chart elements survive moving a step and saving',
+    run: async (t) => {
+      const { page } = t;
+      const file = path.join(t.scratch, 'commented.st');
+      const comments = [
+        '(* before the POU *)',
+        '(* between the header and the declarations *)',
+        '(* level switches *)',
+        '(* fill the tank *)',
+        '// open the inlet',
+        '(* ends the line of Fill *)',
+        '// the level switch ends filling',
+        '(* inside the condition *)',
+        '(* drain it again,\n       with the pump *)',
+        '// before the action',
+        '(* inside the action *)',
+        '(* after the last element *)',
+        '// and the very last',
+        '(* after the POU *)',
+      ];
+      const [pre, header, level, fill, inlet, ends, filled, cond, drain, action, body, last, veryLast, post] = comments;
+      fs.writeFileSync(
+        file,
+        `${pre}
+PROGRAM Tank
+    ${header}
+    VAR
+        Full, Empty, Valve : BOOL; ${level}
+    END_VAR
+
+    ${fill}
+    INITIAL_STEP Fill:
+        ${inlet}
+        Open(N);
+    END_STEP ${ends}
+
+    ${filled}
+    TRANSITION FROM Fill TO Drain
+        := Full ${cond} AND NOT Empty;
+    END_TRANSITION
+
+    ${drain}
+    STEP Drain: END_STEP
+    TRANSITION FROM Drain TO Fill
+        := Empty;
+    END_TRANSITION
+
+    ${action}
+    ACTION Open:
+        ${body}
+        Valve := TRUE;
+    END_ACTION
+    ${last}
+    ${veryLast}
+END_PROGRAM
+${post}
+`,
+      );
+      await openEditor(t, [file]);
+      const before = await waitChart(page);
+      const step = before.elements.find((e) => e.kind === 'step' && e.name === 'Drain');
+      assert(step, 'no step Drain');
+      const b = await box(page, step.id);
+      const scale = await page.evaluate(() => window.__sfc.zoom());
+      const from = { x: b.x + b.width / 2, y: b.y + b.height / 2 };
+      await drag(page, from, { x: from.x + 80 * scale, y: from.y + 40 * scale });
+      await page.waitForFunction(([id, x]) => window.__sfc.doc().elements.find((el) => el.id === id).x !== x, [step.id, step.x]);
+      await page.keyboard.press('Control+s');
+      await allSaved(page);
+      const text = fs.readFileSync(file, 'utf8');
+      for (const c of comments) {
+        assert(text.split(c).length === 2, `the saved file has ${text.split(c).length - 1} × ${JSON.stringify(c)}:\n${text}`);
+      }
+      assert(/sfc\.x' := '[-\d.]+'\}\s*(?:\{[^\n]*\n\s*)*STEP Drain/.test(text), `the moved step has no position:\n${text}`);
+      const moved = (await activeDoc(page)).elements.find((e) => e.id === step.id);
+      assert(moved.x !== step.x, `Drain did not move: ${moved.x}`);
+      sfc(t, ['check', '--no-analysis', file]);
+      t.log(`${comments.length} comments kept in ${path.basename(file)}`);
+    },
+  },
+  {
     name: 'examples: move a step, undo, redo, save, reload, compare; a second save is byte-identical',
     run: async (t) => {
       const files = exampleFiles(t.scratch);

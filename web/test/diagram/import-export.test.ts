@@ -44,6 +44,42 @@ describe('load → getDoc', () => {
     expect(canvas.getDoc()).toStrictEqual(d);
   });
 
+  it('keeps the comments of steps, transitions and actions and the trailing comments', () => {
+    const { canvas, get } = mount();
+    const d = conveyorDoc();
+    const step = d.elements.find((e) => e.kind === 'step')!;
+    step.comments = ['(* fill the tank *)', '// two'];
+    const transition = d.elements.find((e) => e.kind === 'transition')!;
+    transition.comments = ['(* when full *)'];
+    d.actions = [{ name: 'Horn', language: 'ST', body: 'x := 1;', comments: ['// horn'] }];
+    d.trailingComments = ['(* the end *)'];
+    canvas.load(d);
+    expect(canvas.getDoc()).toStrictEqual(d);
+    // A moved step keeps its comments; another block's edit leaves them.
+    canvas.updateElement(transition.id, { description: 'edited' });
+    get('modeling').moveElements([get('elementRegistry').get(step.id)], { x: 40, y: 0 });
+    const edited = canvas.getDoc();
+    expect(edited.elements.find((e) => e.id === step.id)!.comments).toEqual(step.comments);
+    expect(edited.elements.find((e) => e.id === transition.id)!.comments).toEqual(transition.comments);
+    expect(edited.actions[0].comments).toEqual(['// horn']);
+    expect(edited.trailingComments).toEqual(['(* the end *)']);
+  });
+
+  it('a pasted copy of a step has no comments; deleting a step deletes its comments', () => {
+    const { canvas, get } = mount();
+    const d = conveyorDoc();
+    const step = d.elements.find((e) => e.kind === 'step')!;
+    step.comments = ['(* fill the tank *)'];
+    canvas.load(d);
+    get('copyPaste').copy([get('elementRegistry').get(step.id)]);
+    get('copyPaste').paste({ element: get('canvas').getRootElement(), point: { x: 600, y: 600 } });
+    const pasted = canvas.getDoc().elements.at(-1)!;
+    expect([pasted.kind, pasted.comments]).toEqual(['step', undefined]);
+    expect(canvas.getDoc().elements.find((e) => e.id === step.id)!.comments).toEqual(['(* fill the tank *)']);
+    get('modeling').removeShape(get('elementRegistry').get(step.id));
+    expect(JSON.stringify(canvas.getDoc())).not.toContain('fill the tank');
+  });
+
   it('gives back a 500-step document unchanged, and loads it fast enough', () => {
     const { canvas } = mount();
     const d = makeBigDoc(500);

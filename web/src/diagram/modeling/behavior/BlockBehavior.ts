@@ -1,6 +1,6 @@
 // Block rules that span several commands: action blocks move and vanish with their step,
-// pasted steps and transitions get fresh names (and pasted action blocks and jumps follow
-// their pasted step).
+// pasted steps and transitions get fresh names and no comments (the comments stay with the
+// original), and pasted action blocks and jumps follow their pasted step.
 import CommandInterceptor from 'diagram-js/lib/command/CommandInterceptor.js';
 import { clone, freshName, isConnection, usedNames, type Service, type SfcShape } from '../../model';
 
@@ -39,7 +39,10 @@ export class BlockBehavior extends CommandInterceptor {
     });
     eventBus.on('copyPaste.pasteElement', 500, (ctx: Service) => {
       const d = ctx.descriptor;
-      if (d.businessObject) d.businessObject = clone(d.businessObject);
+      if (d.businessObject) {
+        d.businessObject = clone(d.businessObject);
+        delete d.businessObject.comments;
+      }
     });
 
     this.preExecute('elements.create', (event: Service) => {
