@@ -170,6 +170,11 @@ fn centre_runs(doc: &mut EditorDoc, d: &Derived, placed: &[bool], keep: &[bool])
     let n = doc.elements.len();
     let kind = |doc: &EditorDoc, i: usize| doc.elements[i].kind;
     let mut seen = vec![false; n];
+    // Placed blocks by top edge, so a run is checked only against blocks level with it (tops
+    // do not change here, only the runs' x).
+    let mut by_top: Vec<usize> = (0..n).filter(|&j| placed[j]).collect();
+    by_top.sort_by(|&a, &b| doc.elements[a].y.total_cmp(&doc.elements[b].y));
+    let tallest = by_top.iter().map(|&j| doc.elements[j].h).fold(0.0, f64::max);
     for start in 0..n {
         if seen[start] || !placed[start] || !is_run_block(doc, start) {
             continue;
@@ -235,9 +240,11 @@ fn centre_runs(doc: &mut EditorDoc, d: &Derived, placed: &[bool], keep: &[bool])
         let overlaps = run.iter().any(|&i| {
             let e = &doc.elements[i];
             let (l, r, t, b) = (e.x + dx - GRID / 2.0, e.x + e.w + dx + GRID / 2.0, e.y, e.y + e.h);
-            (0..n).any(|j| {
+            // Only blocks whose top lies between `t - tallest` and `b` can reach into t..b.
+            let first = by_top.partition_point(|&j| doc.elements[j].y <= t - tallest);
+            by_top[first..].iter().take_while(|&&j| doc.elements[j].y < b).any(|&j| {
                 let o = &doc.elements[j];
-                placed[j] && !run.contains(&j) && o.x < r && o.x + o.w > l && o.y < b && o.y + o.h > t
+                !run.contains(&j) && o.x < r && o.x + o.w > l && o.y + o.h > t
             })
         });
         if overlaps {

@@ -129,10 +129,12 @@ export const createCanvas: CreateCanvas = (container: HTMLElement, opts: CanvasO
     const room = width - inset;
     let scale = Math.max(MIN_ZOOM, Math.min(1, room / (b.width + 2 * m), height / (b.height + 2 * m)));
     if (!whole && scale < 0.6) scale = 1;
-    const w = width / scale;
-    const h = height / scale;
     const x = b.width + 2 * m <= room / scale ? b.x + b.width / 2 - (inset + room / 2) / scale : b.x - m - inset / scale;
-    canvas.viewbox({ x, y: b.y - m, width: w, height: h });
+    // As `canvas.viewbox(box)` with the size kept by the tracker: diagram-js would read the
+    // container's size, forcing a layout of the whole drawing just added (200 ms at 500 steps).
+    canvas._changeViewbox(() => {
+      canvas._viewport.setAttribute('transform', `matrix(${scale},0,0,${scale},${-x * scale},${-(b.y - m) * scale})`);
+    });
     view.tick();
   };
 

@@ -1,6 +1,8 @@
+import { HitAreas } from './HitAreas';
 import { SfcRenderer } from './SfcRenderer';
 
 export default {
-  __init__: ['sfcRenderer'],
+  __init__: ['sfcRenderer', 'sfcHitAreas'],
   sfcRenderer: ['type', SfcRenderer],
+  sfcHitAreas: ['type', HitAreas],
 };
