@@ -307,7 +307,11 @@ export class SfcRenderer extends BaseRenderer {
   private setTooltip(visual: SVGElement, description: string | undefined) {
     const group = visual.parentNode as SVGElement | null;
     if (!group) return;
-    let title = group.querySelector(':scope > title');
+    // The group's own children, from the end (a selector query per block costs more).
+    let title: SVGElement | null = null;
+    for (let c = group.lastElementChild; c && !title; c = c.previousElementSibling) {
+      if (c.tagName === 'title') title = c as SVGElement;
+    }
     if (!description) {
       title?.remove();
       return;
