@@ -16,7 +16,7 @@ mod sim;
 #[command(
     name = "sfc",
     version,
-    about = "Check, format, build, simulate and run IEC 61131-3 Sequential Function Charts"
+    about = "Check, format, build, simulate, edit and run IEC 61131-3 Sequential Function Charts"
 )]
 struct Cli {
     #[command(subcommand)]
@@ -344,25 +344,10 @@ fn summary(errors: usize, warnings: usize) -> String {
     }
 }
 
-/// Writes `text` to `path` through a temporary file in the same directory, then renames it, so
-/// an interrupted write never leaves a truncated chart.
+/// Writes `text` to a temporary file beside `path`, then renames it over `path` (the editor's
+/// server does the same for saves: one implementation).
 fn write_atomically(path: &Path, text: &str) -> std::io::Result<()> {
-    let dir = path.parent().filter(|p| !p.as_os_str().is_empty()).unwrap_or(Path::new("."));
-    let name = path.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
-    let tmp = dir.join(format!(".{name}.sfc-tmp-{}", std::process::id()));
-    let result = (|| {
-        let mut f = std::fs::File::create(&tmp)?;
-        f.write_all(text.as_bytes())?;
-        f.sync_all()?;
-        if let Ok(meta) = std::fs::metadata(path) {
-            let _ = std::fs::set_permissions(&tmp, meta.permissions());
-        }
-        std::fs::rename(&tmp, path)
-    })();
-    if result.is_err() {
-        let _ = std::fs::remove_file(&tmp);
-    }
-    result
+    sfc_server::write_atomically(path, text.as_bytes())
 }
 
 fn fmt(a: FmtArgs) -> u8 {
