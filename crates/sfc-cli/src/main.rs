@@ -9,6 +9,7 @@ use std::process::ExitCode;
 
 mod build;
 mod edit;
+mod prove;
 mod run;
 mod sim;
 
@@ -35,6 +36,8 @@ enum Command {
     Sim(SimArgs),
     /// Run every `*.scenario.toml` under the given files and directories.
     Test(TestArgs),
+    /// Prove or refute the requirements of `<chart>.props.toml` under the exact scan semantics.
+    Prove(prove::ProveArgs),
     /// Open the SFC Editor in a browser, served on 127.0.0.1 (Ctrl-C stops it).
     Edit(edit::EditArgs),
     /// Run a chart as a soft-PLC on the wall clock, with Modbus TCP I/O and the monitor protocol.
@@ -99,7 +102,7 @@ struct TestArgs {
 }
 
 #[derive(Clone, Copy, ValueEnum)]
-enum Format {
+pub(crate) enum Format {
     Human,
     Json,
 }
@@ -250,12 +253,13 @@ fn run() -> u8 {
             set: a.set,
         }),
         Command::Test(a) => sim::test(&a.paths, a.coverage),
+        Command::Prove(a) => prove::prove(a),
         Command::Edit(a) => edit::edit(a),
         Command::Run(a) => run::run(a),
     }
 }
 
-fn read(path: &Path) -> Result<String, String> {
+pub(crate) fn read(path: &Path) -> Result<String, String> {
     if path.as_os_str() == "-" {
         let mut s = String::new();
         std::io::stdin().read_to_string(&mut s).map_err(|e| format!("cannot read standard input: {e}"))?;
@@ -346,7 +350,7 @@ fn summary(errors: usize, warnings: usize) -> String {
 
 /// Writes `text` to a temporary file beside `path`, then renames it over `path` (the editor's
 /// server does the same for saves: one implementation).
-fn write_atomically(path: &Path, text: &str) -> std::io::Result<()> {
+pub(crate) fn write_atomically(path: &Path, text: &str) -> std::io::Result<()> {
     sfc_server::write_atomically(path, text.as_bytes())
 }
 

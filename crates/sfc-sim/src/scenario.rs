@@ -22,6 +22,7 @@
 //! Running ([`run`]) applies the `set` values of an entry before the first scan whose time is
 //! `≥ time` and checks its `expect` values after that scan.
 
+use crate::condition::Condition;
 use crate::coverage::Coverage;
 use crate::trace::{value_text, TraceHeader, TraceSink};
 use crate::{format_time, parse_time, Profile, RuntimeError, ScanRecord, SimOptions, Simulation, Value};
@@ -127,6 +128,26 @@ pub enum Expectation {
     Active(Vec<String>),
     /// A variable, `Step.X`, `Step.T`, … with the value it must have and its type.
     Value { key: String, value: Value, ty: Type },
+    /// `expect = "ST condition"`: a BOOL expression that must be TRUE.
+    Condition(Condition),
+}
+
+/// What an interval requires in every scan of it.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Check {
+    /// An ST condition.
+    Condition(Condition),
+    /// A table of values: `always` = all of them hold; `never` = not all of them at once.
+    Values(Vec<Expectation>),
+}
+
+/// `always` / `never` over the scans from the entry's `time` to `until` (inclusive).
+#[derive(Debug, Clone, PartialEq)]
+pub struct Interval {
+    /// µs; `None`: to the end of the run.
+    pub until: Option<i64>,
+    pub always: Vec<Check>,
+    pub never: Vec<Check>,
 }
 
 /// One `[[at]]` entry, bound to the chart.
@@ -140,6 +161,10 @@ pub struct Entry {
     pub set: Vec<(String, Value)>,
     /// Values checked after the entry's scan, in file order.
     pub expect: Vec<Expectation>,
+    /// `within = T`: `expect` must be met in some scan from the entry's scan up to `T` later.
+    pub within: Option<i64>,
+    /// `always` / `never` over an interval.
+    pub interval: Option<Interval>,
 }
 
 /// A loaded scenario: parsed, its chart read and checked, every name and value bound.
@@ -253,12 +278,33 @@ struct RawAssign {
     column: u32,
 }
 
+/// An ST condition as written: its text and where its first character is in the file.
+#[derive(Debug, Clone)]
+struct RawCond {
+    text: String,
+    line: u32,
+    column: u32,
+    /// Byte offset of the text in the file when the string has no escapes.
+    offset: Option<usize>,
+}
+
+#[derive(Debug, Clone)]
+enum RawCheck {
+    Cond(RawCond),
+    Table(Vec<RawAssign>),
+}
+
 #[derive(Debug, Clone)]
 struct RawEntry {
     time: i64,
     line: u32,
     set: Vec<RawAssign>,
     expect: Vec<RawAssign>,
+    expect_cond: Option<RawCond>,
+    within: Option<i64>,
+    until: Option<i64>,
+    always: Vec<RawCheck>,
+    never: Vec<RawCheck>,
 }
 
 #[derive(Debug, Clone, Default)]
@@ -278,7 +324,7 @@ struct Src<'a> {
 }
 
 const TOP_KEYS: [&str; 7] = ["chart", "pou", "period", "profile", "until", "scans", "at"];
-const ENTRY_KEYS: [&str; 3] = ["time", "set", "expect"];
+const ENTRY_KEYS: [&str; 7] = ["time", "set", "expect", "within", "until", "always", "never"];
 
 impl Src<'_> {
     fn pos(&self, offset: usize) -> (u32, u32) {
@@ -308,6 +354,36 @@ impl Src<'_> {
             None => Err(self.err(
                 item.span().or_else(|| self.key_span(table, key)),
                 format!("`{key}` must be a string ({what}), found {}", type_name(item)),
+            )),
+        }
+    }
+    /// A string value as an ST condition with its position.
+    fn cond(&self, item: &Item) -> Option<RawCond> {
+        let v = item.as_value()?;
+        let text = v.as_str()?.to_string();
+        let span = v.span();
+        let (line, column) = span.clone().map_or((1, 1), |s| self.pos(s.start));
+        let offset = span.and_then(|r| {
+            let raw = &self.text[r.clone()];
+            let basic = raw.starts_with('"') && !raw.contains('\\') && !raw.starts_with("\"\"\"");
+            let literal = raw.starts_with('\'') && !raw.starts_with("'''");
+            (basic || literal).then_some(r.start + 1)
+        });
+        Some(RawCond { text, line, column, offset })
+    }
+    fn check(&self, table: &dyn TableLike, key: &str, item: &Item) -> Result<RawCheck, ScenarioError> {
+        if let Some(c) = self.cond(item) {
+            return Ok(RawCheck::Cond(c));
+        }
+        match item.as_table_like() {
+            Some(inner) => {
+                let mut v = Vec::new();
+                collect_assigns(self, inner, "", &mut v);
+                Ok(RawCheck::Table(v))
+            }
+            None => Err(self.err(
+                self.key_span(table, key),
+                format!("`{key}` must be an ST condition (a string) or a table of values, found {}", type_name(item)),
             )),
         }
     }
@@ -472,6 +548,11 @@ fn parse_entries(src: &Src<'_>, root: &dyn TableLike, item: &Item) -> Result<Vec
         let mut time = None;
         let mut set = Vec::new();
         let mut expect = Vec::new();
+        let mut expect_cond = None;
+        let mut within = None;
+        let mut until = None;
+        let mut always = Vec::new();
+        let mut never = Vec::new();
         for (key, item) in table.iter() {
             let kspan = src.key_span(table, key);
             match key {
@@ -484,20 +565,40 @@ fn parse_entries(src: &Src<'_>, root: &dyn TableLike, item: &Item) -> Result<Vec
                     }
                     time = Some((t, item.span()));
                 }
+                "expect" if item.as_str().is_some() => expect_cond = src.cond(item),
                 "set" | "expect" => {
                     let Some(inner) = item.as_table_like() else {
                         return Err(src.err(
                             kspan,
-                            format!("`{key}` must be a table such as {{ Start = true }}, found {}", type_name(item)),
+                            format!(
+                                "`{key}` must be a table such as {{ Start = true }}{}, found {}",
+                                if key == "expect" { " or an ST condition" } else { "" },
+                                type_name(item)
+                            ),
                         ));
                     };
                     collect_assigns(src, inner, "", if key == "set" { &mut set } else { &mut expect });
                 }
+                "within" => {
+                    let t = src.time(table, key, item)?;
+                    if t < 0 {
+                        return Err(src.err(item.span(), "`within` must not be negative"));
+                    }
+                    within = Some((t, kspan));
+                }
+                "until" => {
+                    let t = src.time(table, key, item)?;
+                    until = Some((t, item.span()));
+                }
+                "always" => always.push(src.check(table, key, item)?),
+                "never" => never.push(src.check(table, key, item)?),
                 other => {
                     let hint = did_you_mean(other, ENTRY_KEYS);
                     return Err(src.err(
                         kspan,
-                        format!("unknown key `{other}` in an [[at]] entry (expected time, set or expect){hint}"),
+                        format!(
+                            "unknown key `{other}` in an [[at]] entry (expected time, set, expect, within, until, always or never){hint}"
+                        ),
                     ));
                 }
             }
@@ -518,7 +619,33 @@ fn parse_entries(src: &Src<'_>, root: &dyn TableLike, item: &Item) -> Result<Vec
                 ));
             }
         }
-        entries.push(RawEntry { time, line, set, expect });
+        if let Some((_, sp)) = &within {
+            if expect.is_empty() && expect_cond.is_none() {
+                return Err(src.err(sp.clone(), "`within` needs an `expect` (what must happen within the time)"));
+            }
+        }
+        if let Some((u, sp)) = &until {
+            if always.is_empty() && never.is_empty() {
+                return Err(src.err(sp.clone(), "`until` ends an interval: give `always` or `never` with it"));
+            }
+            if *u < time {
+                return Err(src.err(
+                    sp.clone(),
+                    format!("`until` ({}) comes before `time` ({})", format_time(*u), format_time(time)),
+                ));
+            }
+        }
+        entries.push(RawEntry {
+            time,
+            line,
+            set,
+            expect,
+            expect_cond,
+            within: within.map(|w| w.0),
+            until: until.map(|u| u.0),
+            always,
+            never,
+        });
     }
     Ok(entries)
 }
@@ -703,6 +830,32 @@ impl<'a> Binder<'a> {
         }
         e
     }
+    /// Binds an ST condition; errors point into the string.
+    fn condition(&self, c: &RawCond, text: &str) -> Result<Condition, ScenarioError> {
+        Condition::new(&c.text, self.sim).map_err(|e| {
+            let (line, column) = match c.offset {
+                Some(o) => Src { file: self.file, text }.pos(o + e.offset.min(c.text.len())),
+                None => (c.line, c.column),
+            };
+            ScenarioError {
+                line: Some(line),
+                column: Some(column),
+                ..ScenarioError::new(ErrorKind::Invalid, Some(self.file.to_string()), e.message)
+            }
+        })
+    }
+    fn check(&self, c: &RawCheck, text: &str) -> Result<Check, ScenarioError> {
+        Ok(match c {
+            RawCheck::Cond(c) => Check::Condition(self.condition(c, text)?),
+            RawCheck::Table(list) => {
+                let mut v = Vec::new();
+                for a in list {
+                    v.push(self.expect(a)?);
+                }
+                Check::Values(v)
+            }
+        })
+    }
     fn step(&self, name: &str) -> Option<&str> {
         self.steps.iter().find(|s| s.eq_ignore_ascii_case(name)).map(String::as_str)
     }
@@ -798,8 +951,20 @@ fn read_text(path: &Path, what: &str) -> Result<String, (ErrorKind, String)> {
 
 /// Loads a scenario file with command-line settings taking precedence.
 pub fn load_with(path: &Path, o: &Overrides) -> Result<Scenario, ScenarioError> {
-    let name = path.display().to_string();
     let text = read_text(path, "the scenario").map_err(|(k, m)| ScenarioError::new(k, None, m))?;
+    load_parts(path, &text, o, None)
+}
+
+/// Loads a scenario from its text as if it were the file `path` (its `chart` is resolved
+/// against `path`'s directory); `chart_text`, when given, is used instead of reading the chart.
+/// Used to replay a scenario before it is written (the prover's witnesses).
+pub fn load_text(path: &Path, text: &str, chart_text: Option<&str>) -> Result<Scenario, ScenarioError> {
+    load_parts(path, text, &Overrides::default(), chart_text)
+}
+
+fn load_parts(path: &Path, text: &str, o: &Overrides, given_chart: Option<&str>) -> Result<Scenario, ScenarioError> {
+    let name = path.display().to_string();
+    let text = text.to_string();
     let parsed = parse_text(&name, &text)?;
     let scenario_chart = parsed.chart.as_ref().map(|(c, _, _)| clean(&path.parent().unwrap_or(Path::new("")).join(c)));
     let chart = match (&o.chart, &scenario_chart) {
@@ -822,10 +987,13 @@ pub fn load_with(path: &Path, o: &Overrides) -> Result<Scenario, ScenarioError> 
         None => ScenarioError { file: Some(name.clone()), ..e },
     };
     let chart_key = if o.chart.is_none() { parsed.chart.as_ref() } else { None };
-    let chart_text = read_text(&chart, "the chart").map_err(|(k, m)| match chart_key {
-        Some(_) => locate(chart_key, ScenarioError::new(k, None, m)),
-        None => ScenarioError::new(k, None, m),
-    })?;
+    let chart_text = match given_chart {
+        Some(t) => t.to_string(),
+        None => read_text(&chart, "the chart").map_err(|(k, m)| match chart_key {
+            Some(_) => locate(chart_key, ScenarioError::new(k, None, m)),
+            None => ScenarioError::new(k, None, m),
+        })?,
+    };
     let options = SimOptions {
         period: o.period.or(parsed.period).unwrap_or(DEFAULT_PERIOD),
         profile: o.profile.or(parsed.profile).unwrap_or_default(),
@@ -839,12 +1007,32 @@ pub fn load_with(path: &Path, o: &Overrides) -> Result<Scenario, ScenarioError> 
     let binder = Binder::new(&sim, &name, &chart_name);
     let mut entries = command_line_sets(&sim, o)?.into_iter().collect::<Vec<_>>();
     for raw in &parsed.entries {
-        let mut entry = Entry { time: raw.time, line: raw.line, set: Vec::new(), expect: Vec::new() };
+        let mut entry = Entry {
+            time: raw.time,
+            line: raw.line,
+            set: Vec::new(),
+            expect: Vec::new(),
+            within: raw.within,
+            interval: None,
+        };
         for a in &raw.set {
             entry.set.push(binder.set(a)?);
         }
         for a in &raw.expect {
             entry.expect.push(binder.expect(a)?);
+        }
+        if let Some(c) = &raw.expect_cond {
+            entry.expect.push(Expectation::Condition(binder.condition(c, &text)?));
+        }
+        if !raw.always.is_empty() || !raw.never.is_empty() {
+            let mut iv = Interval { until: raw.until, always: Vec::new(), never: Vec::new() };
+            for c in &raw.always {
+                iv.always.push(binder.check(c, &text)?);
+            }
+            for c in &raw.never {
+                iv.never.push(binder.check(c, &text)?);
+            }
+            entry.interval = Some(iv);
         }
         entries.push(entry);
     }
@@ -867,7 +1055,7 @@ fn command_line_sets(sim: &Simulation, o: &Overrides) -> Result<Option<Entry>, S
         return Ok(None);
     }
     let binder = Binder::new(sim, "", "");
-    let mut entry = Entry { time: 0, line: 0, set: Vec::new(), expect: Vec::new() };
+    let mut entry = Entry { time: 0, line: 0, set: Vec::new(), expect: Vec::new(), within: None, interval: None };
     for (key, text) in &o.set {
         let ty = sim.type_of(key);
         let raw = ty.as_ref().map_or(Raw::Str(text.clone()), |t| raw_from_text(text, t));
@@ -981,6 +1169,54 @@ fn show(v: &Value, ty: &Type) -> String {
     }
 }
 
+/// Why an expectation does not hold after the last scan (`None` when it holds).
+fn unmet(sim: &Simulation, x: &Expectation) -> Option<String> {
+    match x {
+        Expectation::Active(want) => {
+            let mut got = sim.active();
+            got.sort();
+            (&got != want).then(|| format!("`active`: expected {}, actual {}", show_steps(want), show_steps(&got)))
+        }
+        Expectation::Value { key, value, ty } => match sim.get(key) {
+            Some(got) if same(value, &got, ty) => None,
+            Some(got) => Some(format!("`{key}`: expected {}, actual {}", show(value, ty), show(&got, ty))),
+            None => Some(format!("`{key}`: expected {}, but it cannot be read", show(value, ty))),
+        },
+        Expectation::Condition(c) => match c.eval(sim) {
+            Ok(true) => None,
+            Ok(false) => Some(format!("`{}` is FALSE", c.text)),
+            Err(m) => Some(format!("`{}` cannot be evaluated: {m}", c.text)),
+        },
+    }
+}
+
+/// Why an interval check fails in this scan: `always` (`want` TRUE) or `never` (`want` FALSE).
+fn check_fails(sim: &Simulation, c: &Check, want: bool) -> Option<String> {
+    match c {
+        Check::Condition(cond) => match cond.eval(sim) {
+            Ok(v) if v == want => None,
+            Ok(v) => Some(format!("`{}` is {}", cond.text, if v { "TRUE" } else { "FALSE" })),
+            Err(m) => Some(format!("`{}` cannot be evaluated: {m}", cond.text)),
+        },
+        Check::Values(list) => {
+            let why: Vec<String> = list.iter().filter_map(|x| unmet(sim, x)).collect();
+            if want {
+                (!why.is_empty()).then(|| why.join("; "))
+            } else {
+                let all: Vec<String> = list
+                    .iter()
+                    .map(|x| match x {
+                        Expectation::Value { key, value, ty } => format!("`{key}` = {}", show(value, ty)),
+                        Expectation::Active(a) => format!("`active` = {}", show_steps(a)),
+                        Expectation::Condition(c) => format!("`{}`", c.text),
+                    })
+                    .collect();
+                why.is_empty().then(|| format!("{} all hold", all.join(", ")))
+            }
+        }
+    }
+}
+
 fn show_steps(steps: &[String]) -> String {
     format!("[{}]", steps.iter().map(|s| format!("{s:?}")).collect::<Vec<_>>().join(", "))
 }
@@ -1037,6 +1273,17 @@ pub fn execute(
     let here = |e: &Entry| if e.line > 0 { format!("{}:{}", s.name, e.line) } else { format!("{} (--set)", s.name) };
     let total = s.total_scans();
     let (mut applied, mut checked) = (0usize, 0usize);
+    let period = s.options.period.max(1);
+    let last_scan_at = |t: i64| -> u64 {
+        if t < 0 {
+            0
+        } else {
+            (t / period) as u64
+        }
+    };
+    // Open `within` windows: (entry, last scan); open intervals: (entry, first scan, last scan).
+    let mut windows: Vec<(usize, u64)> = Vec::new();
+    let mut intervals: Vec<(usize, u64, Option<u64>)> = Vec::new();
     for _ in 0..total {
         let now = sim.next_time();
         while applied < s.entries.len() && s.entries[applied].time <= now {
@@ -1061,35 +1308,75 @@ pub fn execute(
         on_scan(&sim, &record);
         while checked < applied {
             let e = &s.entries[checked];
-            for x in &e.expect {
-                let at = format!("{}: at {} (scan {})", here(e), format_time(e.time), record.scan);
-                match x {
-                    Expectation::Active(want) => {
-                        let mut got = sim.active();
-                        got.sort();
-                        if &got != want {
-                            outcome.failures.push(format!(
-                                "{at}: `active`: expected {}, actual {}",
-                                show_steps(want),
-                                show_steps(&got)
-                            ));
-                        }
+            let at = format!("{}: at {} (scan {})", here(e), format_time(e.time), record.scan);
+            if let Some(w) = e.within {
+                windows.push((checked, last_scan_at(record.time.saturating_add(w))));
+            } else {
+                for x in &e.expect {
+                    if let Some(why) = unmet(&sim, x) {
+                        outcome.failures.push(format!("{at}: {why}"));
                     }
-                    Expectation::Value { key, value, ty } => match sim.get(key) {
-                        Some(got) if same(value, &got, ty) => {}
-                        Some(got) => outcome.failures.push(format!(
-                            "{at}: `{key}`: expected {}, actual {}",
-                            show(value, ty),
-                            show(&got, ty)
-                        )),
-                        None => outcome
-                            .failures
-                            .push(format!("{at}: `{key}`: expected {}, but it cannot be read", show(value, ty))),
-                    },
                 }
+            }
+            if let Some(iv) = &e.interval {
+                intervals.push((checked, record.scan, iv.until.map(last_scan_at)));
             }
             checked += 1;
         }
+        // `within` windows: met in this scan, or failed at their last scan.
+        windows.retain(|&(k, last)| {
+            let e = &s.entries[k];
+            let why: Vec<String> = e.expect.iter().filter_map(|x| unmet(&sim, x)).collect();
+            if why.is_empty() {
+                return false;
+            }
+            if record.scan >= last {
+                outcome.failures.push(format!(
+                    "{}: at {} (scan {}): within {}: not met by {} (scan {}): {}",
+                    here(e),
+                    format_time(e.time),
+                    s.scan_of(e.time),
+                    format_time(e.within.unwrap_or(0)),
+                    format_time(record.time),
+                    record.scan,
+                    why.join("; ")
+                ));
+                return false;
+            }
+            true
+        });
+        // Intervals: every scan of them is checked; the first violation fails the entry.
+        intervals.retain(|&(k, _, last)| {
+            let e = &s.entries[k];
+            let Some(iv) = &e.interval else { return false };
+            let span = match last {
+                Some(l) => format!("{} to {}", format_time(e.time), format_time(l as i64 * period)),
+                None => format!("{} to the end of the run", format_time(e.time)),
+            };
+            for c in &iv.always {
+                if let Some(why) = check_fails(&sim, c, true) {
+                    outcome.failures.push(format!(
+                        "{}: at {} (scan {}): `always` ({span}): {why}",
+                        here(e),
+                        format_time(record.time),
+                        record.scan
+                    ));
+                    return false;
+                }
+            }
+            for c in &iv.never {
+                if let Some(why) = check_fails(&sim, c, false) {
+                    outcome.failures.push(format!(
+                        "{}: at {} (scan {}): `never` ({span}): {why}",
+                        here(e),
+                        format_time(record.time),
+                        record.scan
+                    ));
+                    return false;
+                }
+            }
+            last.is_none_or(|l| record.scan < l)
+        });
         if let Some(err) = sim.error() {
             outcome.error = Some(render_runtime_error(err, sim.source()));
             break;
@@ -1102,8 +1389,29 @@ pub fn execute(
         (None, 0) => "the run has no scans".to_string(),
         (None, n) => format!("the run ended after scan {} ({})", n - 1, format_time((n as i64 - 1) * s.options.period)),
     };
+    for &(k, last) in &windows {
+        let e = &s.entries[k];
+        outcome.failures.push(format!(
+            "{}: at {} (scan {}): within {}: not met before the run ended (the window lasts to scan {last}): {end}",
+            here(e),
+            format_time(e.time),
+            s.scan_of(e.time),
+            format_time(e.within.unwrap_or(0))
+        ));
+    }
+    for &(k, _, last) in &intervals {
+        let e = &s.entries[k];
+        if let Some(last) = last {
+            outcome.failures.push(format!(
+                "{}: at {} (scan {}): the interval to scan {last} was not completed: {end}",
+                here(e),
+                format_time(e.time),
+                s.scan_of(e.time)
+            ));
+        }
+    }
     for e in &s.entries[checked..] {
-        if !e.expect.is_empty() {
+        if !e.expect.is_empty() || e.interval.is_some() {
             outcome.failures.push(format!(
                 "{}: at {} (scan {}): expectation never reached: {end}",
                 here(e),

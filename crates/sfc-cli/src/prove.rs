@@ -1,0 +1,204 @@
+//! `sfc prove`: the properties of `<chart>.props.toml` proved or refuted, with witness scenarios.
+
+use sfc_diagnostics::{render_human, RenderOptions};
+use sfc_prove::{Options, ProveError};
+use std::io::IsTerminal;
+use std::path::{Path, PathBuf};
+
+#[derive(clap::Args)]
+pub struct ProveArgs {
+    /// The chart (`.st`); its properties are read from `<chart>.props.toml` beside it.
+    file: PathBuf,
+    /// The property file (default: `<chart>.props.toml` beside the chart).
+    #[arg(long, value_name = "P.toml")]
+    properties: Option<PathBuf>,
+    /// The POU whose chart to prove (over the property file's `pou`).
+    #[arg(long, value_name = "NAME")]
+    pou: Option<String>,
+    /// Scan period: time is scans × period (default T#10ms, or the property file's `period`).
+    #[arg(long, value_name = "TIME", value_parser = crate::sim::parse_period)]
+    period: Option<i64>,
+    /// Output: a report per property (human) or one JSON object on stdout.
+    #[arg(long, value_enum, default_value = "human")]
+    format: crate::Format,
+    /// Work allowed before a verdict is `unknown`: seconds for all properties (`60s`, `2.5`), or
+    /// reached states per property (`500000states`).
+    #[arg(long, value_name = "SECONDS|Nstates", value_parser = parse_budget)]
+    budget: Option<Budget>,
+    /// Where to write the witness scenarios (default: beside the chart).
+    #[arg(long, value_name = "DIR")]
+    witness_dir: Option<PathBuf>,
+    /// Do not write witness scenarios.
+    #[arg(long)]
+    no_witness: bool,
+}
+
+#[derive(Debug, Clone, Copy)]
+pub enum Budget {
+    Seconds(f64),
+    States(f64),
+}
+
+/// `--budget`: `60`, `60s`, `1.5s`, `500ms`, or `200000states`.
+pub fn parse_budget(s: &str) -> Result<Budget, String> {
+    let t = s.trim().to_ascii_lowercase().replace('_', "");
+    if let Some(n) = t.strip_suffix("states") {
+        return match n.trim().parse::<f64>() {
+            Ok(v) if v > 0.0 => Ok(Budget::States(v)),
+            _ => Err(format!("`{s}`: expected a number of states such as 500000states")),
+        };
+    }
+    let (num, scale) = if let Some(n) = t.strip_suffix("ms") {
+        (n, 0.001)
+    } else if let Some(n) = t.strip_suffix('s') {
+        (n, 1.0)
+    } else {
+        (t.as_str(), 1.0)
+    };
+    match num.trim().parse::<f64>() {
+        Ok(v) if v > 0.0 && v.is_finite() => Ok(Budget::Seconds(v * scale)),
+        _ => Err(format!("`{s}`: expected seconds (`60s`, `2.5`) or states (`500000states`)")),
+    }
+}
+
+/// `door.st` → `door.props.toml` in the same directory.
+pub fn default_properties(chart: &Path) -> PathBuf {
+    let stem = chart.file_stem().map_or_else(|| "chart".into(), |s| s.to_string_lossy().into_owned());
+    chart.with_file_name(format!("{stem}.props.toml"))
+}
+
+pub fn prove(a: ProveArgs) -> u8 {
+    if a.file.extension().is_some_and(|e| e.eq_ignore_ascii_case("xml")) {
+        eprintln!(
+            "error: `{}` is PLCopen XML: convert it to textual SFC first (`sfc build {} --target text -o chart.st`) and prove that",
+            a.file.display(),
+            a.file.display()
+        );
+        return 2;
+    }
+    let chart_text = match crate::read(&a.file) {
+        Ok(t) => t,
+        Err(e) => {
+            eprintln!("error: {e}");
+            return 2;
+        }
+    };
+    let props_path = a.properties.clone().unwrap_or_else(|| default_properties(&a.file));
+    let props_text = match std::fs::read(&props_path) {
+        Ok(b) => match String::from_utf8(b) {
+            Ok(t) => t,
+            Err(_) => {
+                eprintln!("error: `{}` is not UTF-8 text", props_path.display());
+                return 2;
+            }
+        },
+        Err(e) if a.properties.is_none() && e.kind() == std::io::ErrorKind::NotFound => {
+            eprintln!(
+                "error: no property file for `{}`: `{}` does not exist (write it, or name one with --properties)",
+                a.file.display(),
+                props_path.display()
+            );
+            return 2;
+        }
+        Err(e) => {
+            eprintln!("error: cannot read `{}`: {e}", props_path.display());
+            return 2;
+        }
+    };
+    let shown_props = props_path.display().to_string();
+    let file = match sfc_prove::props::parse(&shown_props, &props_text) {
+        Ok(f) => f,
+        Err(e) => {
+            eprintln!("error: {e}");
+            return 2;
+        }
+    };
+    if file.properties.is_empty() {
+        eprintln!("warning: `{shown_props}` declares no [[property]]: only ranges and runtime errors are checked");
+    }
+    let mut opts = Options { pou: a.pou.clone(), period: a.period, ..Options::default() };
+    match a.budget {
+        Some(Budget::Seconds(s)) => opts.seconds = s,
+        Some(Budget::States(n)) => opts.max_states = Some(n),
+        None => {}
+    }
+    let chart_name = a.file.display().to_string();
+    let report = match sfc_prove::prove(&chart_name, &chart_text, &file, &opts) {
+        Ok(r) => r,
+        Err(ProveError::Chart(b)) => {
+            let (src, diags) = *b;
+            let color = std::io::stderr().is_terminal();
+            for d in &diags {
+                eprintln!("{}", render_human(d, std::slice::from_ref(&src), RenderOptions { color }));
+            }
+            eprintln!("error: `{}` cannot be proved until these errors are fixed", a.file.display());
+            return 2;
+        }
+        Err(ProveError::Props(e)) => {
+            eprintln!("error: {e}");
+            return 2;
+        }
+    };
+    // Witness scenarios, beside the chart unless told otherwise.
+    let dir = a.witness_dir.clone().unwrap_or_else(|| a.file.parent().map(Path::to_path_buf).unwrap_or_default());
+    let mut shown_dir = dir.display().to_string();
+    if !a.no_witness {
+        if !dir.as_os_str().is_empty() {
+            if let Err(e) = std::fs::create_dir_all(&dir) {
+                eprintln!("error: cannot create `{}`: {e}", dir.display());
+                return 2;
+            }
+        }
+        for p in &report.properties {
+            let Some(w) = &p.witness else { continue };
+            if !w.write {
+                continue;
+            }
+            // The witness names the chart relative to where it is written.
+            let text = relocate_chart(&w.text, &a.file, &dir);
+            let path = dir.join(&w.file);
+            if let Err(e) = crate::write_atomically(&path, &text) {
+                eprintln!("error: cannot write the witness `{}`: {e}", path.display());
+                return 2;
+            }
+        }
+    } else {
+        shown_dir = String::from("(not written)");
+    }
+    match a.format {
+        crate::Format::Json => println!("{}", report.json(&shown_dir)),
+        crate::Format::Human => print!("{}", report.human(&shown_dir)),
+    }
+    report.exit_code()
+}
+
+/// The witness's `chart = "…"` line pointing from `dir` to the chart.
+fn relocate_chart(text: &str, chart: &Path, dir: &Path) -> String {
+    let chart_abs = std::fs::canonicalize(chart).unwrap_or_else(|_| chart.to_path_buf());
+    let dir_abs = std::fs::canonicalize(if dir.as_os_str().is_empty() { Path::new(".") } else { dir })
+        .unwrap_or_else(|_| dir.to_path_buf());
+    let rel = relative(&chart_abs, &dir_abs).unwrap_or(chart_abs);
+    let line = format!("chart = {}", sfc_prove::witness::toml_string(&rel.to_string_lossy()));
+    text.lines()
+        .map(|l| if l.starts_with("chart = ") { line.clone() } else { l.to_string() })
+        .collect::<Vec<_>>()
+        .join("\n")
+        + "\n"
+}
+
+fn relative(path: &Path, base: &Path) -> Option<PathBuf> {
+    let p: Vec<_> = path.components().collect();
+    let b: Vec<_> = base.components().collect();
+    let common = p.iter().zip(&b).take_while(|(x, y)| x == y).count();
+    if common == 0 {
+        return None;
+    }
+    let mut out = PathBuf::new();
+    for _ in common..b.len() {
+        out.push("..");
+    }
+    for c in &p[common..] {
+        out.push(c);
+    }
+    Some(out)
+}

@@ -1,0 +1,296 @@
+//! The engines, in the order that settles most properties fastest: a short bounded search
+//! (quick refutations, shortest first), 1-induction strengthened with the net analysis'
+//! invariants (its invariant re-checked clause by clause), BDD reachability (exact: the
+//! reachable set, shortest witnesses), and a longer bounded search when the diagrams grow too
+//! large. What none of them settles within the budget is `unknown`, with how far it got.
+
+use crate::aig::Lit;
+use crate::bdd::{BddEngine, GiveUp};
+use crate::compile::Signal;
+use crate::sat;
+use crate::system::System;
+use std::time::{Duration, Instant};
+
+/// How much work a property may take.
+#[derive(Debug, Clone, Copy)]
+pub struct Budget {
+    pub deadline: Instant,
+    /// Reached states the symbolic search may hold (`--budget Nstates`).
+    pub max_states: Option<f64>,
+    pub node_limit: usize,
+}
+
+/// The verdict of one property.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Verdict {
+    Holds,
+    Violated,
+    Unknown,
+}
+
+impl Verdict {
+    pub fn name(self) -> &'static str {
+        match self {
+            Verdict::Holds => "holds",
+            Verdict::Violated => "violated",
+            Verdict::Unknown => "unknown",
+        }
+    }
+}
+
+/// What an engine concluded, before witnesses are replayed.
+#[derive(Debug, Clone)]
+pub struct Finding {
+    pub verdict: Verdict,
+    pub method: &'static str,
+    /// Reachable states counted by the symbolic search.
+    pub states: Option<f64>,
+    /// The inductive invariant's size in clauses, and whether the independent check passed.
+    pub invariant: Option<(usize, bool)>,
+    /// For violations (and reachable goals): the inputs of every scan from the initial state.
+    pub trace: Option<Vec<Vec<(u32, bool)>>>,
+    /// Scans searched without a violation (bounded searches).
+    pub depth: Option<usize>,
+    pub message: String,
+}
+
+impl Finding {
+    fn new(verdict: Verdict, method: &'static str, message: impl Into<String>) -> Finding {
+        Finding { verdict, method, states: None, invariant: None, trace: None, depth: None, message: message.into() }
+    }
+}
+
+fn give_up_text(g: &GiveUp) -> String {
+    match g {
+        GiveUp::Nodes(n) => format!("a decision diagram grew beyond {n} nodes"),
+        GiveUp::Time => "the time budget ran out".into(),
+        GiveUp::States(s) => format!("the reached states ({s:.0}) exceed the state budget"),
+    }
+}
+
+/// Checks a safety property: `bad` never holds in a reachable state.
+pub fn safety(full: &System, bad: Lit, strengthen: &[Vec<Lit>], budget: &Budget) -> Finding {
+    let (sys, roots) = full.reduce(&[bad]);
+    let bad = roots[0];
+    if bad == Lit::FALSE {
+        let mut f = Finding::new(Verdict::Holds, "structure", "the property holds by construction");
+        f.invariant = Some((0, true));
+        return f;
+    }
+    // 1. A short bounded search: most violations are shallow.
+    let quick =
+        Instant::now() + Duration::from_millis(150).min(budget.deadline.saturating_duration_since(Instant::now()) / 4);
+    let mut searched = 0;
+    match sat::bmc(&sys, bad, 12, quick.min(budget.deadline)) {
+        sat::Bmc::Found(trace) => {
+            let mut f = Finding::new(Verdict::Violated, "bounded model checking", "");
+            f.trace = Some(trace);
+            return f;
+        }
+        sat::Bmc::None { depth } => searched = searched.max(depth),
+    }
+    // 2. 1-induction with the net invariants of the steps the property depends on.
+    let vars: std::collections::HashSet<u32> = sys.state_vars().into_iter().collect();
+    let mut inv: Vec<Vec<Lit>> = vec![vec![bad.not()]];
+    for cl in strengthen {
+        // The clauses are over the full graph's state variables; the same variable numbers
+        // stand in the reduced graph.
+        let mapped: Option<Vec<Lit>> = cl
+            .iter()
+            .map(|&l| {
+                let v = full.g.var_of(l)?;
+                vars.contains(&v).then(|| if l.is_neg() { sys.g.var_lit(v).not() } else { sys.g.var_lit(v) })
+            })
+            .collect();
+        if let Some(c) = mapped {
+            inv.push(c);
+        }
+    }
+    if sat::inductive(&sys, &inv, bad) {
+        let checked = sat::check_invariant(&sys, &inv).is_ok();
+        let mut f = Finding::new(
+            if checked { Verdict::Holds } else { Verdict::Unknown },
+            "1-induction",
+            if checked {
+                "the property is inductive together with the net invariants".to_string()
+            } else {
+                "1-induction succeeded but the independent check of its invariant failed".to_string()
+            },
+        );
+        f.invariant = Some((inv.len(), checked));
+        return f;
+    }
+    // 3. Symbolic reachability.
+    let reason = match BddEngine::new(&sys, budget.node_limit, budget.deadline) {
+        Ok(mut eng) => {
+            eng.max_states = budget.max_states;
+            match eng.predicate(bad) {
+                Ok(badb) => match eng.reach(Some(&badb)) {
+                    Ok(r) => {
+                        if r.hit.is_some() {
+                            let trace = eng.path_to(&r, &badb);
+                            let mut f = Finding::new(Verdict::Violated, "BDD reachability", "");
+                            if trace.is_none() {
+                                f.verdict = Verdict::Unknown;
+                                f.message =
+                                    "the symbolic search met a violation but could not read its path back".into();
+                            }
+                            f.trace = trace;
+                            return f;
+                        }
+                        let states = eng.count(&r.reached);
+                        let checked = eng.check_inductive(&r.reached, &badb).unwrap_or(false);
+                        let mut f = Finding::new(
+                            if checked { Verdict::Holds } else { Verdict::Unknown },
+                            "BDD reachability",
+                            if checked {
+                                format!("no reachable state violates it ({} scans to the fixpoint)", r.rings.len())
+                            } else {
+                                "the reachable set failed its own inductiveness check".to_string()
+                            },
+                        );
+                        f.states = Some(states);
+                        f.invariant = Some((r.reached.size(), checked));
+                        return f;
+                    }
+                    Err(g) => give_up_text(&g),
+                },
+                Err(g) => give_up_text(&g),
+            }
+        }
+        Err(g) => give_up_text(&g),
+    };
+    // 4. What time is left: a deeper bounded search.
+    match sat::bmc(&sys, bad, usize::MAX, budget.deadline) {
+        sat::Bmc::Found(trace) => {
+            let mut f = Finding::new(Verdict::Violated, "bounded model checking", "");
+            f.trace = Some(trace);
+            f
+        }
+        sat::Bmc::None { depth } => {
+            let mut f = Finding::new(
+                Verdict::Unknown,
+                "bounded model checking",
+                format!("no violation within {} scans ({reason})", group(depth.max(searched))),
+            );
+            f.depth = Some(depth.max(searched));
+            f
+        }
+    }
+}
+
+/// Checks a reachability property.
+pub fn reach(full: &System, goal: Lit, from_initial: bool, budget: &Budget) -> Finding {
+    let (sys, roots) = full.reduce(&[goal]);
+    let goal = roots[0];
+    if from_initial {
+        // EF goal: a path reaching it is a witness that it holds.
+        if let sat::Bmc::Found(trace) =
+            sat::bmc(&sys, goal, 12, budget.deadline.min(Instant::now() + Duration::from_millis(150)))
+        {
+            let mut f = Finding::new(Verdict::Holds, "bounded model checking", "reached from the initial situation");
+            f.trace = Some(trace);
+            return f;
+        }
+    }
+    let mut eng = match BddEngine::new(&sys, budget.node_limit, budget.deadline) {
+        Ok(e) => e,
+        Err(g) => return unknown_reach(&sys, goal, from_initial, budget, &g),
+    };
+    eng.max_states = budget.max_states;
+    let goalb = match eng.predicate(goal) {
+        Ok(b) => b,
+        Err(g) => return unknown_reach(&sys, goal, from_initial, budget, &g),
+    };
+    let r = match eng.reach(None) {
+        Ok(r) => r,
+        Err(g) => return unknown_reach(&sys, goal, from_initial, budget, &g),
+    };
+    let states = eng.count(&r.reached);
+    if from_initial {
+        return match eng.path_to(&r, &goalb) {
+            Some(trace) => {
+                let mut f = Finding::new(Verdict::Holds, "BDD reachability", "reached from the initial situation");
+                f.trace = Some(trace);
+                f.states = Some(states);
+                f
+            }
+            None => {
+                let mut f = Finding::new(
+                    Verdict::Violated,
+                    "BDD reachability",
+                    format!("no reachable situation satisfies the goal ({} reachable states)", fmt_states(states)),
+                );
+                f.states = Some(states);
+                f
+            }
+        };
+    }
+    let can = match eng.can_reach(&goalb, &r.reached) {
+        Ok(b) => b,
+        Err(g) => return unknown_reach(&sys, goal, from_initial, budget, &g),
+    };
+    let trapped = r.reached.and_not(&can);
+    if trapped.is_false() {
+        let mut f = Finding::new(
+            Verdict::Holds,
+            "BDD reachability",
+            format!("from each of the {} reachable states the goal can be reached", fmt_states(states)),
+        );
+        f.states = Some(states);
+        return f;
+    }
+    let mut f = Finding::new(
+        Verdict::Violated,
+        "BDD reachability",
+        format!(
+            "{} of the {} reachable states cannot reach the goal any more",
+            fmt_states(eng.count(&trapped)),
+            fmt_states(states)
+        ),
+    );
+    f.states = Some(states);
+    f.trace = eng.path_to(&r, &trapped);
+    f
+}
+
+fn unknown_reach(sys: &System, goal: Lit, from_initial: bool, budget: &Budget, g: &GiveUp) -> Finding {
+    if from_initial {
+        if let sat::Bmc::Found(trace) = sat::bmc(sys, goal, usize::MAX, budget.deadline) {
+            let mut f = Finding::new(Verdict::Holds, "bounded model checking", "reached from the initial situation");
+            f.trace = Some(trace);
+            return f;
+        }
+    }
+    Finding::new(Verdict::Unknown, "BDD reachability", format!("not decided: {}", give_up_text(g)))
+}
+
+/// A count with thousands separators (`2,000`).
+pub fn group(n: usize) -> String {
+    let s = n.to_string();
+    let mut out = String::new();
+    for (i, c) in s.chars().enumerate() {
+        if i > 0 && (s.len() - i) % 3 == 0 {
+            out.push(',');
+        }
+        out.push(c);
+    }
+    out
+}
+
+/// A state count: exact below 10^15, else in scientific notation.
+pub fn fmt_states(s: f64) -> String {
+    if s < 1e15 {
+        group(s.round() as usize)
+    } else {
+        format!("{s:.3e}")
+    }
+}
+
+/// Checks one compiled property.
+pub fn check(full: &System, signal: &Signal, strengthen: &[Vec<Lit>], budget: &Budget) -> Finding {
+    match signal {
+        Signal::Safety { bad } => safety(full, *bad, strengthen, budget),
+        Signal::Reach { goal, from_initial } => reach(full, *goal, *from_initial, budget),
+    }
+}

@@ -1,0 +1,279 @@
+//! `sfc prove`: the engineer's requirements on an SFC chart — invariants, absence, bounded
+//! response, reachability — proved or refuted under the exact `iec` scan semantics.
+//!
+//! The chart and its ST/IL code are compiled into a bit-level relation of one scan
+//! ([`model`]): the state is every variable, step flag, step time (in scans, bounded by the
+//! largest constant it is compared with), action control block and timer; the inputs of a scan
+//! are free within the `[assume]`d ones. The properties of a `<chart>.props.toml`
+//! ([`props`]) become state predicates and monitors ([`compile`]). The engines ([`check`]):
+//! bounded model checking with SAT ([`sat`], rustsat + BatSat), 1-induction strengthened with
+//! the net analysis' invariants, BDD reachability ([`bdd`], biodivine-lib-bdd).
+//!
+//! Trust: every violation is turned into a scenario file ([`witness`]) and replayed in the
+//! simulator before it is reported; every proof by induction or by a reachable set carries its
+//! invariant, re-checked by a second, simpler procedure.
+
+pub mod aig;
+pub mod bdd;
+pub mod check;
+pub mod compile;
+pub mod model;
+pub mod props;
+pub mod report;
+pub mod sat;
+pub mod system;
+pub mod witness;
+pub mod word;
+
+pub use check::Verdict;
+pub use props::{PropertyFile, PropsError};
+pub use report::{PropertyReport, Report, WitnessInfo};
+
+use aig::Lit;
+use compile::{Origin, PropertyHooks};
+use model::{Plan, Role, Setup};
+use sfc_diagnostics::{Diagnostic, SourceFile};
+use std::collections::HashMap;
+use std::time::{Duration, Instant};
+
+/// The default scan period, `T#10ms`.
+pub const DEFAULT_PERIOD: i64 = 10_000;
+
+/// What `sfc prove` was asked for.
+#[derive(Debug, Clone)]
+pub struct Options {
+    /// `--pou`, over the property file's `pou`.
+    pub pou: Option<String>,
+    /// `--period` (µs), over the property file's `period`.
+    pub period: Option<i64>,
+    /// `--budget`: seconds for all properties together.
+    pub seconds: f64,
+    /// `--budget Nstates`: reached states the symbolic search may hold per property.
+    pub max_states: Option<f64>,
+    /// Diagram nodes a BDD may have.
+    pub node_limit: usize,
+}
+
+impl Default for Options {
+    fn default() -> Self {
+        Options { pou: None, period: None, seconds: 60.0, max_states: None, node_limit: 2_000_000 }
+    }
+}
+
+/// Why no verdicts could be given.
+#[derive(Debug, Clone)]
+pub enum ProveError {
+    /// The chart has syntax or type errors (or names a POU that cannot be simulated).
+    Chart(Box<(SourceFile, Vec<Diagnostic>)>),
+    /// The property file is wrong.
+    Props(PropsError),
+}
+
+/// Proves the properties of `file` about the chart `chart_name` (its text `chart_text`).
+pub fn prove(chart_name: &str, chart_text: &str, file: &PropertyFile, opts: &Options) -> Result<Report, ProveError> {
+    let started = Instant::now();
+    let check_opts = sfc_model::CheckOptions { keep_types: true, ..Default::default() };
+    let checked = sfc_model::check_source(0, chart_name, chart_text, &check_opts);
+    if checked.has_errors() {
+        let errors = checked.diagnostics.iter().filter(|d| d.is_error()).cloned().collect();
+        return Err(ProveError::Chart(Box::new((checked.file.clone(), errors))));
+    }
+    let period = opts.period.or(file.period).unwrap_or(DEFAULT_PERIOD);
+    let pou_req = opts.pou.clone().or_else(|| file.pou.as_ref().map(|p| p.text.clone()));
+    let sim_opts = sfc_sim::SimOptions { period, profile: sfc_sim::Profile::Iec };
+    let sim = match sfc_sim::Simulation::from_source(chart_name, chart_text, pou_req.as_deref(), sim_opts) {
+        Ok(s) => s,
+        Err((src, diags)) => {
+            // A `pou` of the property file that names nothing is the file's error.
+            if let (None, Some(p)) = (&opts.pou, &file.pou) {
+                if let Some(d) = diags.iter().find(|d| d.code == "SFC0321") {
+                    return Err(ProveError::Props(PropsError {
+                        file: file.path.clone(),
+                        line: p.line,
+                        column: p.column,
+                        message: d.message.clone(),
+                    }));
+                }
+            }
+            return Err(ProveError::Chart(Box::new((src, diags))));
+        }
+    };
+    let pou = sim.pou_name().to_string();
+    // Names of `ranges` and `inputs` must be variables of the POU.
+    let var_names: Vec<String> = sim.trace_vars().into_iter().map(|(n, _)| n).collect();
+    let check_name = |l: &props::Located| -> Result<sfc_st::Type, PropsError> {
+        match sim.type_of(&l.text) {
+            Some(t) if !t.is_error() => Ok(t),
+            _ => Err(PropsError {
+                file: file.path.clone(),
+                line: l.line,
+                column: l.column,
+                message: format!(
+                    "unknown variable `{}` in POU {pou}{}",
+                    l.text,
+                    match sfc_st::closest(&l.text, var_names.iter().map(String::as_str)) {
+                        Some(c) => format!("; did you mean `{c}`?"),
+                        None => String::new(),
+                    }
+                ),
+            }),
+        }
+    };
+    let mut ranges = HashMap::new();
+    for r in &file.ranges {
+        let ty = check_name(&r.name).map_err(ProveError::Props)?;
+        let ok =
+            if r.time { ty.is_duration() } else { ty.is_integer() || ty.is_bit() && !ty.is_bool() || ty.is_enum() };
+        if !ok {
+            return Err(ProveError::Props(PropsError {
+                file: file.path.clone(),
+                line: r.name.line,
+                column: r.name.column,
+                message: format!(
+                    "`{}` is {ty}: a range needs an integer variable (or TIME with TIME literals)",
+                    r.name.text
+                ),
+            }));
+        }
+        ranges.insert(r.name.text.to_ascii_uppercase(), (r.lo, r.hi));
+    }
+    let mut extra_inputs = Vec::new();
+    for l in &file.inputs {
+        check_name(l).map_err(ProveError::Props)?;
+        extra_inputs.push(l.text.to_ascii_uppercase());
+    }
+    let setup = Setup { period, pou: pou.clone(), extra_inputs, ranges };
+    let initial = |path: &str| sim.get(path);
+    // Pass 1: which variables does the code write? Pass 2: with the others constant, how far
+    // must each counter count? Pass 3: the model.
+    let mut plan = Plan::default();
+    let mut hooks = PropertyHooks::new(file, period);
+    let (m1, l1) = model::encode(&checked, &setup, &plan, &initial, &mut hooks)
+        .map_err(|m| ProveError::Props(PropsError { file: file.path.clone(), line: 1, column: 1, message: m }))?;
+    if let Some(e) = hooks.errors.first() {
+        return Err(ProveError::Props(e.clone()));
+    }
+    for (r, reg) in m1.regs.iter().enumerate() {
+        if reg.role == (Role::Var { input: false }) && !l1.written.contains(&r) && !reg.obligation {
+            plan.constants.insert(reg.name.to_ascii_uppercase());
+        }
+    }
+    let mut hooks = PropertyHooks::new(file, period);
+    let (m2, l2) = model::encode(&checked, &setup, &plan, &initial, &mut hooks)
+        .map_err(|m| ProveError::Props(PropsError { file: file.path.clone(), line: 1, column: 1, message: m }))?;
+    plan.final_pass = true;
+    plan.inexact = l2.inexact.clone();
+    for (k, v) in &l2.need {
+        plan.bounds.insert(k.clone(), (*v).clamp(1, model::MAX_COUNT));
+    }
+    // A nested chart's call gap counts as far as its longest step time.
+    for c in &m2.charts {
+        if c.path.is_empty() {
+            continue;
+        }
+        let prefix = format!("{}.", c.path.to_ascii_uppercase());
+        let max =
+            plan.bounds.iter().filter(|(k, _)| k.starts_with(&prefix) && k.ends_with("#T")).map(|(_, v)| *v).max();
+        plan.bounds.insert(format!("{}#GAP", c.path.to_ascii_uppercase()), max.unwrap_or(1));
+    }
+    let mut hooks = PropertyHooks::new(file, period);
+    let (m, _) = model::encode(&checked, &setup, &plan, &initial, &mut hooks)
+        .map_err(|m| ProveError::Props(PropsError { file: file.path.clone(), line: 1, column: 1, message: m }))?;
+    if let Some(e) = hooks.errors.first() {
+        return Err(ProveError::Props(e.clone()));
+    }
+    let compiled = hooks.out;
+    let full = system::System::from_model(&m, m.constraint);
+    let strengthen = net_invariants(&checked, &m);
+    let total = Duration::from_secs_f64(opts.seconds.max(0.01));
+    let mut reports = Vec::new();
+    let n = compiled.len().max(1);
+    for (k, c) in compiled.iter().enumerate() {
+        let now = Instant::now();
+        let left = total.saturating_sub(started.elapsed());
+        let share = left / (n - k) as u32;
+        let budget = check::Budget { deadline: now + share, max_states: opts.max_states, node_limit: opts.node_limit };
+        let finding = check::check(&full, &c.signal, &strengthen, &budget);
+        let mut rep = report::PropertyReport::new(c, &finding, now.elapsed());
+        rep.line = report::line_of(c, file);
+        if let Some(trace) = &finding.trace {
+            let expect = witness::Expect::of(c);
+            match witness::Witness::build(&m, &full, trace, c, file, period) {
+                Ok(w) => {
+                    let own = witness::file_name_for(chart_name, &c.name);
+                    let chart_file = std::path::Path::new(chart_name)
+                        .file_name()
+                        .map_or_else(|| chart_name.to_string(), |f| f.to_string_lossy().into_owned());
+                    let (scenario, own_line) = w.scenario(&chart_file, &pou, period, c, file, &own);
+                    let replay = witness::replay(chart_name, chart_text, &scenario, own_line, expect);
+                    let write = finding.verdict == Verdict::Violated;
+                    rep.attach(w, own, scenario, replay, write);
+                }
+                Err(why) => {
+                    rep.verdict = Verdict::Unknown;
+                    rep.message = format!("the engine's path could not be completed into a run: {why}");
+                }
+            }
+        }
+        rep.time = now.elapsed();
+        reports.push(rep);
+    }
+    let inputs = m.inputs.iter().filter(|i| i.reg.is_some()).map(|i| i.name.clone()).collect();
+    Ok(Report {
+        chart: chart_name.to_string(),
+        pou,
+        period,
+        properties_file: file.path.clone(),
+        state_bits: full.state.len(),
+        inputs,
+        notes: m.notes.clone(),
+        properties: reports,
+        time: started.elapsed(),
+    })
+}
+
+/// The net analysis' invariants over the step flags of every chart instance: steps that are
+/// never active together, steps never active.
+fn net_invariants(checked: &sfc_model::Checked, m: &model::Model) -> Vec<Vec<Lit>> {
+    let mut out = Vec::new();
+    for c in &m.charts {
+        let chart = &checked.charts[c.chart];
+        let report = sfc_analysis::net::analyze_net(chart, &sfc_analysis::net::NetOptions { max_states: 200_000 });
+        if !report.complete {
+            continue;
+        }
+        let x: Vec<Lit> = c.x.iter().map(|&r| m.latch[r][0]).collect();
+        let started = m.latch[c.started][0];
+        let n = chart.steps.len();
+        // Before its first call (or after SFCInit) a chart has at most its initial steps active.
+        for (s, step) in chart.steps.iter().enumerate() {
+            if !step.initial {
+                out.push(vec![started, x[s].not()]);
+            }
+        }
+        if n > 400 {
+            continue;
+        }
+        for a in 0..n {
+            if !report.concurrency.together(a, a) {
+                out.push(vec![x[a].not()]);
+                continue;
+            }
+            for b in a + 1..n {
+                if !report.concurrency.together(a, b) {
+                    out.push(vec![x[a].not(), x[b].not()]);
+                }
+            }
+        }
+    }
+    out
+}
+
+/// The origin of a compiled property, for reports.
+pub fn origin_kind(o: &Origin) -> &'static str {
+    match o {
+        Origin::User(_) => "property",
+        Origin::Range { .. } => "range",
+        Origin::Fault => "runtime error",
+    }
+}
