@@ -323,6 +323,16 @@ impl<'s> BddEngine<'s> {
         self.check(acc.exists(&inputs))
     }
 
+    pub fn vars_true(&self) -> Bdd {
+        self.vars.mk_true()
+    }
+
+    /// Whether no scan leads from a state of `b` out of it.
+    pub fn closed(&self, b: &Bdd) -> Result<bool, GiveUp> {
+        let img = self.image(b)?;
+        Ok(img.and_not(b).is_false())
+    }
+
     /// Number of states in a set over the current variables.
     pub fn count(&self, b: &Bdd) -> f64 {
         b.cardinality() / 2f64.powi(self.n_extra as i32)

@@ -202,6 +202,57 @@ pub fn reach(full: &System, goal: Lit, from_initial: bool, budget: &Budget) -> F
         Ok(b) => b,
         Err(g) => return unknown_reach(&sys, goal, from_initial, budget, &g),
     };
+    if !from_initial {
+        // AG EF: the states that can reach the goal, backwards over the whole state space.
+        // When they contain the initial state and no scan leaves them, they are an inductive
+        // invariant and every reachable state can reach the goal.
+        let all = eng.vars_true();
+        if let Ok(can) = eng.can_reach(&goalb, &all) {
+            let init = eng.init();
+            if !init.and_not(&can).is_false() {
+                // Even the initial state cannot reach the goal.
+                return trapped_path(&eng, &can, &init, budget);
+            }
+            if let Ok(true) = eng.closed(&can) {
+                let mut f = Finding::new(
+                    Verdict::Holds,
+                    "BDD backward reachability",
+                    format!(
+                        "the {} states that can reach the goal contain the initial state and no scan leaves them",
+                        fmt_states(eng.count(&can))
+                    ),
+                );
+                f.invariant = Some((can.size(), true));
+                return f;
+            }
+            // Some state of the set can leave it: search forwards for a reachable trap.
+            let target = can.not().and_not(&init);
+            return match eng.reach(Some(&target)) {
+                Ok(r) if r.hit.is_some() => {
+                    let mut f = Finding::new(
+                        Verdict::Violated,
+                        "BDD reachability",
+                        "a reachable situation cannot reach the goal any more",
+                    );
+                    f.trace = eng.path_to(&r, &target);
+                    f
+                }
+                Ok(r) => {
+                    let states = eng.count(&r.reached);
+                    let mut f = Finding::new(
+                        Verdict::Holds,
+                        "BDD reachability",
+                        format!("from each of the {} reachable states the goal can be reached", fmt_states(states)),
+                    );
+                    f.states = Some(states);
+                    f
+                }
+                Err(g) => {
+                    Finding::new(Verdict::Unknown, "BDD reachability", format!("not decided: {}", give_up_text(&g)))
+                }
+            };
+        }
+    }
     let r = match eng.reach(None) {
         Ok(r) => r,
         Err(g) => return unknown_reach(&sys, goal, from_initial, budget, &g),
@@ -250,7 +301,26 @@ pub fn reach(full: &System, goal: Lit, from_initial: bool, budget: &Budget) -> F
         ),
     );
     f.states = Some(states);
-    f.trace = eng.path_to(&r, &trapped);
+    f.trace = eng.path_to(&r, &trapped.and_not(&eng.init()));
+    f
+}
+
+/// AG EF fails already from the start: the shortest path to any state after scan 0.
+fn trapped_path(
+    eng: &BddEngine<'_>,
+    can: &biodivine_lib_bdd::Bdd,
+    init: &biodivine_lib_bdd::Bdd,
+    _b: &Budget,
+) -> Finding {
+    let target = can.not().and_not(init);
+    let mut f = Finding::new(
+        Verdict::Violated,
+        "BDD backward reachability",
+        "the goal cannot be reached from the initial situation",
+    );
+    if let Ok(r) = eng.reach(Some(&target)) {
+        f.trace = eng.path_to(&r, &target);
+    }
     f
 }
 

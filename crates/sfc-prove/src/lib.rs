@@ -52,11 +52,13 @@ pub struct Options {
     pub max_states: Option<f64>,
     /// Diagram nodes a BDD may have.
     pub node_limit: usize,
+    /// Fill [`Report::debug`] with the model's registers and the engines' figures.
+    pub debug: bool,
 }
 
 impl Default for Options {
     fn default() -> Self {
-        Options { pou: None, period: None, seconds: 60.0, max_states: None, node_limit: 2_000_000 }
+        Options { pou: None, period: None, seconds: 60.0, max_states: None, node_limit: 2_000_000, debug: false }
     }
 }
 
@@ -163,6 +165,11 @@ pub fn prove(chart_name: &str, chart_text: &str, file: &PropertyFile, opts: &Opt
         .map_err(|m| ProveError::Props(PropsError { file: file.path.clone(), line: 1, column: 1, message: m }))?;
     plan.final_pass = true;
     plan.inexact = l2.inexact.clone();
+    for k in l2.need.keys() {
+        if k.ends_with("#T") && !l2.time_read_elsewhere.contains(k) {
+            plan.dead_inactive.insert(k.clone());
+        }
+    }
     for (k, v) in &l2.need {
         plan.bounds.insert(k.clone(), (*v).clamp(1, model::MAX_COUNT));
     }
@@ -219,6 +226,16 @@ pub fn prove(chart_name: &str, chart_text: &str, file: &PropertyFile, opts: &Opt
         reports.push(rep);
     }
     let inputs = m.inputs.iter().filter(|i| i.reg.is_some()).map(|i| i.name.clone()).collect();
+    let mut debug = Vec::new();
+    if opts.debug {
+        for r in &m.regs {
+            if !r.constant && r.role != Role::Temp {
+                debug.push(format!("reg {} : {} stored {} bits {:?} {:?}", r.name, r.ty, r.stored, r.range, r.role));
+            }
+        }
+        debug.push(format!("plan: {:?}", plan.bounds));
+        debug.push(format!("AIG: {} nodes, {} variables", m.g.num_nodes(), m.g.num_vars()));
+    }
     Ok(Report {
         chart: chart_name.to_string(),
         pou,
@@ -229,6 +246,7 @@ pub fn prove(chart_name: &str, chart_text: &str, file: &PropertyFile, opts: &Opt
         notes: m.notes.clone(),
         properties: reports,
         time: started.elapsed(),
+        debug,
     })
 }
 

@@ -94,6 +94,8 @@ pub struct Report {
     pub notes: Vec<String>,
     pub properties: Vec<PropertyReport>,
     pub time: Duration,
+    /// With `Options::debug`: the model's registers and figures.
+    pub debug: Vec<String>,
 }
 
 impl Report {
@@ -132,7 +134,7 @@ impl Report {
                 how.push_str(&format!(", {} reachable states", fmt_states(s)));
             }
             if let Some((n, ok)) = p.invariant {
-                if p.method == "BDD reachability" {
+                if p.method.starts_with("BDD") {
                     how.push_str(&format!(", reachable set of {n} diagram nodes"));
                 } else if n > 0 {
                     how.push_str(&format!(", inductive invariant of {n} clause{}", if n == 1 { "" } else { "s" }));

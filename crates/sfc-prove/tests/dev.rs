@@ -7,10 +7,14 @@ fn dev() {
     let props_path = chart.replace(".st", ".props.toml");
     let props = std::fs::read_to_string(&props_path).unwrap();
     let file = sfc_prove::props::parse(&props_path, &props).unwrap();
-    let opts = sfc_prove::Options { seconds: 20.0, ..Default::default() };
+    let opts =
+        sfc_prove::Options { seconds: 20.0, debug: std::env::var("SFC_PROVE_DEBUG").is_ok(), ..Default::default() };
     match sfc_prove::prove(&chart, &text, &file, &opts) {
         Ok(r) => {
             println!("{}", r.human(""));
+            for d in &r.debug {
+                println!("  {d}");
+            }
             for p in &r.properties {
                 if let Some(w) = &p.witness {
                     println!("--- {}\n{}", w.file, w.text);

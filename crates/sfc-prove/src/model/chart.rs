@@ -164,6 +164,8 @@ impl ChartEnc {
                 let duration = asc.duration.as_ref().map(|d| match d {
                     Duration::Literal(us) => DurEnc::Literal(*us),
                     Duration::Variable(name) => match e.instance_reg(inst, name) {
+                        // A parameter nothing writes is its initial value.
+                        Some(r) if e.regs[r].constant => DurEnc::Literal(e.regs[r].init as i64),
                         Some(r) => DurEnc::Reg(r),
                         None => DurEnc::Unknown,
                     },
@@ -433,7 +435,9 @@ impl Enc<'_> {
                 continue;
             }
             self.pc = self.g.and(pc, enabled);
+            self.guard_of = Some((c, t));
             let g = self.guard(inst, c, &tr.condition, &tr.name);
+            self.guard_of = None;
             e_true[t] = self.g.and(enabled, g);
         }
         self.pc = pc;
@@ -470,6 +474,22 @@ impl Enc<'_> {
             for &s in &tr.to {
                 a[s] = self.g.or(a[s], accepted[t]);
             }
+        }
+        // A step time that only the step's own outgoing guards read does not matter while the
+        // step is inactive: it is kept at 0 then (fewer states, the same behaviour).
+        for s in 0..chart.steps.len() {
+            let Some(t) = ch.t[s] else { continue };
+            let key = ChartEnc::time_key(&ch.path, &chart.steps[s].name);
+            if !self.plan.dead_inactive.contains(&key) {
+                continue;
+            }
+            let x = self.bool_reg(ch.x[s]);
+            let keep = self.g.and(x, d[s].not());
+            let active = self.g.or(keep, a[s]);
+            let cw = self.mem[t].clone();
+            let z = Word::constant(0, cw.width());
+            let w = self.ops().ite(active, &cw, &z);
+            self.write_reg(t, w);
         }
         for s in 0..chart.steps.len() {
             if d[s] == Lit::FALSE && a[s] == Lit::FALSE {

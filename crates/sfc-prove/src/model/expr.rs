@@ -187,6 +187,7 @@ impl<'a> Enc<'a> {
             let name = &self.chart_of(c).steps[s].name;
             super::chart::ChartEnc::time_key(&ch.path, name)
         };
+        self.note_time_read(c, s, &key);
         let Some(count) = self.step_time_count(c, s) else {
             self.note("a step time the model does not count is free");
             return self.fresh("step time", 64, true, None);
@@ -224,6 +225,15 @@ impl<'a> Enc<'a> {
             }
         }
         t
+    }
+
+    /// Records where a step time is read: only in a guard of a transition leaving the step, or
+    /// elsewhere.
+    fn note_time_read(&mut self, c: usize, s: usize, key: &str) {
+        let own = self.guard_of.is_some_and(|(gc, t)| gc == c && self.chart_of(c).transitions[t].from.contains(&s));
+        if !own {
+            self.learned.time_read_elsewhere.insert(key.to_string());
+        }
     }
 
     /// Evaluates an expression. `expected`: the type the context wants (for untyped constants).
@@ -892,6 +902,7 @@ impl<'a> Enc<'a> {
             let name = self.chart_of(c).steps[s].name.clone();
             super::chart::ChartEnc::time_key(&self.charts[c].path, &name)
         };
+        self.note_time_read(c, s, &key);
         let period = self.setup.period as i128;
         let ow = self.word_of(other, &Type::Time, span)?;
         if let Some(k) = ow.as_const(true) {

@@ -181,12 +181,16 @@ pub struct Plan {
     pub bounds: HashMap<String, u64>,
     /// Step times read outside comparisons with constants.
     pub inexact: HashSet<String>,
+    /// Step times only the step's own outgoing guards read: kept at 0 while it is inactive.
+    pub dead_inactive: HashSet<String>,
 }
 
 /// What a pass of the encoding learns for the next one.
 #[derive(Debug, Clone, Default)]
 pub struct Learned {
     pub written: HashSet<usize>,
+    /// Step times read somewhere other than the guards of their own step's transitions.
+    pub time_read_elsewhere: HashSet<String>,
     /// Per counter key: the largest constant (µs) it is compared with, and the thresholds (scans).
     pub need: HashMap<String, u64>,
     pub inexact: HashSet<String>,
@@ -241,6 +245,10 @@ pub struct Enc<'a> {
     pub frames: Vec<Vec<VarEntry>>,
     /// The register of the global scan counter's "first scan" flag (the top instance started).
     pub scanned: usize,
+    /// The guard being encoded: (chart, transition).
+    pub guard_of: Option<(usize, usize)>,
+    /// Implicit control inputs held FALSE (not read by the chart).
+    pub held: std::cell::RefCell<Vec<String>>,
 }
 
 /// The result of encoding: the transition system of one scan.
@@ -568,12 +576,14 @@ impl<'a> Enc<'a> {
         if self.setup.extra_inputs.iter().any(|n| *n == key) {
             return true;
         }
-        if v.implicit {
-            // SFCInit, SFCPause, SFCQuitError: free when the chart's code reads them.
-            return v.kind == VarKind::Input && self.mentioned(&v.name);
-        }
-        if sfc_st::is_sfc_control_variable(&v.name) {
-            return v.kind == VarKind::Input && self.mentioned(&v.name);
+        if v.implicit || sfc_st::is_sfc_control_variable(&v.name) {
+            // SFCInit, SFCPause, SFCQuitError: free when the chart's own code reads them;
+            // otherwise they are the caller's and held FALSE (said in the report).
+            let free = v.kind == VarKind::Input && self.code_reads(&v.name);
+            if !free && v.kind == VarKind::Input {
+                self.held.borrow_mut().push(v.name.clone());
+            }
+            return free;
         }
         match v.kind {
             VarKind::Input | VarKind::InOut => true,
@@ -581,23 +591,30 @@ impl<'a> Enc<'a> {
         }
     }
 
-    /// Whether the file's text mentions `name` (as a word, case-insensitive).
-    fn mentioned(&self, name: &str) -> bool {
-        let text = self.checked.file.text.to_ascii_lowercase();
-        let n = name.to_ascii_lowercase();
-        let bytes = text.as_bytes();
-        let mut from = 0;
-        while let Some(i) = text[from..].find(&n) {
-            let s = from + i;
-            let e = s + n.len();
-            let before = s == 0 || !(bytes[s - 1].is_ascii_alphanumeric() || bytes[s - 1] == b'_');
-            let after = e >= bytes.len() || !(bytes[e].is_ascii_alphanumeric() || bytes[e] == b'_');
-            if before && after {
-                return true;
+    /// Whether the code of the top POU (its chart's conditions and actions, or its body) names
+    /// `name`.
+    fn code_reads(&self, name: &str) -> bool {
+        let top = self.pous.iter().position(|p| p.ast.name.is(&self.setup.pou));
+        let Some(p) = top else { return false };
+        let mut found = false;
+        let mut visit = |id: &sfc_syntax::ast::Ident| found |= id.is(name);
+        if let Some(c) = self.pous[p].chart {
+            let chart = &self.checked.charts[c];
+            for t in &chart.transitions {
+                match &t.condition {
+                    sfc_syntax::ast::Condition::St(e) => names_in_expr(e, &mut visit),
+                    sfc_syntax::ast::Condition::Il(il) => names_in_il(&il.instructions, &mut visit),
+                    sfc_syntax::ast::Condition::Missing => {}
+                }
             }
-            from = e;
+            for a in &chart.actions {
+                match &a.body {
+                    sfc_syntax::ast::ActionBody::St(s) => names_in_stmts(s, &mut visit),
+                    sfc_syntax::ast::ActionBody::Il(il) => names_in_il(&il.instructions, &mut visit),
+                }
+            }
         }
-        false
+        found
     }
 
     /// Every register that is a free input of the top POU, with its path.
@@ -675,6 +692,8 @@ pub fn encode<'a>(
         depth: 0,
         frames: Vec::new(),
         scanned: 0,
+        guard_of: None,
+        held: Default::default(),
     };
     // Globals of the file.
     let globals: Vec<VarInfo> = e.env.globals().to_vec();
@@ -721,6 +740,14 @@ pub fn encode<'a>(
             e.mem[r].bits[..reg.stored].to_vec()
         };
         next.push(stored);
+    }
+    for h in e.held.borrow().iter() {
+        e.notes.insert(
+            format!(
+                "{h} is held FALSE: the chart's code does not read it (list it in [assume] inputs to make it free)"
+            ),
+            (),
+        );
     }
     let constraint = e.g.and_all(e.constraints.clone());
     let learned = std::mem::take(&mut e.learned);
@@ -804,5 +831,105 @@ impl<'a> Enc<'a> {
     pub fn chart_of(&self, c: usize) -> &'a Chart {
         let idx = self.charts[c].chart;
         &self.checked.charts[idx]
+    }
+}
+
+/// Every identifier an expression names.
+pub(crate) fn names_in_expr(e: &sfc_syntax::ast::Expr, f: &mut dyn FnMut(&sfc_syntax::ast::Ident)) {
+    use sfc_syntax::ast::ExprKind;
+    match &e.kind {
+        ExprKind::Name(id) => f(id),
+        ExprKind::Member { base, .. } => names_in_expr(base, f),
+        ExprKind::Index { base, indices } => {
+            names_in_expr(base, f);
+            indices.iter().for_each(|i| names_in_expr(i, f));
+        }
+        ExprKind::Call { callee, args } => {
+            f(callee);
+            for a in args {
+                if let Some(v) = &a.value {
+                    names_in_expr(v, f);
+                }
+            }
+        }
+        ExprKind::Unary { operand, .. } => names_in_expr(operand, f),
+        ExprKind::Binary { lhs, rhs, .. } => {
+            names_in_expr(lhs, f);
+            names_in_expr(rhs, f);
+        }
+        ExprKind::Paren(inner) => names_in_expr(inner, f),
+        _ => {}
+    }
+}
+
+/// Every identifier statements name.
+pub(crate) fn names_in_stmts(list: &[sfc_syntax::ast::Stmt], f: &mut dyn FnMut(&sfc_syntax::ast::Ident)) {
+    use sfc_syntax::ast::{CaseLabel, StmtKind};
+    for s in list {
+        match &s.kind {
+            StmtKind::Assign { target, value } => {
+                names_in_expr(target, f);
+                names_in_expr(value, f);
+            }
+            StmtKind::Call(e) => names_in_expr(e, f),
+            StmtKind::If { branches, else_body } => {
+                for (c, b) in branches {
+                    names_in_expr(c, f);
+                    names_in_stmts(b, f);
+                }
+                if let Some(b) = else_body {
+                    names_in_stmts(b, f);
+                }
+            }
+            StmtKind::Case { selector, arms, else_body } => {
+                names_in_expr(selector, f);
+                for a in arms {
+                    for l in &a.labels {
+                        match l {
+                            CaseLabel::Value(v) => names_in_expr(v, f),
+                            CaseLabel::Range(x, y) => {
+                                names_in_expr(x, f);
+                                names_in_expr(y, f);
+                            }
+                        }
+                    }
+                    names_in_stmts(&a.body, f);
+                }
+                if let Some(b) = else_body {
+                    names_in_stmts(b, f);
+                }
+            }
+            StmtKind::For { var, from, to, by, body } => {
+                f(var);
+                names_in_expr(from, f);
+                names_in_expr(to, f);
+                if let Some(b) = by {
+                    names_in_expr(b, f);
+                }
+                names_in_stmts(body, f);
+            }
+            StmtKind::While { cond, body } | StmtKind::Repeat { body, until: cond } => {
+                names_in_expr(cond, f);
+                names_in_stmts(body, f);
+            }
+            _ => {}
+        }
+    }
+}
+
+/// Every identifier an instruction list names.
+pub(crate) fn names_in_il(list: &[sfc_syntax::ast::IlInstruction], f: &mut dyn FnMut(&sfc_syntax::ast::Ident)) {
+    for i in list {
+        i.operands.iter().for_each(|o| names_in_expr(o, f));
+        if let Some(n) = &i.nested {
+            names_in_il(n, f);
+        }
+        if let Some(args) = &i.call_args {
+            for a in args {
+                if let Some(v) = &a.value {
+                    names_in_expr(v, f);
+                }
+            }
+        }
     }
 }
