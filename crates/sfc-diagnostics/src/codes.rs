@@ -2,7 +2,7 @@
 //!
 //! Ranges: `SFC00xx` lexical, `SFC01xx` syntax, `SFC02xx` chart structure, `SFC03xx` names and
 //! types, `SFC04xx` ATMT/EATMT target rules, `SFC05xx` analysis, `SFC06xx` pragmas and attributes,
-//! `SFC07xx` import (PLCopen XML), `SFC08xx` code generation.
+//! `SFC07xx` import (PLCopen XML), `SFC08xx` code generation, `SFC09xx` requirements (`sfc prove`).
 
 use crate::Severity;
 
@@ -393,6 +393,20 @@ or use fewer distinct step-time constants.";
 hold, pause and supervise the chart in the simulator; the S7-200 program implements none of \
 them, so a chart that declares or reads one is refused rather than run differently. Drive the \
 chart with ordinary transitions instead (an abort transition on a BOOL input).";
+    "SFC0901" Error "error in the property file"
+        "The property file (`<chart>.props.toml`) of `sfc prove` is not valid: TOML syntax, an \
+unknown key, a name the POU does not declare, or an ST condition that is not BOOL. The message \
+points at the line and column.\n\n    [[property]]\n    name = \"never both directions\"\n    \
+always = \"NOT (MotorFwd AND MotorRev)\"";
+    "SFC0902" Error "requirement violated"
+        "`sfc prove` found a run of the chart, allowed by the `[assume]`d inputs, in which the \
+property fails. The shortest such run is written as a scenario file \
+(`<chart>.<property>.witness.toml`) and was replayed in the simulator; `sfc test` on it shows \
+the failing expectation, which is the property itself.";
+    "SFC0903" Warning "requirement not decided"
+        "`sfc prove` ran out of its budget (`--budget`) before proving or refuting the property; \
+the message says how far it got (e.g. no violation within 2,000 scans). Give it more time, \
+narrow the inputs with `[assume] ranges`, or split the property.";
 }
 
 /// Looks a code up.

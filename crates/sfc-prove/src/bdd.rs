@@ -23,8 +23,8 @@ pub enum GiveUp {
     States(f64),
 }
 
-pub struct BddEngine<'s> {
-    pub sys: &'s System,
+pub struct BddEngine {
+    pub sys: System,
     vars: BddVariableSet,
     cur: Vec<BddVariable>,
     nxt: Vec<BddVariable>,
@@ -55,6 +55,7 @@ pub struct BddEngine<'s> {
 }
 
 /// The result of a forward search.
+#[derive(Clone)]
 pub struct Reach {
     /// `rings[k]`: states first reached after `k` transitions (ring 0 is the initial state).
     pub rings: Vec<Bdd>,
@@ -68,8 +69,8 @@ fn not_limit<T>(r: Option<T>, size: usize) -> Result<T, GiveUp> {
     r.ok_or(GiveUp::Nodes(size))
 }
 
-impl<'s> BddEngine<'s> {
-    pub fn new(sys: &'s System, node_limit: usize, deadline: Instant) -> Result<BddEngine<'s>, GiveUp> {
+impl BddEngine {
+    pub fn new(sys: System, node_limit: usize, deadline: Instant) -> Result<BddEngine, GiveUp> {
         // Inputs: every AIG variable in the cone that is not a state variable.
         let state_vars: HashMap<u32, usize> =
             sys.state.iter().enumerate().filter_map(|(i, s)| sys.g.var_of(s.lit).map(|v| (v, i))).collect();
@@ -101,7 +102,6 @@ impl<'s> BddEngine<'s> {
             to_nxt[c] = (c + 1) as u16;
         }
         let mut e = BddEngine {
-            sys,
             vars,
             cur,
             nxt,
@@ -123,12 +123,15 @@ impl<'s> BddEngine<'s> {
             deadline,
             max_states: None,
             n_extra: inputs.len() + sys.state.len(),
+            sys,
         };
-        e.constraint = e.of(sys.constraint)?;
+        let c = e.sys.constraint;
+        e.constraint = e.of(c)?;
         let mut funcs = Vec::new();
         let mut parts = Vec::new();
-        for (k, s) in sys.state.iter().enumerate() {
-            let f = e.of(s.next)?;
+        let nexts: Vec<Lit> = e.sys.state.iter().map(|s| s.next).collect();
+        for (k, next) in nexts.into_iter().enumerate() {
+            let f = e.of(next)?;
             let x = e.vars.mk_var(e.nxt[k]);
             let p = not_limit(Bdd::binary_op_with_limit(node_limit, &x, &f, op_function::iff), node_limit)?;
             funcs.push(f);
@@ -167,28 +170,40 @@ impl<'s> BddEngine<'s> {
         e.funcs = funcs;
         e.cur_vars = e.cur.clone();
         e.nxt_vars = e.nxt.clone();
-        // The monolithic relation, if it stays small.
+        // The monolithic relation, if it stays small: the parts are conjoined pairwise (a
+        // balanced tree keeps the intermediate diagrams small), then the inputs quantified.
         let limit = (node_limit / 10).clamp(10_000, 200_000);
-        let inputs: Vec<BddVariable> = e.input_of.values().copied().collect();
-        let mut acc = Some(e.constraint.clone());
-        for (j, p) in e.parts.iter().enumerate() {
-            let Some(a) = acc else { break };
-            let q: Vec<BddVariable> = e.q_after[j].iter().copied().filter(|v| inputs.contains(v)).collect();
-            let r = if q.is_empty() {
-                Bdd::binary_op_with_limit(limit, &a, p, op_function::and)
-            } else {
-                let r = Bdd::binary_op_with_exists(&a, p, op_function::and, &q);
-                (r.size() <= limit).then_some(r)
-            };
-            acc = r;
+        let mut level: Vec<Bdd> = e.parts.clone();
+        level.push(e.constraint.clone());
+        let mut ok = true;
+        while level.len() > 1 && ok {
+            let mut next = Vec::with_capacity(level.len() / 2 + 1);
+            let mut it = level.into_iter();
+            while let Some(a) = it.next() {
+                match it.next() {
+                    Some(b) => match Bdd::binary_op_with_limit(limit, &a, &b, op_function::and) {
+                        Some(c) => next.push(c),
+                        None => {
+                            ok = false;
+                            break;
+                        }
+                    },
+                    None => next.push(a),
+                }
+            }
+            level = next;
             if Instant::now() > deadline {
                 return Err(GiveUp::Time);
             }
         }
-        if let Some(a) = acc {
-            let rest: Vec<BddVariable> = e.q_first.iter().copied().filter(|v| inputs.contains(v)).collect();
-            let a = if rest.is_empty() { a } else { a.exists(&rest) };
-            e.mono = Some(a);
+        if ok {
+            if let Some(a) = level.pop() {
+                let inputs: Vec<BddVariable> = e.input_of.values().copied().collect();
+                let a = if inputs.is_empty() { a } else { a.exists(&inputs) };
+                if a.size() <= limit {
+                    e.mono = Some(a);
+                }
+            }
         }
         Ok(e)
     }
@@ -321,6 +336,11 @@ impl<'s> BddEngine<'s> {
         }
         let inputs: Vec<BddVariable> = self.input_of.values().copied().collect();
         self.check(acc.exists(&inputs))
+    }
+
+    /// Nodes of the monolithic relation (0 when partitioned).
+    pub fn relation_size(&self) -> usize {
+        self.mono.as_ref().map_or(0, |b| b.size())
     }
 
     pub fn vars_true(&self) -> Bdd {

@@ -68,10 +68,48 @@ fn give_up_text(g: &GiveUp) -> String {
     }
 }
 
+/// Development tracing of the engines' stages (`SFC_PROVE_TRACE=1`).
+fn trace(what: &str, since: Instant) {
+    if std::env::var_os("SFC_PROVE_TRACE").is_some() {
+        eprintln!("[prove] {what}: {:?}", since.elapsed());
+    }
+}
+
+/// The symbolic engine of the last cone, and its complete reachable set, for the next
+/// property with the same cone.
+#[derive(Default)]
+pub struct Cache {
+    key: Option<(Vec<u32>, usize)>,
+    pub eng: Option<BddEngine>,
+    pub reach: Option<crate::bdd::Reach>,
+}
+
+impl Cache {
+    /// The engine for `sys`: the cached one when the cone is the same, else a new one.
+    fn engine(&mut self, sys: &System, budget: &Budget) -> Result<&mut BddEngine, GiveUp> {
+        let key = (sys.state_vars(), sys.g.num_nodes());
+        if self.key.as_ref() != Some(&key) || self.eng.is_none() {
+            self.eng = None;
+            self.reach = None;
+            self.key = None;
+            let e = BddEngine::new(sys.clone(), budget.node_limit, budget.deadline)?;
+            self.eng = Some(e);
+            self.key = Some(key);
+        }
+        let eng = self.eng.as_mut().expect("engine");
+        eng.deadline = budget.deadline;
+        eng.max_states = budget.max_states;
+        Ok(eng)
+    }
+}
+
 /// Checks a safety property: `bad` never holds in a reachable state.
-pub fn safety(full: &System, bad: Lit, strengthen: &[Vec<Lit>], budget: &Budget) -> Finding {
+pub fn safety(full: &System, bad: Lit, strengthen: &[Vec<Lit>], budget: &Budget, cache: &mut Cache) -> Finding {
+    let t0 = Instant::now();
+    sat::set_deadline(Some(budget.deadline));
     let (sys, roots) = full.reduce(&[bad]);
     let bad = roots[0];
+    trace(&format!("cone of {} state bits, {} nodes", sys.state.len(), sys.g.num_nodes()), t0);
     if bad == Lit::FALSE {
         let mut f = Finding::new(Verdict::Holds, "structure", "the property holds by construction");
         f.invariant = Some((0, true));
@@ -89,9 +127,11 @@ pub fn safety(full: &System, bad: Lit, strengthen: &[Vec<Lit>], budget: &Budget)
         }
         sat::Bmc::None { depth } => searched = searched.max(depth),
     }
+    trace(&format!("bmc to depth {searched}"), t0);
     // 2. 1-induction with the net invariants of the steps the property depends on.
     let vars: std::collections::HashSet<u32> = sys.state_vars().into_iter().collect();
     let mut inv: Vec<Vec<Lit>> = vec![vec![bad.not()]];
+    let mut extra: Vec<Vec<Lit>> = Vec::new();
     for cl in strengthen {
         // The clauses are over the full graph's state variables; the same variable numbers
         // stand in the reduced graph.
@@ -103,30 +143,68 @@ pub fn safety(full: &System, bad: Lit, strengthen: &[Vec<Lit>], budget: &Budget)
             })
             .collect();
         if let Some(c) = mapped {
-            inv.push(c);
+            extra.push(c);
         }
     }
-    if sat::inductive(&sys, &inv, bad) {
-        let checked = sat::check_invariant(&sys, &inv).is_ok();
-        let mut f = Finding::new(
-            if checked { Verdict::Holds } else { Verdict::Unknown },
-            "1-induction",
-            if checked {
-                "the property is inductive together with the net invariants".to_string()
-            } else {
-                "1-induction succeeded but the independent check of its invariant failed".to_string()
-            },
-        );
-        f.invariant = Some((inv.len(), checked));
-        return f;
+    // First the property alone, then with the net invariants near the steps it names, then
+    // with all of them (each costs more).
+    let near: std::collections::HashSet<u32> = sys.g.support(&[bad]).into_iter().collect();
+    let close: Vec<Vec<Lit>> = extra
+        .iter()
+        .filter(|c| c.iter().any(|l| sys.g.var_of(*l).is_some_and(|v| near.contains(&v))))
+        .cloned()
+        .collect();
+    let mut ind = sat::inductive(&sys, &inv, bad);
+    if !ind && !close.is_empty() && Instant::now() < budget.deadline {
+        let mut with = inv.clone();
+        with.extend(close.iter().cloned());
+        if sat::inductive(&sys, &with, bad) {
+            inv = with;
+            ind = true;
+        }
     }
-    // 3. Symbolic reachability.
-    let reason = match BddEngine::new(&sys, budget.node_limit, budget.deadline) {
-        Ok(mut eng) => {
-            eng.max_states = budget.max_states;
+    if !ind && extra.len() > close.len() && extra.len() <= 5000 && Instant::now() < budget.deadline {
+        let mut with = inv.clone();
+        with.extend(extra.iter().cloned());
+        if sat::inductive(&sys, &with, bad) {
+            inv = with;
+            ind = true;
+        }
+    }
+    trace(&format!("1-induction ({} clauses): {ind}", inv.len()), t0);
+    if ind {
+        // Only a certificate that passes the independent check is a proof; otherwise the
+        // symbolic search decides.
+        if sat::check_invariant(&sys, &inv).is_ok() {
+            let mut f = Finding::new(
+                Verdict::Holds,
+                "1-induction",
+                if inv.len() == 1 {
+                    "the property is inductive".to_string()
+                } else {
+                    "the property is inductive together with the net invariants".to_string()
+                },
+            );
+            f.invariant = Some((inv.len(), true));
+            return f;
+        }
+        trace("the invariant failed its independent check", t0);
+    }
+    // 3. Symbolic reachability (the engine and a complete reachable set are shared by the
+    // properties with the same cone).
+    let reason = match cache.engine(&sys, budget) {
+        Ok(eng) => {
+            trace(&format!("BDD engine ready (relation {})", eng.relation_size()), t0);
+            let known = cache.reach.clone();
+            let eng = cache.eng.as_mut().expect("engine just made");
             match eng.predicate(bad) {
-                Ok(badb) => match eng.reach(Some(&badb)) {
-                    Ok(r) => {
+                Ok(badb) => match known.map_or_else(|| eng.reach(Some(&badb)), Ok) {
+                    Ok(mut r) => {
+                        if r.complete {
+                            cache.reach = Some(r.clone());
+                            r.hit = r.rings.iter().position(|ring| !ring.and(&badb).is_false());
+                        }
+                        let eng = cache.eng.as_ref().expect("engine");
                         if r.hit.is_some() {
                             let trace = eng.path_to(&r, &badb);
                             let mut f = Finding::new(Verdict::Violated, "BDD reachability", "");
@@ -180,7 +258,8 @@ pub fn safety(full: &System, bad: Lit, strengthen: &[Vec<Lit>], budget: &Budget)
 }
 
 /// Checks a reachability property.
-pub fn reach(full: &System, goal: Lit, from_initial: bool, budget: &Budget) -> Finding {
+pub fn reach(full: &System, goal: Lit, from_initial: bool, budget: &Budget, cache: &mut Cache) -> Finding {
+    sat::set_deadline(Some(budget.deadline));
     let (sys, roots) = full.reduce(&[goal]);
     let goal = roots[0];
     if from_initial {
@@ -193,11 +272,10 @@ pub fn reach(full: &System, goal: Lit, from_initial: bool, budget: &Budget) -> F
             return f;
         }
     }
-    let mut eng = match BddEngine::new(&sys, budget.node_limit, budget.deadline) {
+    let eng = match cache.engine(&sys, budget) {
         Ok(e) => e,
         Err(g) => return unknown_reach(&sys, goal, from_initial, budget, &g),
     };
-    eng.max_states = budget.max_states;
     let goalb = match eng.predicate(goal) {
         Ok(b) => b,
         Err(g) => return unknown_reach(&sys, goal, from_initial, budget, &g),
@@ -217,10 +295,7 @@ pub fn reach(full: &System, goal: Lit, from_initial: bool, budget: &Budget) -> F
                 let mut f = Finding::new(
                     Verdict::Holds,
                     "BDD backward reachability",
-                    format!(
-                        "the {} states that can reach the goal contain the initial state and no scan leaves them",
-                        fmt_states(eng.count(&can))
-                    ),
+                    "the states from which the goal can be reached contain the initial state and no scan leads out of them",
                 );
                 f.invariant = Some((can.size(), true));
                 return f;
@@ -270,7 +345,10 @@ pub fn reach(full: &System, goal: Lit, from_initial: bool, budget: &Budget) -> F
                 let mut f = Finding::new(
                     Verdict::Violated,
                     "BDD reachability",
-                    format!("no reachable situation satisfies the goal ({} reachable states)", fmt_states(states)),
+                    format!(
+                        "no reachable situation satisfies the goal ({} reachable states of what the goal depends on)",
+                        fmt_states(states)
+                    ),
                 );
                 f.states = Some(states);
                 f
@@ -306,12 +384,7 @@ pub fn reach(full: &System, goal: Lit, from_initial: bool, budget: &Budget) -> F
 }
 
 /// AG EF fails already from the start: the shortest path to any state after scan 0.
-fn trapped_path(
-    eng: &BddEngine<'_>,
-    can: &biodivine_lib_bdd::Bdd,
-    init: &biodivine_lib_bdd::Bdd,
-    _b: &Budget,
-) -> Finding {
+fn trapped_path(eng: &BddEngine, can: &biodivine_lib_bdd::Bdd, init: &biodivine_lib_bdd::Bdd, _b: &Budget) -> Finding {
     let target = can.not().and_not(init);
     let mut f = Finding::new(
         Verdict::Violated,
@@ -358,9 +431,9 @@ pub fn fmt_states(s: f64) -> String {
 }
 
 /// Checks one compiled property.
-pub fn check(full: &System, signal: &Signal, strengthen: &[Vec<Lit>], budget: &Budget) -> Finding {
+pub fn check(full: &System, signal: &Signal, strengthen: &[Vec<Lit>], budget: &Budget, cache: &mut Cache) -> Finding {
     match signal {
-        Signal::Safety { bad } => safety(full, *bad, strengthen, budget),
-        Signal::Reach { goal, from_initial } => reach(full, *goal, *from_initial, budget),
+        Signal::Safety { bad } => safety(full, *bad, strengthen, budget, cache),
+        Signal::Reach { goal, from_initial } => reach(full, *goal, *from_initial, budget, cache),
     }
 }

@@ -54,11 +54,21 @@ pub struct Options {
     pub node_limit: usize,
     /// Fill [`Report::debug`] with the model's registers and the engines' figures.
     pub debug: bool,
+    /// Only check the property file against the chart (names, types); prove nothing.
+    pub check_only: bool,
 }
 
 impl Default for Options {
     fn default() -> Self {
-        Options { pou: None, period: None, seconds: 60.0, max_states: None, node_limit: 2_000_000, debug: false }
+        Options {
+            pou: None,
+            period: None,
+            seconds: 60.0,
+            max_states: None,
+            node_limit: 1_000_000,
+            debug: false,
+            check_only: false,
+        }
     }
 }
 
@@ -155,6 +165,38 @@ pub fn prove(chart_name: &str, chart_text: &str, file: &PropertyFile, opts: &Opt
     if let Some(e) = hooks.errors.first() {
         return Err(ProveError::Props(e.clone()));
     }
+    if opts.check_only {
+        return Ok(Report {
+            chart: chart_name.to_string(),
+            pou,
+            period,
+            properties_file: file.path.clone(),
+            state_bits: 0,
+            inputs: Vec::new(),
+            notes: m1.notes.clone(),
+            properties: Vec::new(),
+            time: started.elapsed(),
+            debug: Vec::new(),
+        });
+    }
+    // A range must hold the variable's initial value (the state before scan 0).
+    for reg in &m1.regs {
+        if let (true, Some((lo, hi))) = (reg.obligation, reg.range) {
+            if reg.init < lo || reg.init > hi {
+                let r = file.ranges.iter().find(|r| r.name.text.eq_ignore_ascii_case(&reg.name));
+                let (line, column) = r.map_or((1, 1), |r| (r.name.line, r.name.column));
+                return Err(ProveError::Props(PropsError {
+                    file: file.path.clone(),
+                    line,
+                    column,
+                    message: format!(
+                        "the initial value {} of `{}` is outside its range {lo}..{hi}",
+                        reg.init, reg.name
+                    ),
+                }));
+            }
+        }
+    }
     for (r, reg) in m1.regs.iter().enumerate() {
         if reg.role == (Role::Var { input: false }) && !l1.written.contains(&r) && !reg.obligation {
             plan.constants.insert(reg.name.to_ascii_uppercase());
@@ -190,17 +232,25 @@ pub fn prove(chart_name: &str, chart_text: &str, file: &PropertyFile, opts: &Opt
         return Err(ProveError::Props(e.clone()));
     }
     let compiled = hooks.out;
+    if std::env::var_os("SFC_PROVE_TRACE").is_some() {
+        eprintln!("[prove] encoded in {:?}: {} AIG nodes", started.elapsed(), m.g.num_nodes());
+    }
     let full = system::System::from_model(&m, m.constraint);
     let strengthen = net_invariants(&checked, &m);
+    if std::env::var_os("SFC_PROVE_TRACE").is_some() {
+        eprintln!("[prove] net invariants in {:?}: {} clauses", started.elapsed(), strengthen.len());
+    }
     let total = Duration::from_secs_f64(opts.seconds.max(0.01));
     let mut reports = Vec::new();
+    let mut cache = check::Cache::default();
     let n = compiled.len().max(1);
     for (k, c) in compiled.iter().enumerate() {
         let now = Instant::now();
         let left = total.saturating_sub(started.elapsed());
         let share = left / (n - k) as u32;
         let budget = check::Budget { deadline: now + share, max_states: opts.max_states, node_limit: opts.node_limit };
-        let finding = check::check(&full, &c.signal, &strengthen, &budget);
+        let finding = check::check(&full, &c.signal, &strengthen, &budget, &mut cache);
+        sat::set_deadline(None);
         let mut rep = report::PropertyReport::new(c, &finding, now.elapsed());
         rep.line = report::line_of(c, file);
         if let Some(trace) = &finding.trace {
@@ -256,6 +306,9 @@ fn net_invariants(checked: &sfc_model::Checked, m: &model::Model) -> Vec<Vec<Lit
     let mut out = Vec::new();
     for c in &m.charts {
         let chart = &checked.charts[c.chart];
+        if chart.steps.len() > 400 {
+            continue;
+        }
         let report = sfc_analysis::net::analyze_net(chart, &sfc_analysis::net::NetOptions { max_states: 200_000 });
         if !report.complete {
             continue;
@@ -294,4 +347,69 @@ pub fn origin_kind(o: &Origin) -> &'static str {
         Origin::Range { .. } => "range",
         Origin::Fault => "runtime error",
     }
+}
+
+/// Diagnostics on a property file, for the editor and the language server: the file's error
+/// (SFC0901) when there is one, else, given a report, one per violated (SFC0902) or undecided
+/// (SFC0903) property at its `[[property]]` line. Spans are byte offsets in `props_text`,
+/// file number `file_id`.
+pub fn property_diagnostics(
+    file_id: u32,
+    props_text: &str,
+    error: Option<&PropsError>,
+    report: Option<&Report>,
+) -> Vec<Diagnostic> {
+    let src = SourceFile::new("", props_text);
+    let span_at = |line: u32, column: u32| -> sfc_diagnostics::Span {
+        let start = offset_of(props_text, line, column);
+        let end = props_text[start..].find('\n').map_or(props_text.len(), |n| start + n);
+        sfc_diagnostics::Span::new(file_id, start as u32, end.max(start + 1).min(props_text.len()) as u32)
+    };
+    let _ = src;
+    let mut out = Vec::new();
+    if let Some(e) = error {
+        out.push(Diagnostic::error("SFC0901", span_at(e.line, e.column), e.message.clone()));
+        return out;
+    }
+    if let Some(r) = report {
+        for p in &r.properties {
+            let line = p.line.max(1);
+            let span = span_at(line, 1);
+            match p.verdict {
+                Verdict::Holds => {}
+                Verdict::Violated => {
+                    let mut d =
+                        Diagnostic::error("SFC0902", span, format!("property `{}` is violated: {}", p.name, p.message));
+                    if let Some(w) = &p.witness {
+                        d = d.with_note(format!(
+                            "witness: {} ({} scans), replay it with `sfc test {}`",
+                            w.file, w.scans, w.file
+                        ));
+                    }
+                    out.push(d);
+                }
+                Verdict::Unknown => {
+                    out.push(Diagnostic::warning(
+                        "SFC0903",
+                        span,
+                        format!("property `{}` is not decided: {}", p.name, p.message),
+                    ));
+                }
+            }
+        }
+    }
+    out
+}
+
+/// The byte offset of a 1-based line and column (in characters).
+fn offset_of(text: &str, line: u32, column: u32) -> usize {
+    let mut off = 0;
+    for (i, l) in text.split_inclusive('\n').enumerate() {
+        if i + 1 == line as usize {
+            let col: usize = l.chars().take(column.saturating_sub(1) as usize).map(char::len_utf8).sum();
+            return off + col.min(l.len());
+        }
+        off += l.len();
+    }
+    text.len()
 }

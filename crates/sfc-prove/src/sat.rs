@@ -6,8 +6,31 @@ use crate::aig::{Aig, Lit, Node};
 use crate::system::System;
 use rustsat::solvers::{Solve, SolveIncremental, SolverResult};
 use rustsat::types::{Clause, Lit as SLit, TernaryVal};
-use rustsat_batsat::BasicSolver;
+use std::cell::Cell;
 use std::time::Instant;
+
+thread_local! {
+    /// When the SAT solver of this thread must give up (the property's time budget).
+    static DEADLINE: Cell<Option<Instant>> = const { Cell::new(None) };
+}
+
+/// BatSat callbacks that stop the search at the thread's deadline.
+#[derive(Default)]
+pub struct Clock;
+
+impl batsat::Callbacks for Clock {
+    fn stop(&self) -> bool {
+        DEADLINE.with(|d| d.get().is_some_and(|t| Instant::now() > t))
+    }
+}
+
+/// The solver: BatSat with the deadline.
+pub type BasicSolver = rustsat_batsat::Solver<Clock>;
+
+/// Sets the deadline of the SAT calls of this thread.
+pub fn set_deadline(t: Option<Instant>) {
+    DEADLINE.with(|d| d.set(t));
+}
 
 /// Tseitin translation of AIG cones, one copy per time frame.
 pub struct Unroller<'s> {
@@ -263,4 +286,42 @@ pub fn complete_inputs(sys: &System, state: &[(u32, bool)], fixed: &[(u32, bool)
         return None;
     }
     Some(u.frame_inputs(0))
+}
+
+/// Whether some valuation of the variables makes `l` TRUE (the graph alone, no state or
+/// constraint): used to stop unrolling a loop once it cannot run another iteration.
+pub fn satisfiable(g: &Aig, l: Lit) -> bool {
+    if let Some(c) = l.as_const() {
+        return c;
+    }
+    let mut solver = BasicSolver::default();
+    let mut map: std::collections::HashMap<usize, SLit> = std::collections::HashMap::new();
+    let mut next = 0u32;
+    let mut fresh = || {
+        next += 1;
+        SLit::positive(next - 1)
+    };
+    for n in g.cone(&[l]) {
+        let x = fresh();
+        if let Node::And(a, b) = g.node(n) {
+            let get = |m: &std::collections::HashMap<usize, SLit>, y: Lit| {
+                let v = m.get(&y.node()).copied().unwrap_or(x);
+                if y.is_neg() {
+                    !v
+                } else {
+                    v
+                }
+            };
+            let (la, lb) = (get(&map, a), get(&map, b));
+            let _ = solver.add_binary(!x, la);
+            let _ = solver.add_binary(!x, lb);
+            let _ = solver.add_ternary(x, !la, !lb);
+        } else if let Node::False = g.node(n) {
+            let _ = solver.add_unit(!x);
+        }
+        map.insert(n, x);
+    }
+    let root = map[&l.node()];
+    let goal = if l.is_neg() { !root } else { root };
+    solver.solve_assumps(&[goal]).map_or(true, |r| r != SolverResult::Unsat)
 }

@@ -200,6 +200,13 @@ impl Ops<'_> {
     /// Unsigned division and remainder (restoring); division by zero gives all ones and `a`.
     pub fn udivrem(&mut self, a: &Word, b: &Word) -> (Word, Word) {
         let w = a.width();
+        // Leading bits that are 0 in both operands do not take part.
+        let used = |x: &Word| x.bits.iter().rposition(|l| *l != Lit::FALSE).map_or(0, |p| p + 1);
+        let k = used(a).max(used(b)).max(1);
+        if k < w {
+            let (q, r) = self.udivrem(&a.resize(k, false), &b.resize(k, false));
+            return (q.resize(w, false), r.resize(w, false));
+        }
         let mut rem = Word::constant(0, w);
         let mut q = vec![Lit::FALSE; w];
         // Extended remainder has w+1 bits to hold the shifted value.

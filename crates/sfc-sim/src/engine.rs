@@ -1644,6 +1644,30 @@ impl Simulation {
         }
     }
 
+    /// A canonical text of the run-time state — variables, active steps, step times,
+    /// supervision flags, action control blocks, chart bookkeeping — without history (time
+    /// analysis, firing log, scratch marks): two runs in the same state after the same scan have
+    /// equal keys. Used to explore state spaces with the simulator (the prover's independent
+    /// cross-check in the test suite).
+    pub fn state_key(&self) -> String {
+        use std::fmt::Write;
+        let mut s = String::new();
+        let _ = write!(s, "{:?}|{:?}|", self.mem, self.error.as_ref().map(|e| (&e.message, e.scan)));
+        for c in &self.charts {
+            let mut active = c.active.clone();
+            active.sort_unstable();
+            let _ = write!(s, "{}:{}:{active:?}:", c.started, c.last_time);
+            for st in &c.steps {
+                let _ = write!(s, "{},{},{};", st.x, st.t, st.overdue);
+            }
+            for ct in &c.controls {
+                let _ = write!(s, "{ct:?};");
+            }
+            s.push('|');
+        }
+        s
+    }
+
     /// Returns to a state taken with [`Simulation::snapshot`] of this simulation.
     pub fn restore(&mut self, snap: &Snapshot) {
         self.mem.clone_from(&snap.mem);

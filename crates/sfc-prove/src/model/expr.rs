@@ -2,7 +2,7 @@
 //! indices, the operators with IEC widths and two's-complement wrap, and the standard
 //! functions that have a bit-level meaning. What has none (REAL, strings) is a free value.
 
-use super::{int_sort, Enc, InstKind, Slot, StdFb, VarEntry};
+use super::{int_sort, Enc, Slot, VarEntry};
 use crate::aig::Lit;
 use crate::word::Word;
 use sfc_diagnostics::Span;
@@ -459,6 +459,29 @@ impl<'a> Enc<'a> {
                 }
             }
         }
+        // `Inst.Step.X` / `Inst.Action.Q` of a nested chart instance (readable by properties).
+        if let ExprKind::Member { base: inner, member: elem } = &base.kind {
+            if let Ok(PlaceRef::Slot(Slot::Fb(i), _)) = self.place(f, inner) {
+                if let Some(c) = self.insts[i].chart {
+                    let chart = self.chart_of(c);
+                    let m = member.text.to_ascii_uppercase();
+                    if let Some(s) = chart.step(&elem.text) {
+                        match m.as_str() {
+                            "X" => return Ok(PlaceRef::StepX(c, s)),
+                            "T" => return Ok(PlaceRef::StepT(c, s)),
+                            _ => {}
+                        }
+                    }
+                    if let Some(a) = chart.action(&elem.text) {
+                        match m.as_str() {
+                            "Q" => return Ok(PlaceRef::ActQ(c, a)),
+                            "A" => return Ok(PlaceRef::ActA(c, a)),
+                            _ => {}
+                        }
+                    }
+                }
+            }
+        }
         let pb = self.place(f, base)?;
         let (slot, ty) = match pb {
             PlaceRef::Slot(s, t) => (s, t),
@@ -604,13 +627,6 @@ impl<'a> Enc<'a> {
             }
         }
         Ok(PlaceRef::Dyn(cands, elem))
-    }
-
-    fn eval_const_index(&self, e: &Expr) -> Option<i64> {
-        match sfc_st::const_eval(e, &sfc_st::NoConstants)? {
-            sfc_st::Value::Int(i) => i64::try_from(i).ok(),
-            _ => None,
-        }
     }
 
     /// Reads a place.
@@ -1299,9 +1315,4 @@ fn conversion_types(name: &str) -> Option<(Option<Type>, Type)> {
     let from = Type::elementary(a)?;
     let to = Type::elementary(b)?;
     Some((Some(from), to))
-}
-
-/// Whether a standard FB's instance kind is a timer.
-pub(crate) fn is_timer(k: &InstKind) -> bool {
-    matches!(k, InstKind::Std(StdFb::Ton | StdFb::Tof | StdFb::Tp, _))
 }

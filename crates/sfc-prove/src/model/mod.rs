@@ -730,6 +730,26 @@ pub fn encode<'a>(
             }
         }
     }
+    // The stored value of a register with a range is in that range in every state that has a
+    // successor (a state where a range was left has none): say so, it helps induction.
+    for r in 0..e.regs.len() {
+        let reg = e.regs[r].clone();
+        let skip = reg.constant || reg.role == Role::Temp || reg.role == (Role::Var { input: true });
+        if let (Some((lo, hi)), false) = (reg.range, skip) {
+            if r < cur.len() && reg.stored < 127 {
+                let signed = reg.range.is_some_and(|(l, _)| l < 0);
+                let storable = if signed {
+                    (-(1i128 << (reg.stored - 1)), (1i128 << (reg.stored - 1)) - 1)
+                } else {
+                    (0, (1i128 << reg.stored) - 1)
+                };
+                if storable.0 < lo || storable.1 > hi {
+                    let ok = e.ops().in_range(&cur[r], reg.signed, lo, hi);
+                    e.constraints.push(ok);
+                }
+            }
+        }
+    }
     hooks.after_scan(&mut e, &cur, &range_exits);
     let mut next = Vec::with_capacity(e.regs.len());
     for r in 0..e.regs.len() {
@@ -741,11 +761,10 @@ pub fn encode<'a>(
         };
         next.push(stored);
     }
-    for h in e.held.borrow().iter() {
+    let held = e.held.borrow().join(", ");
+    if !held.is_empty() {
         e.notes.insert(
-            format!(
-                "{h} is held FALSE: the chart's code does not read it (list it in [assume] inputs to make it free)"
-            ),
+            format!("{held} held FALSE: the chart's code does not read them (name them in [assume] inputs to make them free)"),
             (),
         );
     }

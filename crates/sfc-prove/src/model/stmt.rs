@@ -10,8 +10,10 @@ use sfc_diagnostics::Span;
 use sfc_st::Type;
 use sfc_syntax::ast::{ActionBody, Arg, CaseLabel, Condition, Expr, ExprKind, Ident, Stmt, StmtKind, VarKind};
 
-/// Iterations a loop is unrolled at most.
+/// Iterations a FOR loop is unrolled at most.
 const MAX_UNROLL: usize = 2048;
+/// Iterations a WHILE or REPEAT loop is unrolled at most.
+const MAX_UNROLL_WHILE: usize = 256;
 /// Nesting of calls at most.
 const MAX_DEPTH: u32 = 32;
 
@@ -166,10 +168,10 @@ impl<'a> Enc<'a> {
                     self.pc = live;
                     let c = self.eval_bool(f, cond)?;
                     let go = self.active_with(c);
-                    if go == Lit::FALSE {
+                    if go == Lit::FALSE || self.cannot_iterate(go, n) {
                         break;
                     }
-                    if n >= MAX_UNROLL {
+                    if n >= MAX_UNROLL_WHILE {
                         self.loop_beyond_bound(f, body, go, s.span);
                         break;
                     }
@@ -189,7 +191,7 @@ impl<'a> Enc<'a> {
                 let mut live = pc;
                 let mut n = 0;
                 loop {
-                    if n >= MAX_UNROLL {
+                    if n >= MAX_UNROLL_WHILE {
                         let go = self.active_with(Lit::TRUE);
                         self.pc = live;
                         if go != Lit::FALSE {
@@ -201,7 +203,7 @@ impl<'a> Enc<'a> {
                     self.exec_list(f, body);
                     let c = self.eval_bool(f, until)?;
                     let again = self.active_with(c.not());
-                    if again == Lit::FALSE {
+                    if again == Lit::FALSE || self.cannot_iterate(again, n) {
                         break;
                     }
                     live = again;
@@ -223,6 +225,12 @@ impl<'a> Enc<'a> {
             }
             StmtKind::Empty => Ok(()),
         }
+    }
+
+    /// Whether a loop cannot run iteration `n` (its condition `go` is unsatisfiable), asked of
+    /// the SAT solver every few iterations once the loop runs longer than constants decide.
+    fn cannot_iterate(&mut self, go: Lit, n: usize) -> bool {
+        (n >= 4 && (n.is_power_of_two() || n % 16 == 0)) && !crate::sat::satisfiable(&self.g, go)
     }
 
     /// `pc ∧ cond` for the loop test (the statement-level active condition).
@@ -291,7 +299,7 @@ impl<'a> Enc<'a> {
             let past_down = self.ops().lt(&i, &end, signed);
             let past = self.g.ite(neg, past_down, past_up);
             let go = self.active_with(past.not());
-            if go == Lit::FALSE {
+            if go == Lit::FALSE || self.cannot_iterate(go, n) {
                 break;
             }
             if n >= MAX_UNROLL {
@@ -565,8 +573,12 @@ impl<'a> Enc<'a> {
             }
             self.pc = self.g.and(pc, g);
         }
+        let mut given: Vec<(String, Word)> = Vec::new();
         for (p, v) in &inputs {
             let val = self.eval(f, v, Some(&p.ty))?;
+            if let Ok(SV::Int(w, _)) = self.coerce(val.clone(), &p.ty, v.span) {
+                given.push((p.name.to_ascii_uppercase(), w));
+            }
             self.write_place(&PlaceRef::Slot(p.slot.clone(), p.ty.clone()), val, v.span)?;
         }
         let mut back = Vec::new();
@@ -581,7 +593,7 @@ impl<'a> Enc<'a> {
         }
         self.depth += 1;
         match self.insts[inst].kind.clone() {
-            InstKind::Std(k, hidden) => self.run_std_fb(inst, k, &hidden),
+            InstKind::Std(k, hidden) => self.run_std_fb(inst, k, &hidden, &given),
             InstKind::User(_) => self.run_body(inst),
         }
         self.depth -= 1;
@@ -617,7 +629,9 @@ impl<'a> Enc<'a> {
     }
 
     /// One call of a standard function block (the simulator's `stdfb::run`).
-    fn run_std_fb(&mut self, inst: usize, kind: StdFb, hidden: &[usize]) {
+    /// `given`: the values this call binds to inputs (what the block sees when it runs; the
+    /// registers merge them with their old values under the call's path condition).
+    fn run_std_fb(&mut self, inst: usize, kind: StdFb, hidden: &[usize], given: &[(String, Word)]) {
         let p = |e: &Enc<'_>, n: &str| e.param_reg(inst, n);
         let b = |e: &Enc<'_>, r: Option<usize>| r.map_or(Lit::FALSE, |r| e.mem[r].bits[0]);
         let period = self.setup.period;
@@ -627,7 +641,8 @@ impl<'a> Enc<'a> {
                 let (inr, ptr, qr, etr) = (p(self, "IN"), p(self, "PT"), p(self, "Q"), p(self, "ET"));
                 let (Some(ptr), Some(qr), Some(etr)) = (ptr, qr, etr) else { return };
                 let input = b(self, inr);
-                let pt = self.mem[ptr].clone();
+                let pt =
+                    given.iter().find(|(n, _)| n == "PT").map_or_else(|| self.mem[ptr].clone(), |(_, w)| w.clone());
                 // The bound of the elapsed counter: the largest PT.
                 let key = format!("{}#timer", self.insts[inst].path).to_ascii_uppercase();
                 let (_, hi) = pt.bounds(true);

@@ -1,0 +1,278 @@
+//! The prover on fixture charts with known verdicts (`tests/fixtures/NAME.st`,
+//! `NAME.props.toml`, `NAME.expected`), each verdict cross-checked by the explicit-state
+//! explorer (`explorer/`) where the chart is small enough, and on random charts against the
+//! explorer alone.
+//!
+//! `NAME.expected` has one line per checked property: the verdict, then the property's name;
+//! a violated one may end with `after scan N` (the last scan of the shortest witness).
+
+mod explorer;
+
+use explorer::{explore, Found};
+use sfc_prove::{Options, Verdict};
+use std::path::{Path, PathBuf};
+
+fn fixtures() -> Vec<PathBuf> {
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/fixtures");
+    let mut out: Vec<PathBuf> = std::fs::read_dir(&dir)
+        .expect("fixtures")
+        .filter_map(Result::ok)
+        .map(|e| e.path())
+        .filter(|p| p.extension().is_some_and(|e| e == "st"))
+        .collect();
+    out.sort();
+    out
+}
+
+struct Expected {
+    verdict: String,
+    name: String,
+    scan: Option<usize>,
+}
+
+fn expected(path: &Path) -> Vec<Expected> {
+    let text = std::fs::read_to_string(path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+    text.lines()
+        .filter(|l| !l.trim().is_empty() && !l.starts_with('#'))
+        .map(|l| {
+            let (verdict, rest) = l.split_once(' ').expect("verdict name");
+            let (name, scan) = match rest.rsplit_once(" after scan ") {
+                Some((n, s)) => (n.to_string(), s.trim().parse().ok()),
+                None => (rest.to_string(), None),
+            };
+            Expected { verdict: verdict.to_string(), name: name.trim().to_string(), scan }
+        })
+        .collect()
+}
+
+/// Runs one fixture; returns the failures.
+fn run_fixture(st: &Path) -> Vec<String> {
+    let mut fails = Vec::new();
+    let chart_text = std::fs::read_to_string(st).expect("chart");
+    let props_path = st.with_extension("props.toml");
+    let props_text = std::fs::read_to_string(&props_path).expect("props");
+    let file =
+        sfc_prove::props::parse(&props_path.display().to_string(), &props_text).unwrap_or_else(|e| panic!("{e}"));
+    let chart_name = st.display().to_string();
+    let report =
+        match sfc_prove::prove(&chart_name, &chart_text, &file, &Options { seconds: 60.0, ..Default::default() }) {
+            Ok(r) => r,
+            Err(e) => return vec![format!("{}: {e:?}", st.display())],
+        };
+    let exp_path = st.with_extension("expected");
+    if std::env::var_os("SFC_PROVE_BLESS").is_some() {
+        // Writes the verdicts as they are (review them before committing).
+        let mut text = String::new();
+        for p in &report.properties {
+            let scan = p.witness.as_ref().filter(|w| w.write).map(|w| format!(" after scan {}", w.scans - 1));
+            text.push_str(&format!("{} {}{}\n", p.verdict.name(), p.name, scan.unwrap_or_default()));
+        }
+        let _ = std::fs::write(&exp_path, text);
+    }
+    let want = expected(&exp_path);
+    let stem = st.file_stem().unwrap_or_default().to_string_lossy().to_string();
+    for p in &report.properties {
+        let got = p.verdict.name();
+        let scan = p.witness.as_ref().filter(|w| w.write).map(|w| w.scans - 1);
+        match want.iter().find(|w| w.name == p.name) {
+            None => fails.push(format!("{stem}: `{}` is {got} but not in the .expected file", p.name)),
+            Some(w) => {
+                if w.verdict != got {
+                    fails.push(format!("{stem}: `{}`: expected {}, got {got} ({})", p.name, w.verdict, p.message));
+                }
+                if let (Some(ws), Some(gs)) = (w.scan, scan) {
+                    if ws != gs {
+                        fails.push(format!(
+                            "{stem}: `{}`: expected the witness to end after scan {ws}, got {gs}",
+                            p.name
+                        ));
+                    }
+                }
+                if p.verdict == Verdict::Violated {
+                    let replayed = p.witness.as_ref().is_some_and(|w| w.replayed);
+                    if !replayed {
+                        fails.push(format!("{stem}: `{}`: violated without a replayed witness", p.name));
+                    }
+                }
+                if p.verdict == Verdict::Holds {
+                    if let Some((_, ok)) = p.invariant {
+                        if !ok {
+                            fails.push(format!("{stem}: `{}`: holds but its invariant check failed", p.name));
+                        }
+                    }
+                }
+            }
+        }
+    }
+    for w in &want {
+        if !report.properties.iter().any(|p| p.name == w.name) {
+            fails.push(format!("{stem}: expected a verdict for `{}`", w.name));
+        }
+    }
+    // The explorer's independent opinion, where the state space is small.
+    let names: Vec<String> = report.properties.iter().map(|p| p.name.clone()).collect();
+    let depth = 40;
+    let found =
+        explore(&chart_name, &chart_text, &report.pou, report.period, &file, &report.inputs, &names, depth, 20_000);
+    for (p, f) in report.properties.iter().zip(&found) {
+        let agree = match (p.verdict, f) {
+            (_, Found::Skipped | Found::TooBig) => true,
+            (Verdict::Violated, Found::ViolatedAt(s)) => {
+                Some(*s) == p.witness.as_ref().map(|w| w.scans - 1) || p.witness.is_none()
+            }
+            (Verdict::Violated, Found::NotWithin(_)) => p.witness.as_ref().is_some_and(|w| w.scans > depth),
+            (Verdict::Holds, Found::NotWithin(_)) => true,
+            (Verdict::Holds, Found::ReachedAt(s)) => p.witness.as_ref().is_none_or(|w| w.scans - 1 == *s),
+            (Verdict::Violated, Found::ReachedAt(_)) => false,
+            (Verdict::Holds, Found::ViolatedAt(_)) => false,
+            (Verdict::Unknown, _) => true,
+        };
+        if !agree {
+            fails.push(format!(
+                "{stem}: `{}`: the prover says {} ({}), the explorer {:?}",
+                p.name,
+                p.verdict.name(),
+                p.message,
+                f
+            ));
+        }
+    }
+    fails
+}
+
+#[test]
+fn fixture_verdicts_agree_with_the_explorer() {
+    let all = fixtures();
+    assert!(all.len() >= 30, "at least 30 fixture charts, found {}", all.len());
+    let only = std::env::var("SFC_PROVE_FIXTURE").ok();
+    let mut fails = Vec::new();
+    for st in &all {
+        if only.as_ref().is_some_and(|o| !st.display().to_string().contains(o.as_str())) {
+            continue;
+        }
+        fails.extend(run_fixture(st));
+    }
+    assert!(fails.is_empty(), "{}", fails.join("\n"));
+}
+
+/// A small deterministic generator (xorshift).
+struct Rng(u64);
+
+impl Rng {
+    fn next(&mut self) -> u64 {
+        self.0 ^= self.0 << 13;
+        self.0 ^= self.0 >> 7;
+        self.0 ^= self.0 << 17;
+        self.0
+    }
+    fn below(&mut self, n: u64) -> u64 {
+        self.next() % n.max(1)
+    }
+}
+
+/// A random chart: a loop of steps with a selection branch or a parallel pair, guards over
+/// three inputs and step times, BOOL outputs driven by actions with assorted qualifiers.
+fn random_chart(seed: u64) -> (String, String) {
+    let mut r = Rng(seed.wrapping_mul(0x9E37_79B9_7F4A_7C15) | 1);
+    let n = 3 + r.below(4) as usize;
+    let inputs = ["A", "B", "C"];
+    let mut s = String::from("PROGRAM R\n    VAR_INPUT\n        A : BOOL;\n        B : BOOL;\n        C : BOOL;\n    END_VAR\n    VAR_OUTPUT\n        O1 : BOOL;\n        O2 : BOOL;\n        K : INT;\n    END_VAR\n");
+    let guard = |r: &mut Rng, k: usize| -> String {
+        let a = inputs[r.below(3) as usize];
+        match r.below(5) {
+            0 => a.to_string(),
+            1 => format!("NOT {a}"),
+            2 => format!("{a} AND {}", inputs[r.below(3) as usize]),
+            3 => format!("S{k}.T >= T#{}ms", 20 * (1 + r.below(3))),
+            _ => format!("{a} OR S{k}.T > T#30ms"),
+        }
+    };
+    let quals = ["N", "S", "R", "P1", "P0", "L, T#20ms", "D, T#20ms", "P"];
+    let mut actions = Vec::new();
+    for k in 0..n {
+        let kw = if k == 0 { "INITIAL_STEP" } else { "STEP" };
+        let mut body = String::new();
+        if r.below(3) > 0 {
+            let q = quals[r.below(quals.len() as u64) as usize];
+            let out = if r.below(2) == 0 { "O1" } else { "O2" };
+            if r.below(2) == 0 {
+                body.push_str(&format!("        {out}({q});\n"));
+            } else {
+                let act = format!("Act{k}");
+                body.push_str(&format!("        {act}({q});\n"));
+                actions.push(format!("    ACTION {act}:\n        K := K + 1;\n        IF K > 5 THEN\n            K := 0;\n        END_IF;\n    END_ACTION\n"));
+            }
+        }
+        s.push_str(&format!("    {kw} S{k}:\n{body}    END_STEP\n"));
+    }
+    for k in 0..n {
+        let next = (k + 1) % n;
+        s.push_str(&format!(
+            "    TRANSITION FROM S{k} TO S{next}\n        := {};\n    END_TRANSITION\n",
+            guard(&mut r, k)
+        ));
+        if r.below(3) == 0 && n > 2 {
+            let other = (k + 2) % n;
+            s.push_str(&format!(
+                "    TRANSITION FROM S{k} TO S{other}\n        := {};\n    END_TRANSITION\n",
+                guard(&mut r, k)
+            ));
+        }
+    }
+    for a in actions {
+        s.push_str(&a);
+    }
+    s.push_str("END_PROGRAM\n");
+    let a = r.below(n as u64);
+    let b = (a + 1 + r.below(n as u64 - 1)) % n as u64;
+    let props = format!(
+        "period = \"T#10ms\"\n\n[[property]]\nname = \"exclusive\"\nnever = \"S{a}.X AND S{b}.X\"\n\n[[property]]\nname = \"outputs\"\nnever = \"O1 AND O2 AND S{a}.X\"\n\n[[property]]\nname = \"response\"\nafter = \"{}\"\nexpect = \"S{b}.X OR O1\"\nscans = {}\n\n[[property]]\nname = \"counter\"\nalways = \"K <= 5\"\n\n[[property]]\nname = \"reach\"\nreachable = \"S{b}.X AND O2\"\nfrom_initial = true\n",
+        inputs[r.below(3) as usize],
+        r.below(4)
+    );
+    (s, props)
+}
+
+#[test]
+fn random_charts_agree_with_the_explorer() {
+    let count: u64 = std::env::var("SFC_PROVE_RANDOM").ok().and_then(|v| v.parse().ok()).unwrap_or(12);
+    let mut fails = Vec::new();
+    for seed in 1..=count {
+        let (chart, props) = random_chart(seed);
+        let file = sfc_prove::props::parse("random.props.toml", &props).expect("props");
+        let name = format!("random{seed}.st");
+        let report = match sfc_prove::prove(&name, &chart, &file, &Options { seconds: 30.0, ..Default::default() }) {
+            Ok(r) => r,
+            Err(e) => {
+                fails.push(format!("seed {seed}: {e:?}\n{chart}"));
+                continue;
+            }
+        };
+        let names: Vec<String> = report.properties.iter().map(|p| p.name.clone()).collect();
+        let found = explore(&name, &chart, &report.pou, report.period, &file, &report.inputs, &names, 30, 50_000);
+        for (p, f) in report.properties.iter().zip(&found) {
+            let scans = p.witness.as_ref().map(|w| w.scans - 1);
+            let ok = match (p.verdict, f) {
+                (_, Found::Skipped | Found::TooBig) => true,
+                (Verdict::Violated, Found::ViolatedAt(s)) => {
+                    scans == Some(*s) && p.witness.as_ref().is_some_and(|w| w.replayed)
+                }
+                (Verdict::Holds, Found::NotWithin(_)) => true,
+                (Verdict::Holds, Found::ReachedAt(s)) => scans == Some(*s),
+                (Verdict::Violated, Found::NotWithin(d)) => scans.is_some_and(|s| s >= *d),
+                _ => false,
+            };
+            if !ok {
+                fails.push(format!(
+                    "seed {seed}: `{}`: the prover says {} {:?} ({}), the explorer {:?}\n{chart}\n{props}",
+                    p.name,
+                    p.verdict.name(),
+                    scans,
+                    p.message,
+                    f
+                ));
+            }
+        }
+    }
+    assert!(fails.is_empty(), "{}", fails.join("\n\n"));
+}
