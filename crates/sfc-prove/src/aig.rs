@@ -370,9 +370,9 @@ mod tests {
         let x = g.and(a, b);
         assert_eq!(g.and(b, a), x);
         assert_eq!(g.and(a, x), x);
+        let y = g.xor(a, b);
         let t = g.eval_all(&[true, false]);
         assert!(!Aig::value(&t, x));
-        let y = g.xor(a, b);
         assert!(Aig::value(&t, y));
     }
 }

@@ -20,6 +20,9 @@ pub struct WitnessInfo {
     pub replay_detail: Vec<String>,
     /// A file to write (violations; not the path of a reached goal).
     pub write: bool,
+    /// The inputs to set before each scan (only those that change), as JSON values: what the
+    /// editor's monitor replays.
+    pub inputs: Vec<Vec<(String, serde_json::Value)>>,
 }
 
 /// The verdict of one property.
@@ -75,8 +78,20 @@ impl PropertyReport {
         } else if self.verdict == Verdict::Violated && self.message.is_empty() {
             self.message = format!("violated after scan {} (shortest witness: {} scans)", w.last, scans);
         }
-        self.witness =
-            Some(WitnessInfo { file, text, scans, replayed: replay.confirmed, replay_detail: replay.detail, write });
+        let inputs = w
+            .sets
+            .iter()
+            .map(|scan| scan.iter().map(|(n, v)| (n.clone(), crate::witness::json_value(v))).collect())
+            .collect();
+        self.witness = Some(WitnessInfo {
+            file,
+            text,
+            scans,
+            replayed: replay.confirmed,
+            replay_detail: replay.detail,
+            write,
+            inputs,
+        });
     }
 }
 

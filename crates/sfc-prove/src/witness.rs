@@ -448,3 +448,13 @@ pub fn replay(chart_name: &str, chart_text: &str, scenario: &str, own_line: u32,
     };
     Replay { confirmed, detail }
 }
+
+/// A value of a scenario's `set` (TOML text) as JSON.
+pub fn json_value(toml: &str) -> serde_json::Value {
+    match toml {
+        "true" => serde_json::Value::Bool(true),
+        "false" => serde_json::Value::Bool(false),
+        t if t.starts_with('"') && t.ends_with('"') && t.len() >= 2 => serde_json::Value::String(t[1..t.len() - 1].to_string()),
+        t => t.parse::<i64>().map_or_else(|_| serde_json::Value::String(t.to_string()), |n| serde_json::json!(n)),
+    }
+}
