@@ -23,6 +23,26 @@ export interface Diag {
   witness: string[] | Record<string, unknown> | null;
   /** For a firing-sequence witness: the transition block ids, in firing order. */
   witnessIds?: string[];
+  /** For a violated requirement (`sfc prove`): its witness, to replay in monitor mode. */
+  replay?: Replay;
+}
+
+/** A witness of `sfc prove` as the monitor replays it: the inputs to set before each scan. */
+export interface Replay {
+  /** Scan period, a TIME literal. */
+  period: string;
+  /** Per scan: `[name, value]` pairs (only the inputs that change). */
+  scans: [string, boolean | number | string][][];
+  /** The witness scenario file's text and name. */
+  scenario: string;
+  file: string;
+}
+
+/** What `POST /api/prove` answers. */
+export interface ProveResult {
+  propertiesFile: string;
+  diagnostics: Diag[];
+  summary: { holds: number; violated: number; unknown: number } | null;
 }
 
 export type FileFormat = 'st' | 'xml';

@@ -12,6 +12,7 @@ pub mod compile;
 mod confine;
 mod diag;
 mod disk;
+mod prove;
 mod sim;
 
 pub use access::TOKEN_HEADER;
@@ -187,6 +188,7 @@ pub fn app(state: AppState) -> Router {
         .route("/api/build", post(api::build))
         .route("/api/layout", post(api::layout))
         .route("/api/new", post(api::new_chart))
+        .route("/api/prove", post(prove::prove))
         .route("/api/sim/start", post(sim::start))
         .route("/api/sim/stop", post(sim::stop))
         .route("/api", any(api::not_found))

@@ -363,6 +363,34 @@ export function App({ api, createCanvas }: AppProps) {
     }
   }
 
+  /** `sfc prove` with the requirements beside the chart's file: violated and undecided
+   * properties join the Error List (a violation with a Replay button). */
+  async function runProve(): Promise<void> {
+    if (!tab || !canvas || busy) return;
+    if (!tab.path) {
+      toasts.show('error', t('prove.saveFirst'));
+      return;
+    }
+    const doc = canvas.getDoc();
+    const id = tab.id;
+    const path = tab.path;
+    setBusy(true);
+    setWitness(null);
+    setSelectedDiag(null);
+    try {
+      const r = await api.prove(doc, path);
+      const kept = (tab.diagnostics ?? []).filter((d) => !d.code.startsWith('SFC09'));
+      store.update(id, { diagnostics: [...kept, ...r.diagnostics] });
+      if (r.summary) toasts.show(r.summary.violated + r.summary.unknown > 0 ? 'error' : 'success', t('prove.summary', r.summary));
+      setBottomTab('errors');
+      setPanels((p) => ({ ...p, bottom: true }));
+    } catch (e) {
+      toasts.show('error', t('prove.failed', { message: (e as Error).message }));
+    } finally {
+      setBusy(false);
+    }
+  }
+
   async function autoLayout(): Promise<void> {
     if (!canvas) return;
     try {
@@ -466,6 +494,7 @@ export function App({ api, createCanvas }: AppProps) {
         { separator: true, label: '' },
         { label: t('menu.autoLayout'), icon: 'layout', disabled: !hasChart, action: () => void autoLayout() },
         { label: t('menu.validate'), icon: 'validate', disabled: !hasChart, action: () => void runBuild('validate') },
+        { label: t('menu.prove'), icon: 'validate', disabled: !hasChart || !!host, action: () => void runProve() },
         { label: t('menu.build'), shortcut: 'F7', icon: 'build', disabled: !hasChart, action: () => void runBuild() },
       ],
     },
@@ -657,6 +686,7 @@ export function App({ api, createCanvas }: AppProps) {
                     onToggleHighlight={() => setHighlightOn(!highlightOn)}
                     witness={witness}
                     onWitness={setWitness}
+                    onReplay={(d) => d.replay && void monitor.replay(d.replay)}
                   />
                 ) : (
                   <ResultPanel pou={tab?.pou ?? ''} result={tab?.result ?? null} />

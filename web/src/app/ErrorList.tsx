@@ -19,6 +19,8 @@ export function ErrorList(props: {
   onToggleHighlight: () => void;
   witness: WitnessView | null;
   onWitness: (w: WitnessView | null) => void;
+  /** Replays a violated requirement's witness in monitor mode. */
+  onReplay?: (d: Diag) => void;
 }) {
   const [shown, setShown] = useState<Record<Severity, boolean>>({ error: true, warning: true, note: true });
   const count = (s: Severity) => props.diagnostics.filter((d) => d.severity === s).length;
@@ -86,6 +88,18 @@ export function ErrorList(props: {
                   </td>
                   <td class="col-line">{d.line > 0 ? `${d.line}:${d.column}` : ''}</td>
                   <td class="col-action">
+                    {d.replay && props.onReplay && (
+                      <button
+                        class="button small"
+                        title={t('errors.replayTip')}
+                        onClick={(e) => {
+                          e.stopPropagation();
+                          props.onReplay!(d);
+                        }}
+                      >
+                        <Icon name="witness" /> {t('errors.replay')}
+                      </button>
+                    )}
                     {d.witnessIds && d.witnessIds.length > 0 && (
                       <button
                         class="button small"

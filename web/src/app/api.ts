@@ -1,7 +1,7 @@
 // Client of the editor's HTTP API (contract: docs/editor.md "HTTP API", types in src/api.ts).
 // Every call sends the token from the page URL; a failed call throws an ApiError and shows the
 // server's message as a toast, and never touches the document being edited.
-import type { BuildResult, BuildTarget, Diag, FileFormat, OpenResult, SaveResult, Session } from '../api';
+import type { BuildResult, BuildTarget, Diag, FileFormat, OpenResult, ProveResult, SaveResult, Session } from '../api';
 import type { ChartTarget, EditorDoc } from '../doc';
 import { toasts } from './toast';
 
@@ -95,6 +95,8 @@ export function createApi(opts: ApiOptions) {
       call<{ diagnostics: Diag[] }>('POST', '/api/check', { doc, analysis }).then((r) => r.diagnostics),
     build: (doc: EditorDoc, target: BuildTarget, limits?: { nstep: number; ntr: number }) =>
       call<BuildResult>('POST', '/api/build', { doc, target, ...(limits ?? {}) }),
+    /** `sfc prove` on the chart with `<chart>.props.toml` beside `path`; `404`: no property file. */
+    prove: (doc: EditorDoc, path: string) => call<ProveResult>('POST', '/api/prove', { doc, path }, [404]),
     layout: (doc: EditorDoc) => call<{ doc: EditorDoc }>('POST', '/api/layout', { doc }).then((r) => r.doc),
     codes: () => call<{ code: string; severity: string; title: string }[]>('GET', '/api/codes'),
     /** The document of a new chart (an initial step), as `sfc-doc` makes it. */

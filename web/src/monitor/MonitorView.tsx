@@ -75,6 +75,25 @@ export function MonitorView({ target, createCanvas, onLeave, socket }: MonitorVi
   const [explainError, setExplainError] = useState('');
   const [, setTick] = useState(0);
 
+  // A witness to replay: once connected, set each scan's inputs and run that scan.
+  const replayed = useRef(false);
+  useEffect(() => {
+    const w = target.replay;
+    if (!w || replayed.current || client.status !== 'open' || !client.canControl()) return;
+    replayed.current = true;
+    void (async () => {
+      try {
+        for (const scan of w.scans) {
+          for (const [name, value] of scan) await client.set(name, value);
+          await client.singleScan();
+        }
+        toasts.show('success', t('monitor.replayed', { scans: w.scans.length }));
+      } catch (e) {
+        toasts.show('error', t('monitor.replayFailed', { message: (e as Error).message }));
+      }
+    })();
+  });
+
   const info = client.info;
   const elements = useMemo(() => resolveElements(info, target.elements), [info, target.elements]);
   const kindOf = (id: string) => target.doc.elements.find((e) => e.id === id)?.kind;

@@ -4,6 +4,7 @@
 import { useEffect, useRef, useState } from 'preact/hooks';
 import type { JSX } from 'preact';
 import type { CreateCanvas } from '../diagram/types';
+import type { Replay } from '../api';
 import type { EditorDoc } from '../doc';
 import { Modal } from '../app/dialogs';
 import type { MenuDef } from '../app/Menu';
@@ -31,6 +32,8 @@ export interface MonitorUi {
   button: JSX.Element;
   /** The monitor view over the workspace, and the attach dialog. */
   overlay: JSX.Element | null;
+  /** Starts the simulator halted and replays a witness of `sfc prove` in it. */
+  replay: (r: Replay) => Promise<void>;
 }
 
 /** Posts `stop` for a simulation as the page goes away (a beacon-like request that outlives it). */
@@ -87,6 +90,22 @@ export function useMonitor(opts: UseMonitorOptions): MonitorUi {
     }
   }
 
+  async function replay(w: Replay): Promise<void> {
+    const open = opts.current();
+    if (!open || starting) return;
+    await leave();
+    setStarting(true);
+    try {
+      const doc = structuredClone(open.doc);
+      const r = await startSimulation(doc, { period: w.period, halted: true });
+      setTarget({ url: r.url, doc, elements: r.elements, simId: r.id, title: open.title, replay: w });
+    } catch (e) {
+      toasts.show('error', t('monitor.replayFailed', { message: (e as Error).message }));
+    } finally {
+      setStarting(false);
+    }
+  }
+
   async function attach(url: string): Promise<void> {
     const open = opts.current();
     if (!open) return;
@@ -134,7 +153,7 @@ export function useMonitor(opts: UseMonitorOptions): MonitorUi {
       </>
     ) : null;
 
-  return { active: target !== null, menu, button, overlay };
+  return { active: target !== null, menu, button, overlay, replay };
 }
 
 /** A ws:// URL of a runtime's monitor (what `sfc run` prints), or why it is not one. */

@@ -1,6 +1,7 @@
 // Starting a monitor session: the editor's simulator on the open chart (`POST /api/sim/start`,
 // docs/editor.md) or an attached runtime (a ws:// URL with its token), and which blocks of the
 // chart show each step and transition of the runtime.
+import type { Replay } from '../api';
 import type { EditorDoc } from '../doc';
 
 /** A monitor session as the shell holds it. */
@@ -15,6 +16,8 @@ export interface MonitorTarget {
   simId: number | null;
   /** The tab's title, shown in the monitor's toolbar. */
   title: string;
+  /** A witness of `sfc prove` to replay once connected (the simulation starts halted). */
+  replay?: Replay;
 }
 
 /** An answer of the server that is not 2xx: its message and, for 422, the diagnostics. */
