@@ -1,12 +1,12 @@
 //! `sfc build FILE --target T [-o OUT]`: compile a chart (textual SFC or PLCopen XML) to a
 //! REX ATMT/EATMT table, Structured Text, S7-200 statement list, PLCopen XML, SVG or text.
-//! The checking and compiling are `sfc_server::compile`'s, shared with the editor.
+//! The checking and compiling are the driver's (`sfc_driver::compile`), shared with the editor.
 
 use crate::{print_diagnostics, read, write_atomically};
-use sfc_server::compile::{self, CompileError, CompileOptions};
+use sfc_driver::compile::{self, CompileError, CompileOptions};
 use std::path::PathBuf;
 
-pub use sfc_server::compile::{check_any, BuildTarget};
+pub use sfc_driver::compile::{check_any, BuildTarget};
 
 pub struct BuildRequest {
     pub file: PathBuf,

@@ -345,9 +345,9 @@ fn summary(errors: usize, warnings: usize) -> String {
 }
 
 /// Writes `text` to a temporary file beside `path`, then renames it over `path` (the editor's
-/// server does the same for saves: one implementation).
+/// server does the same for saves: one implementation, the driver's).
 fn write_atomically(path: &Path, text: &str) -> std::io::Result<()> {
-    sfc_server::write_atomically(path, text.as_bytes())
+    sfc_driver::write_atomically(path, text.as_bytes())
 }
 
 fn fmt(a: FmtArgs) -> u8 {

@@ -1,6 +1,7 @@
-//! Checking and compiling a chart file for a target: the one implementation behind `sfc build`
-//! and the editor's `build` call.
+//! Checking and compiling a chart file for a target: the one implementation behind `sfc check`,
+//! `sfc build` and the editor's `check` and `build` calls (moved here from `sfc-server`).
 
+use crate::load::FileKind;
 use sfc_diagnostics::{Diagnostic, SourceFile};
 use sfc_model::{Chart, CheckOptions, Checked, Limits, Target};
 use std::path::Path;
@@ -57,27 +58,44 @@ impl BuildTarget {
     }
 }
 
-/// A file is PLCopen XML by its extension, or by its first non-blank character.
+/// A file is PLCopen XML by its extension, or by its first non-blank character (after a
+/// byte order mark).
 pub fn is_xml(path: &Path, text: &str) -> bool {
-    path.extension().is_some_and(|e| e.eq_ignore_ascii_case("xml")) || text.trim_start().starts_with('<')
+    path.extension().is_some_and(|e| e.eq_ignore_ascii_case("xml"))
+        || text.trim_start_matches('\u{feff}').trim_start().starts_with('<')
 }
 
 /// Checks a file of either kind: the diagnostics are located in the file the user wrote (for
 /// XML, the importer maps them back to XML lines and columns); `Checked` is the IEC text.
 pub fn check_any(file_id: u32, path: &Path, text: &str, opts: &CheckOptions) -> (SourceFile, Checked, Vec<Diagnostic>) {
-    let name = path.display().to_string();
-    if is_xml(path, text) {
-        let imported = sfc_plcopen::import(file_id, &name, text);
-        let checked = sfc_analysis::check_source(file_id, &format!("{name} (imported)"), &imported.text, opts);
-        let mut diags = imported.diagnostics.clone();
-        diags.extend(checked.diagnostics.iter().map(|d| sfc_plcopen::relocate(d, &imported.map, file_id)));
-        sfc_diagnostics::sort(&mut diags);
-        diags.dedup();
-        (imported.xml, checked, diags)
-    } else {
-        let checked = sfc_analysis::check_source(file_id, &name, text, opts);
-        let diags = checked.diagnostics.clone();
-        (checked.file.clone(), checked, diags)
+    let kind = if is_xml(path, text) { FileKind::PlcOpen } else { FileKind::Iec };
+    check_text(file_id, &path.display().to_string(), text, kind, opts)
+}
+
+/// [`check_any`] for a text in memory (an editor buffer, a language server's document):
+/// `name` is how diagnostics name the file, `kind` says how to read it.
+pub fn check_text(
+    file_id: u32,
+    name: &str,
+    text: &str,
+    kind: FileKind,
+    opts: &CheckOptions,
+) -> (SourceFile, Checked, Vec<Diagnostic>) {
+    match kind {
+        FileKind::PlcOpen => {
+            let imported = sfc_plcopen::import(file_id, name, text);
+            let checked = sfc_analysis::check_source(file_id, &format!("{name} (imported)"), &imported.text, opts);
+            let mut diags = imported.diagnostics.clone();
+            diags.extend(checked.diagnostics.iter().map(|d| sfc_plcopen::relocate(d, &imported.map, file_id)));
+            sfc_diagnostics::sort(&mut diags);
+            diags.dedup();
+            (imported.xml, checked, diags)
+        }
+        FileKind::Iec => {
+            let checked = sfc_analysis::check_source(file_id, name, text, opts);
+            let diags = checked.diagnostics.clone();
+            (checked.file.clone(), checked, diags)
+        }
     }
 }
 
