@@ -472,7 +472,7 @@ impl ChartGen {
             if attempt == 19 {
                 guard = format!("({guard}) OR (S{}.T > T#{}ms)", from[0], (n + 1) * 100);
             }
-            // SFC0215: the same steps and condition twice is an error.
+            // SFC0215: the same steps and condition twice is a warning (the copy never fires).
             if self.seen.insert((from.clone(), to.clone(), guard.clone())) {
                 break;
             }

@@ -101,15 +101,25 @@ namespace; each name may be declared once.";
 transition, or mark it as a final step with `{attribute 'sfc.final' := 'true'}`.";
     "SFC0214" Warning "unused action"
         "An ACTION is declared but no step associates it and no code calls it.";
-    "SFC0215" Error "duplicate transition"
-        "Two transitions connect exactly the same steps with the same condition; one of them can \
-never fire first and is probably a copy.";
+    "SFC0215" Warning "duplicate transition"
+        "Two transitions connect exactly the same steps with the same condition. IEC 61131-3 allows \
+it, but the later one never fires (the earlier one always takes the step first, in declaration or \
+priority order), so it is probably a copy: delete it or change its condition.";
     "SFC0216" Error "step links to itself in one transition"
         "A transition lists the same step twice in FROM or in TO.";
     "SFC0217" Error "transition condition missing"
         "A transition needs a condition: `:= expression;` or an IL body after `:`.";
     "SFC0218" Error "no SFC body"
         "The file has no POU with steps; sfc needs at least one chart for this command.";
+
+    "SFC0219" Warning "output latched by a non-stored action"
+        "An action associated with N (or L, D) sets a BOOL output TRUE in its body, and nothing in \
+the POU ever writes anything else to it. The assignment is stored in the variable, so the output \
+stays TRUE after the step is left, although the action looks as if it lasted only while the step \
+is active.\n\n    STEP S2: Show(N); END_STEP\n    ACTION Show: Visible := TRUE; END_ACTION   (* latches *)\n\n\
+Associate the output itself so it follows the step (`STEP S2: Visible(N); END_STEP`), or reset \
+it (`Visible := FALSE` in another step, or `IF NOT Show.Q THEN Visible := FALSE; END_IF` for the \
+action's last run).";
 
     "SFC0301" Error "undeclared variable"
         "A name in an expression or statement is not a variable, step, action or constant of \

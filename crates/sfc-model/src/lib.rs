@@ -4,6 +4,7 @@
 
 pub mod chart;
 mod code;
+mod latch;
 pub mod lower;
 pub mod validate;
 
@@ -66,6 +67,7 @@ pub fn check_source(file_id: u32, name: &str, text: &str, opts: &CheckOptions) -
         if let ast::Body::Sfc(elements) = &mut body {
             let chart = lower::lower(file_id, i, pou, elements, target, &mut diags);
             validate::structure(&chart, text, &mut diags);
+            latch::latched_outputs(pou, &chart, &mut diags);
             let limits = Limits::of(target, opts.nstep, opts.ntr);
             validate::target_rules(&chart, limits, &mut diags);
             charts.push(chart);

@@ -97,7 +97,7 @@ pub fn structure(chart: &Chart, source: &str, diags: &mut Vec<Diagnostic>) {
             std::collections::hash_map::Entry::Occupied(first) => {
                 let a = &chart.transitions[*first.get()];
                 diags.push(
-                    Diagnostic::error(
+                    Diagnostic::warning(
                         "SFC0215",
                         b.header_span,
                         format!("transition `{}` repeats transition `{}`", b.name, a.name),

@@ -264,10 +264,16 @@ impl<'a> Parser<'a> {
     // Token access
 
     fn tok(&self) -> Tok {
-        self.toks[self.pos.min(self.toks.len() - 1)]
+        self.nth(0)
     }
+    /// The token `n` ahead; past the end, the end of file (the lexer always ends with one).
     fn nth(&self, n: usize) -> Tok {
-        self.toks[(self.pos + n).min(self.toks.len() - 1)]
+        self.toks.get(self.pos.saturating_add(n)).or(self.toks.last()).copied().unwrap_or(Tok {
+            kind: TokenKind::Eof,
+            start: self.text.len() as u32,
+            end: self.text.len() as u32,
+            nl_before: false,
+        })
     }
     fn kind(&self) -> TokenKind {
         self.tok().kind
@@ -289,11 +295,7 @@ impl<'a> Parser<'a> {
     }
     /// End of the previous significant token (for spans of finished nodes).
     fn prev_end(&self) -> u32 {
-        if self.pos == 0 {
-            0
-        } else {
-            self.toks[self.pos - 1].end
-        }
+        self.pos.checked_sub(1).and_then(|p| self.toks.get(p)).map_or(0, |t| t.end)
     }
     fn span_from(&self, start: u32) -> Span {
         Span::new(self.file, start, self.prev_end().max(start))
@@ -358,7 +360,7 @@ impl<'a> Parser<'a> {
     }
 
     fn after_lexical_error(&self) -> bool {
-        self.pos > 0 && self.lexical_error_ends.contains(&self.toks[self.pos - 1].end)
+        self.pos > 0 && self.lexical_error_ends.contains(&self.prev_end())
     }
 
     /// `expected X, found Y` at the current token.
@@ -442,8 +444,8 @@ impl<'a> Parser<'a> {
     /// The unattached attribute pragmas that start before byte `start`.
     fn take_attrs(&mut self, start: u32) -> Vec<Attribute> {
         let mut out = Vec::new();
-        while self.attr_cursor < self.attrs.len() && self.attrs[self.attr_cursor].span.start < start {
-            out.push(self.attrs[self.attr_cursor].clone());
+        while let Some(a) = self.attrs.get(self.attr_cursor).filter(|a| a.span.start < start) {
+            out.push(a.clone());
             self.attr_cursor += 1;
         }
         out
@@ -451,8 +453,7 @@ impl<'a> Parser<'a> {
 
     /// Attribute pragmas left inside an element that just ended are misplaced.
     fn drop_attrs_before(&mut self, end: u32) {
-        while self.attr_cursor < self.attrs.len() && self.attrs[self.attr_cursor].span.start < end {
-            let a = &self.attrs[self.attr_cursor];
+        while let Some(a) = self.attrs.get(self.attr_cursor).filter(|a| a.span.start < end) {
             if a.name.to_ascii_lowercase().starts_with("sfc.") {
                 self.diags.push(Diagnostic::warning(
                     "SFC0603",

@@ -883,7 +883,15 @@ fn compile_pou(u: &Unit<'_>, i: usize, template: &[Value]) -> Compiled {
                 },
                 ActionTarget::Action(_) => None,
             };
-            list.push(AssocCode { duration, variable });
+            // Events name the variable as declared, not as spelled at this association.
+            let variable_name = variable.map(|_| {
+                cx.meta()
+                    .and_then(|m| m.layout.vars.iter().find(|v| v.name.eq_ignore_ascii_case(&a.action)))
+                    .map(|v| v.name.clone())
+                    .or_else(|| cx.u.global_name(&a.action))
+                    .unwrap_or_else(|| a.action.clone())
+            });
+            list.push(AssocCode { duration, variable, variable_name });
         }
         associations.push(list);
     }

@@ -122,6 +122,8 @@ pub struct AssocCode {
     pub duration: Option<DurationCode>,
     /// For a BOOL variable used as an action: where it lives.
     pub variable: Option<Place>,
+    /// For a BOOL variable used as an action: its declared spelling.
+    pub variable_name: Option<String>,
 }
 
 /// Frame offsets of the implicit control variables of an SFC instance (see `docs/sim.md`).
