@@ -68,6 +68,10 @@ checks and runs program organisation units.";
         "The type specification is not valid, for example an array with a reversed range \
 `ARRAY [10..1] OF INT` or a string length that is not a positive integer.";
 
+    "SFC0106" Warning "nothing to check"
+        "The file declares no POU, type or global variable: it is empty or holds only comments. \
+Perhaps it is the wrong file, or it was saved empty.";
+
     "SFC0201" Error "no initial step"
         "Every network of steps needs exactly one `INITIAL_STEP`.\n\n    INITIAL_STEP Init: END_STEP";
     "SFC0202" Error "more than one initial step in a network"

@@ -1969,6 +1969,14 @@ fn choose_pou(
         return Ok(charts[0].pou.clone());
     }
     let names: Vec<&str> = pous.iter().filter(|p| p.kind != PouKind::Function).map(|p| p.name.text.as_str()).collect();
+    if names.is_empty() {
+        return Err(Diagnostic::error(
+            "SFC0321",
+            Span::default(),
+            "the file has no SFC POU to simulate (and no PROGRAM)",
+        )
+        .with_note("a chart is a PROGRAM or FUNCTION_BLOCK whose body is steps and transitions"));
+    }
     Err(Diagnostic::error("SFC0321", Span::default(), "choose the POU to simulate (`pou` / `--pou`)")
         .with_note(format!("candidates: {}", names.join(", "))))
 }

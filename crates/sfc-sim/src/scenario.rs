@@ -793,7 +793,17 @@ fn clean(path: &Path) -> PathBuf {
 fn read_text(path: &Path, what: &str) -> Result<String, (ErrorKind, String)> {
     let bytes =
         std::fs::read(path).map_err(|e| (ErrorKind::Io, format!("cannot read {what} `{}`: {e}", path.display())))?;
-    String::from_utf8(bytes).map_err(|_| (ErrorKind::Invalid, format!("{what} `{}` is not UTF-8 text", path.display())))
+    // A file that is not text is an I/O problem (exit 2), as for `sfc check` and `sfc build`.
+    String::from_utf8(bytes).map_err(|_| (ErrorKind::Io, format!("{what} `{}` is not UTF-8 text", path.display())))
+}
+
+/// A POU that does not exist or cannot be chosen (SFC0321) is a usage error when the command
+/// line chose it (`--pou`, or a chart given without scenario), not a problem of the chart.
+fn pou_choice_is_usage(mut e: ScenarioError) -> ScenarioError {
+    if e.diagnostics.as_ref().is_some_and(|d| !d.1.is_empty() && d.1.iter().all(|d| d.code == "SFC0321")) {
+        e.kind = ErrorKind::Usage;
+    }
+    e
 }
 
 /// Loads a scenario file with command-line settings taking precedence.
@@ -834,6 +844,7 @@ pub fn load_with(path: &Path, o: &Overrides) -> Result<Scenario, ScenarioError> 
     let chart_name = chart.display().to_string();
     let sim = compile(&chart_name, &chart_text, pou.as_deref(), options).map_err(|e| {
         let pou_key = if o.pou.is_none() { parsed.pou.as_ref() } else { None };
+        let e = if o.pou.is_some() { pou_choice_is_usage(e) } else { e };
         locate(pou_key.or(chart_key), e)
     })?;
     let binder = Binder::new(&sim, &name, &chart_name);
@@ -895,7 +906,7 @@ pub fn for_chart(chart: &Path, o: &Overrides) -> Result<Scenario, ScenarioError>
     let chart_name = chart.display().to_string();
     let chart_text = read_text(&chart, "the chart").map_err(|(k, m)| ScenarioError::new(k, None, m))?;
     let options = SimOptions { period: o.period.unwrap_or(DEFAULT_PERIOD), profile: o.profile.unwrap_or_default() };
-    let sim = compile(&chart_name, &chart_text, o.pou.as_deref(), options)?;
+    let sim = compile(&chart_name, &chart_text, o.pou.as_deref(), options).map_err(pou_choice_is_usage)?;
     let entries = command_line_sets(&sim, o)?.into_iter().collect();
     Ok(Scenario {
         path: chart.clone(),

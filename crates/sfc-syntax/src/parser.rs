@@ -76,6 +76,70 @@ const RESERVED: &[&str] = &[
     "RESOURCE",
 ];
 
+/// Keywords a statement list may meet at the start of a statement (a misspelling of one is
+/// reported as such).
+const STATEMENT_KEYWORDS: &[&str] = &[
+    "END_IF",
+    "END_CASE",
+    "END_FOR",
+    "END_WHILE",
+    "END_REPEAT",
+    "END_STEP",
+    "END_TRANSITION",
+    "END_ACTION",
+    "END_PROGRAM",
+    "END_FUNCTION",
+    "END_FUNCTION_BLOCK",
+    "ELSIF",
+    "ELSE",
+    "UNTIL",
+    "CASE",
+    "WHILE",
+    "REPEAT",
+    "RETURN",
+    "INITIAL_STEP",
+    "TRANSITION",
+    "ACTION",
+];
+
+/// Edit distance between a written word and a keyword (both upper case), counting a swap of
+/// two neighbours as one edit (`END_STPE`); at most 3 is ever needed, so longer is 3.
+fn keyword_distance(a: &str, b: &str) -> usize {
+    let a: Vec<char> = a.chars().collect();
+    let b: Vec<char> = b.chars().collect();
+    if a.len().abs_diff(b.len()) > 2 {
+        return 3;
+    }
+    let w = b.len() + 1;
+    let mut d = vec![0usize; (a.len() + 1) * w];
+    let at = |i: usize, j: usize| i * w + j;
+    for i in 0..=a.len() {
+        if let Some(c) = d.get_mut(at(i, 0)) {
+            *c = i;
+        }
+    }
+    for j in 0..=b.len() {
+        if let Some(c) = d.get_mut(at(0, j)) {
+            *c = j;
+        }
+    }
+    let get = |d: &Vec<usize>, i: usize, j: usize| d.get(at(i, j)).copied().unwrap_or(usize::MAX / 2);
+    for (i, ca) in a.iter().enumerate() {
+        for (j, cb) in b.iter().enumerate() {
+            let (i1, j1) = (i + 1, j + 1);
+            let cost = usize::from(ca != cb);
+            let mut best = (get(&d, i, j1) + 1).min(get(&d, i1, j) + 1).min(get(&d, i, j) + cost);
+            if i > 0 && j > 0 && a.get(i - 1) == Some(cb) && b.get(j - 1) == Some(ca) {
+                best = best.min(get(&d, i - 1, j - 1) + 1);
+            }
+            if let Some(c) = d.get_mut(at(i1, j1)) {
+                *c = best;
+            }
+        }
+    }
+    get(&d, a.len(), b.len()).min(3)
+}
+
 /// Keywords at which statement and element lists stop.
 const STOPPERS: &[&str] = &[
     "END_IF",
@@ -139,6 +203,15 @@ pub fn parse(file: u32, text: &str) -> (SourceUnit, Vec<Diagnostic>) {
     p.lexical_error_ends = diags.iter().map(|d| d.span.end).collect();
     let unit = p.source_unit();
     diags.append(&mut p.diags);
+    if unit.items.is_empty() && diags.is_empty() {
+        // Nothing to check is worth saying: an empty file, or one holding only comments, is
+        // usually the wrong file.
+        let what = if text.trim().is_empty() { "the file is empty" } else { "the file holds only comments" };
+        diags.push(
+            Diagnostic::warning("SFC0106", Span::new(file, 0, 0), format!("nothing to check: {what}"))
+                .with_note("a chart is a PROGRAM or FUNCTION_BLOCK whose body is steps and transitions"),
+        );
+    }
     (unit, diags)
 }
 
@@ -194,6 +267,9 @@ struct Parser<'a> {
     /// Ends of lexical errors: a syntax error right after a malformed token (an unterminated
     /// string swallowed its `;`) is a follow-on error and not reported.
     lexical_error_ends: std::collections::HashSet<u32>,
+    /// Misspelled keywords, by token start: reported once, then read as the keyword they stand
+    /// for, so one typo gives one error and no cascade.
+    keyword_typos: std::collections::HashMap<u32, &'static str>,
 }
 
 impl<'a> Parser<'a> {
@@ -257,6 +333,7 @@ impl<'a> Parser<'a> {
             depth: 0,
             depth_reported: false,
             lexical_error_ends: Default::default(),
+            keyword_typos: Default::default(),
         }
     }
 
@@ -282,6 +359,9 @@ impl<'a> Parser<'a> {
         self.kind() == k
     }
     fn text_of(&self, t: Tok) -> &'a str {
+        if let Some(kw) = self.keyword_typos.get(&t.start) {
+            return kw;
+        }
         &self.text[t.start as usize..t.end as usize]
     }
     fn cur_text(&self) -> &'a str {
@@ -380,9 +460,43 @@ impl<'a> Parser<'a> {
         }
     }
 
+    /// When the current token is an identifier that misspells one of `candidates` (`INITAL_STEP`,
+    /// `END_TRANSITON`), reports it and reads it as that keyword from now on. Callers ask only
+    /// where an identifier cannot stand, so a variable that looks like a keyword is left alone.
+    fn fix_keyword_typo(&mut self, candidates: &[&str]) -> bool {
+        let t = self.tok();
+        if t.kind != TokenKind::Ident || self.is_reserved(t) || self.keyword_typos.contains_key(&t.start) {
+            return false;
+        }
+        let written = self.text_of(t).to_ascii_uppercase();
+        let best = candidates
+            .iter()
+            .filter(|k| k.len() >= 4)
+            .map(|k| (keyword_distance(&written, k), *k))
+            .filter(|(d, k)| *d <= if k.len() <= 6 { 1 } else { 2 })
+            .min_by_key(|(d, _)| *d);
+        let Some(kw) = best.and_then(|(_, k)| RESERVED.iter().find(|r| r.eq_ignore_ascii_case(k))) else {
+            return false;
+        };
+        let span = self.span_of(t);
+        let shown = self.text_of(t).to_string();
+        if !self.after_lexical_error() {
+            self.last_error_at = Some(self.pos);
+            self.diags.push(
+                Diagnostic::error("SFC0101", span, format!("misspelled keyword `{shown}`"))
+                    .with_note(format!("did you mean `{kw}`?")),
+            );
+        }
+        self.keyword_typos.insert(t.start, kw);
+        true
+    }
+
     /// Expects a closing keyword (SFC0102 when it is missing).
     fn expect_end(&mut self, kw: &str, opened: Span) {
         if self.eat_kw(kw) {
+            return;
+        }
+        if self.fix_keyword_typo(&[kw]) && self.eat_kw(kw) {
             return;
         }
         let t = self.tok();
@@ -567,8 +681,13 @@ impl<'a> Parser<'a> {
             }
         }
         let mut var_blocks = Vec::new();
+        let var_keywords: Vec<&str> = VAR_KEYWORDS.iter().map(|v| v.0).collect();
         loop {
-            if self.at_any_kw(&VAR_KEYWORDS.iter().map(|v| v.0).collect::<Vec<_>>()) {
+            // `VAR_INPT a : BOOL;`: an identifier followed by an identifier or a newline.
+            if !self.at_any_kw(&var_keywords) && (self.nth(1).kind == TokenKind::Ident || self.nth(1).nl_before) {
+                self.fix_keyword_typo(&var_keywords);
+            }
+            if self.at_any_kw(&var_keywords) {
                 var_blocks.push(self.var_block());
             } else {
                 break;
@@ -584,6 +703,10 @@ impl<'a> Parser<'a> {
     }
 
     fn body(&mut self, end_kw: &str) -> Body {
+        // An identifier followed by an identifier starts no statement: a misspelled element?
+        if self.nth(1).kind == TokenKind::Ident {
+            self.fix_keyword_typo(&["STEP", "INITIAL_STEP", "TRANSITION", "ACTION"]);
+        }
         if self.at_any_kw(&["STEP", "INITIAL_STEP", "TRANSITION", "ACTION"]) {
             return Body::Sfc(self.sfc_elements(end_kw));
         }
@@ -645,6 +768,14 @@ impl<'a> Parser<'a> {
         while !self.at(TokenKind::Eof) && !self.at_kw("END_VAR") {
             if self.at_any_kw(STOPPERS) {
                 break;
+            }
+            // A declaration is `name ,` / `name :` / `name AT`: anything else after a name may be
+            // a misspelled `END_VAR`.
+            if !matches!(self.nth(1).kind, TokenKind::Comma | TokenKind::Colon)
+                && !self.is_kw_tok(self.nth(1), "AT")
+                && self.fix_keyword_typo(&["END_VAR"])
+            {
+                continue;
             }
             let before = self.pos;
             if let Some(d) = self.var_decl(kind == VarKind::Access) {
@@ -980,6 +1111,11 @@ impl<'a> Parser<'a> {
                 "END_FUNCTION_BLOCK",
             ]) {
                 break;
+            } else if (self.nth(1).kind == TokenKind::Ident
+                && self.fix_keyword_typo(&["STEP", "INITIAL_STEP", "TRANSITION", "ACTION"]))
+                || self.fix_keyword_typo(&["END_PROGRAM", "END_FUNCTION", "END_FUNCTION_BLOCK"])
+            {
+                continue;
             } else {
                 self.error_here("expected STEP, INITIAL_STEP, TRANSITION or ACTION");
                 self.bump();
@@ -1005,6 +1141,10 @@ impl<'a> Parser<'a> {
         while !self.at(TokenKind::Eof) && !self.at_kw("END_STEP") {
             if self.at_any_kw(STOPPERS) {
                 break;
+            }
+            // An association is `Name(…)`: anything else here may be a misspelled `END_STEP`.
+            if self.nth(1).kind != TokenKind::LParen && self.fix_keyword_typo(&["END_STEP"]) {
+                continue;
             }
             let before = self.pos;
             if let Some(a) = self.association() {
@@ -1313,6 +1453,13 @@ impl<'a> Parser<'a> {
         loop {
             if self.at(TokenKind::Eof) || self.at_any_kw(STOPPERS) || stop(self) {
                 break;
+            }
+            // A statement starts with a name followed by `:=`, `(`, `.` or `[`: a name
+            // followed by anything else may be a misspelled keyword (`END_ACTON`, `ELSEIF`).
+            if !matches!(self.nth(1).kind, TokenKind::Assign | TokenKind::LParen | TokenKind::Dot | TokenKind::LBracket)
+                && self.fix_keyword_typo(STATEMENT_KEYWORDS)
+            {
+                continue;
             }
             let before = self.pos;
             if let Some(s) = self.stmt() {
