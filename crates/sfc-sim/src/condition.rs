@@ -35,6 +35,8 @@ enum Node {
 enum Kind {
     Bool,
     Other(Option<Type>),
+    /// A bare name that is no variable (an enumeration value, or a mistake).
+    Name,
 }
 
 impl Condition {
@@ -197,14 +199,28 @@ impl Binder<'_> {
                 }
             }
             ExprKind::Binary { op, lhs, rhs } => {
-                let (mut a, ka) = self.bind_operand(lhs)?;
-                let (mut b, kb) = self.bind_operand(rhs)?;
+                let comparison = matches!(
+                    op,
+                    BinaryOp::Eq | BinaryOp::Ne | BinaryOp::Lt | BinaryOp::Gt | BinaryOp::Le | BinaryOp::Ge
+                );
+                let (mut a, ka) = if comparison { self.bind_operand(lhs)? } else { self.bind(lhs)? };
+                let (mut b, kb) = if comparison { self.bind_operand(rhs)? } else { self.bind(rhs)? };
                 // `Mode = Auto`: a bare name on one side is a value of the other side's enumeration.
-                if let (Some(name), Kind::Other(Some(ty))) = (enum_name(lhs, &ka), &kb) {
-                    a = Node::Const(Value::Int(self.enum_value(ty, &name)?));
+                let enum_of = |k: &Kind| match k {
+                    Kind::Other(Some(ty)) if ty.is_enum() => Some(ty.clone()),
+                    _ => None,
+                };
+                if let Some(name) = enum_name(lhs, &ka) {
+                    match enum_of(&kb) {
+                        Some(ty) => a = Node::Const(Value::Int(self.enum_value(&ty, &name)?)),
+                        None => return self.read(lhs),
+                    }
                 }
-                if let (Kind::Other(Some(ty)), Some(name)) = (&ka, enum_name(rhs, &kb)) {
-                    b = Node::Const(Value::Int(self.enum_value(ty, &name)?));
+                if let Some(name) = enum_name(rhs, &kb) {
+                    match enum_of(&ka) {
+                        Some(ty) => b = Node::Const(Value::Int(self.enum_value(&ty, &name)?)),
+                        None => return self.read(rhs),
+                    }
                 }
                 let kind = match op {
                     BinaryOp::Eq | BinaryOp::Ne | BinaryOp::Lt | BinaryOp::Gt | BinaryOp::Le | BinaryOp::Ge => {
@@ -230,11 +246,12 @@ impl Binder<'_> {
         }
     }
 
-    /// Like `bind`, but a bare name that is no variable is kept for enumeration values.
+    /// Like `bind`, but a bare name that is no variable is kept aside (marked by `Kind::Name`)
+    /// for the enumeration of the other side of a comparison.
     fn bind_operand(&self, e: &Expr) -> Result<(Node, Kind), String> {
         if let ExprKind::Name(id) = &e.kind {
             if self.sim.type_of(&id.text).is_none() {
-                return Ok((Node::Const(Value::Int(0)), Kind::Other(None)));
+                return Ok((Node::Const(Value::Int(0)), Kind::Name));
             }
         }
         self.bind(e)
@@ -254,7 +271,7 @@ impl Binder<'_> {
 /// The bare name of an operand that `bind_operand` kept aside (no variable of that name).
 fn enum_name(e: &Expr, kind: &Kind) -> Option<String> {
     match (&e.kind, kind) {
-        (ExprKind::Name(id), Kind::Other(None)) => Some(id.text.clone()),
+        (ExprKind::Name(id), Kind::Name) => Some(id.text.clone()),
         _ => None,
     }
 }
