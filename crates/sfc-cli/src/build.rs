@@ -2,11 +2,12 @@
 //! REX ATMT/EATMT table, Structured Text, S7-200 statement list, PLCopen XML, SVG or text.
 //! The checking and compiling are the driver's (`sfc_driver::compile`), shared with the editor.
 
-use crate::{print_diagnostics, read, write_atomically};
+use crate::term::{self, print_diagnostics};
+use crate::Status;
 use sfc_driver::compile::{self, CompileError, CompileOptions};
 use std::path::PathBuf;
 
-pub use sfc_driver::compile::{check_any, BuildTarget};
+pub use sfc_driver::compile::BuildTarget;
 
 pub struct BuildRequest {
     pub file: PathBuf,
@@ -19,19 +20,28 @@ pub struct BuildRequest {
 }
 
 pub fn build(r: BuildRequest) -> u8 {
-    let text = match read(&r.file) {
+    if let Some(out) = &r.out {
+        if sfc_driver::same_file(out, &r.file) {
+            term::error(&format!(
+                "`{}` is the input: refusing to overwrite the chart with the build output (choose another -o)",
+                out.display()
+            ));
+            return Status::Usage.code();
+        }
+    }
+    let text = match sfc_driver::read_source(&r.file) {
         Ok(t) => t,
         Err(e) => {
-            eprintln!("error: {e}");
-            return 2;
+            term::error(&e.message);
+            return Status::Usage.code();
         }
     };
     let opts = compile::validation_options(r.target, r.nstep, r.ntr);
-    let (file, checked, diags) = check_any(0, &r.file, &text, &opts);
+    let (file, checked, diags) = sfc_driver::check_any(0, &r.file, &text, &opts);
     let errors = print_diagnostics(&diags, &[file]);
     if errors > 0 {
-        eprintln!("`{}` has errors: nothing was built", r.file.display());
-        return 1;
+        term::error(&format!("`{}` has errors: nothing was built", r.file.display()));
+        return Status::Findings.code();
     }
     let copts = CompileOptions { pou: r.pou.as_deref(), flatten: r.flatten, nstep: r.nstep, ntr: r.ntr };
     let text = match compile::compile(&checked, r.target, &copts) {
@@ -43,22 +53,22 @@ pub fn build(r: BuildRequest) -> u8 {
             built.text
         }
         Err(CompileError::Chart(e)) => {
-            eprintln!("error: {e}");
-            return 2;
+            term::error(&e);
+            return Status::Usage.code();
         }
         Err(CompileError::Diagnostics(diags)) => {
             // Generation diagnostics are located in the checked text (for XML input, the
             // generated IEC text).
             print_diagnostics(&diags, std::slice::from_ref(&checked.file));
-            eprintln!("`{}` cannot be built for this target", r.file.display());
-            return 1;
+            term::error(&format!("`{}` cannot be built for this target", r.file.display()));
+            return Status::Findings.code();
         }
     };
     match &r.out {
         Some(path) if path.as_os_str() != "-" => {
-            if let Err(e) = write_atomically(path, &text) {
-                eprintln!("error: cannot write `{}`: {e}", path.display());
-                return 2;
+            if let Err(e) = sfc_driver::write_atomically(path, text.as_bytes()) {
+                term::error(&format!("cannot write `{}`: {e}", path.display()));
+                return Status::Usage.code();
             }
         }
         _ => {
@@ -68,5 +78,5 @@ pub fn build(r: BuildRequest) -> u8 {
             }
         }
     }
-    0
+    Status::Ok.code()
 }
