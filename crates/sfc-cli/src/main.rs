@@ -11,6 +11,7 @@ mod check;
 mod ci;
 mod edit;
 mod fmt;
+mod lsp;
 mod run;
 mod sim;
 mod term;
@@ -77,6 +78,8 @@ enum Command {
     Edit(edit::EditArgs),
     /// Run a chart as a soft-PLC on the wall clock, with Modbus TCP I/O and the monitor protocol.
     Run(run::RunArgs),
+    /// Serve the Language Server Protocol on standard input and output, for editors.
+    Lsp(lsp::LspArgs),
     /// Print a shell completion script (e.g. `sfc completions bash > /etc/bash_completion.d/sfc`).
     Completions(CompletionsArgs),
     /// Print the manual page (roff), or write one page per command into a directory.
@@ -275,6 +278,7 @@ fn run() -> u8 {
         Command::Test(a) => test::test(a),
         Command::Edit(a) => edit::edit(a),
         Command::Run(a) => run::run(a),
+        Command::Lsp(a) => lsp::lsp(a),
         Command::Completions(a) => {
             let mut cmd = Cli::command();
             clap_complete::generate(a.shell, &mut cmd, "sfc", &mut std::io::stdout());
