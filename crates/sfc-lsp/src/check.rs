@@ -35,9 +35,12 @@ pub struct ChartDiagnostics;
 impl DiagnosticsProvider for ChartDiagnostics {
     fn handles(&self, path: &Path, language: &str, text: &str) -> bool {
         let ext = path.extension().and_then(|e| e.to_str()).unwrap_or("").to_ascii_lowercase();
-        matches!(language, "sfc" | "iec-st" | "st" | "xml")
-            || matches!(ext.as_str(), "st" | "xml" | "")
-            || sfc_driver::is_xml(path, text)
+        if sfc_driver::is_xml(path, text) || language == "xml" {
+            // Only PLCopen XML: an editor sends every XML file it opens (a `pom.xml` is no chart).
+            let head: String = text.chars().take(4096).collect::<String>().to_ascii_lowercase();
+            return head.contains("plcopen");
+        }
+        matches!(language, "sfc" | "iec-st" | "st") || matches!(ext.as_str(), "st" | "")
     }
 
     fn check(&self, path: &Path, text: &str, analysis: bool) -> (SourceFile, Vec<Diagnostic>) {
