@@ -427,8 +427,7 @@ fn cobertura(set: &CoverageSet) -> String {
             );
             for (line, (shit, sall, thit, tall)) in &cl.lines {
                 let hits = usize::from(*shit > 0 || *thit > 0);
-                if *tall > 0 {
-                    let pct = (*thit * 100) / *tall;
+                if let Some(pct) = (*thit * 100).checked_div(*tall) {
                     let _ = writeln!(
                         out,
                         "            <line number=\"{line}\" hits=\"{hits}\" branch=\"true\" condition-coverage=\"{pct}% ({thit}/{tall})\"/>"

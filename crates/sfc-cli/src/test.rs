@@ -64,7 +64,8 @@ fn chart_warnings(cache: &mut HashMap<PathBuf, Vec<String>>, s: &scenario::Scena
     cache
         .entry(key)
         .or_insert_with(|| {
-            let (file, _, diags) = sfc_driver::check_any(0, &s.chart, s.chart_text(), &Default::default());
+            let opts = sfc_model::CheckOptions { analysis: true, ..Default::default() };
+            let (file, _, diags) = sfc_driver::check_any(0, &s.chart, s.chart_text(), &opts);
             diags
                 .iter()
                 .filter(|d| d.severity == sfc_diagnostics::Severity::Warning)
