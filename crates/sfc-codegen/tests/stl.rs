@@ -1141,3 +1141,17 @@ fn symbol_table_is_valid_csv_for_micro_win() {
     assert_eq!(rows, p.text.lines().filter(|l| l.starts_with("//   ")).count());
     assert!(p.symbols.contains("StartButton,I0.0,"));
 }
+
+/// docs/targets.md shows the seed 002 car wash in both methods: exactly the programs the
+/// generator writes today.
+#[test]
+fn the_documented_car_wash_is_the_generated_one() {
+    let doc = std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("../../docs/targets.md")).unwrap();
+    let text = std::fs::read_to_string(fixture_dir().join("carwash_textbook.st")).expect("fixture");
+    for method in METHODS {
+        let p = build("carwash_textbook.st", &text, method).1.expect("accepted");
+        // The first line names the file as given; the rest must be on the page as it is.
+        let program: String = p.text.lines().skip(1).map(|l| format!("{l}\n")).collect();
+        assert!(doc.contains(program.trim_end()), "docs/targets.md does not show the {method:?} program:\n{}", p.text);
+    }
+}

@@ -104,6 +104,7 @@ impl Sink {
     fn push_network(&mut self, title: String, code: Vec<Ins>) {
         self.flush();
         self.networks.push(Network { title, code });
+        self.part += 1;
     }
 }
 
@@ -505,7 +506,7 @@ impl Emitter {
         Self::chain(enable, &mut skip);
         skip.push(Ins::bare(Op::Not));
         skip.push(Ins::label(Op::Jmp, label, "the call does not run in this scan"));
-        sink.push_network(format!("{}: skip `{text}` unless it runs", sink.title), skip);
+        sink.push_network(format!("jump over the counter call below in the scans it does not run (LBL {label})"), skip);
         let mut code = Vec::new();
         let c = Addr::Counter(counter);
         let (op, inputs, what): (Op, Vec<&Logic>, &str) = match kind {
@@ -523,7 +524,7 @@ impl Emitter {
             ));
             code.push(Ins::on(Op::Out, qd, "QD"));
         }
-        sink.push_network(format!("{}: {text}", sink.title), code);
+        sink.push_network(format!("counter call: {text}"), code);
         sink.code.push(Ins::label(Op::Lbl, label, ""));
     }
 }
