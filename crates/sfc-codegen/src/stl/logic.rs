@@ -443,7 +443,7 @@ impl Lowerer<'_> {
         // One diagnostic per comparison: the right side is judged only when the left is fine.
         let (a, ta) = self.int_expr(lhs, site)?;
         let (b, tb) = self.int_expr(rhs, site)?;
-        let Some(((a, b), ty)) = self.unify(a, ta, b, tb, span, site) else { return None };
+        let ((a, b), ty) = self.unify(a, ta, b, tb, span, site)?;
         if !ty.signed() && !matches!(cmp, CmpOp::Eq | CmpOp::Ne) {
             let msg = format!(
                 "`{}` compares {} values by size; the S7-200 compare contacts are signed, so only = and <> \
