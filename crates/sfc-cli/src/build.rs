@@ -7,6 +7,7 @@ use crate::Status;
 use sfc_driver::compile::{self, CompileError, CompileOptions};
 use std::path::PathBuf;
 
+pub use sfc_codegen::stl::StlMethod;
 pub use sfc_driver::compile::BuildTarget;
 
 pub struct BuildRequest {
@@ -17,13 +18,21 @@ pub struct BuildRequest {
     pub flatten: bool,
     pub nstep: Option<u32>,
     pub ntr: Option<u32>,
+    /// `--stl-method` (STL only).
+    pub stl_method: Option<StlMethod>,
+    /// `--symbols OUT.csv` (STL only).
+    pub symbols: Option<PathBuf>,
 }
 
 pub fn build(r: BuildRequest) -> u8 {
-    if let Some(out) = &r.out {
+    if r.target != BuildTarget::Stl && (r.stl_method.is_some() || r.symbols.is_some()) {
+        term::error("--stl-method and --symbols apply to --target stl");
+        return Status::Usage.code();
+    }
+    for out in r.out.iter().chain(&r.symbols) {
         if sfc_driver::same_file(out, &r.file) {
             term::error(&format!(
-                "`{}` is the input: refusing to overwrite the chart with the build output (choose another -o)",
+                "`{}` is the input: refusing to overwrite the chart with the build output (choose another file)",
                 out.display()
             ));
             return Status::Usage.code();
@@ -36,19 +45,33 @@ pub fn build(r: BuildRequest) -> u8 {
             return Status::Usage.code();
         }
     };
-    let opts = compile::validation_options(r.target, r.nstep, r.ntr);
+    let mut opts = compile::validation_options(r.target, r.nstep, r.ntr);
+    // With --flatten the simultaneous branches are compiled, not refused.
+    opts.flatten = r.flatten;
     let (file, checked, diags) = sfc_driver::check_any(0, &r.file, &text, &opts);
     let errors = print_diagnostics(&diags, &[file]);
     if errors > 0 {
         term::error(&format!("`{}` has errors: nothing was built", r.file.display()));
         return Status::Findings.code();
     }
-    let copts = CompileOptions { pou: r.pou.as_deref(), flatten: r.flatten, nstep: r.nstep, ntr: r.ntr };
+    let copts = CompileOptions {
+        pou: r.pou.as_deref(),
+        flatten: r.flatten,
+        nstep: r.nstep,
+        ntr: r.ntr,
+        stl_method: r.stl_method.unwrap_or_default(),
+    };
     let text = match compile::compile(&checked, r.target, &copts) {
         Ok(built) => {
             print_diagnostics(&built.notes, std::slice::from_ref(&checked.file));
             if let Some(n) = built.flattened {
                 eprintln!("flattened into {n} states");
+            }
+            if let (Some(path), Some(csv)) = (&r.symbols, &built.symbols) {
+                if let Err(e) = sfc_driver::write_atomically(path, csv.as_bytes()) {
+                    term::error(&format!("cannot write `{}`: {e}", path.display()));
+                    return Status::Usage.code();
+                }
             }
             built.text
         }
