@@ -333,6 +333,20 @@ from the body's last step. Exporting the chart again writes the flattened steps.
 transition condition nothing refers to, a second body of a POU, an element that does not belong \
 in an SFC body, a coil on the path of a transition condition (a condition cannot assign it), \
 the `persistent` attribute of a variable list.";
+    "SFC0711" Note "vendor element skipped"
+        "A network holds a vendor's own element (a CODESYS FBD `vendorElement`: a box, a comment or \
+a connector only its tool can draw). It has no IEC 61131-3 meaning and is skipped; the rest of the \
+network is imported.";
+    "SFC0712" Warning "no SFC POU in the file"
+        "The file imports, but none of its POUs is a Sequential Function Chart, so there is no chart \
+to check, simulate, build or edit. The note lists the POUs found. A CODESYS project export keeps an \
+application's POUs in its resource's `addData`; those are read too.";
+    "SFC0713" Warning "unknown type imported as an opaque block"
+        "The file uses a data type or function block that it does not declare: a library's (a \
+CODESYS library, `Util.BLINK`), or an extension's (Beremiz's svghmi `HMI_*`, py_ext `python_eval`, \
+svgui `Button`, `Led`). It is imported as an opaque function block: its instances are kept and \
+written back on export, everything done with them is accepted, and nothing about them is analysed \
+or simulated.";
 
     "SFC0801" Error "chart cannot be translated to ST"
         "The Structured Text target (`--target st`) replaces the chart's POU by a plain ST POU of \

@@ -154,8 +154,9 @@ impl Checker<'_, '_> {
                 format!("`{fb}` is a function block type; declare an instance (`Inst : {fb};`) and call that"),
             ),
             Callee::Unknown => {
-                // An error-typed instance was already reported.
-                if self.scope.resolve(&name.text).is_none() {
+                // An error-typed instance was already reported; a POU kept as written is not
+                // analysed, nor are calls of it.
+                if self.scope.resolve(&name.text).is_none() && !self.scope.env().is_opaque(&name.text) {
                     self.unknown_callee(name);
                 }
             }

@@ -290,7 +290,7 @@ impl Tr<'_, '_, '_, '_, '_> {
                     self.report(i, "SFC0705", "the variable has no expression".into());
                     return self.falsum(i);
                 };
-                let f = text_frag(t);
+                let f = text_frag(&super::dialect::map(self.cx, t));
                 if negated_out {
                     f.not()
                 } else {
@@ -651,7 +651,14 @@ fn unsupported(cx: &mut Ctx, net: &Net) {
             "label" | "jump" | "return" => {
                 cx.diag("SFC0705", anchor(g.n), format!("`{}` (FBD control flow) is not imported", g.kind));
             }
-            "vendorElement" | "error" => {
+            "vendorElement" => {
+                cx.diag(
+                    "SFC0711",
+                    anchor(g.n),
+                    "a vendor element (drawn by its own tool, no IEC meaning) is skipped; the rest of the network is imported",
+                );
+            }
+            "error" => {
                 cx.diag("SFC0705", anchor(g.n), format!("a `{}` element cannot be imported", g.kind));
             }
             _ => {}

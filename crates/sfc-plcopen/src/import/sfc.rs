@@ -843,6 +843,11 @@ fn condition<'a, 'i>(
         let f = network::condition(cx, sfc, cp, &at);
         return (Cond::Net(f), negated, name, None);
     }
+    // TC6 v1.0 wires a condition without `connectionPointIn`: `<condition><connection …/>`.
+    if child(c, "connection").is_some() {
+        let f = network::condition(cx, sfc, c, &at);
+        return (Cond::Net(f), negated, name, None);
+    }
     cx.diag("SFC0708", anchor(c), "the condition is empty; imported as FALSE");
     (Cond::Net(Frag::located("FALSE", anchor(c))), negated, name, None)
 }
@@ -857,7 +862,7 @@ fn body_condition(cx: &mut Ctx, body: Node, name: &str) -> Cond {
     };
     match l.tag_name().name() {
         "ST" => {
-            let t = xml::formatted_text(l).trim();
+            let t = super::dialect::map(cx, &xml::formatted_text(l)).trim();
             Cond::St(st_expression(&t, name))
         }
         "IL" => {
