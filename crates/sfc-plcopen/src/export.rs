@@ -430,26 +430,46 @@ pub fn export(checked: &Checked) -> Result<String, Vec<Diagnostic>> {
             ("xmlns:xsd", "http://www.w3.org/2001/XMLSchema".to_string()),
         ],
     );
-    x.empty(
-        "fileHeader",
-        &[
-            ("companyName", "sfc".into()),
-            ("productName", "sfc".into()),
-            ("productVersion", env!("CARGO_PKG_VERSION").into()),
-            ("creationDateTime", "1970-01-01T00:00:00".into()),
-        ],
-    );
-    let stem = checked.file.name.rsplit(['/', '\\']).next().unwrap_or("project");
-    let stem = stem.split('.').next().filter(|s| !s.is_empty()).unwrap_or("project");
-    x.open("contentHeader", &[("name", stem.to_string())]);
-    x.open("coordinateInfo", &[]);
-    for l in ["fbd", "ld", "sfc"] {
-        x.open(l, &[]);
-        x.empty("scaling", &[("x", "0".into()), ("y", "0".into())]);
-        x.close(l);
+    // The headers of an imported file travel on its first POU (`sfc.fileheader`,
+    // `sfc.contentheader`), as does the project's foreign `addData` (`sfc.projectdata`).
+    let header = |name: &str| -> Option<String> {
+        unit.items.iter().find_map(|it| {
+            let list = match it {
+                ast::Item::Pou(p) => &p.attributes,
+                ast::Item::Verbatim(v) => &v.attributes,
+                _ => return None,
+            };
+            attrs::get(list, name).map(attrs::unescape).filter(|v| well_formed(v))
+        })
+    };
+    match header(attrs::FILEHEADER) {
+        Some(h) => x.raw(&h),
+        None => x.empty(
+            "fileHeader",
+            &[
+                ("companyName", "sfc".into()),
+                ("productName", "sfc".into()),
+                ("productVersion", env!("CARGO_PKG_VERSION").into()),
+                ("creationDateTime", "1970-01-01T00:00:00".into()),
+            ],
+        ),
     }
-    x.close("coordinateInfo");
-    x.close("contentHeader");
+    match header(attrs::CONTENTHEADER).filter(|h| h.contains("coordinateInfo")) {
+        Some(h) => x.raw(&h),
+        None => {
+            let stem = checked.file.name.rsplit(['/', '\\']).next().unwrap_or("project");
+            let stem = stem.split('.').next().filter(|s| !s.is_empty()).unwrap_or("project");
+            x.open("contentHeader", &[("name", stem.to_string())]);
+            x.open("coordinateInfo", &[]);
+            for l in ["fbd", "ld", "sfc"] {
+                x.open(l, &[]);
+                x.empty("scaling", &[("x", "0".into()), ("y", "0".into())]);
+                x.close(l);
+            }
+            x.close("coordinateInfo");
+            x.close("contentHeader");
+        }
+    }
 
     x.open("types", &[]);
     x.open("dataTypes", &[]);
@@ -472,17 +492,56 @@ pub fn export(checked: &Checked) -> Result<String, Vec<Diagnostic>> {
     x.close("dataTypes");
     x.open("pous", &[]);
     for (i, item) in unit.items.iter().enumerate() {
-        if let ast::Item::Pou(pou) = item {
-            let chart = checked.charts.iter().find(|c| c.item == i);
-            write_pou(&mut x, src, pou, chart);
+        match item {
+            ast::Item::Pou(pou) => {
+                let chart = checked.charts.iter().find(|c| c.item == i);
+                write_pou(&mut x, src, pou, chart);
+            }
+            ast::Item::Verbatim(v) => write_verbatim_pou(&mut x, v),
+            _ => {}
         }
     }
     x.close("pous");
     x.close("types");
 
     config::write_instances(&mut x, src, unit);
+    if let Some(data) = header(attrs::PROJECTDATA) {
+        x.open("addData", &[]);
+        x.raw(&data);
+        x.close("addData");
+    }
     x.close("project");
     Ok(x.finish())
+}
+
+/// Whether a kept XML fragment is well-formed (a hand edit may have broken it: then it is not
+/// written, rather than writing a broken file).
+fn well_formed(fragment: &str) -> bool {
+    roxmltree::Document::parse(&format!("<r>{fragment}</r>")).is_ok()
+}
+
+/// A POU kept as written: the XML it was imported from, as it was (`sfc.pouxml`); one written
+/// as text, with its declarations and its body as text. An import's opaque stand-in for a type
+/// declared elsewhere (`sfc.verbatim` = `opaque`) is not written.
+fn write_verbatim_pou(x: &mut X, v: &ast::Verbatim) {
+    if !matches!(v.keyword.as_str(), "PROGRAM" | "FUNCTION_BLOCK" | "FUNCTION") {
+        return;
+    }
+    if attrs::get(&v.attributes, attrs::VERBATIM).is_some_and(|w| w.trim() == "opaque") {
+        return;
+    }
+    if let Some(xml) = attrs::get(&v.attributes, attrs::POUXML).map(attrs::unescape).filter(|t| well_formed(t)) {
+        x.raw(&xml);
+        return;
+    }
+    let (unit, _) = sfc_syntax::parse(0, &v.text);
+    if let Some(ast::Item::Pou(p)) = unit.items.first() {
+        let mut p = p.clone();
+        p.attributes = v.attributes.clone();
+        let checked = sfc_model::check_source(0, "", &v.text, &sfc_model::CheckOptions::default());
+        let chart = checked.charts.first().filter(|_| matches!(p.body, ast::Body::Sfc(_)));
+        write_pou(x, &checked.file.text, &p, chart);
+    }
 }
 
 fn write_pou(x: &mut X, src: &str, pou: &ast::Pou, chart: Option<&sfc_model::Chart>) {
@@ -517,7 +576,11 @@ fn write_pou(x: &mut X, src: &str, pou: &ast::Pou, chart: Option<&sfc_model::Cha
             x.close("body");
         }
     }
-    x.add_data(&pou.attributes, &[], &[attrs::DESCRIPTION, attrs::COMMENT]);
+    x.add_data(
+        &pou.attributes,
+        &[],
+        &[attrs::DESCRIPTION, attrs::COMMENT, attrs::FILEHEADER, attrs::CONTENTHEADER, attrs::PROJECTDATA],
+    );
     x.documentation(&pou.attributes);
     x.close("pou");
 }

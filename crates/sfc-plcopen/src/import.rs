@@ -147,6 +147,10 @@ pub(crate) struct Ctx<'i> {
     pub enum_types: HashSet<String>,
     /// Upper-case names of every global variable of the file.
     pub global_names: HashSet<String>,
+    /// The POU being written is kept as written: its code is copied without mapping.
+    pub verbatim: bool,
+    /// The file's headers and foreign project `addData`, written before the first POU.
+    pub header_attrs: Vec<(String, String)>,
     /// While writing the resources' lists at file level: the globals written so far (a
     /// repeated identical declaration is written once).
     pub emitted_globals: Option<HashSet<String>>,
@@ -266,6 +270,22 @@ pub(crate) fn own_data<'a, 'i: 'a>(n: Node<'a, 'i>, what: &str) -> Option<Node<'
 /// Imports a document; `root` is its `project` element.
 pub(crate) fn project(cx: &mut Ctx, root: Node) {
     let types = child(root, "types");
+    // The headers and the project's foreign `addData` travel on the first POU, so an export
+    // writes them back.
+    for (name, key) in [("fileHeader", attrs::FILEHEADER), ("contentHeader", attrs::CONTENTHEADER)] {
+        if let Some(h) = child(root, name) {
+            cx.header_attrs.push((key.to_string(), attrs::escape(&xml::serialize(h))));
+        }
+    }
+    let project_data: String = child(root, "addData")
+        .into_iter()
+        .flat_map(|a| children(a, "data"))
+        .filter(|d| attr(*d, "name") != Some(CODESYS_APPLICATION))
+        .map(xml::serialize)
+        .collect();
+    if !project_data.is_empty() {
+        cx.header_attrs.push((attrs::PROJECTDATA.to_string(), attrs::escape(&project_data)));
+    }
     // Names the CODESYS dialect qualifies: enumerated types, global variable lists, globals.
     cx.enum_types = dialect::enum_types(root);
     let lists: Vec<Node> =
@@ -701,7 +721,10 @@ fn pou(cx: &mut Ctx, p: Node) {
     }
     // Vendor code without an IEC meaning: the POU is kept as written (its XML travels with it,
     // so an export writes it back unchanged) and not analysed.
+    let header = std::mem::take(&mut cx.header_attrs);
+    pou_attrs.splice(0..0, header);
     let verbatim = dialect::reasons(cx, p);
+    cx.verbatim = verbatim.is_some();
     if let Some(why) = &verbatim {
         pou_attrs.insert(0, (attrs::VERBATIM.to_string(), attrs::escape(&format!("not analysed: {why}"))));
         pou_attrs.push((attrs::POUXML.to_string(), attrs::escape(&xml::serialize(p))));
@@ -960,7 +983,9 @@ pub(crate) fn type_text(cx: &mut Ctx, t: Node, indent: &str) -> Frag {
                 Some(l) => {
                     // CODESYS: `GVL.LEN`, a constant of a global variable list.
                     let l = match l.split_once('.') {
-                        Some((gvl, c)) if cx.gvl_names.contains(&gvl.trim().to_ascii_uppercase()) => c.trim(),
+                        Some((gvl, c)) if !cx.verbatim && cx.gvl_names.contains(&gvl.trim().to_ascii_uppercase()) => {
+                            c.trim()
+                        }
                         _ => l,
                     };
                     Frag::located(format!("{kw}[{l}]"), at)
@@ -1197,6 +1222,8 @@ pub(crate) fn run(file: u32, xml_text: &str) -> (String, SourceMap, Vec<Diagnost
         enum_types: HashSet::new(),
         global_names: HashSet::new(),
         emitted_globals: None,
+        header_attrs: Vec::new(),
+        verbatim: false,
     };
     if root.tag_name().name() != "project" {
         cx.diag(

@@ -139,7 +139,10 @@ pub(super) fn map_type(name: &str) -> Option<&str> {
 /// Code copied from the XML with CODESYS spellings that have an IEC meaning rewritten:
 /// `Enum.Value` → `Enum#Value`, `GVL.X` → `X`, `Standard.TON` → `TON`.
 pub(super) fn map(cx: &Ctx, t: &XText) -> XText {
-    if !t.text.contains('.') || (cx.enum_types.is_empty() && cx.gvl_names.is_empty() && !t.text.contains("tandard")) {
+    if cx.verbatim
+        || !t.text.contains('.')
+        || (cx.enum_types.is_empty() && cx.gvl_names.is_empty() && !t.text.contains("tandard"))
+    {
         return t.clone();
     }
     let text = &t.text;
