@@ -52,6 +52,11 @@ separated by dots: `%IX2.4`, `%QW29`, `%MW6`.";
     "SFC0010" Error "nested comment"
         "IEC 61131-3 comments do not nest: `(* (* inner *) *)` ends at the first `*)`.";
 
+    "SFC0011" Warning "text file not in UTF-8"
+        "The file is not valid UTF-8, so it was read as Latin-1 / Windows-1252 (what older Windows \
+editors and many PLC tools write). The warning names the first line that is not UTF-8. `sfc fmt` \
+and the editor write the file back in the same encoding, with its byte order mark and line \
+endings; converting it to UTF-8 silences the warning.";
     "SFC0101" Error "syntax error"
         "The parser expected something else here. It recovers at the next keyword, so later \
 errors are usually real.";

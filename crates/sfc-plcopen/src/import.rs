@@ -147,6 +147,12 @@ pub(crate) struct Ctx<'i> {
     pub enum_types: HashSet<String>,
     /// Upper-case names of every global variable of the file.
     pub global_names: HashSet<String>,
+    /// The name of the POU being written.
+    pub pou_name: String,
+    /// Functions generated for conditions whose logic shares values, written after the POU.
+    pub functions: Vec<String>,
+    /// How many of them the file has.
+    pub condition_functions: usize,
     /// The POU being written is kept as written: its code is copied without mapping.
     pub verbatim: bool,
     /// The file's headers and foreign project `addData`, written before the first POU.
@@ -731,6 +737,7 @@ fn pou(cx: &mut Ctx, p: Node) {
     }
     cx.attributes(&pou_attrs, "");
     let name = cx.name(p, "name", "POU");
+    cx.pou_name = name.text.clone();
     cx.em.str(kind);
     cx.em.str(" ");
     cx.em.frag(&name);
@@ -852,6 +859,11 @@ fn pou(cx: &mut Ctx, p: Node) {
         _ => "END_PROGRAM\n\n",
     });
     cx.em.close();
+    for f in std::mem::take(&mut cx.functions) {
+        cx.em.open(anchor(p));
+        cx.em.str(&f);
+        cx.em.close();
+    }
     // A POU kept as written is not analysed: what its import found is not reported either.
     if verbatim.is_some() {
         cx.diags.truncate(diags_before);
@@ -1224,6 +1236,9 @@ pub(crate) fn run(file: u32, xml_text: &str) -> (String, SourceMap, Vec<Diagnost
         emitted_globals: None,
         header_attrs: Vec::new(),
         verbatim: false,
+        pou_name: String::new(),
+        functions: Vec::new(),
+        condition_functions: 0,
     };
     if root.tag_name().name() != "project" {
         cx.diag(

@@ -1468,16 +1468,26 @@ impl Simulation {
         opts: SimOptions,
     ) -> Result<Simulation, (SourceFile, Vec<Diagnostic>)> {
         let check_opts = sfc_model::CheckOptions { keep_types: true, ..Default::default() };
-        let checked = sfc_model::check_source(0, name, text, &check_opts);
-        if checked.has_errors() {
-            let diags = checked.diagnostics.into_iter().filter(|d| d.is_error()).collect();
-            return Err((checked.file, diags));
-        }
-        let source = checked.file;
+        let mut checked = sfc_model::check_source(0, name, text, &check_opts);
+        // An error in another POU does not keep this one from running: only the errors of the
+        // POU, of what it uses, and of the file's types and globals count.
         let top = match choose_pou(&checked.unit, &checked.charts, pou) {
             Ok(n) => n,
-            Err(d) => return Err((source, vec![d])),
+            Err(d) if checked.has_errors() => {
+                let mut diags: Vec<Diagnostic> = checked.diagnostics.into_iter().filter(|d| d.is_error()).collect();
+                diags.push(d);
+                return Err((checked.file, diags));
+            }
+            Err(d) => return Err((checked.file, vec![d])),
         };
+        if checked.has_errors() {
+            let errors = sfc_model::errors_for(&checked, &top);
+            if !errors.is_empty() {
+                return Err((checked.file, errors));
+            }
+            sfc_model::set_aside_unrelated(&mut checked, &top);
+        }
+        let source = checked.file;
         let prog = match Program::compile(&checked.unit, checked.charts, &checked.expr_types) {
             Ok(p) => p,
             Err(d) => return Err((source, d)),
