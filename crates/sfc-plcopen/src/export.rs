@@ -442,8 +442,8 @@ pub fn export(checked: &Checked) -> Result<String, Vec<Diagnostic>> {
             attrs::get(list, name).map(attrs::unescape).filter(|v| well_formed(v))
         })
     };
-    match header(attrs::FILEHEADER) {
-        Some(h) => x.raw(&h),
+    match header(attrs::FILEHEADER).and_then(|h| file_header(&h)) {
+        Some(a) => x.empty("fileHeader", &a.iter().map(|(k, v)| (k.as_str(), v.clone())).collect::<Vec<_>>()),
         None => x.empty(
             "fileHeader",
             &[
@@ -512,6 +512,62 @@ pub fn export(checked: &Checked) -> Result<String, Vec<Diagnostic>> {
     }
     x.close("project");
     Ok(x.finish())
+}
+
+/// The attributes of a kept `fileHeader`, made valid for v2.01: the required ones present,
+/// `creationDateTime` an `xs:dateTime` (v1.0 files write `2007-07-07 11:58:26`).
+pub(crate) fn file_header(fragment: &str) -> Option<Vec<(String, String)>> {
+    let doc = roxmltree::Document::parse(fragment).ok()?;
+    let h = doc.root_element();
+    const KNOWN: &[&str] = &[
+        "companyName",
+        "companyURL",
+        "productName",
+        "productVersion",
+        "productRelease",
+        "creationDateTime",
+        "contentDescription",
+    ];
+    let mut out: Vec<(String, String)> = Vec::new();
+    for name in KNOWN {
+        let v = h.attribute(*name).map(str::to_string);
+        let v = match (*name, v) {
+            ("creationDateTime", Some(d)) => Some(date_time(&d)),
+            ("creationDateTime", None) => Some("1970-01-01T00:00:00".into()),
+            ("companyName" | "productName" | "productVersion", None) => Some(String::new()),
+            (_, v) => v,
+        };
+        if let Some(v) = v {
+            out.push((name.to_string(), v));
+        }
+    }
+    Some(out)
+}
+
+/// A `fileHeader` as the import keeps it: the attributes of [`file_header`], in its order.
+pub(crate) fn canonical_file_header(fragment: &str) -> Option<String> {
+    let list = file_header(fragment)?;
+    let a: Vec<String> = list.iter().map(|(k, v)| format!("{k}=\"{}\"", escape_attr(v))).collect();
+    Some(format!("<fileHeader {}/>", a.join(" ")))
+}
+
+/// `2007-07-07 11:58:26` → `2007-07-07T11:58:26`; anything else that is not an `xs:dateTime`
+/// becomes the fixed date of sfc's own files.
+fn date_time(d: &str) -> String {
+    let d = d.trim().replacen(' ', "T", 1);
+    let b = d.as_bytes();
+    let ok = b.len() >= 19
+        && b[4] == b'-'
+        && b[7] == b'-'
+        && b[10] == b'T'
+        && b[13] == b':'
+        && b[16] == b':'
+        && [0, 1, 2, 3, 5, 6, 8, 9, 11, 12, 14, 15, 17, 18].iter().all(|&i| b[i].is_ascii_digit());
+    if ok {
+        d
+    } else {
+        "1970-01-01T00:00:00".into()
+    }
 }
 
 /// Whether a kept XML fragment is well-formed (a hand edit may have broken it: then it is not

@@ -278,9 +278,15 @@ pub(crate) fn project(cx: &mut Ctx, root: Node) {
     let types = child(root, "types");
     // The headers and the project's foreign `addData` travel on the first POU, so an export
     // writes them back.
+    // (Not those of sfc's own export, which it writes again.)
+    let ours = child(root, "fileHeader").is_some_and(|h| attr(h, "productName") == Some("sfc"));
     for (name, key) in [("fileHeader", attrs::FILEHEADER), ("contentHeader", attrs::CONTENTHEADER)] {
-        if let Some(h) = child(root, name) {
-            cx.header_attrs.push((key.to_string(), attrs::escape(&xml::serialize(h))));
+        if let Some(h) = child(root, name).filter(|_| !ours) {
+            let mut text = xml::serialize(h);
+            if name == "fileHeader" {
+                text = crate::export::canonical_file_header(&text).unwrap_or(text);
+            }
+            cx.header_attrs.push((key.to_string(), attrs::escape(&text)));
         }
     }
     let project_data: String = child(root, "addData")
