@@ -544,6 +544,9 @@ pub(crate) fn file_header(fragment: &str) -> Option<Vec<(String, String)>> {
     Some(out)
 }
 
+/// The coordinate info sfc writes (no scaling).
+pub(crate) const COORDINATE_INFO: &str = "<coordinateInfo><fbd><scaling x=\"0\" y=\"0\"/></fbd><ld><scaling x=\"0\" y=\"0\"/></ld><sfc><scaling x=\"0\" y=\"0\"/></sfc></coordinateInfo>";
+
 /// A `fileHeader` as the import keeps it: the attributes of [`file_header`], in its order.
 pub(crate) fn canonical_file_header(fragment: &str) -> Option<String> {
     let list = file_header(fragment)?;

@@ -285,9 +285,20 @@ pub(crate) fn project(cx: &mut Ctx, root: Node) {
             let mut text = xml::serialize(h);
             if name == "fileHeader" {
                 text = crate::export::canonical_file_header(&text).unwrap_or(text);
+            } else if child(h, "coordinateInfo").is_none() {
+                // v2.01 requires the coordinate info: kept as the export writes it.
+                let a: String =
+                    h.attributes().map(|a| format!(" {}=\"{}\"", a.name(), xml::escape_attr(a.value()))).collect();
+                let rest: String = elements(h).map(xml::serialize).collect();
+                text = format!("<contentHeader{a}>{}{rest}</contentHeader>", crate::export::COORDINATE_INFO);
             }
             cx.header_attrs.push((key.to_string(), attrs::escape(&text)));
         }
+    }
+    if !ours && child(root, "contentHeader").is_none() && child(root, "fileHeader").is_some() {
+        // v2.01 requires one: kept as the export writes it, so the way back is stable.
+        let h = format!("<contentHeader name=\"project\">{}</contentHeader>", crate::export::COORDINATE_INFO);
+        cx.header_attrs.push((attrs::CONTENTHEADER.to_string(), attrs::escape(&h)));
     }
     let project_data: String = child(root, "addData")
         .into_iter()
