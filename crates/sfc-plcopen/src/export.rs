@@ -544,6 +544,26 @@ pub(crate) fn file_header(fragment: &str) -> Option<Vec<(String, String)>> {
     Some(out)
 }
 
+/// The `pou` element of the first POU of a checked text (for putting one POU back into a file,
+/// see [`crate::splice_pou`]). Fails with the errors that keep it from being written
+/// faithfully, or when the text holds no POU.
+pub fn export_pou(checked: &Checked) -> Result<String, Vec<Diagnostic>> {
+    let errors: Vec<Diagnostic> = checked.diagnostics.iter().filter(|d| blocks_export(d)).cloned().collect();
+    if !errors.is_empty() {
+        return Err(errors);
+    }
+    let src = checked.file.text.as_str();
+    let mut x = X::new();
+    for (i, item) in checked.unit.items.iter().enumerate() {
+        if let ast::Item::Pou(pou) = item {
+            let chart = checked.charts.iter().find(|c| c.item == i);
+            write_pou(&mut x, src, pou, chart);
+            return Ok(x.finish());
+        }
+    }
+    Err(vec![Diagnostic::new("SFC0702", Span::new(0, 0, 0), "the text holds no POU to export")])
+}
+
 /// The coordinate info sfc writes (no scaling).
 pub(crate) const COORDINATE_INFO: &str = "<coordinateInfo><fbd><scaling x=\"0\" y=\"0\"/></fbd><ld><scaling x=\"0\" y=\"0\"/></ld><sfc><scaling x=\"0\" y=\"0\"/></sfc></coordinateInfo>";
 

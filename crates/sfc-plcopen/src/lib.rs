@@ -20,10 +20,12 @@ pub mod attrs;
 mod emit;
 mod export;
 mod import;
+mod splice;
 mod xml;
 
 pub use emit::{MapEntry, SourceMap};
-pub use export::{export, fmt_duration};
+pub use export::{export, export_pou, fmt_duration};
+pub use splice::{splice_pou, SpliceError};
 pub use import::NAMESPACES;
 
 use sfc_diagnostics::{Diagnostic, Label, SourceFile};

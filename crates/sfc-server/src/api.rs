@@ -141,9 +141,10 @@ fn read_existing(path: &Path) -> Result<Option<Vec<u8>>, ApiError> {
     }
 }
 
-fn utf8(path: &Path, bytes: Vec<u8>) -> Result<String, ApiError> {
-    String::from_utf8(bytes)
-        .map_err(|_| ApiError::new(StatusCode::UNPROCESSABLE_ENTITY, format!("`{}` is not UTF-8 text", path.display())))
+/// A chart file's text: UTF-8 with or without a byte order mark, or Latin-1 / Windows-1252 (a
+/// save writes it back the same way, see [`sfc_syntax::encoding`]).
+fn utf8(_path: &Path, bytes: Vec<u8>) -> Result<String, ApiError> {
+    Ok(sfc_syntax::encoding::decode(&bytes).text)
 }
 
 /// An IEC identifier (`Conveyor_2`), as a POU name must be.
@@ -380,6 +381,8 @@ fn save_file(s: &AppState, req: SaveRequest) -> Answer {
                 .with("conflict", json!(true)));
         }
     }
+    // The file keeps its encoding, byte order mark and line endings.
+    let written_as = current.as_deref().map(sfc_syntax::encoding::decode).unwrap_or_default();
     let current = current.map(|b| utf8(&path, b)).transpose()?;
     let name = path.display().to_string();
     if !path.parent().is_some_and(Path::is_dir) {
@@ -396,41 +399,43 @@ fn save_file(s: &AppState, req: SaveRequest) -> Answer {
             sfc_doc::splice_replacing(text, &req.doc, &replacing)
         }
         FileFormat::Xml => {
-            // The other POUs come through the import; a file that does not import cleanly would
-            // lose them, so it is not overwritten.
-            let base = match &current {
-                None => String::new(),
-                Some(xml) => {
-                    let imported = sfc_plcopen::import(0, &name, xml);
-                    if imported.diagnostics.iter().any(Diagnostic::is_error) {
-                        let d = page_diagnostics(&name, &imported.text, Some(&imported), &[], &[]);
-                        return Err(ApiError::new(
-                            StatusCode::UNPROCESSABLE_ENTITY,
-                            format!("`{name}` cannot be imported without errors, so it was not overwritten"),
-                        )
-                        .with("diagnostics", json!(d)));
-                    }
-                    imported.text
-                }
-            };
-            refuse_rename_onto(&name, &base, renamed, &req.doc.pou)?;
-            let spliced = sfc_doc::splice_replacing(&base, &req.doc, &replacing);
-            let checked = sfc_analysis::check_source(0, &format!("{name} (as text)"), &spliced, &plain);
-            match sfc_plcopen::export(&checked) {
+            // Only this POU's element is replaced: every other byte of the file (the other
+            // POUs as their tool drew them, headers, instances, vendor data) stays as it was.
+            let pou_text = sfc_doc::to_text(&req.doc).text;
+            if let Some(xml) = &current {
+                let others = sfc_plcopen::import(0, &name, xml);
+                refuse_rename_onto(&name, &others.text, renamed, &req.doc.pou)?;
+            }
+            let checked = sfc_analysis::check_source(0, &format!("{name} (as text)"), &pou_text, &plain);
+            let base = current.clone().unwrap_or_else(|| sfc_plcopen::export(&checked).unwrap_or_default());
+            match sfc_plcopen::splice_pou(&base, &replacing, &checked) {
                 Ok(xml) => xml,
-                Err(errors) => {
+                Err(sfc_plcopen::SpliceError::Diagnostics(errors)) => {
                     let d =
-                        page_diagnostics(&checked.file.name, &spliced, None, &errors, std::slice::from_ref(&req.doc));
+                        page_diagnostics(&checked.file.name, &pou_text, None, &errors, std::slice::from_ref(&req.doc));
                     return Err(ApiError::new(
                         StatusCode::UNPROCESSABLE_ENTITY,
                         "the chart cannot be written as PLCopen XML; nothing was written",
                     )
                     .with("diagnostics", json!(d)));
                 }
+                Err(sfc_plcopen::SpliceError::NotAProject(why)) => {
+                    return Err(ApiError::new(
+                        StatusCode::UNPROCESSABLE_ENTITY,
+                        format!("`{name}`: {why}; nothing was written"),
+                    ));
+                }
             }
         }
     };
-    write_atomically(&path, bytes.as_bytes()).map_err(|e| io_error(&path, &e))?;
+    let (raw, lost) = sfc_syntax::encoding::encode(&bytes, &written_as);
+    if lost > 0 {
+        return Err(ApiError::new(
+            StatusCode::UNPROCESSABLE_ENTITY,
+            format!("`{name}` is Latin-1 / Windows-1252, which cannot hold {lost} character(s) of the chart; nothing was written"),
+        ));
+    }
+    write_atomically(&path, &raw).map_err(|e| io_error(&path, &e))?;
     // What the page shows after saving: the document's problems, then the check of the file as
     // written (located in it), without the analysis (`check` runs that on request).
     let mut diagnostics: Vec<Value> = sfc_doc::to_text(&req.doc).problems.iter().map(problem_json).collect();
@@ -443,7 +448,7 @@ fn save_file(s: &AppState, req: SaveRequest) -> Answer {
         let checked = sfc_analysis::check_source(0, &name, &bytes, &plain);
         diagnostics.extend(page_diagnostics(&name, &bytes, None, &checked.diagnostics, charts));
     }
-    Ok(json!({ "path": path_string(&path), "hash": content_hash(bytes.as_bytes()), "diagnostics": diagnostics }))
+    Ok(json!({ "path": path_string(&path), "hash": content_hash(&raw), "diagnostics": diagnostics }))
 }
 
 /// A renamed POU may not take the name of another POU of its file: saving would leave two.
