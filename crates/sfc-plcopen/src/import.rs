@@ -1148,6 +1148,12 @@ pub(crate) fn value_text(cx: &mut Ctx, v: Node) -> Frag {
         "simpleValue" => match attr(e, "value") {
             Some(val) => {
                 let range = attr_range(e, "value").unwrap_or_else(|| anchor(e));
+                // CODESYS: `E_Mode.Manual` is the IEC `E_Mode#Manual`.
+                if let Some((ty, v)) = val.trim().split_once('.') {
+                    if !cx.verbatim && cx.enum_types.contains(&ty.trim().to_ascii_uppercase()) && is_ident(v.trim()) {
+                        return Frag::located(format!("{}#{}", ty.trim(), v.trim()), range);
+                    }
+                }
                 let t = val.trim();
                 let lead = val.len() - val.trim_start().len();
                 let mut f = Frag::plain(t);

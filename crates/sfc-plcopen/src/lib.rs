@@ -25,8 +25,8 @@ mod xml;
 
 pub use emit::{MapEntry, SourceMap};
 pub use export::{export, export_pou, fmt_duration};
-pub use splice::{splice_pou, SpliceError};
 pub use import::NAMESPACES;
+pub use splice::{splice_pou, SpliceError};
 
 use sfc_diagnostics::{Diagnostic, Label, SourceFile};
 use sfc_model::{check_source, CheckOptions, Checked};
