@@ -30,12 +30,27 @@ fn find_pou(doc: &roxmltree::Document, name: &str) -> Option<(std::ops::Range<us
 /// does not declare it at its root.
 fn fit(pou_xml: &str, indent: &str, declare_xhtml: bool) -> String {
     let mut out = String::new();
+    // Lines inside CDATA (code) are content: they are not indented.
+    let mut in_cdata = false;
     for (k, line) in pou_xml.trim_end().lines().enumerate() {
         if k > 0 {
             out.push('\n');
-            out.push_str(indent);
+            if !in_cdata {
+                out.push_str(indent);
+            }
         }
         out.push_str(line);
+        let mut rest = line;
+        loop {
+            let next = if in_cdata { rest.find("]]>") } else { rest.find("<![CDATA[") };
+            match next {
+                Some(i) => {
+                    rest = &rest[i + if in_cdata { 3 } else { 9 }..];
+                    in_cdata = !in_cdata;
+                }
+                None => break,
+            }
+        }
     }
     if declare_xhtml {
         if let Some(end) = out.find('>') {

@@ -212,3 +212,42 @@ pub fn chained_and_network(n: usize, as_condition: bool) -> String {
         r#"<?xml version="1.0" encoding="utf-8"?><project xmlns="http://www.plcopen.org/xml/tc6_0201"><fileHeader companyName="t" productName="t" productVersion="1" creationDateTime="2024-01-01T00:00:00"/><contentHeader name="chain"><coordinateInfo><fbd><scaling x="0" y="0"/></fbd><ld><scaling x="0" y="0"/></ld><sfc><scaling x="0" y="0"/></sfc></coordinateInfo></contentHeader><types><dataTypes/><pous><pou name="Chain" pouType="program">{vars}<body>{body}</body></pou></pous></types></project>"#
     )
 }
+
+/// Putting one POU back into a file: only its element changes; in a CODESYS file (no `xhtml`
+/// prefix declared) the POU declares it; code inside CDATA is not re-indented.
+#[test]
+fn splicing_one_pou_keeps_every_other_byte() {
+    for (rel, pou) in [("beremiz/sfc_fbd_ld_project.plc.xml", "Conveyor"), ("codesys/types_pous_selection.xml", "Lift")]
+    {
+        let xml = std::fs::read_to_string(real_dir().join(rel)).expect("fixture");
+        let imported = sfc_plcopen::import(0, rel, &xml);
+        // The POU's text as the editor would save it: here, its imported text with a step renamed.
+        let (unit, _) = sfc_syntax::parse(0, &imported.text);
+        let p = unit
+            .items
+            .iter()
+            .find_map(|i| match i {
+                sfc_syntax::ast::Item::Pou(p) if p.name.text == pou => Some(p.span),
+                _ => None,
+            })
+            .expect("the POU");
+        let text = imported.text[p.start as usize..p.end as usize].to_string();
+        let (old_step, new_step) = if pou == "Lift" { ("Arrived", "AtFloor") } else { ("Running", "Moving") };
+        let text = text.replace(old_step, new_step);
+        let checked = check_text("pou.st", &text);
+        let out = sfc_plcopen::splice_pou(&xml, pou, &checked).expect("spliced");
+        let start = xml.find(&format!("<pou name=\"{pou}\"")).expect("start");
+        let end = xml[start..].find("</pou>").map(|e| start + e + 6).expect("end");
+        assert_eq!(&out[..start], &xml[..start], "{rel}: bytes before the POU");
+        let tail = &xml[end..];
+        assert!(out.ends_with(tail), "{rel}: bytes after the POU");
+        roxmltree::Document::parse(&out).unwrap_or_else(|e| panic!("{rel}: not well-formed: {e}"));
+        let (_, again, diags) = sfc_plcopen::check_xml(0, rel, &out, &opts());
+        assert!(!diags.iter().any(|d| d.is_error()), "{rel}: {diags:?}");
+        let chart = again.charts.iter().find(|c| c.pou == pou).expect("chart");
+        assert!(chart.step(new_step).is_some(), "{rel}: renamed step");
+        if pou == "Conveyor" {
+            assert!(out.contains("<![CDATA[Logic(Run := TRUE, Fault := Jam);\nBelt := Logic.Motor;"), "{out}");
+        }
+    }
+}
