@@ -52,7 +52,7 @@ struct G<'a, 'i> {
     pos: (f64, f64),
 }
 
-struct Net<'a, 'i> {
+pub(super) struct Net<'a, 'i> {
     els: Vec<G<'a, 'i>>,
     ids: HashMap<u64, usize>,
     consumed: Vec<bool>,
@@ -81,7 +81,7 @@ fn pin(n: Node, cp: Option<Node>, negated_attr: &str, edge_attr: &str) -> Pin {
     }
 }
 
-fn parse<'a, 'i>(body: Node<'a, 'i>) -> Net<'a, 'i> {
+pub(super) fn parse<'a, 'i>(body: Node<'a, 'i>) -> Net<'a, 'i> {
     let mut els = Vec::new();
     let mut ids = HashMap::new();
     for n in elements(body) {
@@ -929,11 +929,11 @@ fn condition_value(tr: &mut Tr, p: &Pin) -> Option<Frag> {
     Some(call)
 }
 
-/// A transition condition wired to an FBD/LD network in an SFC body.
-pub(super) fn condition(cx: &mut Ctx, sfc: Node, cp: Node, owner: &Range<u32>) -> Frag {
-    let net = parse(sfc);
+/// A transition condition wired to an FBD/LD network in an SFC body (`net`, the body parsed
+/// once for all its conditions).
+pub(super) fn condition(cx: &mut Ctx, net: &Net, cp: Node, owner: &Range<u32>) -> Frag {
     let p = pin(cp, Some(cp), "-", "-");
-    let mut tr = condition_tr(cx, &net);
+    let mut tr = condition_tr(cx, net);
     let v = condition_value(&mut tr, &p);
     let stmts = std::mem::take(&mut tr.stmts);
     drop(tr);
