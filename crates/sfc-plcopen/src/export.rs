@@ -19,11 +19,15 @@ use sfc_syntax::ast;
 /// The XML being written.
 pub(crate) struct X {
     w: Writer<Vec<u8>>,
+    /// The comments of the source (`(* … *)`, `// …`) not written yet, with their spans.
+    comments: Vec<(Span, String, bool)>,
+    /// The comments of the element being written: its raw comments and their text.
+    pending: Option<(String, String)>,
 }
 
 impl X {
     fn new() -> X {
-        X { w: Writer::new_with_indent(Vec::new(), b' ', 2) }
+        X { w: Writer::new_with_indent(Vec::new(), b' ', 2), comments: Vec::new(), pending: None }
     }
 
     fn tag(name: &str, attrs: &[(&str, String)]) -> BytesStart<'static> {
@@ -69,6 +73,61 @@ impl X {
         let mut s = String::from_utf8(self.w.into_inner()).unwrap_or_default();
         s.push('\n');
         s
+    }
+
+    /// Takes the comments of the source, to write each with the element it belongs to.
+    pub fn with_comments(&mut self, unit: &ast::SourceUnit) {
+        self.comments = unit
+            .trivia
+            .iter()
+            .filter(|t| matches!(t.kind, ast::TriviaKind::BlockComment | ast::TriviaKind::LineComment))
+            .map(|t| (t.span, t.text.clone(), false))
+            .collect();
+    }
+
+    /// The comments that belong to the element at `span` of `src` (those right before it, with
+    /// nothing but white space and attribute pragmas between, and one ending its last line)
+    /// become its pending comments: `add_data` keeps them verbatim, `documentation` writes
+    /// their text when the element has no description of its own.
+    pub fn take_comments(&mut self, src: &str, span: Span) {
+        self.pending = None;
+        let mut taken: Vec<usize> = Vec::new();
+        // Leading: walk back from the element over white space, pragmas and comments.
+        let mut bound = span.start as usize;
+        for k in (0..self.comments.len()).rev() {
+            let (c, _, used) = &self.comments[k];
+            if *used || c.end as usize > bound {
+                continue;
+            }
+            let gap = src.get(c.end as usize..bound).unwrap_or("x");
+            if !only_blank_or_pragmas(gap) {
+                break;
+            }
+            taken.push(k);
+            bound = c.start as usize;
+        }
+        taken.reverse();
+        // Trailing: a comment after the element on its last line.
+        if let Some(k) = self.comments.iter().position(|(c, _, used)| !used && c.start >= span.end) {
+            let gap = src.get(span.end as usize..self.comments[k].0.start as usize).unwrap_or("x");
+            if gap.chars().all(|ch| ch == ' ' || ch == '\t' || ch == ';') {
+                taken.push(k);
+            }
+        }
+        if taken.is_empty() {
+            return;
+        }
+        let mut raw = Vec::new();
+        let mut plain = Vec::new();
+        for k in taken {
+            self.comments[k].2 = true;
+            let t = self.comments[k].1.clone();
+            let inner =
+                t.strip_prefix("(*").and_then(|x| x.strip_suffix("*)")).or_else(|| t.strip_prefix("//")).unwrap_or(&t);
+            plain.push(inner.trim().to_string());
+            raw.push(t);
+        }
+        self.pending = Some((raw.join("\n"), plain.join("\n")));
     }
 
     /// `position` with `x`, `y`.
@@ -154,6 +213,11 @@ impl X {
     /// attribute not in `native` (those written in PLCopen's own elements for this element),
     /// plus `extra` entries (`<name value="…"/>`).
     pub fn add_data(&mut self, list: &[ast::Attribute], extra: &[(&str, Vec<(&str, String)>)], native: &[&str]) {
+        let mut extra = extra.to_vec();
+        if let Some((raw, _)) = &self.pending {
+            extra.push(("comments", vec![("text", raw.clone())]));
+        }
+        let extra = extra.as_slice();
         let foreign: Vec<String> = attrs::all(list, attrs::ADDDATA).map(attrs::unescape).collect();
         let own: Vec<&ast::Attribute> = list
             .iter()
@@ -188,10 +252,30 @@ impl X {
 
     /// `<documentation>` from `sfc.description`.
     pub fn documentation(&mut self, list: &[ast::Attribute]) {
+        let pending = self.pending.take();
         if let Some(d) = description(list) {
             self.formatted("documentation", &d);
+        } else if let Some((_, text)) = pending.filter(|p| !p.1.trim().is_empty()) {
+            self.formatted("documentation", &text);
         }
     }
+}
+
+/// White space and attribute pragmas only (what may lie between a comment and its element).
+fn only_blank_or_pragmas(gap: &str) -> bool {
+    let mut depth = 0;
+    gap.chars().all(|c| match c {
+        '{' => {
+            depth += 1;
+            true
+        }
+        '}' => {
+            depth -= 1;
+            true
+        }
+        _ if depth > 0 => true,
+        c => c.is_whitespace(),
+    })
 }
 
 /// Elementary types the schema names as elements.
@@ -350,6 +434,7 @@ pub(crate) fn write_variables(x: &mut X, src: &str, d: &ast::VarDecl, kind: Opti
                 ],
             ));
         }
+        x.take_comments(src, d.span);
         x.add_data(&d.attributes, &extra, &[attrs::DESCRIPTION]);
         x.documentation(&d.attributes);
         x.close("variable");
@@ -421,6 +506,7 @@ pub fn export(checked: &Checked) -> Result<String, Vec<Diagnostic>> {
     let src = checked.file.text.as_str();
     let unit = &checked.unit;
     let mut x = X::new();
+    x.with_comments(unit);
     let _ = x.w.write_event(Event::Decl(BytesDecl::new("1.0", Some("utf-8"), None)));
     x.open(
         "project",
@@ -554,6 +640,7 @@ pub fn export_pou(checked: &Checked) -> Result<String, Vec<Diagnostic>> {
     }
     let src = checked.file.text.as_str();
     let mut x = X::new();
+    x.with_comments(&checked.unit);
     for (i, item) in checked.unit.items.iter().enumerate() {
         if let ast::Item::Pou(pou) = item {
             let chart = checked.charts.iter().find(|c| c.item == i);
@@ -655,6 +742,7 @@ fn write_pou(x: &mut X, src: &str, pou: &ast::Pou, chart: Option<&sfc_model::Cha
             x.close("body");
         }
     }
+    x.take_comments(src, Span::new(pou.span.file, pou.span.start, pou.name.span.end));
     x.add_data(
         &pou.attributes,
         &[],

@@ -217,19 +217,34 @@ impl<'i> Ctx<'i> {
         Frag::located(fixed, range)
     }
 
-    /// Writes `{attribute 'name' := 'value'}` lines at `indent`.
+    /// Writes `{attribute 'name' := 'value'}` lines at `indent` (and the element's comments,
+    /// kept by an export, as they were written).
     pub fn attributes(&mut self, list: &[(String, String)], indent: &str) {
         for (k, v) in list {
+            if k == COMMENTS_KEY {
+                for line in v.lines() {
+                    self.em.str(&format!("{indent}{}\n", line.trim_start()));
+                }
+                continue;
+            }
             let v = if v.contains(['\'', '}']) { v.replace('\'', "$27").replace('}', "$7D") } else { v.clone() };
             self.em.str(&format!("{indent}{{attribute '{k}' := '{v}'}}\n"));
         }
     }
 }
 
+/// The key of [`element_attrs`]'s entry that holds an element's comments (not an attribute).
+pub(crate) const COMMENTS_KEY: &str = "\u{0}comments";
+
 /// Attributes kept for an element: `documentation` → `sfc.description`, our `addData` → its
-/// attributes, foreign `addData` → `sfc.adddata`.
+/// attributes, foreign `addData` → `sfc.adddata`. Comments an export kept (in our `addData`,
+/// their text also in `documentation`) come back as comments.
 pub(crate) fn element_attrs(n: Node) -> Vec<(String, String)> {
     let mut out = Vec::new();
+    let comments = own_data(n, "comments").and_then(|c| attr(c, "text")).filter(|t| !t.trim().is_empty());
+    if let Some(c) = comments {
+        out.push((COMMENTS_KEY.to_string(), c.to_string()));
+    }
     if let Some(add) = child(n, "addData") {
         let mut foreign = String::new();
         for data in children(add, "data") {
@@ -253,7 +268,7 @@ pub(crate) fn element_attrs(n: Node) -> Vec<(String, String)> {
             out.push((attrs::ADDDATA.to_string(), attrs::escape(&foreign)));
         }
     }
-    if let Some(doc) = child(n, "documentation") {
+    if let Some(doc) = child(n, "documentation").filter(|_| comments.is_none()) {
         let text = xml::formatted_text(doc).text;
         let text = text.trim();
         if !text.is_empty() {
