@@ -222,8 +222,22 @@ impl<'i> Ctx<'i> {
     pub fn attributes(&mut self, list: &[(String, String)], indent: &str) {
         for (k, v) in list {
             if k == COMMENTS_KEY {
-                for line in v.lines() {
-                    self.em.str(&format!("{indent}{}\n", line.trim_start()));
+                // Each comment on its own line, its later lines as written.
+                for c in v.split('\n').scan(false, |inside, line| {
+                    let start = !*inside;
+                    let t = line.trim_start();
+                    let opens = t.starts_with("(*") || t.starts_with("//");
+                    if start && opens && !t.starts_with("//") {
+                        *inside = !t.ends_with("*)");
+                    } else if !start && line.trim_end().ends_with("*)") {
+                        *inside = false;
+                    }
+                    Some((start && opens, line))
+                }) {
+                    match c {
+                        (true, line) => self.em.str(&format!("{indent}{}\n", line.trim_start())),
+                        (false, line) => self.em.str(&format!("{line}\n")),
+                    }
                 }
                 continue;
             }

@@ -251,3 +251,22 @@ fn splicing_one_pou_keeps_every_other_byte() {
         }
     }
 }
+
+/// Two initial steps in one network (Beremiz, MatIEC and OpenPLC run such charts; IEC does not
+/// allow it): imported as drawn and reported, and exported as drawn.
+#[test]
+fn two_initial_steps_in_one_network_are_kept_and_reported() {
+    let xml = std::fs::read_to_string(real_dir().join("openplc/two_initial_networks.xml")).expect("fixture");
+    // Join the two loops into one network: B1 also leads back to A0.
+    let joined = xml.replacen("targetName=\"B0\"", "targetName=\"A0\"", 1);
+    let (_, checked, diags) = sfc_plcopen::check_xml(0, "joined.xml", &joined, &opts());
+    assert!(diags.iter().any(|d| d.code == "SFC0202"), "{diags:?}");
+    let chart = &checked.charts[0];
+    assert_eq!(chart.steps.iter().filter(|s| s.initial).count(), 2);
+    let out = sfc_plcopen::export(&checked).expect("exported as drawn");
+    if let Some(r) = xmllint(&out) {
+        r.expect("valid");
+    }
+    let (_, again, _) = sfc_plcopen::check_xml(0, "again.xml", &out, &opts());
+    assert_eq!(again.charts[0].steps.iter().filter(|s| s.initial).count(), 2);
+}
