@@ -169,9 +169,10 @@ pub(super) fn map(cx: &Ctx, t: &XText) -> XText {
                 None
             } else if cx.enum_types.contains(&up) {
                 Some((a.start as usize, b.end as usize, format!("{aw}#{bw}")))
-            } else if cx.gvl_names.contains(&up) && !cx.global_names.contains(&up) {
-                Some((a.start as usize, dot.end as usize, String::new()))
-            } else if map_type(&format!("{aw}.{bw}")).is_some() && up == "STANDARD" {
+            } else if (cx.gvl_names.contains(&up) && !cx.global_names.contains(&up))
+                || (up == "STANDARD" && map_type(&format!("{aw}.{bw}")).is_some())
+            {
+                // `GVL.X` is `X`; `Standard.TON` is `TON`.
                 Some((a.start as usize, dot.end as usize, String::new()))
             } else {
                 None
