@@ -115,8 +115,9 @@ export function App({ api, createCanvas }: AppProps) {
     return () => window.removeEventListener('beforeunload', guard);
   }, [store]);
 
-  // Read-only views for the browser tests (window.__sfc).
-  useEffect(() => installProbe(store, canvases.current), [store]);
+  // Read-only views for the browser tests (window.__sfc), in test builds only: `vite build
+  // --mode test` (web/dist-test) and vitest. The production bundle leaves the probe out.
+  useEffect(() => (import.meta.env.MODE === 'test' ? installProbe(store, canvases.current) : undefined), [store]);
 
   // Start: the session, then the files named on the command line (or the host chart).
   useEffect(() => {
@@ -657,6 +658,12 @@ export function App({ api, createCanvas }: AppProps) {
                     onToggleHighlight={() => setHighlightOn(!highlightOn)}
                     witness={witness}
                     onWitness={setWitness}
+                    blockName={(id) => {
+                      const e = canvas?.getDoc().elements.find((x) => x.id === id);
+                      if (!e) return '';
+                      if (e.name) return e.name;
+                      return e.kind === 'jump' && e.target ? `${t('kind.jump')} → ${e.target}` : t(`kind.${e.kind}`);
+                    }}
                   />
                 ) : (
                   <ResultPanel pou={tab?.pou ?? ''} result={tab?.result ?? null} />
