@@ -89,7 +89,8 @@ pub fn problem_json(p: &Problem, doc: &EditorDoc, file: &str, text: &str) -> Val
 }
 
 /// Where a block is said in `text` (1-based line and column): a named step or transition at its
-/// keyword, anything else at the `sfc.graph` attribute; the first line when neither is found.
+/// keyword, anything else (or a block the text does not hold) at the `sfc.graph` attribute; the
+/// first line when neither is found.
 fn locate(text: &str, block: Option<&sfc_doc::Element>) -> (usize, usize) {
     use sfc_doc::ElementKind;
     let named =
@@ -110,11 +111,13 @@ fn locate(text: &str, block: Option<&sfc_doc::Element>) -> (usize, usize) {
             }) {
                 return (i + 1, column);
             }
-        } else if trimmed.starts_with("{attribute 'sfc.graph'") {
-            return (i + 1, column);
         }
     }
-    (1, 1)
+    // Not in the text (a block the text cannot hold yet, or an unnamed one): the drawing.
+    text.lines()
+        .enumerate()
+        .find(|(_, l)| l.trim_start().starts_with("{attribute 'sfc.graph'"))
+        .map_or((1, 1), |(i, l)| (i + 1, l.len() - l.trim_start().len() + 1))
 }
 
 /// The POUs of a file's text and the SFC elements in them, to find what a diagnostic located

@@ -183,7 +183,7 @@ export function App({ api, createCanvas }: AppProps) {
   }
 
   function attachCanvas(id: string, container: HTMLElement): () => void {
-    const c = createCanvas(container, { t: (key) => t(key) });
+    const c = createCanvas(container, { t: (key, opts) => t(key, opts) });
     canvases.current.set(id, c);
     containers.current.set(id, container);
     const doc = pending.current.get(id);
