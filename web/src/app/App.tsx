@@ -11,6 +11,7 @@ import { chartBuild, chartKind, kindFields, withBuild, type ChartKind } from './
 import { witnessSituations } from './chart';
 import { AboutDialog, CloseDialog, ConflictDialog, NewDialog, OpenDialog, SaveAsDialog, ShortcutsDialog, type NewChartRequest } from './dialogs';
 import { ErrorList, type WitnessView } from './ErrorList';
+import { rememberFile, Welcome } from './Welcome';
 import { Icon } from './icons';
 import { MenuBar, type MenuDef } from './Menu';
 import { PrintDialog } from './PrintDialog';
@@ -220,6 +221,7 @@ export function App({ api, createCanvas }: AppProps) {
     }
     try {
       const r = await api.open(path);
+      rememberFile(r.path);
       if (r.charts.length === 0) toasts.show('info', t('open.noCharts', { file: baseName(path) }));
       for (const chart of r.charts) {
         addTab({ path: r.path, format: r.format, hash: r.hash, pou: chart.pou, filePou: chart.pou, ...kindOfTab(chart), diagnostics: r.diagnostics }, chart);
@@ -609,28 +611,19 @@ export function App({ api, createCanvas }: AppProps) {
               </div>
             )}
             {store.tabs.length === 0 && (
-              <div class="welcome">
-                {startError ? (
-                  <div class="field-error">{t('start.failed', { message: startError })}</div>
-                ) : !session ? (
-                  <div class="muted">{t('common.loading')}</div>
-                ) : (
-                  <>
-                    <h1>{t('app.name')}</h1>
-                    <p class="muted">{t('start.hint')}</p>
-                    {mdi && (
-                      <div class="welcome-buttons">
-                        <button class="button primary" onClick={() => setDialog({ kind: 'new', target: 'blank' })}>
-                          <Icon name="new" /> {t('menu.new')}
-                        </button>
-                        <button class="button" onClick={() => setDialog({ kind: 'open' })}>
-                          <Icon name="open" /> {t('menu.open')}
-                        </button>
-                      </div>
-                    )}
-                  </>
-                )}
-              </div>
+              startError || !session ? (
+                <div class="welcome">
+                  {startError ? <div class="field-error">{t('start.failed', { message: startError })}</div> : <div class="muted">{t('common.loading')}</div>}
+                </div>
+              ) : (
+                <Welcome
+                  mdi={mdi}
+                  files={api.files}
+                  onNew={() => setDialog({ kind: 'new', target: 'blank' })}
+                  onOpenDialog={() => setDialog({ kind: 'open' })}
+                  onOpen={(p) => void openFile(p)}
+                />
+              )
             )}
           </div>
           {panels.bottom && (

@@ -124,8 +124,11 @@ export const createCanvas: CreateCanvas = (container: HTMLElement, opts: CanvasO
     const { width, height } = view.size();
     if (!b || width === 0 || height === 0) return;
     const m = 40;
-    // The palette floats over the left edge: centre the chart in the room beside it.
-    const inset = readOnly ? 0 : Math.min(PALETTE_ROOM, width / 3);
+    // The palette floats over the left edge: centre the chart in the room beside it (the
+    // palette is as wide as its longest label, which depends on the language).
+    const palette = readOnly ? null : (host.querySelector('.djs-palette') as HTMLElement | null);
+    const room0 = palette && palette.offsetWidth > 0 ? palette.offsetWidth + 20 : PALETTE_ROOM;
+    const inset = readOnly ? 0 : Math.min(room0, width / 3);
     const room = width - inset;
     let scale = Math.max(MIN_ZOOM, Math.min(1, room / (b.width + 2 * m), height / (b.height + 2 * m)));
     if (!whole && scale < 0.6) scale = 1;
