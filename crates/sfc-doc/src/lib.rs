@@ -270,14 +270,17 @@ pub struct Point {
 
 use sfc_diagnostics::{Diagnostic, Severity, SourceFile};
 
+pub mod drawing;
 mod graph;
 mod layout;
 mod open;
 mod pragma;
 mod readback;
 mod region;
+pub mod route;
 mod sidecar;
 mod splice;
+mod structured;
 mod write;
 
 /// A file opened in the editor.

@@ -656,8 +656,46 @@ fn laid_out(r: &ReadChart, probe: &mut Probe) -> EditorDoc {
         .collect();
 
     let d = graph::derive(&doc, probe);
-    layout::place(&mut doc, &d, &Model { step_of: &step_of, transition_of: &transition_of }, &lay, &keep);
+    let only_labels_kept = doc.elements.iter().zip(&keep).all(|(e, k)| !k || e.kind == Some(ElementKind::Text));
+    if !(only_labels_kept
+        && lay.kind == LayoutKind::Structured
+        && structured(&mut doc, &d, chart, &step_of, &transition_of))
+    {
+        layout::place(&mut doc, &d, &Model { step_of: &step_of, transition_of: &transition_of }, &lay, &keep);
+    }
     doc
+}
+
+/// Lays the document out with the structured layout in the editor's units (`structured.rs`)
+/// and routes its wires; `false` (nothing changed) when the chart or the document's bars do not
+/// fit it.
+fn structured(
+    doc: &mut EditorDoc,
+    d: &graph::Derived,
+    chart: &sfc_model::Chart,
+    step_of: &[Option<usize>],
+    transition_of: &[Option<usize>],
+) -> bool {
+    let Some(tree) = sfc_render::structure::recover(chart) else { return false };
+    let invert = |of: &[Option<usize>], n: usize| -> Option<Vec<usize>> {
+        let mut out = vec![usize::MAX; n];
+        for (i, k) in of.iter().enumerate() {
+            if let Some(k) = *k {
+                *out.get_mut(k)? = i;
+            }
+        }
+        out.iter().all(|&i| i != usize::MAX).then_some(out)
+    };
+    let (Some(steps), Some(transitions)) =
+        (invert(step_of, chart.steps.len()), invert(transition_of, chart.transitions.len()))
+    else {
+        return false;
+    };
+    if !crate::structured::place(doc, d, &tree, &steps, &transitions) {
+        return false;
+    }
+    layout::route_all(doc, d);
+    true
 }
 
 /// See [`crate::auto_layout`]: the chart the document's text describes is laid out, and the
@@ -698,6 +736,12 @@ pub fn auto_layout(doc: &EditorDoc) -> EditorDoc {
                 || (*r == Role::Other && matches!(e.kind, Some(ElementKind::Step | ElementKind::Transition)))
         })
         .collect();
-    layout::place(&mut out, &d, &Model { step_of: &step_of, transition_of: &transition_of }, &lay, &keep);
+    let only_labels_kept = out.elements.iter().zip(&keep).all(|(e, k)| !k || e.kind == Some(ElementKind::Text));
+    if !(only_labels_kept
+        && lay.kind == LayoutKind::Structured
+        && structured(&mut out, &d, &chart, &step_of, &transition_of))
+    {
+        layout::place(&mut out, &d, &Model { step_of: &step_of, transition_of: &transition_of }, &lay, &keep);
+    }
     out
 }
