@@ -16,7 +16,7 @@ pub const LINE_H: f64 = 14.0;
 /// Advance of one character of the monospaced condition font (DejaVu Sans Mono: 1233/2048 em).
 pub const MONO_ADVANCE: f64 = FONT * 1233.0 / 2048.0;
 /// Bold text (step names, jump targets) is this much wider than regular text.
-pub const BOLD: f64 = 1.1;
+pub const BOLD: f64 = 1.2;
 /// Characters of a condition line before it wraps (about 230 px at 12 px).
 pub const CONDITION_CHARS: usize = 32;
 /// Half the drawn transition bar.

@@ -281,6 +281,7 @@ pub mod route;
 mod sidecar;
 mod splice;
 mod structured;
+mod svg;
 mod write;
 
 /// A file opened in the editor.
@@ -359,6 +360,12 @@ pub fn splice_replacing(file_text: &str, doc: &EditorDoc, replacing: &str) -> St
 /// Whether IEC text holds a POU named `name` (compared as IEC does, ignoring case).
 pub fn holds_pou(file_text: &str, name: &str) -> bool {
     splice::holds_pou(file_text, name)
+}
+
+/// The document drawn as a standalone SVG file, as the canvas draws it (`sfc build --target
+/// svg` and the editor's export agree).
+pub fn svg(doc: &EditorDoc) -> String {
+    svg::svg(doc)
 }
 
 /// Positions every block and routes every connection again (the structured layout of

@@ -694,8 +694,42 @@ fn structured(
     if !crate::structured::place(doc, d, &tree, &steps, &transitions) {
         return false;
     }
+    clear_text_labels(doc);
     layout::route_all(doc, d);
     true
+}
+
+/// Text labels (comments) keep their place unless the new layout put a block or a label under
+/// them; those move to a column right of the drawing, one below the other.
+fn clear_text_labels(doc: &mut EditorDoc) {
+    use crate::drawing::{labels, Rect};
+    let texts: Vec<usize> =
+        (0..doc.elements.len()).filter(|&i| doc.elements[i].kind == Some(ElementKind::Text)).collect();
+    if texts.is_empty() {
+        return;
+    }
+    let mut taken: Vec<Rect> = doc
+        .elements
+        .iter()
+        .filter(|e| e.kind.is_some() && e.kind != Some(ElementKind::Text))
+        .map(Rect::of)
+        .chain(labels(doc).into_iter().map(|l| l.rect))
+        .collect();
+    let right = taken.iter().map(|r| r.right()).fold(0.0, f64::max);
+    let mut column_y = taken.iter().map(|r| r.y).fold(f64::INFINITY, f64::min).min(40.0);
+    let column_x = ((right + 40.0) / 10.0).ceil() * 10.0;
+    for i in texts {
+        let r = Rect::of(&doc.elements[i]);
+        if taken.iter().any(|t| t.overlaps(&r)) {
+            let e = &mut doc.elements[i];
+            e.x = column_x;
+            e.y = column_y;
+            column_y = ((column_y + e.h + 20.0) / 10.0).ceil() * 10.0;
+            taken.push(Rect::of(e));
+        } else {
+            taken.push(r);
+        }
+    }
 }
 
 /// See [`crate::auto_layout`]: the chart the document's text describes is laid out, and the
@@ -742,6 +776,8 @@ pub fn auto_layout(doc: &EditorDoc) -> EditorDoc {
         && structured(&mut out, &d, &chart, &step_of, &transition_of))
     {
         layout::place(&mut out, &d, &Model { step_of: &step_of, transition_of: &transition_of }, &lay, &keep);
+        clear_text_labels(&mut out);
+        layout::route_all(&mut out, &d);
     }
     out
 }

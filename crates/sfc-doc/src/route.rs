@@ -77,14 +77,15 @@ fn snap(v: f64) -> f64 {
 /// The candidate routes from `s` (an output pin) to `e` (an input pin), best first.
 fn candidates(s: Point, e: Point, obstacles: &[Rect], lane_hint: Option<f64>) -> Vec<Vec<Point>> {
     let mut out: Vec<Vec<Point>> = Vec::new();
-    let below = e.y >= s.y + 2.0 * STUB;
+    let below = e.y > s.y;
     if (s.x - e.x).abs() < 0.5 && e.y > s.y {
         out.push(vec![s, e]);
     }
     if below {
-        // One horizontal run, from the middle outwards.
-        let (lo, hi) = (s.y + STUB, e.y - STUB);
-        let mid = snap((lo + hi) / 2.0).clamp(lo, hi);
+        // One horizontal run, from the middle outwards (pins closer than two stubs: halfway).
+        let stub = STUB.min((e.y - s.y) / 2.0);
+        let (lo, hi) = (s.y + stub, e.y - stub);
+        let mid = if hi - lo < GRID { (lo + hi) / 2.0 } else { snap((lo + hi) / 2.0).clamp(lo, hi) };
         let mut ys = vec![mid];
         let mut k = 1.0;
         while mid - k * GRID >= lo || mid + k * GRID <= hi {

@@ -369,7 +369,14 @@ export function App({ api, createCanvas }: AppProps) {
   async function autoLayout(): Promise<void> {
     if (!canvas) return;
     try {
-      canvas.applyLayout(await api.layout(canvas.getDoc()));
+      const before = canvas.getDoc();
+      const laidOut = await api.layout(before);
+      // A chart already laid out stays unmodified: no command, no undo step, no `*`.
+      if (sameGeometry(before, laidOut)) {
+        toasts.show('info', t('layout.unchanged'));
+        return;
+      }
+      canvas.applyLayout(laidOut);
     } catch {
       // The API client has shown the server's message; the chart is unchanged.
     }
@@ -832,4 +839,24 @@ function StatusBar(props: {
       </span>
     </div>
   );
+}
+
+/** Whether two documents place every block and route every wire alike (same ids). */
+export function sameGeometry(a: EditorDoc, b: EditorDoc): boolean {
+  if (a.elements.length !== b.elements.length || a.connections.length !== b.connections.length) return false;
+  const byId = new Map(b.elements.map((e) => [e.id, e]));
+  for (const e of a.elements) {
+    const o = byId.get(e.id);
+    if (!o || o.x !== e.x || o.y !== e.y || o.w !== e.w || o.h !== e.h) return false;
+  }
+  const wires = new Map(b.connections.map((c) => [c.id, c]));
+  const pts = (w?: { x: number; y: number }[]) => JSON.stringify((w ?? []).map((p) => [p.x, p.y]));
+  for (const c of a.connections) {
+    const o = wires.get(c.id);
+    if (!o) return false;
+    // An empty polyline is a straight wire, as is a two-point one.
+    const norm = (w?: { x: number; y: number }[]) => (w && w.length > 2 ? pts(w) : 'straight');
+    if (norm(c.waypoints) !== norm(o.waypoints)) return false;
+  }
+  return true;
 }

@@ -39,6 +39,8 @@ export type { CanvasHandle, CanvasOptions, CreateCanvas } from './types';
 
 const MIN_ZOOM = 0.1;
 const MAX_ZOOM = 4;
+/** The smallest zoom "fit" chooses: 12 px labels at 9 px on screen. */
+export const READABLE_ZOOM = 0.75;
 /** Width the palette covers on the canvas's left edge, in pixels. */
 const PALETTE_ROOM = 190;
 
@@ -131,6 +133,9 @@ export const createCanvas: CreateCanvas = (container: HTMLElement, opts: CanvasO
     const inset = readOnly ? 0 : Math.min(room0, width / 3);
     const room = width - inset;
     let scale = Math.max(MIN_ZOOM, Math.min(1, room / (b.width + 2 * m), height / (b.height + 2 * m)));
+    // Names and conditions (12 px) stay readable: "fit" shrinks no further than 9 px on
+    // screen, and shows the chart's top when all of it does not fit then.
+    if (whole && scale < READABLE_ZOOM) scale = READABLE_ZOOM;
     if (!whole && scale < 0.6) scale = 1;
     const x = b.width + 2 * m <= room / scale ? b.x + b.width / 2 - (inset + room / 2) / scale : b.x - m - inset / scale;
     // As `canvas.viewbox(box)` with the size kept by the tracker: diagram-js would read the

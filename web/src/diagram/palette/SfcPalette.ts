@@ -5,6 +5,7 @@
 // their tooltip, and the canvas refuses them at the drop, saying why (rules/RefusalTooltip).
 import type { Element, ElementKind } from '../../doc';
 import type { DocState } from '../core/DocState';
+import { actionBlockSize, stepSize } from '../drawing';
 import { defaultSize } from '../geometry';
 import { freshName, usedNames, type Service } from '../model';
 import { kindsRefusedBy, refusalReason } from '../rules/SfcRules';
@@ -88,7 +89,7 @@ export class SfcPalette {
   /** A new block of the entry's kind with default size, ready for the create tool. */
   newShape(spec: EntrySpec): Service {
     const e = spec.make();
-    const size = defaultSize(e.kind);
+    const size = e.kind === 'step' ? stepSize(e) : e.kind === 'actionBlock' ? actionBlockSize(e.associations ?? []) : defaultSize(e.kind);
     const bo: Element = { id: '', x: 0, y: 0, w: size.w, h: size.h, ...e } as Element;
     return this.elementFactory.createShape({ businessObject: bo, width: size.w, height: size.h });
   }
