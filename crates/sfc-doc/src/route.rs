@@ -74,39 +74,42 @@ fn snap(v: f64) -> f64 {
     (v / GRID).round() * GRID
 }
 
-/// The candidate routes from `s` (an output pin) to `e` (an input pin), best first.
-fn candidates(s: Point, e: Point, obstacles: &[Rect], lane_hint: Option<f64>) -> Vec<Vec<Point>> {
-    let mut out: Vec<Vec<Point>> = Vec::new();
+/// The Z-shaped candidates (down, across, down), from the middle height outwards.
+fn z_routes(s: Point, e: Point) -> Vec<Vec<Point>> {
+    let mut out = Vec::new();
+    if e.y <= s.y {
+        return out;
+    }
+    // Pins closer than two stubs: the run halfway.
+    let stub = STUB.min((e.y - s.y) / 2.0);
+    let (lo, hi) = (s.y + stub, e.y - stub);
+    let mid = if hi - lo < GRID { (lo + hi) / 2.0 } else { snap((lo + hi) / 2.0).clamp(lo, hi) };
+    let mut ys = vec![mid];
+    let mut k = 1.0;
+    while mid - k * GRID >= lo || mid + k * GRID <= hi {
+        if mid - k * GRID >= lo {
+            ys.push(mid - k * GRID);
+        }
+        if mid + k * GRID <= hi {
+            ys.push(mid + k * GRID);
+        }
+        k += 1.0;
+    }
+    for y in [lo, hi] {
+        if !ys.contains(&y) {
+            ys.push(y);
+        }
+    }
+    for y in ys.into_iter().take(64) {
+        out.push(vec![s, p(s.x, y), p(e.x, y), e]);
+    }
+    out
+}
+
+/// The lane candidates: down a stub, across to a vertical lane beside an obstacle (or the
+/// hint), along it, across above the end, down into it; the hint first, then shortest first.
+fn lane_routes(s: Point, e: Point, obstacles: &[Rect], lane_hint: Option<f64>) -> Vec<Vec<Point>> {
     let below = e.y > s.y;
-    if (s.x - e.x).abs() < 0.5 && e.y > s.y {
-        out.push(vec![s, e]);
-    }
-    if below {
-        // One horizontal run, from the middle outwards (pins closer than two stubs: halfway).
-        let stub = STUB.min((e.y - s.y) / 2.0);
-        let (lo, hi) = (s.y + stub, e.y - stub);
-        let mid = if hi - lo < GRID { (lo + hi) / 2.0 } else { snap((lo + hi) / 2.0).clamp(lo, hi) };
-        let mut ys = vec![mid];
-        let mut k = 1.0;
-        while mid - k * GRID >= lo || mid + k * GRID <= hi {
-            if mid - k * GRID >= lo {
-                ys.push(mid - k * GRID);
-            }
-            if mid + k * GRID <= hi {
-                ys.push(mid + k * GRID);
-            }
-            k += 1.0;
-        }
-        for y in [lo, hi] {
-            if !ys.contains(&y) {
-                ys.push(y);
-            }
-        }
-        for y in ys.into_iter().take(64) {
-            out.push(vec![s, p(s.x, y), p(e.x, y), e]);
-        }
-    }
-    // Lanes: the hint, beside every obstacle between the pins' heights, beside the pins.
     let (top, bottom) = (s.y.min(e.y) - STUB, s.y.max(e.y) + STUB);
     let mut lanes: Vec<f64> = Vec::new();
     if let Some(h) = lane_hint {
@@ -118,47 +121,55 @@ fn candidates(s: Point, e: Point, obstacles: &[Rect], lane_hint: Option<f64>) ->
     }
     lanes.push(s.x.max(e.x) + 2.0 * GRID);
     lanes.push(s.x.min(e.x) - 2.0 * GRID);
-    let mut lanes_sorted: Vec<f64> = lanes.clone();
-    lanes_sorted.sort_by(|a, b| a.total_cmp(b));
-    lanes_sorted.dedup();
+    lanes.sort_by(|a, b| a.total_cmp(b));
+    lanes.dedup();
     let hint = lane_hint.map(snap);
-    // Heights of the runs below the start and above the end: the stubs first, then further.
     let starts = [s.y + STUB, s.y + 2.0 * STUB, s.y + 3.0 * STUB];
     let ends = [e.y - STUB, e.y - 2.0 * STUB, e.y - 3.0 * STUB];
-    let mut lane_routes: Vec<(bool, f64, Vec<Point>)> = Vec::new();
-    for &x in &lanes_sorted {
+    let mut routes: Vec<(bool, f64, Vec<Point>)> = Vec::new();
+    for &x in &lanes {
         for &y1 in &starts {
             for &y2 in &ends {
                 if below && y2 < y1 {
                     continue;
                 }
                 let r = vec![s, p(s.x, y1), p(x, y1), p(x, y2), p(e.x, y2), e];
-                let is_hint = hint == Some(x);
-                lane_routes.push((!is_hint, length(&r), r));
+                routes.push((hint != Some(x), length(&r), r));
             }
         }
     }
-    lane_routes.sort_by(|a, b| a.0.cmp(&b.0).then(a.1.total_cmp(&b.1)));
-    out.extend(lane_routes.into_iter().map(|(_, _, r)| r));
-    out
+    routes.sort_by(|a, b| a.0.cmp(&b.0).then(a.1.total_cmp(&b.1)));
+    routes.into_iter().map(|(_, _, r)| r).collect()
 }
 
 /// The route from output pin `s` to input pin `e` around `obstacles` (see the module doc): the
 /// whole polyline, both pins included, or empty for a straight wire. `lane_hint` is a vertical
-/// run the user asked for (a dragged segment), tried first among the lanes.
+/// run the user asked for (a dragged segment), tried right after the straight wire.
 pub fn route(s: Point, e: Point, obstacles: &[Rect], lane_hint: Option<f64>) -> Vec<Point> {
     let mut best: Option<(usize, Vec<Point>)> = None;
-    for c in candidates(s, e, obstacles, lane_hint) {
-        let n = hits(&c, obstacles);
-        if n == 0 {
-            best = Some((0, c));
-            break;
-        }
-        if best.as_ref().is_none_or(|(m, _)| n < *m) {
-            best = Some((n, c));
+    let straight = || if (s.x - e.x).abs() < 0.5 && e.y > s.y { vec![vec![s, e]] } else { Vec::new() };
+    // Cheapest first: straight, (the hinted lanes,) one horizontal run, then every lane.
+    let mut stages: Vec<Box<dyn Fn() -> Vec<Vec<Point>> + '_>> =
+        vec![Box::new(straight), Box::new(|| z_routes(s, e)), Box::new(|| lane_routes(s, e, obstacles, lane_hint))];
+    if lane_hint.is_some() {
+        stages.insert(1, Box::new(|| lane_routes(s, e, obstacles, lane_hint).into_iter().take(9).collect()));
+    }
+    for stage in &stages {
+        for c in stage() {
+            let n = hits(&c, obstacles);
+            if n == 0 {
+                return finish(simplify(c));
+            }
+            if best.as_ref().is_none_or(|(m, _)| n < *m) {
+                best = Some((n, c));
+            }
         }
     }
-    let points = simplify(best.map(|(_, c)| c).unwrap_or_else(|| vec![s, e]));
+    finish(simplify(best.map(|(_, c)| c).unwrap_or_else(|| vec![s, e])))
+}
+
+/// A straight wire is written without bends (empty: the canvas draws it pin to pin).
+fn finish(points: Vec<Point>) -> Vec<Point> {
     if points.len() == 2 && (points[0].x - points[1].x).abs() < 0.5 {
         return Vec::new();
     }

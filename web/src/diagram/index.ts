@@ -119,6 +119,7 @@ export const createCanvas: CreateCanvas = (container: HTMLElement, opts: CanvasO
     return e;
   };
 
+  let paletteRoom = 0;
   /** Shows the chart from its top, centred: all of it (`whole`, never beyond 100 %), or on
    *  load all of it when that stays readable, else its top at 100 %. */
   const showChart = (whole: boolean) => {
@@ -127,10 +128,9 @@ export const createCanvas: CreateCanvas = (container: HTMLElement, opts: CanvasO
     if (!b || width === 0 || height === 0) return;
     const m = 40;
     // The palette floats over the left edge: centre the chart in the room beside it (the
-    // palette is as wide as its longest label, which depends on the language).
-    const palette = readOnly ? null : (host.querySelector('.djs-palette') as HTMLElement | null);
-    const room0 = palette && palette.offsetWidth > 0 ? palette.offsetWidth + 20 : PALETTE_ROOM;
-    const inset = readOnly ? 0 : Math.min(room0, width / 3);
+    // palette is as wide as its longest label, which depends on the language; measured before
+    // the chart is drawn, when that costs no layout of the drawing).
+    const inset = readOnly ? 0 : Math.min(paletteRoom || PALETTE_ROOM, width / 3);
     const room = width - inset;
     let scale = Math.max(MIN_ZOOM, Math.min(1, room / (b.width + 2 * m), height / (b.height + 2 * m)));
     // Names and conditions (12 px) stay readable: "fit" shrinks no further than 9 px on
@@ -148,6 +148,10 @@ export const createCanvas: CreateCanvas = (container: HTMLElement, opts: CanvasO
 
   const handle: CanvasHandle = {
     load(doc: EditorDoc) {
+      if (!readOnly && elementRegistry.getAll().length <= 1) {
+        const palette = host.querySelector('.djs-palette') as HTMLElement | null;
+        if (palette && palette.offsetWidth > 0) paletteRoom = palette.offsetWidth + 20;
+      }
       importer.load(doc);
       savedTop = top();
       showChart(false);

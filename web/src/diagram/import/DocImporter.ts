@@ -5,7 +5,7 @@ import { pinCounts, type Connection, type EditorDoc, type Element } from '../../
 import type { DocFields, DocState } from '../core/DocState';
 import type { SfcElementFactory } from '../core/SfcElementFactory';
 import { labelsOf } from '../drawing';
-import { layoutWire } from '../layout/SfcLayouter';
+import { layoutWire, wireEnds } from '../layout/SfcLayouter';
 import type { Rect } from '../layout/router';
 import { clone, connectionsOf, shapesOf, type OrderCounter, type Service, type SfcConnection, type SfcShape } from '../model';
 
@@ -67,7 +67,13 @@ export class DocImporter {
         waypoints: c.waypoints && c.waypoints.length >= 2 ? c.waypoints.map((p) => ({ x: p.x, y: p.y })) : [],
         sfcOrder: elements.length + i,
       });
-      if (wire.waypoints.length < 2) wire.waypoints = layoutWire(wire, {}, () => (obstacles ??= obstaclesOfDoc(elements)));
+      // No polyline: a straight wire (the server checked that nothing is in its way), else
+      // one to route here.
+      if (wire.waypoints.length < 2) {
+        const { start, end } = wireEnds(wire);
+        wire.waypoints =
+          start.x === end.x && end.y > start.y ? [start, end] : layoutWire(wire, {}, () => (obstacles ??= obstaclesOfDoc(elements)));
+      }
       return wire;
     });
     for (const s of shapes.values()) this.canvas.addShape(s, root);

@@ -68,24 +68,29 @@ export function simplify(points: Point[]): Point[] {
 
 const snap = (v: number) => Math.round(v / GRID) * GRID;
 
-function candidates(s: Point, e: Point, obstacles: Rect[], laneHint?: number): Point[][] {
+/** The Z-shaped candidates (down, across, down), from the middle height outwards. */
+function zRoutes(s: Point, e: Point): Point[][] {
   const out: Point[][] = [];
-  const below = e.y > s.y;
-  if (Math.abs(s.x - e.x) < 0.5 && e.y > s.y) out.push([s, e]);
-  if (below) {
-    // One horizontal run, from the middle outwards (pins closer than two stubs: halfway).
-    const stub = Math.min(STUB, (e.y - s.y) / 2);
-    const lo = s.y + stub;
-    const hi = e.y - stub;
-    const mid = hi - lo < GRID ? (lo + hi) / 2 : Math.min(hi, Math.max(lo, snap((lo + hi) / 2)));
-    const ys = [mid];
-    for (let k = 1; mid - k * GRID >= lo || mid + k * GRID <= hi; k++) {
-      if (mid - k * GRID >= lo) ys.push(mid - k * GRID);
-      if (mid + k * GRID <= hi) ys.push(mid + k * GRID);
-    }
-    for (const y of [lo, hi]) if (!ys.includes(y)) ys.push(y);
-    for (const y of ys.slice(0, 64)) out.push([s, { x: s.x, y }, { x: e.x, y }, e]);
+  if (e.y <= s.y) return out;
+  // Pins closer than two stubs: the run halfway.
+  const stub = Math.min(STUB, (e.y - s.y) / 2);
+  const lo = s.y + stub;
+  const hi = e.y - stub;
+  const mid = hi - lo < GRID ? (lo + hi) / 2 : Math.min(hi, Math.max(lo, snap((lo + hi) / 2)));
+  const ys = [mid];
+  for (let k = 1; mid - k * GRID >= lo || mid + k * GRID <= hi; k++) {
+    if (mid - k * GRID >= lo) ys.push(mid - k * GRID);
+    if (mid + k * GRID <= hi) ys.push(mid + k * GRID);
   }
+  for (const y of [lo, hi]) if (!ys.includes(y)) ys.push(y);
+  for (const y of ys.slice(0, 64)) out.push([s, { x: s.x, y }, { x: e.x, y }, e]);
+  return out;
+}
+
+/** The lane candidates: down a stub, across to a vertical lane beside an obstacle (or the
+ *  hint), along it, across above the end, down into it; the hint first, then shortest first. */
+function laneRoutes(s: Point, e: Point, obstacles: Rect[], laneHint?: number): Point[][] {
+  const below = e.y > s.y;
   const top = Math.min(s.y, e.y) - STUB;
   const bottom = Math.max(s.y, e.y) + STUB;
   const lanes: number[] = [];
@@ -102,32 +107,37 @@ function candidates(s: Point, e: Point, obstacles: Rect[], laneHint?: number): P
   const hint = laneHint === undefined ? undefined : snap(laneHint);
   const starts = [s.y + STUB, s.y + 2 * STUB, s.y + 3 * STUB];
   const ends = [e.y - STUB, e.y - 2 * STUB, e.y - 3 * STUB];
-  const laneRoutes: { hinted: boolean; len: number; r: Point[] }[] = [];
+  const routes: { hinted: boolean; len: number; r: Point[] }[] = [];
   for (const x of sorted) {
     for (const y1 of starts) {
       for (const y2 of ends) {
         if (below && y2 < y1) continue;
         const r = [s, { x: s.x, y: y1 }, { x, y: y1 }, { x, y: y2 }, { x: e.x, y: y2 }, e];
-        laneRoutes.push({ hinted: hint === x, len: length(r), r });
+        routes.push({ hinted: hint === x, len: length(r), r });
       }
     }
   }
-  laneRoutes.sort((a, b) => Number(b.hinted) - Number(a.hinted) || a.len - b.len);
-  for (const l of laneRoutes) out.push(l.r);
-  return out;
+  routes.sort((a, b) => Number(b.hinted) - Number(a.hinted) || a.len - b.len);
+  return routes.map((l) => l.r);
 }
 
 /** The route from output pin `s` to input pin `e` around `obstacles`: the whole polyline with
  *  both pins (two points for a straight wire). `laneHint`: a vertical run the user asked for. */
 export function route(s: Point, e: Point, obstacles: Rect[], laneHint?: number): Point[] {
   let best: { n: number; c: Point[] } | undefined;
-  for (const c of candidates(s, e, obstacles, laneHint)) {
-    const n = hits(c, obstacles);
-    if (n === 0) {
-      best = { n, c };
-      break;
+  // Cheapest first: straight, then one horizontal run, then lanes (built only when needed).
+  const stages: (() => Point[][])[] = [
+    () => (Math.abs(s.x - e.x) < 0.5 && e.y > s.y ? [[s, e]] : []),
+    () => zRoutes(s, e),
+    () => laneRoutes(s, e, obstacles, laneHint),
+  ];
+  if (laneHint !== undefined) stages.splice(1, 0, () => laneRoutes(s, e, obstacles, laneHint).slice(0, 9));
+  for (const stage of stages) {
+    for (const c of stage()) {
+      const n = hits(c, obstacles);
+      if (n === 0) return simplify(c);
+      if (!best || n < best.n) best = { n, c };
     }
-    if (!best || n < best.n) best = { n, c };
   }
   return simplify(best?.c ?? [s, e]);
 }
