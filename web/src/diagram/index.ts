@@ -25,7 +25,7 @@ import { exportSvg } from './export/SvgExport';
 import type { Highlights } from './highlight/Highlights';
 import type { DocImporter } from './import/DocImporter';
 import ImportModule from './import';
-import { isConnection, type Service } from './model';
+import { isConnection, shapesOf, type Service } from './model';
 import ModelingModule from './modeling';
 import PaletteModule from './palette';
 import RenderModule from './render';
@@ -137,7 +137,17 @@ export const createCanvas: CreateCanvas = (container: HTMLElement, opts: CanvasO
     // screen, and shows the chart's top when all of it does not fit then.
     if (whole && scale < READABLE_ZOOM) scale = READABLE_ZOOM;
     if (!whole && scale < 0.6) scale = 1;
-    const x = b.width + 2 * m <= room / scale ? b.x + b.width / 2 - (inset + room / 2) / scale : b.x - m - inset / scale;
+    // A chart wider than the view shows its top around the initial step (where it starts),
+    // kept within the chart's extent.
+    let x: number;
+    if (b.width + 2 * m <= room / scale) {
+      x = b.x + b.width / 2 - (inset + room / 2) / scale;
+    } else {
+      const first = shapesOf(elementRegistry).find((s) => s.businessObject.kind === 'step' && s.businessObject.initial);
+      const left = b.x - m - inset / scale;
+      const right = b.x + b.width + m - width / scale;
+      x = first ? Math.min(right, Math.max(left, first.x + first.width / 2 - (inset + room / 2) / scale)) : left;
+    }
     // As `canvas.viewbox(box)` with the size kept by the tracker: diagram-js would read the
     // container's size, forcing a layout of the whole drawing just added (200 ms at 500 steps).
     canvas._changeViewbox(() => {
