@@ -9,6 +9,7 @@ pub mod coverage;
 pub mod engine;
 pub mod explain;
 pub mod scenario;
+pub mod timespec;
 pub mod trace;
 pub mod value;
 
