@@ -18,6 +18,8 @@ use std::sync::Arc;
 mod matiec;
 mod monitor;
 
+pub(crate) use matiec::test_order as matiec_test_order;
+
 /// Fired transitions and events collected during one scan (from every chart instance).
 #[derive(Debug, Default)]
 pub struct ScanSink {
