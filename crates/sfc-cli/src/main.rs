@@ -132,6 +132,10 @@ struct CheckArgs {
     /// Skip the reachability and guard analysis (structural and type checks only).
     #[arg(long)]
     no_analysis: bool,
+    /// Also warn where the chart behaves differently under this profile than under `iec`
+    /// (`matiec`: SFC0901–SFC0908).
+    #[arg(long, value_enum)]
+    profile: Option<ProfileArg>,
     /// Print what a diagnostic code means and how to fix it.
     #[arg(long, value_name = "CODE")]
     explain: Option<String>,
@@ -327,10 +331,19 @@ fn check(a: CheckArgs) -> u8 {
             }
         };
         let id = files.len() as u32;
-        let (file, _, found) = build::check_any(id, path, &decoded.text, &opts);
+        let (file, checked, found) = build::check_any(id, path, &decoded.text, &opts);
+        let clean = !found.iter().any(|d| d.severity == Severity::Error);
         files.push(file);
         diags.extend(encoding_warning(id, &decoded));
         diags.extend(found);
+        if matches!(a.profile, Some(ProfileArg::Matiec)) && clean && !sfc_server::compile::is_xml(path, &decoded.text) {
+            let mut extra = sfc_sim::matiec_check::differences(&checked.charts, &decoded.text);
+            for d in &mut extra {
+                d.span.file = id;
+            }
+            diags.extend(extra);
+            sfc_diagnostics::sort(&mut diags);
+        }
     }
     let errors = diags.iter().filter(|d| d.severity == Severity::Error).count();
     let warnings = diags.iter().filter(|d| d.severity == Severity::Warning).count();
