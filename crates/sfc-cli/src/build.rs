@@ -38,7 +38,7 @@ pub fn build(r: BuildRequest) -> u8 {
             return Status::Usage.code();
         }
     }
-    let text = match sfc_driver::read_source(&r.file) {
+    let decoded = match sfc_driver::read_source(&r.file) {
         Ok(t) => t,
         Err(e) => {
             term::error(&e.message);
@@ -48,8 +48,33 @@ pub fn build(r: BuildRequest) -> u8 {
     let mut opts = compile::validation_options(r.target, r.nstep, r.ntr);
     // With --flatten the simultaneous branches are compiled, not refused.
     opts.flatten = r.flatten;
-    let (file, checked, diags) = sfc_driver::check_any(0, &r.file, &text, &opts);
-    let errors = print_diagnostics(&diags, &[file]);
+    let (file, mut checked, mut diags) = sfc_driver::check_any(0, &r.file, &decoded.text, &opts);
+    diags.splice(0..0, sfc_syntax::encoding::warning(0, &decoded));
+    let compiling = matches!(r.target, BuildTarget::Atmt | BuildTarget::Eatmt | BuildTarget::St | BuildTarget::Stl);
+    // Converting (text, PLCopen XML, SVG) never refuses a chart for its problems: they are
+    // reported. Compiling refuses a chart with errors, but only its own errors count (those of
+    // the POU built, of what it uses, of the file's types and globals), never another POU's.
+    let errors = if !compiling {
+        print_diagnostics(&diags, std::slice::from_ref(&file));
+        0
+    } else {
+        match compile::pick_chart(&checked, r.pou.as_deref()).map(|c| c.pou.clone()) {
+            Ok(pou) if checked.has_errors() => {
+                let mine = sfc_model::errors_for(&checked, &pou);
+                let shown: Vec<_> = diags
+                    .iter()
+                    .filter(|d| !d.is_error() || mine.iter().any(|m| m.code == d.code && m.message == d.message))
+                    .cloned()
+                    .collect();
+                let n = print_diagnostics(&shown, std::slice::from_ref(&file));
+                if n == 0 {
+                    sfc_model::set_aside_unrelated(&mut checked, &pou);
+                }
+                n
+            }
+            _ => print_diagnostics(&diags, std::slice::from_ref(&file)),
+        }
+    };
     if errors > 0 {
         term::error(&format!("`{}` has errors: nothing was built", r.file.display()));
         return Status::Findings.code();
@@ -61,6 +86,15 @@ pub fn build(r: BuildRequest) -> u8 {
         ntr: r.ntr,
         stl_method: r.stl_method.unwrap_or_default(),
     };
+    let unparsed = checked
+        .diagnostics
+        .iter()
+        .any(|d| d.is_error() && (d.code.starts_with("SFC00") || d.code.starts_with("SFC01")));
+    if r.target == BuildTarget::Text && unparsed {
+        // Text that does not parse is not reprinted (the printer would drop what it could not
+        // read): it is written as it is, its errors reported above.
+        return write_out(&r, &checked.file.text);
+    }
     let text = match compile::compile(&checked, r.target, &copts) {
         Ok(built) => {
             print_diagnostics(&built.notes, std::slice::from_ref(&checked.file));
@@ -87,6 +121,11 @@ pub fn build(r: BuildRequest) -> u8 {
             return Status::Findings.code();
         }
     };
+    write_out(&r, &text)
+}
+
+/// Writes the result to `-o OUT` (atomically) or standard output.
+fn write_out(r: &BuildRequest, text: &str) -> u8 {
     match &r.out {
         Some(path) if path.as_os_str() != "-" => {
             if let Err(e) = sfc_driver::write_atomically(path, text.as_bytes()) {

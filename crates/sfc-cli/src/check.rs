@@ -3,7 +3,7 @@
 //! diagnostics as rustc-like text, one JSON array, or a SARIF 2.1.0 log.
 
 use crate::term::{self, plural, summary};
-use crate::{DenyArg, Status};
+use crate::{DenyArg, ProfileArg, Status};
 use sfc_diagnostics::{render_json, render_sarif, SarifNotification, SarifTool, Severity, SourceFile};
 use sfc_driver::load::{collect, is_chart_file, Found};
 use sfc_model::{CheckOptions, Target};
@@ -50,6 +50,10 @@ pub struct CheckArgs {
     /// Skip the reachability and guard analysis (structural and type checks only).
     #[arg(long)]
     no_analysis: bool,
+    /// Also warn where the chart behaves differently under this profile than under `iec`
+    /// (`matiec`: SFC0901–SFC0908).
+    #[arg(long, value_enum)]
+    profile: Option<ProfileArg>,
     /// Print what a diagnostic code means and how to fix it.
     #[arg(long, value_name = "CODE")]
     explain: Option<String>,
@@ -92,7 +96,7 @@ pub fn check(a: CheckArgs) -> u8 {
                 continue;
             }
         };
-        let text = match sfc_driver::read_source(&path) {
+        let decoded = match sfc_driver::read_source(&path) {
             Ok(t) => t,
             Err(e) => {
                 term::error(&e.message);
@@ -102,7 +106,17 @@ pub fn check(a: CheckArgs) -> u8 {
         };
         let id = files.len() as u32;
         let shown = if path.as_os_str() == "-" { PathBuf::from("<stdin>") } else { path.clone() };
-        let (file, _, found) = sfc_driver::check_any(id, &shown, &text, &opts);
+        let (file, checked, mut found) = sfc_driver::check_any(id, &shown, &decoded.text, &opts);
+        let clean = !found.iter().any(|d| d.severity == Severity::Error);
+        found.splice(0..0, sfc_syntax::encoding::warning(id, &decoded));
+        if matches!(a.profile, Some(ProfileArg::Matiec)) && clean && !sfc_driver::is_xml(&shown, &decoded.text) {
+            let mut extra = sfc_sim::matiec_check::differences(&checked.charts, &decoded.text);
+            for d in &mut extra {
+                d.span.file = id;
+            }
+            found.extend(extra);
+            sfc_diagnostics::sort(&mut found);
+        }
         // Human output goes file by file, so a long run shows its findings as it goes.
         if human {
             files.push(file);

@@ -193,7 +193,10 @@ fn exit_codes_of_every_command() {
     std::fs::write(d.join("broken.st"), BROKEN).unwrap();
     std::fs::write(d.join("syntax.st"), "PROGRAM P\n    x := ;\nEND_PROGRAM\n").unwrap();
     std::fs::write(d.join("empty.st"), "").unwrap();
-    std::fs::write(d.join("latin1.st"), b"PROGRAM P (* \xe9 *)\nEND_PROGRAM\n").unwrap();
+    // Not UTF-8: read as Latin-1 by every command alike, with the warning SFC0011.
+    let mut latin1 = b"(* Ventil ge\xf6ffnet *)\n".to_vec();
+    latin1.extend_from_slice(CLEAN.as_bytes());
+    std::fs::write(d.join("latin1.st"), &latin1).unwrap();
     std::fs::write(
         d.join("ok.scenario.toml"),
         "chart = \"clean.st\"\n[[at]]\ntime = \"T#0s\"\nexpect = { active = [\"S1\"] }\n",
@@ -208,7 +211,8 @@ fn exit_codes_of_every_command() {
         (&["check", "clean.st"], 0),
         (&["check", "broken.st"], 1),
         (&["check", "missing.st"], 2),
-        (&["check", "latin1.st"], 2),
+        (&["check", "latin1.st"], 0),
+        (&["check", "--deny", "warnings", "latin1.st"], 1),
         (&["check", "--format", "yaml", "clean.st"], 2),
         (&["check", "--explain", "SFC9999"], 2),
         (&["fmt", "--check", "formatted.st"], 0),
@@ -216,17 +220,17 @@ fn exit_codes_of_every_command() {
         (&["fmt", "--check", "syntax.st"], 1),
         (&["fmt", "--check", "broken.st", "missing.st"], 2),
         (&["fmt", "missing.st"], 2),
-        (&["fmt", "latin1.st"], 2),
+        (&["fmt", "--check", "latin1.st"], 1),
         (&["build", "clean.st", "--target", "st"], 0),
         (&["build", "broken.st", "--target", "st"], 1),
         (&["build", "missing.st", "--target", "st"], 2),
-        (&["build", "latin1.st", "--target", "st"], 2),
+        (&["build", "latin1.st", "--target", "st"], 0),
         (&["build", "clean.st", "--target", "st", "--pou", "Nope"], 2),
         (&["build", "empty.st", "--target", "st"], 2),
         (&["sim", "clean.st", "--scans", "3"], 0),
         (&["sim", "broken.st"], 1),
         (&["sim", "missing.st"], 2),
-        (&["sim", "latin1.st"], 2),
+        (&["sim", "latin1.st", "--scans", "3"], 0),
         (&["sim", "clean.st", "--pou", "Nope"], 2),
         (&["sim", "empty.st"], 2),
         (&["sim", "clean.st", "--period", "10ms"], 2),
@@ -262,9 +266,15 @@ fn sim_names_what_is_missing() {
     std::fs::write(d.join("empty.st"), "").unwrap();
     let out = sfc_in(&d, &["sim", "empty.st"]);
     assert!(text(&out.stderr).contains("the file has no SFC POU to simulate"), "{}", text(&out.stderr));
-    std::fs::write(d.join("latin1.st"), b"PROGRAM P (* \xe9 *)\nEND_PROGRAM\n").unwrap();
-    let out = sfc_in(&d, &["sim", "latin1.st"]);
-    assert!(text(&out.stderr).contains("is not UTF-8 text"), "{}", text(&out.stderr));
+    // A chart that is not UTF-8 is simulated as Latin-1 and `sim` says so, as `check` does.
+    let mut latin1 = b"(* Ventil ge\xf6ffnet *)\n".to_vec();
+    latin1.extend_from_slice(CLEAN.as_bytes());
+    std::fs::write(d.join("latin1.st"), &latin1).unwrap();
+    let out = sfc_in(&d, &["sim", "latin1.st", "--scans", "2"]);
+    assert_eq!(out.status.code(), Some(0), "{}", text(&out.stderr));
+    assert!(text(&out.stderr).contains("warning[SFC0011]"), "{}", text(&out.stderr));
+    let out = sfc_in(&d, &["check", "latin1.st"]);
+    assert!(text(&out.stderr).contains("warning[SFC0011]"), "{}", text(&out.stderr));
     let blinker = root().join("examples/blinker/blinker.st");
     let out = sfc(&["sim", p(&blinker), "--pou", "Nope"]);
     assert!(text(&out.stderr).contains("no POU named `Nope`"), "{}", text(&out.stderr));
