@@ -42,7 +42,9 @@ impl ApiError {
 
     /// The error with more fields (`conflict`, `diagnostics`).
     fn with(mut self, key: &str, value: Value) -> Self {
-        self.body[key] = value;
+        if let Some(o) = self.body.as_object_mut() {
+            o.insert(key.to_string(), value);
+        }
         self
     }
 }
@@ -232,13 +234,17 @@ pub async fn session(State(s): State<AppState>) -> Json<Value> {
         "open": paths(&s.0.open),
     });
     if let Some(h) = &s.0.host {
-        v["host"] = json!({
-            "fb": h.fb.name(),
-            "nstep": h.nstep,
-            "ntr": h.ntr,
-            "file": path_string(&h.file),
-            "result": path_string(&h.result),
-        });
+        put(
+            &mut v,
+            "host",
+            json!({
+                "fb": h.fb.name(),
+                "nstep": h.nstep,
+                "ntr": h.ntr,
+                "file": path_string(&h.file),
+                "result": path_string(&h.result),
+            }),
+        );
     }
     Json(v)
 }
@@ -597,11 +603,11 @@ fn build_document(s: &AppState, req: BuildRequest) -> Answer {
         let table = compile::parse_table(&built.text).ok_or_else(|| {
             ApiError::new(StatusCode::INTERNAL_SERVER_ERROR, format!("the table `{}` cannot be read back", built.text))
         })?;
-        answer["table"] = json!(table);
+        put(&mut answer, "table", json!(table));
     }
     if let Some(h) = host {
         write_atomically(&h.result, built.text.as_bytes()).map_err(|e| io_error(&h.result, &e))?;
-        answer["resultWritten"] = json!(path_string(&h.result));
+        put(&mut answer, "resultWritten", json!(path_string(&h.result)));
     }
     Ok(answer)
 }
@@ -650,5 +656,13 @@ pub async fn static_file(method: Method, uri: Uri) -> Response {
         assets::serve(uri).await
     } else {
         (StatusCode::METHOD_NOT_ALLOWED, "the web app's files are read-only\n").into_response()
+    }
+}
+
+/// Sets `key` of a JSON object (the answers built here are objects; anything else is left as it
+/// is rather than panicking).
+fn put(v: &mut Value, key: &str, value: Value) {
+    if let Some(o) = v.as_object_mut() {
+        o.insert(key.to_string(), value);
     }
 }
