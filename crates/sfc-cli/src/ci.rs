@@ -136,11 +136,9 @@ pub fn junit(cases: &[TestCase], seconds: f64) -> String {
     let failures = cases.iter().filter(|c| matches!(c.result, CaseResult::Failed { .. })).count();
     let errors = cases.iter().filter(|c| matches!(c.result, CaseResult::Error { .. })).count();
     let mut out = String::from("<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n");
-    let _ = writeln!(
-        out,
-        "<testsuites name=\"sfc test\" tests=\"{}\" failures=\"{failures}\" errors=\"{errors}\" time=\"{seconds:.3}\">",
-        cases.len()
-    );
+    // The aggregate carries no attributes: Ant's schema (windyroad) declares none on
+    // `testsuites` and refuses any; the totals are on the one `testsuite`.
+    let _ = writeln!(out, "<testsuites>");
     let _ = writeln!(
         out,
         "  <testsuite name=\"sfc test\" package=\"sfc\" id=\"0\" timestamp=\"{}\" hostname=\"{}\" tests=\"{}\" failures=\"{failures}\" errors=\"{errors}\" skipped=\"0\" time=\"{seconds:.3}\">",
