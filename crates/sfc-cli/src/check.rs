@@ -83,6 +83,15 @@ pub fn check(a: CheckArgs) -> u8 {
         analysis: !a.no_analysis,
         ..CheckOptions::default()
     };
+    if let Some(p @ (ProfileArg::Iec | ProfileArg::Codesys | ProfileArg::Grafcet)) = a.profile {
+        // Said, not silently ignored: only `matiec` has warnings of its own.
+        let name = match p {
+            ProfileArg::Iec => "iec",
+            ProfileArg::Codesys => "codesys",
+            _ => "grafcet",
+        };
+        eprintln!("note: `--profile {name}` adds no warnings to `sfc check` (only `matiec` does: SFC0901–SFC0908)");
+    }
     let human = matches!(a.format, CheckFormat::Human);
     let mut files: Vec<SourceFile> = Vec::new();
     let mut diags = Vec::new();

@@ -710,3 +710,53 @@ fn completions_man_page_and_version() {
         "a commit or the archive's note: {v}"
     );
 }
+
+/// The README's GitLab CI jobs, run as a runner would (`sh -c` per script line, `sfc` on the
+/// `PATH`) in a project with `charts/` and `scenarios/`: every command succeeds and leaves the
+/// files the artifacts name.
+#[test]
+fn the_readme_ci_example_runs() {
+    let readme = std::fs::read_to_string(root().join("README.md")).unwrap();
+    let ci = &readme[readme.find("### In CI").unwrap()..];
+    let yaml = &ci[ci.find("```yaml\n").unwrap() + 8..];
+    let yaml = &yaml[..yaml.find("```").unwrap()];
+    let commands: Vec<&str> = yaml.lines().filter_map(|l| l.trim_start().strip_prefix("- sfc ")).collect();
+    assert!(commands.len() >= 2, "{yaml}");
+    let d = temp_dir("readme-ci");
+    std::fs::create_dir_all(d.join("charts")).unwrap();
+    std::fs::create_dir_all(d.join("scenarios")).unwrap();
+    std::fs::write(d.join("charts/clean.st"), CLEAN).unwrap();
+    std::fs::write(
+        d.join("scenarios/clean.scenario.toml"),
+        "chart = \"../charts/clean.st\"\n[[at]]\ntime = \"T#0s\"\nset = { Go = true }\nexpect = { active = [\"S1\"] }\n[[at]]\ntime = \"T#10ms\"\nexpect = { active = [\"S2\"] }\n",
+    )
+    .unwrap();
+    let bin = Path::new(env!("CARGO_BIN_EXE_sfc")).parent().unwrap().to_path_buf();
+    let path = format!("{}:{}", bin.display(), std::env::var("PATH").unwrap_or_default());
+    for c in &commands {
+        let out =
+            Command::new("sh").arg("-c").arg(format!("sfc {c}")).current_dir(&d).env("PATH", &path).output().unwrap();
+        assert!(out.status.success(), "sfc {c}: {:?}\n{}", out.status.code(), text(&out.stderr));
+    }
+    for named in ["sfc.sarif", "sfc-junit.xml", "sfc-coverage.xml"] {
+        assert!(yaml.contains(named), "{yaml}");
+        assert!(d.join(named).exists(), "`{named}` was not written");
+    }
+    let sarif: serde_json::Value = serde_json::from_slice(&std::fs::read(d.join("sfc.sarif")).unwrap()).unwrap();
+    assert_eq!(sarif["version"], "2.1.0");
+    let cobertura = std::fs::read_to_string(d.join("sfc-coverage.xml")).unwrap();
+    assert!(cobertura.contains("<coverage line-rate=\"1.0000\""), "{cobertura}");
+}
+
+/// `check --profile` with a profile that has no warnings of its own says so; `matiec` adds its
+/// SFC09xx warnings, which `--deny warnings` fails on.
+#[test]
+fn check_profiles_are_never_silent() {
+    let d = temp_dir("check-profile");
+    std::fs::write(d.join("clean.st"), CLEAN).unwrap();
+    let out = sfc_in(&d, &["check", "--profile", "codesys", "clean.st"]);
+    assert_eq!(out.status.code(), Some(0));
+    assert!(text(&out.stderr).contains("`--profile codesys` adds no warnings"), "{}", text(&out.stderr));
+    let out = sfc_in(&d, &["check", "--profile", "matiec", "clean.st"]);
+    assert!(!text(&out.stderr).contains("adds no warnings"), "{}", text(&out.stderr));
+}
