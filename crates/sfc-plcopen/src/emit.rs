@@ -35,7 +35,7 @@ impl SourceMap {
         // Entries are sorted by start; only those starting at or before `at` can cover it.
         let upto = self.entries.partition_point(|e| e.text.start <= at);
         let mut best: Option<&MapEntry> = None;
-        for e in self.entries[..upto].iter().rev() {
+        for e in self.entries.get(..upto).unwrap_or_default().iter().rev() {
             let covers = e.text.start <= at && (at < e.text.end || (e.text.is_empty() && at == e.text.start));
             if !covers {
                 continue;

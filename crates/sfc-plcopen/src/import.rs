@@ -98,7 +98,7 @@ const RESERVED: &[&str] = &[
 pub(crate) fn is_ident(s: &str) -> bool {
     let b = s.as_bytes();
     !b.is_empty()
-        && (b[0].is_ascii_alphabetic() || b[0] == b'_')
+        && b.first().is_some_and(|c| c.is_ascii_alphabetic() || *c == b'_')
         && b.iter().all(|c| c.is_ascii_alphanumeric() || *c == b'_')
         && !s.contains("__")
         && !s.ends_with('_')
@@ -118,7 +118,10 @@ pub(crate) fn sanitize(s: &str) -> String {
     while out.ends_with('_') {
         out.pop();
     }
-    if out.is_empty() || out.as_bytes()[0].is_ascii_digit() || RESERVED.iter().any(|k| k.eq_ignore_ascii_case(&out)) {
+    if out.is_empty()
+        || out.as_bytes().first().is_some_and(u8::is_ascii_digit)
+        || RESERVED.iter().any(|k| k.eq_ignore_ascii_case(&out))
+    {
         out.insert_str(0, "X_");
     }
     out
@@ -189,9 +192,8 @@ impl<'i> Ctx<'i> {
     }
 
     pub fn diag(&mut self, code: &'static str, at: Range<u32>, msg: impl Into<String>) -> &mut Diagnostic {
-        self.diags.push(Diagnostic::new(code, Span::new(self.file, at.start, at.end), msg));
-        let n = self.diags.len() - 1;
-        &mut self.diags[n]
+        let d = Diagnostic::new(code, Span::new(self.file, at.start, at.end), msg);
+        self.diags.push_mut(d)
     }
 
     /// A name from attribute `name` of `n` as a located fragment; reports and repairs a name
@@ -493,7 +495,7 @@ pub(crate) fn project(cx: &mut Ctx, root: Node) {
     }
     for (p, owner) in &pous {
         cx.externals = match owner {
-            Some(k) if scoped => externals[*k].clone(),
+            Some(k) if scoped => externals.get(*k).cloned().unwrap_or_default(),
             _ => Vec::new(),
         };
         pou(cx, *p);
@@ -706,10 +708,10 @@ fn pou_instance(cx: &mut Ctx, pi: Node, task: Option<&str>) {
 /// A task interval as an IEC duration: v2 writes `T#100ms`, v1.0 `00:00:00.100000`.
 fn interval(s: &str) -> String {
     let parts: Vec<&str> = s.split(':').collect();
-    if parts.len() == 3 {
-        let h: Option<u64> = parts[0].parse().ok();
-        let m: Option<u64> = parts[1].parse().ok();
-        let sec: Option<f64> = parts[2].parse().ok();
+    if let [h, m, sec] = parts.as_slice() {
+        let h: Option<u64> = h.parse().ok();
+        let m: Option<u64> = m.parse().ok();
+        let sec: Option<f64> = sec.parse().ok();
         if let (Some(h), Some(m), Some(sec)) = (h, m, sec) {
             let us = ((h * 3600 + m * 60) as f64 * 1e6 + sec * 1e6).round() as i64;
             return crate::export::fmt_duration(us);

@@ -151,9 +151,8 @@ pub(super) fn map(cx: &Ctx, t: &XText) -> XText {
     let mut out = XText { anchor: t.anchor.clone(), ..Default::default() };
     let mut at = 0usize;
     let mut i = 0;
-    while i + 2 < sig.len() {
-        let (a, dot, b) = (sig[i], sig[i + 1], sig[i + 2]);
-        let prev_dot = i > 0 && sig[i - 1].kind == TokenKind::Dot;
+    while let (Some(&a), Some(&dot), Some(&b)) = (sig.get(i), sig.get(i + 1), sig.get(i + 2)) {
+        let prev_dot = i.checked_sub(1).and_then(|k| sig.get(k)).is_some_and(|t| t.kind == TokenKind::Dot);
         let adjacent = a.end == dot.start && dot.end == b.start;
         if a.kind == TokenKind::Ident
             && dot.kind == TokenKind::Dot

@@ -152,14 +152,24 @@ pub(super) fn parse<'a, 'i>(body: Node<'a, 'i>) -> Net<'a, 'i> {
     for g in &els {
         for p in g.ins.iter().chain(g.in_outs.iter()) {
             for (r, _, _) in &p.conns {
-                if let Some(&i) = ids.get(r) {
-                    consumed[i] = true;
-                    fanout[i] += 1;
+                // `ids` holds positions in `els`, which both tables have.
+                if let (Some(c), Some(f)) =
+                    ids.get(r).and_then(|&i| Some((consumed.get_mut(i)?, fanout.get_mut(i)?))).unzip()
+                {
+                    *c = true;
+                    *f += 1;
                 }
             }
         }
     }
     Net { els, ids, consumed, fanout }
+}
+
+impl Net<'_, '_> {
+    /// How many input pins read element `i`'s outputs.
+    fn fanout(&self, i: usize) -> usize {
+        self.fanout.get(i).copied().unwrap_or(0)
+    }
 }
 
 #[derive(Clone, Copy, PartialEq, Eq)]
@@ -252,6 +262,20 @@ impl Tr<'_, '_, '_, '_, '_> {
         }
     }
 
+    fn is_active(&self, i: usize) -> bool {
+        self.active.get(i).copied().unwrap_or(false)
+    }
+
+    fn set_active(&mut self, i: usize, on: bool) {
+        if let Some(a) = self.active.get_mut(i) {
+            *a = on;
+        }
+    }
+
+    fn is_done(&self, i: usize) -> bool {
+        self.done.get(i).copied().unwrap_or(false)
+    }
+
     fn falsum(&self, i: usize) -> Frag {
         match self.net.els.get(i) {
             Some(g) => Frag::located("FALSE", anchor(g.n)),
@@ -295,7 +319,8 @@ impl Tr<'_, '_, '_, '_, '_> {
 
     /// The value produced by element `i` (at its output `formal`).
     fn value(&mut self, i: usize, formal: Option<&str>) -> Frag {
-        let g = &self.net.els[i];
+        let net = self.net;
+        let Some(g) = net.els.get(i) else { return self.falsum(i) };
         let boolean = is_boolean_op(g) || g.kind == "contact";
         if let Some(t) = self.shared.get(&i) {
             return t.clone();
@@ -308,9 +333,9 @@ impl Tr<'_, '_, '_, '_, '_> {
             self.params = saved;
             return self.as_param(v);
         }
-        if boolean && self.net.fanout[i] > 1 && self.mode_shares() {
+        if boolean && net.fanout(i) > 1 && self.mode_shares() {
             let v = self.value_unshared(i, formal);
-            let at = anchor(self.net.els[i].n);
+            let at = anchor(g.n);
             let name = match self.params {
                 Some(_) => {
                     let name = format!("SHARED{}", self.fn_stmts.len() + 1);
@@ -366,7 +391,7 @@ impl Tr<'_, '_, '_, '_, '_> {
 
     fn value_inner(&mut self, i: usize, formal: Option<&str>) -> Frag {
         let net = self.net;
-        let g = &net.els[i];
+        let Some(g) = net.els.get(i) else { return self.falsum(i) };
         let at = anchor(g.n);
         let negated_out = g.outs.first().is_some_and(|o| o.negated);
         match g.kind {
@@ -439,7 +464,7 @@ impl Tr<'_, '_, '_, '_, '_> {
                     e.kind == "connector" && attr(e.n, "name").is_some_and(|n| n.trim().eq_ignore_ascii_case(name))
                 });
                 match conn {
-                    Some(c) => match net.els[c].ins.first() {
+                    Some(c) => match net.els.get(c).and_then(|e| e.ins.first()) {
                         Some(p) => self.input(c, p).unwrap_or_else(|| self.falsum(c)),
                         None => self.falsum(c),
                     },
@@ -459,7 +484,7 @@ impl Tr<'_, '_, '_, '_, '_> {
 
     fn block_value(&mut self, i: usize, formal: Option<&str>) -> Frag {
         let net = self.net;
-        let g = &net.els[i];
+        let Some(g) = net.els.get(i) else { return self.falsum(i) };
         let at = anchor(g.n);
         let type_name = attr(g.n, "typeName").unwrap_or("").trim().to_string();
         let instance = attr(g.n, "instanceName").map(str::trim).filter(|s| !s.is_empty()).map(str::to_string);
@@ -485,7 +510,7 @@ impl Tr<'_, '_, '_, '_, '_> {
             self.statement(i);
             Frag::located(format!("{inst}.{out_name}"), attr_range_or(g.n, "instanceName", &at))
         } else {
-            if self.active[i] {
+            if self.is_active(i) {
                 self.report(
                     i,
                     "SFC0706",
@@ -493,9 +518,9 @@ impl Tr<'_, '_, '_, '_, '_> {
                 );
                 return self.falsum(i);
             }
-            self.active[i] = true;
+            self.set_active(i, true);
             let v = self.function(i, &type_name);
-            self.active[i] = false;
+            self.set_active(i, false);
             v
         };
         if negated {
@@ -509,7 +534,7 @@ impl Tr<'_, '_, '_, '_, '_> {
     /// the power rail).
     fn args(&mut self, i: usize) -> Vec<(Option<String>, Frag)> {
         let net = self.net;
-        let g = &net.els[i];
+        let Some(g) = net.els.get(i) else { return Vec::new() };
         let mut out = Vec::new();
         for p in g.ins.iter().chain(g.in_outs.iter()) {
             let is_en = p.formal.as_deref().is_some_and(|f| f.eq_ignore_ascii_case("EN"));
@@ -538,7 +563,7 @@ impl Tr<'_, '_, '_, '_, '_> {
 
     /// A function (a block without instance) as an expression.
     fn function(&mut self, i: usize, type_name: &str) -> Frag {
-        let at = anchor(self.net.els[i].n);
+        let at = self.net.els.get(i).map_or(0..0, |g| anchor(g.n));
         let args = self.args(i);
         let vals: Vec<Frag> = args.iter().map(|a| a.1.clone()).collect();
         let upper = type_name.to_ascii_uppercase();
@@ -567,7 +592,7 @@ impl Tr<'_, '_, '_, '_, '_> {
             Frag::infix(op, vals)
         } else if let (Some(op), true) = (cmp, vals.len() >= 2) {
             // GT(a, b, c) is a > b AND b > c.
-            let pairs: Vec<Frag> = vals.windows(2).map(|w| Frag::infix(op, vec![w[0].clone(), w[1].clone()])).collect();
+            let pairs: Vec<Frag> = vals.windows(2).map(|w| Frag::infix(op, w.to_vec())).collect();
             if pairs.len() == 1 {
                 pairs.into_iter().next().unwrap_or_default()
             } else {
@@ -598,16 +623,16 @@ impl Tr<'_, '_, '_, '_, '_> {
 
     /// Makes sure the statement of element `i` has been written (before its value is read).
     fn statement(&mut self, i: usize) {
-        if self.done[i] || self.active[i] {
-            return;
-        }
-        if self.mode == Mode::Condition && self.net.els[i].kind == "coil" {
-            return;
-        }
-        self.active[i] = true;
-        let gates_before = std::mem::take(&mut self.gates);
         let net = self.net;
-        let g = &net.els[i];
+        let Some(g) = net.els.get(i) else { return };
+        if self.is_done(i) || self.is_active(i) {
+            return;
+        }
+        if self.mode == Mode::Condition && g.kind == "coil" {
+            return;
+        }
+        self.set_active(i, true);
+        let gates_before = std::mem::take(&mut self.gates);
         let at = anchor(g.n);
         let ind = self.indent.clone();
         let stmt: Option<Frag> = match g.kind {
@@ -694,8 +719,10 @@ impl Tr<'_, '_, '_, '_, '_> {
             }
             _ => None,
         };
-        self.active[i] = false;
-        self.done[i] = true;
+        self.set_active(i, false);
+        if let Some(d) = self.done.get_mut(i) {
+            *d = true;
+        }
         let gates = std::mem::replace(&mut self.gates, gates_before);
         if let Some(s) = stmt {
             let s = if gates.is_empty() {
@@ -743,18 +770,21 @@ fn call(name: &str, args: &[(Option<String>, Frag)], positional: bool) -> Frag {
 fn sinks(net: &Net) -> Vec<usize> {
     let mut list: Vec<usize> = (0..net.els.len())
         .filter(|&i| {
-            let g = &net.els[i];
+            let Some(g) = net.els.get(i) else { return false };
             match g.kind {
                 "outVariable" | "coil" => true,
                 "inOutVariable" => g.ins.first().is_some_and(|p| !p.conns.is_empty()),
-                "block" => attr(g.n, "instanceName").is_some_and(|s| !s.trim().is_empty()) || !net.consumed[i],
+                "block" => {
+                    attr(g.n, "instanceName").is_some_and(|s| !s.trim().is_empty())
+                        || !net.consumed.get(i).copied().unwrap_or(false)
+                }
                 _ => false,
             }
         })
         .collect();
-    let ordered = list.iter().any(|&i| net.els[i].order > 0);
+    let ordered = list.iter().any(|&i| net.els.get(i).is_some_and(|g| g.order > 0));
     list.sort_by(|&a, &b| {
-        let (ga, gb) = (&net.els[a], &net.els[b]);
+        let (Some(ga), Some(gb)) = (net.els.get(a), net.els.get(b)) else { return a.cmp(&b) };
         let ka = if ordered && ga.order > 0 { ga.order } else { u64::MAX };
         let kb = if ordered && gb.order > 0 { gb.order } else { u64::MAX };
         ka.cmp(&kb).then(ga.pos.1.total_cmp(&gb.pos.1)).then(ga.pos.0.total_cmp(&gb.pos.0)).then(a.cmp(&b))
@@ -867,11 +897,11 @@ fn shares_logic(net: &Net, p: &Pin) -> bool {
         if !seen.insert(i) {
             continue;
         }
-        let g = &net.els[i];
+        let Some(g) = net.els.get(i) else { continue };
         if !(is_boolean_op(g) || g.kind == "contact") {
             continue;
         }
-        if net.fanout[i] > 1 {
+        if net.fanout(i) > 1 {
             return true;
         }
         for q in &g.ins {
@@ -952,23 +982,23 @@ pub(super) fn condition(cx: &mut Ctx, net: &Net, cp: Node, owner: &Range<u32>) -
 pub(super) fn transition_body(cx: &mut Ctx, body: Node, name: &str, owner: &Range<u32>) -> Frag {
     let net = parse(body);
     unsupported(cx, &net);
-    let target = net.els.iter().position(|g| {
+    let target = net.els.iter().enumerate().find(|(_, g)| {
         matches!(g.kind, "outVariable" | "inOutVariable" | "coil")
             && g.text.as_ref().is_some_and(|t| !name.is_empty() && t.text.eq_ignore_ascii_case(name))
     });
-    let Some(t) = target else {
+    let Some((t, target)) = target else {
         cx.diag("SFC0708", anchor(body), format!("the condition body never assigns `{name}`; imported as FALSE"));
         return Frag::located("FALSE", anchor(body));
     };
     let mut tr = condition_tr(cx, &net);
     tr.reported.insert(t);
-    let value = match net.els[t].ins.first() {
+    let value = match target.ins.first() {
         Some(p) => condition_value(&mut tr, p),
         None => None,
     };
     // Elements that neither feed the condition nor are called for it have no place in it.
     for i in sinks(&net) {
-        if i != t && !tr.done[i] && !tr.reported.contains(&i) {
+        if i != t && !tr.is_done(i) && !tr.reported.contains(&i) {
             tr.report(i, "SFC0710", format!("only the value assigned to `{name}` is imported from a condition body"));
         }
     }
@@ -978,8 +1008,8 @@ pub(super) fn transition_body(cx: &mut Ctx, body: Node, name: &str, owner: &Rang
     match value {
         Some(v) => v,
         None => {
-            cx.diag("SFC0708", anchor(net.els[t].n), format!("nothing is connected to `{name}`; imported as FALSE"));
-            Frag::located("FALSE", anchor(net.els[t].n))
+            cx.diag("SFC0708", anchor(target.n), format!("nothing is connected to `{name}`; imported as FALSE"));
+            Frag::located("FALSE", anchor(target.n))
         }
     }
 }
