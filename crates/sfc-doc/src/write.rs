@@ -249,15 +249,17 @@ pub fn write(doc: &EditorDoc) -> Written {
             continue;
         }
         let (mut from, mut to) = (Vec::new(), Vec::new());
+        // Ends by block position (ids may repeat in a document being edited).
         for c in &doc.connections {
-            let (other, list) = if c.target == e.id {
-                (&c.source, &mut from)
-            } else if c.source == e.id {
-                (&c.target, &mut to)
+            let (Some(&s), Some(&t)) = (d.by_id.get(&c.source), d.by_id.get(&c.target)) else { continue };
+            let (other, list) = if t == i {
+                (s, &mut from)
+            } else if s == i {
+                (t, &mut to)
             } else {
                 continue;
             };
-            if let Some(s) = d.by_id.get(other).map(|&k| &doc.elements[k]) {
+            if let Some(s) = doc.elements.get(other) {
                 if s.kind == Some(ElementKind::Step) && probe.is_name(&s.name) {
                     list.push(s.name.clone());
                 }
