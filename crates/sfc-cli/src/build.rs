@@ -7,6 +7,7 @@ use crate::Status;
 use sfc_driver::compile::{self, CompileError, CompileOptions};
 use std::path::PathBuf;
 
+pub use sfc_codegen::stl::StlMethod;
 pub use sfc_driver::compile::BuildTarget;
 
 pub struct BuildRequest {
@@ -17,38 +18,94 @@ pub struct BuildRequest {
     pub flatten: bool,
     pub nstep: Option<u32>,
     pub ntr: Option<u32>,
+    /// `--stl-method` (STL only).
+    pub stl_method: Option<StlMethod>,
+    /// `--symbols OUT.csv` (STL only).
+    pub symbols: Option<PathBuf>,
 }
 
 pub fn build(r: BuildRequest) -> u8 {
-    if let Some(out) = &r.out {
+    if r.target != BuildTarget::Stl && (r.stl_method.is_some() || r.symbols.is_some()) {
+        term::error("--stl-method and --symbols apply to --target stl");
+        return Status::Usage.code();
+    }
+    for out in r.out.iter().chain(&r.symbols) {
         if sfc_driver::same_file(out, &r.file) {
             term::error(&format!(
-                "`{}` is the input: refusing to overwrite the chart with the build output (choose another -o)",
+                "`{}` is the input: refusing to overwrite the chart with the build output (choose another file)",
                 out.display()
             ));
             return Status::Usage.code();
         }
     }
-    let text = match sfc_driver::read_source(&r.file) {
+    let decoded = match sfc_driver::read_source(&r.file) {
         Ok(t) => t,
         Err(e) => {
             term::error(&e.message);
             return Status::Usage.code();
         }
     };
-    let opts = compile::validation_options(r.target, r.nstep, r.ntr);
-    let (file, checked, diags) = sfc_driver::check_any(0, &r.file, &text, &opts);
-    let errors = print_diagnostics(&diags, &[file]);
+    let mut opts = compile::validation_options(r.target, r.nstep, r.ntr);
+    // With --flatten the simultaneous branches are compiled, not refused.
+    opts.flatten = r.flatten;
+    let (file, mut checked, mut diags) = sfc_driver::check_any(0, &r.file, &decoded.text, &opts);
+    diags.splice(0..0, sfc_syntax::encoding::warning(0, &decoded));
+    let compiling = matches!(r.target, BuildTarget::Atmt | BuildTarget::Eatmt | BuildTarget::St | BuildTarget::Stl);
+    // Converting (text, PLCopen XML, SVG) never refuses a chart for its problems: they are
+    // reported. Compiling refuses a chart with errors, but only its own errors count (those of
+    // the POU built, of what it uses, of the file's types and globals), never another POU's.
+    let errors = if !compiling {
+        print_diagnostics(&diags, std::slice::from_ref(&file));
+        0
+    } else {
+        match compile::pick_chart(&checked, r.pou.as_deref()).map(|c| c.pou.clone()) {
+            Ok(pou) if checked.has_errors() => {
+                let mine = sfc_model::errors_for(&checked, &pou);
+                let shown: Vec<_> = diags
+                    .iter()
+                    .filter(|d| !d.is_error() || mine.iter().any(|m| m.code == d.code && m.message == d.message))
+                    .cloned()
+                    .collect();
+                let n = print_diagnostics(&shown, std::slice::from_ref(&file));
+                if n == 0 {
+                    sfc_model::set_aside_unrelated(&mut checked, &pou);
+                }
+                n
+            }
+            _ => print_diagnostics(&diags, std::slice::from_ref(&file)),
+        }
+    };
     if errors > 0 {
         term::error(&format!("`{}` has errors: nothing was built", r.file.display()));
         return Status::Findings.code();
     }
-    let copts = CompileOptions { pou: r.pou.as_deref(), flatten: r.flatten, nstep: r.nstep, ntr: r.ntr };
+    let copts = CompileOptions {
+        pou: r.pou.as_deref(),
+        flatten: r.flatten,
+        nstep: r.nstep,
+        ntr: r.ntr,
+        stl_method: r.stl_method.unwrap_or_default(),
+    };
+    let unparsed = checked
+        .diagnostics
+        .iter()
+        .any(|d| d.is_error() && (d.code.starts_with("SFC00") || d.code.starts_with("SFC01")));
+    if r.target == BuildTarget::Text && unparsed {
+        // Text that does not parse is not reprinted (the printer would drop what it could not
+        // read): it is written as it is, its errors reported above.
+        return write_out(&r, &checked.file.text);
+    }
     let text = match compile::compile(&checked, r.target, &copts) {
         Ok(built) => {
             print_diagnostics(&built.notes, std::slice::from_ref(&checked.file));
             if let Some(n) = built.flattened {
                 eprintln!("flattened into {n} states");
+            }
+            if let (Some(path), Some(csv)) = (&r.symbols, &built.symbols) {
+                if let Err(e) = sfc_driver::write_atomically(path, csv.as_bytes()) {
+                    term::error(&format!("cannot write `{}`: {e}", path.display()));
+                    return Status::Usage.code();
+                }
             }
             built.text
         }
@@ -64,6 +121,11 @@ pub fn build(r: BuildRequest) -> u8 {
             return Status::Findings.code();
         }
     };
+    write_out(&r, &text)
+}
+
+/// Writes the result to `-o OUT` (atomically) or standard output.
+fn write_out(r: &BuildRequest, text: &str) -> u8 {
     match &r.out {
         Some(path) if path.as_os_str() != "-" => {
             if let Err(e) = sfc_driver::write_atomically(path, text.as_bytes()) {

@@ -3,7 +3,7 @@
 //! diagnostics as rustc-like text, one JSON array, or a SARIF 2.1.0 log.
 
 use crate::term::{self, plural, summary};
-use crate::{DenyArg, Status};
+use crate::{DenyArg, ProfileArg, Status};
 use sfc_diagnostics::{render_json, render_sarif, SarifNotification, SarifTool, Severity, SourceFile};
 use sfc_driver::load::{collect, is_chart_file, Found};
 use sfc_model::{CheckOptions, Target};
@@ -50,6 +50,10 @@ pub struct CheckArgs {
     /// Skip the reachability and guard analysis (structural and type checks only).
     #[arg(long)]
     no_analysis: bool,
+    /// Also warn where the chart behaves differently under this profile than under `iec`
+    /// (`matiec`: SFC0901–SFC0908).
+    #[arg(long, value_enum)]
+    profile: Option<ProfileArg>,
     /// Print what a diagnostic code means and how to fix it.
     #[arg(long, value_name = "CODE")]
     explain: Option<String>,
@@ -79,6 +83,15 @@ pub fn check(a: CheckArgs) -> u8 {
         analysis: !a.no_analysis,
         ..CheckOptions::default()
     };
+    if let Some(p @ (ProfileArg::Iec | ProfileArg::Codesys | ProfileArg::Grafcet)) = a.profile {
+        // Said, not silently ignored: only `matiec` has warnings of its own.
+        let name = match p {
+            ProfileArg::Iec => "iec",
+            ProfileArg::Codesys => "codesys",
+            _ => "grafcet",
+        };
+        eprintln!("note: `--profile {name}` adds no warnings to `sfc check` (only `matiec` does: SFC0901–SFC0908)");
+    }
     let human = matches!(a.format, CheckFormat::Human);
     let mut files: Vec<SourceFile> = Vec::new();
     let mut diags = Vec::new();
@@ -92,7 +105,7 @@ pub fn check(a: CheckArgs) -> u8 {
                 continue;
             }
         };
-        let text = match sfc_driver::read_source(&path) {
+        let decoded = match sfc_driver::read_source(&path) {
             Ok(t) => t,
             Err(e) => {
                 term::error(&e.message);
@@ -102,7 +115,17 @@ pub fn check(a: CheckArgs) -> u8 {
         };
         let id = files.len() as u32;
         let shown = if path.as_os_str() == "-" { PathBuf::from("<stdin>") } else { path.clone() };
-        let (file, _, found) = sfc_driver::check_any(id, &shown, &text, &opts);
+        let (file, checked, mut found) = sfc_driver::check_any(id, &shown, &decoded.text, &opts);
+        let clean = !found.iter().any(|d| d.severity == Severity::Error);
+        found.splice(0..0, sfc_syntax::encoding::warning(id, &decoded));
+        if matches!(a.profile, Some(ProfileArg::Matiec)) && clean && !sfc_driver::is_xml(&shown, &decoded.text) {
+            let mut extra = sfc_sim::matiec_check::differences(&checked.charts, &decoded.text);
+            for d in &mut extra {
+                d.span.file = id;
+            }
+            found.extend(extra);
+            sfc_diagnostics::sort(&mut found);
+        }
         // Human output goes file by file, so a long run shows its findings as it goes.
         if human {
             files.push(file);

@@ -136,11 +136,9 @@ pub fn junit(cases: &[TestCase], seconds: f64) -> String {
     let failures = cases.iter().filter(|c| matches!(c.result, CaseResult::Failed { .. })).count();
     let errors = cases.iter().filter(|c| matches!(c.result, CaseResult::Error { .. })).count();
     let mut out = String::from("<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n");
-    let _ = writeln!(
-        out,
-        "<testsuites name=\"sfc test\" tests=\"{}\" failures=\"{failures}\" errors=\"{errors}\" time=\"{seconds:.3}\">",
-        cases.len()
-    );
+    // The aggregate carries no attributes: Ant's schema (windyroad) declares none on
+    // `testsuites` and refuses any; the totals are on the one `testsuite`.
+    let _ = writeln!(out, "<testsuites>");
     let _ = writeln!(
         out,
         "  <testsuite name=\"sfc test\" package=\"sfc\" id=\"0\" timestamp=\"{}\" hostname=\"{}\" tests=\"{}\" failures=\"{failures}\" errors=\"{errors}\" skipped=\"0\" time=\"{seconds:.3}\">",
@@ -427,8 +425,7 @@ fn cobertura(set: &CoverageSet) -> String {
             );
             for (line, (shit, sall, thit, tall)) in &cl.lines {
                 let hits = usize::from(*shit > 0 || *thit > 0);
-                if *tall > 0 {
-                    let pct = (*thit * 100) / *tall;
+                if let Some(pct) = (*thit * 100).checked_div(*tall) {
                     let _ = writeln!(
                         out,
                         "            <line number=\"{line}\" hits=\"{hits}\" branch=\"true\" condition-coverage=\"{pct}% ({thit}/{tall})\"/>"

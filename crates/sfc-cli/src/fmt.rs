@@ -4,6 +4,7 @@
 
 use crate::term::{self, plural};
 use crate::Status;
+use sfc_diagnostics::SourceFile;
 use sfc_driver::load::{collect, Found};
 use sfc_driver::FormatError;
 use std::io::Write;
@@ -38,7 +39,7 @@ pub fn fmt(a: FmtArgs) -> u8 {
             }
         };
         let stdin = path.as_os_str() == "-";
-        let text = match sfc_driver::read_source(&path) {
+        let decoded = match sfc_driver::read_source(&path) {
             Ok(t) => t,
             Err(e) => {
                 term::error(&e.message);
@@ -46,9 +47,13 @@ pub fn fmt(a: FmtArgs) -> u8 {
                 continue;
             }
         };
+        let text = &decoded.text;
         let shown = if stdin { "standard input".to_string() } else { format!("`{}`", path.display()) };
         let name = if stdin { "<stdin>".to_string() } else { path.display().to_string() };
-        let formatted = match sfc_driver::format(&name, &text) {
+        if let Some(w) = sfc_syntax::encoding::warning(0, &decoded) {
+            term::print_diagnostics(&[w], &[SourceFile::new(name.clone(), text.clone())]);
+        }
+        let formatted = match sfc_driver::format(&name, text) {
             Ok(f) => f,
             Err(FormatError::Xml) => {
                 term::error(&format!(
@@ -65,20 +70,31 @@ pub fn fmt(a: FmtArgs) -> u8 {
                 continue;
             }
         };
+        // The file keeps its encoding, byte order mark and line endings.
+        let (bytes, lost) = sfc_syntax::encoding::encode(&formatted, &decoded);
+        let same = sfc_syntax::encoding::decode(&bytes) == decoded;
         if stdin {
             // `--check -` says nothing: the exit status tells whether the input is formatted.
             if a.check {
-                if formatted != text {
+                if !same {
                     status = status.max(Status::Findings);
                 }
             } else {
                 let mut out = std::io::stdout().lock();
-                let _ = out.write_all(formatted.as_bytes());
+                let _ = out.write_all(&bytes);
                 let _ = out.flush();
             }
             continue;
         }
-        if formatted == text {
+        if lost > 0 {
+            term::error(&format!(
+                "{shown} is Latin-1 / Windows-1252, which cannot hold {} of its characters: not formatted",
+                lost
+            ));
+            status = status.max(Status::Findings);
+            continue;
+        }
+        if same {
             unchanged += 1;
             continue;
         }
@@ -86,7 +102,7 @@ pub fn fmt(a: FmtArgs) -> u8 {
         if a.check {
             println!("would reformat {}", path.display());
             status = status.max(Status::Findings);
-        } else if let Err(e) = sfc_driver::write_atomically(&path, formatted.as_bytes()) {
+        } else if let Err(e) = sfc_driver::write_atomically(&path, &bytes) {
             term::error(&format!("cannot write `{}`: {e}", path.display()));
             status = status.max(Status::Usage);
         }

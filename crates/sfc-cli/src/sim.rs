@@ -303,6 +303,13 @@ pub fn sim(r: SimRequest) -> u8 {
         Ok(s) => s,
         Err(e) => return report_load_error(&e),
     };
+    // A chart that is not UTF-8 was read as Latin-1 / Windows-1252: said, as `check` says it.
+    if let Ok(decoded) = sfc_driver::read_source(&scen.chart) {
+        if let Some(w) = sfc_syntax::encoding::warning(0, &decoded) {
+            let file = sfc_diagnostics::SourceFile::new(scen.chart_name(), decoded.text.clone());
+            term::print_diagnostics(&[w], &[file]);
+        }
+    }
     if let Some(named) = &scen.scenario_chart {
         let canon = |p: &Path| std::fs::canonicalize(p).unwrap_or_else(|_| p.to_path_buf());
         if canon(named) != canon(&scen.chart) {

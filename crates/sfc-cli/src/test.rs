@@ -64,7 +64,14 @@ fn chart_warnings(cache: &mut HashMap<PathBuf, Vec<String>>, s: &scenario::Scena
     cache
         .entry(key)
         .or_insert_with(|| {
-            let (file, _, diags) = sfc_driver::check_any(0, &s.chart, s.chart_text(), &Default::default());
+            let opts = sfc_model::CheckOptions { analysis: true, ..Default::default() };
+            // The chart as `sfc check` reads it (a PLCopen file as XML, its encoding warned of).
+            let decoded = match sfc_driver::read_source(&s.chart) {
+                Ok(d) => d,
+                Err(e) => return vec![format!("{} (denied by --deny warnings)", e.message)],
+            };
+            let (file, _, mut diags) = sfc_driver::check_any(0, &s.chart, &decoded.text, &opts);
+            diags.extend(sfc_syntax::encoding::warning(0, &decoded));
             diags
                 .iter()
                 .filter(|d| d.severity == sfc_diagnostics::Severity::Warning)

@@ -53,10 +53,17 @@ pub fn sarif_uri(name: &str) -> (String, bool) {
     (out, !absolute)
 }
 
+/// Adds `key: value` to a JSON object (a no-op on anything else).
+fn set(v: &mut Value, key: &str, value: Value) {
+    if let Some(obj) = v.as_object_mut() {
+        obj.insert(key.to_string(), value);
+    }
+}
+
 fn location(uri: &str, relative: bool) -> Value {
     let mut loc = json!({ "uri": uri });
     if relative {
-        loc["uriBaseId"] = json!("%SRCROOT%");
+        set(&mut loc, "uriBaseId", json!("%SRCROOT%"));
     }
     loc
 }
@@ -118,11 +125,11 @@ pub fn render_sarif(
         if let Some(file) = files.get(d.span.file as usize) {
             let (uri, relative) = sarif_uri(&file.name);
             let mut artifact = location(&uri, relative);
-            artifact["index"] = json!(artifact_index(&file.name));
+            set(&mut artifact, "index", json!(artifact_index(&file.name)));
             let mut loc =
                 json!({ "physicalLocation": { "artifactLocation": artifact, "region": region(file, d.span) } });
             if let Some(e) = &d.element {
-                loc["logicalLocations"] = json!([{ "name": e, "kind": "element" }]);
+                set(&mut loc, "logicalLocations", json!([{ "name": e, "kind": "element" }]));
             }
             result.insert("locations".into(), json!([loc]));
             let related: Vec<Value> = d
@@ -174,7 +181,11 @@ pub fn render_sarif(
             let mut v = json!({ "level": "error", "message": { "text": n.message } });
             if let Some(f) = &n.file {
                 let (uri, relative) = sarif_uri(f);
-                v["locations"] = json!([{ "physicalLocation": { "artifactLocation": location(&uri, relative) } }]);
+                set(
+                    &mut v,
+                    "locations",
+                    json!([{ "physicalLocation": { "artifactLocation": location(&uri, relative) } }]),
+                );
             }
             v
         })
@@ -186,7 +197,7 @@ pub fn render_sarif(
         "rules": rules,
     });
     if let Some(uri) = tool.information_uri {
-        driver["informationUri"] = json!(uri);
+        set(&mut driver, "informationUri", json!(uri));
     }
     let log = json!({
         "$schema": "https://docs.oasis-open.org/sarif/sarif/v2.1.0/os/schemas/sarif-schema-2.1.0.json",
@@ -251,12 +262,7 @@ mod tests {
     fn one_result_per_diagnostic() {
         let f = SourceFile::new("a.st", "PROGRAM P\n  x := 1;\nEND_PROGRAM\n");
         let d = Diagnostic::new("SFC0301", Span::new(0, 12, 13), "undeclared variable `x`").with_element("T1");
-        let tool = SarifTool {
-            name: "sfc",
-            version: "0.1.0",
-            semantic_version: "0.1.0",
-            information_uri: "https://example.org",
-        };
+        let tool = SarifTool { name: "sfc", version: "0.1.0", semantic_version: "0.1.0", information_uri: None };
         let v: Value = serde_json::from_str(&render_sarif(&[d], &[f], &tool, "file:///w/", &[])).unwrap();
         let run = &v["runs"][0];
         assert_eq!(v["version"], "2.1.0");

@@ -1,6 +1,7 @@
 //! Reading chart files: text from a path or standard input, the kind of a file, and the chart
 //! files under directories (for `sfc check DIR`, `sfc fmt DIR`).
 
+use sfc_syntax::encoding::Decoded;
 use std::io::Read;
 use std::path::{Path, PathBuf};
 
@@ -30,7 +31,7 @@ impl FileKind {
 pub struct LoadError {
     /// The path as given (`-` for standard input).
     pub path: PathBuf,
-    /// `cannot read `a.st`: No such file or directory (os error 2)`, `` `a.st` is not UTF-8 text ``.
+    /// `cannot read `a.st`: No such file or directory (os error 2)`, `` `a.st` is a directory ``.
     pub message: String,
 }
 
@@ -46,9 +47,11 @@ impl std::error::Error for LoadError {}
 /// far beyond any real one, and bounds the work per input).
 pub const MAX_SOURCE: u64 = 256 << 20;
 
-/// Reads a chart file as text; `-` reads standard input. The text must be UTF-8 (a byte order
-/// mark is kept: the lexer skips it).
-pub fn read_source(path: &Path) -> Result<String, LoadError> {
+/// Reads a chart file as text; `-` reads standard input. UTF-8 with or without a byte order
+/// mark, or Latin-1 / Windows-1252 (then `first_non_utf8` is set and
+/// `sfc_syntax::encoding::warning` says so); `sfc_syntax::encoding::encode` writes text back in
+/// the file's encoding, byte order mark and line endings.
+pub fn read_source(path: &Path) -> Result<Decoded, LoadError> {
     let err = |message: String| LoadError { path: path.to_path_buf(), message };
     let bytes = if path.as_os_str() == "-" {
         let mut b = Vec::new();
@@ -72,10 +75,7 @@ pub fn read_source(path: &Path) -> Result<String, LoadError> {
     if bytes.len() as u64 > MAX_SOURCE {
         return Err(err(format!("{shown} is larger than {} MiB", MAX_SOURCE >> 20)));
     }
-    String::from_utf8(bytes).map_err(|e| {
-        let at = e.utf8_error().valid_up_to();
-        err(format!("{shown} is not UTF-8 text (invalid byte at offset {at})"))
-    })
+    Ok(sfc_syntax::encoding::decode(&bytes))
 }
 
 /// Whether a file found in a directory is a chart file: `.st` or `.xml` (any case).
@@ -198,9 +198,11 @@ mod tests {
         let d = scratch("read");
         std::fs::write(d.join("ok.st"), "PROGRAM P END_PROGRAM").unwrap();
         std::fs::write(d.join("latin.st"), b"(* \xe9 *)").unwrap();
-        assert_eq!(read_source(&d.join("ok.st")).unwrap(), "PROGRAM P END_PROGRAM");
-        let e = read_source(&d.join("latin.st")).unwrap_err();
-        assert!(e.message.ends_with("is not UTF-8 text (invalid byte at offset 3)"), "{e}");
+        assert_eq!(read_source(&d.join("ok.st")).unwrap().text, "PROGRAM P END_PROGRAM");
+        // Not UTF-8: read as Latin-1 / Windows-1252, and the first such byte is known.
+        let latin = read_source(&d.join("latin.st")).unwrap();
+        assert_eq!(latin.text, "(* \u{e9} *)");
+        assert!(latin.first_non_utf8.is_some());
         let e = read_source(&d.join("none.st")).unwrap_err();
         assert!(e.message.starts_with("cannot read `"), "{e}");
         assert!(read_source(&d).unwrap_err().message.ends_with("is a directory"));

@@ -65,6 +65,26 @@ impl ChartInfo {
     pub fn transition_index(&self, name: &str) -> Option<u32> {
         self.transitions.iter().position(|(n, _, _)| n.eq_ignore_ascii_case(name)).map(|i| i as u32)
     }
+    /// The name of step `s` (empty for a number the chart does not have).
+    pub fn step_name(&self, s: u32) -> String {
+        self.steps.get(s as usize).map(|s| s.0.clone()).unwrap_or_default()
+    }
+    /// The name of transition `t` (empty for a number the chart does not have).
+    pub fn transition_name(&self, t: u32) -> String {
+        self.transitions.get(t as usize).map(|t| t.0.clone()).unwrap_or_default()
+    }
+    /// The name of variable `v` (empty for a number the chart does not have).
+    pub fn variable_name(&self, v: u32) -> String {
+        self.variables.get(v as usize).map(|v| v.name.clone()).unwrap_or_default()
+    }
+}
+
+/// Sets `key` of a JSON object (`j` is always one where this is used; anything else is left as
+/// it is rather than panicking).
+pub fn put(j: &mut serde_json::Value, key: &str, value: serde_json::Value) {
+    if let Some(o) = j.as_object_mut() {
+        o.insert(key.to_string(), value);
+    }
 }
 
 /// How many halts and resumes the board keeps for clients between two ticks.

@@ -152,22 +152,25 @@ impl Image {
     /// Reads the value of `p` from the image as the chart's value.
     pub fn get(&self, p: &IoPoint) -> Value {
         let a = p.address as usize;
+        // Every point's address lies in its table (the image is sized from the points).
         match p.table {
-            Table::Coil => Value::Bool(self.coils[a]),
-            Table::DiscreteInput => Value::Bool(self.discrete[a]),
-            Table::InputRegister => word_value(self.input_regs[a], &p.slot.ty),
-            Table::HoldingRegister => word_value(self.holding[a], &p.slot.ty),
+            Table::Coil => Value::Bool(self.coils.get(a).copied().unwrap_or(false)),
+            Table::DiscreteInput => Value::Bool(self.discrete.get(a).copied().unwrap_or(false)),
+            Table::InputRegister => word_value(self.input_regs.get(a).copied().unwrap_or(0), &p.slot.ty),
+            Table::HoldingRegister => word_value(self.holding.get(a).copied().unwrap_or(0), &p.slot.ty),
         }
     }
 
     /// Stores the chart's value of `p` in the image.
     pub fn put(&mut self, p: &IoPoint, v: &Value) {
         let a = p.address as usize;
+        let bit = v.as_bool().unwrap_or(false);
+        let word = v.as_int().unwrap_or(0) as u16;
         match p.table {
-            Table::Coil => self.coils[a] = v.as_bool().unwrap_or(false),
-            Table::DiscreteInput => self.discrete[a] = v.as_bool().unwrap_or(false),
-            Table::InputRegister => self.input_regs[a] = v.as_int().unwrap_or(0) as u16,
-            Table::HoldingRegister => self.holding[a] = v.as_int().unwrap_or(0) as u16,
+            Table::Coil => set(&mut self.coils, a, bit),
+            Table::DiscreteInput => set(&mut self.discrete, a, bit),
+            Table::InputRegister => set(&mut self.input_regs, a, word),
+            Table::HoldingRegister => set(&mut self.holding, a, word),
         }
     }
 }
@@ -242,7 +245,9 @@ impl Service {
     fn write_coils(&self, img: &mut Image, a: u16, vs: &[bool]) -> Result<(), ExceptionCode> {
         let targets = self.targets(a, vs.len(), |p| p.table == Table::DiscreteInput, INPUT_WINDOW)?;
         for (i, v) in targets.into_iter().zip(vs) {
-            img.discrete[self.points[i].address as usize] = *v;
+            if let Some(p) = self.points.get(i) {
+                set(&mut img.discrete, p.address as usize, *v);
+            }
         }
         Ok(())
     }
@@ -255,11 +260,11 @@ impl Service {
             self.targets(a, vs.len(), |p| p.table == Table::HoldingRegister && p.role == Role::Memory, 0)?
         };
         for (i, &v) in targets.into_iter().zip(vs) {
-            let p = &self.points[i];
+            let Some(p) = self.points.get(i) else { continue };
             match p.table {
-                Table::InputRegister => img.input_regs[p.address as usize] = v,
+                Table::InputRegister => set(&mut img.input_regs, p.address as usize, v),
                 _ => {
-                    img.holding[p.address as usize] = v;
+                    set(&mut img.holding, p.address as usize, v);
                     img.memory_writes.push(i);
                 }
             }
@@ -291,10 +296,17 @@ impl Service {
 }
 
 fn read_range<T: Copy>(table: &[T], a: usize, n: usize) -> Result<Vec<T>, ExceptionCode> {
-    if n == 0 || a + n > table.len() {
-        return Err(ExceptionCode::IllegalDataAddress);
+    match a.checked_add(n).and_then(|end| table.get(a..end)) {
+        Some(values) if n > 0 => Ok(values.to_vec()),
+        _ => Err(ExceptionCode::IllegalDataAddress),
     }
-    Ok(table[a..a + n].to_vec())
+}
+
+/// Stores `v` at `a` in a table of the image (an address outside it changes nothing).
+fn set<T>(table: &mut [T], a: usize, v: T) {
+    if let Some(slot) = table.get_mut(a) {
+        *slot = v;
+    }
 }
 
 impl tokio_modbus::server::Service for Service {

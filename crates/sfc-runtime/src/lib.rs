@@ -7,6 +7,7 @@
 
 pub mod atmt;
 pub mod board;
+pub mod contract;
 pub mod io;
 pub mod jitter;
 pub mod protocol;

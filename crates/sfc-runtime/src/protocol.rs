@@ -78,7 +78,7 @@ pub fn event_json(e: &Event) -> serde_json::Value {
 pub fn hello(info: &ChartInfo, authorized: bool, halted: bool) -> serde_json::Value {
     let steps: Vec<serde_json::Value> =
         info.steps.iter().map(|(n, init)| serde_json::json!({"name": n, "initial": init})).collect();
-    let name = |s: &u32| info.steps[*s as usize].0.clone();
+    let name = |s: &u32| info.step_name(*s);
     let transitions: Vec<serde_json::Value> = info
         .transitions
         .iter()
@@ -93,7 +93,7 @@ pub fn hello(info: &ChartInfo, authorized: bool, halted: bool) -> serde_json::Va
         .map(|v| {
             let mut o = serde_json::json!({"name": v.name, "type": v.ty});
             if let Some(l) = &v.location {
-                o["location"] = serde_json::json!(l);
+                crate::board::put(&mut o, "location", serde_json::json!(l));
             }
             o
         })
@@ -120,7 +120,7 @@ fn active_json(info: &ChartInfo, st: &ScanState) -> serde_json::Value {
     serde_json::Value::Array(
         st.active
             .iter()
-            .map(|&(s, t)| serde_json::json!({"step": info.steps[s as usize].0, "elapsed": format_time(t), "elapsedUs": t}))
+            .map(|&(s, t)| serde_json::json!({"step": info.step_name(s), "elapsed": format_time(t), "elapsedUs": t}))
             .collect(),
     )
 }
@@ -128,18 +128,16 @@ fn active_json(info: &ChartInfo, st: &ScanState) -> serde_json::Value {
 fn guards_json(info: &ChartInfo, st: &ScanState) -> serde_json::Map<String, serde_json::Value> {
     st.guards
         .iter()
-        .map(|&(t, v)| {
-            (info.transitions[t as usize].0.clone(), v.map_or(serde_json::Value::Null, serde_json::Value::Bool))
-        })
+        .map(|&(t, v)| (info.transition_name(t), v.map_or(serde_json::Value::Null, serde_json::Value::Bool)))
         .collect()
 }
 
 fn names(info: &ChartInfo, ts: &[u32]) -> Vec<String> {
-    ts.iter().map(|&t| info.transitions[t as usize].0.clone()).collect()
+    ts.iter().map(|&t| info.transition_name(t)).collect()
 }
 
 fn forced_json(info: &ChartInfo, st: &ScanState) -> Vec<String> {
-    st.forced.iter().map(|&v| info.variables[v as usize].name.clone()).collect()
+    st.forced.iter().map(|&v| info.variable_name(v)).collect()
 }
 
 /// One scan state in full (`snapshot`, and the entries of `history`).
@@ -161,9 +159,9 @@ pub fn state_json(info: &ChartInfo, st: &ScanState) -> serde_json::Value {
 /// `snapshot`: the latest state in full.
 pub fn snapshot(info: &ChartInfo, st: &ScanState, halted: bool, stats: &serde_json::Value) -> serde_json::Value {
     let mut j = state_json(info, st);
-    j["type"] = serde_json::json!("snapshot");
-    j["halted"] = serde_json::json!(halted);
-    j["stats"] = stats.clone();
+    crate::board::put(&mut j, "type", serde_json::json!("snapshot"));
+    crate::board::put(&mut j, "halted", serde_json::json!(halted));
+    crate::board::put(&mut j, "stats", stats.clone());
     j
 }
 
@@ -172,26 +170,26 @@ pub fn snapshot(info: &ChartInfo, st: &ScanState, halted: bool, stats: &serde_js
 pub fn delta(info: &ChartInfo, old: &ScanState, new: &ScanState, between: &[Arc<ScanState>]) -> serde_json::Value {
     let mut j =
         serde_json::json!({"type": "delta", "scan": new.scan, "time": format_time(new.time), "timeUs": new.time});
-    j["active"] = active_json(info, new);
+    crate::board::put(&mut j, "active", active_json(info, new));
     let fired: Vec<u32> = between.iter().flat_map(|s| s.fired.iter().copied()).collect();
     if !fired.is_empty() {
-        j["fired"] = serde_json::json!(names(info, &fired));
+        crate::board::put(&mut j, "fired", serde_json::json!(names(info, &fired)));
     }
     if old.guards != new.guards {
-        j["guards"] = serde_json::Value::Object(guards_json(info, new));
+        crate::board::put(&mut j, "guards", serde_json::Value::Object(guards_json(info, new)));
     }
     let changed: serde_json::Map<String, serde_json::Value> = info
         .variables
         .iter()
         .enumerate()
         .filter(|&(i, _)| old.values.get(i) != new.values.get(i))
-        .map(|(i, v)| (v.name.clone(), value_json(&new.values[i])))
+        .filter_map(|(i, v)| Some((v.name.clone(), value_json(new.values.get(i)?))))
         .collect();
     if !changed.is_empty() {
-        j["vars"] = serde_json::Value::Object(changed);
+        crate::board::put(&mut j, "vars", serde_json::Value::Object(changed));
     }
     if old.forced != new.forced {
-        j["forced"] = serde_json::json!(forced_json(info, new));
+        crate::board::put(&mut j, "forced", serde_json::json!(forced_json(info, new)));
     }
     j
 }
@@ -235,19 +233,18 @@ fn query_token(uri: &str) -> Option<String> {
 
 fn percent_decode(s: &str) -> String {
     let hex = |c: u8| (c as char).to_digit(16).map(|d| d as u8);
-    let b = s.as_bytes();
-    let mut out = Vec::with_capacity(b.len());
-    let mut i = 0;
-    while i < b.len() {
-        if b[i] == b'%' && i + 2 < b.len() {
-            if let (Some(h), Some(l)) = (hex(b[i + 1]), hex(b[i + 2])) {
+    let mut rest = s.as_bytes();
+    let mut out = Vec::with_capacity(rest.len());
+    while let Some((&c, tail)) = rest.split_first() {
+        if let [b'%', h, l, after @ ..] = rest {
+            if let (Some(h), Some(l)) = (hex(*h), hex(*l)) {
                 out.push(h * 16 + l);
-                i += 3;
+                rest = after;
                 continue;
             }
         }
-        out.push(if b[i] == b'+' { b' ' } else { b[i] });
-        i += 1;
+        out.push(if c == b'+' { b' ' } else { c });
+        rest = tail;
     }
     String::from_utf8_lossy(&out).into_owned()
 }
@@ -432,7 +429,7 @@ impl Session<'_> {
         for e in events {
             self.next_event = e.seq + 1;
             let mut j = (*e.json).clone();
-            j["type"] = serde_json::json!("event");
+            crate::board::put(&mut j, "type", serde_json::json!("event"));
             if !self.send(j) {
                 return false;
             }
@@ -442,7 +439,7 @@ impl Session<'_> {
                 Some(old) => delta(&self.hub.info, old, new, &between),
                 None => {
                     let mut j = state_json(&self.hub.info, new);
-                    j["type"] = serde_json::json!("snapshot");
+                    crate::board::put(&mut j, "type", serde_json::json!("snapshot"));
                     j
                 }
             };
@@ -573,13 +570,13 @@ impl Session<'_> {
                 };
                 let list: Vec<serde_json::Value> = states.iter().map(|s| state_json(info, s)).collect();
                 let mut j = serde_json::json!({"type": "history", "re": id, "states": list});
-                j["ok"] = serde_json::json!(true);
+                crate::board::put(&mut j, "ok", serde_json::json!(true));
                 return Ok(Some(j.to_string()));
             }
             "explain" => {
                 let name = str_field("step").ok_or("`explain` needs `step`")?;
                 let s = info.step_index(name).ok_or_else(|| format!("no step `{name}`"))?;
-                Command::Explain { step: info.steps[s as usize].0.clone() }
+                Command::Explain { step: info.step_name(s) }
             }
             "timing" => Command::Timing,
             "halt" => Command::Halt,

@@ -171,26 +171,27 @@ impl ScanThread {
         let first = self.sim.next_scan() == 0 || self.stats.scans == 0;
         // Inputs: the image when it is free, else the last copy (the scan never waits).
         if let Ok(mut img) = self.image.try_lock() {
-            for (i, p) in self.points.iter().enumerate() {
+            for (p, input) in self.points.iter().zip(self.inputs.iter_mut()) {
                 if p.role == Role::Input {
-                    self.inputs[i] = img.get(p);
+                    *input = img.get(p);
                 }
             }
             for i in std::mem::take(&mut img.memory_writes) {
-                let p = &self.points[i];
+                let Some(p) = self.points.get(i) else { continue };
                 let v = img.get(p);
                 // A rejected value is impossible: the map only admits 16-bit types.
                 let _ = self.sim.write_slot(p.slot.index, &p.slot.ty, v);
             }
         }
-        for (i, p) in self.points.iter().enumerate() {
+        for (p, input) in self.points.iter().zip(&self.inputs) {
             if p.role == Role::Input {
-                let _ = self.sim.write_slot(p.slot.index, &p.slot.ty, self.inputs[i].clone());
+                let _ = self.sim.write_slot(p.slot.index, &p.slot.ty, input.clone());
             }
         }
         for (var, v) in std::mem::take(&mut self.pending_sets) {
-            let s = &self.vars[var as usize];
-            let _ = self.sim.write_slot(s.index, &s.ty, v);
+            if let Some(s) = self.vars.get(var as usize) {
+                let _ = self.sim.write_slot(s.index, &s.ty, v);
+            }
         }
         self.apply_forces();
         let result = self.sim.advance().map_err(|e| e.clone());
@@ -219,13 +220,14 @@ impl ScanThread {
         events.sort_by_key(|e| e.rank());
         for e in events {
             let mut j = event_json(e);
-            j["scan"] = serde_json::json!(st.scan);
+            crate::board::put(&mut j, "scan", serde_json::json!(st.scan));
             self.unpublished_events.push(j);
         }
         // Breakpoints: a step is hit when a fired transition enters it (or it starts the chart),
         // a transition when it fires.
         let mut hits: Vec<BreakTarget> = Vec::new();
-        let mut entered: Vec<u32> = st.fired.iter().flat_map(|&t| self.post[t as usize].iter().copied()).collect();
+        let mut entered: Vec<u32> =
+            st.fired.iter().filter_map(|&t| self.post.get(t as usize)).flatten().copied().collect();
         if first {
             entered.extend(self.initial.iter().copied());
         }
@@ -260,15 +262,16 @@ impl ScanThread {
 
     fn apply_forces(&mut self) {
         for (var, v) in &self.forced {
-            let s = &self.vars[*var as usize];
-            let _ = self.sim.write_slot(s.index, &s.ty, v.clone());
+            if let Some(s) = self.vars.get(*var as usize) {
+                let _ = self.sim.write_slot(s.index, &s.ty, v.clone());
+            }
         }
     }
 
     fn target_name(&self, t: BreakTarget) -> (&'static str, String) {
         match t {
-            BreakTarget::Step(s) => ("step", self.hub.info.steps[s as usize].0.clone()),
-            BreakTarget::Transition(t) => ("transition", self.hub.info.transitions[t as usize].0.clone()),
+            BreakTarget::Step(s) => ("step", self.hub.info.step_name(s)),
+            BreakTarget::Transition(t) => ("transition", self.hub.info.transition_name(t)),
         }
     }
 
@@ -342,8 +345,9 @@ impl ScanThread {
             Command::Force { var, value } => self.convert(var, &value).map(|v| {
                 self.forced.retain(|f| f.0 != var);
                 self.forced.push((var, v.clone()));
-                let s = &self.vars[var as usize];
-                let _ = self.sim.write_slot(s.index, &s.ty, v.clone());
+                if let Some(s) = self.vars.get(var as usize) {
+                    let _ = self.sim.write_slot(s.index, &s.ty, v.clone());
+                }
                 value_json(&v)
             }),
             Command::Unforce { var } => {
@@ -354,12 +358,15 @@ impl ScanThread {
                 Ok(serde_json::Value::Null)
             }
             Command::Set { var, value } => self.convert(var, &value).map(|v| {
-                match self.var_point[var as usize] {
+                let point = self.var_point.get(var as usize).copied().flatten();
+                match point.and_then(|i| Some((i, self.points.get(i)?))) {
                     // A located input keeps the value in the image until a client writes it.
-                    Some(i) if self.points[i].role == Role::Input => {
-                        self.inputs[i] = v.clone();
+                    Some((i, p)) if p.role == Role::Input => {
+                        if let Some(input) = self.inputs.get_mut(i) {
+                            *input = v.clone();
+                        }
                         if let Ok(mut img) = self.image.lock() {
-                            img.put(&self.points[i], &v);
+                            img.put(p, &v);
                         }
                     }
                     _ => self.pending_sets.push((var, v.clone())),
@@ -369,10 +376,10 @@ impl ScanThread {
             Command::Explain { step } => match self.sim.explain_step(&step) {
                 Some(report) => {
                     let mut j = report.to_json();
-                    j["elapsedUs"] = serde_json::json!(report.elapsed);
-                    j["timeoutUs"] = serde_json::json!(report.timeout);
-                    j["lines"] = serde_json::json!(report.lines());
-                    j["scan"] = serde_json::json!(self.sim.next_scan().saturating_sub(1));
+                    crate::board::put(&mut j, "elapsedUs", serde_json::json!(report.elapsed));
+                    crate::board::put(&mut j, "timeoutUs", serde_json::json!(report.timeout));
+                    crate::board::put(&mut j, "lines", serde_json::json!(report.lines()));
+                    crate::board::put(&mut j, "scan", serde_json::json!(self.sim.next_scan().saturating_sub(1)));
                     Ok(j)
                 }
                 None => Err(format!("step `{step}` is not active: only an active step can be stuck")),
@@ -392,8 +399,9 @@ impl ScanThread {
 
     /// A JSON value as the variable's value, checked against its type.
     fn convert(&self, var: u32, value: &serde_json::Value) -> Result<Value, String> {
-        let s = &self.vars[var as usize];
-        let info = &self.hub.info.variables[var as usize];
+        let (Some(s), Some(info)) = (self.vars.get(var as usize), self.hub.info.variables.get(var as usize)) else {
+            return Err(format!("no variable number {var}"));
+        };
         let v = value_from_json(value).ok_or_else(|| format!("`{}`: {value} is not a value", info.name))?;
         Simulation::fit_to(&s.ty, v).map_err(|e| format!("`{}` is {e}", info.name))
     }

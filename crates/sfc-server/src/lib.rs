@@ -10,6 +10,7 @@ mod access;
 mod api;
 mod assets;
 mod confine;
+pub mod contract;
 mod diag;
 mod disk;
 mod sim;

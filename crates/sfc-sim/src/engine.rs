@@ -15,7 +15,10 @@ use sfc_model::{ActionTarget, Qualifier};
 use sfc_st::Type;
 use std::sync::Arc;
 
+mod matiec;
 mod monitor;
+
+pub(crate) use matiec::test_order as matiec_test_order;
 
 /// Fired transitions and events collected during one scan (from every chart instance).
 #[derive(Debug, Default)]
@@ -472,6 +475,8 @@ pub struct ChartState {
     current: Option<u32>,
     /// `(time, transition)` of every firing, to rebuild the sequence of situations.
     pub(crate) log: Vec<(i64, u32)>,
+    /// The `matiec` profile's own state (`engine/matiec.rs`).
+    matiec: Option<Box<matiec::State>>,
 }
 
 /// At most this many firings are kept per instance for the sequence of situations.
@@ -514,6 +519,7 @@ impl ChartState {
             run: Vec::new(),
             current: None,
             log: Vec::new(),
+            matiec: None,
             plan,
         }
     }
@@ -605,6 +611,9 @@ fn code_of(prog: &Program, pou: usize) -> &ChartCode {
 pub fn run_chart(ctx: &mut Ctx<'_>, chart: usize) -> Result<(), Fault> {
     let prog = ctx.prog;
     let code = code_of(prog, ctx.charts[chart].pou);
+    if ctx.profile == Profile::Matiec {
+        return matiec::run(ctx, chart, code);
+    }
     let plan = code.plan();
     let frame = ctx.charts[chart].frame;
     let now = ctx.now;
@@ -1470,17 +1479,27 @@ impl Simulation {
         opts: SimOptions,
     ) -> Result<Simulation, (SourceFile, Vec<Diagnostic>)> {
         let check_opts = sfc_model::CheckOptions { keep_types: true, ..Default::default() };
-        let checked = sfc_model::check_source(0, name, text, &check_opts);
-        if checked.has_errors() {
-            let diags = checked.diagnostics.into_iter().filter(|d| d.is_error()).collect();
-            return Err((checked.file, diags));
-        }
-        let source = checked.file;
+        let mut checked = sfc_model::check_source(0, name, text, &check_opts);
+        // An error in another POU does not keep this one from running: only the errors of the
+        // POU, of what it uses, and of the file's types and globals count.
         let top = match choose_pou(&checked.unit, &checked.charts, pou) {
             Ok(n) => n,
-            Err(d) => return Err((source, vec![d])),
+            Err(d) if checked.has_errors() => {
+                let mut diags: Vec<Diagnostic> = checked.diagnostics.into_iter().filter(|d| d.is_error()).collect();
+                diags.push(d);
+                return Err((checked.file, diags));
+            }
+            Err(d) => return Err((checked.file, vec![d])),
         };
-        let prog = match Program::compile(&checked.unit, checked.charts, &checked.expr_types) {
+        if checked.has_errors() {
+            let errors = sfc_model::errors_for(&checked, &top);
+            if !errors.is_empty() {
+                return Err((checked.file, errors));
+            }
+            sfc_model::set_aside_unrelated(&mut checked, &top);
+        }
+        let source = checked.file;
+        let prog = match Program::compile_with(&checked.unit, checked.charts, &checked.expr_types, opts.profile) {
             Ok(p) => p,
             Err(d) => return Err((source, d)),
         };
@@ -1511,6 +1530,9 @@ impl Simulation {
             .filter(|v| !v.implicit && v.size == 1 && v.ty.is_elementary())
             .filter_map(|v| prog.resolve(top, top_frame, &v.name).map(|(slot, _)| (v.name.clone(), v.ty.clone(), slot)))
             .collect();
+        if opts.profile == Profile::Matiec {
+            matiec::prepare(&prog, &mut charts, &source.text);
+        }
         let lower = source.text.to_ascii_lowercase();
         let mentioned = lower.contains("sfccurrentstep");
         let flags = step_flags_read(&lower);
@@ -1562,12 +1584,18 @@ impl Simulation {
     /// Runs the next scan without building its record (the fast path for benchmarks and the
     /// runtime). Returns the error that stopped the run, if any.
     pub fn advance(&mut self) -> Result<(), &RuntimeError> {
+        self.advance_at(self.next_time())
+    }
+
+    /// Runs the next scan at virtual time `now` (µs, not before the previous scan's) instead of
+    /// `scan · period`: for comparing with targets whose clock ticks differently (an S7-200
+    /// 100 ms timer sees time in whole ticks of its time base).
+    pub fn advance_at(&mut self, now: i64) -> Result<(), &RuntimeError> {
         if self.error.is_some() {
             return Err(self.error.as_ref().unwrap());
         }
         self.sink.fired.clear();
         self.sink.events.clear();
-        let now = self.next_time();
         let scan = self.next_scan;
         let result = {
             let mut ctx = Ctx {
@@ -1605,12 +1633,16 @@ impl Simulation {
     /// Runs the next scan. When it faults, the record holds the `error` event and
     /// [`Simulation::error`] is set; once stopped, `scan` runs nothing and returns that record.
     pub fn scan(&mut self) -> &ScanRecord {
+        self.scan_at(self.next_time())
+    }
+
+    /// [`Simulation::scan`] at virtual time `time` (see [`Simulation::advance_at`]).
+    pub fn scan_at(&mut self, time: i64) -> &ScanRecord {
         if self.error.is_some() {
             return &self.record;
         }
         let scan = self.next_scan;
-        let time = self.next_time();
-        let _ = self.advance();
+        let _ = self.advance_at(time);
         let mut events = std::mem::take(&mut self.sink.events);
         events.sort_by_key(Event::rank);
         // Within one chart's evolution, `fired` is in declaration order.
@@ -1677,7 +1709,7 @@ impl Simulation {
             return Err(format!("no variable `{name}` in `{}`", self.pou_name()));
         };
         let v = fit(value, &ty).map_err(|why| format!("`{name}` is {}: {why}", type_name(&ty)))?;
-        self.mem[slot] = v;
+        self.mem[slot] = self.inward(v);
         Ok(())
     }
 
@@ -1706,7 +1738,23 @@ impl Simulation {
         if let Some(v) = self.current_step_of(name).or_else(|| self.unmirrored_step_value(slot)) {
             return Some(v);
         }
-        self.mem.get(slot).cloned()
+        self.mem.get(slot).map(|v| self.outward(v))
+    }
+
+    /// A value of memory as users see it: TIME in µs (under `matiec` memory holds MatIEC's
+    /// packed timespecs, `crate::timespec`).
+    fn outward(&self, v: &Value) -> Value {
+        match v {
+            Value::Time(t) if self.prog.matiec_time => Value::Time(crate::timespec::Timespec::unpack(*t).to_us()),
+            _ => v.clone(),
+        }
+    }
+    /// The inverse of [`Simulation::outward`].
+    fn inward(&self, v: Value) -> Value {
+        match v {
+            Value::Time(us) if self.prog.matiec_time => Value::Time(crate::timespec::Timespec::from_us(us).pack()),
+            _ => v,
+        }
     }
 
     /// `[Path.]SFCCurrentStep` computed from the chart state (see `ChartState::track_current`).
@@ -1759,7 +1807,7 @@ impl Simulation {
     }
     /// Current values of [`Simulation::trace_vars`], same order.
     pub fn trace_values(&self) -> Vec<Value> {
-        self.trace.iter().map(|&(_, _, slot)| self.mem[slot].clone()).collect()
+        self.trace.iter().map(|&(_, _, slot)| self.outward(&self.mem[slot])).collect()
     }
     /// Every step (qualified), in declaration order, top chart first.
     pub fn step_names(&self) -> Vec<String> {

@@ -9,8 +9,10 @@ pub mod condition;
 pub mod coverage;
 pub mod engine;
 pub mod explain;
+pub mod matiec_check;
 pub mod scenario;
 mod temporal;
+pub mod timespec;
 pub mod trace;
 pub mod value;
 
