@@ -29,7 +29,7 @@ fn opted_in() -> Vec<String> {
 #[test]
 fn input_facing_crates_pass_clippy() {
     let crates = opted_in();
-    for must in ["sfc-syntax", "sfc-plcopen", "sfc-server", "sfc-runtime", "sfc-driver", "sfc-diagnostics"] {
+    for must in ["sfc-syntax", "sfc-plcopen", "sfc-server", "sfc-runtime", "sfc-driver", "sfc-diagnostics", "sfc-lsp"] {
         assert!(crates.iter().any(|c| c == must), "{must} opts into the workspace lints");
     }
     let cargo = std::env::var("CARGO").unwrap_or_else(|_| "cargo".to_string());

@@ -4,7 +4,7 @@
 
 use lsp_server::{Message, Notification, Request, RequestId, Response};
 use lsp_types::notification::{self as note, Notification as _};
-use lsp_types::request::{self as req, Request as _};
+use lsp_types::request as req;
 use lsp_types::*;
 use std::io::BufReader;
 use std::path::{Path, PathBuf};

@@ -24,10 +24,22 @@ fn chart(n: usize) -> String {
         let _ = writeln!(s, "    ACTION A{i}:\n        Count := Count + {i};\n        Timer(IN := TRUE, PT := T#1s);\n        Out := Timer.Q AND Level > {};\n    END_ACTION\n", i % 100);
         let next = (i + 1) % n;
         if i % 10 == 5 && i + 2 < n {
-            let _ = writeln!(s, "    TRANSITION FROM S{i} TO S{}\n        := Go AND Level > {};\n    END_TRANSITION\n", i + 2, i % 50);
-            let _ = writeln!(s, "    TRANSITION FROM S{i} TO S{next}\n        := NOT Go AND S{i}.T >= T#100ms;\n    END_TRANSITION\n");
+            let _ = writeln!(
+                s,
+                "    TRANSITION FROM S{i} TO S{}\n        := Go AND Level > {};\n    END_TRANSITION\n",
+                i + 2,
+                i % 50
+            );
+            let _ = writeln!(
+                s,
+                "    TRANSITION FROM S{i} TO S{next}\n        := NOT Go AND S{i}.T >= T#100ms;\n    END_TRANSITION\n"
+            );
         } else {
-            let _ = writeln!(s, "    TRANSITION FROM S{i} TO S{next}\n        := Go OR S{i}.T >= T#{}ms;\n    END_TRANSITION\n", 10 + i % 90);
+            let _ = writeln!(
+                s,
+                "    TRANSITION FROM S{i} TO S{next}\n        := Go OR S{i}.T >= T#{}ms;\n    END_TRANSITION\n",
+                10 + i % 90
+            );
         }
     }
     s.push_str("END_PROGRAM\n");
@@ -74,7 +86,9 @@ impl Client {
         }
         self.seen.clear();
         loop {
-            if let Message::Notification(n) = self.conn.receiver.recv_timeout(Duration::from_secs(600)).expect("diagnostics") {
+            if let Message::Notification(n) =
+                self.conn.receiver.recv_timeout(Duration::from_secs(600)).expect("diagnostics")
+            {
                 if n.method == note::PublishDiagnostics::METHOD {
                     let p: PublishDiagnosticsParams = serde_json::from_value(n.params).unwrap();
                     if p.version == Some(version) && p.diagnostics.len() == count {
@@ -103,10 +117,8 @@ fn main() {
     let (server, client) = Connection::memory();
     let options = sfc_lsp::ServerOptions { idle: None, ..sfc_lsp::ServerOptions::default() };
     let debounce = options.debounce;
-    let thread = std::thread::Builder::new()
-        .stack_size(64 << 20)
-        .spawn(move || sfc_lsp::serve(server, options))
-        .unwrap();
+    let thread =
+        std::thread::Builder::new().stack_size(64 << 20).spawn(move || sfc_lsp::serve(server, options)).unwrap();
     let mut c = Client { conn: client, next: 0, seen: Vec::new() };
     #[allow(deprecated)]
     let _ = c.request::<req::Initialize>(InitializeParams::default());
@@ -164,7 +176,10 @@ fn main() {
                 text: String::new(),
             }],
         });
-        let pos = TextDocumentPositionParams::new(TextDocumentIdentifier::new(uri.clone()), Position::new(cond_line, cond_col));
+        let pos = TextDocumentPositionParams::new(
+            TextDocumentIdentifier::new(uri.clone()),
+            Position::new(cond_line, cond_col),
+        );
         let (items, took) = c.request::<req::Completion>(CompletionParams {
             text_document_position: pos.clone(),
             work_done_progress_params: Default::default(),
@@ -177,7 +192,10 @@ fn main() {
         };
         assert_eq!(labels, ["X", "T"]);
         member_times.push(ms(took));
-        let name_pos = TextDocumentPositionParams::new(TextDocumentIdentifier::new(uri.clone()), Position::new(cond_line, cond_col - 2));
+        let name_pos = TextDocumentPositionParams::new(
+            TextDocumentIdentifier::new(uri.clone()),
+            Position::new(cond_line, cond_col - 2),
+        );
         let (_, took) = c.request::<req::Completion>(CompletionParams {
             text_document_position: name_pos.clone(),
             work_done_progress_params: Default::default(),
@@ -185,7 +203,10 @@ fn main() {
             context: None,
         });
         name_times.push(ms(took));
-        let (h, took) = c.request::<req::HoverRequest>(HoverParams { text_document_position_params: name_pos, work_done_progress_params: Default::default() });
+        let (h, took) = c.request::<req::HoverRequest>(HoverParams {
+            text_document_position_params: name_pos,
+            work_done_progress_params: Default::default(),
+        });
         assert!(h.is_some());
         hover_times.push(ms(took));
     }
@@ -193,7 +214,10 @@ fn main() {
     // The full check with the analysis, as after a save (once the quick check is in).
     c.diagnostics(v, 0);
     let t = Instant::now();
-    c.notify::<note::DidSaveTextDocument>(DidSaveTextDocumentParams { text_document: TextDocumentIdentifier::new(uri.clone()), text: None });
+    c.notify::<note::DidSaveTextDocument>(DidSaveTextDocumentParams {
+        text_document: TextDocumentIdentifier::new(uri.clone()),
+        text: None,
+    });
     c.diagnostics(v, 0);
     let analysis = t.elapsed();
 
@@ -203,7 +227,10 @@ fn main() {
     println!("sfc lsp on a ring of {n} steps ({} lines, {} KiB):", text.lines().count(), text.len() / 1024);
     println!("  open → first diagnostics:                 {:8.1} ms", ms(open));
     println!("  edit → diagnostics of that version:       {:8.1} ms (median of {}; {} ms debounce included; target < 300 ms)", median(edit_times.clone()), edit_times.len(), debounce.as_millis());
-    println!("  completion after `S1.` (after an edit):   {:8.1} ms (median of {runs}; target < 50 ms)", median(member_times));
+    println!(
+        "  completion after `S1.` (after an edit):   {:8.1} ms (median of {runs}; target < 50 ms)",
+        median(member_times)
+    );
     println!("  completion of a name in a condition:      {:8.1} ms (median of {runs})", median(name_times));
     println!("  hover (document unchanged):               {:8.1} ms (median of {runs})", median(hover_times));
     println!("  save → diagnostics with the analysis:     {:8.1} ms", ms(analysis));

@@ -132,7 +132,7 @@ impl Workspace {
                 return Some(a.clone());
             }
         }
-        let text = sfc_driver::read_source(path).ok()?;
+        let text = sfc_driver::read_source(path).ok()?.text;
         if sfc_driver::is_xml(path, &text) {
             return None;
         }
