@@ -7,6 +7,7 @@
 #   python3-jsonschema validates `sfc check --format sarif` against the SARIF 2.1.0 JSON
 #   schema, which the npm package @microsoft/jest-sarif ships (fetched with `npm pack` into
 #   target/test-tools/, only the schema is kept).
+#   unzip lists the VS Code extension's .vsix (scripts/test-vscode.sh checks what it holds).
 #   python3 counts the steps, transitions and actions of the PLCopen corpus independently of the
 #   importer (tests/corpus/real/count.py, standard library only).
 # Part of the README's test command, so a fresh machine needs no manual step.
@@ -15,6 +16,7 @@ root="$(cd "$(dirname "$0")/.." && pwd)"
 need=()
 command -v xmllint >/dev/null 2>&1 || need+=(libxml2-utils)
 command -v python3 >/dev/null 2>&1 || need+=(python3)
+command -v unzip >/dev/null 2>&1 || need+=(unzip)
 [ -x /usr/bin/chromium ] || need+=(chromium)
 if ! command -v node >/dev/null 2>&1 || ! command -v npm >/dev/null 2>&1; then need+=(nodejs npm); fi
 python3 -c 'import jsonschema' >/dev/null 2>&1 || need+=(python3-jsonschema)

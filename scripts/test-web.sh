@@ -5,7 +5,9 @@
 #      the translation catalogues);
 #   2. the web app built into web/dist (what release binaries embed) and its test build, with the
 #      browser tests' hook `window.__sfc`, into web/dist-test (the debug binary serves it there);
-#   3. end-to-end tests in headless Debian Chromium driven by playwright-core (web/e2e).
+#   3. end-to-end tests in headless Debian Chromium driven by playwright-core (web/e2e);
+#   4. the VS Code extension (scripts/test-vscode.sh): its unit and TextMate grammar tests and
+#      its .vsix, packaged with @vscode/vsce into target/vscode/.
 # Each part ends with a `test result:` line in cargo's format, so .ci/run counts them.
 set -euo pipefail
 root="$(cd "$(dirname "$0")/.." && pwd)"
@@ -25,4 +27,5 @@ console.log(`test result: ${ok ? "ok" : "FAILED"}. ${r.numPassedTests} passed; $
 ' "$report"
 cargo build -p sfc-cli --bin sfc --quiet
 SFC_BIN="$root/target/debug/sfc" node e2e/run.mjs || status=1
+"$scripts_dir/test-vscode.sh" || status=1
 exit $status

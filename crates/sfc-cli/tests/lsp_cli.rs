@@ -194,6 +194,18 @@ fn apply(text: &str, edits: &[TextEdit]) -> String {
     t
 }
 
+/// Settings the server cannot read are said in the editor's log, not dropped silently; the
+/// server goes on with its defaults.
+#[test]
+fn unreadable_initialization_options_are_reported() {
+    let mut c = Client::start(None, serde_json::json!({"debounceMs": "soon"}));
+    let text = std::fs::read_to_string(fixture("tank.st")).unwrap();
+    let u = c.open(&fixture("tank.st"), &text);
+    c.diagnostics_for(&u, 1, |d| d.is_empty());
+    assert!(c.logs.iter().any(|l| l.contains("initializationOptions ignored")), "{:?}", c.logs);
+    c.stop();
+}
+
 #[test]
 fn open_with_errors_then_edit_then_fix() {
     let text = std::fs::read_to_string(fixture("tank.st")).unwrap().replace("Level > 80", "Levle > 80");

@@ -97,7 +97,23 @@ pub fn serve(connection: Connection, mut options: ServerOptions) -> Result<(), S
     let init = connection.initialize(caps).map_err(|e| format!("initialisation failed: {e}"))?;
     let params: InitializeParams =
         serde_json::from_value(init).map_err(|e| format!("bad initialize parameters: {e}"))?;
-    if let Some(o) = params.initialization_options.clone().and_then(|v| serde_json::from_value::<InitOptions>(v).ok()) {
+    let init_options = match params.initialization_options.clone().map(serde_json::from_value::<InitOptions>) {
+        Some(Ok(o)) => Some(o),
+        Some(Err(e)) => {
+            // Nothing silent: the editor's log says which settings were not taken.
+            let note = LogMessageParams {
+                typ: MessageType::WARNING,
+                message: format!("sfc lsp: initializationOptions ignored, the defaults are used: {e}"),
+            };
+            let _ = connection.sender.send(lsp_server::Message::Notification(lsp_server::Notification::new(
+                "window/logMessage".into(),
+                note,
+            )));
+            None
+        }
+        None => None,
+    };
+    if let Some(o) = init_options {
         if let Some(ms) = o.debounce_ms {
             options.debounce = Duration::from_millis(ms);
         }
