@@ -277,6 +277,12 @@ preceding step), so the transition never fires. (A literal `FALSE` is not report
 structured enough for the cheap proofs; the findings listed are real, but the absence of others \
 is not proven. Split the chart into function blocks, or structure its branches as matched \
 divergences and convergences.";
+    "SFC0510" Warning "runaway scan"
+        "While the analysis replayed a witness in the simulator, one scan spent its whole budget \
+of loop iterations, IL jumps and calls (a loop that does not end for the inputs the replay \
+tried, or unbounded recursion through calls). The replay stops there, so the finding it was \
+confirming stays *possible*. The same code would stop `sfc sim` and trip the watchdog of \
+`sfc run`: give the loop a bound that holds for every input.";
 
     "SFC0601" Error "invalid attribute value"
         "An `sfc.*` attribute has a value of the wrong form: `sfc.tag` an integer, `sfc.timeout` \

@@ -31,6 +31,7 @@ impl Program {
                 now: 0,
                 scan: 0,
                 profile: Default::default(),
+                budget: Default::default(),
             };
             // A fault in an initial value leaves the type's default in place.
             for op in &self.support.global_inits {

@@ -150,6 +150,7 @@ impl Simulation {
                 now,
                 scan: self.next_scan.saturating_sub(1),
                 profile: self.opts.profile,
+                budget: crate::code::Budget::new(self.budget, self.interrupt.as_deref()),
             };
             for t in ts {
                 let code = code_of(ctx.prog, pou);
