@@ -337,8 +337,7 @@ from the body's last step. Exporting the chart again writes the flattened steps.
     "SFC0710" Warning "XML content not imported"
         "Part of the file has no effect in the imported program and is left out: a named \
 transition condition nothing refers to, a second body of a POU, an element that does not belong \
-in an SFC body, a coil on the path of a transition condition (a condition cannot assign it), \
-the `persistent` attribute of a variable list.";
+in an SFC body, a coil on the path of a transition condition (a condition cannot assign it).";
 
     "SFC0801" Error "chart cannot be translated to ST"
         "The Structured Text target (`--target st`) replaces the chart's POU by a plain ST POU of \

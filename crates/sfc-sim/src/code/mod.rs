@@ -155,6 +155,10 @@ pub struct VarSlot {
     pub location: Option<String>,
     /// Not declared by the user: the SFC control variables and the ATMT/EATMT inputs.
     pub implicit: bool,
+    /// Declared in a `RETAIN` block: restored on a warm start.
+    pub retain: bool,
+    /// Declared in a `PERSISTENT` block: restored on warm and cold starts.
+    pub persistent: bool,
 }
 
 /// The slots of one frame.
@@ -260,6 +264,23 @@ impl ChartCode {
     pub(crate) fn plan_arc(&self) -> &std::sync::Arc<crate::engine::ChartPlan> {
         self.plan.get_or_init(|| std::sync::Arc::new(crate::engine::ChartPlan::new(self)))
     }
+}
+
+/// A retentive elementary value ([`Program::retained`]).
+#[derive(Debug, Clone, PartialEq)]
+pub struct Retained {
+    /// The path as [`Program::resolve`] reads it: `Washes`, `Counts[2]`, `Pump.Hours`.
+    pub name: String,
+    pub ty: Type,
+    /// Absolute memory slot.
+    pub slot: usize,
+    /// `PERSISTENT`: kept over cold starts too; otherwise `RETAIN`: over warm starts only.
+    pub persistent: bool,
+}
+
+/// `None` for a variable that is not retentive, else whether it is persistent.
+pub(crate) fn class_of(retain: bool, persistent: bool) -> Option<bool> {
+    (retain || persistent).then_some(persistent)
 }
 
 /// Every POU of a file, compiled.

@@ -1,6 +1,7 @@
-//! The scan budget: every loop iteration, IL jump and call is charged to the scan, nested loops
+//! What a runtime needs from the simulator. The scan budget: every loop iteration, IL jump and call is charged to the scan, nested loops
 //! together, so a runaway scan ends with a located error; an interrupt flag set from another
 //! thread stops a scan that is still running; `fault_place` names the action and steps.
+//! `restart` starts again from the initial values; `retained` lists the RETAIN/PERSISTENT leaves.
 
 use sfc_sim::code::{INTERRUPTED, SCAN_BUDGET};
 use sfc_sim::{SimOptions, Simulation, Value};
@@ -117,4 +118,49 @@ END_PROGRAM
     assert!(e.message.starts_with("runaway scan"), "{}", e.message);
     // 5 charges per outer iteration (the loop, the call, three inner iterations).
     assert_eq!(s.get("n"), Some(Value::Int(1000)));
+}
+
+#[test]
+fn retentive_values_are_listed_as_leaves() {
+    let text = "TYPE Recipe : STRUCT Speed : INT; Time : TIME; END_STRUCT; END_TYPE
+FUNCTION_BLOCK Pump
+VAR RETAIN Hours : UDINT; END_VAR
+VAR PERSISTENT Starts : UDINT; END_VAR
+VAR Running : BOOL; END_VAR
+Running := NOT Running;
+END_FUNCTION_BLOCK
+VAR_GLOBAL RETAIN Total : LREAL; END_VAR
+PROGRAM P
+VAR_EXTERNAL Total : LREAL; END_VAR
+VAR RETAIN Counts : ARRAY[1..2] OF DINT; R : Recipe; Timer : TON; END_VAR
+VAR PERSISTENT Serial : STRING[8]; END_VAR
+VAR P1 : Pump; Scratch : INT; END_VAR
+P1();
+Total := Total + 1.0;
+END_PROGRAM
+";
+    let s = Simulation::from_source("p.st", text, Some("P"), SimOptions::default())
+        .unwrap_or_else(|(_, d)| panic!("{d:?}"));
+    let list: Vec<(String, String, bool)> =
+        s.retained().iter().map(|r| (r.name.clone(), r.ty.to_string(), r.persistent)).collect();
+    let want = [
+        ("Counts[1]", "DINT", false),
+        ("Counts[2]", "DINT", false),
+        ("R.Speed", "INT", false),
+        ("R.Time", "TIME", false),
+        ("Timer.IN", "BOOL", false),
+        ("Timer.PT", "TIME", false),
+        ("Timer.Q", "BOOL", false),
+        ("Timer.ET", "TIME", false),
+        ("Serial", "STRING[8]", true),
+        ("P1.Hours", "UDINT", false),
+        ("P1.Starts", "UDINT", true),
+        ("Total", "LREAL", false),
+    ];
+    let want: Vec<(String, String, bool)> = want.iter().map(|(n, t, p)| (n.to_string(), t.to_string(), *p)).collect();
+    assert_eq!(list, want);
+    // Each leaf's slot is the one the simulator resolves for its name.
+    for r in s.retained() {
+        assert_eq!(s.handle(&r.name).map(|h| h.0), Some(r.slot), "{}", r.name);
+    }
 }
