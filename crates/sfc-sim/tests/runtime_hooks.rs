@@ -1,7 +1,8 @@
-//! What a runtime needs from the simulator. The scan budget: every loop iteration, IL jump and call is charged to the scan, nested loops
-//! together, so a runaway scan ends with a located error; an interrupt flag set from another
-//! thread stops a scan that is still running; `fault_place` names the action and steps.
-//! `restart` starts again from the initial values; `retained` lists the RETAIN/PERSISTENT leaves.
+//! What a runtime needs from the simulator. The scan budget: every loop iteration, IL jump and
+//! call is charged to the scan, nested loops together, so a runaway scan ends with a located
+//! error; an interrupt flag set from another thread stops a scan that is still running;
+//! `fault_place` names the action and steps; `restart` starts again from the initial values;
+//! `retained` lists the RETAIN/PERSISTENT leaves.
 
 use sfc_sim::code::{INTERRUPTED, SCAN_BUDGET};
 use sfc_sim::{SimOptions, Simulation, Value};
