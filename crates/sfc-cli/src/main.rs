@@ -10,6 +10,7 @@ use std::process::ExitCode;
 mod build;
 mod edit;
 mod run;
+mod run_config;
 mod sim;
 
 #[derive(Parser)]
