@@ -247,8 +247,10 @@ pub struct Hub {
     pub commands: Mutex<Option<mpsc::Sender<Request>>>,
     /// The secret a client needs to force or write.
     pub token: String,
-    /// Set to end the run (every task watches it).
+    /// Set to end the run (the scan thread and the supervisor watch it).
     pub stop: AtomicBool,
+    /// Set once the run has ended and told its clients: the network side closes.
+    pub closing: AtomicBool,
     /// Monitor clients dropped for misbehaving (flooding, garbage, slow reading).
     pub dropped: AtomicU64,
     pub connected: AtomicU64,
@@ -273,6 +275,7 @@ impl Hub {
             commands: Mutex::new(Some(tx)),
             token,
             stop: AtomicBool::new(false),
+            closing: AtomicBool::new(false),
             dropped: AtomicU64::new(0),
             connected: AtomicU64::new(0),
             notices: Mutex::new(VecDeque::new()),
@@ -311,6 +314,11 @@ impl Hub {
 
     pub fn stopping(&self) -> bool {
         self.stop.load(Ordering::Relaxed)
+    }
+
+    /// The network side closes (after the end of the run was told).
+    pub fn closing(&self) -> bool {
+        self.closing.load(Ordering::Relaxed)
     }
 
     /// Locks the board (a poisoned lock only means a client task panicked while copying).

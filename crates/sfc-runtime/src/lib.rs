@@ -211,7 +211,7 @@ fn start_net(
                 if ctrl_c {
                     tokio::spawn(stop_on_signals(hub.clone()));
                 }
-                while !hub.stopping() {
+                while !hub.closing() {
                     tokio::time::sleep(std::time::Duration::from_millis(20)).await;
                 }
             });
@@ -474,6 +474,7 @@ impl Runtime {
         // Two ticks: every session sends what the end of the run published.
         std::thread::sleep(protocol::TICK * 3);
         self.stop();
+        self.hub.closing.store(true, Ordering::Relaxed);
         *self.hub.commands.lock().unwrap_or_else(|e| e.into_inner()) = None;
         if let Some(net) = self.net.take() {
             let _ = net.join();

@@ -342,7 +342,7 @@ pub async fn serve(
         let accepted = tokio::select! {
             a = listener.accept() => a,
             _ = tokio::time::sleep(Duration::from_millis(100)) => {
-                if hub.stopping() { return; }
+                if hub.closing() { return; }
                 continue;
             }
         };
@@ -409,7 +409,7 @@ async fn connection(
                 Ok(r) => break Some(r),
                 Err(_) => {
                     waited += slice;
-                    if hub.stopping() {
+                    if hub.closing() {
                         return;
                     }
                     if waited >= limits.idle_timeout {

@@ -243,7 +243,7 @@ pub async fn serve(listener: std::net::TcpListener, hub: Arc<Hub>, access: Arc<M
         let accepted = tokio::select! {
             a = listener.accept() => a,
             _ = tokio::time::sleep(Duration::from_millis(100)) => {
-                if hub.stopping() { return; }
+                if hub.closing() { return; }
                 continue;
             }
         };
@@ -474,7 +474,7 @@ impl Session<'_> {
                     }
                 }
                 _ = tick.tick() => {
-                    if self.hub.stopping() {
+                    if self.hub.closing() {
                         return End::Closed;
                     }
                     if !self.update() {
