@@ -421,6 +421,39 @@ fn modbus_answers_every_exception_and_keeps_the_connection() {
     assert!(counters.contains(&format!("{} exceptions", cases.len() + 1)), "{counters}");
 }
 
+/// A Modbus connection idle longer than the timeout is closed; the server counts it.
+#[test]
+fn idle_modbus_connections_are_closed() {
+    let mut run = Run::start(&[
+        s(&chart("io.st")),
+        "--modbus",
+        "127.0.0.1:0",
+        "--modbus-idle-timeout",
+        "T#300ms",
+        "--no-retain",
+        "--for",
+        "T#60s",
+    ]);
+    let mb = run.modbus();
+    let mut busy = Modbus::connect(mb);
+    let mut idle = Modbus::connect(mb);
+    idle.s.set_read_timeout(Some(Duration::from_secs(10))).unwrap();
+    // One client keeps asking every 100 ms; the other says nothing for a second.
+    let started = Instant::now();
+    while started.elapsed() < Duration::from_secs(1) {
+        assert_eq!(busy.read_holding(1000, 1), [100]);
+        std::thread::sleep(Duration::from_millis(100));
+    }
+    use std::io::Read;
+    let mut b = [0u8; 1];
+    assert!(matches!(idle.s.read(&mut b), Ok(0) | Err(_)), "the idle connection is closed");
+    assert_eq!(busy.read_holding(1000, 1), [100], "the busy one is served");
+    run.signal(libc::SIGTERM);
+    let (status, lines) = run.finish(30);
+    assert_eq!(status, Some(0), "{lines:?}");
+    assert!(lines.iter().any(|l| l.starts_with("sfc run: Modbus: ") && l.contains(" 1 closed idle")), "{lines:?}");
+}
+
 /// A real client (pymodbus) reads the 32-bit values in the documented word orders.
 #[test]
 fn pymodbus_reads_32_bit_values_in_both_word_orders() {
