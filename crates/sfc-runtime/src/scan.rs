@@ -213,7 +213,7 @@ impl ScanThread {
     /// when it ended.
     fn run_scan(&mut self, k: u64, start: Instant) -> Instant {
         if self.limits.watchdog.is_some() {
-            self.clock.begin(start);
+            self.clock.begin(start, k);
         }
         let result = self.scan_once();
         let end = Instant::now();

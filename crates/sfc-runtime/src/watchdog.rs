@@ -25,6 +25,8 @@ pub struct ScanClock {
     started: AtomicU64,
     /// Scans begun.
     seq: AtomicU64,
+    /// The number of the scan running (or last run).
+    scan: AtomicU64,
     /// The supervisor tripped on the scan now running (or the last one).
     pub tripped: AtomicBool,
 }
@@ -35,14 +37,16 @@ impl ScanClock {
             epoch: Instant::now(),
             started: AtomicU64::new(0),
             seq: AtomicU64::new(0),
+            scan: AtomicU64::new(0),
             tripped: AtomicBool::new(false),
         }
     }
 
-    /// A scan starts at `at`.
+    /// Scan `scan` starts at `at`.
     #[inline]
-    pub fn begin(&self, at: Instant) {
+    pub fn begin(&self, at: Instant, scan: u64) {
         self.seq.fetch_add(1, Ordering::Relaxed);
+        self.scan.store(scan, Ordering::Relaxed);
         let us = at.saturating_duration_since(self.epoch).as_micros() as u64 + 1;
         self.started.store(us, Ordering::Release);
     }
@@ -91,6 +95,21 @@ impl Supervisor {
             }
             if self.clock.started.load(Ordering::Acquire) == started && self.clock.seq.load(Ordering::Relaxed) == seq {
                 self.trip(now - (deadline - self.watchdog));
+                // The scan thread tells the trip when the scan returns; a scan that does not
+                // return within a moment is told from here.
+                let told = Instant::now() + Duration::from_millis(250);
+                while self.clock.started.load(Ordering::Acquire) == started && Instant::now() < told {
+                    std::thread::sleep(Duration::from_millis(5));
+                }
+                if self.clock.started.load(Ordering::Acquire) == started {
+                    self.hub.notice(format!(
+                        "watchdog: scan {} ran past the watchdog of {} and has not stopped {} ms after its deadline; \
+                         outputs at their safe values (FAULT)",
+                        self.clock.scan.load(Ordering::Relaxed),
+                        sfc_sim::format_time(self.watchdog.as_micros() as i64),
+                        Instant::now().saturating_duration_since(deadline).as_millis()
+                    ));
+                }
             }
         }
     }
