@@ -51,7 +51,9 @@ fn a_monitor_client_drives_the_car_wash_to_its_end() {
     assert_eq!(halted["reason"], "breakpoint");
     ws.send(r#"{"id":10,"cmd":"continue"}"#);
     let end = ws.until("the end of the run", |m| m["type"] == "halted" && m["reason"] == "end");
-    assert_eq!(end["scan"], 49, "--scans 50 runs scans 0..=49: {end}");
+    // 50 scans: numbers 0..=49, more when an overrun on a busy machine skipped periods (scan
+    // numbers count grid periods); the statistics below count the scans themselves.
+    assert!(end["scan"].as_u64() >= Some(49), "--scans 50 ends at scan 49 or later: {end}");
 
     let (status, rest) = run.finish(20);
     assert_eq!(status, Some(0));
