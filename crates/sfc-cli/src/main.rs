@@ -170,6 +170,19 @@ struct BuildArgs {
     /// Rule limit override for ATMT/EATMT.
     #[arg(long)]
     ntr: Option<u32>,
+    /// STL: how the steps are programmed: set/reset networks (default) or SCR segments
+    /// (LSCR/SCRT/SCRE).
+    #[arg(long, value_enum, value_name = "METHOD")]
+    stl_method: Option<StlMethodArg>,
+    /// STL: also write STEP 7-Micro/WIN's symbol table (CSV: Symbol,Address,Comment) here.
+    #[arg(long, value_name = "OUT.csv")]
+    symbols: Option<PathBuf>,
+}
+
+#[derive(Clone, Copy, ValueEnum)]
+enum StlMethodArg {
+    Setreset,
+    Scr,
 }
 
 #[derive(clap::Args)]
@@ -230,6 +243,11 @@ fn run() -> u8 {
             flatten: a.flatten,
             nstep: a.nstep,
             ntr: a.ntr,
+            stl_method: a.stl_method.map(|m| match m {
+                StlMethodArg::Setreset => build::StlMethod::SetReset,
+                StlMethodArg::Scr => build::StlMethod::Scr,
+            }),
+            symbols: a.symbols,
         }),
         Command::Sim(a) => sim::sim(sim::SimRequest {
             file: a.file,

@@ -359,45 +359,60 @@ again, or store it in a variable and load that.";
 a transition condition or a parenthesised operand, an operator without the operand it needs, or \
 a jump to a label that does not exist.";
 
-    "SFC0810" Error "not expressible in S7-200 bit logic"
-        "The S7-200 statement-list target (`--target stl`) turns conditions and action bodies \
-into bit logic over inputs, outputs, memory bits, step bits and timer bits. This expression reads \
-something that is not a bit: an integer or REAL variable, a comparison of numbers, arithmetic, a \
-function or function block output, an array element, or an IL instruction other than LD, AND, \
-OR, XOR (also with N) and NOT. Compute the number elsewhere and give the chart a BOOL:\n\n    \
-TRANSITION FROM Fill TO Full := LevelHigh; END_TRANSITION   (* LevelHigh : BOOL *)";
+    "SFC0810" Error "not expressible in the S7-200 program"
+        "The S7-200 statement-list target (`--target stl`) turns conditions into bit logic over \
+inputs, outputs, memory, step, timer and counter bits, and into compare contacts (`LDW>=`, \
+`LDD<>`) over INT, UINT, WORD, DINT, UDINT and DWORD values. This expression has no faithful \
+form there: a REAL or STRING, a function call, an array element, a division by a variable (the \
+S7-200 goes on with the old value where the IEC chart stops with a runtime error), an unsigned \
+comparison by size (the compare contacts are signed), the count of a CTD (the S7-200 CTD stops \
+at 0), or an IL instruction other than LD, AND, OR, XOR (also with N) and NOT. Compute the value \
+in INT or DINT, or give the chart a BOOL:\n\n    \
+TRANSITION FROM Fill TO Full := Level >= 80; END_TRANSITION   (* Level : INT *)";
     "SFC0811" Error "statement not supported by the STL target"
-        "S7-200 action bodies are BOOL assignments (`Lamp := Start AND NOT Fault;`), IF / ELSIF / \
-ELSE around them, and in IL the instructions LD, AND, OR, XOR, NOT, ST, STN, S and R on BOOL \
-variables. Assignments to other types, calls of functions or function blocks, CASE, FOR, WHILE, \
-REPEAT, EXIT, RETURN and jumps have no translation. A timer block is usually an action \
-qualifier (`Lamp(L, T#2s)`); otherwise build for `st`.";
+        "S7-200 action bodies are BOOL and integer assignments (`Lamp := Start AND NOT Fault;`, \
+`Count := Count + 1;`), IF / ELSIF / ELSE around them, calls of counter blocks (CTU, CTD, CTUD, \
+one call per instance: an S7-200 counter instruction runs at most once per scan), and in IL the \
+instructions LD, AND, OR, XOR, NOT, ST, STN, S and R on BOOL variables. Other blocks (a TON is an \
+action qualifier here: `Lamp(L, T#2s)`), CASE, FOR, WHILE, REPEAT, EXIT, RETURN, assignments to \
+TIME variables (they are timer presets) and inputs have no translation; build for `st` instead.";
     "SFC0812" Error "step time not representable by an S7-200 timer"
-        "A step time becomes the bit of a 100 ms S7-200 timer whose preset is fixed in the \
-program, so `S.T` must be compared (>=, >, <, <=, =, <>) with a constant duration, a literal or \
-a CONSTANT, that is a multiple of 100 ms and needs a preset of at most +32767 \
-(T#54m36s700ms):\n\n    TRANSITION FROM Heat TO Hold := Heat.T >= T#1m30s; END_TRANSITION";
+        "A step time is read through 100 ms S7-200 timers whose presets are fixed in the program, \
+so `S.T` must be compared with a duration known when the program is generated (a literal, a \
+CONSTANT, or a TIME variable the chart does not write: warning SFC0817), of at most 3276.7 s; \
+= and <> need a multiple of 100 ms (a step time counts whole timer ticks):\n\n    \
+TRANSITION FROM Heat TO Hold := Heat.T >= T#1m30s; END_TRANSITION";
     "SFC0813" Error "action association not supported by the STL target"
         "Timed qualifiers (L, D, SD, DS, SL) use one S7-200 100 ms TON per action, so the \
-duration must be a constant (literal or CONSTANT) multiple of 100 ms up to T#54m36s700ms, and the \
-timed associations of one action must all have the same qualifier and duration: different ones \
-contend at run time, and the simulator's choice between them has no fixed program form.\n\n    \
+duration must be known when the program is generated (at most T#54m36s700ms), and the timed \
+associations of one action must all have the same qualifier and duration: different ones contend \
+at run time, and the simulator's choice between them has no fixed program form.\n\n    \
 Horn(L, T#2s);   (* in every step that sounds the horn *)";
     "SFC0814" Error "address not available on the S7-200"
-        "A BOOL variable located `AT` a direct address is that S7-200 bit: `%IXb.i` is `Ib.i`, \
-`%QXb.i` is `Qb.i`, `%MXb.i` is `Mb.i`, with bytes I0-I15, Q0-Q15, M0-M31 and bits 0-7. Other \
-addresses (byte or word sizes, a partly specified `%I*`) name no bit. The input image is \
-read-only for the program: no action or assignment may write a variable located in `%I`.";
+        "A variable located `AT` a direct address is that S7-200 operand: `%IXb.i` is `Ib.i`, \
+`%QXb.i` is `Qb.i`, `%MXb.i` is `Mb.i` (bytes I0-I15, Q0-Q15, M0-M31, bits 0-7); an INT, UINT or \
+WORD is `%MWn`, `%IWn` or `%QWn`, a DINT, UDINT or DWORD `%MDn`. Other addresses name no such \
+operand. The input image is read-only for the program: no action or assignment may write a \
+variable located in `%I`.";
     "SFC0815" Error "S7-200 resources exceeded"
         "The program needs more than the S7-200 has: 100 ms timers (182 TON: T37-T63 and \
-T101-T255; 54 TONR: T5-T31 and T69-T95; one per distinct step-time comparison and one per \
-action with a timed qualifier) or bit memory (M0.0-M31.7, then V0.0-V2047.7). Split the chart, \
-or use fewer distinct step-time constants.";
+T101-T255; 54 TONR: T5-T31 and T69-T95; one per distinct step-time comparison, supervision time \
+and action with a timed qualifier), 256 counters, 256 jump labels, bit memory (M0.0-M31.7, then \
+V memory), or, with `--stl-method scr`, one S bit per step (S0.0-S31.7: 256 steps; the set/reset \
+method continues in M and V bits). Split the chart, or use fewer distinct step-time constants.";
     "SFC0816" Error "chart control variable not supported by the STL target"
-        "`SFCInit`, `SFCPause`, `SFCQuitError`, `SFCError`, `SFCErrorStep` and `SFCCurrentStep` \
-hold, pause and supervise the chart in the simulator; the S7-200 program implements none of \
-them, so a chart that declares or reads one is refused rather than run differently. Drive the \
-chart with ordinary transitions instead (an abort transition on a BOOL input).";
+        "The S7-200 program implements `SFCError` (set when a step stays longer than its \
+`sfc.timeout`, readable by the chart) and `SFCQuitError` (acknowledges it). `SFCInit` and \
+`SFCPause` (hold or freeze the chart) and the STRING outputs `SFCErrorStep` and `SFCCurrentStep` \
+have no form there, so a chart that declares or reads one is refused rather than run \
+differently. Drive the chart with ordinary transitions instead (an abort transition on a BOOL \
+input).";
+    "SFC0817" Warning "value fixed when the S7-200 program is generated"
+        "A TIME variable used as a step-time comparison or a qualifier duration becomes the preset \
+of an S7-200 timer, which the program fixes at the variable's initial value: changing the \
+variable at run time has no effect on the PLC. Declare it CONSTANT to state that, or change the \
+initial value and build again. The same warning marks a RETAIN variable with a non-zero initial \
+value, which the program does not set in the first scan (the retentive memory keeps its value).";
 }
 
 /// Looks a code up.

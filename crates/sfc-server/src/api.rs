@@ -525,7 +525,7 @@ fn build_document(s: &AppState, req: BuildRequest) -> Answer {
     if errors {
         return Ok(json!({ "ok": false, "diagnostics": diagnostics }));
     }
-    let opts = CompileOptions { pou: Some(&req.doc.pou), flatten: false, nstep, ntr };
+    let opts = CompileOptions { pou: Some(&req.doc.pou), flatten: false, nstep, ntr, ..Default::default() };
     let charts = std::slice::from_ref(&req.doc);
     let built = match compile::compile(&checked, target, &opts) {
         Ok(b) => b,

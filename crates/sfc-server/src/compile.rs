@@ -115,6 +115,8 @@ pub struct CompileOptions<'a> {
     /// ATMT/EATMT state and rule limit overrides.
     pub nstep: Option<u32>,
     pub ntr: Option<u32>,
+    /// STL: set/reset or SCR.
+    pub stl_method: sfc_codegen::stl::StlMethod,
 }
 
 /// A successful compilation.
@@ -126,6 +128,8 @@ pub struct Compiled {
     pub notes: Vec<Diagnostic>,
     /// With flattening: the number of states produced.
     pub flattened: Option<usize>,
+    /// STL: Micro/WIN's symbol table as CSV.
+    pub symbols: Option<String>,
 }
 
 /// Why a checked file could not be compiled.
@@ -139,7 +143,7 @@ pub enum CompileError {
 
 /// Compiles a checked file (without errors) for `target`.
 pub fn compile(checked: &Checked, target: BuildTarget, opts: &CompileOptions) -> Result<Compiled, CompileError> {
-    let plain = |text: String| Compiled { text, notes: Vec::new(), flattened: None };
+    let plain = |text: String| Compiled { text, notes: Vec::new(), flattened: None, symbols: None };
     match target {
         BuildTarget::Text => {
             // `checked.unit` lent its conditions and action bodies to the charts: print a fresh
@@ -158,10 +162,19 @@ pub fn compile(checked: &Checked, target: BuildTarget, opts: &CompileOptions) ->
                 text: t.text,
                 notes: t.notes,
                 flattened: t.flattened,
+                symbols: None,
             })
         }
         (BuildTarget::St, _) => sfc_codegen::st::build_st(checked, chart).map(plain),
-        (BuildTarget::Stl, _) => sfc_codegen::stl::build_stl(checked, chart).map(plain),
+        (BuildTarget::Stl, _) => {
+            let opts = sfc_codegen::stl::StlOptions { method: opts.stl_method };
+            sfc_codegen::stl::build_stl(checked, chart, opts).map(|p| Compiled {
+                text: p.text,
+                notes: p.warnings,
+                flattened: None,
+                symbols: Some(p.symbols),
+            })
+        }
         _ => {
             let layout = sfc_render::layout(chart);
             Ok(plain(sfc_render::svg(chart, &layout, &sfc_render::SvgOptions::default())))

@@ -1678,13 +1678,19 @@ impl Simulation {
     /// Runs the next scan without building its record (the fast path for benchmarks and the
     /// runtime). Returns the error that stopped the run, if any.
     pub fn advance(&mut self) -> Result<(), &RuntimeError> {
+        self.advance_at(self.next_time())
+    }
+
+    /// Runs the next scan at virtual time `now` (µs, not before the previous scan's) instead of
+    /// `scan · period`: for comparing with targets whose clock ticks differently (an S7-200
+    /// 100 ms timer sees time in whole ticks of its time base).
+    pub fn advance_at(&mut self, now: i64) -> Result<(), &RuntimeError> {
         if self.error.is_some() {
             return Err(self.error.as_ref().unwrap());
         }
         self.sink.fired.clear();
         self.sink.events.clear();
         self.sink.fault_site = None;
-        let now = self.next_time();
         let scan = self.next_scan;
         let result = {
             let mut ctx = Ctx {
@@ -1723,12 +1729,16 @@ impl Simulation {
     /// Runs the next scan. When it faults, the record holds the `error` event and
     /// [`Simulation::error`] is set; once stopped, `scan` runs nothing and returns that record.
     pub fn scan(&mut self) -> &ScanRecord {
+        self.scan_at(self.next_time())
+    }
+
+    /// [`Simulation::scan`] at virtual time `time` (see [`Simulation::advance_at`]).
+    pub fn scan_at(&mut self, time: i64) -> &ScanRecord {
         if self.error.is_some() {
             return &self.record;
         }
         let scan = self.next_scan;
-        let time = self.next_time();
-        let _ = self.advance();
+        let _ = self.advance_at(time);
         let mut events = std::mem::take(&mut self.sink.events);
         events.sort_by_key(Event::rank);
         // Within one chart's evolution, `fired` is in declaration order.
