@@ -2,7 +2,7 @@
 //! REX ATMT/EATMT table, Structured Text, S7-200 statement list, PLCopen XML, SVG or text.
 //! The checking and compiling are `sfc_server::compile`'s, shared with the editor.
 
-use crate::{print_diagnostics, read, write_atomically};
+use crate::{encoding_warning, print_diagnostics, read, write_atomically};
 use sfc_server::compile::{self, CompileError, CompileOptions};
 use std::path::PathBuf;
 
@@ -28,7 +28,7 @@ pub fn build(r: BuildRequest) -> u8 {
         eprintln!("error: --stl-method and --symbols apply to --target stl");
         return 2;
     }
-    let text = match read(&r.file) {
+    let decoded = match read(&r.file) {
         Ok(t) => t,
         Err(e) => {
             eprintln!("error: {e}");
@@ -38,8 +38,33 @@ pub fn build(r: BuildRequest) -> u8 {
     let mut opts = compile::validation_options(r.target, r.nstep, r.ntr);
     // With --flatten the simultaneous branches are compiled, not refused.
     opts.flatten = r.flatten;
-    let (file, checked, diags) = check_any(0, &r.file, &text, &opts);
-    let errors = print_diagnostics(&diags, &[file]);
+    let (file, mut checked, mut diags) = check_any(0, &r.file, &decoded.text, &opts);
+    diags.splice(0..0, encoding_warning(0, &decoded));
+    let compiling = matches!(r.target, BuildTarget::Atmt | BuildTarget::Eatmt | BuildTarget::St | BuildTarget::Stl);
+    // Converting (text, PLCopen XML, SVG) never refuses a chart for its problems: they are
+    // reported. Compiling refuses a chart with errors, but only its own errors count (those of
+    // the POU built, of what it uses, of the file's types and globals), never another POU's.
+    let errors = if !compiling {
+        print_diagnostics(&diags, std::slice::from_ref(&file));
+        0
+    } else {
+        match compile::pick_chart(&checked, r.pou.as_deref()).map(|c| c.pou.clone()) {
+            Ok(pou) if checked.has_errors() => {
+                let mine = sfc_model::errors_for(&checked, &pou);
+                let shown: Vec<_> = diags
+                    .iter()
+                    .filter(|d| !d.is_error() || mine.iter().any(|m| m.code == d.code && m.message == d.message))
+                    .cloned()
+                    .collect();
+                let n = print_diagnostics(&shown, std::slice::from_ref(&file));
+                if n == 0 {
+                    sfc_model::set_aside_unrelated(&mut checked, &pou);
+                }
+                n
+            }
+            _ => print_diagnostics(&diags, std::slice::from_ref(&file)),
+        }
+    };
     if errors > 0 {
         eprintln!("`{}` has errors: nothing was built", r.file.display());
         return 1;
@@ -51,6 +76,15 @@ pub fn build(r: BuildRequest) -> u8 {
         ntr: r.ntr,
         stl_method: r.stl_method.unwrap_or_default(),
     };
+    let unparsed = checked
+        .diagnostics
+        .iter()
+        .any(|d| d.is_error() && (d.code.starts_with("SFC00") || d.code.starts_with("SFC01")));
+    if r.target == BuildTarget::Text && unparsed {
+        // Text that does not parse is not reprinted (the printer would drop what it could not
+        // read): it is written as it is, its errors reported above.
+        return write_out(&r, &checked.file.text);
+    }
     let text = match compile::compile(&checked, r.target, &copts) {
         Ok(built) => {
             print_diagnostics(&built.notes, std::slice::from_ref(&checked.file));
@@ -77,9 +111,14 @@ pub fn build(r: BuildRequest) -> u8 {
             return 1;
         }
     };
+    write_out(&r, &text)
+}
+
+/// Writes the result to `-o OUT` (atomically) or standard output.
+fn write_out(r: &BuildRequest, text: &str) -> u8 {
     match &r.out {
         Some(path) if path.as_os_str() != "-" => {
-            if let Err(e) = write_atomically(path, &text) {
+            if let Err(e) = write_atomically(path, text) {
                 eprintln!("error: cannot write `{}`: {e}", path.display());
                 return 2;
             }

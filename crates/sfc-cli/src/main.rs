@@ -3,6 +3,7 @@
 use clap::{Parser, Subcommand, ValueEnum};
 use sfc_diagnostics::{render_human, render_json, RenderOptions, Severity, SourceFile};
 use sfc_model::{CheckOptions, Target};
+use sfc_syntax::encoding::Decoded;
 use std::io::{IsTerminal, Read, Write};
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
@@ -132,6 +133,10 @@ struct CheckArgs {
     /// Skip the reachability and guard analysis (structural and type checks only).
     #[arg(long)]
     no_analysis: bool,
+    /// Also warn where the chart behaves differently under this profile than under `iec`
+    /// (`matiec`: SFC0901–SFC0908).
+    #[arg(long, value_enum)]
+    profile: Option<ProfileArg>,
     /// Print what a diagnostic code means and how to fix it.
     #[arg(long, value_name = "CODE")]
     explain: Option<String>,
@@ -274,14 +279,22 @@ fn run() -> u8 {
     }
 }
 
-fn read(path: &Path) -> Result<String, String> {
-    if path.as_os_str() == "-" {
-        let mut s = String::new();
-        std::io::stdin().read_to_string(&mut s).map_err(|e| format!("cannot read standard input: {e}"))?;
-        return Ok(s);
-    }
-    let bytes = std::fs::read(path).map_err(|e| format!("cannot read `{}`: {e}", path.display()))?;
-    String::from_utf8(bytes).map_err(|_| format!("`{}` is not UTF-8 text", path.display()))
+/// Reads a chart file (or standard input for `-`): UTF-8 with or without a byte order mark, or
+/// Latin-1 / Windows-1252 (then `decoded.first_non_utf8` is set, see [`encoding_warning`]).
+fn read(path: &Path) -> Result<Decoded, String> {
+    let bytes = if path.as_os_str() == "-" {
+        let mut b = Vec::new();
+        std::io::stdin().read_to_end(&mut b).map_err(|e| format!("cannot read standard input: {e}"))?;
+        b
+    } else {
+        std::fs::read(path).map_err(|e| format!("cannot read `{}`: {e}", path.display()))?
+    };
+    Ok(sfc_syntax::encoding::decode(&bytes))
+}
+
+/// The warning for a file that is not UTF-8, located in file `id`.
+fn encoding_warning(id: u32, decoded: &Decoded) -> Option<sfc_diagnostics::Diagnostic> {
+    sfc_syntax::encoding::warning(id, decoded)
 }
 
 fn check(a: CheckArgs) -> u8 {
@@ -311,7 +324,7 @@ fn check(a: CheckArgs) -> u8 {
     let mut files: Vec<SourceFile> = Vec::new();
     let mut diags = Vec::new();
     for path in &a.files {
-        let text = match read(path) {
+        let decoded = match read(path) {
             Ok(t) => t,
             Err(e) => {
                 eprintln!("error: {e}");
@@ -319,9 +332,19 @@ fn check(a: CheckArgs) -> u8 {
             }
         };
         let id = files.len() as u32;
-        let (file, _, found) = build::check_any(id, path, &text, &opts);
+        let (file, checked, found) = build::check_any(id, path, &decoded.text, &opts);
+        let clean = !found.iter().any(|d| d.severity == Severity::Error);
         files.push(file);
+        diags.extend(encoding_warning(id, &decoded));
         diags.extend(found);
+        if matches!(a.profile, Some(ProfileArg::Matiec)) && clean && !sfc_server::compile::is_xml(path, &decoded.text) {
+            let mut extra = sfc_sim::matiec_check::differences(&checked.charts, &decoded.text);
+            for d in &mut extra {
+                d.span.file = id;
+            }
+            diags.extend(extra);
+            sfc_diagnostics::sort(&mut diags);
+        }
     }
     let errors = diags.iter().filter(|d| d.severity == Severity::Error).count();
     let warnings = diags.iter().filter(|d| d.severity == Severity::Warning).count();
@@ -373,13 +396,18 @@ fn fmt(a: FmtArgs) -> u8 {
     let mut status = 0u8;
     let color = std::io::stderr().is_terminal();
     for path in &a.files {
-        let text = match read(path) {
+        let decoded = match read(path) {
             Ok(t) => t,
             Err(e) => {
                 eprintln!("error: {e}");
                 return 2;
             }
         };
+        let text = decoded.text.clone();
+        if let Some(w) = encoding_warning(0, &decoded) {
+            let files = [SourceFile::new(path.display().to_string(), text.clone())];
+            eprintln!("{}", render_human(&w, &files, RenderOptions { color }));
+        }
         let (unit, diags) = sfc_syntax::parse(0, &text);
         let errors: Vec<_> = diags.iter().filter(|d| d.is_error()).collect();
         if !errors.is_empty() {
@@ -392,17 +420,28 @@ fn fmt(a: FmtArgs) -> u8 {
             continue;
         }
         let formatted = sfc_syntax::print::print(&unit);
+        // The file keeps its encoding, byte order mark and line endings.
+        let (bytes, lost) = sfc_syntax::encoding::encode(&formatted, &decoded);
         if path.as_os_str() == "-" {
-            print!("{formatted}");
+            let _ = std::io::stdout().write_all(&bytes);
             continue;
         }
-        if formatted == text {
+        if lost > 0 {
+            eprintln!(
+                "error: `{}` is Latin-1 / Windows-1252, which cannot hold {lost} of its characters: not formatted",
+                path.display()
+            );
+            status = 1;
+            continue;
+        }
+        let same = sfc_syntax::encoding::decode(&bytes) == decoded;
+        if same {
             continue;
         }
         if a.check {
             println!("would reformat {}", path.display());
             status = 1;
-        } else if let Err(e) = write_atomically(path, &formatted) {
+        } else if let Err(e) = sfc_server::write_atomically(path, &bytes) {
             eprintln!("error: cannot write `{}`: {e}", path.display());
             return 2;
         }

@@ -2,7 +2,8 @@
 //!
 //! Ranges: `SFC00xx` lexical, `SFC01xx` syntax, `SFC02xx` chart structure, `SFC03xx` names and
 //! types, `SFC04xx` ATMT/EATMT target rules, `SFC05xx` analysis, `SFC06xx` pragmas and attributes,
-//! `SFC07xx` import (PLCopen XML), `SFC08xx` code generation.
+//! `SFC07xx` import (PLCopen XML), `SFC08xx` code generation, `SFC09xx` behaviour that differs
+//! under a vendor profile (`sfc check --profile`).
 
 use crate::Severity;
 
@@ -52,6 +53,11 @@ separated by dots: `%IX2.4`, `%QW29`, `%MW6`.";
     "SFC0010" Error "nested comment"
         "IEC 61131-3 comments do not nest: `(* (* inner *) *)` ends at the first `*)`.";
 
+    "SFC0011" Warning "text file not in UTF-8"
+        "The file is not valid UTF-8, so it was read as Latin-1 / Windows-1252 (what older Windows \
+editors and many PLC tools write). The warning names the first line that is not UTF-8. `sfc fmt` \
+and the editor write the file back in the same encoding, with its byte order mark and line \
+endings; converting it to UTF-8 silences the warning.";
     "SFC0101" Error "syntax error"
         "The parser expected something else here. It recovers at the next keyword, so later \
 errors are usually real.";
@@ -338,6 +344,20 @@ from the body's last step. Exporting the chart again writes the flattened steps.
         "Part of the file has no effect in the imported program and is left out: a named \
 transition condition nothing refers to, a second body of a POU, an element that does not belong \
 in an SFC body, a coil on the path of a transition condition (a condition cannot assign it).";
+    "SFC0711" Note "vendor element skipped"
+        "A network holds a vendor's own element (a CODESYS FBD `vendorElement`: a box, a comment or \
+a connector only its tool can draw). It has no IEC 61131-3 meaning and is skipped; the rest of the \
+network is imported.";
+    "SFC0712" Warning "no SFC POU in the file"
+        "The file imports, but none of its POUs is a Sequential Function Chart, so there is no chart \
+to check, simulate, build or edit. The note lists the POUs found. A CODESYS project export keeps an \
+application's POUs in its resource's `addData`; those are read too.";
+    "SFC0713" Warning "unknown type imported as an opaque block"
+        "The file uses a data type or function block that it does not declare: a library's (a \
+CODESYS library, `Util.BLINK`), or an extension's (Beremiz's svghmi `HMI_*`, py_ext `python_eval`, \
+svgui `Button`, `Led`). It is imported as an opaque function block: its instances are kept and \
+written back on export, everything done with them is accepted, and nothing about them is analysed \
+or simulated.";
 
     "SFC0801" Error "chart cannot be translated to ST"
         "The Structured Text target (`--target st`) replaces the chart's POU by a plain ST POU of \
@@ -413,6 +433,53 @@ of an S7-200 timer, which the program fixes at the variable's initial value: cha
 variable at run time has no effect on the PLC. Declare it CONSTANT to state that, or change the \
 initial value and build again. The same warning marks a RETAIN variable with a non-zero initial \
 value, which the program does not set in the first scan (the retentive memory keeps its value).";
+
+    "SFC0901" Warning "transition tested in scan 0 under MatIEC"
+        "MatIEC's generated code has no first-scan guard: a transition leaving an initial step is \
+tested in the very first scan, so when its condition already holds the initial step is left \
+before its actions run. IEC (and `--profile iec`) runs only the initial step's actions in scan 0. \
+Reported by `sfc check --profile matiec`:\n\n    INITIAL_STEP S0: Y(N); END_STEP\n    TRANSITION \
+T1 FROM S0 TO S1 := TRUE; END_TRANSITION   (* MatIEC: S1 at scan 0, Y never on *)\n\nWait for an \
+input or a step time (`S0.T >= T#10ms`) if the initial actions must run.";
+    "SFC0902" Warning "every TRUE alternative fires under MatIEC"
+        "MatIEC fires every transition whose preceding steps are active when it is tested: two TRUE \
+alternatives without PRIORITY both fire (the step gets two successors), and an unprioritised \
+transition tested before a prioritised one fires with it. IEC fires one: explicit PRIORITY first, \
+then declaration order. Make the conditions exclusive, or give each alternative a PRIORITY \
+(MatIEC then clears the step as soon as the first one fires):\n\n    TRANSITION T1 (PRIORITY := 1) \
+FROM S1 TO S2 := Full; END_TRANSITION\n    TRANSITION T2 (PRIORITY := 2) FROM S1 TO S3 := Full OR \
+Timeout; END_TRANSITION";
+    "SFC0903" Warning "step flag read after a PRIORITY transition cleared it under MatIEC"
+        "When a transition with an explicit PRIORITY fires, MatIEC clears its preceding steps at \
+once, in the middle of testing the transitions, so a condition tested after it reads `S.X` as \
+FALSE in the same scan. IEC evaluates every condition on the situation at the start of the \
+scan. Read an input or a variable instead of the step flag, or drop the PRIORITY.";
+    "SFC0904" Warning "association switched off by another under MatIEC"
+        "MatIEC writes the associations of an action (or BOOL variable) one by one, steps in \
+declaration order, each on its own: N writes TRUE while its step is active and FALSE in the scan \
+it is left; L writes FALSE once its time is up; P, P1 and P0 write FALSE in every scan they do \
+not pulse. A later association therefore switches off what an earlier one switched on, e.g. an \
+N action on S1 and S2 (S2 declared first) is off in the scan S2 hands over to S1. IEC ORs the \
+associations of one qualifier. Use one association per action, or S and R.";
+    "SFC0905" Warning "R does not stop an action under MatIEC"
+        "MatIEC's R only clears the stored flag of S, SD, DS and SL; an N, L, D or P association of \
+the same action on an active step keeps running it. IEC's ACTION_CONTROL lets R override every \
+qualifier (`Q := NOT R AND (…)`). Switch the continuous association off by leaving its step.";
+    "SFC0906" Warning "timed association behaves differently under MatIEC"
+        "MatIEC starts SD, DS and SL on the activation edge of their step, which an initial step \
+does not have, and counts them down from the duration: SD or DS with T#0s never acts, SL with \
+T#0s stays stored until R. L and D compare the step's own elapsed time, so a step that loops to \
+itself restarts them. IEC times these qualifiers in the action's ACTION_CONTROL block.";
+    "SFC0907" Warning "time comparison changes in another scan under MatIEC"
+        "MatIEC converts TIME literals with x86-64 `long double` arithmetic and truncates to whole \
+nanoseconds, so `T#4ms` is 3.999999 ms and `S.T > T#4ms` already holds at 4 ms; and a step time \
+that reaches a whole second exactly is kept as {0 s, 1 000 000 000 ns}, which compares below \
+`T#1s`, so `S.T >= T#1s` holds one scan later. Compare with `>=` / `<` against a literal a \
+nanosecond-exact value (`T#4ms` → `>= T#5ms`), or avoid whole seconds.";
+    "SFC0908" Warning "P1/P0 on a BOOL variable under MatIEC"
+        "MatIEC treats P1 and P0 as pulses that write the variable used as the action: TRUE for one \
+scan on the activation (P1) or deactivation (P0) of the step. IEC runs P1/P0 with Q FALSE, so a \
+BOOL variable used as the action stays FALSE. Use an ACTION that sets the variable.";
 }
 
 /// Looks a code up.

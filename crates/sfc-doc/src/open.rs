@@ -656,8 +656,80 @@ fn laid_out(r: &ReadChart, probe: &mut Probe) -> EditorDoc {
         .collect();
 
     let d = graph::derive(&doc, probe);
-    layout::place(&mut doc, &d, &Model { step_of: &step_of, transition_of: &transition_of }, &lay, &keep);
+    let only_labels_kept = doc.elements.iter().zip(&keep).all(|(e, k)| !k || e.kind == Some(ElementKind::Text));
+    if !(only_labels_kept
+        && lay.kind == LayoutKind::Structured
+        && structured(&mut doc, &d, chart, &step_of, &transition_of))
+    {
+        layout::place(&mut doc, &d, &Model { step_of: &step_of, transition_of: &transition_of }, &lay, &keep);
+    }
     doc
+}
+
+/// Lays the document out with the structured layout in the editor's units (`structured.rs`)
+/// and routes its wires; `false` (nothing changed) when the chart or the document's bars do not
+/// fit it.
+fn structured(
+    doc: &mut EditorDoc,
+    d: &graph::Derived,
+    chart: &sfc_model::Chart,
+    step_of: &[Option<usize>],
+    transition_of: &[Option<usize>],
+) -> bool {
+    let Some(tree) = sfc_render::structure::recover(chart) else { return false };
+    let invert = |of: &[Option<usize>], n: usize| -> Option<Vec<usize>> {
+        let mut out = vec![usize::MAX; n];
+        for (i, k) in of.iter().enumerate() {
+            if let Some(k) = *k {
+                *out.get_mut(k)? = i;
+            }
+        }
+        out.iter().all(|&i| i != usize::MAX).then_some(out)
+    };
+    let (Some(steps), Some(transitions)) =
+        (invert(step_of, chart.steps.len()), invert(transition_of, chart.transitions.len()))
+    else {
+        return false;
+    };
+    if !crate::structured::place(doc, d, &tree, &steps, &transitions) {
+        return false;
+    }
+    clear_text_labels(doc);
+    layout::route_all(doc, d);
+    true
+}
+
+/// Text labels (comments) keep their place unless the new layout put a block or a label under
+/// them; those move to a column right of the drawing, one below the other.
+fn clear_text_labels(doc: &mut EditorDoc) {
+    use crate::drawing::{labels, Rect};
+    let texts: Vec<usize> =
+        (0..doc.elements.len()).filter(|&i| doc.elements[i].kind == Some(ElementKind::Text)).collect();
+    if texts.is_empty() {
+        return;
+    }
+    let mut taken: Vec<Rect> = doc
+        .elements
+        .iter()
+        .filter(|e| e.kind.is_some() && e.kind != Some(ElementKind::Text))
+        .map(Rect::of)
+        .chain(labels(doc).into_iter().map(|l| l.rect))
+        .collect();
+    let right = taken.iter().map(|r| r.right()).fold(0.0, f64::max);
+    let mut column_y = taken.iter().map(|r| r.y).fold(f64::INFINITY, f64::min).min(40.0);
+    let column_x = ((right + 40.0) / 10.0).ceil() * 10.0;
+    for i in texts {
+        let r = Rect::of(&doc.elements[i]);
+        if taken.iter().any(|t| t.overlaps(&r)) {
+            let e = &mut doc.elements[i];
+            e.x = column_x;
+            e.y = column_y;
+            column_y = ((column_y + e.h + 20.0) / 10.0).ceil() * 10.0;
+            taken.push(Rect::of(e));
+        } else {
+            taken.push(r);
+        }
+    }
 }
 
 /// See [`crate::auto_layout`]: the chart the document's text describes is laid out, and the
@@ -698,6 +770,14 @@ pub fn auto_layout(doc: &EditorDoc) -> EditorDoc {
                 || (*r == Role::Other && matches!(e.kind, Some(ElementKind::Step | ElementKind::Transition)))
         })
         .collect();
-    layout::place(&mut out, &d, &Model { step_of: &step_of, transition_of: &transition_of }, &lay, &keep);
+    let only_labels_kept = out.elements.iter().zip(&keep).all(|(e, k)| !k || e.kind == Some(ElementKind::Text));
+    if !(only_labels_kept
+        && lay.kind == LayoutKind::Structured
+        && structured(&mut out, &d, &chart, &step_of, &transition_of))
+    {
+        layout::place(&mut out, &d, &Model { step_of: &step_of, transition_of: &transition_of }, &lay, &keep);
+        clear_text_labels(&mut out);
+        layout::route_all(&mut out, &d);
+    }
     out
 }

@@ -160,3 +160,18 @@ fn corpus_round_trips() {
     }
     run(inputs, false);
 }
+
+/// Every chart of the files in the shapes of other tools (`tests/corpus/real`) opens in the
+/// editor and saves back equal.
+#[test]
+fn real_tool_files_open_and_round_trip() {
+    let mut inputs = Vec::new();
+    for p in files(&root().join("tests/corpus/real"), ".xml") {
+        let xml = std::fs::read_to_string(&p).unwrap();
+        let imported = sfc_plcopen::import(0, &p.display().to_string(), &xml);
+        inputs.push((format!("{} (imported)", p.display()), imported.text, true));
+    }
+    assert!(inputs.len() >= 25);
+    let charts = run(inputs, false);
+    assert!(charts >= 30, "{charts} charts opened");
+}

@@ -119,3 +119,108 @@ fn bang_outside_eatmt(file_id: u32, text: &str, charts: &[Chart], diags: &mut Ve
         }
     }
 }
+
+/// The POUs `pou` depends on, itself included (upper-case names): the POUs of the file whose
+/// names occur in its text (instances of function blocks, calls of functions), transitively.
+pub fn dependencies(unit: &ast::SourceUnit, text: &str, pou: &str) -> std::collections::HashSet<String> {
+    use std::collections::{HashMap, HashSet};
+    let mut spans: HashMap<String, Span> = HashMap::new();
+    for item in &unit.items {
+        if let ast::Item::Pou(p) = item {
+            spans.entry(p.name.text.to_ascii_uppercase()).or_insert(p.span);
+        }
+    }
+    let mut out = HashSet::new();
+    let mut todo = vec![pou.to_ascii_uppercase()];
+    while let Some(name) = todo.pop() {
+        if !out.insert(name.clone()) {
+            continue;
+        }
+        let Some(span) = spans.get(&name) else { continue };
+        let body = text.get(span.start as usize..span.end as usize).unwrap_or("");
+        let (toks, _) = sfc_syntax::lexer::lex(0, body);
+        for t in toks.iter().filter(|t| t.kind == sfc_syntax::lexer::TokenKind::Ident) {
+            let w = body[t.start as usize..t.end as usize].to_ascii_uppercase();
+            if spans.contains_key(&w) && !out.contains(&w) {
+                todo.push(w);
+            }
+        }
+    }
+    out
+}
+
+/// The errors of a checked file that concern the POU `pou`: those inside it or inside a POU it
+/// depends on, and those outside every POU (types, globals). An error in an unrelated POU does
+/// not keep `pou` from being simulated or built.
+pub fn errors_for(checked: &Checked, pou: &str) -> Vec<Diagnostic> {
+    let deps = dependencies(&checked.unit, &checked.file.text, pou);
+    let pou_spans: Vec<(String, Span)> = checked
+        .unit
+        .items
+        .iter()
+        .filter_map(|i| match i {
+            ast::Item::Pou(p) => Some((p.name.text.to_ascii_uppercase(), p.span)),
+            _ => None,
+        })
+        .collect();
+    checked
+        .diagnostics
+        .iter()
+        .filter(|d| d.is_error())
+        .filter(|d| {
+            match pou_spans.iter().find(|(_, s)| s.start <= d.span.start && d.span.start < s.end.max(s.start + 1)) {
+                Some((name, _)) => deps.contains(name),
+                None => true,
+            }
+        })
+        .cloned()
+        .collect()
+}
+
+/// Leaves out of `checked` every POU with an error that `pou` does not depend on (it becomes a
+/// block kept as written, so item numbers stay), so the rest can be compiled; returns whether
+/// any was left out.
+pub fn set_aside_unrelated(checked: &mut Checked, pou: &str) -> bool {
+    let deps = dependencies(&checked.unit, &checked.file.text, pou);
+    let errors: Vec<Span> = checked.diagnostics.iter().filter(|d| d.is_error()).map(|d| d.span).collect();
+    let mut any = false;
+    for item in checked.unit.items.iter_mut() {
+        let ast::Item::Pou(p) = item else { continue };
+        if deps.contains(&p.name.text.to_ascii_uppercase()) {
+            continue;
+        }
+        if !errors.iter().any(|e| p.span.start <= e.start && e.start < p.span.end) {
+            continue;
+        }
+        let text = checked.file.text.get(p.span.start as usize..p.span.end as usize).unwrap_or("").to_string();
+        *item = ast::Item::Verbatim(ast::Verbatim {
+            keyword: p.kind.keyword().to_string(),
+            attributes: p.attributes.clone(),
+            name: Some(p.name.clone()),
+            text,
+            span: p.span,
+        });
+        any = true;
+    }
+    if any {
+        let kept: std::collections::HashSet<usize> = checked
+            .unit
+            .items
+            .iter()
+            .enumerate()
+            .filter(|(_, i)| matches!(i, ast::Item::Pou(_)))
+            .map(|(k, _)| k)
+            .collect();
+        checked.charts.retain(|c| kept.contains(&c.item));
+        checked.diagnostics.retain(|d| !d.is_error() || errors_for_span(&checked.unit, d.span));
+    }
+    any
+}
+
+/// Whether an error at `span` is in a POU still analysed or outside every POU.
+fn errors_for_span(unit: &ast::SourceUnit, span: Span) -> bool {
+    !unit
+        .items
+        .iter()
+        .any(|i| matches!(i, ast::Item::Verbatim(v) if v.span.start <= span.start && span.start < v.span.end))
+}

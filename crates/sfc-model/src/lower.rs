@@ -66,6 +66,13 @@ const KNOWN_ATTRIBUTES: &[&str] = &[
     "sfc.reference",
     "sfc.inline",
     "sfc.comment",
+    // Also the PLCopen import's: the file's headers and foreign project data (on its first POU),
+    // a POU kept as written (why, and its XML).
+    "sfc.fileheader",
+    "sfc.contentheader",
+    "sfc.projectdata",
+    "sfc.verbatim",
+    "sfc.pouxml",
     // Written by the editor (`sfc-doc`): the blocks, connections and bends the text cannot hold;
     // the build output of an "IEC 61131-3" chart (a blank one), kept for the editor's toolbar.
     "sfc.graph",

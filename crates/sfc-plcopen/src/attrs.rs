@@ -30,6 +30,12 @@ pub const JUMP: &str = "sfc.jump";
 pub const REFERENCE: &str = "sfc.reference";
 pub const INLINE: &str = "sfc.inline";
 pub const COMMENT: &str = "sfc.comment";
+pub const GVL: &str = "sfc.gvl";
+pub const VERBATIM: &str = "sfc.verbatim";
+pub const POUXML: &str = "sfc.pouxml";
+pub const FILEHEADER: &str = "sfc.fileheader";
+pub const CONTENTHEADER: &str = "sfc.contentheader";
+pub const PROJECTDATA: &str = "sfc.projectdata";
 
 /// The `name` of the `addData/data` element that carries the other `sfc.*` attributes.
 pub const DATA_NAME: &str = "urn:sfc-toolchain:attributes";

@@ -20,11 +20,13 @@ pub mod attrs;
 mod emit;
 mod export;
 mod import;
+mod splice;
 mod xml;
 
 pub use emit::{MapEntry, SourceMap};
-pub use export::{export, fmt_duration};
+pub use export::{export, export_pou, fmt_duration};
 pub use import::NAMESPACES;
+pub use splice::{splice_pou, SpliceError};
 
 use sfc_diagnostics::{Diagnostic, Label, SourceFile};
 use sfc_model::{check_source, CheckOptions, Checked};

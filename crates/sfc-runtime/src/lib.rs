@@ -10,6 +10,7 @@
 pub mod access;
 pub mod atmt;
 pub mod board;
+pub mod contract;
 pub mod io;
 pub mod jitter;
 pub mod modbus;

@@ -176,8 +176,16 @@ pub fn compile(checked: &Checked, target: BuildTarget, opts: &CompileOptions) ->
             })
         }
         _ => {
-            let layout = sfc_render::layout(chart);
-            Ok(plain(sfc_render::svg(chart, &layout, &sfc_render::SvgOptions::default())))
+            // The chart as the editor draws it: the same document (its saved layout, or the
+            // structured layout), drawn the same way.
+            let opened = sfc_doc::open(0, &checked.file.name, &checked.file.text);
+            match opened.charts.iter().find(|d| d.pou.eq_ignore_ascii_case(&chart.pou)) {
+                Some(doc) => Ok(plain(sfc_doc::svg(doc))),
+                None => {
+                    let layout = sfc_render::layout(chart);
+                    Ok(plain(sfc_render::svg(chart, &layout, &sfc_render::SvgOptions::default())))
+                }
+            }
         }
     };
     built.map_err(CompileError::Diagnostics)

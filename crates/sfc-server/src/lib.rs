@@ -10,6 +10,7 @@ mod api;
 mod assets;
 pub mod compile;
 mod confine;
+pub mod contract;
 mod diag;
 mod disk;
 mod sim;

@@ -166,9 +166,10 @@ fn start_simulation(sims: &Simulations, req: StartRequest, port: u16) -> Result<
     }
     let doc = req.doc;
     let written = sfc_doc::to_text(&doc);
-    let mut diagnostics: Vec<Value> = written.problems.iter().map(problem_json).collect();
-    let problems = written.problems.iter().any(|p| p.severity == sfc_diagnostics::Severity::Error);
     let name = format!("{}.st", doc.pou);
+    let mut diagnostics: Vec<Value> =
+        written.problems.iter().map(|p| problem_json(p, &doc, &name, &written.text)).collect();
+    let problems = written.problems.iter().any(|p| p.severity == sfc_diagnostics::Severity::Error);
     let opts = SimOptions { period, profile: Profile::Iec };
     let sim = match Simulation::from_source(&name, &written.text, Some(&doc.pou), opts) {
         Ok(sim) if !problems => sim,

@@ -15,7 +15,10 @@ use sfc_model::{ActionTarget, Qualifier};
 use sfc_st::Type;
 use std::sync::Arc;
 
+mod matiec;
 mod monitor;
+
+pub(crate) use matiec::test_order as matiec_test_order;
 
 /// Fired transitions and events collected during one scan (from every chart instance).
 #[derive(Debug, Default)]
@@ -490,6 +493,8 @@ pub struct ChartState {
     current: Option<u32>,
     /// `(time, transition)` of every firing, to rebuild the sequence of situations.
     pub(crate) log: Vec<(i64, u32)>,
+    /// The `matiec` profile's own state (`engine/matiec.rs`).
+    matiec: Option<Box<matiec::State>>,
 }
 
 /// At most this many firings are kept per instance for the sequence of situations.
@@ -532,6 +537,7 @@ impl ChartState {
             run: Vec::new(),
             current: None,
             log: Vec::new(),
+            matiec: None,
             plan,
         }
     }
@@ -623,6 +629,9 @@ fn code_of(prog: &Program, pou: usize) -> &ChartCode {
 pub fn run_chart(ctx: &mut Ctx<'_>, chart: usize) -> Result<(), Fault> {
     let prog = ctx.prog;
     let code = code_of(prog, ctx.charts[chart].pou);
+    if ctx.profile == Profile::Matiec {
+        return matiec::run(ctx, chart, code);
+    }
     let plan = code.plan();
     let frame = ctx.charts[chart].frame;
     let now = ctx.now;
@@ -1521,17 +1530,27 @@ impl Simulation {
         opts: SimOptions,
     ) -> Result<Simulation, (SourceFile, Vec<Diagnostic>)> {
         let check_opts = sfc_model::CheckOptions { keep_types: true, ..Default::default() };
-        let checked = sfc_model::check_source(0, name, text, &check_opts);
-        if checked.has_errors() {
-            let diags = checked.diagnostics.into_iter().filter(|d| d.is_error()).collect();
-            return Err((checked.file, diags));
-        }
-        let source = checked.file;
+        let mut checked = sfc_model::check_source(0, name, text, &check_opts);
+        // An error in another POU does not keep this one from running: only the errors of the
+        // POU, of what it uses, and of the file's types and globals count.
         let top = match choose_pou(&checked.unit, &checked.charts, pou) {
             Ok(n) => n,
-            Err(d) => return Err((source, vec![d])),
+            Err(d) if checked.has_errors() => {
+                let mut diags: Vec<Diagnostic> = checked.diagnostics.into_iter().filter(|d| d.is_error()).collect();
+                diags.push(d);
+                return Err((checked.file, diags));
+            }
+            Err(d) => return Err((checked.file, vec![d])),
         };
-        let prog = match Program::compile(&checked.unit, checked.charts, &checked.expr_types) {
+        if checked.has_errors() {
+            let errors = sfc_model::errors_for(&checked, &top);
+            if !errors.is_empty() {
+                return Err((checked.file, errors));
+            }
+            sfc_model::set_aside_unrelated(&mut checked, &top);
+        }
+        let source = checked.file;
+        let prog = match Program::compile_with(&checked.unit, checked.charts, &checked.expr_types, opts.profile) {
             Ok(p) => p,
             Err(d) => return Err((source, d)),
         };
@@ -1554,6 +1573,9 @@ impl Simulation {
             .filter(|v| !v.implicit && v.size == 1 && v.ty.is_elementary())
             .filter_map(|v| prog.resolve(top, top_frame, &v.name).map(|(slot, _)| (v.name.clone(), v.ty.clone(), slot)))
             .collect();
+        if opts.profile == Profile::Matiec {
+            matiec::prepare(&prog, &mut charts, &source.text);
+        }
         let lower = source.text.to_ascii_lowercase();
         let mentioned = lower.contains("sfccurrentstep");
         let flags = step_flags_read(&lower);
@@ -1805,7 +1827,7 @@ impl Simulation {
             return Err(format!("no variable `{name}` in `{}`", self.pou_name()));
         };
         let v = fit(value, &ty).map_err(|why| format!("`{name}` is {}: {why}", type_name(&ty)))?;
-        self.mem[slot] = v;
+        self.mem[slot] = self.inward(v);
         Ok(())
     }
 
@@ -1834,7 +1856,23 @@ impl Simulation {
         if let Some(v) = self.current_step_of(name).or_else(|| self.unmirrored_step_value(slot)) {
             return Some(v);
         }
-        self.mem.get(slot).cloned()
+        self.mem.get(slot).map(|v| self.outward(v))
+    }
+
+    /// A value of memory as users see it: TIME in µs (under `matiec` memory holds MatIEC's
+    /// packed timespecs, `crate::timespec`).
+    fn outward(&self, v: &Value) -> Value {
+        match v {
+            Value::Time(t) if self.prog.matiec_time => Value::Time(crate::timespec::Timespec::unpack(*t).to_us()),
+            _ => v.clone(),
+        }
+    }
+    /// The inverse of [`Simulation::outward`].
+    fn inward(&self, v: Value) -> Value {
+        match v {
+            Value::Time(us) if self.prog.matiec_time => Value::Time(crate::timespec::Timespec::from_us(us).pack()),
+            _ => v,
+        }
     }
 
     /// `[Path.]SFCCurrentStep` computed from the chart state (see `ChartState::track_current`).
@@ -1887,7 +1925,7 @@ impl Simulation {
     }
     /// Current values of [`Simulation::trace_vars`], same order.
     pub fn trace_values(&self) -> Vec<Value> {
-        self.trace.iter().map(|&(_, _, slot)| self.mem[slot].clone()).collect()
+        self.trace.iter().map(|&(_, _, slot)| self.outward(&self.mem[slot])).collect()
     }
     /// Every step (qualified), in declaration order, top chart first.
     pub fn step_names(&self) -> Vec<String> {

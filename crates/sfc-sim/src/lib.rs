@@ -8,7 +8,9 @@ pub mod code;
 pub mod coverage;
 pub mod engine;
 pub mod explain;
+pub mod matiec_check;
 pub mod scenario;
+pub mod timespec;
 pub mod trace;
 pub mod value;
 

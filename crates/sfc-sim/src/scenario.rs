@@ -800,7 +800,14 @@ fn clean(path: &Path) -> PathBuf {
 fn read_text(path: &Path, what: &str) -> Result<String, (ErrorKind, String)> {
     let bytes =
         std::fs::read(path).map_err(|e| (ErrorKind::Io, format!("cannot read {what} `{}`: {e}", path.display())))?;
-    String::from_utf8(bytes).map_err(|_| (ErrorKind::Invalid, format!("{what} `{}` is not UTF-8 text", path.display())))
+    // UTF-8 with or without a byte order mark, or Latin-1 / Windows-1252.
+    let text = sfc_syntax::encoding::decode(&bytes).text;
+    // A PLCopen XML chart is simulated as the IEC text it imports to.
+    let xml = path.extension().is_some_and(|e| e.eq_ignore_ascii_case("xml")) || text.trim_start().starts_with('<');
+    if xml && what == "the chart" {
+        return Ok(sfc_plcopen::import(0, &path.display().to_string(), &text).text);
+    }
+    Ok(text)
 }
 
 /// Loads a scenario file with command-line settings taking precedence.

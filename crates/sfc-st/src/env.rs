@@ -199,9 +199,18 @@ pub struct TypeEnv {
     /// Upper-case enumerated value → the enumerated types (named or inline in a global) that
     /// declare it.
     enum_values: HashMap<String, Vec<Type>>,
+    /// Upper-case names of the POUs kept as written (`sfc.verbatim`): opaque, so a variable of
+    /// such a type, a call of such a function, and everything done with them is accepted
+    /// without analysis (their type is [`Type::Error`]).
+    opaque: std::collections::HashSet<String>,
 }
 
 impl TypeEnv {
+    /// Whether `name` is a POU kept as written, so not analysed (an opaque type or function).
+    pub fn is_opaque(&self, name: &str) -> bool {
+        self.opaque.contains(&name.to_ascii_uppercase())
+    }
+
     /// An environment with only the standard library (no file declarations).
     pub fn standard() -> TypeEnv {
         let mut env = TypeEnv::default();
@@ -256,9 +265,17 @@ impl TypeEnv {
                         b.pou_kinds.insert(key, (pou.kind, pou.name.span));
                     }
                 }
-                Item::Globals(_) | Item::Verbatim(_) => {}
+                Item::Verbatim(v) => {
+                    if let (true, Some(name)) =
+                        (matches!(v.keyword.as_str(), "PROGRAM" | "FUNCTION_BLOCK" | "FUNCTION"), &v.name)
+                    {
+                        b.opaque.insert(name.key());
+                    }
+                }
+                Item::Globals(_) => {}
             }
         }
+        env.opaque = b.opaque.clone();
 
         // Global constants, needed by array bounds and string lengths everywhere.
         let global_blocks: Vec<&VarBlock> =
@@ -549,6 +566,9 @@ impl TypeNames for EnvNames<'_> {
         if let Some(def) = self.env.types.get(&key) {
             return Named::Type(def.ty.clone());
         }
+        if self.env.opaque.contains(&key) {
+            return Named::Type(Type::Error);
+        }
         match self.env.pou(&key) {
             Some(p) if p.kind == PouKind::Function => Named::NotAType("a function"),
             Some(_) => Named::Type(Type::FunctionBlock(key)),
@@ -581,6 +601,8 @@ struct Builder<'a> {
     consts: HashMap<String, Value>,
     /// Constants of the POU whose interface is being resolved.
     local_consts: HashMap<String, Value>,
+    /// POUs kept as written: opaque types.
+    opaque: std::collections::HashSet<String>,
 }
 
 impl<'a> Builder<'a> {
@@ -706,6 +728,9 @@ impl TypeNames for Builder<'_> {
         let key = ident.key();
         if self.decls.contains_key(&key) {
             return Named::Type(self.resolve_decl(&key, diags));
+        }
+        if self.opaque.contains(&key) {
+            return Named::Type(Type::Error);
         }
         match self.pou_kinds.get(&key) {
             Some((PouKind::Function, _)) => Named::NotAType("a function"),

@@ -99,8 +99,11 @@ impl Item {
 /// A block kept as source text.
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub struct Verbatim {
-    /// The opening keyword, e.g. `CONFIGURATION`.
+    /// The opening keyword, e.g. `CONFIGURATION`, or `PROGRAM`, `FUNCTION_BLOCK`, `FUNCTION`
+    /// for a POU kept as written (one with an `sfc.verbatim` attribute, which says why).
     pub keyword: String,
+    /// The attribute pragmas before it.
+    pub attributes: Vec<Attribute>,
     pub name: Option<Ident>,
     pub text: String,
     pub span: Span,

@@ -128,6 +128,11 @@ impl<'a> Lexer<'a> {
             let start = self.pos;
             let b = self.src[self.pos];
             match b {
+                // A UTF-8 byte order mark at the start of a file is white space.
+                0xEF if start == 0 && self.src.starts_with(b"\xEF\xBB\xBF") => {
+                    self.pos += 3;
+                    self.push(TokenKind::Whitespace, start);
+                }
                 b' ' | b'\t' | b'\r' | b'\n' | 0x0b | 0x0c => {
                     while matches!(self.peek(0), b' ' | b'\t' | b'\r' | b'\n' | 0x0b | 0x0c) {
                         self.pos += 1;

@@ -138,6 +138,10 @@ pub fn parse(file: u32, text: &str) -> (SourceUnit, Vec<Diagnostic>) {
     drop(all); // the parser keeps only significant tokens; free the rest before building the tree
     p.lexical_error_ends = diags.iter().map(|d| d.span.end).collect();
     let unit = p.source_unit();
+    if !p.verbatim_spans.is_empty() {
+        let spans = std::mem::take(&mut p.verbatim_spans);
+        diags.retain(|d| !spans.iter().any(|&(s, e)| s <= d.span.start && d.span.end <= e));
+    }
     diags.append(&mut p.diags);
     (unit, diags)
 }
@@ -194,6 +198,8 @@ struct Parser<'a> {
     /// Ends of lexical errors: a syntax error right after a malformed token (an unterminated
     /// string swallowed its `;`) is a follow-on error and not reported.
     lexical_error_ends: std::collections::HashSet<u32>,
+    /// Byte ranges of the POUs kept as written (their lexical errors are dropped).
+    verbatim_spans: Vec<(u32, u32)>,
 }
 
 impl<'a> Parser<'a> {
@@ -257,6 +263,7 @@ impl<'a> Parser<'a> {
             depth: 0,
             depth_reported: false,
             lexical_error_ends: Default::default(),
+            verbatim_spans: Vec::new(),
         }
     }
 
@@ -473,7 +480,11 @@ impl<'a> Parser<'a> {
     fn source_unit(&mut self) -> SourceUnit {
         let mut items = Vec::new();
         while !self.at(TokenKind::Eof) {
-            if self.at_kw("PROGRAM") || self.at_kw("FUNCTION_BLOCK") || self.at_kw("FUNCTION") {
+            if (self.at_kw("PROGRAM") || self.at_kw("FUNCTION_BLOCK") || self.at_kw("FUNCTION"))
+                && self.verbatim_pou_ahead()
+            {
+                items.push(Item::Verbatim(self.verbatim()));
+            } else if self.at_kw("PROGRAM") || self.at_kw("FUNCTION_BLOCK") || self.at_kw("FUNCTION") {
                 items.push(Item::Pou(self.pou()));
             } else if self.at_kw("TYPE") {
                 items.push(Item::Types(self.type_block()));
@@ -509,10 +520,22 @@ impl<'a> Parser<'a> {
         }
     }
 
+    /// Whether the POU that starts here carries an `sfc.verbatim` attribute: it is kept as
+    /// written (an import found code in it that is not IEC 61131-3, say CODESYS pointers).
+    fn verbatim_pou_ahead(&self) -> bool {
+        let start = self.tok().start;
+        self.attrs[self.attr_cursor..]
+            .iter()
+            .take_while(|a| a.span.start < start)
+            .any(|a| a.name.eq_ignore_ascii_case("sfc.verbatim"))
+    }
+
     fn verbatim(&mut self) -> Verbatim {
         let kw_tok = self.bump();
         let keyword = self.text_of(kw_tok).to_ascii_uppercase();
         let start = kw_tok.start;
+        let attributes = self.take_attrs(start);
+        let pou = matches!(keyword.as_str(), "PROGRAM" | "FUNCTION_BLOCK" | "FUNCTION");
         let name = if self.at(TokenKind::Ident) && !self.is_reserved(self.tok()) {
             let t = self.bump();
             Some(self.ident_of(t))
@@ -539,12 +562,37 @@ impl<'a> Parser<'a> {
             self.bump();
         }
         let span = self.span_from(start);
-        self.diags.push(Diagnostic::note_diag(
+        // Inside a POU kept as written, the text may be another tool's dialect: its lexical
+        // errors are not errors of the file.
+        let end = self.prev_end();
+        self.attr_cursor = self.attrs.partition_point(|a| a.span.start < end).max(self.attr_cursor);
+        if pou {
+            self.verbatim_spans.push((start, end));
+        }
+        let why = attributes
+            .iter()
+            .rev()
+            .find(|a| a.name.eq_ignore_ascii_case("sfc.verbatim"))
+            .and_then(|a| a.value.as_deref())
+            .map(crate::attr_value::unescape)
+            .filter(|w| !w.trim().is_empty() && pou);
+        // A stand-in for a type declared elsewhere (an import's opaque block) is reported there.
+        let stub = why.as_deref() == Some("opaque");
+        let mut note = Diagnostic::note_diag(
             "SFC0104",
             self.span_of(kw_tok),
-            format!("`{keyword}` is kept as written and not analysed"),
-        ));
-        Verbatim { keyword, name, text: self.text[span.range()].to_string(), span }
+            match &name {
+                Some(n) if pou => format!("`{keyword} {}` is kept as written, not analysed", n.text),
+                _ => format!("`{keyword}` is kept as written and not analysed"),
+            },
+        );
+        if let Some(w) = why.filter(|_| !stub) {
+            note.notes.push(w);
+        }
+        if !stub {
+            self.diags.push(note);
+        }
+        Verbatim { keyword, attributes, name, text: self.text[span.range()].to_string(), span }
     }
 
     fn pou(&mut self) -> Pou {

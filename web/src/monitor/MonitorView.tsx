@@ -251,7 +251,7 @@ export function MonitorView({ target, createCanvas, onLeave, socket }: MonitorVi
           <MonitorIcon name={target.simId !== null ? 'monitor' : 'plug'} />
           <span>{target.doc.pou}</span>
         </span>
-        <span class={`mon-badge mon-${stateBadge.cls}`} role="status" data-testid="monitor-state" title={faulted ? String(client.fault?.message ?? '') : undefined}>
+        <span class={`mon-badge mon-${stateBadge.cls}`} role="status" data-testid="monitor-state" title={faulted ? client.fault?.message : undefined}>
           {stateBadge.text}
         </span>
         <span class="tool-separator" />

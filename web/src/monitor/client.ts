@@ -7,9 +7,11 @@ import {
   toState,
   type Breakpoint,
   type Delta,
+  type Fault,
   type Hello,
   type MonEvent,
   type MonValue,
+  type RunState,
   type ScanState,
   type StepReport,
   type Timing,
@@ -73,9 +75,9 @@ export class MonitorClient {
   halted = false;
   haltReason = '';
   /** RUN, STOP or FAULT (docs/runtime.md, "States"). */
-  runState = 'RUN';
+  runState: RunState = 'RUN';
   /** What put the runtime in FAULT (`kind`, `message`, `step`, `action`, `line` …). */
-  fault: Record<string, unknown> | null = null;
+  fault: Fault | null = null;
   /** The display is paused: the runtime keeps running and buffering, the view stands still. */
   displayPaused = false;
   history: HistoryView | null = null;
@@ -203,9 +205,10 @@ export class MonitorClient {
   }
 
   private setRunState(m: Record<string, unknown>): void {
-    if (typeof m.state !== 'string') return;
+    // `hello`, `snapshot` and `state` carry the state (an older runtime's do not: it runs).
+    if (m.state !== 'RUN' && m.state !== 'STOP' && m.state !== 'FAULT') return;
     this.runState = m.state;
-    this.fault = m.fault && typeof m.fault === 'object' ? (m.fault as Record<string, unknown>) : null;
+    this.fault = m.fault && typeof m.fault === 'object' ? (m.fault as Fault) : null;
   }
 
   private closed(reason: string): void {

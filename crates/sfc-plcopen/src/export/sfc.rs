@@ -790,6 +790,7 @@ pub(super) fn write_chart(x: &mut X, src: &str, pou: &ast::Pou, chart: &Chart) {
                 // Positions, sizes and action blocks are written in the elements (or, for a chart
                 // laid out afresh, replaced).
                 let native = [attrs::X, attrs::Y, attrs::W, attrs::H, attrs::ACTIONBLOCK, attrs::DESCRIPTION];
+                x.take_comments(src, step.span);
                 x.add_data(&step.attributes, &[], &native);
                 x.documentation(&step.attributes);
                 x.close("step");
@@ -830,6 +831,7 @@ pub(super) fn write_chart(x: &mut X, src: &str, pou: &ast::Pou, chart: &Chart) {
                 if by_ref.contains_key(t) {
                     native.push(attrs::REFERENCE);
                 }
+                x.take_comments(src, tr.span);
                 x.add_data(&tr.attributes, &extra, &native);
                 x.documentation(&tr.attributes);
                 x.close("transition");

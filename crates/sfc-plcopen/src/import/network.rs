@@ -52,10 +52,12 @@ struct G<'a, 'i> {
     pos: (f64, f64),
 }
 
-struct Net<'a, 'i> {
+pub(super) struct Net<'a, 'i> {
     els: Vec<G<'a, 'i>>,
     ids: HashMap<u64, usize>,
     consumed: Vec<bool>,
+    /// How many input pins read each element's outputs (`fanout[i]`, all outputs together).
+    fanout: Vec<usize>,
 }
 
 fn pin(n: Node, cp: Option<Node>, negated_attr: &str, edge_attr: &str) -> Pin {
@@ -79,7 +81,7 @@ fn pin(n: Node, cp: Option<Node>, negated_attr: &str, edge_attr: &str) -> Pin {
     }
 }
 
-fn parse<'a, 'i>(body: Node<'a, 'i>) -> Net<'a, 'i> {
+pub(super) fn parse<'a, 'i>(body: Node<'a, 'i>) -> Net<'a, 'i> {
     let mut els = Vec::new();
     let mut ids = HashMap::new();
     for n in elements(body) {
@@ -146,16 +148,18 @@ fn parse<'a, 'i>(body: Node<'a, 'i>) -> Net<'a, 'i> {
         els.push(g);
     }
     let mut consumed = vec![false; els.len()];
+    let mut fanout = vec![0usize; els.len()];
     for g in &els {
         for p in g.ins.iter().chain(g.in_outs.iter()) {
             for (r, _, _) in &p.conns {
                 if let Some(&i) = ids.get(r) {
                     consumed[i] = true;
+                    fanout[i] += 1;
                 }
             }
         }
     }
-    Net { els, ids, consumed }
+    Net { els, ids, consumed, fanout }
 }
 
 #[derive(Clone, Copy, PartialEq, Eq)]
@@ -174,6 +178,28 @@ struct Tr<'c, 'x, 'n, 'a, 'i> {
     reported: HashSet<usize>,
     depth: u32,
     indent: String,
+    /// Values of elements read more than once, computed once into a temporary (so the size of
+    /// the translation stays linear in the size of the network): element → its temporary.
+    shared: HashMap<usize, Frag>,
+    /// Inside a condition's function (see [`condition`]): the arguments passed to it, each an
+    /// expression of the POU, and the parameter standing for it.
+    params: Option<Vec<(Frag, String)>>,
+    /// The statements of that function (its temporaries).
+    fn_stmts: Vec<Frag>,
+    /// The EN inputs of the blocks the statement being written reads: it runs only when they
+    /// are TRUE (`IF en THEN … END_IF;`, as Beremiz generates it).
+    gates: Vec<Frag>,
+}
+
+/// A boolean operator block (a function without instance whose result is BOOL when its
+/// operands are): the nodes whose sharing is written with BOOL temporaries.
+fn is_boolean_op(g: &G) -> bool {
+    g.kind == "block"
+        && attr(g.n, "instanceName").is_none_or(|s| s.trim().is_empty())
+        && ["AND", "OR", "XOR", "NOT"]
+            .iter()
+            .any(|k| attr(g.n, "typeName").is_some_and(|t| t.trim().eq_ignore_ascii_case(k)))
+        && !g.ins.iter().any(|p| p.formal.as_deref().is_some_and(|f| f.eq_ignore_ascii_case("EN")))
 }
 
 /// Whether a text needs no parentheses as an operand: a name, a literal, a member or index
@@ -269,6 +295,65 @@ impl Tr<'_, '_, '_, '_, '_> {
 
     /// The value produced by element `i` (at its output `formal`).
     fn value(&mut self, i: usize, formal: Option<&str>) -> Frag {
+        let g = &self.net.els[i];
+        let boolean = is_boolean_op(g) || g.kind == "contact";
+        if let Some(t) = self.shared.get(&i) {
+            return t.clone();
+        }
+        // Inside a condition's function, every operand that is not boolean logic is an
+        // argument: the function sees only its parameters.
+        if self.params.is_some() && !boolean && g.kind != "leftPowerRail" {
+            let saved = self.params.take();
+            let v = self.value(i, formal);
+            self.params = saved;
+            return self.as_param(v);
+        }
+        if boolean && self.net.fanout[i] > 1 && self.mode_shares() {
+            let v = self.value_unshared(i, formal);
+            let at = anchor(self.net.els[i].n);
+            let name = match self.params {
+                Some(_) => {
+                    let name = format!("SHARED{}", self.fn_stmts.len() + 1);
+                    let mut f = Frag::plain(format!("    {name} := "));
+                    f.push(&v);
+                    f.push_str(";\n");
+                    self.fn_stmts.push(f);
+                    name
+                }
+                None => {
+                    let name = self.cx.fresh_var("SHARED", "BOOL");
+                    let mut f = Frag::plain(format!("{}{name} := ", self.indent));
+                    f.push(&v);
+                    f.push_str(";\n");
+                    self.stmts.push(f.locate(at.clone()));
+                    name
+                }
+            };
+            let t = Frag::located(name, at);
+            self.shared.insert(i, t.clone());
+            return t;
+        }
+        self.value_unshared(i, formal)
+    }
+
+    /// Inside a condition's function: the parameter that passes `v` in (one per distinct
+    /// argument). Elsewhere `v` itself.
+    fn as_param(&mut self, v: Frag) -> Frag {
+        let Some(list) = self.params.as_mut() else { return v };
+        if let Some((_, p)) = list.iter().find(|(f, _)| f.text == v.text) {
+            return Frag::plain(p.clone());
+        }
+        let p = format!("IN{}", list.len() + 1);
+        list.push((v, p.clone()));
+        Frag::plain(p)
+    }
+
+    /// Whether shared values get temporaries here: in statements, and in a condition's function.
+    fn mode_shares(&self) -> bool {
+        self.mode == Mode::Statements || self.params.is_some()
+    }
+
+    fn value_unshared(&mut self, i: usize, formal: Option<&str>) -> Frag {
         if self.depth > MAX_DEPTH {
             self.report(i, "SFC0705", "the network is nested too deeply to be imported".into());
             return self.falsum(i);
@@ -290,7 +375,7 @@ impl Tr<'_, '_, '_, '_, '_> {
                     self.report(i, "SFC0705", "the variable has no expression".into());
                     return self.falsum(i);
                 };
-                let f = text_frag(t);
+                let f = text_frag(&super::dialect::map(self.cx, t));
                 if negated_out {
                     f.not()
                 } else {
@@ -322,6 +407,7 @@ impl Tr<'_, '_, '_, '_, '_> {
                 } else if let Some(e @ ("rising" | "falling")) = xml::attr(g.n, "edge") {
                     term = self.trigger(e, term, &at);
                 }
+                let term = self.as_param(term);
                 let power = match g.ins.first() {
                     Some(p) => self.input(i, p),
                     None => None,
@@ -383,6 +469,17 @@ impl Tr<'_, '_, '_, '_, '_> {
         };
         let out_name =
             out.map(|o| o.formal.clone()).or_else(|| formal.map(str::to_string)).unwrap_or_else(|| "OUT".into());
+        // ENO is TRUE exactly when the block ran: its EN.
+        if out_name.eq_ignore_ascii_case("ENO") {
+            if instance.is_some() {
+                self.statement(i);
+            }
+            let en = g.ins.iter().find(|p| p.formal.as_deref().is_some_and(|f| f.eq_ignore_ascii_case("EN")));
+            return match en.and_then(|p| self.input(i, p)) {
+                Some(v) => v,
+                None => Frag::located("TRUE", at),
+            };
+        }
         let negated = out.is_some_and(|o| o.negated);
         let v = if let Some(inst) = instance {
             self.statement(i);
@@ -419,11 +516,18 @@ impl Tr<'_, '_, '_, '_, '_> {
             let Some(v) = self.input(i, p) else { continue };
             if is_en {
                 if v.text != "TRUE" {
-                    self.report(
-                        i,
-                        "SFC0705",
-                        "a block enabled through EN is not imported; it is called unconditionally".into(),
-                    );
+                    if self.mode == Mode::Statements {
+                        // The block runs only when EN is TRUE.
+                        if !self.gates.iter().any(|g| g.text == v.text) {
+                            self.gates.push(v);
+                        }
+                    } else {
+                        self.report(
+                            i,
+                            "SFC0705",
+                            "a block enabled through EN cannot be part of a transition condition; it is evaluated unconditionally".into(),
+                        );
+                    }
                 }
                 continue;
             }
@@ -501,6 +605,7 @@ impl Tr<'_, '_, '_, '_, '_> {
             return;
         }
         self.active[i] = true;
+        let gates_before = std::mem::take(&mut self.gates);
         let net = self.net;
         let g = &net.els[i];
         let at = anchor(g.n);
@@ -591,7 +696,20 @@ impl Tr<'_, '_, '_, '_, '_> {
         };
         self.active[i] = false;
         self.done[i] = true;
+        let gates = std::mem::replace(&mut self.gates, gates_before);
         if let Some(s) = stmt {
+            let s = if gates.is_empty() {
+                s
+            } else {
+                // `IF en THEN stmt END_IF;` with the statement indented one level more.
+                let mut f = Frag::plain(format!("{ind}IF "));
+                f.push(&Frag::infix("AND", gates));
+                f.push_str(" THEN\n    ");
+                let body = s;
+                f.push(&body);
+                f.push_str(&format!("{ind}END_IF;\n"));
+                f
+            };
             self.stmts.push(s.locate(at));
         }
     }
@@ -651,7 +769,14 @@ fn unsupported(cx: &mut Ctx, net: &Net) {
             "label" | "jump" | "return" => {
                 cx.diag("SFC0705", anchor(g.n), format!("`{}` (FBD control flow) is not imported", g.kind));
             }
-            "vendorElement" | "error" => {
+            "vendorElement" => {
+                cx.diag(
+                    "SFC0711",
+                    anchor(g.n),
+                    "a vendor element (drawn by its own tool, no IEC meaning) is skipped; the rest of the network is imported",
+                );
+            }
+            "error" => {
                 cx.diag("SFC0705", anchor(g.n), format!("a `{}` element cannot be imported", g.kind));
             }
             _ => {}
@@ -683,6 +808,10 @@ pub(super) fn statements(cx: &mut Ctx, body: Node, indent: &str) -> Frag {
         reported: HashSet::new(),
         depth: 0,
         indent: indent.to_string(),
+        shared: HashMap::new(),
+        params: None,
+        fn_stmts: Vec::new(),
+        gates: Vec::new(),
     };
     for i in sinks(&net) {
         tr.statement(i);
@@ -708,6 +837,10 @@ fn condition_tr<'c, 'x, 'n, 'a, 'i>(cx: &'c mut Ctx<'x>, net: &'n Net<'a, 'i>) -
         reported: HashSet::new(),
         depth: 0,
         indent: COMPUTE_INDENT.to_string(),
+        shared: HashMap::new(),
+        params: None,
+        fn_stmts: Vec::new(),
+        gates: Vec::new(),
     }
 }
 
@@ -725,12 +858,83 @@ fn keep_calls(cx: &mut Ctx, stmts: Vec<Frag>, owner: &Range<u32>) {
     cx.compute.extend(stmts);
 }
 
-/// A transition condition wired to an FBD/LD network in an SFC body.
-pub(super) fn condition(cx: &mut Ctx, sfc: Node, cp: Node, owner: &Range<u32>) -> Frag {
-    let net = parse(sfc);
+/// Whether boolean logic reachable from `p` (AND, OR, XOR, NOT blocks, contacts) reads one
+/// element's value more than once: inlined, such a network grows exponentially with its depth.
+fn shares_logic(net: &Net, p: &Pin) -> bool {
+    let mut seen = HashSet::new();
+    let mut todo: Vec<usize> = p.conns.iter().filter_map(|(r, _, _)| net.ids.get(r).copied()).collect();
+    while let Some(i) = todo.pop() {
+        if !seen.insert(i) {
+            continue;
+        }
+        let g = &net.els[i];
+        if !(is_boolean_op(g) || g.kind == "contact") {
+            continue;
+        }
+        if net.fanout[i] > 1 {
+            return true;
+        }
+        for q in &g.ins {
+            todo.extend(q.conns.iter().filter_map(|(r, _, _)| net.ids.get(r).copied()));
+        }
+    }
+    false
+}
+
+/// The value at `p` as a condition: an expression, or, when its boolean logic shares values, a
+/// call of a function generated for it (a condition cannot hold statements, and a function is
+/// free of side effects), whose temporaries compute each shared value once.
+fn condition_value(tr: &mut Tr, p: &Pin) -> Option<Frag> {
+    if !shares_logic(tr.net, p) {
+        return tr.input(usize::MAX, p);
+    }
+    tr.params = Some(Vec::new());
+    let v = tr.input(usize::MAX, p);
+    let params = tr.params.take().unwrap_or_default();
+    let stmts = std::mem::take(&mut tr.fn_stmts);
+    let v = v?;
+    let cx = &mut *tr.cx;
+    cx.condition_functions += 1;
+    let name = format!("{}_CONDITION{}", cx.pou_name, cx.condition_functions);
+    let mut text = format!("FUNCTION {name} : BOOL\n");
+    if !params.is_empty() {
+        text.push_str("    VAR_INPUT\n");
+        for (_, p) in &params {
+            text.push_str(&format!("        {p} : BOOL;\n"));
+        }
+        text.push_str("    END_VAR\n");
+    }
+    if !stmts.is_empty() {
+        text.push_str("    VAR\n");
+        for k in 1..=stmts.len() {
+            text.push_str(&format!("        SHARED{k} : BOOL;\n"));
+        }
+        text.push_str("    END_VAR\n");
+    }
+    for st in &stmts {
+        text.push_str(&st.text);
+    }
+    text.push_str(&format!("    {name} := {};\nEND_FUNCTION\n\n", v.text));
+    cx.functions.push(text);
+    let mut call = Frag::plain(format!("{name}("));
+    for (k, (arg, p)) in params.iter().enumerate() {
+        if k > 0 {
+            call.push_str(", ");
+        }
+        call.push_str(&format!("{p} := "));
+        call.push(arg);
+    }
+    call.push_str(")");
+    call.atomic = true;
+    Some(call)
+}
+
+/// A transition condition wired to an FBD/LD network in an SFC body (`net`, the body parsed
+/// once for all its conditions).
+pub(super) fn condition(cx: &mut Ctx, net: &Net, cp: Node, owner: &Range<u32>) -> Frag {
     let p = pin(cp, Some(cp), "-", "-");
-    let mut tr = condition_tr(cx, &net);
-    let v = tr.input(usize::MAX, &p);
+    let mut tr = condition_tr(cx, net);
+    let v = condition_value(&mut tr, &p);
     let stmts = std::mem::take(&mut tr.stmts);
     drop(tr);
     keep_calls(cx, stmts, owner);
@@ -759,7 +963,7 @@ pub(super) fn transition_body(cx: &mut Ctx, body: Node, name: &str, owner: &Rang
     let mut tr = condition_tr(cx, &net);
     tr.reported.insert(t);
     let value = match net.els[t].ins.first() {
-        Some(p) => tr.input(t, p),
+        Some(p) => condition_value(&mut tr, p),
         None => None,
     };
     // Elements that neither feed the condition nor are called for it have no place in it.

@@ -87,6 +87,8 @@ struct Graph {
 }
 
 struct Importer<'p, 'a, 'i> {
+    /// Each SFC body's elements read as a network once, for all its wired conditions.
+    nets: HashMap<roxmltree::NodeId, std::rc::Rc<network::Net<'a, 'i>>>,
     inline: Vec<InlineAction<'a, 'i>>,
     /// Per step name: how many inline actions it has so far.
     inline_count: HashMap<String, usize>,
@@ -97,6 +99,7 @@ struct Importer<'p, 'a, 'i> {
 /// Writes the chart of an SFC POU and its actions.
 pub(super) fn chart<'a, 'i>(cx: &mut Ctx, sfc: Node<'a, 'i>, actions: &[Node<'a, 'i>], named: &[Node<'a, 'i>]) {
     let mut imp = Importer {
+        nets: HashMap::new(),
         inline: Vec::new(),
         inline_count: HashMap::new(),
         named_conditions: named,
@@ -840,7 +843,14 @@ fn condition<'a, 'i>(
         return (cond, negated, name, Some(attrs::escape(&rname)));
     }
     if let Some(cp) = child(c, "connectionPointIn") {
-        let f = network::condition(cx, sfc, cp, &at);
+        let net = imp.nets.entry(sfc.id()).or_insert_with(|| std::rc::Rc::new(network::parse(sfc))).clone();
+        let f = network::condition(cx, &net, cp, &at);
+        return (Cond::Net(f), negated, name, None);
+    }
+    // TC6 v1.0 wires a condition without `connectionPointIn`: `<condition><connection …/>`.
+    if child(c, "connection").is_some() {
+        let net = imp.nets.entry(sfc.id()).or_insert_with(|| std::rc::Rc::new(network::parse(sfc))).clone();
+        let f = network::condition(cx, &net, c, &at);
         return (Cond::Net(f), negated, name, None);
     }
     cx.diag("SFC0708", anchor(c), "the condition is empty; imported as FALSE");
@@ -857,7 +867,7 @@ fn body_condition(cx: &mut Ctx, body: Node, name: &str) -> Cond {
     };
     match l.tag_name().name() {
         "ST" => {
-            let t = xml::formatted_text(l).trim();
+            let t = super::dialect::map(cx, &xml::formatted_text(l)).trim();
             Cond::St(st_expression(&t, name))
         }
         "IL" => {

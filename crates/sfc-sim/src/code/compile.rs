@@ -87,6 +87,34 @@ impl Program {
         charts: Vec<Chart>,
         types: &HashMap<Span, Type>,
     ) -> Result<Program, Vec<Diagnostic>> {
+        Program::compile_with(unit, charts, types, crate::Profile::Iec)
+    }
+
+    /// [`Program::compile`] for a profile: under `matiec`, TIME values are MatIEC's timespecs
+    /// (literals truncated as its generated C computes them, `crate::timespec`).
+    pub fn compile_with(
+        unit: &SourceUnit,
+        charts: Vec<Chart>,
+        types: &HashMap<Span, Type>,
+        profile: crate::Profile,
+    ) -> Result<Program, Vec<Diagnostic>> {
+        struct Reset(bool);
+        impl Drop for Reset {
+            fn drop(&mut self) {
+                super::MATIEC_TIME.with(|f| f.set(self.0));
+            }
+        }
+        let _reset = Reset(super::MATIEC_TIME.with(|f| f.replace(profile == crate::Profile::Matiec)));
+        let mut prog = Program::compile_inner(unit, charts, types)?;
+        prog.matiec_time = profile == crate::Profile::Matiec;
+        Ok(prog)
+    }
+
+    fn compile_inner(
+        unit: &SourceUnit,
+        charts: Vec<Chart>,
+        types: &HashMap<Span, Type>,
+    ) -> Result<Program, Vec<Diagnostic>> {
         let (env, _) = TypeEnv::from_unit(unit);
         let mut std_layouts = HashMap::new();
         for n in std_fb_names() {
@@ -237,6 +265,7 @@ impl Program {
                 global_inits,
                 std_layouts: std_plain,
             },
+            matiec_time: false,
         })
     }
 

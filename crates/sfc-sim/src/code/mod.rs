@@ -291,6 +291,9 @@ pub struct Program {
     /// Frame templates, initial-value code and standard block layouts used by compiled code,
     /// [`Program::instantiate`] and [`Program::resolve`].
     pub(crate) support: compile::Support,
+    /// Compiled for the `matiec` profile: TIME slots hold MatIEC's packed timespecs
+    /// (`crate::timespec`), which [`crate::Simulation`] shows and takes as µs.
+    pub matiec_time: bool,
 }
 
 /// Memory ready for the first scan of one top-level POU.
@@ -313,6 +316,26 @@ pub struct ChartInstance {
     pub frame: usize,
     /// Instance path from the top POU: `""` for the top itself, `Rev`, `Cells[2].Seq`.
     pub path: String,
+}
+
+thread_local! {
+    /// Set while [`Program::compile_with`] compiles for the `matiec` profile: TIME values are
+    /// then MatIEC's timespecs packed into `Value::Time` (`crate::timespec`).
+    static MATIEC_TIME: std::cell::Cell<bool> = const { std::cell::Cell::new(false) };
+}
+
+/// Whether the code being compiled holds TIME as MatIEC's packed timespecs.
+pub(crate) fn matiec_time() -> bool {
+    MATIEC_TIME.with(|f| f.get())
+}
+
+/// A TIME value in µs as the code compiled now holds it.
+pub(crate) fn time_of_us(us: i64) -> i64 {
+    if matiec_time() {
+        crate::timespec::Timespec::from_us(us).pack()
+    } else {
+        us
+    }
 }
 
 mod call;

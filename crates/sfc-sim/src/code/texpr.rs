@@ -137,7 +137,8 @@ pub(crate) use opd1;
 
 /// Runs `f` against an empty memory (for folding constants at compile time).
 pub(crate) fn with_scratch_ctx<T>(f: impl FnOnce(&mut Ctx<'_>) -> T) -> T {
-    let prog = Program { pous: Vec::new(), globals: Layout::default(), support: Default::default() };
+    let prog =
+        Program { pous: Vec::new(), globals: Layout::default(), support: Default::default(), matiec_time: false };
     let mut mem = Vec::new();
     let mut charts = Vec::new();
     let mut sink = ScanSink::default();
