@@ -707,3 +707,66 @@ fn retain_and_persistent_over_warm_and_cold_starts() {
     assert_eq!(v(&f, "Runs"), json!(1));
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// A runtime error (a division by zero) is a FAULT like a watchdog trip: the outputs go to
+/// their safe values on Modbus, the monitor names the step, the action and the line, the
+/// retentive values are written; a cold `reset` clears RETAIN and keeps PERSISTENT.
+#[test]
+fn a_runtime_error_faults_to_the_safe_state_and_a_cold_reset_keeps_only_persistent() {
+    let dir = scratch("runtime-error");
+    let retain = dir.join("hoist.retain");
+    let mut run = Run::start(&[
+        s(&chart("guarded.st")),
+        "--modbus",
+        "127.0.0.1:0",
+        "--monitor",
+        "127.0.0.1:0",
+        "--retain",
+        s(&retain),
+        "--for",
+        "T#120s",
+    ]);
+    let (mb, mon) = (run.modbus(), run.monitor());
+    let mut m = Modbus::connect(mb);
+    // Parked: brake released, lamp on (the opposite of the safe values).
+    eventually("the first scans", 20, || m.read_coils(0, 2) == [false, true]);
+    let mut ws = Ws::connect(&format!("ws://{mon}/?token=t0k3n"));
+    ws.until("hello", |m| m["type"] == "hello" && m["state"] == "RUN");
+
+    m.write_coil(32768, true); // Go: the first scan of Lifting divides by zero.
+    let line = run.line("the fault's line", 60, |l| l.starts_with("error: ") && l.contains("division by zero"));
+    let div =
+        std::fs::read_to_string(chart("guarded.st")).unwrap().lines().position(|l| l.contains("/ Divisor")).unwrap()
+            + 1;
+    assert!(line.starts_with(&format!("error: {div}:")) && line.contains("in action Lift of step Lifting"), "{line}");
+    assert_eq!(m.read_coils(0, 2), [true, false], "Modbus reads the safe values");
+    let st = ws.until("FAULT", |m| m["type"] == "state" && m["state"] == "FAULT");
+    let f = &st["fault"];
+    assert_eq!(
+        (f["kind"].as_str(), f["step"].as_str(), f["action"].as_str(), f["line"].as_u64()),
+        (Some("error"), Some("Lifting"), Some("Lift"), Some(div as u64)),
+        "{st}"
+    );
+    assert_eq!((st["outputs"]["Brake"].clone(), st["outputs"]["Lamp"].clone()), (json!(true), json!(false)));
+    // Entering FAULT writes the retentive values of the scan that faulted.
+    eventually("the retain file", 20, || retain.exists() && retained(&read_retain(&retain), "Lifts") == json!(1));
+    assert_eq!(retained(&read_retain(&retain), "Attempts"), json!(1));
+
+    // A cold reset: Lifts (RETAIN) starts again from 0, Attempts (PERSISTENT) is kept.
+    m.write_coil(32768, false);
+    let r = ws.cmd(1, json!({"cmd": "reset", "mode": "cold"}));
+    assert_eq!((r["ok"].as_bool(), r["result"]["mode"].as_str()), (Some(true), Some("cold")), "{r}");
+    ws.until("RUN", |m| m["type"] == "state" && m["state"] == "RUN");
+    eventually("parked again", 20, || m.read_coils(0, 2) == [false, true]);
+    let r = ws.cmd(2, json!({"cmd": "snapshot"}));
+    assert_eq!(r["ok"], true, "{r}");
+    let snap = ws.until("snapshot", |m| m["type"] == "snapshot");
+    assert_eq!((snap["vars"]["Lifts"].clone(), snap["vars"]["Attempts"].clone()), (json!(0), json!(1)), "{snap}");
+    run.signal(libc::SIGTERM);
+    let (status, lines) = run.finish(30);
+    assert_eq!(status, Some(0), "{lines:?}");
+    assert!(lines.iter().any(|l| l.starts_with("sfc run: cold restart from FAULT")), "{lines:?}");
+    let file = read_retain(&retain);
+    assert_eq!((retained(&file, "Lifts"), retained(&file, "Attempts")), (json!(0), json!(1)));
+    let _ = std::fs::remove_dir_all(&dir);
+}
