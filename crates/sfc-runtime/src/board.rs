@@ -253,7 +253,11 @@ pub struct Hub {
     pub closing: AtomicBool,
     /// Monitor clients dropped for misbehaving (flooding, garbage, slow reading).
     pub dropped: AtomicU64,
+    /// Monitor connections (the limit counts them, handshakes included).
     pub connected: AtomicU64,
+    /// Monitor sessions past their handshake; at the end of the run the network side waits
+    /// for them to send the end and close.
+    pub sessions: AtomicU64,
     /// Lines for the operator (`sfc run` prints them on standard error): the watchdog, faults,
     /// retain, a server that cannot accept. The oldest go when nobody reads them.
     pub notices: Mutex<VecDeque<String>>,
@@ -278,6 +282,7 @@ impl Hub {
             closing: AtomicBool::new(false),
             dropped: AtomicU64::new(0),
             connected: AtomicU64::new(0),
+            sessions: AtomicU64::new(0),
             notices: Mutex::new(VecDeque::new()),
             interrupt_flag: std::sync::OnceLock::new(),
             guesses: Mutex::new(Default::default()),

@@ -215,6 +215,13 @@ fn start_net(
                 while !hub.closing() {
                     tokio::time::sleep(std::time::Duration::from_millis(20)).await;
                 }
+                // Every session now sends what the end of the run published and closes its
+                // connection (flushing for at most a second); shutting the runtime down before
+                // that would cancel them and lose the end. Bounded for clients that never read.
+                let deadline = tokio::time::Instant::now() + std::time::Duration::from_secs(3);
+                while hub.sessions.load(Ordering::Relaxed) > 0 && tokio::time::Instant::now() < deadline {
+                    tokio::time::sleep(std::time::Duration::from_millis(10)).await;
+                }
             });
             net.shutdown_timeout(std::time::Duration::from_secs(1));
         })
@@ -472,8 +479,8 @@ impl Runtime {
                 .join()
                 .unwrap_or_else(|_| RunReport { error: Some("the run's thread panicked".into()), ..Default::default() })
         };
-        // Two ticks: every session sends what the end of the run published.
-        std::thread::sleep(protocol::TICK * 3);
+        // The sessions send what the end of the run published once they see `closing`, and
+        // the network thread waits for them (`start_net`).
         self.stop();
         self.hub.closing.store(true, Ordering::Relaxed);
         *self.hub.commands.lock().unwrap_or_else(|e| e.into_inner()) = None;

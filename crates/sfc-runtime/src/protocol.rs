@@ -423,8 +423,9 @@ async fn session(
         ip,
         state_seq: 0,
     };
+    hub.sessions.fetch_add(1, Ordering::Relaxed);
     let end = s.run(&mut source).await;
-    match end {
+    let dropped = match end {
         End::Closed => {
             // Let the writer flush what is queued (it ends when the queue closes).
             drop(s);
@@ -435,7 +436,9 @@ async fn session(
             writer.abort();
             true
         }
-    }
+    };
+    hub.sessions.fetch_sub(1, Ordering::Relaxed);
+    dropped
 }
 
 type Source = futures_util::stream::SplitStream<tokio_tungstenite::WebSocketStream<TcpStream>>;
@@ -475,7 +478,9 @@ impl Session<'_> {
                 }
                 _ = tick.tick() => {
                     if self.hub.closing() {
-                        return End::Closed;
+                        // The run has ended and published its end (the last halt, STOP, the
+                        // last scan): send that before closing, however late this tick came.
+                        return if self.update() { End::Closed } else { End::Dropped };
                     }
                     if !self.update() {
                         return End::Dropped;
