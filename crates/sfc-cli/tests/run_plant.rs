@@ -294,9 +294,8 @@ fn exhausted_file_descriptors_do_not_silence_the_servers() {
             "Modbus" => {
                 let mut fresh = None;
                 eventually("a new Modbus client is served", 30, || {
-                    fresh = std::net::TcpStream::connect(mb).ok().map(|s| {
+                    fresh = std::net::TcpStream::connect(mb).ok().inspect(|s| {
                         s.set_read_timeout(Some(Duration::from_secs(5))).unwrap();
-                        s
                     });
                     fresh.is_some()
                 });
