@@ -322,8 +322,11 @@ the file is imported; rewrite this part in ST or as plain SFC.";
     "SFC0706" Error "broken connection"
         "A connection of a graphical body refers to a `localId` that does not exist, joins \
 elements that cannot follow each other (a transition after a transition, a step after a step), \
-or a transition lacks a preceding or following step. The element is not imported. PLCopen stores \
-each link on its consumer: `connectionPointIn/connection@refLocalId` names the producer.";
+or a transition lacks a preceding or following step. A transition without a step on one side (a \
+chart still being drawn) cannot be written in IEC text: it is kept on the POU in an `sfc.loose` \
+attribute, which the editor draws and the PLCopen export writes back wired as it was, but the chart \
+does not hold it. Any other such element is not imported. PLCopen stores each link on its \
+consumer: `connectionPointIn/connection@refLocalId` names the producer.";
     "SFC0707" Note "condition network calls function blocks"
         "A transition condition drawn in FBD or LD uses function block instances (a timer, a \
 flip-flop). A condition is an expression and cannot call them, so, as Beremiz does when it \

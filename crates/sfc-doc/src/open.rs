@@ -14,6 +14,7 @@ use crate::{ActionDef, Association, ChartTarget, Connection, EditorDoc, Element,
 use sfc_model::{Chart, Target};
 use sfc_render::LayoutKind;
 use sfc_syntax::ast;
+use sfc_syntax::attr_value::{Loose, LOOSE};
 use std::collections::{HashMap, HashSet};
 
 /// One chart as read from the text, before it becomes a document.
@@ -38,6 +39,8 @@ pub struct ReadChart<'a> {
     pub trailing_comments: Vec<String>,
     pub graph: Option<String>,
     pub attributes: Vec<crate::OtherAttribute>,
+    /// `sfc.loose`: transitions drawn but not connected on both sides (from another tool).
+    pub loose: Vec<Loose>,
 }
 
 /// The element of the text a comment belongs to.
@@ -240,15 +243,66 @@ pub fn read<'a>(text: &str, chart: &'a Chart, pou: &ast::Pou, trivia: &[ast::Tri
         trailing_comments,
         graph: pragma::text(&pou.attributes, sidecar::NAME),
         attributes: pragma::others(&pou.attributes, pragma::POU),
+        loose: pragma::all(&pou.attributes, LOOSE).iter().filter_map(|v| Loose::read(v)).collect(),
     }
 }
 
 /// The document of a chart read from text, with canonical ids.
 pub fn document(r: &ReadChart) -> EditorDoc {
     let mut probe = Probe::default();
-    let doc = from_sidecar(r, &mut probe).unwrap_or_else(|| laid_out(r, &mut probe));
+    let doc = from_sidecar(r, &mut probe).unwrap_or_else(|| {
+        let mut doc = laid_out(r, &mut probe);
+        add_loose(&mut doc, &r.loose);
+        doc
+    });
     let d = graph::derive(&doc, &mut probe);
     graph::normalize(&doc, &d)
+}
+
+/// Draws the transitions of `sfc.loose` (a chart being drawn in another tool): each at its
+/// stored position (or right of the chart), wired to the steps it was wired to where their pin
+/// is still free. They stay outside the chart until the user connects them (SFC0204).
+fn add_loose(doc: &mut EditorDoc, loose: &[Loose]) {
+    let right = doc.elements.iter().map(|e| e.x + e.w).fold(0.0, f64::max);
+    for (k, l) in loose.iter().enumerate() {
+        let id = format!("#loose{k}");
+        let (x, y) = match l.rect {
+            Some([x, y, w, _]) => (x + w / 2.0 - layout::TRANSITION_W / 2.0, y),
+            None => (right + 80.0, 40.0 + 80.0 * k as f64),
+        };
+        doc.elements.push(Element {
+            id: id.clone(),
+            kind: Some(ElementKind::Transition),
+            x,
+            y,
+            w: layout::TRANSITION_W,
+            h: layout::TRANSITION_H,
+            name: l.name.clone(),
+            condition: Some(l.condition.clone()),
+            ..Element::default()
+        });
+        let step = |doc: &EditorDoc, name: &str| {
+            doc.elements
+                .iter()
+                .find(|e| e.kind == Some(ElementKind::Step) && e.name.eq_ignore_ascii_case(name))
+                .map(|e| e.id.clone())
+        };
+        let mut wires = Vec::new();
+        for s in l.from.iter().filter_map(|n| step(doc, n)) {
+            if wires.is_empty() && !doc.connections.iter().any(|c| c.source == s) {
+                wires.push((s, id.clone()));
+            }
+        }
+        for s in l.to.iter().filter_map(|n| step(doc, n)) {
+            if !doc.connections.iter().any(|c| c.target == s) && !wires.iter().any(|w| w.0 == id) {
+                wires.push((id.clone(), s));
+            }
+        }
+        for (source, target) in wires {
+            let n = doc.connections.len();
+            doc.connections.push(Connection { id: format!("#cl{n}"), source, target, ..Connection::default() });
+        }
+    }
 }
 
 fn empty_doc(r: &ReadChart) -> EditorDoc {

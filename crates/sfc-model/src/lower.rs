@@ -73,6 +73,9 @@ const KNOWN_ATTRIBUTES: &[&str] = &[
     "sfc.projectdata",
     "sfc.verbatim",
     "sfc.pouxml",
+    // Transitions drawn but not connected on both sides (PLCopen import and editor), which the
+    // chart does not hold (`sfc_syntax::attr_value::Loose`).
+    "sfc.loose",
     // Written by the editor (`sfc-doc`): the blocks, connections and bends the text cannot hold;
     // the build output of an "IEC 61131-3" chart (a blank one), kept for the editor's toolbar.
     "sfc.graph",

@@ -228,6 +228,28 @@ impl Emitter {
         }
     }
 
+    /// Inserts `s` at byte `at` of the text written so far, moving what follows (and its map).
+    pub fn insert(&mut self, at: usize, s: &str) {
+        if s.is_empty() || at > self.out.len() {
+            return;
+        }
+        self.out.insert_str(at, s);
+        let (at, n) = (at as u32, s.len() as u32);
+        for e in &mut self.entries {
+            if e.text.start >= at {
+                e.text.start += n;
+            }
+            if e.text.end > at || (e.text.end == at && e.text.start > at) {
+                e.text.end += n;
+            }
+        }
+        for (_, start) in &mut self.stack {
+            if *start > at {
+                *start += n;
+            }
+        }
+    }
+
     /// Appends text written by another emitter (with its map) at the current end.
     pub fn append(&mut self, other: Emitter) {
         let base = self.out.len() as u32;

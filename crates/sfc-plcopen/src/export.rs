@@ -496,9 +496,12 @@ fn pou_body_text(src: &str, pou: &ast::Pou) -> String {
 /// leave connections and associations out of the chart. Type errors (an unknown library type, a
 /// condition that is not BOOL) do not change what is written, so such files are exported.
 fn blocks_export(d: &Diagnostic) -> bool {
-    // A second initial step in a network (which Beremiz, MatIEC and OpenPLC run) is written as
-    // drawn: the chart stays complete.
-    d.is_error() && d.code != "SFC0202" && ["SFC00", "SFC01", "SFC02"].iter().any(|p| d.code.starts_with(p))
+    // A second initial step in a network (which Beremiz, MatIEC and OpenPLC run), no initial
+    // step or a step connected to nothing (a chart being drawn) are written as drawn: the chart
+    // stays complete.
+    d.is_error()
+        && !["SFC0201", "SFC0202", "SFC0203"].contains(&d.code)
+        && ["SFC00", "SFC01", "SFC02"].iter().any(|p| d.code.starts_with(p))
 }
 
 /// Exports a checked file as a PLCopen TC6 v2.01 project. Fails with the errors that keep it
@@ -751,7 +754,14 @@ fn write_pou(x: &mut X, src: &str, pou: &ast::Pou, chart: Option<&sfc_model::Cha
     x.add_data(
         &pou.attributes,
         &[],
-        &[attrs::DESCRIPTION, attrs::COMMENT, attrs::FILEHEADER, attrs::CONTENTHEADER, attrs::PROJECTDATA],
+        &[
+            attrs::DESCRIPTION,
+            attrs::COMMENT,
+            attrs::LOOSE,
+            attrs::FILEHEADER,
+            attrs::CONTENTHEADER,
+            attrs::PROJECTDATA,
+        ],
     );
     x.documentation(&pou.attributes);
     x.close("pou");

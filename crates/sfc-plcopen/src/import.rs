@@ -155,6 +155,9 @@ pub(crate) struct Ctx<'i> {
     pub condition_functions: usize,
     /// The POU being written is kept as written: its code is copied without mapping.
     pub verbatim: bool,
+    /// Transitions of the SFC body being written that are not connected on both sides: they go
+    /// into `sfc.loose` attributes of the POU.
+    pub loose: Vec<sfc_syntax::attr_value::Loose>,
     /// The file's headers and foreign project `addData`, written before the first POU.
     pub header_attrs: Vec<(String, String)>,
     /// While writing the resources' lists at file level: the globals written so far (a
@@ -782,6 +785,7 @@ fn pou(cx: &mut Ctx, p: Node) {
         pou_attrs.push((attrs::POUXML.to_string(), attrs::escape(&xml::serialize(p))));
     }
     cx.attributes(&pou_attrs, "");
+    let attrs_end = cx.em.out.len();
     let name = cx.name(p, "name", "POU");
     cx.pou_name = name.text.clone();
     cx.em.str(kind);
@@ -890,6 +894,12 @@ fn pou(cx: &mut Ctx, p: Node) {
         }
     }
     let body_text = std::mem::replace(&mut cx.em, head);
+    // Transitions of the SFC body left unconnected go with the POU's attributes.
+    let mut lines = String::new();
+    for t in std::mem::take(&mut cx.loose) {
+        lines.push_str(&format!("{{attribute '{}' := '{}'}}\n", attrs::LOOSE, attrs::escape(&t.write())));
+    }
+    cx.em.insert(attrs_end, &lines);
     if !cx.extra_vars.is_empty() {
         cx.em.str("    VAR\n");
         for (n, t) in std::mem::take(&mut cx.extra_vars) {
@@ -1289,6 +1299,7 @@ pub(crate) fn run(file: u32, xml_text: &str) -> (String, SourceMap, Vec<Diagnost
         emitted_globals: None,
         header_attrs: Vec::new(),
         verbatim: false,
+        loose: Vec::new(),
         pou_name: String::new(),
         functions: Vec::new(),
         condition_functions: 0,

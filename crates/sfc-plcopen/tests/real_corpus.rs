@@ -74,10 +74,24 @@ fn check_file(path: &Path, expected: Option<&BTreeMap<String, [usize; 3]>>) -> R
         return Err(format!("{name}: no chart imported"));
     }
     if let Some(expected) = expected {
+        // Transitions not connected on both sides are kept on the POU (`sfc.loose`), not in the chart.
+        let loose = |pou: &str| -> usize {
+            checked
+                .unit
+                .items
+                .iter()
+                .filter_map(|i| if let sfc_syntax::ast::Item::Pou(p) = i { Some(p) } else { None })
+                .filter(|p| p.name.text.eq_ignore_ascii_case(pou))
+                .flat_map(|p| p.attributes.iter())
+                .filter(|a| a.name.eq_ignore_ascii_case(sfc_syntax::attr_value::LOOSE))
+                .count()
+        };
         let got: BTreeMap<String, [usize; 3]> = checked
             .charts
             .iter()
-            .map(|c| (c.pou.to_ascii_uppercase(), [c.steps.len(), c.transitions.len(), c.actions.len()]))
+            .map(|c| {
+                (c.pou.to_ascii_uppercase(), [c.steps.len(), c.transitions.len() + loose(&c.pou), c.actions.len()])
+            })
             .collect();
         if &got != expected {
             return Err(format!(
@@ -269,4 +283,50 @@ fn two_initial_steps_in_one_network_are_kept_and_reported() {
     }
     let (_, again, _) = sfc_plcopen::check_xml(0, "again.xml", &out, &opts());
     assert_eq!(again.charts[0].steps.iter().filter(|s| s.initial).count(), 2);
+}
+
+/// A chart being drawn in Beremiz: a transition with no step after it, one with no step before
+/// it and one wired to nothing, and a step wired only to those. IEC text cannot hold such
+/// transitions; they are reported (SFC0706), kept on the POU (`sfc.loose`, counted with the
+/// chart's transitions against the XML's own count), and exported back wired as they were.
+#[test]
+fn unconnected_transitions_of_a_chart_being_drawn_are_kept_and_exported_back() {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/fixtures/drawing_in_progress.xml");
+    let xml = std::fs::read_to_string(&path).expect("fixture");
+    let (_, checked, diags) = sfc_plcopen::check_xml(0, "drawing.xml", &xml, &opts());
+    let unconnected: Vec<_> = diags.iter().filter(|d| d.code == "SFC0706").collect();
+    assert_eq!(unconnected.len(), 3, "{diags:?}");
+    let loose = |c: &sfc_model::Checked| -> Vec<sfc_syntax::attr_value::Loose> {
+        c.unit
+            .items
+            .iter()
+            .filter_map(|i| if let sfc_syntax::ast::Item::Pou(p) = i { Some(p) } else { None })
+            .flat_map(|p| p.attributes.iter())
+            .filter(|a| a.name.eq_ignore_ascii_case(sfc_syntax::attr_value::LOOSE))
+            .filter_map(|a| sfc_syntax::attr_value::Loose::read(&sfc_syntax::attr_value::unescape(a.value.as_deref()?)))
+            .collect()
+    };
+    let kept = loose(&checked);
+    assert_eq!(kept.len(), 3);
+    assert_eq!((kept[0].from.len(), kept[0].to.as_slice()), (0, &["Draining".to_string()][..]));
+    assert_eq!(kept[0].condition, "Level > 80");
+    assert_eq!((kept[1].from.as_slice(), kept[1].to.len()), (&["Draining".to_string()][..], 0));
+    assert!(kept[2].from.is_empty() && kept[2].to.is_empty());
+    let chart = &checked.charts[0];
+    if let Some(counts) = script_counts(&[path.clone()]) {
+        assert_eq!(
+            counts[0]["TANKFILL"],
+            [chart.steps.len(), chart.transitions.len() + kept.len(), chart.actions.len()]
+        );
+    }
+    // The export writes the chart as drawn: the step and the three transitions, wired as before.
+    let out = sfc_plcopen::export(&checked).expect("a chart being drawn is exported as drawn");
+    if let Some(r) = xmllint(&out) {
+        r.expect("valid");
+    }
+    assert_eq!(out.matches("<transition ").count(), 5, "{out}");
+    let (_, again, diags) = sfc_plcopen::check_xml(0, "again.xml", &out, &opts());
+    assert_eq!(diags.iter().filter(|d| d.code == "SFC0706").count(), 3, "{diags:?}");
+    assert_eq!(loose(&again), kept);
+    assert_eq!(again.charts[0].transitions.len(), chart.transitions.len());
 }

@@ -67,6 +67,15 @@ export const tests = [
       );
       const openMs = Date.now() - started;
       const inPageMs = await drawnAt.jsonValue();
+      // The server's share: the API requests of the page (opening the chart, its diagnostics).
+      const api = await page.evaluate(() =>
+        performance
+          .getEntriesByType('resource')
+          .filter((e) => e.name.includes('/api/'))
+          .map((e) => `${new URL(e.name).pathname} ${e.duration.toFixed(0)} ms`)
+          .join(', '),
+      );
+      t.log(`requests to the server while opening: ${api}`);
       const load = os.loadavg().map((x) => x.toFixed(2)).join(' ');
       t.log(
         `open (${useRelease ? 'release' : 'debug'} binary): ${openMs} ms from navigation to ${4 * SECTIONS} steps, ${blocks} blocks and ${wires} wires drawn (${inPageMs.toFixed(0)} ms after navigation start in the page); target < 1000 ms; load average ${load} on ${os.cpus().length} cores`,

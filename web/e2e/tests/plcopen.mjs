@@ -60,4 +60,38 @@ export const tests = [
       assertSame(reopened, saved, 'the SFC POU reopened');
     },
   },
+  {
+    name: 'a chart still being drawn in Beremiz shows its unconnected transitions, and a save keeps them',
+    run: async (t) => {
+      const { page } = t;
+      const file = path.join(t.scratch, 'tank.plc.xml');
+      fs.copyFileSync(path.join(t.root, 'crates', 'sfc-plcopen', 'tests', 'fixtures', 'drawing_in_progress.xml'), file);
+      await openEditor(t, [file]);
+      const doc = await waitChart(page);
+      const transitions = doc.elements.filter((e) => e.kind === 'transition');
+      assert(transitions.length === 5, `5 transitions drawn, got ${transitions.length}`);
+      const level = transitions.find((e) => e.condition === 'Level > 80');
+      assert(level, 'the transition Level > 80, which has no step before it, is drawn');
+      await page.keyboard.press('F7');
+      const rows = page.locator('.error-list tbody tr', { hasText: 'SFC0204' });
+      await rows.first().waitFor();
+      assert((await rows.count()) === 3, `three transitions reported as not connected, got ${await rows.count()}`);
+      const step = doc.elements.find((e) => e.kind === 'step' && e.name === 'Idle');
+      const b = await box(page, step.id);
+      const scale = await page.evaluate(() => window.__sfc.zoom());
+      const from = { x: b.x + b.width / 2, y: b.y + b.height / 2 };
+      await drag(page, from, { x: from.x - 20 * scale, y: from.y });
+      await page.waitForFunction(([id, x]) => window.__sfc.doc().elements.find((e) => e.id === id).x !== x, [step.id, step.x]);
+      const saves = page.waitForResponse((r) => r.url().endsWith('/api/save') && r.status() === 200);
+      await page.keyboard.press('Control+s');
+      await saves;
+      const after = fs.readFileSync(file, 'utf8');
+      assert(after.split('<transition ').length - 1 === 5, 'the saved file has the five transitions');
+      assert(after.includes('Level > 80') && after.includes('Empty AND NOT Start'), 'with their conditions');
+      await page.reload();
+      const reopened = await waitChart(page);
+      const again = reopened.elements.filter((e) => e.kind === 'transition');
+      assert(again.length === 5, `5 transitions after reopening, got ${again.length}`);
+    },
+  },
 ];

@@ -13,7 +13,7 @@
 //! TwinCAT write every position as (0, 0): such a body has no layout, and document order stays.
 
 use super::{action_body, attr_xtext, element_attrs, is_ident, network, own_data, Ctx};
-use crate::attrs;
+use crate::attrs::{self, Loose};
 use crate::emit::Frag;
 use crate::xml::{self, anchor, attr, attr_range, child, children, elements, XText};
 use roxmltree::Node;
@@ -82,6 +82,7 @@ struct InlineAction<'a, 'i> {
 struct Graph {
     steps: Vec<OutStep>,
     trans: Vec<OutTrans>,
+    loose: Vec<Loose>,
     entry: Option<Frag>,
     exit: Option<Frag>,
 }
@@ -112,6 +113,7 @@ pub(super) fn chart<'a, 'i>(cx: &mut Ctx, sfc: Node<'a, 'i>, actions: &[Node<'a,
     let g = graph(cx, &mut imp, sfc, layout, 0, Vec::new());
 
     let mut g = g;
+    cx.loose = std::mem::take(&mut g.loose);
     // Function block calls of condition networks run in an action stored in the initial step.
     let compute = std::mem::take(&mut cx.compute);
     let mut compute_action = None;
@@ -337,7 +339,7 @@ fn graph<'a, 'i>(
         }
     }
 
-    let mut g = Graph { steps: Vec::new(), trans: Vec::new(), entry: None, exit: None };
+    let mut g = Graph { steps: Vec::new(), trans: Vec::new(), loose: Vec::new(), entry: None, exit: None };
     // Step names by element (macro steps: their entry and exit steps).
     let mut step_in: HashMap<usize, Frag> = HashMap::new();
     let mut step_out: HashMap<usize, Frag> = HashMap::new();
@@ -392,6 +394,7 @@ fn graph<'a, 'i>(
                                 }
                                 g.steps.extend(sub.steps);
                                 g.trans.extend(sub.trans);
+                                g.loose.extend(sub.loose);
                                 true
                             }
                             _ => {
@@ -491,17 +494,40 @@ fn graph<'a, 'i>(
                 up(cx, &els, &ids, c, &step_out, &mut from, &mut seen, 0);
             }
         }
-        if from.is_empty() {
-            cx.diag("SFC0706", at.clone(), "the transition is not connected to a preceding step; it is not imported");
-            continue;
-        }
         // Following steps.
         let mut to: Vec<Frag> = Vec::new();
         let mut jumps: Vec<String> = Vec::new();
         let mut seen = HashSet::new();
         down(cx, &els, &consumers, i, &step_in, &macro_entry, &mut to, &mut jumps, &mut seen, 0, layout);
-        if to.is_empty() {
-            cx.diag("SFC0706", at.clone(), "the transition is not connected to a following step; it is not imported");
+        if from.is_empty() || to.is_empty() {
+            // A chart being drawn: IEC text cannot hold the transition, the POU's `sfc.loose`
+            // attribute does (the editor draws it, the export writes it back).
+            let side = match (from.is_empty(), to.is_empty()) {
+                (true, true) => "to any step",
+                (true, false) => "to a preceding step",
+                _ => "to a following step",
+            };
+            cx.diag(
+                "SFC0706",
+                at.clone(),
+                format!(
+                    "the transition is not connected {side}; it is kept in the drawing (`sfc.loose`), not in the chart"
+                ),
+            );
+            let (cond, negated, name, _) = condition(cx, imp, sfc, e.n);
+            let condition = match cond {
+                Cond::St(x) | Cond::Il(x) => x.text.trim().to_string(),
+                Cond::Net(f) => f.text,
+            };
+            let rect = xml::position(e.n)
+                .map(|p| [p.0, p.1, xml::num(e.n, "width").unwrap_or(20.0), xml::num(e.n, "height").unwrap_or(2.0)]);
+            g.loose.push(Loose {
+                rect,
+                from: from.iter().map(|f| f.text.clone()).collect(),
+                to: to.iter().map(|f| f.text.clone()).collect(),
+                name: name.map(|n| n.text).unwrap_or_default(),
+                condition: if negated { format!("NOT ({condition})") } else { condition },
+            });
             continue;
         }
         let mut list = Vec::new();
