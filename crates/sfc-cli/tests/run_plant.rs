@@ -420,6 +420,20 @@ fn modbus_answers_every_exception_and_keeps_the_connection() {
     assert!(counters.contains(&format!("{} exceptions", cases.len() + 1)), "{counters}");
 }
 
+/// Before the first scan has run (here: started halted), Modbus reads the chart's declared
+/// values of outputs and `%M`, not zeros: Limit := 100, Gain := 2.5 (0x40200000).
+#[test]
+fn modbus_reads_declared_values_before_the_first_scan() {
+    let mut run =
+        Run::start(&[s(&chart("io.st")), "--modbus", "127.0.0.1:0", "--halted", "--no-retain", "--for", "T#60s"]);
+    let mut m = Modbus::connect(run.modbus());
+    assert_eq!(m.read_holding(1000, 4), [100, 0, 0x4020, 0x0000]);
+    assert_eq!(m.read_holding(2, 2), [0, 0], "Count is assigned by the chart's first scan, not declared");
+    run.signal(libc::SIGTERM);
+    let (status, lines) = run.finish(30);
+    assert_eq!(status, Some(0), "{lines:?}");
+}
+
 /// A Modbus connection idle longer than the timeout is closed; the server counts it.
 #[test]
 fn idle_modbus_connections_are_closed() {

@@ -288,7 +288,15 @@ impl Runtime {
         };
         let interrupt = sim.interrupt_flag();
         let _ = hub.interrupt_flag.set(interrupt.clone());
-        let image = Arc::new(Mutex::new(Image::new(&points, opts.word_order)));
+        // Outputs and `%M` read their declared (or restored) values before the first scan has
+        // copied them out, not zeros: a client that connects at once sees what the chart holds.
+        let mut first_image = Image::new(&points, opts.word_order);
+        for p in points.iter().filter(|p| p.role != io::Role::Input) {
+            if let Some(v) = sim.read_slot(p.slot.index) {
+                first_image.put(p, v);
+            }
+        }
+        let image = Arc::new(Mutex::new(first_image));
         let modbus_l = opts.modbus.map(|a| bind("Modbus", a)).transpose()?;
         let monitor_l = opts.monitor.map(|a| bind("the monitor", a)).transpose()?;
         let modbus = modbus_l.as_ref().and_then(|l| l.local_addr().ok());
