@@ -12,6 +12,7 @@ mod ci;
 mod edit;
 mod fmt;
 mod run;
+mod run_config;
 mod sim;
 mod term;
 mod test;
