@@ -13,6 +13,7 @@ mod edit;
 mod fmt;
 mod lsp;
 mod run;
+mod run_config;
 mod sim;
 mod term;
 mod test;

@@ -297,6 +297,12 @@ preceding step), so the transition never fires. (A literal `FALSE` is not report
 structured enough for the cheap proofs; the findings listed are real, but the absence of others \
 is not proven. Split the chart into function blocks, or structure its branches as matched \
 divergences and convergences.";
+    "SFC0510" Warning "runaway scan"
+        "While the analysis replayed a witness in the simulator, one scan spent its whole budget \
+of loop iterations, IL jumps and calls (a loop that does not end for the inputs the replay \
+tried, or unbounded recursion through calls). The replay stops there, so the finding it was \
+confirming stays *possible*. The same code would stop `sfc sim` and trip the watchdog of \
+`sfc run`: give the loop a bound that holds for every input.";
 
     "SFC0601" Error "invalid attribute value"
         "An `sfc.*` attribute has a value of the wrong form: `sfc.tag` an integer, `sfc.timeout` \
@@ -354,8 +360,7 @@ from the body's last step. Exporting the chart again writes the flattened steps.
     "SFC0710" Warning "XML content not imported"
         "Part of the file has no effect in the imported program and is left out: a named \
 transition condition nothing refers to, a second body of a POU, an element that does not belong \
-in an SFC body, a coil on the path of a transition condition (a condition cannot assign it), \
-the `persistent` attribute of a variable list.";
+in an SFC body, a coil on the path of a transition condition (a condition cannot assign it).";
     "SFC0711" Note "vendor element skipped"
         "A network holds a vendor's own element (a CODESYS FBD `vendorElement`: a box, a comment or \
 a connector only its tool can draw). It has no IEC 61131-3 meaning and is skipped; the rest of the \

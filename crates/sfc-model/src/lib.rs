@@ -67,7 +67,13 @@ pub fn check_source(file_id: u32, name: &str, text: &str, opts: &CheckOptions) -
     let (type_diags, expr_types) = code::check_unit(&unit, opts.keep_types);
     let mut charts = Vec::new();
     for (i, item) in unit.items.iter_mut().enumerate() {
+        if let ast::Item::Globals(block) = item {
+            lower::check_variable_attributes(block, file_id, &mut diags);
+        }
         let ast::Item::Pou(pou) = item else { continue };
+        for block in &pou.var_blocks {
+            lower::check_variable_attributes(block, file_id, &mut diags);
+        }
         lower::check_attributes(&pou.attributes, &["sfc.target"], "a POU", &mut diags);
         let attr_target = lower::target_attr(&pou.attributes, &mut diags);
         let target = opts.target.or(attr_target).unwrap_or(Target::Blank);

@@ -465,6 +465,9 @@ pub(crate) fn write_var_block(x: &mut X, src: &str, b: &ast::VarBlock, name: &st
         Some(ast::Retain::NonRetain) => a.push(("nonretain", "true".into())),
         None => {}
     }
+    if b.persistent {
+        a.push(("persistent", "true".into()));
+    }
     x.open(name, &a);
     for d in &b.decls {
         write_variables(x, src, d, Some(b.kind));

@@ -968,7 +968,8 @@ fn var_list(cx: &mut Ctx, l: Node, kw: &str, indent: &str) {
         head.push_str(" NON_RETAIN");
     }
     if xml::flag(l, "persistent") {
-        cx.diag("SFC0710", anchor(l), "`persistent` has no IEC 61131-3 keyword; the variables are imported without it");
+        // Not an IEC keyword, but the CODESYS/TwinCAT one `sfc run` keeps over cold starts.
+        head.push_str(" PERSISTENT");
     }
     cx.em.str(&format!("{indent}{head}\n"));
     let inner = format!("{indent}    ");

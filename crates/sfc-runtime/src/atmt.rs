@@ -153,11 +153,12 @@ impl AtmtModel {
     /// What the monitor's `hello` describes: steps, rules as transitions, and the variables
     /// `state` and `c<i>` for each input read.
     pub fn info(&self) -> ChartInfo {
-        let mut variables = vec![VarInfo { name: "state".into(), ty: "UDINT".into(), location: None }];
+        let mut variables = vec![VarInfo { name: "state".into(), ty: "UDINT".into(), location: None, safe: None }];
         variables.extend(self.inputs().into_iter().map(|i| VarInfo {
             name: format!("c{i}"),
             ty: "BOOL".into(),
             location: None,
+            safe: None,
         }));
         ChartInfo {
             runtime: "atmt",
@@ -284,7 +285,7 @@ impl Adapter {
         }
         // The command thread ends when the hub drops its sender (Runtime::wait).
         drop(cmd);
-        RunReport { stats: obs.stats, error: None, dropped: 0, realtime: Ok(false) }
+        RunReport { stats: obs.stats, ..RunReport::default() }
     }
 }
 

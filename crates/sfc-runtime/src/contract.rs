@@ -34,7 +34,7 @@ pub struct TransitionInfo {
     pub to: Vec<String>,
 }
 
-#[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[cfg_attr(test, derive(ts_rs::TS))]
 #[serde(deny_unknown_fields)]
 pub struct VariableInfo {
@@ -46,6 +46,62 @@ pub struct VariableInfo {
     #[serde(default, skip_serializing_if = "Option::is_none")]
     #[cfg_attr(test, ts(optional))]
     pub location: Option<String>,
+    /// The output's safe value (`sfc.safe` or the run configuration; FALSE/0 by default), for
+    /// the outputs of `sfc run`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    #[cfg_attr(test, ts(optional))]
+    pub safe: Option<MonValue>,
+}
+
+/// The runtime's state (`docs/runtime.md`, "States").
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[cfg_attr(test, derive(ts_rs::TS))]
+pub enum RunState {
+    #[serde(rename = "RUN")]
+    Run,
+    #[serde(rename = "STOP")]
+    Stop,
+    #[serde(rename = "FAULT")]
+    Fault,
+}
+
+/// What put the runtime in FAULT: the watchdog or a runtime error, and where the scan was.
+#[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
+#[cfg_attr(test, derive(ts_rs::TS))]
+#[serde(rename_all = "camelCase", deny_unknown_fields)]
+pub struct Fault {
+    /// `watchdog` or `error`.
+    pub kind: String,
+    pub message: String,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    #[cfg_attr(test, ts(optional, type = "number"))]
+    pub scan: Option<u64>,
+    /// How long the scan had run when it was stopped (watchdog).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    #[cfg_attr(test, ts(optional, type = "number"))]
+    pub scan_us: Option<u64>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    #[cfg_attr(test, ts(optional, type = "number"))]
+    pub watchdog_us: Option<u64>,
+    /// The active step the scan was in (the first of `steps`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    #[cfg_attr(test, ts(optional))]
+    pub step: Option<String>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    #[cfg_attr(test, ts(optional))]
+    pub steps: Option<Vec<String>>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    #[cfg_attr(test, ts(optional))]
+    pub action: Option<String>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    #[cfg_attr(test, ts(optional))]
+    pub transition: Option<String>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    #[cfg_attr(test, ts(optional))]
+    pub line: Option<u32>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    #[cfg_attr(test, ts(optional))]
+    pub column: Option<u32>,
 }
 
 /// The `hello` message.
@@ -66,6 +122,10 @@ pub struct Hello {
     pub token_required: bool,
     pub authorized: bool,
     pub halted: bool,
+    /// RUN, STOP or FAULT (`docs/runtime.md`, "States").
+    pub state: RunState,
+    /// In FAULT, what caused it; null otherwise.
+    pub fault: Option<Fault>,
     pub history: u32,
     pub steps: Vec<StepInfo>,
     pub transitions: Vec<TransitionInfo>,
@@ -119,6 +179,10 @@ pub struct Snapshot {
     pub vars: BTreeMap<String, MonValue>,
     pub forced: Vec<String>,
     pub halted: bool,
+    /// RUN, STOP or FAULT (`sfc run`); in STOP and FAULT `vars` shows the outputs' safe values.
+    pub state: RunState,
+    /// In FAULT, what caused it; null otherwise.
+    pub fault: Option<Fault>,
     /// Scan statistics of the runtime (free form).
     #[cfg_attr(test, ts(type = "Record<string, unknown> | null"))]
     pub stats: serde_json::Value,
@@ -153,6 +217,26 @@ pub struct Delta {
     pub forced: Option<Vec<String>>,
 }
 
+/// The `state` message: the runtime entered RUN, STOP or FAULT.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[cfg_attr(test, derive(ts_rs::TS))]
+#[serde(rename_all = "camelCase", deny_unknown_fields)]
+pub struct StateMessage {
+    #[cfg_attr(test, ts(type = "\"state\""))]
+    #[serde(rename = "type")]
+    pub kind: String,
+    pub state: RunState,
+    /// In FAULT, what caused it; null otherwise.
+    pub fault: Option<Fault>,
+    /// The last scan that ran.
+    #[cfg_attr(test, ts(type = "number"))]
+    pub scan: u64,
+    /// The outputs as they are now (their safe values in STOP and FAULT).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    #[cfg_attr(test, ts(optional))]
+    pub outputs: Option<BTreeMap<String, MonValue>>,
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -169,11 +253,14 @@ mod tests {
             StepInfo::decl(&cfg),
             TransitionInfo::decl(&cfg),
             VariableInfo::decl(&cfg),
+            RunState::decl(&cfg),
+            Fault::decl(&cfg),
             Hello::decl(&cfg),
             ActiveStep::decl(&cfg),
             ScanState::decl(&cfg),
             Snapshot::decl(&cfg),
             Delta::decl(&cfg),
+            StateMessage::decl(&cfg),
         ] {
             out.push_str("export ");
             out.push_str(&decl);

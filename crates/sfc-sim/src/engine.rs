@@ -26,6 +26,26 @@ pub struct ScanSink {
     /// `(chart instance, transition)` in firing order.
     pub fired: Vec<(u32, u32)>,
     pub events: Vec<Event>,
+    /// Where the scan faulted: the innermost chart instance and the action body or guard
+    /// that was running (noted on the error path only).
+    pub(crate) fault_site: Option<(u32, FaultSite)>,
+}
+
+/// The chart element whose code was running when a scan faulted.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) enum FaultSite {
+    Action(usize),
+    Guard(u32),
+}
+
+impl ScanSink {
+    /// Notes where a fault happened, unless a nested chart already did.
+    #[cold]
+    fn note_fault(&mut self, chart: usize, site: FaultSite) {
+        if self.fault_site.is_none() {
+            self.fault_site = Some((chart as u32, site));
+        }
+    }
 }
 
 /// What drives an action control block: an ACTION, or a BOOL variable used as an action.
@@ -850,10 +870,11 @@ fn evolve(ctx: &mut Ctx<'_>, chart: usize, code: &ChartCode, plan: &ChartPlan, d
             Err(f) => {
                 let mut all = cand[k..].to_vec();
                 all.sort_unstable();
-                let first = all
+                let (t, first) = all
                     .into_iter()
-                    .find_map(|t| eval_guard(ctx, code, plan.tr[t as usize].guard, frame, t).err())
-                    .unwrap_or(f);
+                    .find_map(|t| eval_guard(ctx, code, plan.tr[t as usize].guard, frame, t).err().map(|f| (t, f)))
+                    .unwrap_or((t, f));
+                ctx.sink.note_fault(chart, FaultSite::Guard(t));
                 ctx.charts[chart].cand = cand;
                 return Err(first);
             }
@@ -1367,6 +1388,7 @@ fn run_actions(ctx: &mut Ctx<'_>, chart: usize, code: &ChartCode, plan: &ChartPl
     for &e in &run {
         if let Some(id) = plan.entities[e as usize].action {
             if let Err(f) = (code.bodies[id])(ctx, frame) {
+                ctx.sink.note_fault(chart, FaultSite::Action(id));
                 ctx.charts[chart].run = run;
                 return Err(f);
             }
@@ -1466,6 +1488,37 @@ pub struct Simulation {
     next_scan: u64,
     /// The traced variables with their slots, resolved once.
     trace: Vec<(String, Type, usize)>,
+    /// Charges one scan may make ([`Simulation::set_scan_budget`]).
+    budget: u64,
+    /// Set from outside to stop the running scan ([`Simulation::interrupt_flag`]).
+    interrupt: Option<Arc<std::sync::atomic::AtomicBool>>,
+}
+
+/// Where in the chart a runtime error happened ([`Simulation::fault_place`]); names carry the
+/// instance path of nested charts.
+#[derive(Debug, Clone, PartialEq, Eq, Default)]
+pub struct FaultPlace {
+    /// The action whose body was running.
+    pub action: Option<String>,
+    /// The transition whose condition was being evaluated.
+    pub transition: Option<String>,
+    /// The active steps associated with that action, or the steps that transition leaves.
+    pub steps: Vec<String>,
+}
+
+/// The chart states of the SFC instances of a fresh memory (each instance's hidden slot set
+/// to its index).
+fn chart_states(prog: &Program, instances: Vec<crate::code::ChartInstance>, mem: &mut [Value]) -> Vec<ChartState> {
+    let mut charts = Vec::with_capacity(instances.len());
+    for (i, inst) in instances.into_iter().enumerate() {
+        let PouBody::Chart(code) = &prog.pous[inst.pou].body else {
+            continue;
+        };
+        let plan = code.plan_arc().clone();
+        mem[inst.frame + code.chart_slot as usize] = Value::Int(i as i64);
+        charts.push(ChartState::new(inst.pou, plan, inst.frame, inst.path));
+    }
+    charts
 }
 
 impl Simulation {
@@ -1514,15 +1567,7 @@ impl Simulation {
     pub fn new(prog: Program, top: usize, source: SourceFile, opts: SimOptions) -> Simulation {
         let Memory { mem, top_frame, charts: instances } = prog.instantiate(top);
         let mut mem = mem;
-        let mut charts = Vec::with_capacity(instances.len());
-        for (i, inst) in instances.into_iter().enumerate() {
-            let PouBody::Chart(code) = &prog.pous[inst.pou].body else {
-                continue;
-            };
-            let plan = code.plan_arc().clone();
-            mem[inst.frame + code.chart_slot as usize] = Value::Int(i as i64);
-            charts.push(ChartState::new(inst.pou, plan, inst.frame, inst.path));
-        }
+        let mut charts = chart_states(&prog, instances, &mut mem);
         let trace = prog.pous[top]
             .layout
             .vars
@@ -1558,7 +1603,80 @@ impl Simulation {
             error: None,
             next_scan: 0,
             trace,
+            budget: crate::code::SCAN_BUDGET,
+            interrupt: None,
         }
+    }
+
+    /// Starts the POU again from its declared initial values (a PLC's restart): memory, steps
+    /// and action control as at scan 0, the error cleared. The scan counter goes on, so the
+    /// first scan after a restart is the chart's scan 0 at a later virtual time.
+    pub fn restart(&mut self) {
+        let Memory { mut mem, charts: instances, .. } = self.prog.instantiate(self.top);
+        let mut charts = chart_states(&self.prog, instances, &mut mem);
+        for (new, old) in charts.iter_mut().zip(&self.charts) {
+            new.track_current = old.track_current;
+            new.track_left = old.track_left;
+            for (a, b) in new.steps.iter_mut().zip(&old.steps) {
+                a.mirror_x = b.mirror_x;
+                a.mirror_t = b.mirror_t;
+            }
+        }
+        self.mem = mem;
+        self.charts = charts;
+        self.error = None;
+        self.record = ScanRecord::default();
+        self.sink.fired.clear();
+        self.sink.events.clear();
+        self.sink.fault_site = None;
+    }
+
+    /// Bounds every later scan to `limit` charges (loop iterations, IL jumps, calls; default
+    /// [`crate::code::SCAN_BUDGET`]); a scan that spends it stops with a located runtime error.
+    pub fn set_scan_budget(&mut self, limit: u64) {
+        self.budget = limit.max(1);
+    }
+
+    /// A flag that, once set (from any thread), stops the running scan at its next look at its
+    /// budget (within a few thousand loop iterations) with a runtime error whose message is
+    /// [`crate::code::INTERRUPTED`], and every later scan at once until it is cleared.
+    pub fn interrupt_flag(&mut self) -> Arc<std::sync::atomic::AtomicBool> {
+        self.interrupt.get_or_insert_with(Default::default).clone()
+    }
+
+    /// Where the last runtime error happened in the chart: the action or transition whose code
+    /// was running, and the active steps that run that action (or that the transition leaves).
+    pub fn fault_place(&self) -> Option<FaultPlace> {
+        let (c, site) = self.sink.fault_site?;
+        let st = self.charts.get(c as usize)?;
+        let plan = &st.plan;
+        let code = code_of(&self.prog, st.pou);
+        let active = |s: &u32| st.steps[*s as usize].x;
+        let step_name = |s: u32| st.qualify(&plan.step_names[s as usize]);
+        Some(match site {
+            FaultSite::Action(a) => {
+                let name = &code.chart.actions[a].name;
+                let mut steps: Vec<u32> = plan
+                    .entities
+                    .iter()
+                    .filter(|e| e.action == Some(a))
+                    .flat_map(|e| e.assocs.iter().map(|x| x.step))
+                    .filter(active)
+                    .collect();
+                steps.sort_unstable();
+                steps.dedup();
+                FaultPlace {
+                    action: Some(st.qualify(name)),
+                    transition: None,
+                    steps: steps.into_iter().map(step_name).collect(),
+                }
+            }
+            FaultSite::Guard(t) => FaultPlace {
+                action: None,
+                transition: Some(st.qualify(&plan.transition_names[t as usize])),
+                steps: plan.pre.get(t).iter().copied().map(step_name).collect(),
+            },
+        })
     }
 
     /// The checked source (to render runtime errors and diagnostics).
@@ -1596,6 +1714,7 @@ impl Simulation {
         }
         self.sink.fired.clear();
         self.sink.events.clear();
+        self.sink.fault_site = None;
         let scan = self.next_scan;
         let result = {
             let mut ctx = Ctx {
@@ -1606,6 +1725,7 @@ impl Simulation {
                 now,
                 scan,
                 profile: self.opts.profile,
+                budget: crate::code::Budget::new(self.budget, self.interrupt.as_deref()),
             };
             match &self.prog.pous[self.top].body {
                 PouBody::Chart(_) => run_chart(&mut ctx, 0),

@@ -327,6 +327,7 @@ impl Guards<'_, '_> {
             now: self.view.now,
             scan: 0,
             profile: self.view.profile,
+            budget: Default::default(),
         };
         (code.guards[t as usize])(&mut ctx, st.frame).ok()
     }

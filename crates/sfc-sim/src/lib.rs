@@ -16,7 +16,7 @@ pub mod timespec;
 pub mod trace;
 pub mod value;
 
-pub use engine::{ScanSink, Simulation, Snapshot, StepStats, TimeStats};
+pub use engine::{FaultPlace, ScanSink, Simulation, Snapshot, StepStats, TimeStats};
 pub use explain::{StepReport, TransitionReport};
 pub use value::{format_time, parse_time, Value};
 
@@ -135,7 +135,7 @@ impl Event {
 }
 
 /// A fault that stopped the run, located in the source.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, Eq)]
 pub struct RuntimeError {
     pub message: String,
     pub span: Span,

@@ -843,6 +843,13 @@ fn round_real(x: f64, ty: &Type) -> f64 {
     }
 }
 
+/// A value of `ty` written as text the way `--set` takes it (`TRUE`, `0`, `-5`, `16#FF`,
+/// `2.5`, `T#1s`, `'text'`, an enumeration value), checked against the type; the error says
+/// what was expected.
+pub fn value_from_text(text: &str, ty: &Type) -> Result<Value, String> {
+    convert(&raw_from_text(text, ty), ty)
+}
+
 /// Reads a `--set` value written on the command line as the TOML value it stands for.
 fn raw_from_text(text: &str, ty: &Type) -> Raw {
     let t = text.trim();

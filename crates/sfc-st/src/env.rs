@@ -25,6 +25,8 @@ pub struct VarInfo {
     pub constant: bool,
     /// `RETAIN` / `NON_RETAIN` of its block.
     pub retain: Option<Retain>,
+    /// Its block is `PERSISTENT`.
+    pub persistent: bool,
     /// The declared type, resolved.
     pub ty: Type,
     /// `AT %IX1.2`.
@@ -54,6 +56,7 @@ impl VarInfo {
             kind: block.kind,
             constant: block.constant,
             retain: block.retain,
+            persistent: block.persistent,
             ty,
             location: decl.location.clone(),
             init: decl.init.clone(),
@@ -109,6 +112,7 @@ pub(crate) fn add_sfc_control_variables(vars: &mut Vec<VarInfo>, pou_span: Span,
             kind,
             constant: false,
             retain: None,
+            persistent: false,
             ty,
             location: None,
             init: None,
@@ -498,6 +502,7 @@ fn standard_fb(name: &str) -> Option<PouInterface> {
             kind,
             constant: false,
             retain: None,
+            persistent: false,
             ty,
             location: None,
             init: None,

@@ -202,12 +202,14 @@ pub enum Retain {
     NonRetain,
 }
 
-/// `VAR [CONSTANT] [RETAIN|NON_RETAIN] … END_VAR`
+/// `VAR [CONSTANT] [RETAIN|NON_RETAIN] [PERSISTENT] … END_VAR`
 #[derive(Debug, Clone, PartialEq)]
 pub struct VarBlock {
     pub kind: VarKind,
     pub constant: bool,
     pub retain: Option<Retain>,
+    /// `PERSISTENT` (CODESYS, TwinCAT): the values survive a cold start too.
+    pub persistent: bool,
     pub decls: Vec<VarDecl>,
     pub span: Span,
 }

@@ -803,6 +803,7 @@ impl<'a> Parser<'a> {
         let kind = VAR_KEYWORDS.iter().find(|v| v.0 == kwtext).map(|v| v.1).unwrap_or(VarKind::Var);
         let mut constant = false;
         let mut retain = None;
+        let mut persistent = false;
         loop {
             if self.eat_kw("CONSTANT") {
                 constant = true;
@@ -810,6 +811,13 @@ impl<'a> Parser<'a> {
                 retain = Some(Retain::Retain);
             } else if self.eat_kw("NON_RETAIN") {
                 retain = Some(Retain::NonRetain);
+            } else if self.at_kw("PERSISTENT")
+                && !matches!(self.nth(1).kind, TokenKind::Colon | TokenKind::Comma)
+                && !self.is_kw_tok(self.nth(1), "AT")
+            {
+                // Not an IEC keyword (CODESYS, TwinCAT): a variable of that name stays one.
+                self.bump();
+                persistent = true;
             } else {
                 break;
             }
@@ -836,7 +844,7 @@ impl<'a> Parser<'a> {
             }
         }
         self.expect_end("END_VAR", self.span_of(kw));
-        VarBlock { kind, constant, retain, decls, span: self.span_from(start) }
+        VarBlock { kind, constant, retain, persistent, decls, span: self.span_from(start) }
     }
 
     fn var_decl(&mut self, access: bool) -> Option<VarDecl> {

@@ -309,6 +309,9 @@ impl<'a> Printer<'a> {
             Some(Retain::NonRetain) => self.push(" NON_RETAIN"),
             None => {}
         }
+        if block.persistent {
+            self.push(" PERSISTENT");
+        }
         self.end();
         self.indent += 1;
         for decl in &block.decls {

@@ -5,7 +5,20 @@
 // (../contracts/monitor.ts, kept current by sfc-runtime's `contracts_are_current` test;
 // `tests/contract.rs` there reads the messages a running chart sends back into those types).
 import type { ActiveStep, Delta, MonValue, ScanState } from '../contracts/monitor';
-export type { ActiveStep, Delta, Hello, MonValue, ScanState, Snapshot, StepInfo, TransitionInfo, VariableInfo } from '../contracts/monitor';
+export type {
+  ActiveStep,
+  Delta,
+  Fault,
+  Hello,
+  MonValue,
+  RunState,
+  ScanState,
+  Snapshot,
+  StateMessage,
+  StepInfo,
+  TransitionInfo,
+  VariableInfo,
+} from '../contracts/monitor';
 
 export interface MonEvent {
   type: 'event';

@@ -348,6 +348,8 @@ fn lay_out(u: &mut Unit<'_>, i: usize) {
             size,
             location: v.location.as_ref().map(|l| l.text.clone()),
             implicit: v.implicit,
+            retain: v.retain == Some(sfc_syntax::ast::Retain::Retain),
+            persistent: v.persistent,
         });
         off += size;
     }
@@ -371,6 +373,8 @@ fn lay_out(u: &mut Unit<'_>, i: usize) {
                 size: 1,
                 location: None,
                 implicit: true,
+                retain: false,
+                persistent: false,
             });
             off += 1;
         }
@@ -463,6 +467,8 @@ fn lay_out_globals(u: &Unit<'_>) {
             size,
             location: v.location.as_ref().map(|l| l.text.clone()),
             implicit: false,
+            retain: v.retain == Some(sfc_syntax::ast::Retain::Retain),
+            persistent: v.persistent,
         });
         off += size;
     }

@@ -441,6 +441,8 @@ impl Cx<'_, '_> {
             size: 1,
             location: Some(a.text.clone()),
             implicit: true,
+            retain: false,
+            persistent: false,
         });
         let n = g.layout.vars.len() - 1;
         g.index.insert(key.clone(), n);

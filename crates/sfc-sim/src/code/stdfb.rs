@@ -86,6 +86,8 @@ pub(crate) fn std_layout(name: &str) -> Option<(Layout, Vec<Value>)> {
             size: 1,
             location: None,
             implicit: false,
+            retain: false,
+            persistent: false,
         });
     }
     for (_, h) in kind.hidden() {

@@ -150,6 +150,7 @@ pub(crate) fn with_scratch_ctx<T>(f: impl FnOnce(&mut Ctx<'_>) -> T) -> T {
         now: 0,
         scan: 0,
         profile: Default::default(),
+        budget: Default::default(),
     };
     f(&mut ctx)
 }
