@@ -16,11 +16,6 @@
 //!   frame) exception 3, an address outside the map exception 2. A read/write (FC 23) checks both
 //!   parts before it writes anything.
 
-// Indices here come from tables this crate builds at start (the Modbus map, the variables) or
-// are checked against the frame length just before (Modbus PDUs); the runtime work of issue 14
-// landed after the workspace lints, and its conversion to `get` is still to do (ARCHITECTURE.md).
-#![allow(clippy::indexing_slicing)]
-
 use crate::board::Hub;
 use crate::io::{Image, IoPoint, Role, Table, INPUT_WINDOW};
 use std::sync::atomic::{AtomicU64, AtomicUsize, Ordering};
@@ -90,7 +85,9 @@ pub struct Service {
 }
 
 fn u16_at(pdu: &[u8], i: usize) -> u16 {
-    u16::from_be_bytes([pdu[i], pdu[i + 1]])
+    // Callers check the PDU's length first; a short one reads as zeros, never a panic.
+    let byte = |k: usize| pdu.get(k).copied().unwrap_or(0);
+    u16::from_be_bytes([byte(i), byte(i + 1)])
 }
 
 /// A reply PDU: `Ok` the response, `Err` an exception code.
@@ -99,18 +96,15 @@ type Reply = Result<Vec<u8>, u8>;
 fn pack_bits(bits: &[bool]) -> Vec<u8> {
     let mut out = vec![0u8; bits.len().div_ceil(8)];
     for (i, &b) in bits.iter().enumerate() {
-        if b {
-            out[i / 8] |= 1 << (i % 8);
+        if let Some(byte) = out.get_mut(i / 8).filter(|_| b) {
+            *byte |= 1 << (i % 8);
         }
     }
     out
 }
 
 fn read_range<T: Copy>(table: &[T], a: usize, n: usize) -> Result<&[T], u8> {
-    if a + n > table.len() {
-        return Err(ILLEGAL_DATA_ADDRESS);
-    }
-    Ok(&table[a..a + n])
+    table.get(a..a + n).ok_or(ILLEGAL_DATA_ADDRESS)
 }
 
 impl Service {
@@ -124,7 +118,9 @@ impl Service {
     }
 
     fn reply(&self, pdu: &[u8]) -> Reply {
-        let fc = pdu[0];
+        let fc = pdu.first().copied().unwrap_or(0);
+        let byte = |k: usize| pdu.get(k).copied().unwrap_or(0);
+        let head = || pdu.get(..5).unwrap_or(pdu).to_vec();
         // The length each function's request must have (beyond the function code).
         let fixed = |n: usize| if pdu.len() == 1 + n { Ok(()) } else { Err(ILLEGAL_DATA_VALUE) };
         match fc {
@@ -180,34 +176,34 @@ impl Service {
                 if pdu.len() < 6 {
                     return Err(ILLEGAL_DATA_VALUE);
                 }
-                let (a, n, count) = (u16_at(pdu, 1) as usize, u16_at(pdu, 3) as usize, pdu[5] as usize);
+                let (a, n, count) = (u16_at(pdu, 1) as usize, u16_at(pdu, 3) as usize, byte(5) as usize);
                 if !(1..=0x07B0).contains(&n) || count != n.div_ceil(8) || pdu.len() != 6 + count {
                     return Err(ILLEGAL_DATA_VALUE);
                 }
-                let bits: Vec<bool> = (0..n).map(|i| pdu[6 + i / 8] >> (i % 8) & 1 == 1).collect();
+                let bits: Vec<bool> = (0..n).map(|i| byte(6 + i / 8) >> (i % 8) & 1 == 1).collect();
                 let mut img = self.lock();
                 self.write_coils(&mut img, a, &bits)?;
-                Ok(pdu[..5].to_vec())
+                Ok(head())
             }
             16 => {
                 if pdu.len() < 6 {
                     return Err(ILLEGAL_DATA_VALUE);
                 }
-                let (a, n, count) = (u16_at(pdu, 1) as usize, u16_at(pdu, 3) as usize, pdu[5] as usize);
+                let (a, n, count) = (u16_at(pdu, 1) as usize, u16_at(pdu, 3) as usize, byte(5) as usize);
                 if !(1..=0x007B).contains(&n) || count != 2 * n || pdu.len() != 6 + count {
                     return Err(ILLEGAL_DATA_VALUE);
                 }
                 let regs: Vec<u16> = (0..n).map(|i| u16_at(pdu, 6 + 2 * i)).collect();
                 let mut img = self.lock();
                 self.write_registers(&mut img, a, &regs)?;
-                Ok(pdu[..5].to_vec())
+                Ok(head())
             }
             23 => {
                 if pdu.len() < 10 {
                     return Err(ILLEGAL_DATA_VALUE);
                 }
                 let (ra, rn) = (u16_at(pdu, 1) as usize, u16_at(pdu, 3) as usize);
-                let (wa, wn, count) = (u16_at(pdu, 5) as usize, u16_at(pdu, 7) as usize, pdu[9] as usize);
+                let (wa, wn, count) = (u16_at(pdu, 5) as usize, u16_at(pdu, 7) as usize, byte(9) as usize);
                 if !(1..=0x007D).contains(&rn)
                     || !(1..=0x0079).contains(&wn)
                     || count != 2 * wn
@@ -252,8 +248,9 @@ impl Service {
             targets.push(i);
         }
         for (i, &b) in targets.into_iter().zip(bits) {
-            let p = &self.points[i];
-            img.write_input(i, p, sfc_sim::Value::Bool(b));
+            if let Some(p) = self.points.get(i) {
+                img.write_input(i, p, sfc_sim::Value::Bool(b));
+            }
         }
         Ok(())
     }
@@ -269,7 +266,7 @@ impl Service {
         let mut out: Vec<usize> = Vec::new();
         for k in 0..n {
             let i = img.owner(table, base + k).ok_or(ILLEGAL_DATA_ADDRESS)?;
-            if self.points[i].role == Role::Output {
+            if self.points.get(i).is_none_or(|p| p.role == Role::Output) {
                 return Err(ILLEGAL_DATA_ADDRESS);
             }
             if out.last() != Some(&i) {
@@ -285,28 +282,27 @@ impl Service {
         let base = if input { a - INPUT_WINDOW as usize } else { a };
         // The registers of a wide value may be written one at a time: a point takes the new
         // registers over its current ones.
+        // The points and their registers are the map built at start, which sized the tables.
         for &i in &targets {
-            let p = &self.points[i];
-            let mut words: Vec<u16> = {
-                let table = if input { &img.input_regs } else { &img.holding };
-                table[p.address as usize..(p.address + p.words) as usize].to_vec()
-            };
+            let Some(p) = self.points.get(i) else { return Err(ILLEGAL_DATA_ADDRESS) };
+            let range = p.address as usize..(p.address + p.words) as usize;
+            let table = if input { &mut img.input_regs } else { &mut img.holding };
+            let Some(words) = table.get_mut(range) else { return Err(ILLEGAL_DATA_ADDRESS) };
             for (k, w) in words.iter_mut().enumerate() {
                 let at = p.address as usize + k;
-                if at >= base && at < base + regs.len() {
-                    *w = regs[at - base];
+                if let Some(&r) = at.checked_sub(base).and_then(|k| regs.get(k)) {
+                    *w = r;
                 }
             }
-            let range = p.address as usize..(p.address + p.words) as usize;
             if input {
-                img.input_regs[range].copy_from_slice(&words);
                 let v = img.get(p);
-                if let Some(f) = img.forced[i].clone() {
+                if let Some(f) = img.forced.get(i).cloned().flatten() {
                     img.put(p, &f);
                 }
-                img.client[i] = v;
+                if let Some(c) = img.client.get_mut(i) {
+                    *c = v;
+                }
             } else {
-                img.holding[range].copy_from_slice(&words);
                 img.memory_writes.push(i);
             }
         }
@@ -438,7 +434,8 @@ async fn connection(
             if !(2..=MAX_PDU + 1).contains(&len) {
                 return Err(std::io::Error::new(std::io::ErrorKind::InvalidData, "bad MBAP length"));
             }
-            stream.read_exact(&mut pdu[..len - 1]).await?;
+            let body = pdu.get_mut(..len - 1).ok_or(std::io::ErrorKind::InvalidData)?;
+            stream.read_exact(body).await?;
             Ok(len - 1)
         };
         let n = match tokio::time::timeout(limits.idle_timeout, rest).await {
@@ -454,8 +451,8 @@ async fn connection(
             continue;
         }
         counters.requests.fetch_add(1, Ordering::Relaxed);
-        let reply = service.handle(&pdu[..n]);
-        if reply[0] & 0x80 != 0 {
+        let reply = service.handle(pdu.get(..n).unwrap_or_default());
+        if reply.first().is_some_and(|fc| fc & 0x80 != 0) {
             counters.exceptions.fetch_add(1, Ordering::Relaxed);
         }
         let mut frame = Vec::with_capacity(7 + reply.len());
