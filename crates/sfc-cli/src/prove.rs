@@ -76,8 +76,8 @@ pub fn prove(a: ProveArgs) -> u8 {
         );
         return 2;
     }
-    let chart_text = match crate::read(&a.file) {
-        Ok(t) => t,
+    let chart_text = match sfc_driver::read_source(&a.file) {
+        Ok(d) => d.text,
         Err(e) => {
             eprintln!("error: {e}");
             return 2;
@@ -157,7 +157,7 @@ pub fn prove(a: ProveArgs) -> u8 {
             // The witness names the chart relative to where it is written.
             let text = relocate_chart(&w.text, &a.file, &dir);
             let path = dir.join(&w.file);
-            if let Err(e) = crate::write_atomically(&path, &text) {
+            if let Err(e) = sfc_driver::write_atomically(&path, text.as_bytes()) {
                 eprintln!("error: cannot write the witness `{}`: {e}", path.display());
                 return 2;
             }

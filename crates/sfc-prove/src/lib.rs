@@ -350,8 +350,8 @@ pub fn origin_kind(o: &Origin) -> &'static str {
 }
 
 /// Diagnostics on a property file, for the editor and the language server: the file's error
-/// (SFC0901) when there is one, else, given a report, one per violated (SFC0902) or undecided
-/// (SFC0903) property at its `[[property]]` line. Spans are byte offsets in `props_text`,
+/// (SFC1001) when there is one, else, given a report, one per violated (SFC1002) or undecided
+/// (SFC1003) property at its `[[property]]` line. Spans are byte offsets in `props_text`,
 /// file number `file_id`.
 pub fn property_diagnostics(
     file_id: u32,
@@ -368,7 +368,7 @@ pub fn property_diagnostics(
     let _ = src;
     let mut out = Vec::new();
     if let Some(e) = error {
-        out.push(Diagnostic::error("SFC0901", span_at(e.line, e.column), e.message.clone()));
+        out.push(Diagnostic::error("SFC1001", span_at(e.line, e.column), e.message.clone()));
         return out;
     }
     if let Some(r) = report {
@@ -379,7 +379,7 @@ pub fn property_diagnostics(
                 Verdict::Holds => {}
                 Verdict::Violated => {
                     let mut d =
-                        Diagnostic::error("SFC0902", span, format!("property `{}` is violated: {}", p.name, p.message));
+                        Diagnostic::error("SFC1002", span, format!("property `{}` is violated: {}", p.name, p.message));
                     if let Some(w) = &p.witness {
                         d = d.with_note(format!(
                             "witness: {} ({} scans), replay it with `sfc test {}`",
@@ -390,7 +390,7 @@ pub fn property_diagnostics(
                 }
                 Verdict::Unknown => {
                     out.push(Diagnostic::warning(
-                        "SFC0903",
+                        "SFC1003",
                         span,
                         format!("property `{}` is not decided: {}", p.name, p.message),
                     ));

@@ -237,7 +237,7 @@ impl Witness {
             Check::Always(e) | Check::Never(e) => vec![(
                 0,
                 format!(
-                    "# The property over the whole run: it fails after scan {} ({}).\n[[at]]\ntime = \"T#0s\"\nuntil = \"{}\"\n{} = {}\n",
+                    "# The property over the whole run: it fails after scan {} ({}).\n[[at]]\ntime = \"T#0s\"\nto = \"{}\"\n{} = {}\n",
                     self.last,
                     t(self.last),
                     t(self.last),
@@ -246,20 +246,21 @@ impl Witness {
                 ),
             )],
             Check::Response { after, expect, within } => {
+                // The property itself, with its triggers up to the one that is not answered (an
+                // earlier unanswered trigger would have made a shorter witness).
                 let k = self.trigger.unwrap_or(0);
-                vec![
-                    (k, format!("# The trigger rises in scan {k} ({}) ...\n[[at]]\ntime = \"{}\"\nexpect = {}\n", t(k), t(k), toml_string(after))),
-                    (
-                        k,
-                        format!(
-                            "# ... and the response does not follow within {}.\n[[at]]\ntime = \"{}\"\nwithin = \"{}\"\nexpect = {}\n",
-                            format_time(*within),
-                            t(k),
-                            format_time(*within),
-                            toml_string(expect)
-                        ),
+                vec![(
+                    0,
+                    format!(
+                        "# The trigger rises in scan {k} ({}) and the response does not follow within {}.\n[[at]]\ntime = \"T#0s\"\nto = \"{}\"\nafter = {}\nwithin = \"{}\"\nexpect = {}\n",
+                        t(k),
+                        format_time(*within),
+                        t(k),
+                        toml_string(after),
+                        format_time(*within),
+                        toml_string(expect)
                     ),
-                ]
+                )]
             }
             Check::Fault => vec![(
                 self.last,
@@ -454,7 +455,9 @@ pub fn json_value(toml: &str) -> serde_json::Value {
     match toml {
         "true" => serde_json::Value::Bool(true),
         "false" => serde_json::Value::Bool(false),
-        t if t.starts_with('"') && t.ends_with('"') && t.len() >= 2 => serde_json::Value::String(t[1..t.len() - 1].to_string()),
+        t if t.starts_with('"') && t.ends_with('"') && t.len() >= 2 => {
+            serde_json::Value::String(t[1..t.len() - 1].to_string())
+        }
         t => t.parse::<i64>().map_or_else(|_| serde_json::Value::String(t.to_string()), |n| serde_json::json!(n)),
     }
 }

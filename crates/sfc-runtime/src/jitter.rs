@@ -21,7 +21,9 @@ impl Default for Histogram {
 impl Histogram {
     pub fn add(&mut self, us: u64) {
         let b = (us as usize).min(BUCKETS - 1);
-        self.counts[b] = self.counts[b].saturating_add(1);
+        if let Some(c) = self.counts.get_mut(b) {
+            *c = c.saturating_add(1);
+        }
         self.n += 1;
         self.max = self.max.max(us);
         self.sum = self.sum.saturating_add(us);

@@ -1,341 +1,369 @@
-//! ST conditions in scenario files (`expect = "Door.X AND NOT Alarm"`, `always = "…"`): a BOOL
-//! expression over the simulated POU's variables, step flags and times (`S.X`, `S.T`) and
-//! action flags (`A.Q`), bound to the simulation once and evaluated after a scan.
+//! Conditions of scenario files: an ST BOOL expression over the simulated POU's variables, step
+//! flags `S.X`, step times `S.T` and action flags `A.Q`, as in
+//! `always = "NOT (MotorFwd AND MotorRev)"` or `after = "DoorCmd"`.
 //!
-//! Integer arithmetic follows IEC: the result has the common type of its operands and wraps in
-//! that width (untyped constants take the other operand's type); TIME values are microseconds.
+//! The expression is parsed with the IEC parser and bound to the simulation once (every name
+//! must exist, the result must be BOOL); evaluating it reads the values after a scan. It is a
+//! small interpreter over [`Value`]s, not compiled code: scenarios evaluate a few conditions per
+//! scan, and this keeps them independent of the engine's code generator.
 
-use crate::{Simulation, Value};
+use crate::{format_time, Simulation, Value};
 use sfc_st::Type;
 use sfc_syntax::ast::{BinaryOp, Expr, ExprKind, LiteralKind, UnaryOp};
+use std::sync::Arc;
 
-/// A condition bound to a simulation.
+/// A bound condition.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Condition {
-    /// The text as written.
+    /// The expression as written.
     pub text: String,
-    root: Node,
-}
-
-/// A problem in a condition: the byte offset in its text and a message.
-#[derive(Debug, Clone, PartialEq)]
-pub struct ConditionError {
-    pub offset: usize,
-    pub message: String,
+    expr: Node,
 }
 
 #[derive(Debug, Clone, PartialEq)]
 enum Node {
-    Bool(bool),
-    Int(i128, Type),
-    /// An integer constant without a type.
-    Untyped(i128),
-    Real(f64),
-    Str(String),
-    Read(String, Type),
+    /// A variable, `Step.X`, `Step.T`, `Action.Q`, … (the key for [`Simulation::get`]).
+    Read(String),
+    Const(Value),
     Not(Box<Node>),
-    Neg(Box<Node>, Type),
-    Bin(BinaryOp, Box<Node>, Box<Node>, Type),
+    Neg(Box<Node>),
+    Binary(BinaryOp, Box<Node>, Box<Node>),
 }
 
+/// What a node is known to produce, for binding errors.
 #[derive(Debug, Clone, PartialEq)]
-enum V {
-    B(bool),
-    I(i128),
-    R(f64),
-    S(String),
-}
-
-fn err<T>(offset: usize, message: impl Into<String>) -> Result<T, ConditionError> {
-    Err(ConditionError { offset, message: message.into() })
-}
-
-/// Wraps an integer into the width of an integer-like type.
-fn wrap(v: i128, ty: &Type) -> i128 {
-    let ty = ty.base();
-    let (bits, signed) = match ty {
-        Type::SInt => (8, true),
-        Type::Int => (16, true),
-        Type::DInt => (32, true),
-        Type::USInt | Type::Byte => (8, false),
-        Type::UInt | Type::Word => (16, false),
-        Type::UDInt | Type::DWord => (32, false),
-        Type::ULInt | Type::LWord => (64, false),
-        _ => (64, true),
-    };
-    let m = v & ((1i128 << bits) - 1);
-    if signed && m >= 1i128 << (bits - 1) {
-        m - (1i128 << bits)
-    } else {
-        m
-    }
-}
-
-fn is_int_like(t: &Type) -> bool {
-    t.is_integer() || (t.is_bit() && !t.is_bool()) || t.is_duration() || t.is_date() || t.is_enum()
+enum Kind {
+    Bool,
+    Other(Option<Type>),
+    /// A bare name that is no variable (an enumeration value, or a mistake).
+    Name,
 }
 
 impl Condition {
-    /// Parses and binds `text` to the variables of `sim`.
-    pub fn new(text: &str, sim: &Simulation) -> Result<Condition, ConditionError> {
+    /// Parses `text` and binds it to the simulation; the error says what is wrong, in words.
+    pub fn parse(text: &str, sim: &Simulation) -> Result<Condition, String> {
         let (expr, diags) = sfc_syntax::parse_expression(0, text);
         if let Some(d) = diags.iter().find(|d| d.is_error()) {
-            return err(d.span.start as usize, d.message.clone());
+            return Err(format!("`{text}` is not an ST expression: {}", d.message));
         }
-        if text.trim().is_empty() {
-            return err(0, "the condition is empty");
+        let binder = Binder { sim, text };
+        let (node, kind) = binder.bind(&expr)?;
+        if kind != Kind::Bool {
+            return Err(format!("`{text}` is not a BOOL expression"));
         }
-        let root = bind(&expr, sim, None)?;
-        match node_type(&root) {
-            Some(Type::Bool) => Ok(Condition { text: text.to_string(), root }),
-            other => err(
-                0,
-                format!(
-                    "a condition must be BOOL, found {}",
-                    other.map_or_else(|| "an untyped number".to_string(), |t| format!("`{t}`"))
-                ),
-            ),
-        }
+        Ok(Condition { text: text.trim().to_string(), expr: node })
     }
 
-    /// The value after the last scan of `sim`.
+    /// The value after the last scan; an error when it cannot be computed (division by zero).
     pub fn eval(&self, sim: &Simulation) -> Result<bool, String> {
-        match eval(&self.root, sim)? {
-            V::B(b) => Ok(b),
-            _ => Err("the condition is not BOOL".into()),
+        match eval(&self.expr, sim)? {
+            Value::Bool(b) => Ok(b),
+            other => Err(format!("`{}` gave {other:?}, not a BOOL", self.text)),
         }
+    }
+
+    /// The names it reads with their values now, for failure messages: `Fwd = TRUE, Rev = TRUE`.
+    pub fn operands(&self, sim: &Simulation) -> String {
+        let mut names = Vec::new();
+        reads(&self.expr, &mut names);
+        names
+            .iter()
+            .map(|n| {
+                let v = sim.get(n).map_or_else(|| "?".to_string(), |v| show(&v));
+                format!("{n} = {v}")
+            })
+            .collect::<Vec<_>>()
+            .join(", ")
     }
 }
 
-fn node_type(n: &Node) -> Option<Type> {
+fn reads<'a>(n: &'a Node, out: &mut Vec<&'a str>) {
     match n {
-        Node::Bool(_) | Node::Not(_) => Some(Type::Bool),
-        Node::Int(_, t) | Node::Read(_, t) | Node::Neg(_, t) => Some(t.clone()),
-        Node::Untyped(_) => None,
-        Node::Real(_) => Some(Type::LReal),
-        Node::Str(_) => Some(Type::String { len: None }),
-        Node::Bin(op, a, _, t) => match op {
-            BinaryOp::Eq | BinaryOp::Ne | BinaryOp::Lt | BinaryOp::Gt | BinaryOp::Le | BinaryOp::Ge => Some(Type::Bool),
-            BinaryOp::AndThen | BinaryOp::OrElse => Some(Type::Bool),
-            _ => {
-                let _ = a;
-                Some(t.clone())
+        Node::Read(k) => {
+            if !out.contains(&k.as_str()) {
+                out.push(k);
             }
-        },
+        }
+        Node::Const(_) => {}
+        Node::Not(a) | Node::Neg(a) => reads(a, out),
+        Node::Binary(_, a, b) => {
+            reads(a, out);
+            reads(b, out);
+        }
     }
 }
 
-/// The dotted path of a place expression (`Rev.Busy`, `S2.X`, `Cells[2]`).
-fn path_of(e: &Expr) -> Option<String> {
-    match &e.kind {
-        ExprKind::Name(id) => Some(id.text.clone()),
-        ExprKind::Member { base, member } => Some(format!("{}.{}", path_of(base)?, member.text)),
-        ExprKind::Index { base, indices } => {
-            let mut ix = Vec::new();
-            for i in indices {
-                match sfc_st::const_eval(i, &sfc_st::NoConstants)? {
-                    sfc_st::Value::Int(v) => ix.push(v.to_string()),
-                    _ => return None,
-                }
-            }
-            Some(format!("{}[{}]", path_of(base)?, ix.join(",")))
-        }
-        ExprKind::Paren(inner) => path_of(inner),
-        _ => None,
+/// A value as the failure messages show it (IEC spelling).
+fn show(v: &Value) -> String {
+    match v {
+        Value::Bool(b) => if *b { "TRUE" } else { "FALSE" }.to_string(),
+        Value::Int(i) => i.to_string(),
+        Value::Real(r) => format!("{r}"),
+        Value::Time(t) => format_time(*t),
+        Value::Str(s) => format!("'{s}'"),
     }
 }
 
-fn bind(e: &Expr, sim: &Simulation, expected: Option<&Type>) -> Result<Node, ConditionError> {
-    let at = e.span.start as usize;
-    match &e.kind {
-        ExprKind::Paren(inner) => bind(inner, sim, expected),
-        ExprKind::Literal(lit) => Ok(match &lit.kind {
-            LiteralKind::Bool(b) => Node::Bool(*b),
-            LiteralKind::Int(v) => match lit.type_prefix.as_deref().and_then(Type::elementary) {
-                Some(t) if t.is_bool() => Node::Bool(*v != 0),
-                Some(t) => Node::Int(*v, t),
-                None => Node::Untyped(*v),
-            },
-            LiteralKind::Real(r) => Node::Real(*r),
-            LiteralKind::Duration(us) => Node::Int(*us as i128, Type::Time),
-            LiteralKind::String { value, .. } => Node::Str(value.clone()),
-            LiteralKind::Date(d) => Node::Int(*d as i128 * 86_400_000_000, Type::Date),
-            LiteralKind::TimeOfDay(us) => Node::Int(*us as i128, Type::TimeOfDay),
-            LiteralKind::DateAndTime(us) => Node::Int(*us as i128, Type::DateAndTime),
-            LiteralKind::Enum(v) => match expected.and_then(|t| t.enum_value(&v.text).map(|n| (t.clone(), n))) {
-                Some((t, n)) => Node::Int(n as i128, t),
-                None => return err(at, format!("unknown enumerated value `{}`", lit.text)),
-            },
-        }),
-        ExprKind::Name(id) => {
-            if let Some(t) = sim.type_of(&id.text) {
-                return Ok(Node::Read(id.text.clone(), t));
-            }
-            if let Some(n) = expected.and_then(|t| t.enum_value(&id.text)) {
-                return Ok(Node::Int(n as i128, expected.cloned().unwrap_or(Type::DInt)));
-            }
-            if sim.step_names().iter().any(|s| s.eq_ignore_ascii_case(&id.text)) {
-                return err(at, format!("`{}` is a step; read `{0}.X` or `{0}.T`", id.text));
-            }
-            let mut names: Vec<String> = sim.trace_vars().into_iter().map(|(n, _)| n).collect();
-            for s in sim.step_names() {
-                names.push(format!("{s}.X"));
-            }
-            let hint = match sfc_st::closest(&id.text, names.iter().map(String::as_str)) {
-                Some(c) => format!("; did you mean `{c}`?"),
-                None => String::new(),
-            };
-            err(at, format!("unknown name `{}` in POU {}{hint}", id.text, sim.pou_name()))
-        }
-        ExprKind::Member { .. } | ExprKind::Index { .. } => {
-            let Some(p) = path_of(e) else { return err(at, "not a variable") };
-            match sim.type_of(&p) {
-                Some(t) => Ok(Node::Read(p, t)),
-                None => err(at, format!("unknown name `{p}` in POU {}", sim.pou_name())),
-            }
-        }
-        ExprKind::Unary { op, operand } => {
-            let v = bind(operand, sim, expected)?;
-            match op {
-                UnaryOp::Plus => Ok(v),
-                UnaryOp::Not => match node_type(&v) {
-                    Some(t) if t.is_bool() || t.is_bit() => Ok(Node::Not(Box::new(v))),
-                    _ => err(at, "NOT needs a BOOL or a bit string"),
-                },
-                UnaryOp::Neg => match (&v, node_type(&v)) {
-                    (Node::Untyped(c), _) => Ok(Node::Untyped(-c)),
-                    (Node::Real(r), _) => Ok(Node::Real(-r)),
-                    (_, Some(t)) if is_int_like(&t) || t.is_real() => Ok(Node::Neg(Box::new(v), t)),
-                    _ => err(at, "minus needs a number"),
-                },
-            }
-        }
-        ExprKind::Binary { op, lhs, rhs } => {
-            let l = bind(lhs, sim, None)?;
-            let lt = node_type(&l);
-            let r = bind(rhs, sim, lt.as_ref().or(expected))?;
-            let rt = node_type(&r);
-            let l = if lt.is_none() { bind(lhs, sim, rt.as_ref())? } else { l };
-            let lt = node_type(&l);
-            let t = match (&lt, &rt) {
-                (Some(a), Some(b)) => match Type::common(a, b) {
-                    Some(t) => t,
-                    None if is_int_like(a) && is_int_like(b) => a.clone(),
-                    None if a.is_real() || b.is_real() => Type::LReal,
-                    None => return err(at, format!("`{}` cannot combine `{a}` and `{b}`", op.symbol())),
-                },
-                (Some(a), None) | (None, Some(a)) => a.base().clone(),
-                (None, None) => Type::LInt,
-            };
-            match op {
-                BinaryOp::And | BinaryOp::Or | BinaryOp::Xor | BinaryOp::AndThen | BinaryOp::OrElse => {
-                    if !(t.is_bool() || t.is_bit()) {
-                        return err(at, format!("`{}` needs BOOL operands, found `{t}`", op.symbol()));
+struct Binder<'a> {
+    sim: &'a Simulation,
+    text: &'a str,
+}
+
+impl Binder<'_> {
+    /// The key [`Simulation::get`] reads for a name, member or constant-index path.
+    fn path(&self, e: &Expr) -> Option<String> {
+        match &e.kind {
+            ExprKind::Name(id) => Some(id.text.clone()),
+            ExprKind::Member { base, member } => Some(format!("{}.{}", self.path(base)?, member.text)),
+            ExprKind::Index { base, indices } => {
+                let mut idx = Vec::new();
+                for i in indices {
+                    match &i.kind {
+                        ExprKind::Literal(l) => match l.kind {
+                            LiteralKind::Int(v) => idx.push(v.to_string()),
+                            _ => return None,
+                        },
+                        ExprKind::Unary { op: UnaryOp::Neg, operand } => match &operand.kind {
+                            ExprKind::Literal(l) => match l.kind {
+                                LiteralKind::Int(v) => idx.push(format!("-{v}")),
+                                _ => return None,
+                            },
+                            _ => return None,
+                        },
+                        _ => return None,
                     }
                 }
-                BinaryOp::Pow => return err(at, "`**` is not supported in conditions"),
-                _ => {}
+                Some(format!("{}[{}]", self.path(base)?, idx.join(",")))
             }
-            Ok(Node::Bin(*op, Box::new(l), Box::new(r), t))
+            ExprKind::Paren(inner) => self.path(inner),
+            _ => None,
         }
-        ExprKind::Call { callee, .. } => err(at, format!("calls (`{}`) are not supported in conditions", callee.text)),
-        ExprKind::Address(a) => match sim.type_of(&a.text) {
-            Some(t) => Ok(Node::Read(a.text.clone(), t)),
-            None => err(at, format!("unknown address `{}`", a.text)),
-        },
-        ExprKind::Error => err(at, "syntax error"),
+    }
+
+    fn read(&self, e: &Expr) -> Result<(Node, Kind), String> {
+        let Some(path) = self.path(e) else {
+            return Err(format!(
+                "`{}`: a scenario condition reads variables, `Step.X`, `Step.T` and `Action.Q` (array indices must be integer literals)",
+                self.text
+            ));
+        };
+        match self.sim.type_of(&path) {
+            Some(ty) => {
+                let kind = if ty.base().is_bool() { Kind::Bool } else { Kind::Other(Some(ty)) };
+                Ok((Node::Read(path), kind))
+            }
+            None => {
+                let mut names: Vec<String> = self.sim.trace_vars().into_iter().map(|(n, _)| n).collect();
+                for s in self.sim.step_names() {
+                    names.push(format!("{s}.X"));
+                    names.push(format!("{s}.T"));
+                }
+                let hint = match sfc_st::closest(&path, names.iter().map(String::as_str)) {
+                    Some(c) => format!("; did you mean `{c}`?"),
+                    None => String::new(),
+                };
+                Err(format!("unknown variable `{path}` in `{}` (POU {}){hint}", self.text, self.sim.pou_name()))
+            }
+        }
+    }
+
+    fn bind(&self, e: &Expr) -> Result<(Node, Kind), String> {
+        match &e.kind {
+            ExprKind::Paren(inner) => self.bind(inner),
+            ExprKind::Literal(l) => {
+                let (v, kind) = match &l.kind {
+                    LiteralKind::Bool(b) => (Value::Bool(*b), Kind::Bool),
+                    LiteralKind::Int(i) => {
+                        (Value::Int(i64::try_from(*i).map_err(|_| format!("{i} is too large"))?), Kind::Other(None))
+                    }
+                    LiteralKind::Real(r) => (Value::Real(*r), Kind::Other(None)),
+                    LiteralKind::String { value, .. } => (Value::Str(Arc::from(value.as_str())), Kind::Other(None)),
+                    LiteralKind::Duration(t) => (Value::Time(*t), Kind::Other(Some(Type::Time))),
+                    LiteralKind::Date(d) => (Value::Int(d.saturating_mul(86_400_000_000)), Kind::Other(None)),
+                    LiteralKind::TimeOfDay(t) | LiteralKind::DateAndTime(t) => (Value::Int(*t), Kind::Other(None)),
+                    LiteralKind::Enum(id) => {
+                        return Err(format!(
+                            "`{}`: compare an enumerated variable with its value by name (`Mode = {}`)",
+                            self.text, id.text
+                        ))
+                    }
+                };
+                Ok((Node::Const(v), kind))
+            }
+            ExprKind::Unary { op, operand } => {
+                let (n, k) = self.bind(operand)?;
+                match op {
+                    UnaryOp::Not => Ok((Node::Not(Box::new(n)), k)),
+                    UnaryOp::Neg => Ok((Node::Neg(Box::new(n)), k)),
+                    UnaryOp::Plus => Ok((n, k)),
+                }
+            }
+            ExprKind::Binary { op, lhs, rhs } => {
+                let comparison = matches!(
+                    op,
+                    BinaryOp::Eq | BinaryOp::Ne | BinaryOp::Lt | BinaryOp::Gt | BinaryOp::Le | BinaryOp::Ge
+                );
+                let (mut a, ka) = if comparison { self.bind_operand(lhs)? } else { self.bind(lhs)? };
+                let (mut b, kb) = if comparison { self.bind_operand(rhs)? } else { self.bind(rhs)? };
+                // `Mode = Auto`: a bare name on one side is a value of the other side's enumeration.
+                let enum_of = |k: &Kind| match k {
+                    Kind::Other(Some(ty)) if ty.is_enum() => Some(ty.clone()),
+                    _ => None,
+                };
+                if let Some(name) = enum_name(lhs, &ka) {
+                    match enum_of(&kb) {
+                        Some(ty) => a = Node::Const(Value::Int(self.enum_value(&ty, &name)?)),
+                        None => return self.read(lhs),
+                    }
+                }
+                if let Some(name) = enum_name(rhs, &kb) {
+                    match enum_of(&ka) {
+                        Some(ty) => b = Node::Const(Value::Int(self.enum_value(&ty, &name)?)),
+                        None => return self.read(rhs),
+                    }
+                }
+                let kind = match op {
+                    BinaryOp::Eq | BinaryOp::Ne | BinaryOp::Lt | BinaryOp::Gt | BinaryOp::Le | BinaryOp::Ge => {
+                        Kind::Bool
+                    }
+                    BinaryOp::And | BinaryOp::AndThen | BinaryOp::Or | BinaryOp::OrElse | BinaryOp::Xor
+                        if ka == Kind::Bool && kb == Kind::Bool =>
+                    {
+                        Kind::Bool
+                    }
+                    _ => Kind::Other(None),
+                };
+                Ok((Node::Binary(*op, Box::new(a), Box::new(b)), kind))
+            }
+            ExprKind::Name(_) | ExprKind::Member { .. } | ExprKind::Index { .. } => self.read(e),
+            ExprKind::Call { callee, .. } => {
+                Err(format!("`{}`: calls (`{}(…)`) are not allowed in a scenario condition", self.text, callee.text))
+            }
+            ExprKind::Address(_) => {
+                Err(format!("`{}`: name the variable declared at the address instead of the address", self.text))
+            }
+            ExprKind::Error => Err(format!("`{}` is not an ST expression", self.text)),
+        }
+    }
+
+    /// Like `bind`, but a bare name that is no variable is kept aside (marked by `Kind::Name`)
+    /// for the enumeration of the other side of a comparison.
+    fn bind_operand(&self, e: &Expr) -> Result<(Node, Kind), String> {
+        if let ExprKind::Name(id) = &e.kind {
+            if self.sim.type_of(&id.text).is_none() {
+                return Ok((Node::Const(Value::Int(0)), Kind::Name));
+            }
+        }
+        self.bind(e)
+    }
+
+    fn enum_value(&self, ty: &Type, name: &str) -> Result<i64, String> {
+        ty.enum_value(name).ok_or_else(|| match ty {
+            Type::Enum { values, .. } => {
+                let names: Vec<&str> = values.iter().map(|(n, _)| n.as_str()).collect();
+                format!("`{name}` is not a value of {ty} in `{}` (values: {})", self.text, names.join(", "))
+            }
+            _ => format!("unknown variable `{name}` in `{}` (POU {})", self.text, self.sim.pou_name()),
+        })
     }
 }
 
-fn value_of(v: Value) -> V {
-    match v {
-        Value::Bool(b) => V::B(b),
-        Value::Int(i) | Value::Time(i) => V::I(i as i128),
-        Value::Real(r) => V::R(r),
-        Value::Str(s) => V::S(s.to_string()),
-    }
-}
-
-fn eval(n: &Node, sim: &Simulation) -> Result<V, String> {
-    Ok(match n {
-        Node::Bool(b) => V::B(*b),
-        Node::Int(v, _) | Node::Untyped(v) => V::I(*v),
-        Node::Real(r) => V::R(*r),
-        Node::Str(s) => V::S(s.clone()),
-        Node::Read(p, t) => {
-            let v = sim.get(p).ok_or_else(|| format!("`{p}` cannot be read"))?;
-            match (value_of(v), t.base()) {
-                (V::I(i), Type::ULInt | Type::LWord) => V::I(i & ((1i128 << 64) - 1)),
-                (v, _) => v,
-            }
-        }
-        Node::Not(a) => match eval(a, sim)? {
-            V::B(b) => V::B(!b),
-            V::I(i) => V::I(!i),
-            _ => return Err("NOT of a non-BOOL value".into()),
-        },
-        Node::Neg(a, t) => match eval(a, sim)? {
-            V::I(i) => V::I(wrap(-i, t)),
-            V::R(r) => V::R(-r),
-            _ => return Err("minus of a non-number".into()),
-        },
-        Node::Bin(op, a, b, t) => {
-            let x = eval(a, sim)?;
-            let y = eval(b, sim)?;
-            binary(*op, x, y, t)?
-        }
-    })
-}
-
-fn num(v: &V) -> Option<f64> {
-    match v {
-        V::I(i) => Some(*i as f64),
-        V::R(r) => Some(*r),
+/// The bare name of an operand that `bind_operand` kept aside (no variable of that name).
+fn enum_name(e: &Expr, kind: &Kind) -> Option<String> {
+    match (&e.kind, kind) {
+        (ExprKind::Name(id), Kind::Name) => Some(id.text.clone()),
         _ => None,
     }
 }
 
-fn binary(op: BinaryOp, x: V, y: V, t: &Type) -> Result<V, String> {
-    use BinaryOp as B;
-    let cmp = |o: std::cmp::Ordering| -> V {
-        V::B(match op {
-            B::Eq => o.is_eq(),
-            B::Ne => o.is_ne(),
-            B::Lt => o.is_lt(),
-            B::Gt => o.is_gt(),
-            B::Le => o.is_le(),
-            _ => o.is_ge(),
-        })
+fn num(v: &Value) -> Option<f64> {
+    match v {
+        Value::Int(i) | Value::Time(i) => Some(*i as f64),
+        Value::Real(r) => Some(*r),
+        Value::Bool(b) => Some(f64::from(u8::from(*b))),
+        Value::Str(_) => None,
+    }
+}
+
+fn eval(n: &Node, sim: &Simulation) -> Result<Value, String> {
+    match n {
+        Node::Read(k) => sim.get(k).ok_or_else(|| format!("`{k}` cannot be read")),
+        Node::Const(v) => Ok(v.clone()),
+        Node::Not(a) => match eval(a, sim)? {
+            Value::Bool(b) => Ok(Value::Bool(!b)),
+            Value::Int(i) => Ok(Value::Int(!i)),
+            v => Err(format!("NOT of {}", show(&v))),
+        },
+        Node::Neg(a) => match eval(a, sim)? {
+            Value::Int(i) => Ok(Value::Int(i.wrapping_neg())),
+            Value::Time(t) => Ok(Value::Time(t.wrapping_neg())),
+            Value::Real(r) => Ok(Value::Real(-r)),
+            v => Err(format!("- of {}", show(&v))),
+        },
+        Node::Binary(op, a, b) => {
+            let (x, y) = (eval(a, sim)?, eval(b, sim)?);
+            binary(*op, &x, &y)
+        }
+    }
+}
+
+fn binary(op: BinaryOp, x: &Value, y: &Value) -> Result<Value, String> {
+    use std::cmp::Ordering;
+    let order = || -> Option<Ordering> {
+        match (x, y) {
+            (Value::Str(a), Value::Str(b)) => Some(a.cmp(b)),
+            (Value::Int(a) | Value::Time(a), Value::Int(b) | Value::Time(b)) => Some(a.cmp(b)),
+            (Value::Bool(a), Value::Bool(b)) => Some(a.cmp(b)),
+            _ => num(x)?.partial_cmp(&num(y)?),
+        }
     };
-    Ok(match (op, x, y) {
-        (B::And | B::AndThen, V::B(a), V::B(b)) => V::B(a && b),
-        (B::Or | B::OrElse, V::B(a), V::B(b)) => V::B(a || b),
-        (B::Xor, V::B(a), V::B(b)) => V::B(a ^ b),
-        (B::And, V::I(a), V::I(b)) => V::I(wrap(a & b, t)),
-        (B::Or, V::I(a), V::I(b)) => V::I(wrap(a | b, t)),
-        (B::Xor, V::I(a), V::I(b)) => V::I(wrap(a ^ b, t)),
-        (B::Eq | B::Ne | B::Lt | B::Gt | B::Le | B::Ge, V::B(a), V::B(b)) => cmp(a.cmp(&b)),
-        (B::Eq | B::Ne | B::Lt | B::Gt | B::Le | B::Ge, V::I(a), V::I(b)) => cmp(wrap(a, t).cmp(&wrap(b, t))),
-        (B::Eq | B::Ne | B::Lt | B::Gt | B::Le | B::Ge, V::S(a), V::S(b)) => cmp(a.cmp(&b)),
-        (B::Eq | B::Ne | B::Lt | B::Gt | B::Le | B::Ge, a, b) => match (num(&a), num(&b)) {
-            (Some(p), Some(q)) => cmp(p.partial_cmp(&q).unwrap_or(std::cmp::Ordering::Equal)),
-            _ => return Err("comparing values of different kinds".into()),
-        },
-        (B::Add, V::I(a), V::I(b)) => V::I(wrap(a + b, t)),
-        (B::Sub, V::I(a), V::I(b)) => V::I(wrap(a - b, t)),
-        (B::Mul, V::I(a), V::I(b)) => V::I(wrap(a.wrapping_mul(b), t)),
-        (B::Div, V::I(_), V::I(0)) | (B::Mod, V::I(_), V::I(0)) => return Err("division by zero".into()),
-        (B::Div, V::I(a), V::I(b)) => V::I(wrap(a / b, t)),
-        (B::Mod, V::I(a), V::I(b)) => V::I(wrap(a % b, t)),
-        (op, a, b) => match (num(&a), num(&b)) {
-            (Some(p), Some(q)) => V::R(match op {
-                B::Add => p + q,
-                B::Sub => p - q,
-                B::Mul => p * q,
-                B::Div => p / q,
-                _ => return Err(format!("`{}` on numbers", op.symbol())),
-            }),
-            _ => return Err(format!("`{}` on these values", op.symbol())),
-        },
-    })
+    let cmp = |f: fn(Ordering) -> bool| -> Result<Value, String> {
+        order().map(|o| Value::Bool(f(o))).ok_or_else(|| format!("cannot compare {} with {}", show(x), show(y)))
+    };
+    let ints = |f: fn(i64, i64) -> Option<i64>| -> Result<Value, String> {
+        match (x, y) {
+            (Value::Int(a), Value::Int(b)) => f(*a, *b).map(Value::Int).ok_or_else(|| "division by zero".to_string()),
+            (Value::Time(a) | Value::Int(a), Value::Time(b) | Value::Int(b)) => {
+                f(*a, *b).map(Value::Time).ok_or_else(|| "division by zero".to_string())
+            }
+            _ => match (num(x), num(y)) {
+                (Some(a), Some(b)) => {
+                    let r = match op {
+                        BinaryOp::Add => a + b,
+                        BinaryOp::Sub => a - b,
+                        BinaryOp::Mul => a * b,
+                        BinaryOp::Div => a / b,
+                        BinaryOp::Pow => a.powf(b),
+                        _ => a % b,
+                    };
+                    Ok(Value::Real(r))
+                }
+                _ => Err(format!("cannot compute with {} and {}", show(x), show(y))),
+            },
+        }
+    };
+    let logic = |f: fn(bool, bool) -> bool, g: fn(i64, i64) -> i64| -> Result<Value, String> {
+        match (x, y) {
+            (Value::Bool(a), Value::Bool(b)) => Ok(Value::Bool(f(*a, *b))),
+            (Value::Int(a), Value::Int(b)) => Ok(Value::Int(g(*a, *b))),
+            _ => Err(format!("cannot combine {} and {}", show(x), show(y))),
+        }
+    };
+    match op {
+        BinaryOp::Eq => cmp(|o| o == Ordering::Equal),
+        BinaryOp::Ne => cmp(|o| o != Ordering::Equal),
+        BinaryOp::Lt => cmp(|o| o == Ordering::Less),
+        BinaryOp::Gt => cmp(|o| o == Ordering::Greater),
+        BinaryOp::Le => cmp(|o| o != Ordering::Greater),
+        BinaryOp::Ge => cmp(|o| o != Ordering::Less),
+        BinaryOp::And | BinaryOp::AndThen => logic(|a, b| a && b, |a, b| a & b),
+        BinaryOp::Or | BinaryOp::OrElse => logic(|a, b| a || b, |a, b| a | b),
+        BinaryOp::Xor => logic(|a, b| a ^ b, |a, b| a ^ b),
+        BinaryOp::Add => ints(|a, b| Some(a.wrapping_add(b))),
+        BinaryOp::Sub => ints(|a, b| Some(a.wrapping_sub(b))),
+        BinaryOp::Mul => ints(|a, b| Some(a.wrapping_mul(b))),
+        BinaryOp::Div => ints(|a, b| if b == 0 { None } else { Some(a.wrapping_div(b)) }),
+        BinaryOp::Mod => ints(|a, b| if b == 0 { None } else { Some(a.wrapping_rem(b)) }),
+        BinaryOp::Pow => ints(|a, b| u32::try_from(b).ok().map(|e| a.wrapping_pow(e))),
+    }
 }

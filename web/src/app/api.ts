@@ -1,6 +1,9 @@
 // Client of the editor's HTTP API (contract: docs/editor.md "HTTP API", types in src/api.ts).
-// Every call sends the token from the page URL; a failed call throws an ApiError and shows the
-// server's message as a toast, and never touches the document being edited.
+// The page authenticates with the HttpOnly cookie the server set when the printed URL was opened
+// (the token itself never reaches the page's scripts) plus the header `X-Sfc-Page`, which other
+// origins cannot send; scripts and tests may pass a token, sent as `X-Sfc-Token`. A failed call
+// throws an ApiError and shows the server's message as a toast, and never touches the document
+// being edited.
 import type { BuildResult, BuildTarget, Diag, FileFormat, OpenResult, ProveResult, SaveResult, Session } from '../api';
 import type { ChartTarget, EditorDoc } from '../doc';
 import { toasts } from './toast';
@@ -18,19 +21,23 @@ export class ApiError extends Error {
   }
 }
 
-/** The token of `?token=…` in the page's query string. */
-export function tokenFromSearch(search: string): string | null {
-  return new URLSearchParams(search).get('token');
-}
-
 export interface ApiOptions {
-  token: string | null;
+  /** A token to send as `X-Sfc-Token` (the page itself has none: its cookie carries it). */
+  token?: string | null;
   /** Defaults to the global fetch. */
   fetch?: typeof fetch;
   /** Shows an error to the user; defaults to a toast. */
   notify?: (message: string) => void;
   /** Base URL of the server; defaults to the page's origin. */
   base?: string;
+  /** Requests the page started before the app loaded (index.html), each taken over once. */
+  start?: StartRequests;
+}
+
+/** The session, and the first named file's opening, requested by index.html's inline script. */
+export interface StartRequests {
+  session: Promise<Response>;
+  open: Promise<{ path: string; res: Promise<Response> } | null>;
 }
 
 export interface SaveRequest {
@@ -49,15 +56,40 @@ export function createApi(opts: ApiOptions) {
   const doFetch = opts.fetch ?? ((input: RequestInfo | URL, init?: RequestInit) => fetch(input, init));
   const notify = opts.notify ?? ((m: string) => toasts.show('error', m));
   const base = opts.base ?? '';
+  let session = opts.start?.session;
+  let opening = opts.start?.open;
+
+  /** The response of a request index.html already made, if this is it (each taken once; one
+   *  that failed to arrive is made again). */
+  async function started(method: string, path: string, body: unknown): Promise<Response | undefined> {
+    if (method === 'GET' && path === '/api/session' && session) {
+      const s = session;
+      session = undefined;
+      return s.catch(() => undefined);
+    }
+    if (method === 'POST' && path === '/api/open' && opening) {
+      const o = await opening.catch(() => null);
+      if (o && opening && o.path === (body as { path?: string } | undefined)?.path) {
+        opening = undefined;
+        return o.res.catch(() => undefined);
+      }
+    }
+    return undefined;
+  }
 
   /** One call; statuses in `quiet` throw without a toast (the caller handles them). */
   async function call<T>(method: 'GET' | 'POST', path: string, body?: unknown, quiet: number[] = []): Promise<T> {
-    const headers: Record<string, string> = { Accept: 'application/json' };
+    const headers: Record<string, string> = { Accept: 'application/json', 'X-Sfc-Page': '1' };
     if (opts.token) headers['X-Sfc-Token'] = opts.token;
     if (body !== undefined) headers['Content-Type'] = 'application/json';
     let res: Response;
     try {
-      res = await doFetch(base + path, { method, headers, body: body === undefined ? undefined : JSON.stringify(body) });
+      res = (await started(method, path, body)) ?? (await doFetch(base + path, {
+        method,
+        headers,
+        credentials: 'same-origin',
+        body: body === undefined ? undefined : JSON.stringify(body),
+      }));
     } catch (e) {
       const err = new ApiError(`${method} ${path}: the server cannot be reached (${(e as Error).message})`, 0);
       notify(err.message);

@@ -20,8 +20,11 @@ export { MonitorView } from './MonitorView';
 
 export interface UseMonitorOptions {
   createCanvas: CreateCanvas;
-  /** The open chart and its tab title, or null when no chart is open. */
+  /** The open chart and its tab title, or null when no chart is open (called when monitoring
+   *  starts: it copies the whole document). */
   current: () => { doc: EditorDoc; title: string } | null;
+  /** A chart is open (read on every render, so cheap). */
+  hasChart: boolean;
 }
 
 export interface MonitorUi {
@@ -38,11 +41,11 @@ export interface MonitorUi {
 
 /** Posts `stop` for a simulation as the page goes away (a beacon-like request that outlives it). */
 function stopOnExit(id: number): void {
-  const token = new URLSearchParams(globalThis.location?.search ?? '').get('token') ?? '';
   void fetch('/api/sim/stop', {
     method: 'POST',
     keepalive: true,
-    headers: { 'Content-Type': 'application/json', 'X-Sfc-Token': token },
+    credentials: 'same-origin',
+    headers: { 'Content-Type': 'application/json', 'X-Sfc-Page': '1' },
     body: JSON.stringify({ id }),
   }).catch(() => undefined);
 }
@@ -115,7 +118,7 @@ export function useMonitor(opts: UseMonitorOptions): MonitorUi {
     setTarget({ url, doc, elements: elementsByName(doc), simId: null, title: open.title });
   }
 
-  const hasChart = opts.current() !== null;
+  const hasChart = opts.hasChart;
   const menu: MenuDef = {
     id: 'monitor',
     label: t('monitor.menu'),

@@ -1,5 +1,5 @@
 //! An explicit-state explorer written apart from the prover: it runs the simulator itself on
-//! every input combination, breadth first, keeping the distinct states of each depth (the
+//! every input combination, breadth first, keeping each distinct state once (the
 //! simulator's own state key), and evaluates the properties with the scenario conditions. It
 //! decides, up to a depth, whether and after which scan each property is first violated.
 
@@ -85,7 +85,7 @@ pub fn explore(
             None => return vec![Found::TooBig; names.len()],
         }
     }
-    let assume: Vec<Condition> = match file.assume.iter().map(|a| Condition::new(&a.src.text, &sim)).collect() {
+    let assume: Vec<Condition> = match file.assume.iter().map(|a| Condition::parse(&a.src.text, &sim)).collect() {
         Ok(v) => v,
         Err(_) => return vec![Found::Skipped; names.len()],
     };
@@ -105,7 +105,7 @@ pub fn explore(
             match file.properties.iter().find(|p| &p.name == n) {
                 None => Check::None,
                 Some(p) => {
-                    let cond = |t: &str| Condition::new(t, &sim).ok();
+                    let cond = |t: &str| Condition::parse(t, &sim).ok();
                     match &p.kind {
                         Kind::Always(x) => cond(&x.src.text).map_or(Check::None, Check::Always),
                         Kind::Never(x) => cond(&x.src.text).map_or(Check::None, Check::Never),
@@ -138,9 +138,11 @@ pub fn explore(
     let mut sim = sim;
     // Every combination of input values.
     let combos: usize = doms.iter().map(|(_, d)| d.len()).product();
+    // Every state seen so far, at any depth: breadth first, a state met again later has
+    // nothing new to show (its successors were reached as early or earlier).
+    let mut seen: HashSet<String> = HashSet::new();
     for scan in 0..depth {
         let mut next: Vec<Node> = Vec::new();
-        let mut seen: HashSet<String> = HashSet::new();
         for node in &frontier {
             for k in 0..combos {
                 sim.restore(&node.sim_state);
@@ -206,7 +208,7 @@ pub fn explore(
                 }
             }
         }
-        if next.len() > max_states {
+        if seen.len() > max_states {
             return result.into_iter().map(|r| r.unwrap_or(Found::TooBig)).collect();
         }
         frontier = next;
