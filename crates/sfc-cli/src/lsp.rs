@@ -17,7 +17,10 @@ pub fn lsp(args: LspArgs) -> u8 {
             "sfc lsp: serving the Language Server Protocol on standard input (an editor starts this; Ctrl-D ends)"
         );
     }
-    match sfc_lsp::run_stdio(sfc_lsp::ServerOptions::default()) {
+    let mut options = sfc_lsp::ServerOptions::default();
+    // Property files of `sfc prove` get their own diagnostics (checked first: a `.props.toml`).
+    options.providers.insert(0, Box::new(crate::prove::PropertyDiagnostics));
+    match sfc_lsp::run_stdio(options) {
         Ok(()) => Status::Ok.code(),
         Err(e) => {
             crate::term::error(&format!("sfc lsp: {e}"));

@@ -163,7 +163,7 @@ pub fn prove(a: ProveArgs) -> u8 {
             }
         }
     } else {
-        shown_dir = String::from("(not written)");
+        shown_dir = sfc_prove::report::NOT_WRITTEN.to_string();
     }
     match a.format {
         crate::Format::Json => println!("{}", report.json(&shown_dir)),
@@ -201,4 +201,69 @@ fn relative(path: &Path, base: &Path) -> Option<PathBuf> {
         out.push(c);
     }
     Some(out)
+}
+
+/// Seconds `sfc lsp` gives a proof when a property file is saved (all its properties together).
+const LSP_BUDGET_SECONDS: f64 = 10.0;
+
+/// Diagnostics on property files (`<chart>.props.toml`) for `sfc lsp`: while typing, the file's
+/// TOML and its names and types against the chart beside it (SFC1001); on save or after idle,
+/// the proof itself: one diagnostic per violated (SFC1002) or undecided (SFC1003) property at its
+/// `[[property]]` line.
+pub struct PropertyDiagnostics;
+
+impl sfc_lsp::DiagnosticsProvider for PropertyDiagnostics {
+    fn handles(&self, path: &Path, _language: &str, _text: &str) -> bool {
+        path.file_name().is_some_and(|n| n.to_string_lossy().to_ascii_lowercase().ends_with(".props.toml"))
+    }
+
+    fn check(
+        &self,
+        path: &Path,
+        text: &str,
+        analysis: bool,
+    ) -> (sfc_diagnostics::SourceFile, Vec<sfc_diagnostics::Diagnostic>) {
+        let shown = path.display().to_string();
+        let src = sfc_diagnostics::SourceFile::new(shown.clone(), text.to_string());
+        let file = match sfc_prove::props::parse(&shown, text) {
+            Ok(f) => f,
+            Err(e) => return (src, sfc_prove::property_diagnostics(0, text, Some(&e), None)),
+        };
+        let Some(chart) = chart_of_properties(path) else {
+            return (src, Vec::new());
+        };
+        let chart_text = match sfc_driver::read_source(&chart) {
+            Ok(d) => d.text,
+            Err(e) => {
+                let d = sfc_diagnostics::Diagnostic::error(
+                    "SFC1001",
+                    sfc_diagnostics::Span::new(0, 0, 0),
+                    format!("the chart of this property file cannot be read: {e}"),
+                );
+                return (src, vec![d]);
+            }
+        };
+        let opts = Options { check_only: !analysis, seconds: LSP_BUDGET_SECONDS, ..Options::default() };
+        let diags = match sfc_prove::prove(&chart.display().to_string(), &chart_text, &file, &opts) {
+            Ok(report) if analysis => sfc_prove::property_diagnostics(0, text, None, Some(&report)),
+            Ok(_) => Vec::new(),
+            Err(ProveError::Props(e)) => sfc_prove::property_diagnostics(0, text, Some(&e), None),
+            Err(ProveError::Chart(b)) => {
+                let first = b.1.iter().find(|d| d.is_error()).map_or_else(String::new, |d| d.message.clone());
+                vec![sfc_diagnostics::Diagnostic::error(
+                    "SFC1001",
+                    sfc_diagnostics::Span::new(0, 0, 0),
+                    format!("`{}` has errors, so its requirements cannot be checked: {first}", chart.display()),
+                )]
+            }
+        };
+        (src, diags)
+    }
+}
+
+/// `door.props.toml` → `door.st` beside it (or `door.xml`), if it exists.
+fn chart_of_properties(props: &Path) -> Option<PathBuf> {
+    let name = props.file_name()?.to_string_lossy().into_owned();
+    let stem = name.get(..name.len().checked_sub(".props.toml".len())?)?;
+    ["st", "ST"].iter().map(|ext| props.with_file_name(format!("{stem}.{ext}"))).find(|p| p.is_file())
 }

@@ -111,7 +111,11 @@ impl Client {
 
     fn open(&mut self, path: &Path, text: &str) -> Uri {
         let u = uri(path);
-        let language = if path.extension().is_some_and(|e| e == "xml") { "xml" } else { "sfc" };
+        let language = match path.extension().and_then(|e| e.to_str()) {
+            Some("xml") => "xml",
+            Some("toml") => "toml",
+            _ => "sfc",
+        };
         self.notify::<note::DidOpenTextDocument>(DidOpenTextDocumentParams {
             text_document: TextDocumentItem::new(u.clone(), language.into(), 1, text.to_string()),
         });
@@ -774,5 +778,40 @@ fn references_and_rename_across_workspace_files() {
         })
         .unwrap_err();
     assert!(clash.contains("`Run` is already a step"), "{clash}");
+    c.stop();
+}
+
+#[test]
+fn property_file_diagnostics_while_typing_and_the_proof_on_save() {
+    let dir = scratch("props");
+    let prover = Path::new(env!("CARGO_MANIFEST_DIR")).join("../sfc-prove/tests/fixtures");
+    std::fs::copy(prover.join("carwash.st"), dir.join("carwash.st")).unwrap();
+    let good = std::fs::read_to_string(prover.join("carwash.props.toml")).unwrap();
+    std::fs::write(dir.join("carwash.props.toml"), &good).unwrap();
+    let mut c = Client::start(Some(&dir), no_idle());
+    // A name the chart does not declare: SFC1001 at its line, while typing.
+    let bad_path = dir.join("carwash.props.toml");
+    let bad = "[[property]]\nname = \"x\"\nnever = \"Travel AND Nonsense\"\n";
+    let u = c.open(&bad_path, bad);
+    let code = |d: &Diagnostic| d.code.clone();
+    let found = c.diagnostics_for(&u, 1, |d| !d.is_empty());
+    assert_eq!(code(&found[0]), Some(NumberOrString::String("SFC1001".into())), "{found:#?}");
+    assert_eq!(found[0].range.start.line, 2, "{found:#?}");
+    assert!(found[0].message.contains("Nonsense"), "{}", found[0].message);
+    // The real requirements, then saved: the proof finds the violated one at its [[property]].
+    let end = Position::new(3, 0);
+    c.change(&u, 2, Range::new(Position::new(0, 0), end), &good);
+    let typed = c.diagnostics_for(&u, 2, |_| true);
+    assert!(typed.is_empty(), "no errors while typing valid requirements: {typed:#?}");
+    c.notify::<note::DidSaveTextDocument>(DidSaveTextDocumentParams {
+        text_document: TextDocumentIdentifier::new(u.clone()),
+        text: None,
+    });
+    let proved = c.diagnostics_for(&u, 2, |d| !d.is_empty());
+    assert_eq!(proved.len(), 1, "{proved:#?}");
+    assert_eq!(code(&proved[0]), Some(NumberOrString::String("SFC1002".into())));
+    assert!(proved[0].message.contains("no travel without a car"), "{}", proved[0].message);
+    let line = good.lines().position(|l| l.contains("no travel without a car")).unwrap() as u32;
+    assert!(proved[0].range.start.line + 1 >= line && proved[0].range.start.line <= line, "{proved:#?}");
     c.stop();
 }

@@ -262,7 +262,7 @@ pub fn prove(chart_name: &str, chart_text: &str, file: &PropertyFile, opts: &Opt
                         .file_name()
                         .map_or_else(|| chart_name.to_string(), |f| f.to_string_lossy().into_owned());
                     let (scenario, own_line) = w.scenario(&chart_file, &pou, period, c, file, &own);
-                    let replay = witness::replay(chart_name, chart_text, &scenario, own_line, expect);
+                    let replay = witness::replay(chart_name, chart_text, &own, &scenario, own_line, expect);
                     let write = finding.verdict == Verdict::Violated;
                     rep.attach(w, own, scenario, replay, write);
                 }

@@ -3,6 +3,9 @@
 use crate::check::{fmt_states, Finding, Verdict};
 use crate::compile::{Compiled, Origin};
 use crate::witness::{Replay, Witness};
+
+/// The witness directory that says the witnesses are not written (`--no-witness`).
+pub const NOT_WRITTEN: &str = "(not written)";
 use serde_json::json;
 use std::time::Duration;
 
@@ -165,8 +168,13 @@ impl Report {
             }
             if let Some(w) = &p.witness {
                 if w.write {
-                    let path =
-                        if witness_dir.is_empty() { w.file.clone() } else { format!("{witness_dir}/{}", w.file) };
+                    let path = if witness_dir.is_empty() {
+                        w.file.clone()
+                    } else if witness_dir == NOT_WRITTEN {
+                        format!("{} (not written)", w.file)
+                    } else {
+                        format!("{witness_dir}/{}", w.file)
+                    };
                     out.push_str(&format!(
                         "    witness: {path} ({} scans, {} in the simulator)\n",
                         w.scans,
@@ -200,7 +208,8 @@ impl Report {
             .map(|p| {
                 let witness = p.witness.as_ref().filter(|w| w.write).map(|w| {
                     json!({
-                        "file": if witness_dir.is_empty() { w.file.clone() } else { format!("{witness_dir}/{}", w.file) },
+                        "file": if witness_dir.is_empty() || witness_dir == NOT_WRITTEN { w.file.clone() } else { format!("{witness_dir}/{}", w.file) },
+                        "written": witness_dir != NOT_WRITTEN,
                         "scans": w.scans,
                         "replayed": w.replayed,
                     })

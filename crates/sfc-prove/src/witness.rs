@@ -425,10 +425,18 @@ pub fn file_name_for(chart: &str, name: &str) -> String {
     format!("{stem}.{slug}.witness.toml")
 }
 
-pub fn replay(chart_name: &str, chart_text: &str, scenario: &str, own_line: u32, violation: Expect) -> Replay {
-    // The scenario names the chart by file name, resolved beside the (virtual) witness file.
-    let dir = Path::new(chart_name).parent().unwrap_or(Path::new(""));
-    let path = dir.join("witness.toml");
+/// Replays the witness `scenario` (named `file`, not yet written) in the simulator.
+pub fn replay(
+    chart_name: &str,
+    chart_text: &str,
+    file: &str,
+    scenario: &str,
+    own_line: u32,
+    violation: Expect,
+) -> Replay {
+    // The scenario names the chart by file name, resolved beside the witness file, as if it
+    // were written beside the chart (the default); failures name the witness file.
+    let path = Path::new(chart_name).parent().unwrap_or(Path::new("")).join(file);
     let s = match sfc_sim::scenario::load_text(&path, scenario, Some(chart_text)) {
         Ok(s) => s,
         Err(e) => return Replay { confirmed: false, detail: vec![e.to_string()] },

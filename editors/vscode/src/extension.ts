@@ -38,6 +38,8 @@ async function startClient(ctx: vscode.ExtensionContext): Promise<void> {
       { scheme: 'file', language: 'sfc' },
       { scheme: 'untitled', language: 'sfc' },
       { scheme: 'file', pattern: '**/*.xml' },
+      // Requirements of `sfc prove`: checked while typing, proved on save.
+      { scheme: 'file', pattern: '**/*.props.toml' },
     ],
     initializationOptions: { analysisIdleMs: idle },
     synchronize: { fileEvents: vscode.workspace.createFileSystemWatcher('**/*.st') },

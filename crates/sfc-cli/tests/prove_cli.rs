@@ -1,0 +1,123 @@
+//! `sfc prove` as a user runs it: the property file found beside the chart, exit codes 0 / 1 / 2,
+//! `--format json`, the witness scenario written beside the chart (or into `--witness-dir`),
+//! and `sfc test` on that witness failing on the property itself.
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+fn fixtures() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../sfc-prove/tests/fixtures")
+}
+
+fn sfc_in(dir: &Path, args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_sfc")).args(args).current_dir(dir).output().expect("sfc runs")
+}
+
+fn text(o: &Output) -> String {
+    format!("{}{}", String::from_utf8_lossy(&o.stdout), String::from_utf8_lossy(&o.stderr))
+}
+
+/// A scratch directory holding copies of the fixture charts `names` with their property files.
+fn scratch(test: &str, names: &[&str]) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("sfc-prove-{test}-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&d);
+    std::fs::create_dir_all(&d).unwrap();
+    for n in names {
+        for ext in ["st", "props.toml"] {
+            std::fs::copy(fixtures().join(format!("{n}.{ext}")), d.join(format!("{n}.{ext}"))).unwrap();
+        }
+    }
+    d
+}
+
+#[test]
+fn all_properties_hold_exits_0() {
+    let d = scratch("holds", &["st_enum_case"]);
+    let o = sfc_in(&d, &["prove", "st_enum_case.st"]);
+    let out = text(&o);
+    assert_eq!(o.status.code(), Some(0), "{out}");
+    assert!(out.contains("HOLDS    power follows the previous mode"), "{out}");
+    assert!(out.contains("3 held, 0 violated, 0 unknown"), "{out}");
+    // Nothing violated, nothing written.
+    let written: Vec<_> = std::fs::read_dir(&d)
+        .unwrap()
+        .flatten()
+        .filter(|e| e.file_name().to_string_lossy().ends_with(".witness.toml"))
+        .collect();
+    assert!(written.is_empty(), "{written:?}");
+}
+
+#[test]
+fn violation_exits_1_and_its_witness_fails_sfc_test_on_the_property() {
+    let d = scratch("violated", &["carwash"]);
+    let o = sfc_in(&d, &["prove", "carwash.st"]);
+    let out = text(&o);
+    assert_eq!(o.status.code(), Some(1), "{out}");
+    assert!(out.contains("VIOLATED no travel without a car"), "{out}");
+    assert!(out.contains("replayed in the simulator"), "{out}");
+    let witness = d.join("carwash.no-travel-without-a-car.witness.toml");
+    let scenario = std::fs::read_to_string(&witness).unwrap_or_else(|e| panic!("{}: {e}\n{out}", witness.display()));
+    // The property is stated in the scenario with an interval expectation.
+    assert!(scenario.contains("never = \"Travel AND NOT CarPresent\""), "{scenario}");
+    let t = sfc_in(&d, &["test", "carwash.no-travel-without-a-car.witness.toml"]);
+    let tout = text(&t);
+    assert_eq!(t.status.code(), Some(1), "{tout}");
+    assert!(tout.contains("never from T#0s to"), "{tout}");
+    assert!(tout.contains("`Travel AND NOT CarPresent` is TRUE"), "{tout}");
+}
+
+#[test]
+fn response_witness_fails_on_its_deadline() {
+    let d = scratch("response", &["blinker"]);
+    let w = d.join("witnesses");
+    let o = sfc_in(&d, &["prove", "blinker.st", "--witness-dir", "witnesses"]);
+    let out = text(&o);
+    assert_eq!(o.status.code(), Some(1), "{out}");
+    let file = w.join("blinker.on-within-10-ms-of-start.witness.toml");
+    let scenario = std::fs::read_to_string(&file).unwrap_or_else(|e| panic!("{}: {e}\n{out}", file.display()));
+    assert!(scenario.contains("after = \"Start AND S1.X\""), "{scenario}");
+    assert!(scenario.contains("within = \"T#20ms\""), "{scenario}");
+    // The witness names the chart relative to where it is written.
+    assert!(scenario.contains("chart = \"../blinker.st\""), "{scenario}");
+    let t = sfc_in(&w, &["test", "blinker.on-within-10-ms-of-start.witness.toml"]);
+    let tout = text(&t);
+    assert_eq!(t.status.code(), Some(1), "{tout}");
+    assert!(tout.contains("within T#20ms after"), "{tout}");
+}
+
+#[test]
+fn json_lists_the_verdicts() {
+    let d = scratch("json", &["carwash"]);
+    let o = sfc_in(&d, &["prove", "carwash.st", "--format", "json", "--no-witness"]);
+    assert_eq!(o.status.code(), Some(1), "{}", text(&o));
+    let v: serde_json::Value = serde_json::from_slice(&o.stdout).expect("JSON on stdout");
+    let props = v["properties"].as_array().expect("properties");
+    let verdict =
+        |name: &str| props.iter().find(|p| p["name"] == name).map(|p| p["verdict"].as_str().unwrap_or("").to_string());
+    assert_eq!(verdict("never forward and back").as_deref(), Some("holds"), "{v}");
+    assert_eq!(verdict("no travel without a car").as_deref(), Some("violated"), "{v}");
+    assert_eq!(v["summary"]["violated"], 1, "{v}");
+    let holds = props.iter().find(|p| p["name"] == "never forward and back").unwrap();
+    assert!(holds["method"].as_str().is_some_and(|m| !m.is_empty()), "{holds}");
+    // --no-witness writes nothing.
+    assert!(!d.join("carwash.no-travel-without-a-car.witness.toml").exists());
+}
+
+#[test]
+fn usage_and_input_errors_exit_2() {
+    let d = scratch("usage", &["carwash"]);
+    // No property file beside the chart.
+    std::fs::copy(d.join("carwash.st"), d.join("alone.st")).unwrap();
+    let o = sfc_in(&d, &["prove", "alone.st"]);
+    assert_eq!(o.status.code(), Some(2), "{}", text(&o));
+    assert!(text(&o).contains("alone.props.toml"), "{}", text(&o));
+    // A property file with an error, located at its line and column.
+    std::fs::write(d.join("bad.props.toml"), "[[property]]\nname = \"x\"\nalways = \"Travel AND Nonsense\"\n").unwrap();
+    let o = sfc_in(&d, &["prove", "carwash.st", "--properties", "bad.props.toml"]);
+    let out = text(&o);
+    assert_eq!(o.status.code(), Some(2), "{out}");
+    assert!(out.contains("bad.props.toml:3:"), "{out}");
+    assert!(out.contains("Nonsense"), "{out}");
+    // A chart that does not exist, and an unknown option.
+    assert_eq!(sfc_in(&d, &["prove", "missing.st"]).status.code(), Some(2));
+    assert_eq!(sfc_in(&d, &["prove", "carwash.st", "--frobnicate"]).status.code(), Some(2));
+}
