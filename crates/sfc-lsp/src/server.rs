@@ -3,7 +3,7 @@
 //! current.
 
 use crate::check::{self, DiagnosticsProvider, Job, Outcome};
-use crate::workspace::{path_of, DocKind, Document, Workspace};
+use crate::workspace::{path_of, DocKind, Document, View, Workspace};
 use crate::{actions, complete, format, hover, navigate, symbols, text, tokens};
 use crossbeam_channel::{select, Receiver, Sender};
 use lsp_server::{Connection, ErrorCode, Message, Notification, Request, RequestId, Response};
@@ -132,16 +132,19 @@ pub fn serve(connection: Connection, mut options: ServerOptions) -> Result<(), S
     let providers = Arc::new(std::mem::take(&mut options.providers));
     let (check_tx, check_rx) = crossbeam_channel::unbounded();
     let (analysis_tx, analysis_rx) = crossbeam_channel::unbounded();
+    let (index_tx, index_rx) = crossbeam_channel::unbounded();
     let (out_tx, out_rx) = crossbeam_channel::unbounded();
     let workers = [
         check::spawn_worker("sfc-lsp-check", check_rx, out_tx.clone(), providers.clone()),
-        check::spawn_worker("sfc-lsp-analysis", analysis_rx, out_tx, providers),
+        check::spawn_worker("sfc-lsp-analysis", analysis_rx, out_tx.clone(), providers),
+        check::spawn_index_worker("sfc-lsp-index", index_rx, out_tx),
     ];
     let mut server = Server {
         conn: &connection,
         ws: Workspace::new(roots),
         check_tx,
         analysis_tx,
+        index_tx,
         published: HashMap::new(),
         options,
     };
@@ -158,6 +161,8 @@ struct Server<'c> {
     ws: Workspace,
     check_tx: Sender<Job>,
     analysis_tx: Sender<Job>,
+    /// Parses and indexes each new version in the background (requests then find it made).
+    index_tx: Sender<Job>,
     /// URI → (version, with analysis) of the diagnostics last published.
     published: HashMap<String, (i32, bool)>,
     options: ServerOptions,
@@ -223,6 +228,12 @@ impl Server<'_> {
         if let Some(f) = &o.failure {
             self.log(MessageType::ERROR, f.clone());
         }
+        if let Some(a) = o.indexed {
+            if let Some(doc) = self.ws.open.get_mut(o.uri.as_str()) {
+                doc.offer(o.version, a);
+            }
+            return;
+        }
         let Some(doc) = self.ws.open.get(o.uri.as_str()) else { return };
         if doc.version != o.version {
             return; // stale: a newer version is on its way
@@ -254,6 +265,9 @@ impl Server<'_> {
         if let Some(d) = analysis {
             let _ = self.analysis_tx.send(job(true, d));
         }
+        if doc.kind == DocKind::Iec && !doc.analysed() {
+            let _ = self.index_tx.send(job(false, quick.unwrap_or(Duration::ZERO)));
+        }
     }
 
     fn notification(&mut self, n: Notification) {
@@ -269,8 +283,8 @@ impl Server<'_> {
                 let Ok(p) = serde_json::from_value::<DidChangeTextDocumentParams>(n.params) else { return };
                 let Some(doc) = self.ws.open.get_mut(p.text_document.uri.as_str()) else { return };
                 let mut t = doc.text.as_str().to_string();
-                text::apply_changes(&mut t, p.content_changes);
-                doc.set_text(p.text_document.version, t);
+                let edits = text::apply_changes(&mut t, p.content_changes);
+                doc.set_text_edited(p.text_document.version, t, edits);
                 let (debounce, idle) = (self.options.debounce, self.options.idle);
                 if let Some(doc) = self.ws.open.get(p.text_document.uri.as_str()) {
                     self.schedule(doc, Some(debounce), idle);
@@ -328,13 +342,21 @@ impl Server<'_> {
             req::Completion::METHOD => {
                 let p: CompletionParams = params(r.params)?;
                 let uri = p.text_document_position.text_document.uri;
-                let a = self.analysis_of(&uri)?;
-                let offset = a.offset(p.text_document_position.position);
-                let mut items = complete::complete(&a, offset);
+                // While typing in a long chart, the last analysis with the edits since answers
+                // at once (parsing again takes a while); else the current one.
+                let view = match self.ws.open.get(uri.as_str()).and_then(|d| d.quick_view()) {
+                    Some(v) => v,
+                    None => {
+                        let a = self.analysis_of(&uri)?;
+                        View { text: a.text.clone(), lines: Arc::new(a.lines.clone()), analysis: a, edits: Vec::new() }
+                    }
+                };
+                let offset = view.offset(p.text_document_position.position);
+                let mut items = complete::complete_view(&view, offset);
                 // A long chart has thousands of names: send those that match what is typed.
                 let mut incomplete = false;
                 if items.len() > MAX_ITEMS {
-                    let prefix = typed_prefix(&a.text, offset).to_ascii_uppercase();
+                    let prefix = typed_prefix(&view.text, offset).to_ascii_uppercase();
                     items.retain(|i| i.label.to_ascii_uppercase().starts_with(&prefix));
                     if items.len() > MAX_ITEMS {
                         items.truncate(MAX_ITEMS);

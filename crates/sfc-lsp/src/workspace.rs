@@ -3,7 +3,7 @@
 //! them, re-read when they change), each with its index, parsed at most once per version.
 
 use crate::index::FileIndex;
-use crate::text::LineIndex;
+use crate::text::{Edit, LineIndex, Shift};
 use lsp_types::Uri;
 use sfc_syntax::ast::SourceUnit;
 use std::collections::HashMap;
@@ -36,6 +36,9 @@ impl Analysis {
     }
 }
 
+/// Completion answers from an older analysis for at most this many edits (then it parses).
+const MAX_STALE_EDITS: usize = 200;
+
 /// How a document is read.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum DocKind {
@@ -57,21 +60,98 @@ pub struct Document {
     pub text: Arc<String>,
     pub kind: DocKind,
     analysis: Option<Arc<Analysis>>,
+    /// The last analysis made, of an earlier version, and the edits made since (completion
+    /// answers from it while the current text is not analysed yet).
+    stale: Option<(Arc<Analysis>, Vec<Edit>)>,
+}
+
+/// An analysis with the current text: the analysis of this version, or of an earlier one with
+/// the edits made since (offsets in `index` are then those of `analysis.text`).
+#[derive(Debug, Clone)]
+pub struct View {
+    pub analysis: Arc<Analysis>,
+    pub text: Arc<String>,
+    pub lines: Arc<LineIndex>,
+    pub edits: Vec<Edit>,
+}
+
+impl View {
+    pub fn shift(&self) -> Shift<'_> {
+        Shift(&self.edits)
+    }
+
+    /// The offset in the current text of a position.
+    pub fn offset(&self, pos: lsp_types::Position) -> u32 {
+        self.lines.offset(&self.text, pos)
+    }
 }
 
 impl Document {
     pub fn new(uri: Uri, language: String, version: i32, text: String) -> Document {
         let path = path_of(&uri);
         let kind = kind_of(&path, &language, &text);
-        Document { uri, path, language, version, text: Arc::new(text), kind, analysis: None }
+        Document { uri, path, language, version, text: Arc::new(text), kind, analysis: None, stale: None }
     }
 
-    /// Replaces the text (an edit); the analysis is recomputed on the next request.
+    /// Replaces the text (an edit); the analysis is recomputed on the next request. `edits` are
+    /// the replacements that made it from the previous text (None: replaced whole).
     pub fn set_text(&mut self, version: i32, text: String) {
+        self.set_text_edited(version, text, None);
+    }
+
+    /// As [`Document::set_text`], keeping the last analysis for completion when the edits are
+    /// known.
+    pub fn set_text_edited(&mut self, version: i32, text: String, edits: Option<Vec<Edit>>) {
         self.version = version;
         self.kind = kind_of(&self.path, &self.language, &text);
         self.text = Arc::new(text);
-        self.analysis = None;
+        let analysis = self.analysis.take();
+        self.stale = match (edits, analysis, self.stale.take()) {
+            (Some(edits), Some(a), _) => Some((a, edits)),
+            (Some(edits), None, Some((a, mut before))) if before.len() + edits.len() <= MAX_STALE_EDITS => {
+                before.extend(edits);
+                Some((a, before))
+            }
+            _ => None,
+        };
+    }
+
+    /// The current text is parsed and indexed.
+    pub fn analysed(&self) -> bool {
+        self.analysis.is_some()
+    }
+
+    /// The analysis of version `version` made elsewhere (the index worker), taken if it is
+    /// still the current one.
+    pub fn offer(&mut self, version: i32, analysis: Arc<Analysis>) {
+        if version == self.version && self.kind == DocKind::Iec && Arc::ptr_eq(&analysis.text, &self.text) {
+            self.analysis = Some(analysis);
+            self.stale = None;
+        }
+    }
+
+    /// The current analysis if there is one, else the last one with the edits since (no
+    /// parsing: completion answers at once while typing in a long chart); None for a text never
+    /// analysed or not IEC text.
+    pub fn quick_view(&self) -> Option<View> {
+        if self.kind != DocKind::Iec {
+            return None;
+        }
+        if let Some(a) = &self.analysis {
+            return Some(View {
+                analysis: a.clone(),
+                text: a.text.clone(),
+                lines: Arc::new(a.lines.clone()),
+                edits: Vec::new(),
+            });
+        }
+        let (a, edits) = self.stale.as_ref()?;
+        Some(View {
+            analysis: a.clone(),
+            text: self.text.clone(),
+            lines: Arc::new(LineIndex::new(&self.text)),
+            edits: edits.clone(),
+        })
     }
 
     /// The parse and index of the current text (IEC text only).
