@@ -155,7 +155,9 @@ pub struct Outcome {
     pub elapsed: Duration,
     /// The check failed inside (a bug): its message, for the log.
     pub failure: Option<String>,
-    /// From the index worker: the parse and index of this version (no diagnostics).
+    /// From the index worker (no diagnostics): the parse and index of this version, None when
+    /// it failed inside (`failure` says why).
+    pub from_index: bool,
     pub indexed: Option<Arc<Analysis>>,
 }
 
@@ -212,6 +214,7 @@ fn index(job: &Job, _: &[Box<dyn DiagnosticsProvider>]) -> Outcome {
         diagnostics: Vec::new(),
         elapsed: start.elapsed(),
         failure,
+        from_index: true,
         indexed,
     }
 }
@@ -260,6 +263,7 @@ pub fn run(job: &Job, providers: &[Box<dyn DiagnosticsProvider>]) -> Outcome {
         diagnostics: Vec::new(),
         elapsed: Duration::ZERO,
         failure: None,
+        from_index: false,
         indexed: None,
     };
     let Some(provider) = providers.iter().find(|p| p.handles(&job.path, &job.language, &job.text)) else {

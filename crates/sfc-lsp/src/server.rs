@@ -145,6 +145,8 @@ pub fn serve(connection: Connection, mut options: ServerOptions) -> Result<(), S
         check_tx,
         analysis_tx,
         index_tx,
+        indexing: HashMap::new(),
+        outcomes: out_rx.clone(),
         published: HashMap::new(),
         options,
     };
@@ -163,6 +165,10 @@ struct Server<'c> {
     analysis_tx: Sender<Job>,
     /// Parses and indexes each new version in the background (requests then find it made).
     index_tx: Sender<Job>,
+    /// URI → the version the index worker was last asked to parse (until it answers).
+    indexing: HashMap<String, i32>,
+    /// The workers' outcomes (also read while a request waits for the index worker).
+    outcomes: Receiver<Outcome>,
     /// URI → (version, with analysis) of the diagnostics last published.
     published: HashMap<String, (i32, bool)>,
     options: ServerOptions,
@@ -228,8 +234,11 @@ impl Server<'_> {
         if let Some(f) = &o.failure {
             self.log(MessageType::ERROR, f.clone());
         }
-        if let Some(a) = o.indexed {
-            if let Some(doc) = self.ws.open.get_mut(o.uri.as_str()) {
+        if o.from_index {
+            if self.indexing.get(o.uri.as_str()) == Some(&o.version) {
+                self.indexing.remove(o.uri.as_str());
+            }
+            if let (Some(a), Some(doc)) = (o.indexed, self.ws.open.get_mut(o.uri.as_str())) {
                 doc.offer(o.version, a);
             }
             return;
@@ -249,7 +258,8 @@ impl Server<'_> {
         )));
     }
 
-    fn schedule(&self, doc: &Document, quick: Option<Duration>, analysis: Option<Duration>) {
+    /// Sends the document's jobs to the workers; true when the index worker got one.
+    fn schedule(&self, doc: &Document, quick: Option<Duration>, analysis: Option<Duration>) -> bool {
         let job = |analysis: bool, delay: Duration| Job {
             uri: doc.uri.clone(),
             version: doc.version,
@@ -265,9 +275,9 @@ impl Server<'_> {
         if let Some(d) = analysis {
             let _ = self.analysis_tx.send(job(true, d));
         }
-        if doc.kind == DocKind::Iec && !doc.analysed() {
-            let _ = self.index_tx.send(job(false, quick.unwrap_or(Duration::ZERO)));
-        }
+        doc.kind == DocKind::Iec
+            && !doc.analysed()
+            && self.index_tx.send(job(false, quick.unwrap_or(Duration::ZERO))).is_ok()
     }
 
     fn notification(&mut self, n: Notification) {
@@ -276,7 +286,9 @@ impl Server<'_> {
                 let Ok(p) = serde_json::from_value::<DidOpenTextDocumentParams>(n.params) else { return };
                 let d = p.text_document;
                 let doc = Document::new(d.uri.clone(), d.language_id, d.version, d.text);
-                self.schedule(&doc, Some(Duration::ZERO), self.options.idle);
+                if self.schedule(&doc, Some(Duration::ZERO), self.options.idle) {
+                    self.indexing.insert(d.uri.as_str().to_string(), d.version);
+                }
                 self.ws.open.insert(d.uri.as_str().to_string(), doc);
             }
             note::DidChangeTextDocument::METHOD => {
@@ -287,13 +299,17 @@ impl Server<'_> {
                 doc.set_text_edited(p.text_document.version, t, edits);
                 let (debounce, idle) = (self.options.debounce, self.options.idle);
                 if let Some(doc) = self.ws.open.get(p.text_document.uri.as_str()) {
-                    self.schedule(doc, Some(debounce), idle);
+                    if self.schedule(doc, Some(debounce), idle) {
+                        self.indexing.insert(p.text_document.uri.as_str().to_string(), p.text_document.version);
+                    }
                 }
             }
             note::DidSaveTextDocument::METHOD => {
                 let Ok(p) = serde_json::from_value::<DidSaveTextDocumentParams>(n.params) else { return };
                 if let Some(doc) = self.ws.open.get(p.text_document.uri.as_str()) {
-                    self.schedule(doc, None, Some(Duration::ZERO));
+                    if self.schedule(doc, None, Some(Duration::ZERO)) {
+                        self.indexing.insert(p.text_document.uri.as_str().to_string(), doc.version);
+                    }
                 }
             }
             note::DidCloseTextDocument::METHOD => {
@@ -301,6 +317,7 @@ impl Server<'_> {
                 let uri = p.text_document.uri;
                 self.ws.open.remove(uri.as_str());
                 self.published.remove(uri.as_str());
+                self.indexing.remove(uri.as_str());
                 self.send(Message::Notification(Notification::new(
                     note::PublishDiagnostics::METHOD.to_string(),
                     PublishDiagnosticsParams { uri, diagnostics: Vec::new(), version: None },
@@ -326,7 +343,27 @@ impl Server<'_> {
                 return Err(failed("only IEC text has this feature (PLCopen XML: diagnostics only)"));
             }
         }
+        self.await_index(uri);
         self.ws.analysis(uri).ok_or_else(|| failed(format!("`{}` is not an open or readable IEC text", uri.as_str())))
+    }
+
+    /// When the index worker is parsing the current version of an open document, waits for it
+    /// (publishing what the other workers send meanwhile) rather than parsing it a second time;
+    /// bounded, then the request parses it itself.
+    fn await_index(&mut self, uri: &Uri) {
+        let key = uri.as_str();
+        let deadline = std::time::Instant::now() + INDEX_WAIT;
+        loop {
+            let Some(doc) = self.ws.open.get(key) else { return };
+            if doc.analysed() || self.indexing.get(key) != Some(&doc.version) {
+                return;
+            }
+            let Some(left) = deadline.checked_duration_since(std::time::Instant::now()) else { return };
+            match self.outcomes.recv_timeout(left) {
+                Ok(o) => self.publish(o),
+                Err(_) => return,
+            }
+        }
     }
 
     fn handle(&mut self, r: Request) -> Handled {
@@ -466,6 +503,9 @@ impl Server<'_> {
 }
 
 /// At most this many completion items are sent at once.
+/// A request waits at most this long for the index worker before parsing the text itself.
+const INDEX_WAIT: Duration = Duration::from_secs(10);
+
 const MAX_ITEMS: usize = 500;
 
 /// The part of an identifier before `offset`.
