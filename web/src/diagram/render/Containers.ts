@@ -2,7 +2,8 @@
 // the container of a block or wire (`djs-group` › `djs-element` › `djs-visual`) is cloned from a
 // template instead of built node by node with class lists, and a block's position is written as
 // the same `matrix(1 0 0 1 x y)` attribute diagram-js's translate leaves, without going through
-// an SVGTransform. The nodes, classes and attributes are those diagram-js makes, so everything
+// an SVGTransform. The nodes, classes and attributes are those diagram-js makes (but for the
+// inline `display: block` of a shown element), so everything
 // that reads them (selection, move previews, the SVG export) is unchanged. Frames keep
 // diagram-js's own path.
 import GraphicsFactory from 'diagram-js/lib/core/GraphicsFactory.js';
@@ -31,14 +32,26 @@ export class Containers extends (GraphicsFactory as unknown as new (eventBus: Se
 
   update(type: string, element: Service, gfx: SVGElement): void {
     if (!element.parent) return;
-    if (type !== 'shape') {
+    if (type !== 'shape' && type !== 'connection') {
       super.update(type, element, gfx);
       return;
     }
     const visual = this._clear(gfx);
-    this.drawShape(visual, element);
-    gfx.setAttribute('transform', `matrix(1 0 0 1 ${element.x} ${element.y})`);
-    (gfx as SVGGElement).style.display = element.hidden ? 'none' : 'block';
+    if (type === 'shape') {
+      this.drawShape(visual, element);
+      gfx.setAttribute('transform', `matrix(1 0 0 1 ${element.x} ${element.y})`);
+    } else {
+      this.drawConnection(visual, element);
+    }
+    // A hidden element gets `display: none`; a shown one no inline style at all (diagram-js
+    // writes `display: block`, the default): thousands of inline styles slow the page's style
+    // computation.
+    const style = (gfx as SVGGElement).style;
+    if (element.hidden) style.display = 'none';
+    else if (style.length > 0) {
+      style.removeProperty('display');
+      if (style.length === 0) gfx.removeAttribute('style');
+    }
   }
 
   private template(type: Kind): SVGGElement {
