@@ -258,7 +258,7 @@ fn random_chart(seed: u64) -> (String, String) {
 
 #[test]
 fn random_charts_agree_with_the_explorer() {
-    let count: u64 = std::env::var("SFC_PROVE_RANDOM").ok().and_then(|v| v.parse().ok()).unwrap_or(12);
+    let count: u64 = std::env::var("SFC_PROVE_RANDOM").ok().and_then(|v| v.parse().ok()).unwrap_or(8);
     let mut fails = Vec::new();
     for seed in 1..=count {
         let (chart, props) = random_chart(seed);
@@ -272,7 +272,7 @@ fn random_charts_agree_with_the_explorer() {
             }
         };
         let names: Vec<String> = report.properties.iter().map(|p| p.name.clone()).collect();
-        let found = explore(&name, &chart, &report.pou, report.period, &file, &report.inputs, &names, 30, 50_000);
+        let found = explore(&name, &chart, &report.pou, report.period, &file, &report.inputs, &names, 30, 20_000);
         for (p, f) in report.properties.iter().zip(&found) {
             let scans = p.witness.as_ref().map(|w| w.scans - 1);
             let ok = match (p.verdict, f) {
