@@ -9,8 +9,8 @@ use std::process::ExitCode;
 
 mod build;
 mod edit;
-mod run;
-mod sim;
+
+use sfc_cli::{run, sim};
 
 #[derive(Parser)]
 #[command(

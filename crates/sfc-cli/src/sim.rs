@@ -3,9 +3,9 @@
 
 use sfc_diagnostics::{render_human, RenderOptions};
 use sfc_sim::coverage::CoverageSet;
-use sfc_sim::scenario::{self, Execution, Overrides, RunLength, Scenario, ScenarioError};
+use sfc_sim::scenario::{self, Execution, Overrides, Recording, RunLength, Scenario, ScenarioError};
 use sfc_sim::trace::{TraceFormat, TraceSink};
-use sfc_sim::{format_time, Profile, ScanRecord, Simulation, StepReport, TimeStats, TransitionReport};
+use sfc_sim::{format_time, Profile, Simulation, StepReport, TimeStats, TransitionReport};
 use std::collections::HashSet;
 use std::fmt::Write as _;
 use std::io::{IsTerminal, Write};
@@ -105,14 +105,14 @@ fn timeout_text(r: &StepReport) -> String {
     }
 }
 
-/// The automatic report of a step that exceeded its `sfc.timeout`.
-fn overdue_text(rec: &ScanRecord, r: &StepReport) -> String {
+/// The automatic report of a step that exceeded its `sfc.timeout` in `scan` at `time`.
+fn overdue_text(scan: u64, time: i64, r: &StepReport) -> String {
     let names: Vec<&str> = r.transitions.iter().map(|t| t.transition.as_str()).collect();
     let waiting = if names.is_empty() { "no outgoing transition".to_string() } else { names.join(" or ") };
     let mut out = format!(
         "scan {}, {}: step {} active for {} (timeout {}): waiting for {waiting}",
-        rec.scan,
-        format_time(rec.time),
+        scan,
+        format_time(time),
         r.step,
         format_time(r.elapsed),
         r.timeout.map_or_else(|| "none".to_string(), format_time)
@@ -175,6 +175,15 @@ fn stats_text(stats: &TimeStats) -> String {
     for (t, active) in &stats.sequence {
         let steps = if active.is_empty() { "(no active step)".to_string() } else { active.join(" ") };
         let _ = write!(out, "\n  {:<tw$}  {steps}", format_time(*t));
+    }
+    if stats.dropped > 0 {
+        let _ = write!(
+            out,
+            "\n  … {} later change{} of situation not recorded (the time analysis keeps the first {})",
+            stats.dropped,
+            if stats.dropped == 1 { "" } else { "s" },
+            sfc_sim::engine::MAX_SITUATIONS
+        );
     }
     out
 }
@@ -248,35 +257,35 @@ pub fn sim(r: SimRequest) -> u8 {
             println!("{text}");
         }
     };
-    let mut overdue_seen: HashSet<String> = HashSet::new();
     let mut overdue_json: Vec<serde_json::Value> = Vec::new();
     let json = r.json;
-    let mut on_scan = |sim: &Simulation, rec: &ScanRecord| {
-        // Reports are built only for steps that have just overrun.
-        let steps = sim.overdue_steps();
-        let now: HashSet<String> = steps.iter().cloned().collect();
-        for step in &steps {
-            if overdue_seen.contains(step) {
-                continue;
-            }
-            let Some(x) = &sim.explain_step(step) else { continue };
+    let mut on_scan = |sim: &Simulation| {
+        // Reports are built only for steps that have just overrun (the engine notes each
+        // activation's overrun once: a step reports again only after it was left or restarted
+        // and overran again). Asking costs nothing in the other scans.
+        if !sim.any_newly_overdue() {
+            return;
+        }
+        let scan = sim.next_scan() - 1;
+        let time = scan as i64 * sim.options().period;
+        for step in sim.newly_overdue() {
+            let Some(x) = &sim.explain_step(&step) else { continue };
             if json {
                 let mut v = x.to_json();
-                v["scan"] = rec.scan.into();
-                v["time"] = format_time(rec.time).into();
+                v["scan"] = scan.into();
+                v["time"] = format_time(time).into();
                 overdue_json.push(v);
             } else {
-                report(&overdue_text(rec, x));
+                report(&overdue_text(scan, time, x));
             }
         }
-        // A step reports again only after it was left (or restarted) and overran again.
-        overdue_seen = now;
     };
     let trace_ref: Option<&mut dyn TraceSink> = match sink.as_mut() {
         Some(b) => Some(&mut **b),
         None => None,
     };
-    let Execution { outcome, sim, trace_error } = scenario::execute(&scen, trace_ref, &mut on_scan);
+    let recording = Recording { situations: r.stats };
+    let Execution { outcome, sim, trace_error } = scenario::execute(&scen, trace_ref, &mut on_scan, recording);
     drop(sink);
     if let Some(e) = trace_error {
         let name = r.trace.as_deref().map_or_else(String::new, |p| p.display().to_string());

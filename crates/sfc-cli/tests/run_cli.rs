@@ -183,7 +183,8 @@ fn a_monitor_client_drives_the_car_wash_to_its_end() {
     assert_eq!(halted["reason"], "breakpoint");
     ws.send(r#"{"id":10,"cmd":"continue"}"#);
     let end = ws.until("the end of the run", |m| m["type"] == "halted" && m["reason"] == "end");
-    assert_eq!(end["scan"], 49, "--scans 50 runs scans 0..=49: {end}");
+    // 50 scans ran; on a busy machine an overrun skips periods, and the scan numbers with them.
+    assert!(end["scan"].as_u64().is_some_and(|s| s >= 49), "--scans 50 runs scans 0..=49 or later ones: {end}");
 
     let mut child = run.0.take().unwrap();
     let status = child.wait().unwrap();

@@ -216,7 +216,9 @@ impl Runtime {
             pending_sets: Vec::new(),
             breakpoints: Default::default(),
             stats: ScanStats::default(),
-            unpublished_states: Vec::new(),
+            unpublished_states: Default::default(),
+            spare_states: Vec::new(),
+            newest: None,
             unpublished_events: Vec::new(),
             halt_change: Vec::new(),
             error: None,
@@ -264,7 +266,7 @@ impl Runtime {
     }
     /// The latest published scan statistics (`{"scans":…,"jitterUs":{…},…}`).
     pub fn stats_json(&self) -> serde_json::Value {
-        self.hub.lock().stats.clone()
+        self.hub.lock().stats_json()
     }
     /// Asks the run to end (the scan thread stops before its next scan).
     pub fn stop(&self) {

@@ -34,6 +34,8 @@ pub const MAX_MESSAGE: usize = 64 * 1024;
 pub const MAX_CLIENTS: u64 = 512;
 /// Update period of a session.
 pub const TICK: Duration = Duration::from_millis(20);
+/// How long a new client waits for a state with guards before its first snapshot (ticks).
+const GUARD_WAIT_TICKS: u32 = 100;
 
 /// A value as JSON: BOOL as `true`/`false`, numbers as numbers, TIME as `T#…`, strings as
 /// strings.
@@ -116,19 +118,29 @@ pub fn hello(info: &ChartInfo, authorized: bool, halted: bool) -> serde_json::Va
     })
 }
 
+/// The active steps in step order (the scan thread publishes them in the engine's order).
 fn active_json(info: &ChartInfo, st: &ScanState) -> serde_json::Value {
+    let mut active = st.active.clone();
+    active.sort_unstable();
     serde_json::Value::Array(
-        st.active
+        active
             .iter()
             .map(|&(s, t)| serde_json::json!({"step": info.steps[s as usize].0, "elapsed": format_time(t), "elapsedUs": t}))
             .collect(),
     )
 }
 
+/// The guard values in transition order.
+fn sorted_guards(st: &ScanState) -> Vec<(u32, Option<bool>)> {
+    let mut g = st.guards.clone();
+    g.sort_unstable();
+    g
+}
+
 fn guards_json(info: &ChartInfo, st: &ScanState) -> serde_json::Map<String, serde_json::Value> {
-    st.guards
-        .iter()
-        .map(|&(t, v)| {
+    sorted_guards(st)
+        .into_iter()
+        .map(|(t, v)| {
             (info.transitions[t as usize].0.clone(), v.map_or(serde_json::Value::Null, serde_json::Value::Bool))
         })
         .collect()
@@ -177,7 +189,7 @@ pub fn delta(info: &ChartInfo, old: &ScanState, new: &ScanState, between: &[Arc<
     if !fired.is_empty() {
         j["fired"] = serde_json::json!(names(info, &fired));
     }
-    if old.guards != new.guards {
+    if sorted_guards(old) != sorted_guards(new) {
         j["guards"] = serde_json::Value::Object(guards_json(info, new));
     }
     let changed: serde_json::Map<String, serde_json::Value> = info
@@ -350,6 +362,18 @@ impl Session<'_> {
             let b = self.hub.lock();
             self.next_event = b.next_event;
         }
+        // Guards are evaluated while someone watches: the first snapshot is the first state
+        // evaluated since this client connected (the next scan, or at once when halted).
+        for _ in 0..GUARD_WAIT_TICKS {
+            let ready = {
+                let b = self.hub.lock();
+                b.history.back().is_none_or(|s| s.guards_known)
+            };
+            if ready || self.hub.stopping() {
+                break;
+            }
+            tokio::time::sleep(TICK).await;
+        }
         if !self.send_snapshot() {
             return End::Dropped;
         }
@@ -394,7 +418,7 @@ impl Session<'_> {
         let (latest, halted, stats) = {
             let b = self.hub.lock();
             self.next_halt = b.next_halt;
-            (b.history.back().cloned(), b.halted, b.stats.clone())
+            (b.history.back().cloned(), b.halted, b.stats_json())
         };
         self.halted = Some(halted);
         match latest {
@@ -431,7 +455,7 @@ impl Session<'_> {
         }
         for e in events {
             self.next_event = e.seq + 1;
-            let mut j = (*e.json).clone();
+            let mut j = e.event.to_json();
             j["type"] = serde_json::json!("event");
             if !self.send(j) {
                 return false;

@@ -16,7 +16,10 @@ use crate::jitter::ScanStats;
 use crate::protocol::{event_json, value_from_json, value_json};
 use crate::{RunReport, Slot};
 use sfc_sim::{Simulation, Value};
-use std::collections::BTreeMap;
+use std::collections::{BTreeMap, VecDeque};
+
+/// States kept for reuse: the history's length and a few that clients may still hold.
+const SPARE_STATES: usize = crate::board::HISTORY + 8;
 use std::sync::mpsc::{Receiver, RecvTimeoutError};
 use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant};
@@ -54,8 +57,12 @@ pub(crate) struct ScanThread {
     pub pending_sets: Vec<(u32, Value)>,
     pub breakpoints: BTreeMap<BreakTarget, bool>,
     pub stats: ScanStats,
-    pub unpublished_states: Vec<Arc<ScanState>>,
-    pub unpublished_events: Vec<serde_json::Value>,
+    pub unpublished_states: VecDeque<Arc<ScanState>>,
+    /// States that left the history, to be filled again.
+    pub spare_states: Vec<Arc<ScanState>>,
+    /// The state of the last scan.
+    pub newest: Option<Arc<ScanState>>,
+    pub unpublished_events: Vec<crate::board::Event>,
     /// Halts and resumes not yet published, in order.
     pub halt_change: Vec<(bool, String)>,
     pub error: Option<String>,
@@ -101,6 +108,7 @@ impl ScanThread {
                 if self.error.is_some() {
                     break;
                 }
+                self.refresh_guards();
                 if !self.halted {
                     origin = Instant::now()
                         .checked_sub(Duration::from_micros(period_us.saturating_mul(k)))
@@ -126,6 +134,7 @@ impl ScanThread {
             let end = Instant::now();
             let took = end - start;
             self.stats.duration.add(took.as_micros() as u64);
+            self.stats.duration_ns.add(took.as_nanos() as u64);
             if self.error.is_some() {
                 break;
             }
@@ -136,7 +145,8 @@ impl ScanThread {
                         took.as_micros(),
                         w.as_micros()
                     );
-                    self.unpublished_events.push(serde_json::json!({"kind": "watchdog", "message": msg, "scan": k}));
+                    self.unpublished_events
+                        .push(serde_json::json!({"kind": "watchdog", "message": msg, "scan": k}).into());
                     self.error = Some(msg);
                     break;
                 }
@@ -147,9 +157,11 @@ impl ScanThread {
                 let behind = ((end - origin).as_micros() / period.as_micros()) as u64;
                 next = behind + 1;
                 self.stats.skipped += next - (k + 1);
-                self.unpublished_events.push(serde_json::json!({
-                    "kind": "overrun", "scan": k, "scanUs": took.as_micros() as u64, "skipped": next - (k + 1)
-                }));
+                self.unpublished_events.push(crate::board::Event::Overrun {
+                    scan: k,
+                    scan_us: took.as_micros() as u64,
+                    skipped: next - (k + 1),
+                });
             }
             k = next;
             self.publish();
@@ -166,7 +178,10 @@ impl ScanThread {
         }
     }
 
-    /// One scan: inputs in, chart, outputs out, monitor state and breakpoints.
+    /// One scan: inputs in, chart, outputs out, monitor state and breakpoints. Costs what the
+    /// scan changed: the state is filled in a recycled buffer, guards are evaluated only while
+    /// someone watches, and nothing is allocated unless something happened (an event, a
+    /// breakpoint, a write from a client).
     fn scan_once(&mut self) {
         let first = self.sim.next_scan() == 0 || self.stats.scans == 0;
         // Inputs: the image when it is free, else the last copy (the scan never waits).
@@ -176,11 +191,14 @@ impl ScanThread {
                     self.inputs[i] = img.get(p);
                 }
             }
-            for i in std::mem::take(&mut img.memory_writes) {
-                let p = &self.points[i];
-                let v = img.get(p);
-                // A rejected value is impossible: the map only admits 16-bit types.
-                let _ = self.sim.write_slot(p.slot.index, &p.slot.ty, v);
+            if !img.memory_writes.is_empty() {
+                let writes = std::mem::take(&mut img.memory_writes);
+                for &i in &writes {
+                    let p = &self.points[i];
+                    let v = img.get(p);
+                    // A rejected value is impossible: the map only admits 16-bit types.
+                    let _ = self.sim.write_slot(p.slot.index, &p.slot.ty, v);
+                }
             }
         }
         for (i, p) in self.points.iter().enumerate() {
@@ -188,73 +206,140 @@ impl ScanThread {
                 let _ = self.sim.write_slot(p.slot.index, &p.slot.ty, self.inputs[i].clone());
             }
         }
-        for (var, v) in std::mem::take(&mut self.pending_sets) {
-            let s = &self.vars[var as usize];
-            let _ = self.sim.write_slot(s.index, &s.ty, v);
+        if !self.pending_sets.is_empty() {
+            for (var, v) in std::mem::take(&mut self.pending_sets) {
+                let s = &self.vars[var as usize];
+                let _ = self.sim.write_slot(s.index, &s.ty, v);
+            }
         }
         self.apply_forces();
         let result = self.sim.advance().map_err(|e| e.clone());
         self.apply_forces();
-        if let Ok(mut img) = self.image.try_lock() {
-            for p in self.points.iter().filter(|p| p.role != Role::Input) {
-                if let Some(v) = self.sim.read_slot(p.slot.index) {
-                    img.put(p, v);
+        if !self.points.is_empty() {
+            if let Ok(mut img) = self.image.try_lock() {
+                for p in self.points.iter().filter(|p| p.role != Role::Input) {
+                    if let Some(v) = self.sim.read_slot(p.slot.index) {
+                        img.put(p, v);
+                    }
                 }
             }
         }
         self.stats.scans += 1;
-        let mut st = ScanState {
-            scan: self.sim.next_scan() - 1,
-            time: self.sim.next_time() - self.sim.options().period,
-            ..Default::default()
-        };
-        self.sim.active_times(&mut st.active);
+        // The state, in a buffer the board handed back when it fell out of the history.
+        let mut arc = self.take_state();
+        let st = Arc::get_mut(&mut arc).expect("a recycled state is not shared");
+        st.scan = self.sim.next_scan() - 1;
+        st.time = self.sim.next_time() - self.sim.options().period;
+        self.sim.active_times_unsorted(&mut st.active);
         self.sim.fired_ids(&mut st.fired);
-        let mut guards = Vec::new();
-        self.sim.guard_values(&mut guards);
-        st.guards = guards.into_iter().map(|(t, v)| (t, v.ok())).collect();
-        st.values = self.vars.iter().map(|s| self.sim.read_slot(s.index).cloned().unwrap_or_default()).collect();
-        st.forced = self.forced.iter().map(|f| f.0).collect();
-        let mut events: Vec<&sfc_sim::Event> = self.sim.last_events().iter().collect();
-        events.sort_by_key(|e| e.rank());
-        for e in events {
-            let mut j = event_json(e);
-            j["scan"] = serde_json::json!(st.scan);
-            self.unpublished_events.push(j);
+        st.guards_known = self.hub.connected.load(std::sync::atomic::Ordering::Relaxed) > 0 || self.halted;
+        if st.guards_known {
+            self.sim.guard_states(&mut st.guards);
+        } else {
+            st.guards.clear();
+        }
+        st.values.truncate(self.vars.len());
+        for (i, s) in self.vars.iter().enumerate() {
+            let v = self.sim.read_slot(s.index);
+            match (st.values.get_mut(i), v) {
+                (Some(slot), Some(v)) => slot.clone_from(v),
+                (Some(slot), None) => *slot = Value::default(),
+                (None, v) => st.values.push(v.cloned().unwrap_or_default()),
+            }
+        }
+        st.forced.clear();
+        st.forced.extend(self.forced.iter().map(|f| f.0));
+        let scan = st.scan;
+        if !self.sim.last_events().is_empty() {
+            let mut events: Vec<&sfc_sim::Event> = self.sim.last_events().iter().collect();
+            events.sort_by_key(|e| e.rank());
+            for e in events {
+                let mut j = event_json(e);
+                j["scan"] = serde_json::json!(scan);
+                self.unpublished_events.push(j.into());
+            }
         }
         // Breakpoints: a step is hit when a fired transition enters it (or it starts the chart),
         // a transition when it fires.
-        let mut hits: Vec<BreakTarget> = Vec::new();
-        let mut entered: Vec<u32> = st.fired.iter().flat_map(|&t| self.post[t as usize].iter().copied()).collect();
-        if first {
-            entered.extend(self.initial.iter().copied());
-        }
-        entered.sort_unstable();
-        entered.dedup();
-        for s in entered {
-            if self.breakpoints.get(&BreakTarget::Step(s)) == Some(&true) {
-                hits.push(BreakTarget::Step(s));
+        if !self.breakpoints.is_empty() {
+            let mut hits: Vec<BreakTarget> = Vec::new();
+            let mut entered: Vec<u32> = st.fired.iter().flat_map(|&t| self.post[t as usize].iter().copied()).collect();
+            if first {
+                entered.extend(self.initial.iter().copied());
             }
-        }
-        for &t in &st.fired {
-            if self.breakpoints.get(&BreakTarget::Transition(t)) == Some(&true) {
-                hits.push(BreakTarget::Transition(t));
+            entered.sort_unstable();
+            entered.dedup();
+            for s in entered {
+                if self.breakpoints.get(&BreakTarget::Step(s)) == Some(&true) {
+                    hits.push(BreakTarget::Step(s));
+                }
             }
-        }
-        for h in &hits {
-            let (kind, name) = self.target_name(*h);
-            self.unpublished_events.push(serde_json::json!({"kind": "breakpoint", kind: name, "scan": st.scan}));
-        }
-        if !hits.is_empty() && !self.halted {
-            self.halted = true;
-            self.halt_change.push((true, "breakpoint".into()));
+            let mut fired = st.fired.clone();
+            fired.sort_unstable();
+            fired.dedup();
+            for t in fired {
+                if self.breakpoints.get(&BreakTarget::Transition(t)) == Some(&true) {
+                    hits.push(BreakTarget::Transition(t));
+                }
+            }
+            for h in &hits {
+                let (kind, name) = self.target_name(*h);
+                self.unpublished_events
+                    .push(serde_json::json!({"kind": "breakpoint", kind: name, "scan": scan}).into());
+            }
+            if !hits.is_empty() && !self.halted {
+                self.halted = true;
+                self.halt_change.push((true, "breakpoint".into()));
+            }
         }
         if let Err(e) = result {
             self.error = Some(format!("{}:{}: {} (scan {})", e.line, e.column, e.message, e.scan));
         }
-        self.unpublished_states.push(Arc::new(st));
+        self.newest = Some(arc.clone());
+        self.unpublished_states.push_back(arc);
         if self.unpublished_states.len() > crate::board::HISTORY {
-            self.unpublished_states.remove(0);
+            if let Some(old) = self.unpublished_states.pop_front() {
+                self.recycle(old);
+            }
+        }
+    }
+
+    /// While halted: a client that connected after the last scan gets the guards of the state
+    /// it sees (the newest state is published again with them).
+    fn refresh_guards(&mut self) {
+        if self.hub.connected.load(std::sync::atomic::Ordering::Relaxed) == 0 {
+            return;
+        }
+        let Some(newest) = &self.newest else { return };
+        if newest.guards_known {
+            return;
+        }
+        let mut st = (**newest).clone();
+        self.sim.guard_states(&mut st.guards);
+        st.guards_known = true;
+        let st = Arc::new(st);
+        self.newest = Some(st.clone());
+        match self.unpublished_states.back_mut() {
+            Some(last) if last.scan == st.scan => *last = st,
+            _ => self.hub.lock().replace_latest(st),
+        }
+    }
+
+    /// A state to fill: a recycled one nobody else holds, or a new one.
+    fn take_state(&mut self) -> Arc<ScanState> {
+        while let Some(mut s) = self.spare_states.pop() {
+            if Arc::get_mut(&mut s).is_some() {
+                return s;
+            }
+        }
+        Arc::new(ScanState::default())
+    }
+
+    /// Keeps a state that left the history for reuse (while no client still holds it, it is
+    /// filled again; otherwise it is dropped when the client lets go).
+    fn recycle(&mut self, s: Arc<ScanState>) {
+        if Arc::strong_count(&s) == 1 && self.spare_states.len() < SPARE_STATES {
+            self.spare_states.push(s);
         }
     }
 
@@ -414,8 +499,10 @@ impl ScanThread {
     }
 
     fn flush(&mut self, b: &mut crate::board::Board) {
-        for s in self.unpublished_states.drain(..) {
-            b.push_state(s);
+        while let Some(s) = self.unpublished_states.pop_front() {
+            if let Some(old) = b.push_state(s) {
+                self.recycle(old);
+            }
         }
         for e in self.unpublished_events.drain(..) {
             b.push_event(e);
@@ -424,7 +511,7 @@ impl ScanThread {
             b.push_halt(halted, reason);
         }
         if self.stats.scans.is_multiple_of(50) || b.halted {
-            b.stats = self.stats.to_json();
+            b.digest = Some(self.stats.digest());
         }
     }
 }

@@ -30,6 +30,7 @@ mod state;
 use evolve::code_of;
 pub use evolve::run_chart;
 pub use plan::ChartPlan;
+pub use situations::MAX_SITUATIONS;
 use situations::{ActiveOrder, LogMark, SituationLog};
 pub use state::ChartState;
 
@@ -82,7 +83,8 @@ pub struct TimeStats {
     /// changed, starting with the initial situation (empty when the simulation does not record
     /// situations, see [`Simulation::record_situations`]).
     pub sequence: Vec<(i64, Vec<String>)>,
-    /// Later changes of situation that were not recorded: the log keeps the first 100,000.
+    /// Later changes of situation that were not recorded: the log keeps the first
+    /// [`MAX_SITUATIONS`].
     pub dropped: u64,
 }
 
@@ -122,6 +124,10 @@ pub struct Simulation {
     fired_scratch: Vec<(u32, u32)>,
     /// Spare strings of the record's lists, reused so a record costs no allocation.
     spare: Vec<String>,
+    /// Global number of the first transition of each instance.
+    transition_base: Vec<u32>,
+    /// Scratch sink of the monitor's guard evaluation.
+    monitor_sink: ScanSink,
 }
 
 impl Simulation {
@@ -191,6 +197,14 @@ impl Simulation {
         let transition_qnames =
             charts.iter().map(|c| c.plan.transition_names.iter().map(|t| c.qualify(t)).collect()).collect();
         let order = ActiveOrder::new(&charts);
+        let transition_base = charts
+            .iter()
+            .scan(0u32, |base, c| {
+                let b = *base;
+                *base += c.plan.transition_names.len() as u32;
+                Some(b)
+            })
+            .collect();
         Simulation {
             prog,
             mem,
@@ -209,6 +223,8 @@ impl Simulation {
             order,
             fired_scratch: Vec::new(),
             spare: Vec::new(),
+            transition_base,
+            monitor_sink: ScanSink::default(),
         }
     }
 
@@ -498,6 +514,16 @@ impl Simulation {
     /// Current values of [`Simulation::trace_vars`], same order.
     pub fn trace_values(&self) -> Vec<Value> {
         self.trace.iter().map(|&(_, _, slot)| self.mem[slot].clone()).collect()
+    }
+    /// [`Simulation::trace_values`] into `out`, reusing its room.
+    pub fn trace_values_into(&self, out: &mut Vec<Value>) {
+        out.truncate(self.trace.len());
+        for (i, &(_, _, slot)) in self.trace.iter().enumerate() {
+            match out.get_mut(i) {
+                Some(v) => v.clone_from(&self.mem[slot]),
+                None => out.push(self.mem[slot].clone()),
+            }
+        }
     }
     /// Every step (qualified), in declaration order, top chart first.
     pub fn step_names(&self) -> Vec<String> {

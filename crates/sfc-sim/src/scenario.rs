@@ -24,7 +24,7 @@
 
 use crate::coverage::Coverage;
 use crate::trace::{value_text, TraceHeader, TraceSink};
-use crate::{format_time, parse_time, Profile, RuntimeError, ScanRecord, SimOptions, Simulation, Value};
+use crate::{format_time, parse_time, Profile, RuntimeError, SimOptions, Simulation, Value};
 use sfc_diagnostics::{render_human, Diagnostic, RenderOptions, SourceFile};
 use sfc_st::Type;
 use std::fmt;
@@ -1003,7 +1003,7 @@ fn same(expected: &Value, actual: &Value, ty: &Type) -> bool {
 
 /// Runs a loaded scenario, feeding `trace` if given.
 pub fn run(s: &Scenario, trace: Option<&mut dyn TraceSink>) -> Outcome {
-    execute(s, trace, &mut |_, _| {}).outcome
+    execute(s, trace, &mut |_| {}, Recording::default()).outcome
 }
 
 /// Loads and runs a scenario file, without trace.
@@ -1011,12 +1011,24 @@ pub fn run_path(path: &Path) -> Result<Outcome, ScenarioError> {
     Ok(run(&load(path)?, None))
 }
 
+/// What a run records beyond its outcome and coverage.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct Recording {
+    /// The sequence of situations, for [`Simulation::stats`] (`sfc sim --stats`).
+    pub situations: bool,
+}
+
 /// Runs a loaded scenario, feeding `trace` if given and calling `on_scan` after every scan
-/// with the simulation and the scan's record.
+/// with the simulation ([`Simulation::next_scan`] is then one past the scan that ran).
+///
+/// A scan costs what the engine costs: without a trace no record is built, coverage is read
+/// from the engine's counters at the end, and the values of expectations are read only at
+/// their times.
 pub fn execute(
     s: &Scenario,
     mut trace: Option<&mut dyn TraceSink>,
-    on_scan: &mut dyn FnMut(&Simulation, &ScanRecord),
+    on_scan: &mut dyn FnMut(&Simulation),
+    recording: Recording,
 ) -> Execution {
     let mut outcome =
         Outcome { name: s.name.clone(), failures: Vec::new(), error: None, coverage: Coverage::default(), scans: 0 };
@@ -1027,8 +1039,10 @@ pub fn execute(
             return Execution { outcome, sim: None, trace_error: None };
         }
     };
+    sim.record_situations(recording.situations);
     outcome.coverage = Coverage::of(&sim, s.coverage_key(), s.chart_name());
     let mut trace_error = None;
+    let mut values = Vec::new();
     if let Some(t) = trace.as_deref_mut() {
         if let Err(e) = t.header(&TraceHeader::of(&sim)) {
             trace_error = Some(e);
@@ -1048,21 +1062,25 @@ pub fn execute(
             }
             applied += 1;
         }
-        let record = sim.scan().clone();
-        outcome.scans += 1;
-        outcome.coverage.record(&record);
-        if trace_error.is_none() {
-            if let Some(t) = trace.as_deref_mut() {
-                if let Err(e) = t.scan(&record, &sim.trace_values()) {
+        let scan = sim.next_scan();
+        match trace.as_deref_mut() {
+            Some(t) if trace_error.is_none() => {
+                sim.scan();
+                sim.trace_values_into(&mut values);
+                if let Err(e) = t.scan(sim.record(), &values) {
                     trace_error = Some(e);
                 }
             }
+            _ => {
+                let _ = sim.advance();
+            }
         }
-        on_scan(&sim, &record);
+        outcome.scans += 1;
+        on_scan(&sim);
         while checked < applied {
             let e = &s.entries[checked];
             for x in &e.expect {
-                let at = format!("{}: at {} (scan {})", here(e), format_time(e.time), record.scan);
+                let at = format!("{}: at {} (scan {})", here(e), format_time(e.time), scan);
                 match x {
                     Expectation::Active(want) => {
                         let mut got = sim.active();
@@ -1102,6 +1120,7 @@ pub fn execute(
         (None, 0) => "the run has no scans".to_string(),
         (None, n) => format!("the run ended after scan {} ({})", n - 1, format_time((n as i64 - 1) * s.options.period)),
     };
+    outcome.coverage.record_run(&sim);
     for e in &s.entries[checked..] {
         if !e.expect.is_empty() {
             outcome.failures.push(format!(

@@ -4,8 +4,9 @@
 use super::state::ChartState;
 use super::ScanSink;
 
-/// At most this many changes of situation are recorded; later ones are counted.
-pub(crate) const MAX_SITUATIONS: usize = 100_000;
+/// At most this many changes of situation are recorded for the time analysis; later ones are
+/// counted.
+pub const MAX_SITUATIONS: usize = 100_000;
 /// At most this many step changes are recorded in all.
 pub(crate) const MAX_CHANGES: usize = 1 << 21;
 /// Marks a start entry: the instance entered its initial situation (first call or SFCInit).
