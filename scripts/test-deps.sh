@@ -1,24 +1,45 @@
 #!/usr/bin/env bash
 # Installs the programs the test suite calls besides cargo and npm, when they are missing:
-#   xmllint (Debian libxml2-utils) validates every PLCopen export against the TC6 v2.01 schema;
+#   xmllint (Debian libxml2-utils) validates every PLCopen export against the TC6 v2.01 schema
+#   and `sfc test --junit` output against the JUnit schema;
 #   chromium (Debian) runs the editor's browser tests (Playwright drives it; browsers cannot be
-#   downloaded here, so Debian's build is used).
+#   downloaded here, so Debian's build is used);
+#   python3-jsonschema validates `sfc check --format sarif` against the SARIF 2.1.0 JSON
+#   schema, which the npm package @microsoft/jest-sarif ships (fetched with `npm pack` into
+#   target/test-tools/, only the schema is kept).
+#   unzip lists the VS Code extension's .vsix (scripts/test-vscode.sh checks what it holds).
+#   python3 counts the steps, transitions and actions of the PLCopen corpus independently of the
+#   importer (tests/corpus/real/count.py, standard library only).
 # Part of the README's test command, so a fresh machine needs no manual step.
 set -euo pipefail
+root="$(cd "$(dirname "$0")/.." && pwd)"
 need=()
 command -v xmllint >/dev/null 2>&1 || need+=(libxml2-utils)
+command -v python3 >/dev/null 2>&1 || need+=(python3)
+command -v unzip >/dev/null 2>&1 || need+=(unzip)
 [ -x /usr/bin/chromium ] || need+=(chromium)
 if ! command -v node >/dev/null 2>&1 || ! command -v npm >/dev/null 2>&1; then need+=(nodejs npm); fi
-if [ ${#need[@]} -eq 0 ]; then
-    exit 0
+python3 -c 'import jsonschema' >/dev/null 2>&1 || need+=(python3-jsonschema)
+if [ ${#need[@]} -gt 0 ]; then
+    if ! command -v apt-get >/dev/null 2>&1; then
+        echo "test-deps: please install ${need[*]} with your package manager" >&2
+        exit 1
+    fi
+    sudo=""
+    if [ "$(id -u)" -ne 0 ]; then sudo="sudo"; fi
+    echo "test-deps: installing ${need[*]}" >&2
+    export DEBIAN_FRONTEND=noninteractive
+    $sudo apt-get install -y --no-install-recommends "${need[@]}" >/dev/null 2>&1 ||
+        { $sudo apt-get update >/dev/null 2>&1 && $sudo apt-get install -y --no-install-recommends "${need[@]}" >/dev/null; }
 fi
-if ! command -v apt-get >/dev/null 2>&1; then
-    echo "test-deps: please install ${need[*]} with your package manager" >&2
-    exit 1
+tools="$root/target/test-tools"
+schema="$tools/sarif-schema-2.1.0.json"
+if [ ! -s "$schema" ]; then
+    mkdir -p "$tools"
+    tmp="$(mktemp -d)"
+    trap 'rm -rf "$tmp"' EXIT
+    echo "test-deps: fetching the SARIF 2.1.0 schema (npm package @microsoft/jest-sarif)" >&2
+    (cd "$tmp" && npm pack --silent @microsoft/jest-sarif@1.0.0-beta.0 >/dev/null &&
+        tar -xzf microsoft-jest-sarif-1.0.0-beta.0.tgz package/lib/schemas/sarif-2.1.0-rtm.5.json)
+    cp "$tmp/package/lib/schemas/sarif-2.1.0-rtm.5.json" "$schema"
 fi
-sudo=""
-if [ "$(id -u)" -ne 0 ]; then sudo="sudo"; fi
-echo "test-deps: installing ${need[*]}" >&2
-export DEBIAN_FRONTEND=noninteractive
-$sudo apt-get install -y --no-install-recommends "${need[@]}" >/dev/null 2>&1 ||
-    { $sudo apt-get update >/dev/null 2>&1 && $sudo apt-get install -y --no-install-recommends "${need[@]}" >/dev/null; }

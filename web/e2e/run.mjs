@@ -1,7 +1,9 @@
 // End-to-end tests of the SFC Editor: the real `sfc edit` server, the built web app, headless
 // Debian Chromium driven by playwright-core. Tests live in e2e/tests/*.mjs and export
 // `tests = [{ name, run: async (t) => … }]`; `t` gives a fresh page, a scratch directory with
-// copies of examples/, and `t.edit(args)` to start `sfc edit` on it. A failing test leaves a
+// copies of examples/, and `t.edit(args)` to start `sfc edit` on it. The (debug) binary serves
+// the test build of the app, web/dist-test, the one with the test hook `window.__sfc`
+// (`t.edit(args, cwd, { production: true })` serves web/dist, the build users get). A failing test leaves a
 // screenshot in e2e/out/. The last line is cargo's `test result:` format (counted by .ci/run).
 //
 //   node e2e/run.mjs [FILTER…]      (SFC_BIN: the sfc binary, default ../target/debug/sfc)
@@ -19,12 +21,13 @@ const outDir = path.join(here, 'out');
 const filters = process.argv.slice(2);
 
 /** Starts `sfc edit ARGS` and resolves once it printed its URL. */
-function edit(args, cwd) {
+function edit(args, cwd, { production = false, bin = sfcBin } = {}) {
   return new Promise((resolve, reject) => {
-    const proc = spawn(sfcBin, ['edit', '--no-open', '--port', '0', ...args], {
+    const dist = production ? '' : (process.env.SFC_WEB_DIST ?? path.join(root, 'web', 'dist-test'));
+    const proc = spawn(bin, ['edit', '--no-open', '--port', '0', ...args], {
       cwd,
       stdio: ['ignore', 'pipe', 'pipe'],
-      env: { ...process.env, DISPLAY: '', WAYLAND_DISPLAY: '' },
+      env: { ...process.env, DISPLAY: '', WAYLAND_DISPLAY: '', SFC_WEB_DIST: dist },
     });
     let out = '';
     let err = '';
@@ -119,8 +122,8 @@ async function main() {
       root,
       sfcBin,
       log: (...a) => console.log(`    ${id}:`, ...a),
-      edit: async (args = [], cwd = scratch) => {
-        const s = await edit(args, cwd);
+      edit: async (args = [], cwd = scratch, opts = {}) => {
+        const s = await edit(args, cwd, opts);
         servers.push(s);
         return s;
       },

@@ -95,6 +95,8 @@ struct Confirmer<'a> {
     chart: &'a Chart,
     opts: &'a Options,
     done: usize,
+    /// Runaway scans met while replaying (SFC0510), one per location.
+    runaways: Vec<Diagnostic>,
 }
 
 impl Confirmer<'_> {
@@ -130,13 +132,36 @@ impl Confirmer<'_> {
                 witness.get(index).map(|&t| self.chart.transitions[t].name.as_str()).unwrap_or("?"),
                 index + 1
             )],
+            Err(ReplayFailure::Runaway { index, error }) => {
+                if !self.runaways.iter().any(|d| d.span == error.span) {
+                    self.runaways.push(
+                        Diagnostic::new(
+                            "SFC0510",
+                            error.span,
+                            format!(
+                                "runaway scan: replaying a witness, the simulator spent {} loop iterations, jumps and calls in one scan here",
+                                replay::REPLAY_SCAN_BUDGET
+                            ),
+                        )
+                        .with_element(self.chart.pou.clone())
+                        .with_note(error.message.clone()),
+                    );
+                }
+                vec![format!(
+                    "possible: the replay stopped trying to fire `{}` (step {} of the witness): a scan ran away at line {}, column {}",
+                    witness.get(index).map(|&t| self.chart.transitions[t].name.as_str()).unwrap_or("?"),
+                    index + 1,
+                    error.line,
+                    error.column
+                )]
+            }
         }
     }
 }
 
 fn net_diagnostics(checked: &Checked, chart: &Chart, report: &NetReport, opts: &Options) -> Vec<Diagnostic> {
     let mut out = Vec::new();
-    let mut confirm = Confirmer { checked, chart, opts, done: 0 };
+    let mut confirm = Confirmer { checked, chart, opts, done: 0, runaways: Vec::new() };
     for u in &report.unsafe_steps {
         let step = &chart.steps[u.step];
         let tr = &chart.transitions[u.transition];
@@ -212,6 +237,7 @@ fn net_diagnostics(checked: &Checked, chart: &Chart, report: &NetReport, opts: &
             .with_element(chart.pou.clone()),
         );
     }
+    out.append(&mut confirm.runaways);
     out
 }
 

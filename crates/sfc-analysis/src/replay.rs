@@ -162,7 +162,14 @@ pub enum ReplayFailure {
     Blocked { index: usize, reason: String },
     /// The budget of simulated scans ran out while trying witness transition `index`.
     Budget { index: usize },
+    /// A scan ran away (spent [`REPLAY_SCAN_BUDGET`]) while trying witness transition `index`:
+    /// the replay stopped there; `error` locates the loop or call.
+    Runaway { index: usize, error: sfc_sim::RuntimeError },
 }
+
+/// Loop iterations, jumps and calls one simulated scan of a replay may spend: a scan that
+/// spends them runs away, which ends the replay (a runaway scan would make every try slow).
+pub const REPLAY_SCAN_BUDGET: u64 = 1_000_000;
 
 impl fmt::Display for ReplayFailure {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
@@ -171,6 +178,9 @@ impl fmt::Display for ReplayFailure {
             ReplayFailure::Blocked { reason, .. } => f.write_str(reason),
             ReplayFailure::Budget { index } => {
                 write!(f, "the search budget ran out while looking for a way to fire witness transition {}", index + 1)
+            }
+            ReplayFailure::Runaway { error, .. } => {
+                write!(f, "a scan ran away at line {}, column {}: {}", error.line, error.column, error.message)
             }
         }
     }
@@ -187,7 +197,10 @@ pub fn replay(
     opts: &ReplayOptions,
 ) -> Result<Schedule, ReplayFailure> {
     let sim = match Simulation::from_source(name, text, Some(&chart.pou), SimOptions::default()) {
-        Ok(sim) => sim,
+        Ok(mut sim) => {
+            sim.set_scan_budget(REPLAY_SCAN_BUDGET);
+            sim
+        }
         Err((_, diags)) => {
             let first = diags.iter().find(|d| d.is_error()).or(diags.first());
             let msg = first.map_or_else(|| "unknown error".to_string(), |d| format!("{}: {}", d.code, d.message));
@@ -607,6 +620,13 @@ struct Search<'a> {
     indirect: Vec<usize>,
     observer: Observer,
     scans: usize,
+    /// The runaway scan that ended the search.
+    runaway: Option<sfc_sim::RuntimeError>,
+}
+
+/// The error of a scan that spent its budget.
+fn runaway_of(sim: &Simulation) -> Option<sfc_sim::RuntimeError> {
+    sim.error().filter(|e| e.message.starts_with("runaway scan")).cloned()
 }
 
 impl<'a> Search<'a> {
@@ -629,6 +649,7 @@ impl<'a> Search<'a> {
             indirect: Vec::new(),
             observer,
             scans: 0,
+            runaway: None,
         };
         s.collect_inputs();
         s
@@ -726,7 +747,13 @@ impl<'a> Search<'a> {
             return None;
         }
         self.scans += 1;
-        Some(self.sim.scan().clone())
+        let rec = self.sim.scan().clone();
+        if let Some(e) = runaway_of(&self.sim) {
+            self.runaway = Some(e);
+            self.scans = self.opts.max_tries;
+            return None;
+        }
+        Some(rec)
     }
 
     /// Steps of the simulated chart active now.
@@ -755,7 +782,7 @@ impl<'a> Search<'a> {
     }
 
     fn run(&mut self, goal: &Goal) -> Result<Schedule, ReplayFailure> {
-        let Some(first) = self.scan() else { return Err(ReplayFailure::Budget { index: 0 }) };
+        let Some(first) = self.scan() else { return Err(self.give_up(0, None)) };
         if let Some(e) = Self::error_of(&first) {
             return Err(ReplayFailure::Blocked {
                 index: 0,
@@ -781,7 +808,7 @@ impl<'a> Search<'a> {
                 match self.search_level(k) {
                     Ok(level) => stack.push(level),
                     Err(LevelFail::Blocked(r)) => note(&mut deepest, k, r),
-                    Err(LevelFail::Budget) => return Err(Self::give_up(k, deepest)),
+                    Err(LevelFail::Budget) => return Err(self.give_up(k, deepest)),
                 }
             }
             // Take the next alternative of the innermost level that has one.
@@ -796,7 +823,7 @@ impl<'a> Search<'a> {
                     &mut self.sim,
                     &self.inputs,
                     &self.observer,
-                    &mut self.scans,
+                    (&mut self.scans, &mut self.runaway),
                     self.opts,
                     top,
                     w,
@@ -806,7 +833,7 @@ impl<'a> Search<'a> {
                     Some(false) => {
                         stack.pop();
                     }
-                    None => return Err(Self::give_up(depth - 1, deepest)),
+                    None => return Err(self.give_up(depth - 1, deepest)),
                 }
             }
         }
@@ -814,7 +841,10 @@ impl<'a> Search<'a> {
 
     /// The failure when the budget runs out at `index`: a blocked transition found deeper (or
     /// as deep) is the better answer.
-    fn give_up(index: usize, deepest: Option<(usize, String)>) -> ReplayFailure {
+    fn give_up(&mut self, index: usize, deepest: Option<(usize, String)>) -> ReplayFailure {
+        if let Some(error) = self.runaway.take() {
+            return ReplayFailure::Runaway { index, error };
+        }
         match deepest {
             Some((d, reason)) if d >= index => ReplayFailure::Blocked {
                 index: d,
@@ -1109,7 +1139,7 @@ impl<'a> Search<'a> {
         sim: &mut Simulation,
         inputs: &[Input],
         observer: &Observer,
-        scans: &mut usize,
+        (scans, runaway): (&mut usize, &mut Option<sfc_sim::RuntimeError>),
         opts: &ReplayOptions,
         level: &mut Level,
         w: TransitionId,
@@ -1143,6 +1173,11 @@ impl<'a> Search<'a> {
             }
             *scans += 1;
             let rec = sim.scan().clone();
+            if let Some(e) = runaway_of(sim) {
+                *runaway = Some(e);
+                *scans = opts.max_tries;
+                return None;
+            }
             let fired: Vec<&String> = rec.fired.iter().filter(|n| !n.contains('.')).collect();
             if Self::error_of(&rec).is_some() || fired.len() != 1 || fired[0] != tname {
                 continue;

@@ -394,6 +394,9 @@ fn net_walks_of_user_charts_replay_or_fail_cleanly() {
                         eprintln!("{where_}: blocked at {index}: {reason}");
                     }
                     Err(ReplayFailure::Budget { .. }) => budget += 1,
+                    Err(ReplayFailure::Runaway { error, .. }) => {
+                        failures.push(format!("{where_}: a scan ran away: {error:?}"));
+                    }
                     Err(ReplayFailure::NotSimulatable(m)) => {
                         // A chart of another POU than the one simulated alone, or a target
                         // chart the simulator does not run: allowed, but say which.
@@ -455,4 +458,40 @@ fn never_panics_on_any_fixture() {
     }
     eprintln!("{runs} replays, {not_sim} not simulatable");
     assert!(runs > 100 && not_sim > 0 && not_sim < runs, "{runs} runs, {not_sim} not simulatable");
+}
+
+/// A witness whose first firing enters a step with a loop that never ends: the replay stops at
+/// that scan with a located runaway instead of trying every input for every scan, and
+/// `sfc check` reports the loop (SFC0510) beside the finding, which stays possible.
+#[test]
+fn a_runaway_scan_ends_the_replay_with_its_location() {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/replay/fig68_unsafe.st");
+    let text = std::fs::read_to_string(&path).expect("fixture");
+    let text = text
+        .replace("        g : BOOL;\n    END_VAR", "        g : BOOL;\n    END_VAR\n    VAR n : DINT; END_VAR")
+        .replace("    STEP K2: END_STEP", "    STEP K2:\n        Spin(N);\n    END_STEP")
+        .replace(
+            "END_PROGRAM",
+            "    ACTION Spin:\n        WHILE a DO n := n + 1; END_WHILE;\n    END_ACTION\nEND_PROGRAM",
+        );
+    let chart = chart_of("spin.st", &text);
+    let w: Vec<usize> = ["T1", "T3", "T4", "T5", "T1"].iter().map(|n| chart.transition(n).unwrap()).collect();
+    let k1 = chart.step("K1").unwrap();
+    let started = std::time::Instant::now();
+    let r = replay("spin.st", &text, &chart, &w, &Goal::Unsafe(k1), &ReplayOptions::default());
+    eprintln!("the replay ended in {:?}", started.elapsed());
+    let line = text.lines().position(|l| l.contains("WHILE a DO")).unwrap() as u32 + 1;
+    match r {
+        Err(ReplayFailure::Runaway { index: 0, error }) => {
+            assert_eq!(error.line, line, "{error:?}");
+            assert!(error.message.starts_with("runaway scan"), "{}", error.message);
+        }
+        other => panic!("expected a runaway at the first firing, got {other:?}"),
+    }
+    let checked =
+        sfc_analysis::check_source(0, "spin.st", &text, &CheckOptions { analysis: true, ..Default::default() });
+    let runaway = checked.diagnostics.iter().find(|d| d.code == "SFC0510").expect("SFC0510 reported");
+    assert_eq!(checked.file.line_col(runaway.span.start).line, line);
+    let unsafe_ = checked.diagnostics.iter().find(|d| d.code == "SFC0501").expect("the unsafe finding");
+    assert!(unsafe_.notes.iter().any(|n| n.starts_with("possible:") && n.contains("ran away")), "{:?}", unsafe_.notes);
 }

@@ -44,8 +44,44 @@ fn has_display() -> bool {
         || ["DISPLAY", "WAYLAND_DISPLAY"].iter().any(|v| std::env::var_os(v).is_some_and(|s| !s.is_empty()))
 }
 
-/// Starts the system's browser on `url`; a failure only means the user opens the URL by hand.
-fn open_browser(url: &str) {
+/// A page that forwards the browser to `url`, written where only this user can read it
+/// (a fresh directory of mode 0700, the file 0600), so the browser is started on the file's
+/// path and the token never appears in any process's arguments (where every local user could
+/// read it). Returns the directory, removed when the editor stops.
+fn launch_page(url: &str) -> std::io::Result<(PathBuf, PathBuf)> {
+    let base = std::env::temp_dir();
+    let nanos = std::time::SystemTime::now().duration_since(std::time::UNIX_EPOCH).map_or(0, |d| d.as_nanos());
+    for k in 0..100u32 {
+        let dir = base.join(format!("sfc-edit-{}-{nanos:x}-{k}", std::process::id()));
+        let mut builder = std::fs::DirBuilder::new();
+        #[cfg(unix)]
+        std::os::unix::fs::DirBuilderExt::mode(&mut builder, 0o700);
+        match builder.create(&dir) {
+            Ok(()) => {}
+            Err(e) if e.kind() == std::io::ErrorKind::AlreadyExists => continue,
+            Err(e) => return Err(e),
+        }
+        let file = dir.join("open.html");
+        let mut options = std::fs::OpenOptions::new();
+        options.write(true).create_new(true);
+        #[cfg(unix)]
+        std::os::unix::fs::OpenOptionsExt::mode(&mut options, 0o600);
+        let mut f = options.open(&file)?;
+        let escaped = url.replace('&', "&amp;").replace('"', "&quot;").replace('<', "&lt;");
+        write!(
+            f,
+            "<!doctype html>\n<html><head><meta charset=\"utf-8\"><meta http-equiv=\"refresh\" content=\"0;url={escaped}\">\
+             <title>SFC Editor</title></head><body><p><a href=\"{escaped}\">Open the SFC Editor</a></p></body></html>\n"
+        )?;
+        return Ok((dir, file));
+    }
+    Err(std::io::Error::other("no fresh directory for the browser's launch page"))
+}
+
+/// Starts the system's browser on the local file `page`; a failure only means the user opens
+/// the printed URL by hand.
+fn open_browser(page: &std::path::Path) {
+    let url = page;
     let mut cmd = if cfg!(target_os = "macos") {
         std::process::Command::new("open")
     } else if cfg!(windows) {
@@ -83,14 +119,24 @@ pub fn edit(a: EditArgs) -> u8 {
     };
     let opts = EditOptions { files: a.files, port: a.port, host };
     let open = !a.no_open && has_display();
+    let mut launch_dir: Option<PathBuf> = None;
     let result = sfc_server::serve(opts, |url| {
         let mut out = std::io::stdout().lock();
         let _ = writeln!(out, "SFC Editor: {url}");
         let _ = out.flush();
         if open {
-            open_browser(url);
+            match launch_page(url) {
+                Ok((dir, page)) => {
+                    open_browser(&page);
+                    launch_dir = Some(dir);
+                }
+                Err(e) => eprintln!("note: the browser was not opened ({e}); open the URL above"),
+            }
         }
     });
+    if let Some(dir) = launch_dir {
+        let _ = std::fs::remove_dir_all(dir);
+    }
     match result {
         Ok(()) => 0,
         Err(e) => {

@@ -1,44 +1,70 @@
-//! The `sfc` binary. Exit status: 0 success, 1 the input has errors, 2 usage or I/O error.
+//! The `sfc` binary. Exit status (`interfaces.md`): 0 success, 1 the input has errors or
+//! findings (a test failed, `--deny warnings`), 2 usage or I/O error. The table of every
+//! command is in `docs/cli.md`.
 
-use clap::{Parser, Subcommand, ValueEnum};
-use sfc_diagnostics::{render_human, render_json, RenderOptions, Severity, SourceFile};
-use sfc_model::{CheckOptions, Target};
-use std::io::{IsTerminal, Read, Write};
-use std::path::{Path, PathBuf};
+use clap::{CommandFactory, FromArgMatches, Parser, Subcommand, ValueEnum};
+use std::path::PathBuf;
 use std::process::ExitCode;
 
 mod build;
+mod check;
 mod edit;
+mod fmt;
+mod lsp;
 
-use sfc_cli::{run, sim};
+use sfc_cli::{run, sim, term, test, DenyArg, Status, VERSION};
 
 #[derive(Parser)]
 #[command(
     name = "sfc",
-    version,
-    about = "Check, format, build, simulate, edit and run IEC 61131-3 Sequential Function Charts"
+    version = VERSION,
+    about = "Check, format, build, simulate, test, edit and run IEC 61131-3 Sequential Function Charts"
 )]
 struct Cli {
+    /// When to colour the output: on a terminal (auto; `NO_COLOR` turns it off), always or never.
+    #[arg(long, global = true, value_enum, default_value = "auto")]
+    color: term::ColorChoice,
     #[command(subcommand)]
     command: Command,
 }
 
 #[derive(Subcommand)]
 enum Command {
-    /// Parse and validate charts, printing diagnostics.
-    Check(CheckArgs),
+    /// Parse, validate and analyse charts, printing diagnostics.
+    Check(check::CheckArgs),
     /// Rewrite textual SFC in canonical layout.
-    Fmt(FmtArgs),
+    Fmt(fmt::FmtArgs),
     /// Compile a chart: REX ATMT/EATMT table, Structured Text, S7-200 STL, PLCopen XML, SVG or text.
     Build(BuildArgs),
     /// Simulate a chart on virtual time, optionally against a scenario, writing a trace.
     Sim(SimArgs),
     /// Run every `*.scenario.toml` under the given files and directories.
-    Test(TestArgs),
+    Test(test::TestArgs),
     /// Open the SFC Editor in a browser, served on 127.0.0.1 (Ctrl-C stops it).
     Edit(edit::EditArgs),
     /// Run a chart as a soft-PLC on the wall clock, with Modbus TCP I/O and the monitor protocol.
     Run(run::RunArgs),
+    /// Serve the Language Server Protocol on standard input and output, for editors.
+    Lsp(lsp::LspArgs),
+    /// Print a shell completion script (e.g. `sfc completions bash > /etc/bash_completion.d/sfc`).
+    Completions(CompletionsArgs),
+    /// Print the manual page (roff), or write one page per command into a directory.
+    Man(ManArgs),
+}
+
+#[derive(clap::Args)]
+struct CompletionsArgs {
+    /// The shell.
+    #[arg(value_enum)]
+    shell: clap_complete::Shell,
+}
+
+#[derive(clap::Args)]
+struct ManArgs {
+    /// Write `sfc.1` and `sfc-COMMAND.1` for every command into this directory instead of
+    /// printing `sfc.1`.
+    #[arg(long, value_name = "DIR")]
+    dir: Option<PathBuf>,
 }
 
 #[derive(Clone, Copy, ValueEnum)]
@@ -74,9 +100,13 @@ struct SimArgs {
     /// The POU to simulate when the file has several.
     #[arg(long, value_name = "NAME")]
     pou: Option<String>,
-    /// Print the time analysis: activations and active times per step, sequence of situations.
+    /// Print the time analysis: activations and active times per step, and the situations
+    /// summarised (the ten that lasted longest, and how many there were).
     #[arg(long)]
     stats: bool,
+    /// With the time analysis, list every situation in order with the time it began.
+    #[arg(long)]
+    stats_full: bool,
     /// Print, at the end, why each active step has not been left.
     #[arg(long)]
     explain: bool,
@@ -88,52 +118,10 @@ struct SimArgs {
     set: Vec<(String, String)>,
 }
 
-#[derive(clap::Args)]
-struct TestArgs {
-    /// Scenario files, or directories searched recursively for `*.scenario.toml`.
-    #[arg(required = true)]
-    paths: Vec<PathBuf>,
-    /// Print which steps were never active and which transitions never fired, per chart.
-    #[arg(long)]
-    coverage: bool,
-}
-
 #[derive(Clone, Copy, ValueEnum)]
 enum Format {
     Human,
     Json,
-}
-
-#[derive(Clone, Copy, ValueEnum)]
-enum TargetArg {
-    Blank,
-    Atmt,
-    Eatmt,
-}
-
-#[derive(clap::Args)]
-struct CheckArgs {
-    /// IEC 61131-3 source files (`.st`) or PLCopen XML files (`.xml`).
-    #[arg(required_unless_present = "explain")]
-    files: Vec<PathBuf>,
-    /// Output format: rustc-like text on stderr, or a JSON array on stdout.
-    #[arg(long, value_enum, default_value = "human")]
-    format: Format,
-    /// Apply the rules of a REX automaton block (overrides the `sfc.target` attribute).
-    #[arg(long, value_enum)]
-    target: Option<TargetArg>,
-    /// State limit override for ATMT/EATMT.
-    #[arg(long)]
-    nstep: Option<u32>,
-    /// Rule limit override for ATMT/EATMT.
-    #[arg(long)]
-    ntr: Option<u32>,
-    /// Skip the reachability and guard analysis (structural and type checks only).
-    #[arg(long)]
-    no_analysis: bool,
-    /// Print what a diagnostic code means and how to fix it.
-    #[arg(long, value_name = "CODE")]
-    explain: Option<String>,
 }
 
 #[derive(Clone, Copy, ValueEnum)]
@@ -169,16 +157,19 @@ struct BuildArgs {
     /// Rule limit override for ATMT/EATMT.
     #[arg(long)]
     ntr: Option<u32>,
+    /// STL: how the steps are programmed: set/reset networks (default) or SCR segments
+    /// (LSCR/SCRT/SCRE).
+    #[arg(long, value_enum, value_name = "METHOD")]
+    stl_method: Option<StlMethodArg>,
+    /// STL: also write STEP 7-Micro/WIN's symbol table (CSV: Symbol,Address,Comment) here.
+    #[arg(long, value_name = "OUT.csv")]
+    symbols: Option<PathBuf>,
 }
 
-#[derive(clap::Args)]
-struct FmtArgs {
-    /// Files to format in place; `-` reads standard input and writes standard output.
-    #[arg(required = true)]
-    files: Vec<PathBuf>,
-    /// Only report files whose layout differs (exit 1 if any).
-    #[arg(long)]
-    check: bool,
+#[derive(Clone, Copy, ValueEnum)]
+enum StlMethodArg {
+    Setreset,
+    Scr,
 }
 
 fn main() -> ExitCode {
@@ -202,17 +193,30 @@ fn main() -> ExitCode {
 }
 
 fn run() -> u8 {
-    let cli = match Cli::try_parse() {
+    let args = with_coverage_value(std::env::args_os().collect());
+    let choice = term::color_from_args(&args);
+    term::set_color(choice);
+    let clap_color = match choice {
+        term::ColorChoice::Auto if std::env::var_os("NO_COLOR").is_some_and(|v| !v.is_empty()) => {
+            clap::ColorChoice::Never
+        }
+        term::ColorChoice::Auto => clap::ColorChoice::Auto,
+        term::ColorChoice::Always => clap::ColorChoice::Always,
+        term::ColorChoice::Never => clap::ColorChoice::Never,
+    };
+    let parsed = Cli::command().color(clap_color).try_get_matches_from(args).and_then(|m| Cli::from_arg_matches(&m));
+    let cli = match parsed {
         Ok(c) => c,
         Err(e) => {
-            let code = if e.use_stderr() { 2 } else { 0 };
+            let code = if e.use_stderr() { Status::Usage.code() } else { Status::Ok.code() };
             let _ = e.print();
             return code;
         }
     };
+    term::set_color(cli.color);
     match cli.command {
-        Command::Check(a) => check(a),
-        Command::Fmt(a) => fmt(a),
+        Command::Check(a) => check::check(a),
+        Command::Fmt(a) => fmt::fmt(a),
         Command::Build(a) => build::build(build::BuildRequest {
             file: a.file,
             target: match a.target {
@@ -229,6 +233,11 @@ fn run() -> u8 {
             flatten: a.flatten,
             nstep: a.nstep,
             ntr: a.ntr,
+            stl_method: a.stl_method.map(|m| match m {
+                StlMethodArg::Setreset => build::StlMethod::SetReset,
+                StlMethodArg::Scr => build::StlMethod::Scr,
+            }),
+            symbols: a.symbols,
         }),
         Command::Sim(a) => sim::sim(sim::SimRequest {
             file: a.file,
@@ -244,149 +253,82 @@ fn run() -> u8 {
                 ProfileArg::Grafcet => sfc_sim::Profile::Grafcet,
             }),
             pou: a.pou,
-            stats: a.stats,
+            stats: a.stats || a.stats_full,
+            stats_full: a.stats_full,
             explain: a.explain,
             json: matches!(a.format, Format::Json),
             set: a.set,
         }),
-        Command::Test(a) => sim::test(&a.paths, a.coverage),
+        Command::Test(a) => test::test(a),
         Command::Edit(a) => edit::edit(a),
         Command::Run(a) => run::run(a),
+        Command::Lsp(a) => lsp::lsp(a),
+        Command::Completions(a) => {
+            let mut cmd = Cli::command();
+            clap_complete::generate(a.shell, &mut cmd, "sfc", &mut std::io::stdout());
+            Status::Ok.code()
+        }
+        Command::Man(a) => man(a),
     }
 }
 
-fn read(path: &Path) -> Result<String, String> {
-    if path.as_os_str() == "-" {
-        let mut s = String::new();
-        std::io::stdin().read_to_string(&mut s).map_err(|e| format!("cannot read standard input: {e}"))?;
-        return Ok(s);
-    }
-    let bytes = std::fs::read(path).map_err(|e| format!("cannot read `{}`: {e}", path.display()))?;
-    String::from_utf8(bytes).map_err(|_| format!("`{}` is not UTF-8 text", path.display()))
-}
-
-fn check(a: CheckArgs) -> u8 {
-    if let Some(code) = &a.explain {
-        return match sfc_diagnostics::explain(code) {
-            Some(info) => {
-                println!("{} ({}): {}\n\n{}", info.code, info.severity.as_str(), info.title, info.explanation);
-                0
-            }
-            None => {
-                eprintln!("error: unknown diagnostic code `{code}`");
-                2
-            }
-        };
-    }
-    let opts = CheckOptions {
-        target: a.target.map(|t| match t {
-            TargetArg::Blank => Target::Blank,
-            TargetArg::Atmt => Target::Atmt,
-            TargetArg::Eatmt => Target::Eatmt,
-        }),
-        nstep: a.nstep,
-        ntr: a.ntr,
-        analysis: !a.no_analysis,
-        ..CheckOptions::default()
+/// `sfc man`: the roff page of `sfc` on stdout, or every page into `--dir`.
+fn man(a: ManArgs) -> u8 {
+    let cmd = Cli::command().version(VERSION);
+    let Some(dir) = a.dir else {
+        let mut out = Vec::new();
+        if let Err(e) = clap_mangen::Man::new(cmd).render(&mut out) {
+            term::error(&format!("cannot render the manual page: {e}"));
+            return Status::Usage.code();
+        }
+        let mut stdout = std::io::stdout().lock();
+        let _ = std::io::Write::write_all(&mut stdout, &out);
+        return Status::Ok.code();
     };
-    let mut files: Vec<SourceFile> = Vec::new();
-    let mut diags = Vec::new();
-    for path in &a.files {
-        let text = match read(path) {
-            Ok(t) => t,
-            Err(e) => {
-                eprintln!("error: {e}");
-                return 2;
-            }
-        };
-        let id = files.len() as u32;
-        let (file, _, found) = build::check_any(id, path, &text, &opts);
-        files.push(file);
-        diags.extend(found);
+    let mut pages = vec![("sfc".to_string(), cmd.clone())];
+    for sub in cmd.get_subcommands() {
+        let name = format!("sfc-{}", sub.get_name());
+        // clap names a page by a `'static` string: leak the few names (the process ends soon).
+        let page_name: &'static str = Box::leak(name.clone().into_boxed_str());
+        pages.push((name, sub.clone().name(page_name).version(VERSION)));
     }
-    let errors = diags.iter().filter(|d| d.severity == Severity::Error).count();
-    let warnings = diags.iter().filter(|d| d.severity == Severity::Warning).count();
-    match a.format {
-        Format::Json => println!("{}", render_json(&diags, &files)),
-        Format::Human => {
-            let color = std::io::stderr().is_terminal();
-            let mut err = std::io::stderr().lock();
-            for d in &diags {
-                let _ = writeln!(err, "{}", render_human(d, &files, RenderOptions { color }));
-            }
-            if errors + warnings > 0 {
-                let _ = writeln!(err, "{}", summary(errors, warnings));
-            }
+    if let Err(e) = std::fs::create_dir_all(&dir) {
+        term::error(&format!("cannot create `{}`: {e}", dir.display()));
+        return Status::Usage.code();
+    }
+    for (name, page) in pages {
+        let mut out = Vec::new();
+        let path = dir.join(format!("{name}.1"));
+        let written =
+            clap_mangen::Man::new(page).render(&mut out).and_then(|_| sfc_driver::write_atomically(&path, &out));
+        if let Err(e) = written {
+            term::error(&format!("cannot write `{}`: {e}", path.display()));
+            return Status::Usage.code();
         }
     }
-    u8::from(errors > 0)
+    eprintln!("wrote the manual pages into `{}`", dir.display());
+    Status::Ok.code()
 }
 
-/// Prints diagnostics in the human form on stderr; returns the number of errors.
-fn print_diagnostics(diags: &[sfc_diagnostics::Diagnostic], files: &[SourceFile]) -> usize {
-    let color = std::io::stderr().is_terminal();
-    let mut err = std::io::stderr().lock();
-    for d in diags {
-        let _ = writeln!(err, "{}", render_human(d, files, RenderOptions { color }));
+/// `--coverage` takes an optional format (`--coverage`, `--coverage lcov`): when the word after
+/// it is not a format, it is a path (`sfc test --coverage examples`), so the flag gets its
+/// default explicitly and clap does not take the path for a format.
+fn with_coverage_value(mut args: Vec<std::ffi::OsString>) -> Vec<std::ffi::OsString> {
+    if args.get(1).is_none_or(|a| a != "test") {
+        return args;
     }
-    diags.iter().filter(|d| d.severity == Severity::Error).count()
-}
-
-fn plural(n: usize, word: &str) -> String {
-    format!("{n} {word}{}", if n == 1 { "" } else { "s" })
-}
-
-fn summary(errors: usize, warnings: usize) -> String {
-    match (errors, warnings) {
-        (0, w) => format!("{} emitted", plural(w, "warning")),
-        (e, 0) => format!("{} emitted", plural(e, "error")),
-        (e, w) => format!("{} and {} emitted", plural(e, "error"), plural(w, "warning")),
-    }
-}
-
-/// Writes `text` to a temporary file beside `path`, then renames it over `path` (the editor's
-/// server does the same for saves: one implementation).
-fn write_atomically(path: &Path, text: &str) -> std::io::Result<()> {
-    sfc_server::write_atomically(path, text.as_bytes())
-}
-
-fn fmt(a: FmtArgs) -> u8 {
-    let mut status = 0u8;
-    let color = std::io::stderr().is_terminal();
-    for path in &a.files {
-        let text = match read(path) {
-            Ok(t) => t,
-            Err(e) => {
-                eprintln!("error: {e}");
-                return 2;
+    let formats = ["text", "json", "lcov", "cobertura"];
+    let mut i = 2;
+    while i < args.len() {
+        if args.get(i).is_some_and(|a| a == "--coverage") {
+            let next_is_format = args.get(i + 1).is_some_and(|n| formats.iter().any(|f| n == *f));
+            if !next_is_format {
+                if let Some(a) = args.get_mut(i) {
+                    *a = "--coverage=text".into();
+                }
             }
-        };
-        let (unit, diags) = sfc_syntax::parse(0, &text);
-        let errors: Vec<_> = diags.iter().filter(|d| d.is_error()).collect();
-        if !errors.is_empty() {
-            let files = [SourceFile::new(path.display().to_string(), text.clone())];
-            for d in &errors {
-                eprintln!("{}", render_human(d, &files, RenderOptions { color }));
-            }
-            eprintln!("`{}` has syntax errors and was not formatted", path.display());
-            status = 1;
-            continue;
         }
-        let formatted = sfc_syntax::print::print(&unit);
-        if path.as_os_str() == "-" {
-            print!("{formatted}");
-            continue;
-        }
-        if formatted == text {
-            continue;
-        }
-        if a.check {
-            println!("would reformat {}", path.display());
-            status = 1;
-        } else if let Err(e) = write_atomically(path, &formatted) {
-            eprintln!("error: cannot write `{}`: {e}", path.display());
-            return 2;
-        }
+        i += 1;
     }
-    status
+    args
 }

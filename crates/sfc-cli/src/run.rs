@@ -2,8 +2,11 @@
 //! with `--atmt` the monitor for a REX ATMT/EATMT block running elsewhere.
 //! `docs/runtime.md` and `docs/monitor.md` describe both.
 
+use crate::run_config::{self, RunConfig};
 use sfc_diagnostics::{render_human, RenderOptions};
-use sfc_runtime::{AtmtModel, Limits, LineSource, RunOptions, Runtime};
+use sfc_runtime::board::RunState;
+use sfc_runtime::io::WordOrder;
+use sfc_runtime::{AtmtModel, Limits, LineSource, ModbusLimits, MonitorAccess, RetainOptions, RunOptions, Runtime};
 use sfc_sim::{Profile, SimOptions, Simulation};
 use std::io::IsTerminal;
 use std::net::{SocketAddr, ToSocketAddrs};
@@ -13,27 +16,70 @@ use std::time::Duration;
 /// Arguments of `sfc run`.
 #[derive(clap::Args, Debug)]
 pub struct RunArgs {
-    /// The chart (IEC text), or with `--atmt` a transition table file or an ATMT/EATMT chart.
-    pub file: PathBuf,
+    /// The chart (IEC text), or with `--atmt` a transition table file or an ATMT/EATMT chart
+    /// (may come from the run configuration's `chart`).
+    pub file: Option<PathBuf>,
+    /// A run configuration (TOML): period, watchdog, Modbus, monitor, retain, safe values …
+    /// Options on the command line win over it.
+    #[arg(long, value_name = "FILE")]
+    pub config: Option<PathBuf>,
     /// The POU to run when the file has several.
     #[arg(long)]
     pub pou: Option<String>,
-    /// Scan period (a TIME literal).
-    #[arg(long, default_value = "T#10ms")]
-    pub period: String,
-    /// Stop with an error when one scan takes longer than this (a TIME literal).
-    #[arg(long)]
+    /// Scan period (a TIME literal; default T#10ms).
+    #[arg(long, value_name = "TIME")]
+    pub period: Option<String>,
+    /// Stop a scan that runs longer than this (a TIME literal) and enter FAULT: outputs at
+    /// their safe values until a monitor `reset`.
+    #[arg(long, value_name = "TIME")]
     pub watchdog: Option<String>,
     /// Serve Modbus TCP at this address (e.g. 127.0.0.1:1502); the located variables are the I/O.
-    #[arg(long)]
+    #[arg(long, value_name = "ADDR")]
     pub modbus: Option<String>,
+    /// Most Modbus connections served at once (default 32).
+    #[arg(long, value_name = "N")]
+    pub modbus_max_clients: Option<usize>,
+    /// Close a Modbus connection idle this long (a TIME literal; default T#60s).
+    #[arg(long, value_name = "TIME")]
+    pub modbus_idle_timeout: Option<String>,
+    /// Register order of 32- and 64-bit values on Modbus: big (high word first, default) or
+    /// little.
+    #[arg(long, value_name = "ORDER")]
+    pub word_order: Option<String>,
     /// Serve the monitor protocol (WebSocket) at this address (e.g. 127.0.0.1:9002).
-    #[arg(long)]
+    #[arg(long, value_name = "ADDR")]
     pub monitor: Option<String>,
-    /// The secret monitor clients need to force or write variables (default: a random one,
-    /// printed at start).
-    #[arg(long)]
+    /// A file holding the secret monitor clients need to change the run (default: the
+    /// environment variable SFC_TOKEN, else a random one printed at start).
+    #[arg(long, value_name = "FILE")]
+    pub token_file: Option<PathBuf>,
+    /// Refused: a token on the command line is visible to every local user.
+    #[arg(long, hide = true, value_name = "SECRET")]
     pub token: Option<String>,
+    /// A web page origin the monitor accepts (repeatable; default: pages served from
+    /// loopback, as the editor's).
+    #[arg(long, value_name = "ORIGIN")]
+    pub allow_origin: Vec<String>,
+    /// Keep RETAIN/PERSISTENT values in this file (default: beside the chart, `<chart>.retain`).
+    #[arg(long, value_name = "PATH")]
+    pub retain: Option<PathBuf>,
+    /// Keep no retain file.
+    #[arg(long, conflicts_with = "retain")]
+    pub no_retain: bool,
+    /// Write the retain file at most this often, when a value changed (default T#1s).
+    #[arg(long, value_name = "TIME")]
+    pub retain_interval: Option<String>,
+    /// Cold start: only PERSISTENT values are restored (RETAIN ones start from their initial
+    /// values).
+    #[arg(long)]
+    pub cold: bool,
+    /// The safe value of a variable (repeatable), e.g. `--safe Blower=TRUE`.
+    #[arg(long = "safe", value_name = "NAME=VALUE", value_parser = crate::sim::parse_set)]
+    pub safe: Vec<(String, String)>,
+    /// After a fault: `wait` in FAULT for a monitor `reset` (the default when Modbus or the
+    /// monitor serves) or `exit` with status 1.
+    #[arg(long, value_name = "WHAT")]
+    pub on_fault: Option<String>,
     /// Stop after this many scans.
     #[arg(long)]
     pub scans: Option<u64>,
@@ -73,11 +119,48 @@ fn addr_arg(flag: &str, s: &str) -> Result<SocketAddr, String> {
         .ok_or_else(|| format!("`{flag}`: `{s}` is not an address (write e.g. 127.0.0.1:1502)"))
 }
 
-/// Runs `sfc run`; returns the exit status (0 done, 1 the run stopped on an error, 2 bad
-/// arguments or input).
+/// Where the monitor's token came from.
+enum TokenSource {
+    Random,
+    Env,
+    File(PathBuf),
+}
+
+/// The token: `--token-file` (or the configuration's), else `SFC_TOKEN`, else a random one.
+fn token_of(a: &RunArgs, cfg: &RunConfig) -> Result<(Option<String>, TokenSource), String> {
+    if a.token.is_some() {
+        return Err("`--token` is not accepted: a secret on the command line is visible to every local user \
+             (ps, /proc/PID/cmdline). Put it in the environment variable SFC_TOKEN, or in a file named by \
+             --token-file (or `token_file` in [monitor] of the run configuration)"
+            .into());
+    }
+    if let Some(path) = a.token_file.as_ref().or(cfg.monitor.token_file.as_ref()) {
+        let text = std::fs::read_to_string(path)
+            .map_err(|e| format!("cannot read the token file `{}`: {e}", path.display()))?;
+        let t = text.trim().to_string();
+        if t.is_empty() {
+            return Err(format!("the token file `{}` is empty", path.display()));
+        }
+        #[cfg(unix)]
+        {
+            use std::os::unix::fs::PermissionsExt;
+            if std::fs::metadata(path).is_ok_and(|m| m.permissions().mode() & 0o077 != 0) {
+                eprintln!("warning: the token file `{}` can be read by other users (chmod 600 it)", path.display());
+            }
+        }
+        return Ok((Some(t), TokenSource::File(path.clone())));
+    }
+    match std::env::var("SFC_TOKEN") {
+        Ok(t) if !t.trim().is_empty() => Ok((Some(t.trim().to_string()), TokenSource::Env)),
+        _ => Ok((None, TokenSource::Random)),
+    }
+}
+
+/// Runs `sfc run`; returns the exit status (0 done, 1 the run ended in FAULT, 2 bad arguments
+/// or input).
 pub fn run(a: RunArgs) -> u8 {
     match start(&a) {
-        Ok(rt) => supervise(rt, &a),
+        Ok((rt, source)) => supervise(rt, &a, &source),
         Err(e) if e.starts_with("error") => {
             eprintln!("{e}");
             2
@@ -89,25 +172,91 @@ pub fn run(a: RunArgs) -> u8 {
     }
 }
 
-fn start(a: &RunArgs) -> Result<Runtime, String> {
-    let period = time_arg("--period", &a.period)?;
+fn start(a: &RunArgs) -> Result<(Runtime, TokenSource), String> {
+    let cfg = match &a.config {
+        Some(p) => run_config::load(p)?,
+        None => RunConfig::default(),
+    };
+    let file = a
+        .file
+        .clone()
+        .or_else(|| cfg.chart.clone())
+        .ok_or("no chart to run: name the chart file (`sfc run FILE`), or give `chart` in the run configuration")?;
+    let period = time_arg("--period", a.period.as_deref().or(cfg.period.as_deref()).unwrap_or("T#10ms"))?;
     let limits = Limits {
         scans: a.scans,
         duration: a.duration.as_deref().map(|d| time_arg("--for", d)).transpose()?,
-        watchdog: a.watchdog.as_deref().map(|d| time_arg("--watchdog", d)).transpose()?,
+        watchdog: a.watchdog.as_deref().or(cfg.watchdog.as_deref()).map(|d| time_arg("--watchdog", d)).transpose()?,
     };
-    let opts = RunOptions {
-        modbus: a.modbus.as_deref().map(|m| addr_arg("--modbus", m)).transpose()?,
-        monitor: a.monitor.as_deref().map(|m| addr_arg("--monitor", m)).transpose()?,
-        token: a.token.clone(),
+    let modbus = a.modbus.as_deref().or(cfg.modbus.address.as_deref()).map(|m| addr_arg("--modbus", m)).transpose()?;
+    let monitor =
+        a.monitor.as_deref().or(cfg.monitor.address.as_deref()).map(|m| addr_arg("--monitor", m)).transpose()?;
+    let mut modbus_limits = ModbusLimits::default();
+    if let Some(n) = a.modbus_max_clients.or(cfg.modbus.max_clients) {
+        if n == 0 {
+            return Err("`--modbus-max-clients` must be at least 1".into());
+        }
+        modbus_limits.max_clients = n;
+    }
+    if let Some(t) = &a.modbus_idle_timeout {
+        modbus_limits.idle_timeout = time_arg("--modbus-idle-timeout", t)?;
+    } else if let Some(t) = cfg.modbus.idle_timeout {
+        modbus_limits.idle_timeout = t;
+    }
+    let word_order = match a.word_order.as_deref().or(cfg.modbus.word_order.as_deref()) {
+        None => WordOrder::default(),
+        Some(w) => WordOrder::from_name(w)
+            .ok_or_else(|| format!("`--word-order`: `{w}` is not a word order (big or little)"))?,
+    };
+    let (token, source) = token_of(a, &cfg)?;
+    let monitor_access = MonitorAccess {
+        origins: if a.allow_origin.is_empty() {
+            cfg.monitor.allow_origins.clone()
+        } else {
+            Some(a.allow_origin.clone())
+        },
+        hosts: cfg.monitor.allow_hosts.clone(),
+    };
+    let on_fault = a.on_fault.as_deref().or(cfg.on_fault.as_deref());
+    let wait_in_fault = match on_fault {
+        Some("wait") => true,
+        Some("exit") => false,
+        Some(other) => return Err(format!("`--on-fault`: `{other}` is `wait` or `exit`")),
+        None => modbus.is_some() || monitor.is_some(),
+    };
+    let retain_enabled = !a.no_retain && cfg.retain.enabled != Some(false);
+    let retain = retain_enabled.then(|| -> Result<RetainOptions, String> {
+        Ok(RetainOptions {
+            path: a.retain.clone().or_else(|| cfg.retain.file.clone()).unwrap_or_else(|| file.with_extension("retain")),
+            interval: match &a.retain_interval {
+                Some(t) => time_arg("--retain-interval", t)?,
+                None => cfg.retain.interval.unwrap_or(Duration::from_secs(1)),
+            },
+            cold: a.cold,
+        })
+    });
+    let retain = retain.transpose()?;
+    let mut safe = cfg.safe.clone();
+    safe.extend(a.safe.iter().cloned());
+    let mut opts = RunOptions {
+        modbus,
+        modbus_limits,
+        word_order,
+        monitor,
+        monitor_access,
+        token,
         limits,
+        safe,
+        retain: None,
+        wait_in_fault,
         halted: a.halted,
         ctrl_c: true,
-        realtime: a.realtime,
+        realtime: a.realtime || cfg.realtime == Some(true),
     };
-    let bytes = std::fs::read(&a.file).map_err(|e| format!("error: cannot read `{}`: {e}", a.file.display()))?;
-    let text = String::from_utf8(bytes).map_err(|_| format!("error: `{}` is not UTF-8 text", a.file.display()))?;
-    let name = a.file.display().to_string();
+    let bytes = std::fs::read(&file).map_err(|e| format!("error: cannot read `{}`: {e}", file.display()))?;
+    let text = String::from_utf8(bytes).map_err(|_| format!("error: `{}` is not UTF-8 text", file.display()))?;
+    let name = file.display().to_string();
+    let pou = a.pou.as_deref().or(cfg.pou.as_deref());
     let rt = if a.atmt {
         if opts.monitor.is_none() {
             return Err("error: `--atmt` serves the monitor protocol: give `--monitor ADDR`".into());
@@ -115,7 +264,7 @@ fn start(a: &RunArgs) -> Result<Runtime, String> {
         let model = if sfc_codegen::atmt::parse_table(text.trim()).is_some() {
             AtmtModel::from_table(&text)
         } else {
-            AtmtModel::from_chart(&name, &text, a.pou.as_deref())
+            AtmtModel::from_chart(&name, &text, pou)
         }
         .map_err(|e| format!("error: {e}"))?;
         let source = if a.atmt_input == "-" {
@@ -128,31 +277,47 @@ fn start(a: &RunArgs) -> Result<Runtime, String> {
         Runtime::start_atmt(model, source, opts)?
     } else {
         let sim_opts = SimOptions { period: period.as_micros() as i64, profile: Profile::Iec };
-        let sim = Simulation::from_source(&name, &text, a.pou.as_deref(), sim_opts).map_err(|(file, diags)| {
+        let sim = Simulation::from_source(&name, &text, pou, sim_opts).map_err(|(file, diags)| {
             let color = std::io::stderr().is_terminal();
             let mut out: Vec<String> =
                 diags.iter().map(|d| render_human(d, std::slice::from_ref(&file), RenderOptions { color })).collect();
             out.push(format!("{} error{} emitted", diags.len(), if diags.len() == 1 { "" } else { "s" }));
             out.join("\n")
         })?;
+        // A chart without retentive values needs no file.
+        if !sim.retained().is_empty() {
+            opts.retain = retain;
+        }
         Runtime::start(sim, opts).map_err(|e| format!("error: {e}"))?
     };
-    Ok(rt)
+    Ok((rt, source))
 }
 
-/// Prints where the run serves, waits for its end (limits, error, Ctrl-C) and prints the
-/// statistics.
-fn supervise(rt: Runtime, a: &RunArgs) -> u8 {
+fn print_notices(rt: &Runtime) {
+    for line in rt.notices() {
+        eprintln!("{line}");
+    }
+}
+
+/// Prints where the run serves, waits for its end (limits, fault without servers, Ctrl-C,
+/// SIGTERM), prints the statistics; the exit status.
+fn supervise(rt: Runtime, a: &RunArgs, source: &TokenSource) -> u8 {
     if let Some(m) = rt.modbus_addr() {
         eprintln!("sfc run: Modbus TCP on {m} ({} located variables)", rt.io_points().len());
     }
     if let Some(m) = rt.monitor_addr() {
-        eprintln!("sfc run: monitor on ws://{m}/?token={}", rt.token());
+        match source {
+            TokenSource::Random => eprintln!("sfc run: monitor on ws://{m}/?token={}", rt.token()),
+            TokenSource::Env => eprintln!("sfc run: monitor on ws://{m}/ (token from SFC_TOKEN)"),
+            TokenSource::File(p) => eprintln!("sfc run: monitor on ws://{m}/ (token from {})", p.display()),
+        }
     }
+    print_notices(&rt);
     let every = a.report.as_deref().and_then(|r| time_arg("--report", r).ok());
     let mut last = std::time::Instant::now();
     while !rt.is_finished() {
-        std::thread::sleep(Duration::from_millis(50));
+        std::thread::sleep(Duration::from_millis(20));
+        print_notices(&rt);
         if let Some(e) = every {
             if last.elapsed() >= e {
                 last = std::time::Instant::now();
@@ -160,23 +325,38 @@ fn supervise(rt: Runtime, a: &RunArgs) -> u8 {
             }
         }
     }
+    let safe = rt.safe_state().summary(8);
     let report = rt.wait();
+    for line in &report.notices {
+        eprintln!("{line}");
+    }
     if let Err(e) = &report.realtime {
         eprintln!("warning: {e}");
     }
     if a.atmt {
         eprintln!("sfc run: {} states of the block observed", report.stats.scans);
-    } else {
-        eprintln!("sfc run: {}", report.stats.summary());
+        return 0;
+    }
+    let ended = match report.state {
+        RunState::Fault => "FAULT",
+        _ => "STOP",
+    };
+    if !safe.is_empty() {
+        eprintln!("sfc run: {ended}: outputs at their safe values ({safe})");
+    }
+    eprintln!("sfc run: {}", report.stats.summary());
+    if !report.modbus.is_null() {
+        let m = &report.modbus;
+        eprintln!(
+            "sfc run: Modbus: {} connections, {} refused over the limit, {} closed idle, {} failed accepts; {} requests, {} exceptions",
+            m["accepted"], m["refused"], m["idleClosed"], m["acceptErrors"], m["requests"], m["exceptions"]
+        );
     }
     if report.dropped > 0 {
         eprintln!("sfc run: {} monitor clients dropped (flooding, garbage or too slow)", report.dropped);
     }
-    match report.error {
-        Some(e) => {
-            eprintln!("error: {e}");
-            1
-        }
-        None => 0,
+    match report.state {
+        RunState::Fault => 1,
+        _ => 0,
     }
 }

@@ -1,14 +1,14 @@
-//! `sfc sim` and `sfc test`: running charts and scenarios, writing traces, printing the
-//! condition and time analyses and coverage.
+//! `sfc sim`: running a chart or a scenario, writing traces, printing runtime events and the
+//! condition and time analyses.
 
+use crate::term::{self, Progress};
+use crate::Status;
 use sfc_diagnostics::{render_human, RenderOptions};
-use sfc_sim::coverage::CoverageSet;
 use sfc_sim::scenario::{self, Execution, Overrides, Recording, RunLength, Scenario, ScenarioError};
 use sfc_sim::trace::{TraceFormat, TraceSink};
-use sfc_sim::{format_time, Profile, Simulation, StepReport, TimeStats, TransitionReport};
-use std::collections::HashSet;
+use sfc_sim::{format_time, Event, Profile, ScanRecord, Simulation, StepReport, TimeStats, TransitionReport};
 use std::fmt::Write as _;
-use std::io::{IsTerminal, Write};
+use std::io::Write;
 use std::path::{Path, PathBuf};
 
 /// What `sfc sim` was asked to do (parsed by clap in `main.rs`).
@@ -22,6 +22,8 @@ pub struct SimRequest {
     pub profile: Option<Profile>,
     pub pou: Option<String>,
     pub stats: bool,
+    /// Every situation in order instead of the summary.
+    pub stats_full: bool,
     pub explain: bool,
     pub json: bool,
     pub set: Vec<(String, String)>,
@@ -55,8 +57,8 @@ pub fn parse_set(s: &str) -> Result<(String, String), String> {
 
 /// Prints a scenario or chart error the way `sfc check` prints diagnostics, returns the exit
 /// status.
-fn report_load_error(e: &ScenarioError) -> u8 {
-    let color = std::io::stderr().is_terminal();
+pub fn report_load_error(e: &ScenarioError) -> u8 {
+    let color = term::color_stderr();
     let mut err = std::io::stderr().lock();
     if let Some(d) = &e.diagnostics {
         let (file, diags) = &**d;
@@ -73,7 +75,8 @@ fn report_load_error(e: &ScenarioError) -> u8 {
         let n = diags.len();
         let _ = writeln!(err, "{n} error{} emitted", if n == 1 { "" } else { "s" });
     } else {
-        let _ = writeln!(err, "error: {e}");
+        drop(err);
+        term::error(&e.to_string());
     }
     e.exit_code()
 }
@@ -144,7 +147,33 @@ fn opt_time(t: Option<i64>) -> String {
     t.map_or_else(|| "-".to_string(), format_time)
 }
 
-fn stats_text(stats: &TimeStats) -> String {
+/// The situations of a run grouped by their active steps, longest total time first:
+/// `(active steps, times entered, total time µs)`; `end` is when the run ended.
+fn situations(stats: &TimeStats, end: i64) -> Vec<(String, usize, i64)> {
+    let mut groups: Vec<(String, usize, i64)> = Vec::new();
+    let mut index: std::collections::HashMap<String, usize> = std::collections::HashMap::new();
+    let mut it = stats.sequence.iter().peekable();
+    while let Some((t, active)) = it.next() {
+        let until = it.peek().map_or(end, |(next, _)| *next);
+        let key = if active.is_empty() { "(no active step)".to_string() } else { active.join(" ") };
+        let i = *index.entry(key.clone()).or_insert_with(|| {
+            groups.push((key, 0, 0));
+            groups.len() - 1
+        });
+        if let Some(g) = groups.get_mut(i) {
+            g.1 += 1;
+            g.2 += (until - t).max(0);
+        }
+    }
+    // Stable: equal totals keep the order of first appearance.
+    groups.sort_by(|a, b| b.2.cmp(&a.2));
+    groups
+}
+
+/// How many situations `--stats` lists.
+const TOP_SITUATIONS: usize = 10;
+
+fn stats_text(stats: &TimeStats, full: bool, end: i64) -> String {
     let rows: Vec<[String; 5]> = stats
         .steps
         .iter()
@@ -170,11 +199,32 @@ fn stats_text(stats: &TimeStats) -> String {
         out.push('\n');
         out.push_str(&fmt_row(r));
     }
-    out.push_str("\nsituations:");
-    let tw = stats.sequence.iter().map(|(t, _)| format_time(*t).len()).max().unwrap_or(0);
-    for (t, active) in &stats.sequence {
-        let steps = if active.is_empty() { "(no active step)".to_string() } else { active.join(" ") };
-        let _ = write!(out, "\n  {:<tw$}  {steps}", format_time(*t));
+    if full {
+        out.push_str("\nsituations:");
+        let tw = stats.sequence.iter().map(|(t, _)| format_time(*t).len()).max().unwrap_or(0);
+        for (t, active) in &stats.sequence {
+            let steps = if active.is_empty() { "(no active step)".to_string() } else { active.join(" ") };
+            let _ = write!(out, "\n  {:<tw$}  {steps}", format_time(*t));
+        }
+        return out;
+    }
+    let groups = situations(stats, end);
+    let _ = write!(
+        out,
+        "\nsituations: {} entered, {} different; the longest in total:",
+        stats.sequence.len(),
+        groups.len()
+    );
+    let shown: Vec<&(String, usize, i64)> = groups.iter().take(TOP_SITUATIONS).collect();
+    let tw = shown.iter().map(|g| format_time(g.2).len()).max().unwrap_or(0);
+    let cw = shown.iter().map(|g| g.1.to_string().len()).max().unwrap_or(0);
+    for (steps, count, total) in &shown {
+        let times = if *count == 1 { "time " } else { "times" };
+        let _ = write!(out, "\n  {:>tw$}  {count:>cw$} {times}  {steps}", format_time(*total));
+    }
+    if groups.len() > shown.len() {
+        let _ =
+            write!(out, "\n  … and {} more (--stats-full lists every situation in order)", groups.len() - shown.len());
     }
     if stats.dropped > 0 {
         let _ = write!(
@@ -186,6 +236,40 @@ fn stats_text(stats: &TimeStats) -> String {
         );
     }
     out
+}
+
+/// Runtime events shown per kind before `sfc sim` only counts them.
+const EVENTS_SHOWN: usize = 10;
+
+/// The runtime events of a run: the first few of each kind printed as they happen, all counted.
+#[derive(Default)]
+struct EventLog {
+    /// `(kind, count)` in the order conflict, unsafe, contention.
+    counts: Vec<(&'static str, usize)>,
+    json: Vec<serde_json::Value>,
+}
+
+impl EventLog {
+    fn count(&mut self, kind: &'static str) -> usize {
+        match self.counts.iter_mut().find(|(k, _)| *k == kind) {
+            Some((_, n)) => {
+                *n += 1;
+                *n
+            }
+            None => {
+                self.counts.push((kind, 1));
+                1
+            }
+        }
+    }
+    /// `events: 3 unsafe, 120 conflict`.
+    fn summary(&self) -> Option<String> {
+        if self.counts.is_empty() {
+            return None;
+        }
+        let parts: Vec<String> = self.counts.iter().map(|(k, n)| format!("{n} {k}")).collect();
+        Some(format!("events: {}", parts.join(", ")))
+    }
 }
 
 /// Opens the trace output: a file (created or truncated) or, for `-`, standard output.
@@ -203,11 +287,11 @@ pub fn sim(r: SimRequest) -> u8 {
         Some(p) => match TraceFormat::from_path(p) {
             Some(f) => Some(f),
             None => {
-                eprintln!(
-                    "error: cannot tell the trace format of `{}`: use a `.jsonl`, `.csv` or `.vcd` file, or `-` for JSON lines on standard output",
+                term::error(&format!(
+                    "cannot tell the trace format of `{}`: use a `.jsonl`, `.csv` or `.vcd` file, or `-` for JSON lines on standard output",
                     p.display()
-                );
-                return 2;
+                ));
+                return Status::Usage.code();
             }
         },
         None => None,
@@ -227,15 +311,22 @@ pub fn sim(r: SimRequest) -> u8 {
         Ok(s) => s,
         Err(e) => return report_load_error(&e),
     };
+    // A chart that is not UTF-8 was read as Latin-1 / Windows-1252: said, as `check` says it.
+    if let Ok(decoded) = sfc_driver::read_source(&scen.chart) {
+        if let Some(w) = sfc_syntax::encoding::warning(0, &decoded) {
+            let file = sfc_diagnostics::SourceFile::new(scen.chart_name(), decoded.text.clone());
+            term::print_diagnostics(&[w], &[file]);
+        }
+    }
     if let Some(named) = &scen.scenario_chart {
         let canon = |p: &Path| std::fs::canonicalize(p).unwrap_or_else(|_| p.to_path_buf());
         if canon(named) != canon(&scen.chart) {
-            eprintln!(
-                "warning: simulating `{}` with the scenario `{}`, which names the chart `{}`",
+            term::warning(&format!(
+                "simulating `{}` with the scenario `{}`, which names the chart `{}`",
                 scen.chart.display(),
                 scen.name,
                 named.display()
-            );
+            ));
         }
     }
     let trace_to_stdout = r.trace.as_deref().is_some_and(|p| p.as_os_str() == "-");
@@ -243,8 +334,8 @@ pub fn sim(r: SimRequest) -> u8 {
         (Some(p), Some(f)) => match open_trace(p, f) {
             Ok(s) => Some(s),
             Err(e) => {
-                eprintln!("error: {e}");
-                return 2;
+                term::error(&e);
+                return Status::Usage.code();
             }
         },
         _ => None,
@@ -259,15 +350,43 @@ pub fn sim(r: SimRequest) -> u8 {
     };
     let mut overdue_json: Vec<serde_json::Value> = Vec::new();
     let json = r.json;
-    let mut on_scan = |sim: &Simulation| {
+    let mut events = EventLog::default();
+    let mut progress = Progress::new(scen.total_scans(), "scans");
+    let period = scen.options.period;
+    let mut on_scan = |sim: &Simulation, rec: Option<&ScanRecord>| {
+        let scan = sim.next_scan() - 1;
+        let time = rec.map_or(scan as i64 * period, |r| r.time);
+        progress.set(scan + 1, || format_time(time));
+        // Runtime events: the first few of each kind as they happen (errors are reported at
+        // the end, rustc-like). Without a record the engine's list is read (unsorted).
+        let happened = match rec {
+            Some(r) => &r.events[..],
+            None => sim.last_events(),
+        };
+        if !happened.is_empty() {
+            let mut list: Vec<&Event> = happened.iter().filter(|e| !matches!(e, Event::Error(_))).collect();
+            list.sort_by_key(|e| e.rank());
+            for e in list {
+                let n = events.count(e.kind());
+                if n > EVENTS_SHOWN {
+                    continue;
+                }
+                if json {
+                    let mut v = e.to_json();
+                    v["scan"] = scan.into();
+                    v["time"] = format_time(time).into();
+                    events.json.push(v);
+                } else {
+                    report(&format!("scan {scan}, {}: {}: {}", format_time(time), e.kind(), e.describe()));
+                }
+            }
+        }
         // Reports are built only for steps that have just overrun (the engine notes each
         // activation's overrun once: a step reports again only after it was left or restarted
         // and overran again). Asking costs nothing in the other scans.
         if !sim.any_newly_overdue() {
             return;
         }
-        let scan = sim.next_scan() - 1;
-        let time = scan as i64 * sim.options().period;
         for step in sim.newly_overdue() {
             let Some(x) = &sim.explain_step(&step) else { continue };
             if json {
@@ -284,17 +403,18 @@ pub fn sim(r: SimRequest) -> u8 {
         Some(b) => Some(&mut **b),
         None => None,
     };
-    let recording = Recording { situations: r.stats };
+    let recording = Recording { situations: r.stats, records: false };
     let Execution { outcome, sim, trace_error } = scenario::execute(&scen, trace_ref, &mut on_scan, recording);
+    progress.finish();
     drop(sink);
     if let Some(e) = trace_error {
         let name = r.trace.as_deref().map_or_else(String::new, |p| p.display().to_string());
-        eprintln!("error: cannot write the trace `{name}`: {e}");
-        return 2;
+        term::error(&format!("cannot write the trace `{name}`: {e}"));
+        return Status::Usage.code();
     }
     let Some(sim) = sim else {
-        eprintln!("error: {}", outcome.error.as_deref().unwrap_or("the chart cannot be simulated"));
-        return 1;
+        term::error(outcome.error.as_deref().unwrap_or("the chart cannot be simulated"));
+        return Status::Findings.code();
     };
     if let Some(e) = &outcome.error {
         eprintln!("{e}");
@@ -310,6 +430,8 @@ pub fn sim(r: SimRequest) -> u8 {
                 "message": e.message, "line": e.line, "column": e.column, "scan": e.scan, "time": format_time(e.time)
             })),
             "overdue": overdue_json,
+            "events": events.json,
+            "event_counts": events.counts.iter().map(|(k, n)| ((*k).to_string(), serde_json::json!(n))).collect::<serde_json::Map<_, _>>(),
         });
         if r.scenario.is_some() {
             v["scenario"] = outcome.name.clone().into();
@@ -317,15 +439,39 @@ pub fn sim(r: SimRequest) -> u8 {
             v["failures"] = outcome.failures.clone().into();
         }
         if r.stats {
-            v["stats"] = sim.stats().to_json();
+            let stats = sim.stats();
+            let mut j = stats.to_json();
+            let end = last_time + scen.options.period;
+            j["situations"] = situations(&stats, end)
+                .iter()
+                .take(if r.stats_full { usize::MAX } else { TOP_SITUATIONS })
+                .map(|(active, count, total)| serde_json::json!({"active": active, "count": count, "total": format_time(*total)}))
+                .collect::<Vec<_>>()
+                .into();
+            j["situations_entered"] = stats.sequence.len().into();
+            if !r.stats_full {
+                // The whole sequence only with --stats-full: an hour of a blinker is 7,000 entries.
+                if let Some(seq) = j.get_mut("sequence").and_then(|s| s.as_array_mut()) {
+                    seq.truncate(TOP_SITUATIONS);
+                }
+            }
+            v["stats"] = j;
         }
         if r.explain {
             v["explain"] = sim.explain().iter().map(|r| r.to_json()).collect::<Vec<_>>().into();
         }
         report(&v.to_string());
     } else {
+        for (kind, n) in &events.counts {
+            if *n > EVENTS_SHOWN {
+                report(&format!(
+                    "… {} more `{kind}` events not shown (--trace OUT.jsonl writes every one)",
+                    n - EVENTS_SHOWN
+                ));
+            }
+        }
         if r.stats {
-            report(&stats_text(&sim.stats()));
+            report(&stats_text(&sim.stats(), r.stats_full, last_time + scen.options.period));
         }
         if r.explain {
             report(&explain_text(&sim.explain(), &sim));
@@ -353,102 +499,16 @@ pub fn sim(r: SimRequest) -> u8 {
                 scen.options.profile.name()
             );
             println!("active steps: {}", if active.is_empty() { "(none)".to_string() } else { active.join(" ") });
-        }
-    }
-    u8::from(!outcome.passed())
-}
-
-/// Every `*.scenario.toml` under `dir`, recursively (hidden directories skipped).
-fn walk(dir: &Path, out: &mut Vec<PathBuf>) -> std::io::Result<()> {
-    let mut entries: Vec<_> = std::fs::read_dir(dir)?.filter_map(Result::ok).collect();
-    entries.sort_by_key(|e| e.file_name());
-    for e in entries {
-        let path = e.path();
-        let name = e.file_name().to_string_lossy().into_owned();
-        let Ok(ft) = e.file_type() else { continue };
-        if ft.is_dir() {
-            if !name.starts_with('.') {
-                walk(&path, out)?;
+            if let Some(line) = events.summary() {
+                println!("{line}");
             }
-        } else if name.ends_with(".scenario.toml") && path.is_file() {
-            out.push(path);
+        } else if let Some(line) = events.summary() {
+            eprintln!("{line}");
         }
     }
-    Ok(())
-}
-
-fn indent(text: &str) -> String {
-    text.lines().map(|l| format!("    {l}")).collect::<Vec<_>>().join("\n")
-}
-
-/// `sfc test`.
-pub fn test(paths: &[PathBuf], coverage: bool) -> u8 {
-    let mut files: Vec<PathBuf> = Vec::new();
-    for p in paths {
-        if p.is_dir() {
-            let mut found = Vec::new();
-            if let Err(e) = walk(p, &mut found) {
-                eprintln!("error: cannot read the directory `{}`: {e}", p.display());
-                return 2;
-            }
-            found.sort();
-            files.extend(found);
-        } else if p.is_file() {
-            files.push(p.clone());
-        } else {
-            eprintln!("error: `{}` does not exist", p.display());
-            return 2;
-        }
+    if outcome.passed() {
+        Status::Ok.code()
+    } else {
+        Status::Findings.code()
     }
-    let mut seen = HashSet::new();
-    files.retain(|f| seen.insert(std::fs::canonicalize(f).unwrap_or_else(|_| f.clone())));
-    if files.is_empty() {
-        let shown: Vec<String> = paths.iter().map(|p| format!("`{}`", p.display())).collect();
-        eprintln!("error: no scenario files (`*.scenario.toml`) under {}", shown.join(", "));
-        return 2;
-    }
-    let (mut passed, mut failed) = (0usize, 0usize);
-    let mut cov = CoverageSet::new();
-    let mut out = std::io::stdout().lock();
-    for f in &files {
-        // `sfc test .` names `a/b.scenario.toml`, not `./a/b.scenario.toml`.
-        let mut shown: PathBuf = f.components().filter(|c| !matches!(c, std::path::Component::CurDir)).collect();
-        if shown.as_os_str().is_empty() {
-            shown = f.clone();
-        }
-        let name = shown.display().to_string();
-        let outcome = match scenario::load(&shown) {
-            Ok(s) => scenario::run(&s, None),
-            Err(e) => {
-                failed += 1;
-                let _ = writeln!(out, "FAIL {name}\n{}", indent(&e.to_string()));
-                continue;
-            }
-        };
-        if outcome.scans > 0 || !outcome.coverage.steps.is_empty() {
-            cov.add(&outcome.coverage);
-        }
-        if outcome.passed() {
-            passed += 1;
-            let _ = writeln!(out, "PASS {name}");
-        } else {
-            failed += 1;
-            let _ = writeln!(out, "FAIL {name}");
-            for fl in &outcome.failures {
-                let _ = writeln!(out, "{}", indent(fl));
-            }
-            if let Some(e) = &outcome.error {
-                let _ = writeln!(out, "{}", indent(e));
-            }
-        }
-    }
-    if coverage {
-        let _ = writeln!(out, "coverage:");
-        for c in &cov.charts {
-            let _ = writeln!(out, "{}", c.report().lines().map(|l| format!("  {l}")).collect::<Vec<_>>().join("\n"));
-        }
-    }
-    let _ = writeln!(out, "{passed} passed, {failed} failed");
-    let _ = out.flush();
-    u8::from(failed > 0)
 }

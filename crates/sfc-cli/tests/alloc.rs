@@ -138,30 +138,34 @@ fn sim(file: &Path, scans: u64, stats: bool, trace: Option<PathBuf>) -> u8 {
         profile: None,
         pou: None,
         stats,
+        stats_full: false,
         explain: false,
         json: false,
         set: Vec::new(),
     })
 }
 
+/// The arguments of a command as the binary parses them.
+#[derive(clap::Parser)]
+struct Args<T: clap::Args> {
+    #[command(flatten)]
+    args: T,
+}
+
+fn parse<T: clap::Args>(argv: &[&str]) -> T {
+    use clap::Parser;
+    Args::<T>::try_parse_from(std::iter::once("sfc").chain(argv.iter().copied())).expect("arguments").args
+}
+
 fn run(file: &Path, scans: u64) -> u8 {
-    let args = sfc_cli::run::RunArgs {
-        file: file.to_path_buf(),
-        pou: None,
-        period: "T#1ms".into(),
-        watchdog: None,
-        modbus: None,
-        monitor: None,
-        token: None,
-        scans: Some(scans),
-        duration: None,
-        halted: false,
-        realtime: false,
-        report: None,
-        atmt: false,
-        atmt_input: "-".into(),
-    };
-    sfc_cli::run::run(args)
+    let file = file.to_string_lossy();
+    let scans = scans.to_string();
+    sfc_cli::run::run(parse(&[&file, "--period", "T#1ms", "--scans", &scans, "--no-retain"]))
+}
+
+fn test(dir: &Path) -> u8 {
+    let dir = dir.to_string_lossy();
+    sfc_cli::test::test(parse(&[&dir, "--coverage"]))
 }
 
 /// Runs `f(n)` and `f(2n)` and checks that the second allocates at most `slack` times more.
@@ -217,13 +221,7 @@ fn commands_that_run_charts_do_not_allocate_per_scan() {
         &mut failures,
     );
     let (d1, d2) = (scenario(n), scenario(2 * n));
-    check(
-        "sfc test --coverage",
-        n,
-        8,
-        |k| sfc_cli::sim::test(&[if k == n { d1.clone() } else { d2.clone() }], true),
-        &mut failures,
-    );
+    check("sfc test --coverage", n, 8, |k| test(if k == n { &d1 } else { &d2 }), &mut failures);
     // The run has its network thread beside the scan thread: a little more slack.
     check("sfc run, dense chart", 500, 40, |k| run(&dense, k), &mut failures);
     check("sfc run, ST actions", 500, 40, |k| run(&arith, k), &mut failures);

@@ -107,3 +107,141 @@ fn edit_usage_errors_exit_2() {
         assert!(help.contains(word), "{word} in {help}");
     }
 }
+
+/// One HTTP/1.1 request with extra header lines; returns the status, the head and the body.
+fn http(port: u16, method: &str, path: &str, headers: &[String], body: &str) -> (u16, String, String) {
+    let mut s = TcpStream::connect(("127.0.0.1", port)).expect("the server accepts connections");
+    s.set_read_timeout(Some(Duration::from_secs(20))).unwrap();
+    let mut req = format!("{method} {path} HTTP/1.1\r\nHost: 127.0.0.1:{port}\r\nConnection: close\r\n");
+    for h in headers {
+        req.push_str(h);
+        req.push_str("\r\n");
+    }
+    if !body.is_empty() {
+        req.push_str(&format!("Content-Type: application/json\r\nContent-Length: {}\r\n", body.len()));
+    }
+    req.push_str("\r\n");
+    req.push_str(body);
+    s.write_all(req.as_bytes()).unwrap();
+    let mut raw = String::new();
+    s.read_to_string(&mut raw).expect("an answer");
+    let (head, body) = raw.split_once("\r\n\r\n").expect("headers end");
+    let status = head.split(' ').nth(1).and_then(|c| c.parse().ok()).expect("a status line");
+    (status, head.to_string(), body.to_string())
+}
+
+/// Starts `sfc edit ARGS` with `envs` and returns it with its port and token.
+fn start(args: &[&std::ffi::OsStr], envs: &[(&str, &std::ffi::OsStr)]) -> (Server, u16, String) {
+    let mut cmd = Command::new(env!("CARGO_BIN_EXE_sfc"));
+    cmd.arg("edit").args(["--port", "0"]).args(args).stdout(Stdio::piped()).stderr(Stdio::null());
+    for (k, v) in envs {
+        cmd.env(k, v);
+    }
+    let mut server = Server(cmd.spawn().expect("sfc runs"));
+    let mut line = String::new();
+    BufReader::new(server.0.stdout.take().unwrap()).read_line(&mut line).unwrap();
+    let rest = line.trim_end().strip_prefix("SFC Editor: http://127.0.0.1:").expect("URL line");
+    let (port, token) = rest.split_once("/?token=").expect("token in the URL");
+    (server, port.parse().unwrap(), token.to_string())
+}
+
+#[test]
+fn the_printed_url_is_exchanged_for_an_http_only_cookie() {
+    let d = temp_dir("cookie");
+    std::fs::write(d.join("chart.st"), "PROGRAM P\nEND_PROGRAM\n").unwrap();
+    let (_server, port, token) = start(&["--no-open".as_ref(), d.as_os_str()], &[]);
+    // The printed URL: a redirect to `/` that sets the cookie, so the address drops the token.
+    let (status, head, _) = http(port, "GET", &format!("/?token={token}"), &[], "");
+    assert_eq!(status, 303, "{head}");
+    let head_lower = head.to_ascii_lowercase();
+    assert!(head_lower.contains("\r\nlocation: /\r\n"), "{head}");
+    let cookie_line = head.lines().find(|l| l.to_ascii_lowercase().starts_with("set-cookie:")).expect("a cookie");
+    let cookie = format!("sfc_token_{port}={token}");
+    assert!(cookie_line.contains(&cookie), "{cookie_line}");
+    assert!(cookie_line.contains("HttpOnly") && cookie_line.contains("SameSite=Strict"), "{cookie_line}");
+    // A wrong token sets nothing.
+    let (status, head, _) = http(port, "GET", "/?token=00000000000000000000000000000000", &[], "");
+    assert_eq!(status, 403);
+    assert!(!head.to_ascii_lowercase().contains("set-cookie"), "{head}");
+    // The page's calls: the cookie with the page header; the cookie alone (a form or an image
+    // of another page could send it) is refused.
+    let with_cookie = format!("Cookie: {cookie}");
+    let (status, _, body) = http(port, "GET", "/api/session", &[with_cookie.clone(), "X-Sfc-Page: 1".into()], "");
+    assert_eq!(status, 200, "{body}");
+    let (status, _, _) = http(port, "GET", "/api/session", std::slice::from_ref(&with_cookie), "");
+    assert_eq!(status, 403);
+    let (status, _, _) = http(port, "GET", "/api/session", &["X-Sfc-Page: 1".into()], "");
+    assert_eq!(status, 403);
+}
+
+#[test]
+fn a_named_file_is_served_alone() {
+    let d = temp_dir("alone");
+    let chart = d.join("chart.st");
+    std::fs::write(&chart, "PROGRAM P\nEND_PROGRAM\n").unwrap();
+    std::fs::write(d.join("other.st"), "PROGRAM Q\nEND_PROGRAM\n").unwrap();
+    std::fs::create_dir_all(d.join(".hidden")).unwrap();
+    std::fs::write(d.join(".hidden/secret.st"), "PROGRAM S\nEND_PROGRAM\n").unwrap();
+    let (_server, port, token) = start(&["--no-open".as_ref(), chart.as_os_str()], &[]);
+    let auth = [format!("X-Sfc-Token: {token}")];
+    let (status, _, body) = http(port, "GET", "/api/files", &auth, "");
+    assert_eq!(status, 200);
+    let files: serde_json::Value = serde_json::from_str(&body).unwrap();
+    assert_eq!(files["files"], serde_json::json!([{ "path": chart.to_str().unwrap(), "format": "st" }]));
+    let open =
+        |p: &std::path::Path| http(port, "POST", "/api/open", &auth, &serde_json::json!({ "path": p }).to_string());
+    assert_eq!(open(&chart).0, 200);
+    for p in [d.join("other.st"), d.join("new.st"), d.join(".hidden/secret.st")] {
+        let (status, _, body) = open(&p);
+        assert_eq!(status, 403, "{}: {body}", p.display());
+    }
+    // A directory serves its charts, but not those in hidden directories.
+    let (_server, port, token) = start(&["--no-open".as_ref(), d.as_os_str()], &[]);
+    let auth = [format!("X-Sfc-Token: {token}")];
+    let open =
+        |p: &std::path::Path| http(port, "POST", "/api/open", &auth, &serde_json::json!({ "path": p }).to_string());
+    assert_eq!(open(&d.join("other.st")).0, 200);
+    assert_eq!(open(&d.join(".hidden/secret.st")).0, 403);
+}
+
+/// The browser is started on a private file that forwards to the URL: the token is in no
+/// process's arguments.
+#[cfg(unix)]
+#[test]
+fn the_browser_is_opened_without_the_token_in_its_arguments() {
+    use std::os::unix::fs::PermissionsExt;
+    let d = temp_dir("launch");
+    let bin = d.join("bin");
+    std::fs::create_dir_all(&bin).unwrap();
+    let record = d.join("args.txt");
+    let copy = d.join("page.html");
+    // A stand-in for xdg-open: records its arguments and copies the page it was given.
+    let script = format!(
+        "#!/bin/sh\nprintf '%s\\n' \"$@\" > '{}'\nstat -c %a \"$1\" >> '{}'\ncp \"$1\" '{}'\n",
+        record.display(),
+        record.display(),
+        copy.display()
+    );
+    std::fs::write(bin.join("xdg-open"), script).unwrap();
+    std::fs::set_permissions(bin.join("xdg-open"), std::fs::Permissions::from_mode(0o755)).unwrap();
+    let path = format!("{}:{}", bin.display(), std::env::var("PATH").unwrap_or_default());
+    let (server, _port, token) = start(
+        &[d.as_os_str()],
+        &[("DISPLAY", ":99".as_ref()), ("PATH", path.as_ref()), ("WAYLAND_DISPLAY", "".as_ref())],
+    );
+    let mut waited = 0;
+    while !copy.exists() && waited < 200 {
+        std::thread::sleep(Duration::from_millis(50));
+        waited += 1;
+    }
+    let args = std::fs::read_to_string(&record).expect("the browser was started");
+    let mut lines = args.lines();
+    let page = lines.next().unwrap();
+    assert!(!args.contains(&token), "the token is not in the browser's arguments: {args}");
+    assert!(page.ends_with("open.html"), "{page}");
+    assert_eq!(lines.next(), Some("600"), "the page is readable by the user alone");
+    let html = std::fs::read_to_string(&copy).unwrap();
+    assert!(html.contains(&token), "the page forwards to the URL: {html}");
+    // The page goes when the editor stops.
+    drop(server);
+}

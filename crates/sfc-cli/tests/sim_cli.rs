@@ -557,3 +557,17 @@ fn every_example_has_a_passing_scenario() {
     assert_eq!(out.status.code(), Some(0), "{s}");
     assert!(s.ends_with(" passed, 0 failed\n"), "{s}");
 }
+
+/// A runaway nested loop ends the simulation with a located error (the scan's budget of loop
+/// iterations and calls, nested loops together), instead of hanging.
+#[test]
+fn a_runaway_nested_loop_is_a_located_error() {
+    let o = sfc(&["sim", "crates/sfc-cli/tests/run/runaway.st", "--set", "Go=TRUE", "--scans", "3"]);
+    assert_eq!(o.status.code(), Some(1), "{}", both(&o));
+    let err = stderr(&o);
+    assert!(
+        err.contains("error: runaway scan: more than 10000000 loop iterations, jumps and calls in one scan"),
+        "{err}"
+    );
+    assert!(err.contains("--> crates/sfc-cli/tests/run/runaway.st:43:13") && err.contains("at scan 1"), "{err}");
+}

@@ -84,15 +84,13 @@ pub fn build_table(
     }
     // Simultaneous branches, or several networks each with its initial step: more than one
     // step can be active.
-    let parallel =
-        chart.transitions.iter().any(|t| t.from.len() > 1 || t.to.len() > 1) || chart.initial_steps().len() > 1;
-    let flattening = flatten && parallel;
+    let flattening = flatten && chart.several_active_steps();
     let mut diags = target_diagnostics(chart, target, limits);
     if flattening {
         // The product automaton has its own states and rules: the step and transition counts,
         // the AND branches and the step tags are what flattening replaces (its own limits are
         // SFC0412 and SFC0413).
-        diags.retain(|d| !matches!(d.code, "SFC0401" | "SFC0403" | "SFC0404" | "SFC0409"));
+        diags.retain(|d| !sfc_model::FLATTENING_REPLACES.contains(&d.code));
     }
     diags.extend(unusable_conditions(chart));
     if chart.initial_steps().is_empty() {

@@ -1,90 +1,95 @@
 //! Siemens S7-200 statement list (STL, Micro/WIN style) from a chart, for `--target stl`.
 //!
-//! # Method: set/reset with transition bits, not SCR
+//! Two methods, chosen with [`StlMethod`]; both give the `iec` semantics of `semantics.md`
+//! (one evolution per scan, every guard on one snapshot, a step consumed by one transition,
+//! parallel branches together), checked against a model of the S7-200 (`tests/s7200/`):
 //!
-//! The S7-200 SCR instructions (`LSCR`/`SCRT`/`SCRE`) cannot give the `iec` semantics of
-//! `semantics.md`: `SCRT` sets the next step's S bit at once, so a segment further down the
-//! program runs in the same scan (two evolutions in one scan), later transitions see the new
-//! situation instead of the scan's snapshot, and a simultaneous convergence (several steps left
-//! together) has no SCR form. The program therefore uses the set/reset method, in this order
-//! every scan:
+//! - **set/reset** (default): one network per step resets its S bit when a transition leaves
+//!   it and sets it when one enters it.
+//! - **SCR** (seed 002, section 3.4): one `LSCR`/`SCRE` segment per step; its transitions move
+//!   the token with `SCRT` (several `SCRT` for a simultaneous divergence, `R` of the other
+//!   steps of a simultaneous convergence). `SCRT` sets the next step's bit at once, so a
+//!   segment further down runs in the same scan: the conditions are therefore computed before
+//!   any segment runs (one fire bit per transition, from the scan's snapshot), and a segment
+//!   only moves the token on those bits, which keeps one evolution per scan.
 //!
-//! 1. **First scan** (`SM0.1`): every step bit, action memory and timer is cleared and every
-//!    BOOL variable that is not an input gets its declared initial value.
-//! 2. **Step times**: the timer of each step-time comparison runs on its step bit (below).
-//! 3. **Transitions**, in conflict order (explicit `PRIORITY` ascending, then declaration
-//!    order): one M bit per transition, `fire := pre-steps AND guard AND NOT (fire bit of every
-//!    transition earlier in that order that shares a pre-step)`. Every guard reads the step bits
-//!    and variables as they are at this point, so all guards see one snapshot, and a step is
-//!    consumed by at most one transition while parallel branches fire together.
-//! 4. **Steps**, one network each: reset by the fire bits of the transitions leaving it, then
-//!    set by those entering it (an initial step also by `SM0.1`), so a re-entered step stays
-//!    active; its timers restart when it is entered and run again on the new step bit.
-//! 5. **Action control** (IEC ACTION_CONTROL) of every action and BOOL variable used as an
-//!    action, from the new step bits: N, S/R (reset dominant), P (`EU`), L/D/SD/DS/SL (TON),
-//!    P1/P0 (`EU`/`ED`) and the final scan (`ED` of `Q`).
-//! 6. **Action bodies** in declaration order, each statement under the action's `A` bit.
+//! Every scan, in this order:
 //!
-//! One evolution per scan follows: a step set in step 4 is read by its outgoing transitions
-//! only in the next scan.
+//! 1. **First scan** (`SM0.1`, IEC scan 0): steps, action memories, timers, counters cleared;
+//!    variables that are not inputs (nor RETAIN) get their initial values.
+//! 2. **Timers**, each executed exactly once per scan (an S7-200 100 ms timer adds the time
+//!    base's intervals at every execution): step times on the step bits, supervision times,
+//!    and the timers of the timed qualifiers on their inputs as the previous scan left them.
+//! 3. `SFCQuitError` acknowledges `SFCError`.
+//! 4. **Transitions**, in conflict order: `fire := pre-steps AND guard AND NOT (fire bit of
+//!    every earlier transition sharing a pre-step)`.
+//! 5. **Steps**: set/reset networks or SCR segments; a step entered restarts its timers.
+//! 6. **Action control** (IEC ACTION_CONTROL) from the new step bits.
+//! 7. **Action bodies** under each action's `A` bit: BOOL and integer assignments, IF, counter
+//!    calls (skipped with `JMP` when the body does not run).
+//! 8. **Supervision**: a step active longer than its `sfc.timeout` sets `SFCError`.
 //!
-//! # Scan 0
-//! The S7-200 has no separate initialisation scan: its first scan *is* IEC scan 0. In it the
-//! step bits are all clear while the transitions are computed (so none fires), `SM0.1` then
-//! sets the initial steps, and the actions see them rise, so P, P1, L, … on an initial step act
-//! in the first scan exactly as in the simulator. PLC scan `k` therefore corresponds to
-//! simulator scan `k`, at time `k · period`.
-//!
-//! # Timers
-//! 100 ms timers only (`T37`–`T63`, `T101`–`T255` as TON; `T5`–`T31`, `T69`–`T95` as TONR): the
-//! 1 ms and 10 ms timers are too few (10 in all) and update asynchronously to the scan.
-//! `S.T >= c` is the bit of a timer with preset `c / 100 ms` on the step bit; `S.T > c` uses the
-//! preset `c/100 ms + 1` (a step time advances in whole timer ticks); `<` and `<=` are the
-//! negated contacts; `=` and `<>` combine the two. `c` must be a constant (literal or CONSTANT)
-//! multiple of 100 ms up to 3276.7 s. A step whose time is read only by the transitions leaving
-//! it uses a TON (only its active value matters); one whose time is read elsewhere (a guard of
-//! another transition, an action body) uses a TONR, which keeps the frozen value of an inactive
-//! step, reset by `R` when the step is entered. Each step timer is executed twice per scan: at
-//! the top (so guards read the time elapsed up to this scan) and after its step bit changed (so
-//! it starts in the scan of the activation, when `S.T` is `T#0s` in the simulator). The
-//! program thus keeps `S.T` exact when the scan period is a multiple of 100 ms, and within one
-//! timer tick otherwise. Durations of timed qualifiers obey the same rules (one TON per action).
-//!
-//! # Operands
-//! Steps are S bits (`S0.0`–`S31.7`; beyond that M or V bits). BOOL variables `AT %IXb.i`,
-//! `%QXb.i`, `%MXb.i` are `Ib.i`, `Qb.i`, `Mb.i`; every other BOOL variable gets a free M bit.
-//! Transition bits, action memories and scratch bits take the next free M bits, then V bits.
-//! The allocation table at the top of the output lists every address. Inputs (`VAR_INPUT`,
-//! `VAR_IN_OUT`, anything in `%I`) are not initialised by the program: their value comes from
-//! outside (the input image, or whoever writes the M bit); every other BOOL variable gets its
-//! declared initial value in the first scan.
-//!
-//! # What is refused
-//! Everything that is not BOOL logic over those bits: integer or REAL values, arithmetic,
-//! function and function block calls, CASE/FOR/WHILE/REPEAT, timed qualifiers whose duration is
-//! not a constant, two different timed associations of one action (the simulator's
-//! `contention` rule has no fixed program form), the chart control variables (`SFCInit`, …).
-//! Each gets an error (SFC0810–SFC0816) located on the element; nothing is dropped. Action
-//! indicators are not code (the simulator ignores them too); `sfc.timeout` supervision is only
-//! noted in a comment.
+//! What has no faithful S7-200 form is refused with a located error (SFC0810–SFC0816);
+//! a TIME variable used as a preset is folded to its initial value with a warning (SFC0817).
 
 mod emit;
 mod ir;
 mod logic;
+mod networks;
 mod vars;
 
-use emit::{Contact, Emitter};
-use ir::{Addr, Area, Ins, Network, Op, Resolve};
-use logic::{fmt_time, BodyOp, Logic, Lowerer, Site, TimerUse, Timers, MAX_PT};
+use emit::Emitter;
+use ir::{Addr, Area, Network, Resolve, Val};
+use logic::{fmt_time, BodyOp, Counters, Logic, Lowerer, Site, TimerUse, Timers, MAX_PT};
 use sfc_diagnostics::{Diagnostic, Span};
 use sfc_model::{ActionTarget, Chart, Checked, Duration, Qualifier, StepId};
-use sfc_syntax::ast::{self, Item};
+use sfc_syntax::ast::{self, Item, VarKind};
 use std::collections::{BTreeSet, HashSet};
 use std::fmt::Write as _;
 use vars::Vars;
 
 /// Resolution of every timer the program uses (100 ms).
 pub(crate) const TIMER_BASE_US: i64 = 100_000;
+
+/// How the program moves the steps.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum StlMethod {
+    /// Set/reset of the step bits, one network per step.
+    #[default]
+    SetReset,
+    /// `LSCR`/`SCRT`/`SCRE` segments, one per step.
+    Scr,
+}
+
+impl StlMethod {
+    /// The name on the command line (`setreset`, `scr`).
+    pub fn name(self) -> &'static str {
+        match self {
+            StlMethod::SetReset => "setreset",
+            StlMethod::Scr => "scr",
+        }
+    }
+    pub fn from_name(s: &str) -> Option<StlMethod> {
+        [StlMethod::SetReset, StlMethod::Scr].into_iter().find(|m| m.name() == s)
+    }
+}
+
+/// Options of the STL target.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct StlOptions {
+    pub method: StlMethod,
+}
+
+/// A generated program.
+#[derive(Debug, Clone, PartialEq)]
+pub struct StlProgram {
+    /// The statement list, to paste into Micro/WIN's STL editor.
+    pub text: String,
+    /// The symbol table as CSV (`Symbol,Address,Comment`).
+    pub symbols: String,
+    /// Warnings (TIME variables folded to their initial value, …).
+    pub warnings: Vec<Diagnostic>,
+}
 
 /// 100 ms TON/TOF timer numbers of the S7-200 (CPU 22x).
 fn ton_numbers() -> impl Iterator<Item = u16> {
@@ -96,9 +101,9 @@ fn tonr_numbers() -> impl Iterator<Item = u16> {
 }
 
 /// Builds the statement list of `chart` (one of `checked.charts`). Fails with the file's errors
-/// when it has any, or with a located diagnostic for each part of the chart that S7-200 bit
-/// logic cannot express.
-pub fn build_stl(checked: &Checked, chart: &Chart) -> Result<String, Vec<Diagnostic>> {
+/// when it has any, or with a located diagnostic for each part of the chart that the S7-200
+/// program cannot express.
+pub fn build_stl(checked: &Checked, chart: &Chart, opts: StlOptions) -> Result<StlProgram, Vec<Diagnostic>> {
     if checked.has_errors() {
         return Err(checked.diagnostics.iter().filter(|d| d.is_error()).cloned().collect());
     }
@@ -109,10 +114,13 @@ pub fn build_stl(checked: &Checked, chart: &Chart) -> Result<String, Vec<Diagnos
             format!("the declaration of `{}` is not in the checked file", chart.pou),
         )]);
     };
-    let mut g = Gen::new(checked, chart, pou);
+    let mut g = Gen::new(checked, chart, pou, opts);
     g.run();
     if g.diags.is_empty() {
-        Ok(g.print())
+        let text = g.print();
+        let symbols = g.symbols();
+        sfc_diagnostics::sort(&mut g.warnings);
+        Ok(StlProgram { text, symbols, warnings: g.warnings })
     } else {
         sfc_diagnostics::sort(&mut g.diags);
         g.diags.dedup();
@@ -128,8 +136,8 @@ struct Entity {
     var_bit: Option<Addr>,
     /// Associations: step, qualifier.
     assocs: Vec<(StepId, Qualifier)>,
-    /// The one timed qualifier and its preset (100 ms units; 0 = no delay).
-    timed: Option<(Qualifier, i64)>,
+    /// The one timed qualifier and its preset (100 ms ticks; 0 = no delay) and duration.
+    timed: Option<(Qualifier, i64, i64)>,
     timer: Option<usize>,
     s_ff: Option<Addr>,
     sd_ff: Option<Addr>,
@@ -153,23 +161,29 @@ impl Entity {
     }
 }
 
-/// A row of the allocation table.
+/// A row of the allocation table (and of the symbol table).
 struct Row {
-    addr: Addr,
+    addr: String,
     kind: &'static str,
     name: String,
+    /// Symbol for Micro/WIN's symbol table (made valid and unique later).
+    symbol: String,
     detail: String,
 }
 
-/// Hands out free bits: M first (skipping located ones), then V.
+/// Hands out free memory: bits from M first (skipping located ones), then V; words and
+/// double words from V.
 struct Pool {
     used_m: BTreeSet<u32>,
     next_m: u32,
+    /// Next free V byte.
     next_v: u32,
+    /// The V byte being handed out bit by bit, and the next bit in it.
+    v_bits: Option<(u32, u8)>,
 }
 
 impl Pool {
-    fn take(&mut self) -> Option<Addr> {
+    fn bit(&mut self) -> Option<Addr> {
         let m_bits = (vars::last_byte(Area::M) + 1) * 8;
         while self.next_m < m_bits {
             let n = self.next_m;
@@ -178,20 +192,42 @@ impl Pool {
                 return Some(Addr::from_linear(Area::M, n));
             }
         }
-        let v_bits = (vars::last_byte(Area::V) + 1) * 8;
-        if self.next_v < v_bits {
-            self.next_v += 1;
-            return Some(Addr::from_linear(Area::V, self.next_v - 1));
-        }
-        None
+        let (byte, bit) = match self.v_bits {
+            Some((b, k)) if k < 8 => (b, k),
+            _ => (self.bytes(1)?, 0),
+        };
+        self.v_bits = Some((byte, bit + 1));
+        Some(Addr::Bit(Area::V, byte, bit))
     }
+    /// `n` bytes of V (2 or 4 aligned to 2), the first byte's address.
+    fn bytes(&mut self, n: u32) -> Option<u32> {
+        if n > 1 && self.next_v % 2 == 1 {
+            self.next_v += 1;
+        }
+        let at = self.next_v;
+        if at + n > vars::last_byte(Area::V) + 1 {
+            return None;
+        }
+        self.next_v += n;
+        Some(at)
+    }
+}
+
+/// The supervision of a step with an `sfc.timeout`: its timer and its reported flag.
+#[derive(Clone, Copy)]
+struct Supervision {
+    timer: usize,
+    overdue: Addr,
+    limit: i64,
 }
 
 struct Gen<'a> {
     checked: &'a Checked,
     chart: &'a Chart,
+    method: StlMethod,
     vars: Vars,
     diags: Vec<Diagnostic>,
+    warnings: Vec<Diagnostic>,
     pool: Pool,
     steps: Vec<Addr>,
     fires: Vec<Addr>,
@@ -200,31 +236,51 @@ struct Gen<'a> {
     entities: Vec<Entity>,
     guards: Vec<Option<Logic>>,
     timers: Timers,
+    counters: Counters,
     /// Timer numbers by timer-table index.
     timer_numbers: Vec<u16>,
+    counter_numbers: Vec<u16>,
+    supervised: Vec<Option<Supervision>>,
+    /// The `QD` bit of each CTUD instance, by variable index.
+    ctud_qd: std::collections::HashMap<usize, Addr>,
+    /// `SFCError`, `SFCQuitError` (variable indexes).
+    sfc_error: Option<usize>,
+    sfc_quit: Option<usize>,
     temps: Vec<Addr>,
+    temp_words: Vec<u32>,
+    temp_dwords: Vec<u32>,
     networks: Vec<Network>,
     emitter: Emitter,
     exhausted: bool,
 }
 
 impl<'a> Gen<'a> {
-    fn new(checked: &'a Checked, chart: &'a Chart, pou: &'a ast::Pou) -> Gen<'a> {
+    fn new(checked: &'a Checked, chart: &'a Chart, pou: &'a ast::Pou, opts: StlOptions) -> Gen<'a> {
         let vars = Vars::collect(&checked.unit, pou);
         Gen {
             checked,
             chart,
+            method: opts.method,
             vars,
             diags: Vec::new(),
-            pool: Pool { used_m: BTreeSet::new(), next_m: 0, next_v: 0 },
+            warnings: Vec::new(),
+            pool: Pool { used_m: BTreeSet::new(), next_m: 0, next_v: 0, v_bits: None },
             steps: Vec::new(),
             fires: Vec::new(),
             action_bits: Vec::new(),
             entities: Vec::new(),
             guards: Vec::new(),
             timers: Timers::default(),
+            counters: Counters::default(),
             timer_numbers: Vec::new(),
+            counter_numbers: Vec::new(),
+            supervised: Vec::new(),
+            ctud_qd: Default::default(),
+            sfc_error: None,
+            sfc_quit: None,
             temps: Vec::new(),
+            temp_words: Vec::new(),
+            temp_dwords: Vec::new(),
             networks: Vec::new(),
             emitter: Emitter::default(),
             exhausted: false,
@@ -232,87 +288,198 @@ impl<'a> Gen<'a> {
     }
 
     fn run(&mut self) {
+        self.control_variables();
         self.declarations();
-        self.allocate_bits();
+        self.allocate();
         self.build_entities();
+        self.supervision();
         self.lower();
+        self.fold_warnings();
         if !self.diags.is_empty() {
             return;
         }
-        self.allocate_timers();
+        self.allocate_timers_and_counters();
         if !self.diags.is_empty() {
             return;
         }
         self.emit();
         self.allocate_temps();
+        if self.emitter.labels > 256 {
+            let msg = format!("`{}` needs more than the 256 jump labels of the S7-200", self.chart.pou);
+            self.diags.push(Diagnostic::error("SFC0815", self.chart.name_span, msg));
+        }
+    }
+
+    fn exhausted(&mut self) {
+        if !self.exhausted {
+            self.exhausted = true;
+            self.diags.push(Diagnostic::error(
+                "SFC0815",
+                self.chart.name_span,
+                format!(
+                    "`{}` needs more memory than the S7-200 bit memory M0.0-M31.7 and variable memory \
+                     VB0-VB{} hold",
+                    self.chart.pou,
+                    vars::last_byte(Area::V)
+                ),
+            ));
+        }
     }
 
     fn take_bit(&mut self) -> Addr {
-        match self.pool.take() {
+        match self.pool.bit() {
             Some(a) => a,
             None => {
-                if !self.exhausted {
-                    self.exhausted = true;
-                    self.diags.push(Diagnostic::error(
-                        "SFC0815",
-                        self.chart.name_span,
-                        format!(
-                            "`{}` needs more bits than the S7-200 bit memory M0.0–M31.7 and V0.0–V{}.7 hold",
-                            self.chart.pou,
-                            vars::last_byte(Area::V)
-                        ),
-                    ));
-                }
+                self.exhausted();
                 Addr::Bit(Area::V, 0, 0)
             }
         }
     }
 
-    /// Located BOOL variables get their bit; declared chart control variables are refused.
+    fn take_value(&mut self, wide: bool) -> Val {
+        match self.pool.bytes(if wide { 4 } else { 2 }) {
+            Some(at) if wide => Val::DWord(Area::V, at),
+            Some(at) => Val::Word(Area::V, at),
+            None => {
+                self.exhausted();
+                Val::Word(Area::V, 0)
+            }
+        }
+    }
+
+    /// The chart control variables of `docs/sim.md`: `SFCError` (set by supervision, readable
+    /// by the chart) and `SFCQuitError` (acknowledges it) are implemented, declared or
+    /// implicit; `SFCInit`, `SFCPause`, `SFCErrorStep` and `SFCCurrentStep` are refused where
+    /// they are declared or read.
+    fn control_variables(&mut self) {
+        const UNSUPPORTED: [&str; 4] = ["SFCInit", "SFCPause", "SFCErrorStep", "SFCCurrentStep"];
+        let why = |name: &str| {
+            format!(
+                "the chart control variable `{name}` is not implemented by the S7-200 program (it would {}); \
+                 SFCError and SFCQuitError are",
+                match name.to_ascii_uppercase().as_str() {
+                    "SFCINIT" => "hold the chart in its initial situation",
+                    "SFCPAUSE" => "freeze the evolution and the step times",
+                    _ => "hold a STRING, which S7-200 bit and word memory has no form for",
+                }
+            )
+        };
+        for v in &self.vars.list {
+            if UNSUPPORTED.iter().any(|u| u.eq_ignore_ascii_case(&v.name)) {
+                let d = Diagnostic::error("SFC0816", v.span, why(&v.name)).with_element(v.name.clone());
+                self.diags.push(d);
+            }
+        }
+        let mut used: Vec<(String, Span)> = Vec::new();
+        for t in &self.chart.transitions {
+            condition_names(&t.condition, &mut used);
+        }
+        for a in &self.chart.actions {
+            match &a.body {
+                ast::ActionBody::St(stmts) => stmt_names(stmts, &mut used),
+                ast::ActionBody::Il(b) => il_names(b, &mut used),
+            }
+        }
+        let mut referenced: HashSet<String> = HashSet::new();
+        for (name, span) in used {
+            if !sfc_st::is_sfc_control_variable(&name) || self.vars.get(&name).is_some() {
+                continue;
+            }
+            if UNSUPPORTED.iter().any(|u| u.eq_ignore_ascii_case(&name)) {
+                self.diags.push(Diagnostic::error("SFC0816", span, why(&name)).with_element(name.clone()));
+            } else {
+                referenced.insert(name.to_ascii_uppercase());
+            }
+        }
+        let supervised = self.chart.steps.iter().any(|s| s.timeout.is_some());
+        let span = self.chart.name_span;
+        if supervised || referenced.contains("SFCERROR") || referenced.contains("SFCQUITERROR") {
+            let error = match self.vars.get("SFCError") {
+                Some(i) => i,
+                None => self.vars.add_implicit("SFCError", VarKind::Output, span),
+            };
+            let quit = match self.vars.get("SFCQuitError") {
+                Some(i) => i,
+                None => self.vars.add_implicit("SFCQuitError", VarKind::Input, span),
+            };
+            self.sfc_error = Some(error);
+            self.sfc_quit = Some(quit);
+        } else {
+            self.sfc_error = self.vars.get("SFCError");
+            self.sfc_quit = self.vars.get("SFCQuitError");
+        }
+    }
+
+    /// Located variables get their operand; other kinds than BOOL, integers, TIME and counters
+    /// are noted as not in the program.
     fn declarations(&mut self) {
         for i in 0..self.vars.list.len() {
             let v = &self.vars.list[i];
-            if sfc_st::is_sfc_control_variable(&v.name) {
-                let msg = format!(
-                    "the chart control variable `{}` is not implemented by the S7-200 program (it would hold, \
-                     pause or supervise the chart)",
-                    v.name
-                );
-                self.diags.push(Diagnostic::error("SFC0816", v.span, msg).with_element(v.name.clone()));
-                continue;
-            }
-            if !v.is_bit() {
-                continue;
-            }
             let Some(loc) = &v.location else { continue };
-            match vars::bit_address(loc) {
-                Ok(addr) => {
-                    if let Some((Area::M, n)) = addr.linear() {
-                        self.pool.used_m.insert(n);
+            let name = v.name.clone();
+            if v.is_bit() {
+                match vars::bit_address(loc) {
+                    Ok(addr) => {
+                        if let Some((Area::M, n)) = addr.linear() {
+                            self.pool.used_m.insert(n);
+                        }
+                        self.vars.list[i].addr = Some(addr);
                     }
-                    self.vars.list[i].addr = Some(addr);
+                    Err(msg) => {
+                        let d = Diagnostic::error("SFC0814", loc.span, msg).with_element(name);
+                        self.diags.push(d);
+                    }
                 }
-                Err(msg) => {
-                    let d = Diagnostic::error("SFC0814", loc.span, msg).with_element(v.name.clone());
-                    self.diags.push(d);
+            } else if let (Some(ty), true) = (v.int_ty(), v.is_word()) {
+                match vars::value_address(loc, ty.wide()) {
+                    Ok(val) => {
+                        if let Val::Word(Area::M, b) | Val::DWord(Area::M, b) = val {
+                            for k in b * 8..(b + if ty.wide() { 4 } else { 2 }) * 8 {
+                                self.pool.used_m.insert(k);
+                            }
+                        }
+                        self.vars.list[i].val = Some(val);
+                    }
+                    Err(msg) => {
+                        let d = Diagnostic::error("SFC0814", loc.span, msg).with_element(name);
+                        self.diags.push(d);
+                    }
                 }
             }
         }
     }
 
-    /// Bits of unlocated variables, steps, transitions, and the `Q`/`A` bits of actions.
-    fn allocate_bits(&mut self) {
+    /// Bits and words of unlocated variables, step bits, fire bits, `Q`/`A` bits.
+    fn allocate(&mut self) {
         for i in 0..self.vars.list.len() {
             let v = &self.vars.list[i];
-            if v.is_bit() && v.location.is_none() && !sfc_st::is_sfc_control_variable(&v.name) {
+            if v.location.is_some() {
+                continue;
+            }
+            if v.is_bit() {
                 let a = self.take_bit();
                 self.vars.list[i].addr = Some(a);
+            } else if let (Some(ty), true) = (v.int_ty(), v.is_word()) {
+                let val = self.take_value(ty.wide());
+                self.vars.list[i].val = Some(val);
+            } else if v.counter() == Some(vars::CounterKind::Ctud) {
+                let qd = self.take_bit();
+                self.ctud_qd.insert(i, qd);
             }
         }
         let s_bits = (vars::last_byte(Area::S) + 1) * 8;
         for s in 0..self.chart.steps.len() {
             let a = if (s as u32) < s_bits { Addr::from_linear(Area::S, s as u32) } else { self.take_bit() };
             self.steps.push(a);
+        }
+        if self.method == StlMethod::Scr && self.chart.steps.len() as u32 > s_bits {
+            let msg = format!(
+                "the SCR method needs an S bit per step and the S7-200 has {s_bits} (S0.0-S31.7); `{}` has {} steps: \
+                 build with --stl-method setreset",
+                self.chart.pou,
+                self.chart.steps.len()
+            );
+            self.diags.push(Diagnostic::error("SFC0815", self.chart.name_span, msg));
         }
         for _ in 0..self.chart.transitions.len() {
             let a = self.take_bit();
@@ -389,24 +556,24 @@ impl<'a> Gen<'a> {
                 a,
                 body: Vec::new(),
             };
-            let mut first_timed: Option<(Qualifier, i64, Span)> = None;
+            let mut first_timed: Option<(Qualifier, i64, i64, Span)> = None;
             for (s, step) in chart.steps.iter().enumerate() {
                 for assoc in step.associations.iter().filter(|x| x.action.eq_ignore_ascii_case(&key)) {
                     e.assocs.push((s, assoc.qualifier));
                     if !assoc.qualifier.is_timed() {
                         continue;
                     }
-                    let Some(pt) = self.duration(assoc.duration.as_ref(), assoc.span, &e.name) else { continue };
+                    let Some((pt, us)) = self.duration(assoc.duration.as_ref(), assoc.span, &e.name) else { continue };
                     match first_timed {
-                        None => first_timed = Some((assoc.qualifier, pt, assoc.span)),
-                        Some((q0, pt0, span0)) if (q0, pt0) != (assoc.qualifier, pt) => {
+                        None => first_timed = Some((assoc.qualifier, pt, us, assoc.span)),
+                        Some((q0, _, us0, span0)) if (q0, us0) != (assoc.qualifier, us) => {
                             let msg = format!(
                                 "`{}` already has the timed association {} with {} in another step; two different \
                                  timed associations of one action contend at run time, which the S7-200 program \
                                  does not reproduce",
                                 e.name,
                                 q0.name(),
-                                fmt_time(pt0 * TIMER_BASE_US)
+                                fmt_time(us0)
                             );
                             let d = Diagnostic::error("SFC0813", assoc.span, msg)
                                 .with_element(e.name.clone())
@@ -417,7 +584,7 @@ impl<'a> Gen<'a> {
                     }
                 }
             }
-            e.timed = first_timed.map(|(q, pt, _)| (q, pt));
+            e.timed = first_timed.map(|(q, pt, us, _)| (q, pt, us));
             let need = |q: Qualifier| e.assocs.iter().any(|a| a.1 == q);
             let (s, sd, ds, sl, p) =
                 (need(Qualifier::S), need(Qualifier::SD), need(Qualifier::DS), need(Qualifier::SL), need(Qualifier::P));
@@ -429,9 +596,9 @@ impl<'a> Gen<'a> {
             if is_var {
                 self.check_variable_action(&e, &key);
             }
-            if let Some((q, pt)) = e.timed {
+            if let Some((q, pt, us)) = e.timed {
                 if pt > 0 {
-                    let label = format!("{} {} {}", e.name, q.name(), fmt_time(pt * TIMER_BASE_US));
+                    let label = format!("{} {} {}", e.name, q.name(), fmt_time(us));
                     e.timer = Some(self.timers.action(self.entities.len(), pt as u16, label));
                 }
             }
@@ -439,48 +606,80 @@ impl<'a> Gen<'a> {
         }
     }
 
-    /// The preset of a timed association, in 100 ms units.
-    fn duration(&mut self, d: Option<&Duration>, span: Span, element: &str) -> Option<i64> {
+    /// The preset of a timed association in 100 ms ticks (⌈d / 100 ms⌉: a 100 ms timer counts
+    /// whole ticks), and the duration.
+    fn duration(&mut self, d: Option<&Duration>, span: Span, element: &str) -> Option<(i64, i64)> {
         let us = match d {
-            Some(Duration::Literal(us)) => Some(*us),
-            Some(Duration::Variable(name)) => match self.vars.get(name).and_then(|i| {
-                let v = &self.vars.list[i];
-                if v.constant {
-                    v.init
-                } else {
-                    None
+            Some(Duration::Literal(us)) => *us,
+            Some(Duration::Variable(name)) => {
+                let v = self.vars.get(name).map(|i| &self.vars.list[i]);
+                match v {
+                    Some(v) if v.constant => match v.init {
+                        Some(sfc_st::Value::Time(us)) => us,
+                        _ => 0,
+                    },
+                    Some(v) if v.is_time() => {
+                        let i = self.vars.get(name).unwrap_or(0);
+                        let mut f = self.vars.folded.borrow_mut();
+                        if !f.contains(&i) {
+                            f.push(i);
+                        }
+                        match self.vars.list[i].init {
+                            Some(sfc_st::Value::Time(us)) => us,
+                            _ => 0,
+                        }
+                    }
+                    _ => {
+                        let msg = format!("the duration `{name}` is not a TIME variable or constant");
+                        self.diags.push(Diagnostic::error("SFC0813", span, msg).with_element(element));
+                        return None;
+                    }
                 }
-            }) {
-                Some(sfc_st::Value::Time(us)) => Some(us),
-                _ => {
-                    let msg = format!(
-                        "the duration `{name}` is not a constant: an S7-200 timer preset must be known when the \
-                         program is generated (write a literal, or declare `{name}` CONSTANT)"
-                    );
-                    self.diags.push(Diagnostic::error("SFC0813", span, msg).with_element(element));
-                    return None;
-                }
-            },
-            None => None,
+            }
+            None => {
+                let msg = "a timed qualifier without a duration";
+                self.diags.push(Diagnostic::error("SFC0813", span, msg).with_element(element));
+                return None;
+            }
         };
-        let Some(us) = us else {
-            self.diags
-                .push(Diagnostic::error("SFC0813", span, "a timed qualifier without a duration").with_element(element));
-            return None;
-        };
-        if us < 0 || us % TIMER_BASE_US != 0 || us / TIMER_BASE_US > MAX_PT {
+        let pt = if us <= 0 { 0 } else { (us + TIMER_BASE_US - 1) / TIMER_BASE_US };
+        if pt > MAX_PT {
             let msg = format!(
-                "the duration {} is not a multiple of 100 ms between T#0s and T#54m36s700ms, the presets of an \
-                 S7-200 100 ms timer",
+                "the duration {} needs a preset beyond +32767, the maximum of an S7-200 100 ms timer (T#54m36s700ms)",
                 fmt_time(us)
             );
             self.diags.push(Diagnostic::error("SFC0813", span, msg).with_element(element));
             return None;
         }
-        Some(us / TIMER_BASE_US)
+        Some((pt, us))
     }
 
-    /// Guards and action bodies to bit logic.
+    /// `sfc.timeout`: a timer whose bit is `S.T > timeout` and a reported flag per step.
+    fn supervision(&mut self) {
+        for (s, step) in self.chart.steps.iter().enumerate() {
+            let Some(limit) = step.timeout else {
+                self.supervised.push(None);
+                continue;
+            };
+            let pt = limit.div_euclid(TIMER_BASE_US) + 1;
+            if pt > MAX_PT {
+                let msg = format!(
+                    "the supervision time {} of `{}` is beyond the 3276.7 s of an S7-200 100 ms timer",
+                    fmt_time(limit),
+                    step.name
+                );
+                self.diags.push(Diagnostic::error("SFC0812", step.name_span, msg).with_element(step.name.clone()));
+                self.supervised.push(None);
+                continue;
+            }
+            let label = format!("{}.T > {} (sfc.timeout)", step.name, fmt_time(limit));
+            let timer = self.timers.step(s, pt as u16, false, label);
+            let overdue = self.take_bit();
+            self.supervised.push(Some(Supervision { timer, overdue, limit }));
+        }
+    }
+
+    /// Guards and action bodies to logic.
     fn lower(&mut self) {
         let chart = self.chart;
         let mut low = Lowerer {
@@ -488,7 +687,9 @@ impl<'a> Gen<'a> {
             vars: &self.vars,
             steps: &self.steps,
             actions: &self.action_bits,
+            ctud_qd: &self.ctud_qd,
             timers: &mut self.timers,
+            counters: &mut self.counters,
             diags: &mut self.diags,
             text: &self.checked.file.text,
         };
@@ -513,41 +714,87 @@ impl<'a> Gen<'a> {
         }
     }
 
-    /// Timer numbers: step timers TON or TONR as their readers need, action timers TON.
-    fn allocate_timers(&mut self) {
-        let mut ton = ton_numbers();
-        let mut tonr = tonr_numbers();
-        let mut short = (0usize, 0usize);
-        for t in &self.timers.list {
-            let n = if t.retentive { tonr.next() } else { ton.next() };
-            match n {
-                Some(n) => self.timer_numbers.push(n),
-                None => {
-                    if t.retentive {
-                        short.1 += 1;
-                    } else {
-                        short.0 += 1;
-                    }
-                    self.timer_numbers.push(0);
-                }
+    /// A warning for each TIME variable read as a timer preset.
+    fn fold_warnings(&mut self) {
+        let folded = self.vars.folded.borrow().clone();
+        for i in folded {
+            let v = &self.vars.list[i];
+            let init = match v.init {
+                Some(sfc_st::Value::Time(us)) => fmt_time(us),
+                _ => "T#0s".to_string(),
+            };
+            let mut msg = format!(
+                "`{}` is a TIME variable: the S7-200 program uses its initial value {init} as a timer preset, fixed \
+                 when the program is generated",
+                v.name
+            );
+            if v.is_input() {
+                msg.push_str("; the value given at run time is ignored");
+            }
+            let d = Diagnostic::warning("SFC0817", v.span, msg)
+                .with_element(v.name.clone())
+                .with_note("declare it CONSTANT to say so, or change the preset and build again");
+            self.warnings.push(d);
+        }
+        for v in &self.vars.list {
+            let nonzero = match v.init {
+                Some(sfc_st::Value::Bool(b)) => b,
+                Some(sfc_st::Value::Int(i)) => i != 0,
+                _ => false,
+            };
+            if v.retain && nonzero && (v.is_bit() || v.is_word()) {
+                let msg = format!(
+                    "`{}` is RETAIN: the S7-200 program does not give it its initial value in the first scan (it \
+                     keeps what the retentive memory holds); set it once by hand",
+                    v.name
+                );
+                self.warnings.push(Diagnostic::warning("SFC0817", v.span, msg).with_element(v.name.clone()));
             }
         }
-        if short != (0, 0) {
+    }
+
+    /// Timer numbers (step timers TON or TONR as their readers need, others TON) and counter
+    /// numbers (C0 upwards).
+    fn allocate_timers_and_counters(&mut self) {
+        let mut ton = ton_numbers();
+        let mut tonr = tonr_numbers();
+        let mut short = false;
+        for t in &self.timers.list {
+            let n = if t.retentive { tonr.next() } else { ton.next() };
+            short |= n.is_none();
+            self.timer_numbers.push(n.unwrap_or(0));
+        }
+        if short {
             let msg = format!(
-                "`{}` needs {} TON and {} TONR 100 ms timers; the S7-200 has 182 TON (T37–T63, T101–T255) and 54 \
-                 TONR (T5–T31, T69–T95)",
+                "`{}` needs {} TON and {} TONR 100 ms timers; the S7-200 has 182 TON (T37-T63, T101-T255) and 54 \
+                 TONR (T5-T31, T69-T95)",
                 self.chart.pou,
                 self.timers.list.iter().filter(|t| !t.retentive).count(),
                 self.timers.list.iter().filter(|t| t.retentive).count()
             );
             self.diags.push(Diagnostic::error("SFC0815", self.chart.name_span, msg));
         }
+        if self.counters.list.len() > 256 {
+            let msg = format!("`{}` needs more than the 256 counters of the S7-200", self.chart.pou);
+            self.diags.push(Diagnostic::error("SFC0815", self.chart.name_span, msg));
+        }
+        self.counter_numbers = (0..self.counters.list.len() as u16).collect();
     }
 
     fn allocate_temps(&mut self) {
         for _ in 0..self.emitter.max_temps {
             let a = self.take_bit();
             self.temps.push(a);
+        }
+        for _ in 0..self.emitter.max_words {
+            if let Val::Word(_, at) = self.take_value(false) {
+                self.temp_words.push(at);
+            }
+        }
+        for _ in 0..self.emitter.max_dwords {
+            if let Val::DWord(_, at) = self.take_value(true) {
+                self.temp_dwords.push(at);
+            }
         }
     }
 
@@ -585,373 +832,63 @@ impl<'a> Gen<'a> {
         Logic::bit(self.fires[t], format!("{} fires", self.chart.transitions[t].name))
     }
 
-    fn push_network(&mut self, title: String, code: Vec<Ins>) {
+    fn step_bit(&self, s: StepId) -> Logic {
+        Logic::bit(self.steps[s], self.step_name(s).to_string())
+    }
+
+    fn push_network(&mut self, title: String, code: Vec<ir::Ins>) {
         if !code.is_empty() {
             self.networks.push(Network { title, code });
         }
     }
 
-    fn emit(&mut self) {
-        self.first_scan_network();
-        self.step_time_network();
-        self.transition_networks();
-        self.step_networks();
-        for i in 0..self.entities.len() {
-            self.control_network(i);
+    fn resolve(&self) -> Resolve<'_> {
+        Resolve {
+            timers: &self.timer_numbers,
+            counters: &self.counter_numbers,
+            temps: &self.temps,
+            temp_words: &self.temp_words,
+            temp_dwords: &self.temp_dwords,
         }
-        self.body_networks();
     }
 
-    /// `SM0.1`: clear the steps, the action memories and the timers; initial values.
-    fn first_scan_network(&mut self) {
-        let mut code = vec![Ins::on(Op::Ld, Addr::FIRST_SCAN, "first scan = IEC scan 0")];
-        let steps: Vec<(Addr, String)> =
-            self.steps.iter().enumerate().map(|(s, &a)| (a, self.step_name(s).to_string())).collect();
-        reset_runs(&steps, false, "steps (initial ones are set after the transitions)", &mut code);
-        let mut clear = Vec::new();
-        let mut set = Vec::new();
-        for v in &self.vars.list {
-            let Some(a) = v.addr else { continue };
-            if v.is_input() {
-                continue;
-            }
-            if matches!(v.init, Some(sfc_st::Value::Bool(true))) {
-                set.push((a, v.name.clone()));
-            } else {
-                clear.push((a, v.name.clone()));
-            }
-        }
-        reset_runs(&clear, false, "variables, initial value FALSE", &mut code);
-        reset_runs(&set, true, "variables, initial value TRUE", &mut code);
-        let mut flags = Vec::new();
-        for e in &self.entities {
-            for (bit, what) in [
-                (e.q, "Q"),
-                (e.a, "A"),
-                (e.s_ff, "S"),
-                (e.sd_ff, "SD"),
-                (e.ds_ff, "DS"),
-                (e.sl_ff, "SL"),
-                (e.pulse, "P"),
-            ] {
-                if let Some(b) = bit {
-                    flags.push((b, format!("{}.{what}", e.name)));
-                }
-            }
-        }
-        reset_runs(&flags, false, "action control memories", &mut code);
-        let mut numbers: Vec<u16> = self.timer_numbers.clone();
-        numbers.sort_unstable();
-        let mut i = 0;
-        while i < numbers.len() {
-            let mut j = i + 1;
-            while j < numbers.len() && numbers[j] == numbers[j - 1] + 1 && j - i < 255 {
-                j += 1;
-            }
-            let first = self.timer_numbers.iter().position(|&n| n == numbers[i]).unwrap_or(0);
-            code.push(Ins::on(Op::Reset((j - i) as u16), Addr::Timer(first), "timers"));
-            i = j;
-        }
-        self.push_network("first scan (SM0.1 = IEC scan 0): clear steps, action memories and timers".into(), code);
-    }
-
-    /// The step timers, before the transitions read them.
-    fn step_time_network(&mut self) {
-        let mut code = Vec::new();
-        for (i, t) in self.timers.list.iter().enumerate() {
-            let TimerUse::Step(s) = t.what else { continue };
-            code.push(Ins::on(Op::Ld, self.steps[s], self.step_name(s)));
-            let op = if t.retentive { Op::Tonr(t.pt) } else { Op::Ton(t.pt) };
-            code.push(Ins::on(op, Addr::Timer(i), t.label.clone()));
-        }
-        self.push_network("step times: advance before the transitions read them".into(), code);
-    }
-
-    /// The fire bit of every transition, in conflict order.
-    fn transition_networks(&mut self) {
+    /// Every allocated operand, for the allocation table and the symbol table.
+    fn rows(&self) -> Vec<Row> {
         let chart = self.chart;
-        let mut order: Vec<usize> = (0..chart.transitions.len()).collect();
-        order.sort_by_key(|&t| match chart.transitions[t].priority {
-            Some(p) => (0, p, t),
-            None => (1, 0, t),
-        });
-        let mut rank = vec![0; order.len()];
-        for (k, &t) in order.iter().enumerate() {
-            rank[t] = k;
-        }
-        let adj = chart.adjacency();
-        for &t in &order {
-            let tr = &chart.transitions[t];
-            let Some(guard) = self.guards.get(t).cloned().flatten() else { continue };
-            let mut items: Vec<Logic> =
-                tr.from.iter().map(|&s| Logic::bit(self.steps[s], self.step_name(s).to_string())).collect();
-            items.push(guard);
-            // Transitions earlier in conflict order that share a step with this one.
-            let mut before: Vec<usize> =
-                tr.from.iter().flat_map(|&s| adj.outgoing[s].iter().copied()).filter(|&u| rank[u] < rank[t]).collect();
-            before.sort_by_key(|&u| rank[u]);
-            before.dedup();
-            for u in before {
-                items.push(self.fire_bit(u).not());
-            }
-            let mut code = Vec::new();
-            self.emitter.new_network();
-            self.emitter.logic(&Logic::And(items), &mut code);
-            code.push(Ins::on(Op::Out, self.fires[t], format!("{} fires", tr.name)));
-            let names = |v: &[StepId]| v.iter().map(|&s| self.step_name(s)).collect::<Vec<_>>().join(", ");
-            let mut title = format!("transition {}: {} -> {}", tr.name, names(&tr.from), names(&tr.to));
-            if let Some(p) = tr.priority {
-                let _ = write!(title, " (PRIORITY {p})");
-            }
-            let cond = match &tr.condition {
-                ast::Condition::St(e) => Some(e.span),
-                ast::Condition::Il(b) => Some(b.span),
-                ast::Condition::Missing => None,
-            };
-            if let Some(span) = cond {
-                let _ = write!(title, " := {}", snippet(&self.checked.file.text, span));
-            }
-            self.push_network(title, code);
-        }
-    }
-
-    /// Each step: reset by the transitions leaving it, then set by those entering it; its timers
-    /// restart on entry and run on the new step bit.
-    fn step_networks(&mut self) {
-        let chart = self.chart;
-        let adj = chart.adjacency();
-        for (s, step) in chart.steps.iter().enumerate() {
-            let bit = self.steps[s];
-            let mut code = Vec::new();
-            self.emitter.new_network();
-            let leaving: Vec<Logic> = adj.outgoing[s].iter().map(|&t| self.fire_bit(t)).collect();
-            if !leaving.is_empty() {
-                self.emitter.logic(&Logic::any(leaving), &mut code);
-                code.push(Ins::on(Op::Reset(1), bit, format!("leave {}", step.name)));
-            }
-            let mut entering: Vec<Logic> = adj.incoming[s].iter().map(|&t| self.fire_bit(t)).collect();
-            if step.initial {
-                entering.insert(0, Logic::bit(Addr::FIRST_SCAN, "first scan"));
-            }
-            let timers: Vec<usize> =
-                (0..self.timers.list.len()).filter(|&i| self.timers.list[i].what == TimerUse::Step(s)).collect();
-            if !entering.is_empty() {
-                self.emitter.logic(&Logic::any(entering), &mut code);
-                code.push(Ins::on(Op::Set(1), bit, format!("enter {}", step.name)));
-                for &i in &timers {
-                    code.push(Ins::on(Op::Reset(1), Addr::Timer(i), format!("{}.T restarts", step.name)));
-                }
-            }
-            for &i in &timers {
-                let t = &self.timers.list[i];
-                code.push(Ins::on(Op::Ld, bit, step.name.clone()));
-                let op = if t.retentive { Op::Tonr(t.pt) } else { Op::Ton(t.pt) };
-                code.push(Ins::on(op, Addr::Timer(i), t.label.clone()));
-            }
-            let mut title = format!("step {}", step.name);
-            if step.initial {
-                title.push_str(" (initial)");
-            }
-            if let Some(limit) = step.timeout {
-                let _ = write!(title, "; its sfc.timeout {} is not supervised here", fmt_time(limit));
-            }
-            self.push_network(title, code);
-        }
-    }
-
-    /// ACTION_CONTROL of entity `i` (the simulator's `Control::update`, bit for bit).
-    fn control_network(&mut self, i: usize) {
-        let e = &self.entities[i];
-        let (steps, chart) = (&self.steps, self.chart);
-        let st = |q: Qualifier| {
-            Logic::any(e.steps_with(q).iter().map(|&s| Logic::bit(steps[s], chart.steps[s].name.clone())).collect())
-        };
-        let mut code = Vec::new();
-        let em = &mut self.emitter;
-        em.new_network();
-        let (tq, pt) = e.timed.unwrap_or((Qualifier::N, 0));
-        let timer = e.timer.map(Addr::Timer);
-        let timer_of = |q: Qualifier| if tq == q { timer } else { None };
-        for (q, ff) in [(Qualifier::S, e.s_ff), (Qualifier::SD, e.sd_ff), (Qualifier::SL, e.sl_ff)] {
-            if let Some(ff) = ff {
-                em.logic(&st(q), &mut code);
-                code.push(Ins::on(Op::Set(1), ff, format!("{}.{}", e.name, q.name())));
-            }
-        }
-        if let Some(ff) = e.ds_ff {
-            em.logic(&st(Qualifier::DS), &mut code);
-            if let Some(t) = timer_of(Qualifier::DS) {
-                code.push(Ins::on(Op::Ton(pt as u16), t, format!("{} DS delay", e.name)));
-                code.push(Ins::on(Op::Ld, t, format!("{} DS delay", e.name)));
-            }
-            code.push(Ins::on(Op::Set(1), ff, format!("{}.DS", e.name)));
-        }
-        let ffs: Vec<(Addr, &str)> = [(e.s_ff, "S"), (e.sd_ff, "SD"), (e.ds_ff, "DS"), (e.sl_ff, "SL")]
-            .into_iter()
-            .filter_map(|(b, n)| b.map(|b| (b, n)))
-            .collect();
-        if e.has(Qualifier::R) && !ffs.is_empty() {
-            em.logic(&st(Qualifier::R), &mut code);
-            for (b, n) in &ffs {
-                code.push(Ins::on(Op::Reset(1), *b, format!("{}.{n} (R dominates)", e.name)));
-            }
-        }
-        if let Some(t) = timer {
-            let input = match tq {
-                Qualifier::L | Qualifier::D => Some(st(tq)),
-                Qualifier::SD => e.sd_ff.map(|b| Logic::bit(b, format!("{}.SD", e.name))),
-                Qualifier::SL => e.sl_ff.map(|b| Logic::bit(b, format!("{}.SL", e.name))),
-                _ => None,
-            };
-            if let Some(input) = input {
-                em.logic(&input, &mut code);
-                code.push(Ins::on(
-                    Op::Ton(pt as u16),
-                    t,
-                    format!("{} {} {}", e.name, tq.name(), fmt_time(pt * TIMER_BASE_US)),
-                ));
-            }
-        }
-        if let Some(p) = e.pulse {
-            em.logic(&st(Qualifier::P), &mut code);
-            code.push(Ins::bare(Op::Eu));
-            code.push(Ins::on(Op::Out, p, format!("{}.P pulse", e.name)));
-        }
-        // Q := NOT R AND (N OR L_act OR D_act OR P OR S_FF OR SD_act OR DS_FF OR SL_act)
-        let mut parts: Vec<Logic> = Vec::new();
-        if e.has(Qualifier::N) {
-            parts.push(st(Qualifier::N));
-        }
-        let tbit = |t: Addr| Logic::bit(t, format!("{} {} timer", e.name, tq.name()));
-        if e.has(Qualifier::L) {
-            if let Some(t) = timer_of(Qualifier::L) {
-                parts.push(Logic::And(vec![st(Qualifier::L), tbit(t).not()]));
-            }
-        }
-        if e.has(Qualifier::D) {
-            parts.push(match timer_of(Qualifier::D) {
-                Some(t) => tbit(t),
-                None => st(Qualifier::D),
-            });
-        }
-        if let Some(p) = e.pulse {
-            parts.push(Logic::bit(p, format!("{}.P pulse", e.name)));
-        }
-        if let Some(b) = e.s_ff {
-            parts.push(Logic::bit(b, format!("{}.S", e.name)));
-        }
-        if let Some(b) = e.sd_ff {
-            parts.push(match timer_of(Qualifier::SD) {
-                Some(t) => tbit(t),
-                None => Logic::bit(b, format!("{}.SD", e.name)),
-            });
-        }
-        if let Some(b) = e.ds_ff {
-            parts.push(Logic::bit(b, format!("{}.DS", e.name)));
-        }
-        if let (Some(b), Some(t)) = (e.sl_ff, timer_of(Qualifier::SL)) {
-            parts.push(Logic::And(vec![Logic::bit(b, format!("{}.SL", e.name)), tbit(t).not()]));
-        }
-        let q = Logic::And(vec![Logic::any(parts), st(Qualifier::R).not()]);
-        em.logic(&q, &mut code);
-        let target = e.var_bit.or(e.q);
-        if let Some(target) = target {
-            let note = if e.action.is_some() { format!("{}.Q", e.name) } else { e.name.clone() };
-            code.push(Ins::on(Op::Out, target, note));
-        }
-        if let (Some(qb), Some(ab)) = (e.q, e.a) {
-            // A := Q OR (Q fell: the final scan) OR P1 rising OR P0 falling.
-            let qn = format!("{}.Q", e.name);
-            code.push(Ins::on(Op::Ld, qb, qn.clone()));
-            code.push(Ins::bare(Op::Ed));
-            code.push(Ins::on(Op::O, qb, qn));
-            for (q, edge) in [(Qualifier::P1, Op::Eu), (Qualifier::P0, Op::Ed)] {
-                if e.has(q) {
-                    em.logic(&st(q), &mut code);
-                    code.push(Ins::bare(edge));
-                    code.push(Ins::bare(Op::Old));
-                }
-            }
-            code.push(Ins::on(Op::Out, ab, format!("{}.A", e.name)));
-        }
-        let mut quals: Vec<String> = Vec::new();
-        for (s, q) in &e.assocs {
-            let mut t = format!("{} in {}", q.name(), chart.steps[*s].name);
-            if q.is_timed() {
-                let _ = write!(t, " ({})", fmt_time(pt * TIMER_BASE_US));
-            }
-            if !quals.contains(&t) {
-                quals.push(t);
-            }
-        }
-        let kind = if e.action.is_some() { "" } else { " (BOOL variable)" };
-        let title = format!("action {}{kind}: {}", e.name, quals.join(", "));
-        self.push_network(title, code);
-    }
-
-    /// The statements of each action body, one network per statement, under the action's `A`.
-    fn body_networks(&mut self) {
-        let mut out = Vec::new();
-        for e in &self.entities {
-            let Some(a) = e.a else { continue };
-            for op in &e.body {
-                let text = match op {
-                    BodyOp::Assign { text, .. } | BodyOp::If { text, .. } => text.clone(),
-                };
-                let mut code = Vec::new();
-                self.emitter.new_network();
-                let mut enable: Vec<Contact> = vec![(a, false, format!("{}.A", e.name))];
-                self.emitter.body(std::slice::from_ref(op), &mut enable, &mut code);
-                out.push((format!("body of {} (while {}.A): {text}", e.name, e.name), code));
-            }
-        }
-        for (title, code) in out {
-            self.push_network(title, code);
-        }
-    }
-
-    /// The allocation table, the notes and the networks.
-    fn print(&self) -> String {
-        let chart = self.chart;
-        let mut out = String::new();
-        let _ = writeln!(
-            out,
-            "// S7-200 statement list for {} {} ({}), generated by sfc (--target stl).",
-            chart.pou_kind.keyword(),
-            chart.pou,
-            self.checked.file.name
-        );
-        for line in [
-            "// Set/reset method: each scan first computes one bit per transition from the step bits and",
-            "// inputs as they are at the start of the scan (conflicts: PRIORITY, then declaration order),",
-            "// then resets and sets the steps, then runs action control and action bodies on the new",
-            "// steps: one evolution per scan. The first scan (SM0.1) is IEC scan 0: no transition fires,",
-            "// the initial steps are set and their actions see the activation. Timers: 100 ms base.",
-            "//",
-            "// Allocation (address, kind, name, declaration):",
-        ] {
-            out.push_str(line);
-            out.push('\n');
-        }
-        let r = Resolve { timers: &self.timer_numbers, temps: &self.temps };
+        let r = self.resolve();
         let mut rows: Vec<Row> = Vec::new();
         for v in &self.vars.list {
-            if let Some(a) = v.addr {
-                let mut detail = v.kind_text();
-                if v.is_input() {
-                    detail.push_str(", input");
-                }
-                rows.push(Row { addr: a, kind: "var", name: v.name.clone(), detail });
+            let addr = match (v.addr, v.val) {
+                (Some(a), _) => r.text(a),
+                (None, Some(val)) => r.value(val),
+                _ => continue,
+            };
+            let mut detail = v.kind_text();
+            if v.is_input() {
+                detail.push_str(", input");
             }
+            rows.push(Row { addr, kind: "var", name: v.name.clone(), symbol: v.name.clone(), detail });
         }
         for (s, step) in chart.steps.iter().enumerate() {
-            let detail = if step.initial { "initial step" } else { "" };
-            rows.push(Row { addr: self.steps[s], kind: "step", name: step.name.clone(), detail: detail.into() });
+            let detail = if step.initial { "initial step" } else { "step" };
+            rows.push(Row {
+                addr: r.text(self.steps[s]),
+                kind: "step",
+                name: step.name.clone(),
+                symbol: step.name.clone(),
+                detail: detail.into(),
+            });
         }
         for (t, tr) in chart.transitions.iter().enumerate() {
             let names = |v: &[StepId]| v.iter().map(|&s| self.step_name(s)).collect::<Vec<_>>().join(",");
             let detail = format!("fires: {} -> {}", names(&tr.from), names(&tr.to));
-            rows.push(Row { addr: self.fires[t], kind: "fire", name: tr.name.clone(), detail });
+            rows.push(Row {
+                addr: r.text(self.fires[t]),
+                kind: "fire",
+                name: tr.name.clone(),
+                symbol: format!("{}_fires", tr.name),
+                detail,
+            });
         }
         for e in &self.entities {
             for (bit, what, detail) in [
@@ -964,38 +901,146 @@ impl<'a> Gen<'a> {
                 (e.pulse, "P", "pulse (P)"),
             ] {
                 if let Some(b) = bit {
-                    rows.push(Row { addr: b, kind: "flag", name: format!("{}.{what}", e.name), detail: detail.into() });
+                    rows.push(Row {
+                        addr: r.text(b),
+                        kind: "flag",
+                        name: format!("{}.{what}", e.name),
+                        symbol: format!("{}_{what}", e.name),
+                        detail: detail.into(),
+                    });
                 }
             }
         }
+        for (s, sup) in self.supervised.iter().enumerate() {
+            if let Some(sup) = sup {
+                rows.push(Row {
+                    addr: r.text(sup.overdue),
+                    kind: "flag",
+                    name: format!("{}.overdue", self.step_name(s)),
+                    symbol: format!("{}_overdue", self.step_name(s)),
+                    detail: format!("sfc.timeout {} reported", fmt_time(sup.limit)),
+                });
+            }
+        }
+        for c in &self.counters.list {
+            if let Some(qd) = c.qd {
+                let name = &self.vars.list[c.var].name;
+                rows.push(Row {
+                    addr: r.text(qd),
+                    kind: "flag",
+                    name: format!("{name}.QD"),
+                    symbol: format!("{name}_QD"),
+                    detail: "CTUD output QD (CV <= 0 at the last call)".into(),
+                });
+            }
+        }
         for (i, t) in self.timers.list.iter().enumerate() {
-            let (name, what) = match t.what {
-                TimerUse::Step(s) => {
-                    (format!("{}.T", self.step_name(s)), format!(">= {}", fmt_time(i64::from(t.pt) * TIMER_BASE_US)))
-                }
+            let (name, symbol) = match t.what {
+                TimerUse::Step(s) => (format!("{}.T", self.step_name(s)), format!("{}_T{}", self.step_name(s), t.pt)),
                 TimerUse::Action(k) => {
                     let e = &self.entities[k];
-                    let q = e.timed.map_or("", |(q, _)| q.name());
-                    (format!("{}.{q}", e.name), fmt_time(i64::from(t.pt) * TIMER_BASE_US))
+                    let q = e.timed.map_or("", |(q, _, _)| q.name());
+                    (format!("{}.{q}", e.name), format!("{}_{q}_timer", e.name))
                 }
             };
             let kind = if t.retentive { "TONR" } else { "TON" };
-            let detail = format!("{kind} +{} x 100 ms: {what}", t.pt);
-            rows.push(Row { addr: Addr::Timer(i), kind: "timer", name, detail });
+            let detail = format!("{kind} +{} x 100 ms: {}", t.pt, t.label);
+            rows.push(Row { addr: r.text(Addr::Timer(i)), kind: "timer", name, symbol, detail });
+        }
+        for (i, c) in self.counters.list.iter().enumerate() {
+            let v = &self.vars.list[c.var];
+            let detail = format!("{} {}", c.kind.name(), if c.call.is_some() { "" } else { "(never called)" });
+            rows.push(Row {
+                addr: r.text(Addr::Counter(i)),
+                kind: "counter",
+                name: v.name.clone(),
+                symbol: v.name.clone(),
+                detail: detail.trim_end().to_string(),
+            });
         }
         for (i, &a) in self.temps.iter().enumerate() {
-            rows.push(Row { addr: a, kind: "temp", name: format!("#{i}"), detail: "scratch within a network".into() });
+            rows.push(Row {
+                addr: r.text(a),
+                kind: "temp",
+                name: format!("#{i}"),
+                symbol: format!("sfc_scratch{i}"),
+                detail: "scratch bit within a network".into(),
+            });
         }
-        for row in &rows {
-            let line = format!("//   {:<8} {:<6} {:<24} {}", r.text(row.addr), row.kind, row.name, row.detail);
-            out.push_str(line.trim_end());
+        for (i, &at) in self.temp_words.iter().enumerate() {
+            rows.push(Row {
+                addr: format!("VW{at}"),
+                kind: "temp",
+                name: format!("#W{i}"),
+                symbol: format!("sfc_scratchW{i}"),
+                detail: "scratch word within a network".into(),
+            });
+        }
+        for (i, &at) in self.temp_dwords.iter().enumerate() {
+            rows.push(Row {
+                addr: format!("VD{at}"),
+                kind: "temp",
+                name: format!("#D{i}"),
+                symbol: format!("sfc_scratchD{i}"),
+                detail: "scratch double word within a network".into(),
+            });
+        }
+        rows
+    }
+
+    /// The header, the allocation table and the networks.
+    fn print(&self) -> String {
+        let chart = self.chart;
+        let mut out = String::new();
+        let _ = writeln!(
+            out,
+            "// S7-200 statement list for {} {} ({}), generated by sfc (--target stl --stl-method {}).",
+            chart.pou_kind.keyword(),
+            chart.pou,
+            ir::ascii(&self.checked.file.name),
+            self.method.name()
+        );
+        let method: &[&str] = match self.method {
+            StlMethod::SetReset => &[
+                "// Method: SET/RESET. Each step is an S bit that its own network resets when a transition leaves",
+                "// it and sets when one enters it. Chosen as the default because it has a form for every",
+                "// chart (simultaneous divergence and convergence, re-entered steps) and reads like ladder logic.",
+            ],
+            StlMethod::Scr => &[
+                "// Method: SCR (LSCR/SCRT/SCRE, seed 002 section 3.4). Each step is an SCR segment whose",
+                "// transitions move the token with SCRT (several SCRT for a simultaneous divergence, R of the",
+                "// other steps of a simultaneous convergence). SCRT sets the next S bit at once, so a segment",
+                "// further down would run in the same scan: every condition is therefore computed before the",
+                "// first segment (one fire bit per transition), and the segments move the token only on those",
+                "// bits -- one evolution per scan, as IEC 61131-3 requires.",
+            ],
+        };
+        for line in method {
+            out.push_str(line);
+            out.push('\n');
+        }
+        for line in [
+            "// Each scan: timers (each executed exactly once), transitions from the scan's snapshot (conflicts:",
+            "// PRIORITY, then declaration order), steps, action control, action bodies, supervision. The",
+            "// first scan (SM0.1) is IEC scan 0: no transition fires, the initial steps are set and their",
+            "// actions see the activation. Timers: 100 ms base; a step time counts whole 100 ms ticks.",
+            "// Paste into STEP 7-Micro/WIN's STL editor (main program); the symbol table comes with --symbols.",
+            "//",
+            "// Allocation (address, kind, name, declaration):",
+        ] {
+            out.push_str(line);
+            out.push('\n');
+        }
+        for row in self.rows() {
+            let line = format!("//   {:<8} {:<7} {:<24} {}", row.addr, row.kind, row.name, row.detail);
+            out.push_str(&ir::ascii(line.trim_end()));
             out.push('\n');
         }
         let unmapped: Vec<String> = self
             .vars
             .list
             .iter()
-            .filter(|v| v.addr.is_none())
+            .filter(|v| v.addr.is_none() && v.val.is_none() && v.counter().is_none())
             .map(|v| {
                 format!("{} ({}{})", v.name, if v.constant { "CONSTANT " } else { "" }, v.ty.as_deref().unwrap_or("?"))
             })
@@ -1003,7 +1048,7 @@ impl<'a> Gen<'a> {
         if !unmapped.is_empty() {
             let _ = writeln!(
                 out,
-                "// Not in the program (constants are folded; the chart reads no other variable): {}.",
+                "// Not in the program (constants and TIME presets are folded; the chart reads no other variable): {}.",
                 unmapped.join(", ")
             );
         }
@@ -1017,32 +1062,56 @@ impl<'a> Gen<'a> {
             }
         }
         out.push('\n');
-        ir::print_networks(&self.networks, &r, &mut out);
+        ir::print_networks(&self.networks, &self.resolve(), &mut out);
+        out
+    }
+
+    /// Micro/WIN's symbol table as CSV: `Symbol,Address,Comment`. Symbols are made valid for
+    /// Micro/WIN (letters, digits and `_`, not starting with a digit, at most 23 characters)
+    /// and unique (case-insensitively).
+    fn symbols(&self) -> String {
+        let mut out = String::from("Symbol,Address,Comment\n");
+        let mut taken: HashSet<String> = HashSet::new();
+        for row in self.rows() {
+            let sym = unique_symbol(&row.symbol, &mut taken);
+            let comment = ir::ascii(&format!("{} {}: {}", row.kind, row.name, row.detail));
+            let _ = writeln!(out, "{},{},{}", csv_field(&sym), csv_field(&row.addr), csv_field(&comment));
+        }
         out
     }
 }
 
-/// `R first, n` (or `S`) over runs of consecutive bits of one area.
-fn reset_runs(bits: &[(Addr, String)], set: bool, what: &str, code: &mut Vec<Ins>) {
-    let mut sorted: Vec<(Area, u32, &str)> =
-        bits.iter().filter_map(|(a, n)| a.linear().map(|(area, k)| (area, k, n.as_str()))).collect();
-    sorted.sort_unstable();
-    sorted.dedup_by_key(|x| (x.0, x.1));
-    let mut i = 0;
-    while i < sorted.len() {
-        let mut j = i + 1;
-        while j < sorted.len() && sorted[j].0 == sorted[i].0 && sorted[j].1 == sorted[j - 1].1 + 1 && j - i < 255 {
-            j += 1;
-        }
-        let n = (j - i) as u16;
-        let note = if n == 1 { sorted[i].2.to_string() } else { what.to_string() };
-        let op = if set { Op::Set(n) } else { Op::Reset(n) };
-        code.push(Ins::on(op, Addr::from_linear(sorted[i].0, sorted[i].1), note));
-        i = j;
+/// A symbol name valid in Micro/WIN, unique among `taken`.
+fn unique_symbol(name: &str, taken: &mut HashSet<String>) -> String {
+    const MAX: usize = 23;
+    let mut base: String = name.chars().map(|c| if c.is_ascii_alphanumeric() { c } else { '_' }).collect();
+    if base.is_empty() || base.starts_with(|c: char| c.is_ascii_digit()) {
+        base.insert(0, '_');
+    }
+    base.truncate(MAX);
+    let mut sym = base.clone();
+    let mut k = 2;
+    while !taken.insert(sym.to_ascii_uppercase()) {
+        let suffix = format!("_{k}");
+        let mut b = base.clone();
+        b.truncate(MAX - suffix.len());
+        sym = b + &suffix;
+        k += 1;
+    }
+    sym
+}
+
+/// RFC 4180 quoting where needed.
+fn csv_field(s: &str) -> String {
+    if s.contains([',', '"', '\n', '\r']) {
+        format!("\"{}\"", s.replace('"', "\"\""))
+    } else {
+        s.to_string()
     }
 }
 
-fn snippet(text: &str, span: Span) -> String {
+/// The source text of a span on one line, shortened for comments and messages.
+pub(crate) fn snippet(text: &str, span: Span) -> String {
     let s = ir::one_line(text.get(span.range()).unwrap_or(""));
     if s.chars().count() > 60 {
         let mut t: String = s.chars().take(57).collect();
@@ -1050,5 +1119,100 @@ fn snippet(text: &str, span: Span) -> String {
         t
     } else {
         s
+    }
+}
+
+/// Names read in a condition, with their spans.
+fn condition_names(c: &ast::Condition, out: &mut Vec<(String, Span)>) {
+    match c {
+        ast::Condition::St(e) => expr_names(e, out),
+        ast::Condition::Il(b) => il_names(b, out),
+        ast::Condition::Missing => {}
+    }
+}
+
+fn il_names(b: &ast::IlBody, out: &mut Vec<(String, Span)>) {
+    fn list(ins: &[ast::IlInstruction], out: &mut Vec<(String, Span)>) {
+        for i in ins {
+            for e in &i.operands {
+                expr_names(e, out);
+            }
+            if let Some(n) = &i.nested {
+                list(n, out);
+            }
+        }
+    }
+    list(&b.instructions, out);
+}
+
+fn stmt_names(stmts: &[ast::Stmt], out: &mut Vec<(String, Span)>) {
+    use ast::StmtKind as K;
+    for s in stmts {
+        match &s.kind {
+            K::Assign { target, value } => {
+                expr_names(target, out);
+                expr_names(value, out);
+            }
+            K::Call(e) => expr_names(e, out),
+            K::If { branches, else_body } => {
+                for (c, b) in branches {
+                    expr_names(c, out);
+                    stmt_names(b, out);
+                }
+                if let Some(b) = else_body {
+                    stmt_names(b, out);
+                }
+            }
+            K::Case { selector, arms, else_body } => {
+                expr_names(selector, out);
+                for a in arms {
+                    stmt_names(&a.body, out);
+                }
+                if let Some(b) = else_body {
+                    stmt_names(b, out);
+                }
+            }
+            K::For { from, to, by, body, .. } => {
+                expr_names(from, out);
+                expr_names(to, out);
+                if let Some(b) = by {
+                    expr_names(b, out);
+                }
+                stmt_names(body, out);
+            }
+            K::While { cond, body } | K::Repeat { body, until: cond } => {
+                expr_names(cond, out);
+                stmt_names(body, out);
+            }
+            _ => {}
+        }
+    }
+}
+
+fn expr_names(e: &ast::Expr, out: &mut Vec<(String, Span)>) {
+    use ast::ExprKind as K;
+    match &e.kind {
+        K::Name(id) => out.push((id.text.clone(), e.span)),
+        K::Member { base, .. } => expr_names(base, out),
+        K::Index { base, indices } => {
+            expr_names(base, out);
+            for i in indices {
+                expr_names(i, out);
+            }
+        }
+        K::Call { args, .. } => {
+            for a in args {
+                if let Some(v) = &a.value {
+                    expr_names(v, out);
+                }
+            }
+        }
+        K::Unary { operand, .. } => expr_names(operand, out),
+        K::Binary { lhs, rhs, .. } => {
+            expr_names(lhs, out);
+            expr_names(rhs, out);
+        }
+        K::Paren(i) => expr_names(i, out),
+        _ => {}
     }
 }

@@ -1,25 +1,32 @@
-//! The S7-200 statement-list target.
+//! The S7-200 statement-list target, against the S7-200 model of `tests/s7200/`.
 //!
-//! - Fixtures `tests/stl/*.st`: a chart the target accepts has its expected program beside it
-//!   as `*.stl`; a chart it refuses lists the expected diagnostics inline (`(*! SFC0812 *)` on
-//!   the line where each starts) and keeps their rendering as `*.stderr`. Both files are
-//!   rewritten with `UPDATE_EXPECT=1`.
-//! - Differential test: every accepted fixture and a few hundred random block-structured charts
-//!   run in the simulator and, as generated statement list, in the S7-200 interpreter of
-//!   `s7200/` with the same random inputs and scan period; active steps, every variable and
-//!   every action's `Q`/`A` must agree after every scan, scan 0 included.
-//! - The interpreter itself is checked on hand-written programs.
+//! - Fixtures `tests/stl/*.st`: a chart the target accepts has its expected programs beside it
+//!   (`*.stl` set/reset, `*.scr.stl` SCR); a chart it refuses lists the expected diagnostics
+//!   inline (`(*! SFC0812 *)` on the line where each starts) and keeps their rendering as
+//!   `*.stderr`. Expectation files are rewritten with `UPDATE_EXPECT=1`.
+//! - Differential tests, for both methods: every accepted fixture and 300 random charts (with
+//!   timers, counters and integers) run in the simulator and, as generated statement list, in
+//!   the S7-200 model with the same random inputs; active steps, every variable, counter and
+//!   action flag must agree after every scan, scan 0 included. Scan periods are multiples of
+//!   100 ms and also not (30, 70, 130, 250 ms, with the time base at an arbitrary phase): the
+//!   model's 100 ms timers then count the ticks of the CPU's time base, so the simulator runs
+//!   on that clock (`scan_at`, time = the ticks since the first scan × 100 ms) — the program
+//!   must be exactly the chart with step times in whole ticks. Each timer and counter
+//!   instruction must run at most once per scan.
 
 mod s7200;
 
-use s7200::{parse, Plc};
-use sfc_codegen::stl::build_stl;
+use s7200::{parse, Plc, ScrModel, ScrtReset};
+use sfc_codegen::stl::{build_stl, StlMethod, StlOptions, StlProgram};
 use sfc_diagnostics::{render_human, Diagnostic, RenderOptions};
 use sfc_model::{check_source, CheckOptions};
 use sfc_sim::{SimOptions, Simulation, Value};
 use std::collections::BTreeMap;
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
+
+const MS: i64 = 1000;
+const METHODS: [StlMethod; 2] = [StlMethod::SetReset, StlMethod::Scr];
 
 // ---------------------------------------------------------------------------------------------
 // Helpers
@@ -39,10 +46,10 @@ fn fixtures() -> Vec<PathBuf> {
     out
 }
 
-fn build(name: &str, text: &str) -> (sfc_model::Checked, Result<String, Vec<Diagnostic>>) {
-    let checked = check_source(0, name, text, &CheckOptions { keep_types: true, ..Default::default() });
+fn build(name: &str, text: &str, method: StlMethod) -> (sfc_model::Checked, Result<StlProgram, Vec<Diagnostic>>) {
+    let checked = check_source(0, name, text, &CheckOptions::default());
     let result = match checked.charts.first() {
-        Some(chart) => build_stl(&checked, chart),
+        Some(chart) => build_stl(&checked, chart, StlOptions { method }),
         None => Err(Vec::new()),
     };
     (checked, result)
@@ -56,6 +63,8 @@ struct Alloc {
     steps: Vec<(String, String)>,
     /// `Action.Q` / `Action.A` bits.
     flags: Vec<(String, String)>,
+    /// Counter instances: name, address, kind.
+    counters: Vec<(String, String, String)>,
 }
 
 fn allocation(stl: &str) -> Alloc {
@@ -73,7 +82,10 @@ fn allocation(stl: &str) -> Alloc {
         match kind {
             "var" => a.vars.push((name, addr, rest.contains(", input"))),
             "step" => a.steps.push((name, addr)),
-            "flag" if name.ends_with(".Q") || name.ends_with(".A") => a.flags.push((name, addr)),
+            "flag" if name.ends_with(".Q") || name.ends_with(".A") || name.ends_with(".QD") => {
+                a.flags.push((name, addr))
+            }
+            "counter" => a.counters.push((name, addr, f.get(3).copied().unwrap_or("").to_string())),
             _ => {}
         }
     }
@@ -112,44 +124,119 @@ struct Coverage {
     /// Changes of compared variables and action flags from one scan to the next.
     changes: usize,
     compared: usize,
+    /// Changes of integer variables and counters.
+    number_changes: usize,
     /// `unsafe` and `conflict` events of the simulator.
     unsafe_events: usize,
     conflicts: usize,
+    timer_runs: usize,
 }
 
-/// Runs `text` in the simulator and its statement list in the interpreter for `scans` scans
-/// with random inputs; the first difference is an error with the history that led to it.
-fn differential(name: &str, text: &str, stl: &str, period: i64, scans: usize, seed: u64) -> Result<Coverage, String> {
-    let opts = SimOptions { period, ..Default::default() };
-    let mut sim = match Simulation::from_source(name, text, None, opts) {
+/// How one differential run is made.
+#[derive(Debug, Clone, Copy)]
+struct Run {
+    period: i64,
+    /// The S7-200 time base's offset from the first scan.
+    phase: i64,
+    scans: usize,
+    seed: u64,
+    scr_model: ScrModel,
+    scrt_reset: ScrtReset,
+}
+
+impl Run {
+    fn new(period: i64, scans: usize, seed: u64) -> Run {
+        Run { period, phase: 0, scans, seed, scr_model: ScrModel::PowerOff, scrt_reset: ScrtReset::Immediate }
+    }
+}
+
+/// The runs of a fixture or random chart: periods that are multiples of 100 ms and periods
+/// that are not, with both readings of the SCR instructions.
+fn runs(seed: u64, scans: usize) -> Vec<Run> {
+    let mut out = Vec::new();
+    for (k, (period, phase)) in
+        [(100, 0), (200, 0), (30, 0), (70, 40), (130, 90), (250, 10), (100, 55)].into_iter().enumerate()
+    {
+        let mut r = Run::new(period * MS, scans, seed * 31 + k as u64);
+        r.phase = phase * MS;
+        if k % 2 == 1 {
+            r.scr_model = ScrModel::Skip;
+        }
+        if k % 3 == 2 {
+            r.scrt_reset = ScrtReset::AtScre;
+        }
+        out.push(r);
+    }
+    out
+}
+
+fn mask(addr: &str) -> u64 {
+    if addr.contains('D') {
+        0xFFFF_FFFF
+    } else {
+        0xFFFF
+    }
+}
+
+/// Runs `text` in the simulator and its statement list in the S7-200 model for `run.scans`
+/// scans with random inputs; the first difference is an error with the history that led to it.
+fn differential(name: &str, text: &str, stl: &str, run: Run) -> Result<Coverage, String> {
+    differential_pou(name, text, None, stl, run)
+}
+
+/// [`differential`] of the POU `pou` of the file.
+fn differential_pou(name: &str, text: &str, pou: Option<&str>, stl: &str, run: Run) -> Result<Coverage, String> {
+    let opts = SimOptions { period: run.period, ..Default::default() };
+    let mut sim = match Simulation::from_source(name, text, pou, opts) {
         Ok(s) => s,
         Err((_, d)) => return Err(format!("{name}: the simulator refuses the chart: {d:?}")),
     };
-    let prog = parse(stl).map_err(|e| format!("{name}: the interpreter refuses the program: {e}"))?;
+    let prog = parse(stl).map_err(|e| format!("{name}: the model refuses the program: {e}"))?;
     let mut plc = Plc::new(prog);
+    plc.phase = run.phase;
+    plc.scr_model = run.scr_model;
+    plc.scrt_reset = run.scrt_reset;
     let alloc = allocation(stl);
+    let is_word = |a: &str| a.contains('W') || a.contains('D');
     let inputs: Vec<&(String, String, bool)> = alloc.vars.iter().filter(|v| v.2).collect();
     let outputs: Vec<&(String, String, bool)> = alloc.vars.iter().filter(|v| !v.2).collect();
-    let mut rng = Rng::new(seed);
-    let mut values: Vec<bool> = inputs.iter().map(|_| rng.chance(50)).collect();
+    let mut rng = Rng::new(run.seed);
+    let mut values: Vec<i64> =
+        inputs.iter().map(|v| if is_word(&v.1) { rng.below(20) as i64 } else { i64::from(rng.chance(50)) }).collect();
     let mut history = String::new();
     let mut cov = Coverage { steps: alloc.steps.len(), ..Default::default() };
-    let mut last: Vec<bool> = Vec::new();
-    for k in 0..scans {
+    let mut last: Vec<i64> = Vec::new();
+    let mut last_numbers: Vec<i64> = Vec::new();
+    let ticks = |t: i64| (t + run.phase).div_euclid(100 * MS);
+    for k in 0..run.scans {
         for (i, (vname, addr, _)) in inputs.iter().enumerate() {
             if k > 0 && rng.chance(30) {
-                values[i] = !values[i];
+                values[i] = if is_word(addr) { rng.below(20) as i64 } else { 1 - values[i] };
             }
-            sim.set(vname, Value::Bool(values[i])).map_err(|e| format!("{name}: set {vname}: {e}"))?;
-            plc.set(addr, values[i]).map_err(|e| format!("{name}: set {addr}: {e}"))?;
+            if is_word(addr) {
+                sim.set(vname, Value::Int(values[i])).map_err(|e| format!("{name}: set {vname}: {e}"))?;
+                plc.set_value(addr, values[i]).map_err(|e| format!("{name}: set {addr}: {e}"))?;
+            } else {
+                sim.set(vname, Value::Bool(values[i] == 1)).map_err(|e| format!("{name}: set {vname}: {e}"))?;
+                plc.set(addr, values[i] == 1).map_err(|e| format!("{name}: set {addr}: {e}"))?;
+            }
         }
-        let record = sim.scan().clone();
+        let t = k as i64 * run.period;
+        // The simulator on the S7-200's clock: whole 100 ms ticks since the first scan.
+        let record = sim.scan_at((ticks(t) - ticks(0)) * 100 * MS).clone();
         if let Some(e) = sim.error() {
             return Err(format!("{name}: simulator error in scan {k}: {}", e.message));
         }
-        plc.scan(k as i64 * period).map_err(|e| format!("{name}: interpreter error in scan {k}: {e}"))?;
-        let ins: Vec<String> =
-            inputs.iter().zip(&values).map(|((n, _, _), v)| format!("{n}={}", u8::from(*v))).collect();
+        plc.scan(t).map_err(|e| format!("{name}: S7-200 error in scan {k}: {e}"))?;
+        for (&(kind, n), &count) in plc.executions() {
+            if count > 1 {
+                return Err(format!("{name}: scan {k}: the instruction of {kind}{n} ran {count} times"));
+            }
+            if kind == 'T' {
+                cov.timer_runs += 1;
+            }
+        }
+        let ins: Vec<String> = inputs.iter().zip(&values).map(|((n, _, _), v)| format!("{n}={v}")).collect();
         let mut plc_active: Vec<String> = Vec::new();
         for (s, addr) in &alloc.steps {
             if plc.get(addr)? {
@@ -159,7 +246,8 @@ fn differential(name: &str, text: &str, stl: &str, period: i64, scans: usize, se
         plc_active.sort();
         let _ = writeln!(
             history,
-            "scan {k}: inputs {} | sim active {:?} fired {:?}",
+            "scan {k} (t = {} ms): inputs {} | sim active {:?} fired {:?}",
+            t / MS,
             ins.join(" "),
             record.active,
             record.fired
@@ -178,21 +266,61 @@ fn differential(name: &str, text: &str, stl: &str, period: i64, scans: usize, se
             diffs.push(format!("active steps: sim {:?}, plc {:?}", record.active, plc_active));
         }
         let mut now = Vec::new();
+        let mut numbers = Vec::new();
         for (vname, addr) in outputs.iter().map(|v| (&v.0, &v.1)).chain(alloc.flags.iter().map(|f| (&f.0, &f.1))) {
-            let s = sim.get(vname).and_then(|v| v.as_bool());
+            if is_word(addr) {
+                let s = sim.get(vname).and_then(|v| v.as_int());
+                let p = plc.value(addr)?;
+                let m = mask(addr);
+                if s.map(|s| s as u64 & m) != Some(p as u64 & m) {
+                    diffs.push(format!("{vname} ({addr}): sim {s:?}, plc {p}"));
+                }
+                numbers.push(p);
+                now.push(p);
+            } else {
+                let s = sim.get(vname).and_then(|v| v.as_bool());
+                let p = plc.get(addr)?;
+                if s != Some(p) {
+                    diffs.push(format!("{vname} ({addr}): sim {s:?}, plc {p}"));
+                }
+                now.push(i64::from(p));
+            }
+            cov.compared += 1;
+        }
+        for (cname, addr, kind) in &alloc.counters {
+            let (q, cv) = match kind.as_str() {
+                "CTUD" => ("QU", true),
+                "CTD" => ("Q", false),
+                _ => ("Q", true),
+            };
+            let s = sim.get(&format!("{cname}.{q}")).and_then(|v| v.as_bool());
             let p = plc.get(addr)?;
             if s != Some(p) {
-                diffs.push(format!("{vname} ({addr}): sim {s:?}, plc {p}"));
+                diffs.push(format!("{cname}.{q} ({addr}): sim {s:?}, plc {p}"));
             }
-            now.push(p);
+            if cv {
+                let s = sim.get(&format!("{cname}.CV")).and_then(|v| v.as_int());
+                let p = plc.value(addr)?;
+                if s != Some(p) {
+                    diffs.push(format!("{cname}.CV ({addr}): sim {s:?}, plc {p}"));
+                }
+                numbers.push(p);
+            }
+            now.push(i64::from(p));
             cov.compared += 1;
         }
         cov.changes += now.iter().zip(&last).filter(|(a, b)| a != b).count();
+        cov.number_changes += usize::from(numbers.iter().zip(&last_numbers).any(|(a, b)| a != b));
         last = now;
+        last_numbers = numbers;
         if !diffs.is_empty() {
             return Err(format!(
-                "{name}: scan {k} (t = {} ms) differs:\n  {}\nhistory:\n{history}",
-                k as i64 * period / 1000,
+                "{name}: scan {k} (t = {} ms, period {} ms, phase {} ms, {:?}/{:?}) differs:\n  {}\nhistory:\n{history}",
+                t / MS,
+                run.period / MS,
+                run.phase / MS,
+                run.scr_model,
+                run.scrt_reset,
                 diffs.join("\n  ")
             ));
         }
@@ -237,6 +365,10 @@ fn expectations(text: &str) -> BTreeMap<(usize, String), usize> {
     out
 }
 
+fn render(diags: &[Diagnostic], file: &sfc_diagnostics::SourceFile) -> String {
+    diags.iter().map(|d| render_human(d, std::slice::from_ref(file), RenderOptions::default()) + "\n").collect()
+}
+
 // ---------------------------------------------------------------------------------------------
 // Fixtures
 
@@ -248,42 +380,62 @@ fn fixtures_build_or_refuse_as_expected() {
     for path in all {
         let text = std::fs::read_to_string(&path).expect("fixture is UTF-8");
         let name = display_name(&path);
-        let (checked, result) = build(&name, &text);
         let expected = expectations(&text);
-        match result {
-            Ok(stl) => {
-                if !expected.is_empty() {
-                    failures.push(format!("{name}: expected diagnostics {expected:?}, but the program was built"));
-                }
-                if let Err(e) = expect_file(&path.with_extension("stl"), &stl) {
-                    failures.push(e);
-                }
-            }
-            Err(diags) => {
-                if diags.is_empty() {
-                    failures.push(format!("{name}: refused without a diagnostic"));
-                    continue;
-                }
-                let mut got = BTreeMap::new();
-                for d in &diags {
-                    let line = checked.file.line_col(d.span.start).line as usize;
-                    *got.entry((line, d.code.to_string())).or_insert(0) += 1;
-                    if !d.code.starts_with("SFC081") {
-                        failures.push(format!("{name}: unexpected non-STL diagnostic {} {}", d.code, d.message));
+        for method in METHODS {
+            let (checked, result) = build(&name, &text, method);
+            let ext = match method {
+                StlMethod::SetReset => "stl",
+                StlMethod::Scr => "scr.stl",
+            };
+            match result {
+                Ok(p) => {
+                    if !expected.is_empty() {
+                        failures.push(format!("{name}: expected diagnostics {expected:?}, but the program was built"));
                     }
-                    if d.element.is_none() && d.code != "SFC0815" {
-                        failures.push(format!("{name}: {} has no element: {}", d.code, d.message));
+                    let mut out = p.text.clone();
+                    if !p.warnings.is_empty() {
+                        out.push_str("// --- warnings\n");
+                        for line in render(&p.warnings, &checked.file).lines() {
+                            out.push_str("// ");
+                            out.push_str(line);
+                            out.push('\n');
+                        }
+                    }
+                    if let Err(e) = expect_file(&path.with_extension(ext), &out) {
+                        failures.push(e);
+                    }
+                    if !p.text.is_ascii() {
+                        failures.push(format!("{name}: the program is not ASCII"));
+                    }
+                    if !p.symbols.starts_with("Symbol,Address,Comment\n") {
+                        failures.push(format!("{name}: symbol table header"));
                     }
                 }
-                if got != expected {
-                    failures.push(format!("{name}: diagnostics {got:?}, expected {expected:?}"));
-                }
-                let rendered: String = diags
-                    .iter()
-                    .map(|d| render_human(d, std::slice::from_ref(&checked.file), RenderOptions::default()) + "\n")
-                    .collect();
-                if let Err(e) = expect_file(&path.with_extension("stderr"), &rendered) {
-                    failures.push(e);
+                Err(diags) => {
+                    if method == StlMethod::Scr {
+                        continue; // the same refusal, reported once
+                    }
+                    if diags.is_empty() {
+                        failures.push(format!("{name}: refused without a diagnostic"));
+                        continue;
+                    }
+                    let mut got = BTreeMap::new();
+                    for d in &diags {
+                        let line = checked.file.line_col(d.span.start).line as usize;
+                        *got.entry((line, d.code.to_string())).or_insert(0) += 1;
+                        if !d.code.starts_with("SFC081") {
+                            failures.push(format!("{name}: unexpected non-STL diagnostic {} {}", d.code, d.message));
+                        }
+                        if d.element.is_none() && d.code != "SFC0815" {
+                            failures.push(format!("{name}: {} has no element: {}", d.code, d.message));
+                        }
+                    }
+                    if got != expected {
+                        failures.push(format!("{name}: diagnostics {got:?}, expected {expected:?}"));
+                    }
+                    if let Err(e) = expect_file(&path.with_extension("stderr"), &render(&diags, &checked.file)) {
+                        failures.push(e);
+                    }
                 }
             }
         }
@@ -292,28 +444,30 @@ fn fixtures_build_or_refuse_as_expected() {
 }
 
 #[test]
-fn accepted_fixtures_agree_with_the_simulator() {
+fn accepted_fixtures_agree_with_the_s7200_model() {
     let mut ran = 0;
     for path in fixtures() {
         let text = std::fs::read_to_string(&path).expect("fixture is UTF-8");
         let name = display_name(&path);
-        let Ok(stl) = build(&name, &text).1 else { continue };
-        let mut reached = std::collections::BTreeSet::new();
-        let mut steps = 0;
-        for (seed, period) in [(1, 100_000), (2, 100_000), (3, 200_000), (4, 300_000), (5, 100_000)] {
-            match differential(&name, &text, &stl, period, 400, seed) {
-                Ok(c) => {
-                    reached.extend(c.steps_active);
-                    steps = c.steps;
+        for method in METHODS {
+            let Ok(p) = build(&name, &text, method).1 else { continue };
+            let mut reached = std::collections::BTreeSet::new();
+            let mut steps = 0;
+            for run in runs(ran as u64 + 1, 400) {
+                match differential(&name, &text, &p.text, run) {
+                    Ok(c) => {
+                        reached.extend(c.steps_active);
+                        steps = c.steps;
+                    }
+                    Err(e) => panic!("{method:?}: {e}\n--- program\n{}", p.text),
                 }
-                Err(e) => panic!("{e}\n--- program\n{stl}"),
             }
+            eprintln!("{name} ({method:?}): {} of {steps} steps reached", reached.len());
+            assert_eq!(reached.len(), steps, "{name}: random inputs did not reach every step");
+            ran += 1;
         }
-        eprintln!("{name}: {} of {steps} steps reached", reached.len());
-        assert_eq!(reached.len(), steps, "{name}: random inputs did not reach every step");
-        ran += 1;
     }
-    assert!(ran >= 6, "only {ran} fixtures were accepted");
+    assert!(ran >= 16, "only {ran} fixture programs were accepted");
 }
 
 #[test]
@@ -321,7 +475,7 @@ fn the_refused_fixtures_are_refused_by_this_target_only() {
     // A refused fixture must still be a valid chart: the refusal is the target's.
     for path in fixtures() {
         let text = std::fs::read_to_string(&path).expect("fixture is UTF-8");
-        let (checked, result) = build(&display_name(&path), &text);
+        let (checked, result) = build(&display_name(&path), &text, StlMethod::SetReset);
         if result.is_err() {
             assert!(!checked.has_errors(), "{}: {:?}", path.display(), checked.diagnostics);
         }
@@ -332,18 +486,24 @@ fn the_refused_fixtures_are_refused_by_this_target_only() {
 // Random charts
 
 /// A random block-structured chart: sequences, selections (with and without PRIORITY),
-/// simultaneous branches, loops back, over BOOL inputs (VAR_INPUT and `AT %IX`), with N, S,
-/// R, P, L, D, SD, DS, SL, P1, P0 associations to BOOL outputs and to actions whose bodies
-/// assign BOOL expressions (also under IF), guards with AND/OR/NOT/XOR/=/<>, step flags,
-/// action flags and step-time comparisons (multiples of 100 ms).
+/// simultaneous branches, loops back, over BOOL and INT inputs (VAR_INPUT and `AT %IX`), with
+/// N, S, R, P, L, D, SD, DS, SL, P1, P0 associations to BOOL outputs and to actions whose bodies
+/// assign BOOL and integer expressions (also under IF) and call counters (CTU, CTD, CTUD),
+/// guards with AND/OR/NOT/XOR/=/<>, integer comparisons, step flags, action flags, counter
+/// outputs, step-time comparisons (also not multiples of 100 ms, also against a TIME variable),
+/// and supervised steps whose `SFCError` a guard reads.
 struct ChartGen {
     rng: Rng,
     inputs: Vec<String>,
     outputs: Vec<(String, Option<(&'static str, u32)>)>,
     actions: Vec<(String, Option<(&'static str, u32)>)>,
+    /// Counters: name, kind, the action that calls it.
+    counters: Vec<(String, &'static str, usize)>,
     steps: Vec<(String, bool, Vec<String>)>,
+    timeouts: Vec<Option<u32>>,
     transitions: Vec<String>,
     seen: std::collections::HashSet<(Vec<usize>, Vec<usize>, String)>,
+    supervised: bool,
 }
 
 const TIMED: [&str; 5] = ["L", "D", "SD", "DS", "SL"];
@@ -365,7 +525,27 @@ impl ChartGen {
             let timed = rng.chance(40).then(|| (TIMED[rng.below(5)], rng.below(6) as u32));
             actions.push((format!("Act{i}"), timed));
         }
-        ChartGen { rng, inputs, outputs, actions, steps: Vec::new(), transitions: Vec::new(), seen: Default::default() }
+        let mut counters = Vec::new();
+        if n_act > 0 {
+            for (i, kind) in ["CTU", "CTD", "CTUD"].into_iter().enumerate() {
+                if rng.chance(35) {
+                    let a = rng.below(n_act);
+                    counters.push((format!("Cnt{i}"), kind, a));
+                }
+            }
+        }
+        ChartGen {
+            rng,
+            inputs,
+            outputs,
+            actions,
+            counters,
+            steps: Vec::new(),
+            timeouts: Vec::new(),
+            transitions: Vec::new(),
+            seen: Default::default(),
+            supervised: false,
+        }
     }
 
     fn new_step(&mut self, initial: bool) -> usize {
@@ -380,15 +560,25 @@ impl ChartGen {
             };
             let mut quals = vec!["N", "N", "S", "R", "P"];
             if to_action {
-                quals.extend(["P1", "P0"]);
+                quals.extend(["P1", "P0", "N"]);
             }
             let a = match timed {
-                Some((q, d)) if self.rng.chance(40) => format!("{name}({q}, T#{}ms)", d * 100),
+                Some((q, d)) if self.rng.chance(40) => {
+                    // Also durations that are not multiples of 100 ms, and a TIME variable.
+                    if d == 5 {
+                        format!("{name}({q}, Delay)")
+                    } else {
+                        format!("{name}({q}, T#{}ms)", d * 100 + if d % 2 == 1 { 50 } else { 0 })
+                    }
+                }
                 _ => format!("{name}({})", quals[self.rng.below(quals.len())]),
             };
             assocs.push(a);
         }
         self.steps.push((format!("S{i}"), initial, assocs));
+        let timeout = self.rng.chance(12).then(|| 3 + self.rng.below(6) as u32);
+        self.supervised |= timeout.is_some();
+        self.timeouts.push(timeout);
         i
     }
 
@@ -397,11 +587,26 @@ impl ChartGen {
         let op = ops[self.rng.below(ops.len())];
         // `< T#0s` never holds: lower bounds may be 0, upper bounds start at 100 ms.
         let least = usize::from(op.starts_with('<'));
-        format!("(S{step}.T {op} T#{}ms)", (least + self.rng.below(9 - least)) * 100)
+        let odd = if !exact && self.rng.chance(30) { 50 } else { 0 };
+        if !exact && self.rng.chance(10) {
+            return format!("(S{step}.T {op} Delay)");
+        }
+        format!("(S{step}.T {op} T#{}ms)", (least + self.rng.below(9 - least)) * 100 + odd)
+    }
+
+    fn int_cmp(&mut self) -> String {
+        let ops = ["<", "<=", ">", ">=", "=", "<>"];
+        let op = ops[self.rng.below(ops.len())];
+        match self.rng.below(4) {
+            0 => format!("(Level {op} {})", self.rng.below(20)),
+            1 => format!("(Count {op} {})", self.rng.below(6)),
+            2 => format!("(Total {op} DINT#{})", self.rng.below(30)),
+            _ => format!("(Level + Count {op} 12)"),
+        }
     }
 
     fn leaf(&mut self, from: usize) -> String {
-        match self.rng.below(17) {
+        match self.rng.below(20) {
             0..=6 => self.inputs[self.rng.below(self.inputs.len())].clone(),
             7 | 8 => format!("NOT {}", self.inputs[self.rng.below(self.inputs.len())]),
             9 | 10 => self.time_cmp(from, false),
@@ -428,6 +633,19 @@ impl ChartGen {
             }
             15 => self.outputs[self.rng.below(self.outputs.len())].0.clone(),
             16 if self.rng.chance(30) => "TRUE".to_string(),
+            17 | 18 => self.int_cmp(),
+            19 if !self.counters.is_empty() => {
+                let (n, kind, _) = self.counters[self.rng.below(self.counters.len())].clone();
+                match kind {
+                    "CTUD" => match self.rng.below(3) {
+                        0 => format!("{n}.QU"),
+                        1 => format!("{n}.QD"),
+                        _ => format!("({n}.CV > 1)"),
+                    },
+                    "CTU" if self.rng.chance(50) => format!("({n}.CV >= 2)"),
+                    _ => format!("{n}.Q"),
+                }
+            }
             _ => self.inputs[self.rng.below(self.inputs.len())].clone(),
         }
     }
@@ -448,8 +666,7 @@ impl ChartGen {
     }
 
     fn transition(&mut self, from: Vec<usize>, to: Vec<usize>, priority: Option<u32>) {
-        let guard = None;
-        self.transition_with(from, to, priority, guard);
+        self.transition_with(from, to, priority, None);
     }
 
     fn transition_with(&mut self, from: Vec<usize>, to: Vec<usize>, priority: Option<u32>, fixed: Option<String>) {
@@ -462,6 +679,9 @@ impl ChartGen {
                 break;
             }
             guard = if self.rng.chance(8) { "TRUE".to_string() } else { self.expr(from[0], 2) };
+            if self.supervised && self.rng.chance(10) {
+                guard = format!("({guard}) AND NOT SFCError");
+            }
             if self.rng.chance(60) {
                 // An escape on two inputs (true in a quarter of the scans), so that most
                 // charts keep moving and the comparison covers most steps.
@@ -472,7 +692,7 @@ impl ChartGen {
             if attempt == 19 {
                 guard = format!("({guard}) OR (S{}.T > T#{}ms)", from[0], (n + 1) * 100);
             }
-            // SFC0215: the same steps and condition twice is an error.
+            // SFC0215: the same steps and condition twice is a warning (the copy never fires).
             if self.seen.insert((from.clone(), to.clone(), guard.clone())) {
                 break;
             }
@@ -553,24 +773,54 @@ impl ChartGen {
         cur
     }
 
-    fn body(&mut self) -> String {
-        let mut out = String::new();
-        for _ in 0..1 + self.rng.below(3) {
-            let s = self.rng.below(self.steps.len());
-            let target = self.outputs[self.rng.below(self.outputs.len())].0.clone();
-            if self.rng.chance(25) {
+    fn statement(&mut self, s: usize) -> String {
+        let target = self.outputs[self.rng.below(self.outputs.len())].0.clone();
+        match self.rng.below(9) {
+            0 => {
                 let c = self.expr(s, 2);
                 let v = self.expr(s, 2);
                 let other = self.outputs[self.rng.below(self.outputs.len())].0.clone();
-                let _ = writeln!(out, "        IF {c} THEN\n            {target} := {v};");
+                let mut out = format!("        IF {c} THEN\n            {target} := {v};\n");
                 if self.rng.chance(50) {
                     let c2 = self.expr(s, 1);
-                    let _ = writeln!(out, "        ELSIF {c2} THEN\n            {other} := NOT {other};");
+                    let _ = writeln!(out, "        ELSIF {c2} THEN\n            Count := Count - 1;");
                 }
                 let _ = writeln!(out, "        ELSE\n            {other} := TRUE;\n        END_IF;");
-            } else {
+                out
+            }
+            1 => "        Count := Count + 1;\n".into(),
+            2 => format!("        Total := Total + Count * {};\n", 1 + self.rng.below(3)),
+            3 => "        Count := (Count + Level) MOD 7;\n".into(),
+            4 => format!("        Total := Total - {};\n", self.rng.below(100)),
+            5 => "        Count := Level / 3 - Count;\n".into(),
+            _ => {
                 let v = self.expr(s, 2);
-                let _ = writeln!(out, "        {target} := {v};");
+                format!("        {target} := {v};\n")
+            }
+        }
+    }
+
+    fn body(&mut self, action: usize) -> String {
+        let mut out = String::new();
+        for _ in 0..1 + self.rng.below(3) {
+            let s = self.rng.below(self.steps.len());
+            out.push_str(&self.statement(s));
+        }
+        let calls: Vec<(String, &'static str)> =
+            self.counters.iter().filter(|c| c.2 == action).map(|c| (c.0.clone(), c.1)).collect();
+        for (n, kind) in calls {
+            let a = self.inputs[self.rng.below(self.inputs.len())].clone();
+            let b = self.inputs[self.rng.below(self.inputs.len())].clone();
+            let call = match kind {
+                "CTU" => format!("{n}(CU := {a}, R := {b} AND NOT {a}, PV := 3);"),
+                "CTD" => format!("{n}(CD := {a}, LD := {b} AND NOT {a}, PV := 2);"),
+                _ => format!("{n}(CU := {a}, CD := {b}, R := Count > 5, PV := 2);"),
+            };
+            if self.rng.chance(30) {
+                let c = self.expr(0, 1);
+                let _ = writeln!(out, "        IF {c} THEN\n            {call}\n        END_IF;");
+            } else {
+                let _ = writeln!(out, "        {call}");
             }
         }
         out
@@ -595,14 +845,18 @@ impl ChartGen {
             let e = self.block(s, 1);
             self.transition(vec![e], vec![s], None);
         }
-        let mut text = format!("PROGRAM Random{seed}\n    VAR_INPUT\n");
+        let mut text = format!("PROGRAM Random{seed}\n    VAR_INPUT\n        Level : INT;\n");
         let located: Vec<bool> = self.inputs.iter().map(|_| self.rng.chance(40)).collect();
         for (i, n) in self.inputs.iter().enumerate() {
             if !located[i] {
                 let _ = writeln!(text, "        {n} : BOOL;");
             }
         }
-        text.push_str("    END_VAR\n    VAR\n");
+        text.push_str("    END_VAR\n    VAR\n        Count : INT;\n        Total : DINT := 5;\n");
+        text.push_str("        Delay : TIME := T#300ms;\n");
+        for (n, kind, _) in &self.counters {
+            let _ = writeln!(text, "        {n} : {kind};");
+        }
         for (i, n) in self.inputs.iter().enumerate() {
             if located[i] {
                 let _ = writeln!(text, "        {n} AT %IX0.{i} : BOOL;");
@@ -622,7 +876,10 @@ impl ChartGen {
             }
         }
         text.push_str("    END_VAR\n\n");
-        for (name, initial, assocs) in &self.steps {
+        for (i, (name, initial, assocs)) in self.steps.iter().enumerate() {
+            if let Some(t) = self.timeouts[i] {
+                let _ = writeln!(text, "    {{attribute 'sfc.timeout' := 'T#{}ms'}}", t * 100);
+            }
             let kw = if *initial { "INITIAL_STEP" } else { "STEP" };
             let _ = writeln!(text, "    {kw} {name}:");
             for a in assocs {
@@ -635,8 +892,8 @@ impl ChartGen {
             text.push('\n');
         }
         let names: Vec<String> = self.actions.iter().map(|a| a.0.clone()).collect();
-        for name in names {
-            let body = self.body();
+        for (k, name) in names.into_iter().enumerate() {
+            let body = self.body(k);
             let _ = writeln!(text, "    ACTION {name}:\n{body}    END_ACTION\n");
         }
         text.push_str("END_PROGRAM\n");
@@ -645,57 +902,68 @@ impl ChartGen {
 }
 
 #[test]
-fn random_charts_agree_with_the_simulator() {
+fn random_charts_agree_with_the_s7200_model() {
     let charts: u64 = std::env::var("STL_RANDOM_CHARTS").ok().and_then(|v| v.parse().ok()).unwrap_or(300);
-    let (mut scans_total, mut fired, mut steps, mut active, mut changes, mut compared) = (0, 0, 0, 0, 0, 0);
-    let (mut unsafe_events, mut conflicts) = (0, 0);
-    for seed in 1..=charts {
-        let text = ChartGen::new(seed).generate(seed);
-        let name = format!("random{seed}.st");
-        if std::env::var("STL_DUMP").ok().and_then(|v| v.parse::<u64>().ok()) == Some(seed) {
-            eprintln!("{text}");
-        }
-        let (checked, result) = build(&name, &text);
-        assert!(!checked.has_errors(), "generated chart {seed} does not check: {:?}\n{text}", checked.diagnostics);
-        let stl = match result {
-            Ok(s) => s,
-            Err(d) => panic!("random chart {seed} refused: {d:?}\n{text}"),
-        };
-        let period = [100_000, 100_000, 200_000][(seed % 3) as usize];
-        match differential(&name, &text, &stl, period, 400, seed * 7919) {
-            Ok(c) => {
-                fired += c.fired;
-                steps += c.steps;
-                active += c.steps_active.len();
-                if std::env::var_os("STL_DEBUG").is_some() {
-                    eprintln!("chart {seed}: {} of {} steps, {} firings", c.steps_active.len(), c.steps, c.fired);
-                }
-                changes += c.changes;
-                compared += c.compared;
-                unsafe_events += c.unsafe_events;
-                conflicts += c.conflicts;
+    let dump = std::env::var("STL_DUMP").ok().and_then(|v| v.parse::<u64>().ok());
+    for method in METHODS {
+        let (mut scans_total, mut fired, mut steps, mut active, mut changes, mut compared) = (0, 0, 0, 0, 0, 0);
+        let (mut unsafe_events, mut conflicts, mut numbers, mut counters, mut timer_runs) = (0, 0, 0, 0, 0);
+        let mut built = 0;
+        for seed in 1..=charts {
+            let text = ChartGen::new(seed).generate(seed);
+            let name = format!("random{seed}.st");
+            if dump == Some(seed) {
+                eprintln!("{text}");
             }
-            Err(e) => panic!("{e}\n--- chart\n{text}\n--- program\n{stl}"),
+            let (checked, result) = build(&name, &text, method);
+            assert!(!checked.has_errors(), "generated chart {seed} does not check: {:?}\n{text}", checked.diagnostics);
+            let p = match result {
+                Ok(p) => p,
+                Err(d) => panic!("random chart {seed} refused: {d:?}\n{text}"),
+            };
+            built += 1;
+            counters += allocation(&p.text).counters.len();
+            // Each chart on one period; over the charts every kind of period and reading.
+            let all = runs(seed, 300);
+            let run = all[(seed as usize) % all.len()];
+            match differential(&name, &text, &p.text, run) {
+                Ok(c) => {
+                    fired += c.fired;
+                    steps += c.steps;
+                    active += c.steps_active.len();
+                    changes += c.changes;
+                    compared += c.compared;
+                    numbers += c.number_changes;
+                    unsafe_events += c.unsafe_events;
+                    conflicts += c.conflicts;
+                    timer_runs += c.timer_runs;
+                }
+                Err(e) => panic!("{method:?}: {e}\n--- chart\n{text}\n--- program\n{}", p.text),
+            }
+            scans_total += run.scans;
         }
-        scans_total += 400;
+        eprintln!(
+            "{method:?}: {built} random charts, {scans_total} scans: {fired} firings, {active} of {steps} steps \
+             reached, {changes} changes in {compared} compared values ({numbers} scans with integer changes), \
+             {counters} counters, {timer_runs} timer executions, {unsafe_events} unsafe and {conflicts} conflict \
+             events"
+        );
+        // The comparison must have something to compare: charts that evolve and values that move.
+        assert!(fired > scans_total / 4, "too few firings: {fired}");
+        assert!(active * 10 > steps * 6, "too few steps reached: {active} of {steps}");
+        assert!(changes * 20 > compared, "outputs hardly change: {changes} of {compared}");
+        assert!(numbers > scans_total / 20, "integers hardly change: {numbers}");
+        assert!(counters > charts as usize / 3 && timer_runs > 0, "too few counters or timers");
+        assert!(unsafe_events > 0 && conflicts > 0, "no unsafe or no conflicting situation was compared");
     }
-    eprintln!(
-        "{charts} random charts, {scans_total} scans: {fired} firings, {active} of {steps} steps reached, \
-         {changes} changes in {compared} compared values, {unsafe_events} unsafe and {conflicts} conflict events"
-    );
-    // The comparison must have something to compare: charts that evolve and outputs that move.
-    assert!(fired > scans_total / 4, "too few firings: {fired}");
-    assert!(active * 10 > steps * 6, "too few steps reached: {active} of {steps}");
-    assert!(changes * 20 > compared, "outputs hardly change: {changes} of {compared}");
-    assert!(unsafe_events > 0 && conflicts > 0, "no unsafe or no conflicting situation was compared");
 }
 
 /// The differential test must be able to fail: a program whose transitions see the steps they
-/// set in the same scan (the SCR trap) is caught.
+/// set in the same scan (the SCR trap) is caught, and so is a timer executed twice per scan.
 #[test]
 fn the_differential_test_detects_a_wrong_program() {
     let text = std::fs::read_to_string(fixture_dir().join("carwash_textbook.st")).expect("fixture");
-    let stl = build("carwash_textbook.st", &text).1.expect("accepted");
+    let stl = build("carwash_textbook.st", &text, StlMethod::SetReset).1.expect("accepted").text;
     // Move the step networks before the transition networks: two evolutions per scan.
     let networks: Vec<&str> = stl.split("\nNETWORK ").collect();
     let (mut head, mut trans, mut steps, mut rest) = (Vec::new(), Vec::new(), Vec::new(), Vec::new());
@@ -712,154 +980,30 @@ fn the_differential_test_detects_a_wrong_program() {
     }
     let first = rest.remove(0);
     let wrong = [head, vec![first], steps, trans, rest].concat().join("\n");
-    let mut caught = 0;
-    for seed in 1..=5 {
-        if differential("wrong", &text, &wrong, 100_000, 200, seed).is_err() {
-            caught += 1;
-        }
-    }
-    assert!(caught > 0, "a program with two evolutions per scan passed the differential test");
-    // And a program with a wrong timer preset.
+    let caught = (1..=5).filter(|&seed| differential("wrong", &text, &wrong, Run::new(100 * MS, 200, seed)).is_err());
+    assert!(caught.count() > 0, "a program with two evolutions per scan passed the differential test");
+    // A wrong timer preset.
     let text = std::fs::read_to_string(fixture_dir().join("step_times.st")).expect("fixture");
-    let stl = build("step_times.st", &text).1.expect("accepted");
+    let stl = build("step_times.st", &text, StlMethod::SetReset).1.expect("accepted").text;
     let wrong = stl.replacen(", +", ", +1", 1);
     assert_ne!(wrong, stl);
     assert!(
-        (1..=5).any(|seed| differential("wrong", &text, &wrong, 100_000, 300, seed).is_err()),
+        (1..=5).any(|seed| differential("wrong", &text, &wrong, Run::new(100 * MS, 300, seed)).is_err()),
         "a wrong timer preset passed"
     );
-}
-
-// ---------------------------------------------------------------------------------------------
-// The interpreter on hand-written programs
-
-#[test]
-fn interpreter_logic_stack() {
-    let prog = parse(
-        "NETWORK 1\n\
-         LD I0.0\nLD I0.1\nO I0.2\nALD\n= Q0.0\n\
-         NETWORK 2\n\
-         LD I0.0\nLPS\nA I0.1\n= Q0.1\nLRD\nAN I0.1\n= Q0.2\nLPP\nNOT\n= Q0.3\n\
-         NETWORK 3\n\
-         LDN I0.0\nA I0.1\nLD I0.0\nAN I0.1\nOLD\n= Q0.4\n",
-    )
-    .expect("parses");
-    let mut plc = Plc::new(prog);
-    for (a, b, c) in [(false, false, false), (true, false, true), (true, true, false), (false, true, true)] {
-        plc.set("I0.0", a).unwrap();
-        plc.set("I0.1", b).unwrap();
-        plc.set("I0.2", c).unwrap();
-        plc.scan(0).unwrap();
-        assert_eq!(plc.get("Q0.0").unwrap(), a && (b || c));
-        assert_eq!(plc.get("Q0.1").unwrap(), a && b);
-        assert_eq!(plc.get("Q0.2").unwrap(), a && !b);
-        assert_eq!(plc.get("Q0.3").unwrap(), !a);
-        assert_eq!(plc.get("Q0.4").unwrap(), a != b);
-    }
-    // The stack holds 9 levels: a tenth load loses the bottom, which ALD then cannot read.
-    let mut deep = String::from("NETWORK 1\n");
-    for _ in 0..10 {
-        deep.push_str("LD I0.0\n");
-    }
-    deep.push_str(&"ALD\n".repeat(9));
-    assert!(Plc::new(parse(&deep).unwrap()).scan(0).is_err());
-    // Each network starts with an undefined stack.
-    assert!(Plc::new(parse("NETWORK 1\nA I0.0\n= Q0.0\n").unwrap()).scan(0).is_err());
-    assert!(parse("LDI I0.0\n").is_err(), "immediate instructions are not modelled");
-    assert!(Plc::new(parse("LD SM0.0\n= I0.0\n").unwrap()).scan(0).is_err(), "inputs are read-only");
-}
-
-#[test]
-fn interpreter_set_reset_edges_first_scan() {
-    let prog = parse(
-        "NETWORK 1\nLD SM0.1\nS M0.0, 3\n\
-         NETWORK 2\nLD I0.0\nR M0.1, 2\n\
-         NETWORK 3\nLD I0.1\nEU\n= Q0.0\n\
-         NETWORK 4\nLD I0.1\nED\n= Q0.1\n\
-         NETWORK 5\nLD SM0.0\n= Q0.2\n",
-    )
-    .expect("parses");
-    let mut plc = Plc::new(prog);
-    plc.set("I0.1", true).unwrap();
-    plc.scan(0).unwrap();
-    assert!(plc.get("M0.0").unwrap() && plc.get("M0.1").unwrap() && plc.get("M0.2").unwrap());
-    assert!(plc.get("Q0.0").unwrap(), "EU: rising edge in the first scan");
-    assert!(!plc.get("Q0.1").unwrap());
-    assert!(plc.get("Q0.2").unwrap());
-    plc.set("I0.0", true).unwrap();
-    plc.scan(1).unwrap();
-    assert!(plc.get("M0.0").unwrap() && !plc.get("M0.1").unwrap() && !plc.get("M0.2").unwrap());
-    assert!(!plc.get("Q0.0").unwrap(), "EU: one scan only");
-    plc.set("I0.1", false).unwrap();
-    plc.scan(2).unwrap();
-    assert!(plc.get("Q0.1").unwrap(), "ED: falling edge");
-    plc.scan(3).unwrap();
-    assert!(!plc.get("Q0.1").unwrap());
-    assert!(!plc.get("SM0.1").unwrap());
-}
-
-#[test]
-fn interpreter_timers() {
-    let prog = parse("NETWORK 1\nLD I0.0\nTON T37, +3\nNETWORK 2\nLD I0.1\nTONR T5, +4\nNETWORK 3\nLD I0.2\nR T5, 1\n")
-        .expect("parses");
-    let mut plc = Plc::new(prog);
-    let ms = 1000;
-    plc.set("I0.0", true).unwrap();
-    plc.set("I0.1", true).unwrap();
-    let mut t37 = Vec::new();
-    let mut t5 = Vec::new();
-    for k in 0..8i64 {
-        if k == 2 {
-            plc.set("I0.1", false).unwrap();
-        }
-        if k == 4 {
-            plc.set("I0.1", true).unwrap();
-            plc.set("I0.0", false).unwrap();
-        }
-        plc.scan(k * 100 * ms).unwrap();
-        t37.push((plc.timer_value(37), plc.get("T37").unwrap()));
-        t5.push((plc.timer_value(5), plc.get("T5").unwrap()));
-    }
-    // TON: counts from its first enabled execution, clears when disabled.
-    assert_eq!(&t37[..5], &[(0, false), (1, false), (2, false), (3, true), (0, false)]);
-    // TONR: holds while disabled (scans 2, 3), continues, bit at 4.
-    assert_eq!(t5, vec![(0, false), (1, false), (1, false), (1, false), (1, false), (2, false), (3, false), (4, true)]);
-    plc.set("I0.2", true).unwrap();
-    plc.scan(800 * ms).unwrap();
-    assert_eq!((plc.timer_value(5), plc.get("T5").unwrap()), (0, false), "R clears a TONR");
-    assert!(parse("TON T5, +3").is_ok() && Plc::new(parse("LD SM0.0\nTON T5, +3").unwrap()).scan(0).is_err());
-}
-
-/// The SCR instructions, on the pattern of the textbook's figure 3-35: S0.1 and S0.2 alternate
-/// on I0.0, each segment drives its output; `SCRT` changes the S bits at once, so a segment
-/// later in the program runs in the same scan (why the generator does not use SCR).
-#[test]
-fn interpreter_scr_segments() {
-    let prog = parse(
-        "NETWORK 1\nLD SM0.1\nS S0.1, 1\n\
-         NETWORK 2\nLSCR S0.1\n\
-         NETWORK 3\nLD SM0.0\n= Q0.1\n\
-         NETWORK 4\nLD I0.0\nSCRT S0.2\n\
-         NETWORK 5\nSCRE\n\
-         NETWORK 6\nLSCR S0.2\n\
-         NETWORK 7\nLD SM0.0\n= Q0.2\n\
-         NETWORK 8\nLD I0.1\nSCRT S0.1\n\
-         NETWORK 9\nSCRE\n",
-    )
-    .expect("parses");
-    let mut plc = Plc::new(prog);
-    plc.scan(0).unwrap();
-    assert!(plc.get("S0.1").unwrap() && plc.get("Q0.1").unwrap() && !plc.get("S0.2").unwrap());
-    plc.set("I0.0", true).unwrap();
-    plc.set("I0.1", true).unwrap();
-    plc.scan(1).unwrap();
-    // S0.1 -> S0.2 and, in the same scan, S0.2 -> S0.1 again: two evolutions in one scan.
-    assert!(plc.get("S0.1").unwrap() && !plc.get("S0.2").unwrap());
-    assert!(plc.get("Q0.2").unwrap(), "the segment of S0.2 ran in the scan S0.2 was set");
-    plc.set("I0.1", false).unwrap();
-    plc.scan(2).unwrap();
-    assert!(!plc.get("S0.1").unwrap() && plc.get("S0.2").unwrap());
-    assert!(Plc::new(parse("NETWORK 1\nLD SM0.0\nSCRT S0.1\n").unwrap()).scan(0).is_err());
+    // The step timers executed a second time after the step networks (the old generator's
+    // form): caught by the count of executions, and by the time they gain.
+    let mut twice = stl.clone();
+    let timers: Vec<&str> = stl
+        .split("\nNETWORK ")
+        .find(|n| n.contains("// timers: each"))
+        .expect("a timer network")
+        .lines()
+        .skip(1)
+        .collect();
+    let _ = write!(twice, "NETWORK 999 // timers again\n{}\n", timers.join("\n"));
+    let e = differential("twice", &text, &twice, Run::new(100 * MS, 300, 1)).expect_err("caught");
+    assert!(e.contains("ran 2 times"), "{e}");
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -878,7 +1022,7 @@ fn st_files(dir: &Path, out: &mut Vec<PathBuf>) {
 }
 
 /// Every chart of the valid fixtures, the simulator's semantics fixtures and the examples is
-/// either built, and then agrees with the simulator, or refused with located STL diagnostics.
+/// either built, and then agrees with the S7-200 model, or refused with located STL diagnostics.
 #[test]
 fn project_charts_build_and_agree_or_are_refused() {
     let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("../..");
@@ -892,40 +1036,44 @@ fn project_charts_build_and_agree_or_are_refused() {
     for path in files {
         let text = std::fs::read_to_string(&path).expect("UTF-8");
         let name = path.strip_prefix(&root).unwrap_or(&path).display().to_string();
-        let checked = check_source(0, &name, &text, &CheckOptions { keep_types: true, ..Default::default() });
+        let checked = check_source(0, &name, &text, &CheckOptions::default());
         if checked.has_errors() {
             continue;
         }
         for chart in &checked.charts {
-            match build_stl(&checked, chart) {
-                Ok(stl) => {
-                    parse(&stl).unwrap_or_else(|e| panic!("{name}: {e}"));
-                    // The simulator runs the file's only SFC POU (or its only PROGRAM).
-                    if checked.charts.len() == 1 {
-                        if let Err(e) = differential(&name, &text, &stl, 100_000, 300, 11) {
-                            panic!("{e}\n--- program\n{stl}");
+            for method in METHODS {
+                match build_stl(&checked, chart, StlOptions { method }) {
+                    Ok(p) => {
+                        parse(&p.text).unwrap_or_else(|e| panic!("{name}: {e}"));
+                        // The simulator runs the chart's POU.
+                        if checked.charts.len() == 1 {
+                            for run in [Run::new(100 * MS, 300, 11), Run::new(70 * MS, 300, 12)] {
+                                if let Err(e) = differential_pou(&name, &text, Some(&chart.pou), &p.text, run) {
+                                    panic!("{method:?}: {e}\n--- program\n{}", p.text);
+                                }
+                            }
+                            built.push(format!("{name} ({})", method.name()));
                         }
-                        built.push(name.clone());
                     }
-                }
-                Err(diags) => {
-                    refused += 1;
-                    assert!(!diags.is_empty(), "{name}: refused without a diagnostic");
-                    for d in &diags {
-                        assert!(d.code.starts_with("SFC081"), "{name}: {} {}", d.code, d.message);
-                        assert!(d.span.end > d.span.start, "{name}: {} without a location", d.code);
-                        assert!(sfc_diagnostics::explain(d.code).is_some(), "{} is not registered", d.code);
+                    Err(diags) => {
+                        refused += 1;
+                        assert!(!diags.is_empty(), "{name}: refused without a diagnostic");
+                        for d in &diags {
+                            assert!(d.code.starts_with("SFC081"), "{name}: {} {}", d.code, d.message);
+                            assert!(d.span.end > d.span.start, "{name}: {} without a location", d.code);
+                            assert!(sfc_diagnostics::explain(d.code).is_some(), "{} is not registered", d.code);
+                        }
                     }
                 }
             }
         }
     }
     eprintln!("project charts: {} built and compared ({}), {refused} refused", built.len(), built.join(", "));
-    assert!(built.len() >= 15, "only {} project charts were built: {built:?}", built.len());
+    assert!(built.len() >= 30, "only {} project charts were built: {built:?}", built.len());
 }
 
 /// More than 256 steps: the steps go on in M bits; more than the M area: V bits. The program
-/// still agrees with the simulator.
+/// still agrees with the model. The SCR method, which needs S bits, refuses the chart.
 #[test]
 fn long_charts_overflow_into_m_and_v_bits() {
     let n = 600;
@@ -940,12 +1088,14 @@ fn long_charts_overflow_into_m_and_v_bits() {
         let _ = writeln!(text, "    TRANSITION FROM S{i} TO S{} := {guard}; END_TRANSITION", (i + 1) % n);
     }
     text.push_str("END_PROGRAM\n");
-    let stl = build("long.st", &text).1.expect("a long chart is built");
+    let stl = build("long.st", &text, StlMethod::SetReset).1.expect("a long chart is built").text;
     let alloc = allocation(&stl);
     assert_eq!(alloc.steps[255].1, "S31.7");
     assert!(alloc.steps[256].1.starts_with('M'), "{:?}", alloc.steps[256]);
     assert!(stl.contains("//   V"), "transition bits continue in V memory");
-    differential("long.st", &text, &stl, 100_000, 1500, 3).unwrap_or_else(|e| panic!("{e}"));
+    differential("long.st", &text, &stl, Run::new(100 * MS, 1500, 3)).unwrap_or_else(|e| panic!("{e}"));
+    let scr = build("long.st", &text, StlMethod::Scr).1.expect_err("refused");
+    assert_eq!(scr.iter().map(|d| d.code).collect::<Vec<_>>(), vec!["SFC0815"], "{scr:?}");
 }
 
 /// Every distinct step-time constant takes a timer: beyond the S7-200's 182 TON the chart is
@@ -957,7 +1107,7 @@ fn too_many_timers_are_refused() {
         let _ = writeln!(text, "    TRANSITION FROM S0 TO S1 := S0.T >= T#{}ms; END_TRANSITION", i * 100);
     }
     text.push_str("    TRANSITION FROM S1 TO S0 := TRUE; END_TRANSITION\nEND_PROGRAM\n");
-    let diags = build("timers.st", &text).1.expect_err("refused");
+    let diags = build("timers.st", &text, StlMethod::SetReset).1.expect_err("refused");
     assert_eq!(diags.iter().map(|d| d.code).collect::<Vec<_>>(), vec!["SFC0815"], "{diags:?}");
     assert!(diags[0].message.contains("200 TON"), "{}", diags[0].message);
 }
@@ -966,8 +1116,42 @@ fn too_many_timers_are_refused() {
 #[test]
 fn a_file_with_errors_returns_them() {
     let text = "PROGRAM Bad\n    INITIAL_STEP S0: END_STEP\n    TRANSITION FROM S0 TO S9 := Nope; END_TRANSITION\nEND_PROGRAM\n";
-    let (checked, result) = build("bad.st", text);
+    let (checked, result) = build("bad.st", text, StlMethod::SetReset);
     let diags = result.expect_err("refused");
     assert!(checked.has_errors());
     assert!(!diags.is_empty() && diags.iter().all(|d| d.is_error() && !d.code.starts_with("SFC081")), "{diags:?}");
+}
+
+/// The symbol table: one row per operand, valid unique Micro/WIN symbols, quoted CSV.
+#[test]
+fn symbol_table_is_valid_csv_for_micro_win() {
+    let text = std::fs::read_to_string(fixture_dir().join("carwash_textbook.st")).expect("fixture");
+    let p = build("carwash_textbook.st", &text, StlMethod::Scr).1.expect("accepted");
+    let mut lines = p.symbols.lines();
+    assert_eq!(lines.next(), Some("Symbol,Address,Comment"));
+    let mut seen = std::collections::HashSet::new();
+    let mut rows = 0;
+    for line in lines {
+        let sym = line.split(',').next().unwrap();
+        assert!(sym.len() <= 23 && !sym.starts_with(|c: char| c.is_ascii_digit()), "{sym}");
+        assert!(sym.chars().all(|c| c.is_ascii_alphanumeric() || c == '_'), "{sym}");
+        assert!(seen.insert(sym.to_ascii_uppercase()), "duplicate {sym}");
+        rows += 1;
+    }
+    assert_eq!(rows, p.text.lines().filter(|l| l.starts_with("//   ")).count());
+    assert!(p.symbols.contains("StartButton,I0.0,"));
+}
+
+/// docs/targets.md shows the seed 002 car wash in both methods: exactly the programs the
+/// generator writes today.
+#[test]
+fn the_documented_car_wash_is_the_generated_one() {
+    let doc = std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("../../docs/targets.md")).unwrap();
+    let text = std::fs::read_to_string(fixture_dir().join("carwash_textbook.st")).expect("fixture");
+    for method in METHODS {
+        let p = build("carwash_textbook.st", &text, method).1.expect("accepted");
+        // The first line names the file as given; the rest must be on the page as it is.
+        let program: String = p.text.lines().skip(1).map(|l| format!("{l}\n")).collect();
+        assert!(doc.contains(program.trim_end()), "docs/targets.md does not show the {method:?} program:\n{}", p.text);
+    }
 }

@@ -2,7 +2,8 @@
 //!
 //! Ranges: `SFC00xx` lexical, `SFC01xx` syntax, `SFC02xx` chart structure, `SFC03xx` names and
 //! types, `SFC04xx` ATMT/EATMT target rules, `SFC05xx` analysis, `SFC06xx` pragmas and attributes,
-//! `SFC07xx` import (PLCopen XML), `SFC08xx` code generation.
+//! `SFC07xx` import (PLCopen XML), `SFC08xx` code generation, `SFC09xx` behaviour that differs
+//! under a vendor profile (`sfc check --profile`).
 
 use crate::Severity;
 
@@ -52,6 +53,11 @@ separated by dots: `%IX2.4`, `%QW29`, `%MW6`.";
     "SFC0010" Error "nested comment"
         "IEC 61131-3 comments do not nest: `(* (* inner *) *)` ends at the first `*)`.";
 
+    "SFC0011" Warning "text file not in UTF-8"
+        "The file is not valid UTF-8, so it was read as Latin-1 / Windows-1252 (what older Windows \
+editors and many PLC tools write). The warning names the first line that is not UTF-8. `sfc fmt` \
+and the editor write the file back in the same encoding, with its byte order mark and line \
+endings; converting it to UTF-8 silences the warning.";
     "SFC0101" Error "syntax error"
         "The parser expected something else here. It recovers at the next keyword, so later \
 errors are usually real.";
@@ -67,6 +73,10 @@ checks and runs program organisation units.";
     "SFC0105" Error "invalid type"
         "The type specification is not valid, for example an array with a reversed range \
 `ARRAY [10..1] OF INT` or a string length that is not a positive integer.";
+
+    "SFC0106" Warning "nothing to check"
+        "The file declares no POU, type or global variable: it is empty or holds only comments. \
+Perhaps it is the wrong file, or it was saved empty.";
 
     "SFC0201" Error "no initial step"
         "Every network of steps needs exactly one `INITIAL_STEP`.\n\n    INITIAL_STEP Init: END_STEP";
@@ -101,15 +111,25 @@ namespace; each name may be declared once.";
 transition, or mark it as a final step with `{attribute 'sfc.final' := 'true'}`.";
     "SFC0214" Warning "unused action"
         "An ACTION is declared but no step associates it and no code calls it.";
-    "SFC0215" Error "duplicate transition"
-        "Two transitions connect exactly the same steps with the same condition; one of them can \
-never fire first and is probably a copy.";
+    "SFC0215" Warning "duplicate transition"
+        "Two transitions connect exactly the same steps with the same condition. IEC 61131-3 allows \
+it, but the later one never fires (the earlier one always takes the step first, in declaration or \
+priority order), so it is probably a copy: delete it or change its condition.";
     "SFC0216" Error "step links to itself in one transition"
         "A transition lists the same step twice in FROM or in TO.";
     "SFC0217" Error "transition condition missing"
         "A transition needs a condition: `:= expression;` or an IL body after `:`.";
     "SFC0218" Error "no SFC body"
         "The file has no POU with steps; sfc needs at least one chart for this command.";
+
+    "SFC0219" Warning "output latched by a non-stored action"
+        "An action associated with N (or L, D) sets a BOOL output TRUE in its body, and nothing in \
+the POU ever writes anything else to it. The assignment is stored in the variable, so the output \
+stays TRUE after the step is left, although the action looks as if it lasted only while the step \
+is active.\n\n    STEP S2: Show(N); END_STEP\n    ACTION Show: Visible := TRUE; END_ACTION   (* latches *)\n\n\
+Associate the output itself so it follows the step (`STEP S2: Visible(N); END_STEP`), or reset \
+it (`Visible := FALSE` in another step, or `IF NOT Show.Q THEN Visible := FALSE; END_IF` for the \
+action's last run).";
 
     "SFC0301" Error "undeclared variable"
         "A name in an expression or statement is not a variable, step, action or constant of \
@@ -277,6 +297,12 @@ preceding step), so the transition never fires. (A literal `FALSE` is not report
 structured enough for the cheap proofs; the findings listed are real, but the absence of others \
 is not proven. Split the chart into function blocks, or structure its branches as matched \
 divergences and convergences.";
+    "SFC0510" Warning "runaway scan"
+        "While the analysis replayed a witness in the simulator, one scan spent its whole budget \
+of loop iterations, IL jumps and calls (a loop that does not end for the inputs the replay \
+tried, or unbounded recursion through calls). The replay stops there, so the finding it was \
+confirming stays *possible*. The same code would stop `sfc sim` and trip the watchdog of \
+`sfc run`: give the loop a bound that holds for every input.";
 
     "SFC0601" Error "invalid attribute value"
         "An `sfc.*` attribute has a value of the wrong form: `sfc.tag` an integer, `sfc.timeout` \
@@ -310,8 +336,11 @@ the file is imported; rewrite this part in ST or as plain SFC.";
     "SFC0706" Error "broken connection"
         "A connection of a graphical body refers to a `localId` that does not exist, joins \
 elements that cannot follow each other (a transition after a transition, a step after a step), \
-or a transition lacks a preceding or following step. The element is not imported. PLCopen stores \
-each link on its consumer: `connectionPointIn/connection@refLocalId` names the producer.";
+or a transition lacks a preceding or following step. A transition without a step on one side (a \
+chart still being drawn) cannot be written in IEC text: it is kept on the POU in an `sfc.loose` \
+attribute, which the editor draws and the PLCopen export writes back wired as it was, but the chart \
+does not hold it. Any other such element is not imported. PLCopen stores each link on its \
+consumer: `connectionPointIn/connection@refLocalId` names the producer.";
     "SFC0707" Note "condition network calls function blocks"
         "A transition condition drawn in FBD or LD uses function block instances (a timer, a \
 flip-flop). A condition is an expression and cannot call them, so, as Beremiz does when it \
@@ -331,8 +360,21 @@ from the body's last step. Exporting the chart again writes the flattened steps.
     "SFC0710" Warning "XML content not imported"
         "Part of the file has no effect in the imported program and is left out: a named \
 transition condition nothing refers to, a second body of a POU, an element that does not belong \
-in an SFC body, a coil on the path of a transition condition (a condition cannot assign it), \
-the `persistent` attribute of a variable list.";
+in an SFC body, a coil on the path of a transition condition (a condition cannot assign it).";
+    "SFC0711" Note "vendor element skipped"
+        "A network holds a vendor's own element (a CODESYS FBD `vendorElement`: a box, a comment or \
+a connector only its tool can draw). It has no IEC 61131-3 meaning and is skipped; the rest of the \
+network is imported.";
+    "SFC0712" Warning "no SFC POU in the file"
+        "The file imports, but none of its POUs is a Sequential Function Chart, so there is no chart \
+to check, simulate, build or edit. The note lists the POUs found. A CODESYS project export keeps an \
+application's POUs in its resource's `addData`; those are read too.";
+    "SFC0713" Warning "unknown type imported as an opaque block"
+        "The file uses a data type or function block that it does not declare: a library's (a \
+CODESYS library, `Util.BLINK`), or an extension's (Beremiz's svghmi `HMI_*`, py_ext `python_eval`, \
+svgui `Button`, `Led`). It is imported as an opaque function block: its instances are kept and \
+written back on export, everything done with them is accepted, and nothing about them is analysed \
+or simulated.";
 
     "SFC0801" Error "chart cannot be translated to ST"
         "The Structured Text target (`--target st`) replaces the chart's POU by a plain ST POU of \
@@ -354,45 +396,107 @@ again, or store it in a variable and load that.";
 a transition condition or a parenthesised operand, an operator without the operand it needs, or \
 a jump to a label that does not exist.";
 
-    "SFC0810" Error "not expressible in S7-200 bit logic"
-        "The S7-200 statement-list target (`--target stl`) turns conditions and action bodies \
-into bit logic over inputs, outputs, memory bits, step bits and timer bits. This expression reads \
-something that is not a bit: an integer or REAL variable, a comparison of numbers, arithmetic, a \
-function or function block output, an array element, or an IL instruction other than LD, AND, \
-OR, XOR (also with N) and NOT. Compute the number elsewhere and give the chart a BOOL:\n\n    \
-TRANSITION FROM Fill TO Full := LevelHigh; END_TRANSITION   (* LevelHigh : BOOL *)";
+    "SFC0810" Error "not expressible in the S7-200 program"
+        "The S7-200 statement-list target (`--target stl`) turns conditions into bit logic over \
+inputs, outputs, memory, step, timer and counter bits, and into compare contacts (`LDW>=`, \
+`LDD<>`) over INT, UINT, WORD, DINT, UDINT and DWORD values. This expression has no faithful \
+form there: a REAL or STRING, a function call, an array element, a division by a variable (the \
+S7-200 goes on with the old value where the IEC chart stops with a runtime error), an unsigned \
+comparison by size (the compare contacts are signed), the count of a CTD (the S7-200 CTD stops \
+at 0), or an IL instruction other than LD, AND, OR, XOR (also with N) and NOT. Compute the value \
+in INT or DINT, or give the chart a BOOL:\n\n    \
+TRANSITION FROM Fill TO Full := Level >= 80; END_TRANSITION   (* Level : INT *)";
     "SFC0811" Error "statement not supported by the STL target"
-        "S7-200 action bodies are BOOL assignments (`Lamp := Start AND NOT Fault;`), IF / ELSIF / \
-ELSE around them, and in IL the instructions LD, AND, OR, XOR, NOT, ST, STN, S and R on BOOL \
-variables. Assignments to other types, calls of functions or function blocks, CASE, FOR, WHILE, \
-REPEAT, EXIT, RETURN and jumps have no translation. A timer block is usually an action \
-qualifier (`Lamp(L, T#2s)`); otherwise build for `st`.";
+        "S7-200 action bodies are BOOL and integer assignments (`Lamp := Start AND NOT Fault;`, \
+`Count := Count + 1;`), IF / ELSIF / ELSE around them, calls of counter blocks (CTU, CTD, CTUD, \
+one call per instance: an S7-200 counter instruction runs at most once per scan), and in IL the \
+instructions LD, AND, OR, XOR, NOT, ST, STN, S and R on BOOL variables. Other blocks (a TON is an \
+action qualifier here: `Lamp(L, T#2s)`), CASE, FOR, WHILE, REPEAT, EXIT, RETURN, assignments to \
+TIME variables (they are timer presets) and inputs have no translation; build for `st` instead.";
     "SFC0812" Error "step time not representable by an S7-200 timer"
-        "A step time becomes the bit of a 100 ms S7-200 timer whose preset is fixed in the \
-program, so `S.T` must be compared (>=, >, <, <=, =, <>) with a constant duration, a literal or \
-a CONSTANT, that is a multiple of 100 ms and needs a preset of at most +32767 \
-(T#54m36s700ms):\n\n    TRANSITION FROM Heat TO Hold := Heat.T >= T#1m30s; END_TRANSITION";
+        "A step time is read through 100 ms S7-200 timers whose presets are fixed in the program, \
+so `S.T` must be compared with a duration known when the program is generated (a literal, a \
+CONSTANT, or a TIME variable the chart does not write: warning SFC0817), of at most 3276.7 s; \
+= and <> need a multiple of 100 ms (a step time counts whole timer ticks):\n\n    \
+TRANSITION FROM Heat TO Hold := Heat.T >= T#1m30s; END_TRANSITION";
     "SFC0813" Error "action association not supported by the STL target"
         "Timed qualifiers (L, D, SD, DS, SL) use one S7-200 100 ms TON per action, so the \
-duration must be a constant (literal or CONSTANT) multiple of 100 ms up to T#54m36s700ms, and the \
-timed associations of one action must all have the same qualifier and duration: different ones \
-contend at run time, and the simulator's choice between them has no fixed program form.\n\n    \
+duration must be known when the program is generated (at most T#54m36s700ms), and the timed \
+associations of one action must all have the same qualifier and duration: different ones contend \
+at run time, and the simulator's choice between them has no fixed program form.\n\n    \
 Horn(L, T#2s);   (* in every step that sounds the horn *)";
     "SFC0814" Error "address not available on the S7-200"
-        "A BOOL variable located `AT` a direct address is that S7-200 bit: `%IXb.i` is `Ib.i`, \
-`%QXb.i` is `Qb.i`, `%MXb.i` is `Mb.i`, with bytes I0-I15, Q0-Q15, M0-M31 and bits 0-7. Other \
-addresses (byte or word sizes, a partly specified `%I*`) name no bit. The input image is \
-read-only for the program: no action or assignment may write a variable located in `%I`.";
+        "A variable located `AT` a direct address is that S7-200 operand: `%IXb.i` is `Ib.i`, \
+`%QXb.i` is `Qb.i`, `%MXb.i` is `Mb.i` (bytes I0-I15, Q0-Q15, M0-M31, bits 0-7); an INT, UINT or \
+WORD is `%MWn`, `%IWn` or `%QWn`, a DINT, UDINT or DWORD `%MDn`. Other addresses name no such \
+operand. The input image is read-only for the program: no action or assignment may write a \
+variable located in `%I`.";
     "SFC0815" Error "S7-200 resources exceeded"
         "The program needs more than the S7-200 has: 100 ms timers (182 TON: T37-T63 and \
-T101-T255; 54 TONR: T5-T31 and T69-T95; one per distinct step-time comparison and one per \
-action with a timed qualifier) or bit memory (M0.0-M31.7, then V0.0-V2047.7). Split the chart, \
-or use fewer distinct step-time constants.";
+T101-T255; 54 TONR: T5-T31 and T69-T95; one per distinct step-time comparison, supervision time \
+and action with a timed qualifier), 256 counters, 256 jump labels, bit memory (M0.0-M31.7, then \
+V memory), or, with `--stl-method scr`, one S bit per step (S0.0-S31.7: 256 steps; the set/reset \
+method continues in M and V bits). Split the chart, or use fewer distinct step-time constants.";
     "SFC0816" Error "chart control variable not supported by the STL target"
-        "`SFCInit`, `SFCPause`, `SFCQuitError`, `SFCError`, `SFCErrorStep` and `SFCCurrentStep` \
-hold, pause and supervise the chart in the simulator; the S7-200 program implements none of \
-them, so a chart that declares or reads one is refused rather than run differently. Drive the \
-chart with ordinary transitions instead (an abort transition on a BOOL input).";
+        "The S7-200 program implements `SFCError` (set when a step stays longer than its \
+`sfc.timeout`, readable by the chart) and `SFCQuitError` (acknowledges it). `SFCInit` and \
+`SFCPause` (hold or freeze the chart) and the STRING outputs `SFCErrorStep` and `SFCCurrentStep` \
+have no form there, so a chart that declares or reads one is refused rather than run \
+differently. Drive the chart with ordinary transitions instead (an abort transition on a BOOL \
+input).";
+    "SFC0817" Warning "value fixed when the S7-200 program is generated"
+        "A TIME variable used as a step-time comparison or a qualifier duration becomes the preset \
+of an S7-200 timer, which the program fixes at the variable's initial value: changing the \
+variable at run time has no effect on the PLC. Declare it CONSTANT to state that, or change the \
+initial value and build again. The same warning marks a RETAIN variable with a non-zero initial \
+value, which the program does not set in the first scan (the retentive memory keeps its value).";
+
+    "SFC0901" Warning "transition tested in scan 0 under MatIEC"
+        "MatIEC's generated code has no first-scan guard: a transition leaving an initial step is \
+tested in the very first scan, so when its condition already holds the initial step is left \
+before its actions run. IEC (and `--profile iec`) runs only the initial step's actions in scan 0. \
+Reported by `sfc check --profile matiec`:\n\n    INITIAL_STEP S0: Y(N); END_STEP\n    TRANSITION \
+T1 FROM S0 TO S1 := TRUE; END_TRANSITION   (* MatIEC: S1 at scan 0, Y never on *)\n\nWait for an \
+input or a step time (`S0.T >= T#10ms`) if the initial actions must run.";
+    "SFC0902" Warning "every TRUE alternative fires under MatIEC"
+        "MatIEC fires every transition whose preceding steps are active when it is tested: two TRUE \
+alternatives without PRIORITY both fire (the step gets two successors), and an unprioritised \
+transition tested before a prioritised one fires with it. IEC fires one: explicit PRIORITY first, \
+then declaration order. Make the conditions exclusive, or give each alternative a PRIORITY \
+(MatIEC then clears the step as soon as the first one fires):\n\n    TRANSITION T1 (PRIORITY := 1) \
+FROM S1 TO S2 := Full; END_TRANSITION\n    TRANSITION T2 (PRIORITY := 2) FROM S1 TO S3 := Full OR \
+Timeout; END_TRANSITION";
+    "SFC0903" Warning "step flag read after a PRIORITY transition cleared it under MatIEC"
+        "When a transition with an explicit PRIORITY fires, MatIEC clears its preceding steps at \
+once, in the middle of testing the transitions, so a condition tested after it reads `S.X` as \
+FALSE in the same scan. IEC evaluates every condition on the situation at the start of the \
+scan. Read an input or a variable instead of the step flag, or drop the PRIORITY.";
+    "SFC0904" Warning "association switched off by another under MatIEC"
+        "MatIEC writes the associations of an action (or BOOL variable) one by one, steps in \
+declaration order, each on its own: N writes TRUE while its step is active and FALSE in the scan \
+it is left; L writes FALSE once its time is up; P, P1 and P0 write FALSE in every scan they do \
+not pulse. A later association therefore switches off what an earlier one switched on, e.g. an \
+N action on S1 and S2 (S2 declared first) is off in the scan S2 hands over to S1. IEC ORs the \
+associations of one qualifier. Use one association per action, or S and R.";
+    "SFC0905" Warning "R does not stop an action under MatIEC"
+        "MatIEC's R only clears the stored flag of S, SD, DS and SL; an N, L, D or P association of \
+the same action on an active step keeps running it. IEC's ACTION_CONTROL lets R override every \
+qualifier (`Q := NOT R AND (…)`). Switch the continuous association off by leaving its step.";
+    "SFC0906" Warning "timed association behaves differently under MatIEC"
+        "MatIEC starts SD, DS and SL on the activation edge of their step, which an initial step \
+does not have, and counts them down from the duration: SD or DS with T#0s never acts, SL with \
+T#0s stays stored until R. L and D compare the step's own elapsed time, so a step that loops to \
+itself restarts them. IEC times these qualifiers in the action's ACTION_CONTROL block.";
+    "SFC0907" Warning "time comparison changes in another scan under MatIEC"
+        "MatIEC converts TIME literals with x86-64 `long double` arithmetic and truncates to whole \
+nanoseconds, so `T#4ms` is 3.999999 ms and `S.T > T#4ms` already holds at 4 ms; and a step time \
+that reaches a whole second exactly is kept as {0 s, 1 000 000 000 ns}, which compares below \
+`T#1s`, so `S.T >= T#1s` holds one scan later. Compare with `>=` / `<` against a literal a \
+nanosecond-exact value (`T#4ms` → `>= T#5ms`), or avoid whole seconds.";
+    "SFC0908" Warning "P1/P0 on a BOOL variable under MatIEC"
+        "MatIEC treats P1 and P0 as pulses that write the variable used as the action: TRUE for one \
+scan on the activation (P1) or deactivation (P0) of the step. IEC runs P1/P0 with Q FALSE, so a \
+BOOL variable used as the action stays FALSE. Use an ACTION that sets the variable.";
 }
 
 /// Looks a code up.

@@ -1,14 +1,16 @@
 //! Diagnostics shared by every sfc crate: a [`Diagnostic`] has a stable code, a severity, a
 //! message, a primary [`Span`] in a [`SourceFile`], optional secondary labels and notes.
-//! Rendering (rustc-like text and the JSON contract of `interfaces.md`) lives here too, so
+//! Rendering (rustc-like text, the JSON contract of `interfaces.md`, SARIF 2.1.0) lives here too, so
 //! every front end reports the same way.
 
 mod codes;
 mod render;
+mod sarif;
 mod source;
 
 pub use codes::{explain, CodeInfo, CODES};
 pub use render::{render_human, render_json, to_json_value, RenderOptions};
+pub use sarif::{render_sarif, sarif_uri, SarifNotification, SarifTool};
 pub use source::{LineCol, SourceFile, Span};
 
 use serde::Serialize;

@@ -88,22 +88,33 @@ pub fn render_human(diag: &Diagnostic, files: &[SourceFile], opts: RenderOptions
                 .map(|l| (l.span, '-', Severity::Note, l.message.as_str())),
         );
         local.sort_by_key(|(sp, ..)| sp.start);
-        let mut last_line: Option<u32> = None;
+        // One rendering per source line: every mark on a line goes under that line once.
+        let mut lines: Vec<(u32, Vec<Mark>)> = Vec::new();
         for (sp, mark, sev, msg) in local {
             let line = file.line_col(sp.start).line;
+            let m = Mark { span: sp, mark, sev, label: msg };
+            match lines.last_mut() {
+                Some((l, marks)) if *l == line => marks.push(m),
+                _ => lines.push((line, vec![m])),
+            }
+        }
+        let mut last_line: Option<u32> = None;
+        for (line, marks) in &lines {
             if let Some(prev) = last_line {
-                if line > prev + 1 {
+                if *line > prev + 1 {
                     let _ = writeln!(out, "{}", st.blue("..."));
                 }
             }
-            snippet(&mut out, &st, file, sp, mark, sev, msg, width);
-            last_line = Some(line);
+            snippet(&mut out, &st, file, *line, marks, width);
+            last_line = Some(*line);
         }
         for label in diag.labels.iter().filter(|l| l.span.file != diag.span.file) {
             if let Some(lf) = file_of(files, label.span) {
                 let lc = lf.line_col(label.span.start);
                 let _ = writeln!(out, "{pad}{} {}:{}:{}", st.blue(":::"), lf.name, lc.line, lc.column);
-                snippet(&mut out, &st, lf, label.span, '-', Severity::Note, &label.message, width);
+                let line = lf.line_col(label.span.start).line;
+                let mark = Mark { span: label.span, mark: '-', sev: Severity::Note, label: &label.message };
+                snippet(&mut out, &st, lf, line, &[mark], width);
             }
         }
     }
@@ -113,7 +124,12 @@ pub fn render_human(diag: &Diagnostic, files: &[SourceFile], opts: RenderOptions
         }
     }
     for note in &diag.notes {
-        let _ = writeln!(out, "{pad} {} {}: {note}", st.blue("="), st.bold("note"));
+        // A note that says how to fix the problem is a `help` line, as in rustc.
+        let (kind, text) = match note.strip_prefix("help: ") {
+            Some(help) => ("help", help),
+            None => ("note", note.as_str()),
+        };
+        let _ = writeln!(out, "{pad} {} {}: {text}", st.blue("="), st.bold(kind));
     }
     if let Some(w) = &diag.witness {
         let text = match w {
@@ -126,37 +142,102 @@ pub fn render_human(diag: &Diagnostic, files: &[SourceFile], opts: RenderOptions
     out
 }
 
-#[allow(clippy::too_many_arguments)]
-fn snippet(
-    out: &mut String,
-    st: &Style,
-    file: &SourceFile,
+/// One underline under a source line: the primary span (`^`) or a label (`-`).
+struct Mark<'a> {
     span: Span,
     mark: char,
     sev: Severity,
-    label: &str,
-    width: usize,
-) {
-    let start = file.line_col(span.start);
-    let end = file.line_col(span.end);
+    label: &'a str,
+}
+
+/// Prints source line `line` once, then its marks: all of them on one row, with the label of
+/// the rightmost labelled mark at its end; every other labelled mark gets a row of its own.
+fn snippet(out: &mut String, st: &Style, file: &SourceFile, line: u32, marks: &[Mark<'_>], width: usize) {
     let pad = " ".repeat(width);
-    let line_text = file.line_text(start.line);
+    let line_text = file.line_text(line);
     let shown = line_text.replace('\t', "    ");
-    let _ = writeln!(out, "{} {} {}", st.blue(&format!("{:>width$}", start.line)), st.blue("|"), shown);
-    // Caret columns account for tabs expanded to four spaces.
-    let prefix: String = line_text.chars().take(start.column as usize - 1).collect();
-    let indent = prefix.chars().map(|c| if c == '\t' { 4 } else { 1 }).sum::<usize>();
-    let len = if end.line == start.line {
-        let inner: String =
-            line_text.chars().skip(start.column as usize - 1).take((end.column - start.column) as usize).collect();
-        inner.chars().map(|c| if c == '\t' { 4 } else { 1 }).sum::<usize>().max(1)
-    } else {
-        (shown.chars().count().saturating_sub(indent)).max(1)
+    let _ = writeln!(out, "{} {} {}", st.blue(&format!("{line:>width$}")), st.blue("|"), shown);
+    // Columns account for tabs expanded to four spaces.
+    let cells = |span: Span| -> (usize, usize) {
+        let start = file.line_col(span.start);
+        let end = file.line_col(span.end);
+        let col = (start.column as usize).saturating_sub(1);
+        let indent = line_text.chars().take(col).map(|c| if c == '\t' { 4 } else { 1 }).sum::<usize>();
+        let len = if end.line == start.line {
+            let n = (end.column.saturating_sub(start.column)) as usize;
+            line_text.chars().skip(col).take(n).map(|c| if c == '\t' { 4 } else { 1 }).sum::<usize>().max(1)
+        } else {
+            shown.chars().count().saturating_sub(indent).max(1)
+        };
+        (indent, len)
     };
-    let marks: String = std::iter::repeat(mark).take(len).collect();
-    let marks = if mark == '^' { st.severity(sev, &marks) } else { st.blue(&marks) };
-    let label = if label.is_empty() { String::new() } else { format!(" {label}") };
-    let _ = writeln!(out, "{pad} {} {}{}{}", st.blue("|"), " ".repeat(indent), marks, label);
+    let paint = |m: &Mark<'_>, text: &str| if m.mark == '^' { st.severity(m.sev, text) } else { st.blue(text) };
+    // The combined row: each mark at its columns (the primary one wins where they overlap).
+    let placed: Vec<(usize, usize, &Mark<'_>)> = marks.iter().map(|m| (cells(m.span).0, cells(m.span).1, m)).collect();
+    let row_end = placed.iter().map(|(i, l, _)| i + l).max().unwrap_or(0);
+    let mut row = String::new();
+    let mut col = 0;
+    while col < row_end {
+        let here = placed.iter().filter(|(i, l, _)| *i <= col && col < i + l).min_by_key(|(_, _, m)| m.mark != '^');
+        match here {
+            Some((_, _, m)) => {
+                let mut run = 1;
+                while col + run < row_end {
+                    let next = placed
+                        .iter()
+                        .filter(|(i, l, _)| *i <= col + run && col + run < i + l)
+                        .min_by_key(|(_, _, m)| m.mark != '^');
+                    match next {
+                        Some((_, _, n)) if std::ptr::eq(*n, *m) => run += 1,
+                        _ => break,
+                    }
+                }
+                row.push_str(&paint(m, &m.mark.to_string().repeat(run)));
+                col += run;
+            }
+            None => {
+                row.push(' ');
+                col += 1;
+            }
+        }
+    }
+    // The label of the rightmost mark goes at the end of the row; the labels of marks further
+    // left hang below them on connector lines, as rustc draws them.
+    let rightmost = placed.iter().map(|(i, l, _)| i + l).max().unwrap_or(0);
+    let mut hanging: Vec<(usize, &Mark<'_>)> = Vec::new();
+    let mut inline = String::new();
+    for (i, l, m) in &placed {
+        if m.label.is_empty() {
+            continue;
+        }
+        if i + l == rightmost && inline.is_empty() {
+            inline = format!(" {}", m.label);
+        } else {
+            hanging.push((*i, m));
+        }
+    }
+    let _ = writeln!(out, "{pad} {} {row}{inline}", st.blue("|"));
+    hanging.sort_by_key(|(i, _)| *i);
+    // `|` under the first `upto` hanging marks; returns the text and its visible width (the
+    // text holds colour codes).
+    let connectors = |upto: usize| -> (String, usize) {
+        let (mut line, mut width) = (String::new(), 0);
+        for (i, m) in hanging.iter().take(upto) {
+            line.push_str(&" ".repeat(i.saturating_sub(width)));
+            line.push_str(&paint(m, "|"));
+            width = i + 1;
+        }
+        (line, width)
+    };
+    if !hanging.is_empty() {
+        let _ = writeln!(out, "{pad} {} {}", st.blue("|"), connectors(hanging.len()).0);
+    }
+    for k in (0..hanging.len()).rev() {
+        let Some((i, m)) = hanging.get(k) else { continue };
+        let (line, width) = connectors(k);
+        let gap = " ".repeat(i.saturating_sub(width));
+        let _ = writeln!(out, "{pad} {} {line}{gap}{}", st.blue("|"), paint(m, m.label));
+    }
 }
 
 /// One diagnostic as the JSON object of `interfaces.md`.
@@ -194,7 +275,8 @@ pub fn to_json_value(diag: &Diagnostic, files: &[SourceFile]) -> Value {
 /// All diagnostics as one pretty-printed JSON array.
 pub fn render_json(diags: &[Diagnostic], files: &[SourceFile]) -> String {
     let arr: Vec<Value> = diags.iter().map(|d| to_json_value(d, files)).collect();
-    serde_json::to_string_pretty(&Value::Array(arr)).expect("JSON values always serialise")
+    // `{:#}` is the pretty form of `to_string_pretty`, without its impossible error.
+    format!("{:#}", Value::Array(arr))
 }
 
 #[cfg(test)]
@@ -211,6 +293,24 @@ mod tests {
             s,
             "error[SFC0301]: undeclared variable `x`\n --> a.st:2:3\n  |\n2 |   x := 1;\n  |   ^\n  = note: declare it in a VAR block\n"
         );
+    }
+
+    #[test]
+    fn one_rendering_per_source_line() {
+        let f = SourceFile::new("a.st", "PROGRAM P VAR x : INT; END_PROGRAM\n");
+        let d = Diagnostic::error("SFC0102", Span::new(0, 23, 34), "missing `END_VAR`")
+            .with_label(Span::new(0, 10, 13), "opened here");
+        let s = render_human(&d, &[f], RenderOptions::default());
+        assert_eq!(
+            s,
+            "error[SFC0102]: missing `END_VAR`\n --> a.st:1:24\n  |\n1 | PROGRAM P VAR x : INT; END_PROGRAM\n  |           ---          ^^^^^^^^^^^\n  |           |\n  |           opened here\n"
+        );
+        // A label right of the primary span stays on the row.
+        let f = SourceFile::new("a.st", "ab cd\n");
+        let d = Diagnostic::error("SFC0206", Span::new(0, 0, 2), "twice").with_label(Span::new(0, 3, 5), "first here");
+        let s = render_human(&d, &[f], RenderOptions::default());
+        assert!(s.ends_with("1 | ab cd\n  | ^^ -- first here\n"), "{s}");
+        assert_eq!(s.matches("ab cd").count(), 1);
     }
 
     #[test]

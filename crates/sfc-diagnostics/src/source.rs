@@ -59,9 +59,9 @@ impl SourceFile {
         let offset = offset.min(self.text.len() as u32);
         let line = match self.line_starts.binary_search(&offset) {
             Ok(i) => i,
-            Err(i) => i - 1,
+            Err(i) => i.saturating_sub(1),
         };
-        let start = self.line_starts[line] as usize;
+        let start = self.line_starts.get(line).map_or(0, |&s| s as usize);
         let mut end = offset as usize;
         while !self.text.is_char_boundary(end) {
             end -= 1;
@@ -73,10 +73,8 @@ impl SourceFile {
     /// The text of a 1-based line, without its line break.
     pub fn line_text(&self, line: u32) -> &str {
         let i = (line.max(1) - 1) as usize;
-        if i >= self.line_starts.len() {
-            return "";
-        }
-        let start = self.line_starts[i] as usize;
+        let Some(&start) = self.line_starts.get(i) else { return "" };
+        let start = start as usize;
         let end = self.line_starts.get(i + 1).map(|&e| e as usize).unwrap_or(self.text.len());
         self.text[start..end].trim_end_matches(['\n', '\r'])
     }

@@ -3,14 +3,13 @@
 //! where the layout has them, jumps below their transitions, action blocks right of their
 //! steps, orthogonal routes for connections whose ends are not aligned).
 
+use crate::drawing::{self, Rect};
 use crate::graph::{pin_counts, Derived};
-use crate::{Association, EditorDoc, Element, ElementKind, Point};
+use crate::{EditorDoc, Element, ElementKind, Point};
 use sfc_render::{BranchKind, Layout, LayoutKind};
 
 /// Canvas grid.
 pub const GRID: f64 = 10.0;
-pub const STEP_MIN_W: f64 = 80.0;
-pub const STEP_H: f64 = 40.0;
 pub const TRANSITION_W: f64 = 40.0;
 pub const TRANSITION_H: f64 = 20.0;
 /// Height of every divergence and convergence bar.
@@ -19,38 +18,15 @@ pub const BAR_H: f64 = 10.0;
 pub const BAR_PAD: f64 = 10.0;
 pub const JUMP_SIZE: f64 = 20.0;
 pub const ROW_H: f64 = 24.0;
-/// Font size the text widths are estimated for.
-const FONT: f64 = 12.0;
-/// `sfc-render`'s structured layout is drawn with smaller boxes; its coordinates are scaled
-/// by these factors so the editor's sizes fit.
+/// `sfc-render`'s layout is drawn with smaller boxes; its coordinates are scaled by these
+/// factors so the editor's sizes fit (the fallback for charts the structured layout of
+/// `structured.rs` does not take).
 const SX: f64 = 1.75;
 const SY: f64 = 1.5;
 
-fn ceil_to(v: f64, step: f64) -> f64 {
-    (v / step).ceil() * step
-}
-
-/// A step box: 80×40, wider for long names (even multiples of the grid so the axis stays on it).
+/// A step box for a step named `name` (see [`drawing::step_size`]).
 pub fn step_size(name: &str) -> (f64, f64) {
-    let w = ceil_to(sfc_render::text_width(name, FONT) + 30.0, 2.0 * GRID).max(STEP_MIN_W);
-    (w, STEP_H)
-}
-
-/// An action block: one row per association, wide enough for the longest row.
-pub fn action_block_size(assocs: &[Association]) -> (f64, f64) {
-    let row = |a: &Association| {
-        let q = match &a.duration {
-            Some(d) => format!("{} {d}", a.qualifier),
-            None => a.qualifier.clone(),
-        };
-        let ind = a.indicator.as_deref().unwrap_or("");
-        sfc_render::text_width(&q, FONT).max(20.0)
-            + sfc_render::text_width(&a.action, FONT)
-            + sfc_render::text_width(ind, FONT)
-            + 36.0
-    };
-    let w = assocs.iter().map(row).fold(100.0, f64::max);
-    (ceil_to(w, GRID), ROW_H * assocs.len().max(1) as f64)
+    drawing::step_size(&Element { name: name.to_string(), ..Element::default() })
 }
 
 /// Where pin `k` of a block is, as the canvas draws it (`web/src/diagram/geometry.ts`): inputs
@@ -67,29 +43,6 @@ pub fn pin_pos(e: &Element, input: bool, k: u32) -> Point {
     let off = BAR_PAD + (e.w - 2.0 * BAR_PAD) * f64::from(k) / f64::from(n - 1);
     let snapped = ((off / GRID).round() * GRID).max(BAR_PAD).min(e.w - BAR_PAD);
     Point { x: e.x + snapped, y }
-}
-
-/// An orthogonal route between two pins: none when the input is straight below the output,
-/// two bends half way down when it is lower elsewhere, round the right side when it is not
-/// lower.
-pub fn route(from: Point, to: Point) -> Vec<Point> {
-    if (from.x - to.x).abs() < 0.5 && to.y >= from.y {
-        return Vec::new();
-    }
-    if to.y > from.y {
-        let mid = ((from.y + to.y) / 2.0).round();
-        return vec![from, Point { x: from.x, y: mid }, Point { x: to.x, y: mid }, to];
-    }
-    let lane = from.x.max(to.x) + 6.0 * GRID;
-    let (y1, y2) = (from.y + GRID, to.y - GRID);
-    vec![
-        from,
-        Point { x: from.x, y: y1 },
-        Point { x: lane, y: y1 },
-        Point { x: lane, y: y2 },
-        Point { x: to.x, y: y2 },
-        to,
-    ]
 }
 
 /// How layout coordinates map to canvas coordinates.
@@ -146,7 +99,7 @@ fn layout_geom(layout: &Layout, m: &Model, i: usize) -> Option<(f64, f64, f64)> 
 }
 
 /// The block at the other end of the connection on a pin.
-fn across(doc: &EditorDoc, d: &Derived, i: usize, input: bool, pin: usize) -> Option<(usize, u32)> {
+pub(crate) fn across(doc: &EditorDoc, d: &Derived, i: usize, input: bool, pin: usize) -> Option<(usize, u32)> {
     let c = if input { *d.ins.get(i)?.get(pin)? } else { *d.outs.get(i)?.get(pin)? }?;
     let c = &doc.connections[c];
     if input {
@@ -271,7 +224,7 @@ pub fn place(doc: &mut EditorDoc, d: &Derived, m: &Model, layout: &Layout, keep:
         }
         let e = &mut doc.elements[i];
         if let Some(r) = m.step_of[i].and_then(|k| layout.steps.get(k)).map(|g| g.rect) {
-            let (w, h) = step_size(&e.name);
+            let (w, h) = drawing::step_size(e);
             e.x = f.x(r.x + r.w / 2.0) - w / 2.0;
             e.y = f.y(r.y + r.h / 2.0) - h / 2.0;
             (e.w, e.h) = (w, h);
@@ -381,7 +334,7 @@ pub fn place(doc: &mut EditorDoc, d: &Derived, m: &Model, layout: &Layout, keep:
             continue;
         }
         let step = doc.elements[i].step.as_ref().and_then(|s| d.by_id.get(s)).copied();
-        let (w, h) = action_block_size(&doc.elements[i].associations);
+        let (w, h) = drawing::action_block_size(&doc.elements[i].associations);
         let (x, y) = match step {
             Some(s) => {
                 let st = &doc.elements[s];
@@ -396,7 +349,14 @@ pub fn place(doc: &mut EditorDoc, d: &Derived, m: &Model, layout: &Layout, keep:
         let e = &mut doc.elements[i];
         (e.x, e.y, e.w, e.h) = (x, y, w, h);
     }
-    // Routes.
+    route_all(doc, d);
+}
+
+/// Routes every connection read around the blocks and labels (`route.rs`): straight where the
+/// pins are aligned and nothing is in the way.
+pub fn route_all(doc: &mut EditorDoc, d: &Derived) {
+    let mut obstacles: Vec<Rect> = doc.elements.iter().filter(|e| e.kind.is_some()).map(Rect::of).collect();
+    obstacles.extend(drawing::labels(doc).into_iter().map(|l| l.rect));
     for c in 0..doc.connections.len() {
         if !d.used[c] {
             continue;
@@ -405,6 +365,10 @@ pub fn place(doc: &mut EditorDoc, d: &Derived, m: &Model, layout: &Layout, keep:
         let (Some(&s), Some(&t)) = (d.by_id.get(&con.source), d.by_id.get(&con.target)) else { continue };
         let from = pin_pos(&doc.elements[s], false, con.source_pin);
         let to = pin_pos(&doc.elements[t], true, con.target_pin);
-        doc.connections[c].waypoints = route(from, to);
+        let straight = (from.x - to.x).abs() < 0.5
+            && to.y > from.y
+            && !obstacles.iter().any(|r| crate::route::crosses(from, to, r));
+        doc.connections[c].waypoints =
+            if straight { Vec::new() } else { crate::route::route(from, to, &obstacles, None) };
     }
 }

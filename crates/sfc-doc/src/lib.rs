@@ -46,6 +46,7 @@ use serde::{Deserialize, Serialize};
 
 /// The whole chart of one SFC POU as the editor shows it.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[cfg_attr(test, derive(ts_rs::TS))]
 #[serde(rename_all = "camelCase")]
 pub struct EditorDoc {
     /// The POU's name.
@@ -54,6 +55,7 @@ pub struct EditorDoc {
     /// The target device (`sfc.target` before the POU).
     pub target: ChartTarget,
     #[serde(default, skip_serializing_if = "String::is_empty")]
+    #[cfg_attr(test, ts(as = "Option<String>", optional))]
     pub description: String,
     /// The POU's declarations (its `VAR … END_VAR` blocks) verbatim, as written between the POU
     /// header line and its first SFC element.
@@ -67,10 +69,12 @@ pub struct EditorDoc {
     /// Attribute pragmas before the POU that the editor does not edit (added to the contract by
     /// sfc-doc: kept so that saving does not drop them).
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    #[cfg_attr(test, ts(as = "Option<Vec<OtherAttribute>>", optional))]
     pub attributes: Vec<OtherAttribute>,
     /// The comments after the chart's last element, before `END_PROGRAM` / `END_FUNCTION_BLOCK`
     /// (each whole, delimiters included, in order).
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    #[cfg_attr(test, ts(as = "Option<Vec<String>>", optional))]
     pub trailing_comments: Vec<String>,
 }
 
@@ -78,14 +82,17 @@ pub struct EditorDoc {
 /// the value as written between the quotes): foreign PLCopen `addData`, condition references,
 /// inline actions, other tools' attributes.
 #[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize, Default)]
+#[cfg_attr(test, derive(ts_rs::TS))]
 #[serde(rename_all = "camelCase", default)]
 pub struct OtherAttribute {
     pub name: String,
     #[serde(skip_serializing_if = "Option::is_none")]
+    #[cfg_attr(test, ts(optional))]
     pub value: Option<String>,
 }
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[cfg_attr(test, derive(ts_rs::TS))]
 #[serde(rename_all = "camelCase")]
 pub enum PouKind {
     Program,
@@ -94,6 +101,7 @@ pub enum PouKind {
 
 /// `sfc.target`: what the chart is built for (seed 001: Blank, ATMT, EATMT).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
+#[cfg_attr(test, derive(ts_rs::TS))]
 #[serde(rename_all = "camelCase")]
 pub enum ChartTarget {
     #[default]
@@ -103,6 +111,7 @@ pub enum ChartTarget {
 }
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
+#[cfg_attr(test, derive(ts_rs::TS))]
 pub enum Language {
     #[default]
     #[serde(rename = "ST")]
@@ -113,24 +122,30 @@ pub enum Language {
 
 /// A named action: `ACTION name: … END_ACTION`.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[cfg_attr(test, derive(ts_rs::TS))]
 #[serde(rename_all = "camelCase")]
 pub struct ActionDef {
     pub name: String,
     #[serde(default)]
+    #[cfg_attr(test, ts(as = "Option<Language>", optional))]
     pub language: Language,
     /// The statements (ST) or instructions (IL), without the `ACTION`/`END_ACTION` lines.
     pub body: String,
     #[serde(default, skip_serializing_if = "String::is_empty")]
+    #[cfg_attr(test, ts(as = "Option<String>", optional))]
     pub description: String,
     /// Attribute pragmas the editor does not edit (see [`OtherAttribute`]).
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    #[cfg_attr(test, ts(as = "Option<Vec<OtherAttribute>>", optional))]
     pub attributes: Vec<OtherAttribute>,
     /// The comments written before the action in the text (each whole, delimiters included).
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    #[cfg_attr(test, ts(as = "Option<Vec<String>>", optional))]
     pub comments: Vec<String>,
 }
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[cfg_attr(test, derive(ts_rs::TS))]
 #[serde(rename_all = "camelCase")]
 pub enum ElementKind {
     Step,
@@ -146,9 +161,11 @@ pub enum ElementKind {
 
 /// One block. Fields that do not apply to a kind stay at their defaults.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize, Default)]
+#[cfg_attr(test, derive(ts_rs::TS))]
 #[serde(rename_all = "camelCase", default)]
 pub struct Element {
     pub id: String,
+    #[cfg_attr(test, ts(type = "ElementKind"))]
     pub kind: Option<ElementKind>,
     /// Top-left corner and size, in canvas units (1 unit = 1 CSS pixel at zoom 1).
     pub x: f64,
@@ -157,65 +174,87 @@ pub struct Element {
     pub h: f64,
     /// Step or transition name (empty for an unnamed transition and for other blocks).
     #[serde(skip_serializing_if = "String::is_empty")]
+    #[cfg_attr(test, ts(as = "Option<String>", optional))]
     pub name: String,
     /// Steps: the initial step.
     #[serde(skip_serializing_if = "is_false")]
+    #[cfg_attr(test, ts(as = "Option<bool>", optional))]
     pub initial: bool,
     /// `sfc.tag`: state number of a step, condition index of a transition.
     #[serde(skip_serializing_if = "Option::is_none")]
+    #[cfg_attr(test, ts(optional))]
     pub tag: Option<u32>,
     /// `sfc.timeout` of a step, an IEC duration literal (`T#8.1s`).
     #[serde(skip_serializing_if = "Option::is_none")]
+    #[cfg_attr(test, ts(optional))]
     pub timeout: Option<String>,
     /// Shown as the tooltip.
     #[serde(skip_serializing_if = "String::is_empty")]
+    #[cfg_attr(test, ts(as = "Option<String>", optional))]
     pub description: String,
     /// CSS colours (`#rrggbb`).
     #[serde(skip_serializing_if = "Option::is_none")]
+    #[cfg_attr(test, ts(optional))]
     pub background: Option<String>,
     #[serde(skip_serializing_if = "Option::is_none")]
+    #[cfg_attr(test, ts(optional))]
     pub foreground: Option<String>,
     #[serde(skip_serializing_if = "Option::is_none")]
+    #[cfg_attr(test, ts(optional))]
     pub line_width: Option<f64>,
     #[serde(skip_serializing_if = "is_false")]
+    #[cfg_attr(test, ts(as = "Option<bool>", optional))]
     pub hide_label: bool,
     /// Steps: `sfc.final`, a step intentionally without a way out (added to the contract by
     /// sfc-doc so files using it keep it when saved from the editor).
     #[serde(rename = "final", skip_serializing_if = "is_false")]
+    #[cfg_attr(test, ts(as = "Option<bool>", optional))]
     pub is_final: bool,
     /// Divergences and convergences: the number of branch pins (≥ 2).
     #[serde(skip_serializing_if = "Option::is_none")]
+    #[cfg_attr(test, ts(optional))]
     pub pins: Option<u32>,
     /// Jumps: the name of the target step.
     #[serde(skip_serializing_if = "Option::is_none")]
+    #[cfg_attr(test, ts(optional))]
     pub target: Option<String>,
     /// Transitions: the condition, an ST expression (language ST) or IL instructions (IL).
     #[serde(skip_serializing_if = "Option::is_none")]
+    #[cfg_attr(test, ts(optional))]
     pub condition: Option<String>,
     #[serde(skip_serializing_if = "is_st")]
+    #[cfg_attr(test, ts(as = "Option<Language>", optional))]
     pub condition_language: Language,
     /// Transitions: explicit `PRIORITY`.
     #[serde(skip_serializing_if = "Option::is_none")]
+    #[cfg_attr(test, ts(optional))]
     pub priority: Option<u32>,
     /// Text labels: the text, its alignment (`left`, `center`, `right`) and CSS font.
     #[serde(skip_serializing_if = "Option::is_none")]
+    #[cfg_attr(test, ts(optional))]
     pub text: Option<String>,
     #[serde(skip_serializing_if = "Option::is_none")]
+    #[cfg_attr(test, ts(optional, type = "\"left\" | \"center\" | \"right\""))]
     pub align: Option<String>,
     #[serde(skip_serializing_if = "Option::is_none")]
+    #[cfg_attr(test, ts(optional))]
     pub font: Option<String>,
     /// Action blocks: the id of the step they belong to, and the associations.
     #[serde(skip_serializing_if = "Option::is_none")]
+    #[cfg_attr(test, ts(optional))]
     pub step: Option<String>,
     #[serde(skip_serializing_if = "Vec::is_empty")]
+    #[cfg_attr(test, ts(as = "Option<Vec<Association>>", optional))]
     pub associations: Vec<Association>,
     /// Steps and transitions: attribute pragmas the editor does not edit (see
     /// [`OtherAttribute`]).
     #[serde(skip_serializing_if = "Vec::is_empty")]
+    #[cfg_attr(test, ts(as = "Option<Vec<OtherAttribute>>", optional))]
     pub attributes: Vec<OtherAttribute>,
     /// Steps and transitions: the comments written before the element in the text (each whole,
     /// delimiters included, in order); on other blocks they travel in the layout attribute.
     #[serde(skip_serializing_if = "Vec::is_empty")]
+    #[cfg_attr(test, ts(as = "Option<Vec<String>>", optional))]
     pub comments: Vec<String>,
 }
 
@@ -229,21 +268,25 @@ fn is_st(l: &Language) -> bool {
 
 /// One row of an action block: `qualifier[, duration] action` with optional indicator.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize, Default)]
+#[cfg_attr(test, derive(ts_rs::TS))]
 #[serde(rename_all = "camelCase", default)]
 pub struct Association {
     /// `N`, `R`, `S`, `L`, `D`, `P`, `P0`, `P1`, `SD`, `DS`, `SL`.
     pub qualifier: String,
     /// A duration literal or a TIME variable, for the timed qualifiers.
     #[serde(skip_serializing_if = "Option::is_none")]
+    #[cfg_attr(test, ts(optional))]
     pub duration: Option<String>,
     /// The action name (or a BOOL variable).
     pub action: String,
     #[serde(skip_serializing_if = "Option::is_none")]
+    #[cfg_attr(test, ts(optional))]
     pub indicator: Option<String>,
 }
 
 /// A wire from an output pin to an input pin.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize, Default)]
+#[cfg_attr(test, derive(ts_rs::TS))]
 #[serde(rename_all = "camelCase", default)]
 pub struct Connection {
     pub id: String,
@@ -253,14 +296,18 @@ pub struct Connection {
     pub target_pin: u32,
     /// The whole orthogonal polyline, both ends included, absolute; empty: the editor routes it.
     #[serde(skip_serializing_if = "Vec::is_empty")]
+    #[cfg_attr(test, ts(as = "Option<Vec<Point>>", optional))]
     pub waypoints: Vec<Point>,
     #[serde(skip_serializing_if = "Option::is_none")]
+    #[cfg_attr(test, ts(optional))]
     pub color: Option<String>,
     #[serde(skip_serializing_if = "Option::is_none")]
+    #[cfg_attr(test, ts(optional))]
     pub line_width: Option<f64>,
 }
 
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, Default)]
+#[cfg_attr(test, derive(ts_rs::TS))]
 pub struct Point {
     pub x: f64,
     pub y: f64,
@@ -270,14 +317,21 @@ pub struct Point {
 
 use sfc_diagnostics::{Diagnostic, Severity, SourceFile};
 
+pub mod drawing;
 mod graph;
 mod layout;
 mod open;
 mod pragma;
 mod readback;
 mod region;
+pub mod route;
 mod sidecar;
 mod splice;
+mod structured;
+mod svg;
+
+#[cfg(test)]
+mod contracts;
 mod write;
 
 /// A file opened in the editor.
@@ -356,6 +410,12 @@ pub fn splice_replacing(file_text: &str, doc: &EditorDoc, replacing: &str) -> St
 /// Whether IEC text holds a POU named `name` (compared as IEC does, ignoring case).
 pub fn holds_pou(file_text: &str, name: &str) -> bool {
     splice::holds_pou(file_text, name)
+}
+
+/// The document drawn as a standalone SVG file, as the canvas draws it (`sfc build --target
+/// svg` and the editor's export agree).
+pub fn svg(doc: &EditorDoc) -> String {
+    svg::svg(doc)
 }
 
 /// Positions every block and routes every connection again (the structured layout of

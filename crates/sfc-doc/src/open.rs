@@ -14,6 +14,7 @@ use crate::{ActionDef, Association, ChartTarget, Connection, EditorDoc, Element,
 use sfc_model::{Chart, Target};
 use sfc_render::LayoutKind;
 use sfc_syntax::ast;
+use sfc_syntax::attr_value::{Loose, LOOSE};
 use std::collections::{HashMap, HashSet};
 
 /// One chart as read from the text, before it becomes a document.
@@ -38,6 +39,8 @@ pub struct ReadChart<'a> {
     pub trailing_comments: Vec<String>,
     pub graph: Option<String>,
     pub attributes: Vec<crate::OtherAttribute>,
+    /// `sfc.loose`: transitions drawn but not connected on both sides (from another tool).
+    pub loose: Vec<Loose>,
 }
 
 /// The element of the text a comment belongs to.
@@ -240,15 +243,66 @@ pub fn read<'a>(text: &str, chart: &'a Chart, pou: &ast::Pou, trivia: &[ast::Tri
         trailing_comments,
         graph: pragma::text(&pou.attributes, sidecar::NAME),
         attributes: pragma::others(&pou.attributes, pragma::POU),
+        loose: pragma::all(&pou.attributes, LOOSE).iter().filter_map(|v| Loose::read(v)).collect(),
     }
 }
 
 /// The document of a chart read from text, with canonical ids.
 pub fn document(r: &ReadChart) -> EditorDoc {
     let mut probe = Probe::default();
-    let doc = from_sidecar(r, &mut probe).unwrap_or_else(|| laid_out(r, &mut probe));
+    let doc = from_sidecar(r, &mut probe).unwrap_or_else(|| {
+        let mut doc = laid_out(r, &mut probe);
+        add_loose(&mut doc, &r.loose);
+        doc
+    });
     let d = graph::derive(&doc, &mut probe);
     graph::normalize(&doc, &d)
+}
+
+/// Draws the transitions of `sfc.loose` (a chart being drawn in another tool): each at its
+/// stored position (or right of the chart), wired to the steps it was wired to where their pin
+/// is still free. They stay outside the chart until the user connects them (SFC0204).
+fn add_loose(doc: &mut EditorDoc, loose: &[Loose]) {
+    let right = doc.elements.iter().map(|e| e.x + e.w).fold(0.0, f64::max);
+    for (k, l) in loose.iter().enumerate() {
+        let id = format!("#loose{k}");
+        let (x, y) = match l.rect {
+            Some([x, y, w, _]) => (x + w / 2.0 - layout::TRANSITION_W / 2.0, y),
+            None => (right + 80.0, 40.0 + 80.0 * k as f64),
+        };
+        doc.elements.push(Element {
+            id: id.clone(),
+            kind: Some(ElementKind::Transition),
+            x,
+            y,
+            w: layout::TRANSITION_W,
+            h: layout::TRANSITION_H,
+            name: l.name.clone(),
+            condition: Some(l.condition.clone()),
+            ..Element::default()
+        });
+        let step = |doc: &EditorDoc, name: &str| {
+            doc.elements
+                .iter()
+                .find(|e| e.kind == Some(ElementKind::Step) && e.name.eq_ignore_ascii_case(name))
+                .map(|e| e.id.clone())
+        };
+        let mut wires = Vec::new();
+        for s in l.from.iter().filter_map(|n| step(doc, n)) {
+            if wires.is_empty() && !doc.connections.iter().any(|c| c.source == s) {
+                wires.push((s, id.clone()));
+            }
+        }
+        for s in l.to.iter().filter_map(|n| step(doc, n)) {
+            if !doc.connections.iter().any(|c| c.target == s) && !wires.iter().any(|w| w.0 == id) {
+                wires.push((id.clone(), s));
+            }
+        }
+        for (source, target) in wires {
+            let n = doc.connections.len();
+            doc.connections.push(Connection { id: format!("#cl{n}"), source, target, ..Connection::default() });
+        }
+    }
 }
 
 fn empty_doc(r: &ReadChart) -> EditorDoc {
@@ -656,8 +710,80 @@ fn laid_out(r: &ReadChart, probe: &mut Probe) -> EditorDoc {
         .collect();
 
     let d = graph::derive(&doc, probe);
-    layout::place(&mut doc, &d, &Model { step_of: &step_of, transition_of: &transition_of }, &lay, &keep);
+    let only_labels_kept = doc.elements.iter().zip(&keep).all(|(e, k)| !k || e.kind == Some(ElementKind::Text));
+    if !(only_labels_kept
+        && lay.kind == LayoutKind::Structured
+        && structured(&mut doc, &d, chart, &step_of, &transition_of))
+    {
+        layout::place(&mut doc, &d, &Model { step_of: &step_of, transition_of: &transition_of }, &lay, &keep);
+    }
     doc
+}
+
+/// Lays the document out with the structured layout in the editor's units (`structured.rs`)
+/// and routes its wires; `false` (nothing changed) when the chart or the document's bars do not
+/// fit it.
+fn structured(
+    doc: &mut EditorDoc,
+    d: &graph::Derived,
+    chart: &sfc_model::Chart,
+    step_of: &[Option<usize>],
+    transition_of: &[Option<usize>],
+) -> bool {
+    let Some(tree) = sfc_render::structure::recover(chart) else { return false };
+    let invert = |of: &[Option<usize>], n: usize| -> Option<Vec<usize>> {
+        let mut out = vec![usize::MAX; n];
+        for (i, k) in of.iter().enumerate() {
+            if let Some(k) = *k {
+                *out.get_mut(k)? = i;
+            }
+        }
+        out.iter().all(|&i| i != usize::MAX).then_some(out)
+    };
+    let (Some(steps), Some(transitions)) =
+        (invert(step_of, chart.steps.len()), invert(transition_of, chart.transitions.len()))
+    else {
+        return false;
+    };
+    if !crate::structured::place(doc, d, &tree, &steps, &transitions) {
+        return false;
+    }
+    clear_text_labels(doc);
+    layout::route_all(doc, d);
+    true
+}
+
+/// Text labels (comments) keep their place unless the new layout put a block or a label under
+/// them; those move to a column right of the drawing, one below the other.
+fn clear_text_labels(doc: &mut EditorDoc) {
+    use crate::drawing::{labels, Rect};
+    let texts: Vec<usize> =
+        (0..doc.elements.len()).filter(|&i| doc.elements[i].kind == Some(ElementKind::Text)).collect();
+    if texts.is_empty() {
+        return;
+    }
+    let mut taken: Vec<Rect> = doc
+        .elements
+        .iter()
+        .filter(|e| e.kind.is_some() && e.kind != Some(ElementKind::Text))
+        .map(Rect::of)
+        .chain(labels(doc).into_iter().map(|l| l.rect))
+        .collect();
+    let right = taken.iter().map(|r| r.right()).fold(0.0, f64::max);
+    let mut column_y = taken.iter().map(|r| r.y).fold(f64::INFINITY, f64::min).min(40.0);
+    let column_x = ((right + 40.0) / 10.0).ceil() * 10.0;
+    for i in texts {
+        let r = Rect::of(&doc.elements[i]);
+        if taken.iter().any(|t| t.overlaps(&r)) {
+            let e = &mut doc.elements[i];
+            e.x = column_x;
+            e.y = column_y;
+            column_y = ((column_y + e.h + 20.0) / 10.0).ceil() * 10.0;
+            taken.push(Rect::of(e));
+        } else {
+            taken.push(r);
+        }
+    }
 }
 
 /// See [`crate::auto_layout`]: the chart the document's text describes is laid out, and the
@@ -698,6 +824,14 @@ pub fn auto_layout(doc: &EditorDoc) -> EditorDoc {
                 || (*r == Role::Other && matches!(e.kind, Some(ElementKind::Step | ElementKind::Transition)))
         })
         .collect();
-    layout::place(&mut out, &d, &Model { step_of: &step_of, transition_of: &transition_of }, &lay, &keep);
+    let only_labels_kept = out.elements.iter().zip(&keep).all(|(e, k)| !k || e.kind == Some(ElementKind::Text));
+    if !(only_labels_kept
+        && lay.kind == LayoutKind::Structured
+        && structured(&mut out, &d, &chart, &step_of, &transition_of))
+    {
+        layout::place(&mut out, &d, &Model { step_of: &step_of, transition_of: &transition_of }, &lay, &keep);
+        clear_text_labels(&mut out);
+        layout::route_all(&mut out, &d);
+    }
     out
 }

@@ -44,7 +44,7 @@ pub const TRANSITION: &[&str] = &[
 /// The attributes the editor reads into an action's fields.
 pub const ACTION: &[&str] = &["sfc.description"];
 /// The attributes the editor reads into the document (before the POU).
-pub const POU: &[&str] = &["sfc.target", "sfc.description", "sfc.comment", "sfc.graph"];
+pub const POU: &[&str] = &["sfc.target", "sfc.description", "sfc.comment", "sfc.graph", "sfc.loose"];
 
 pub use sfc_syntax::attr_value::{escape, unescape};
 

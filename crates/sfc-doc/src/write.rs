@@ -7,6 +7,7 @@ use crate::readback::Probe;
 use crate::sidecar::{self, ActEntry, End, Entry, Sidecar, Wire};
 use crate::{ChartTarget, EditorDoc, Element, ElementKind, PouKind, Problem, Written};
 use sfc_diagnostics::Severity;
+use sfc_syntax::attr_value::{Loose, LOOSE};
 use std::collections::HashMap;
 
 const IND: &str = "    ";
@@ -240,6 +241,38 @@ pub fn write(doc: &EditorDoc) -> Written {
     for e in doc.elements.iter().filter(|e| e.kind == Some(ElementKind::Text)) {
         let v = format!("{} {} {} {}\n{}", num(e.x), num(e.y), num(e.w), num(e.h), e.text.as_deref().unwrap_or(""));
         out.push_str(&line("", "sfc.comment", &escape(&v)));
+    }
+    // Transitions not connected on both sides, which the text cannot hold, for other tools
+    // (the PLCopen export draws them); `sfc.graph` keeps them for the editor.
+    for (i, e) in doc.elements.iter().enumerate() {
+        if e.kind != Some(ElementKind::Transition) || !matches!(d.roles[i], Role::Other) {
+            continue;
+        }
+        let (mut from, mut to) = (Vec::new(), Vec::new());
+        // Ends by block position (ids may repeat in a document being edited).
+        for c in &doc.connections {
+            let (Some(&s), Some(&t)) = (d.by_id.get(&c.source), d.by_id.get(&c.target)) else { continue };
+            let (other, list) = if t == i {
+                (s, &mut from)
+            } else if s == i {
+                (t, &mut to)
+            } else {
+                continue;
+            };
+            if let Some(s) = doc.elements.get(other) {
+                if s.kind == Some(ElementKind::Step) && probe.is_name(&s.name) {
+                    list.push(s.name.clone());
+                }
+            }
+        }
+        let loose = Loose {
+            rect: Some([e.x, e.y, e.w, e.h]),
+            from,
+            to,
+            name: if probe.is_name(&e.name) { e.name.clone() } else { String::new() },
+            condition: e.condition.clone().unwrap_or_default().replace('\r', ""),
+        };
+        out.push_str(&line("", LOOSE, &escape(&loose.write())));
     }
     if pragma::readable(&doc.attributes, pragma::POU) != doc.attributes {
         car.attrs = Some(doc.attributes.clone());

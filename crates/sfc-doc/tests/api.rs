@@ -204,7 +204,9 @@ fn plcopen_export_and_import_keep_the_document() {
         let checked = sfc_model::check_source(0, f, &to_text(&d).text, &Default::default());
         let xml = sfc_plcopen::export(&checked).unwrap_or_else(|e| panic!("{f}: {e:?}"));
         let imported = sfc_plcopen::import(0, f, &xml);
-        assert!(imported.diagnostics.is_empty(), "{f}: {:?}", imported.diagnostics);
+        // A transition the user has not connected yet is written as drawn, and reported again
+        // on import (SFC0706).
+        assert!(imported.diagnostics.iter().all(|d| d.code == "SFC0706"), "{f}: {:?}", imported.diagnostics);
         let mut back = open(0, f, &imported.text).charts.remove(0);
         back.declarations = d.declarations.clone();
         // PLCopen carries the `sfc.*` attributes only.

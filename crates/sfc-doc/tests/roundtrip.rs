@@ -160,3 +160,48 @@ fn corpus_round_trips() {
     }
     run(inputs, false);
 }
+
+/// Every chart of the files in the shapes of other tools (`tests/corpus/real`) opens in the
+/// editor and saves back equal.
+#[test]
+fn real_tool_files_open_and_round_trip() {
+    let mut inputs = Vec::new();
+    for p in files(&root().join("tests/corpus/real"), ".xml") {
+        let xml = std::fs::read_to_string(&p).unwrap();
+        let imported = sfc_plcopen::import(0, &p.display().to_string(), &xml);
+        inputs.push((format!("{} (imported)", p.display()), imported.text, true));
+    }
+    assert!(inputs.len() >= 25);
+    let charts = run(inputs, false);
+    assert!(charts >= 30, "{charts} charts opened");
+}
+
+/// A chart being drawn in another tool: its unconnected transitions (`sfc.loose` from the
+/// PLCopen import) are drawn at their places, wired to the step they were wired to, reported
+/// as not yet in the chart, and kept by a save (in `sfc.loose` and `sfc.graph`).
+#[test]
+fn unconnected_transitions_of_an_imported_chart_are_drawn_and_kept() {
+    let p = root().join("crates/sfc-plcopen/tests/fixtures/drawing_in_progress.xml");
+    let xml = std::fs::read_to_string(&p).unwrap();
+    let imported = sfc_plcopen::import(0, "drawing.xml", &xml);
+    let opened = open(0, "drawing.st", &imported.text);
+    let doc = &opened.charts[0];
+    let transitions: Vec<_> =
+        doc.elements.iter().filter(|e| e.kind == Some(sfc_doc::ElementKind::Transition)).collect();
+    assert_eq!(transitions.len(), 5);
+    let conditions: Vec<_> = transitions.iter().filter_map(|e| e.condition.as_deref()).collect();
+    for c in ["Level > 80", "Empty AND NOT Start", ""] {
+        assert!(conditions.contains(&c), "{conditions:?}");
+    }
+    let level = transitions.iter().find(|e| e.condition.as_deref() == Some("Level > 80")).unwrap();
+    assert_eq!((level.x, level.y), (370.0 + 10.0 - 20.0, 100.0), "kept where it was drawn");
+    let draining = doc.elements.iter().find(|e| e.name == "Draining").unwrap();
+    assert!(doc.connections.iter().any(|c| c.source == level.id && c.target == draining.id));
+    let problems = sfc_doc::problems(doc);
+    assert_eq!(problems.iter().filter(|p| p.code == "SFC0204").count(), 3, "{problems:?}");
+    let saved = to_text(doc).text;
+    assert_eq!(saved.matches("{attribute 'sfc.loose'").count(), 3, "{saved}");
+    round_trip("drawing.st", &imported.text, false, false).unwrap();
+    let again = open(0, "saved.st", &saved);
+    assert_eq!(again.charts[0], *doc);
+}

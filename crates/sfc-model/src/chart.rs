@@ -294,15 +294,27 @@ impl Chart {
         }
         groups.into_iter().map(|g| g.1).collect()
     }
-    /// ATMT/EATMT state numbers: tags where given, the free numbers in declaration order
-    /// otherwise (so without tags the initial step is 0 when it is declared first).
+    /// Whether more than one step can be active: simultaneous branches, or several networks
+    /// each with its initial step.
+    pub fn several_active_steps(&self) -> bool {
+        self.transitions.iter().any(|t| t.from.len() > 1 || t.to.len() > 1) || self.initial_steps().len() > 1
+    }
+    /// ATMT/EATMT state numbers (interfaces.md): tags where given; an untagged initial step is
+    /// state 0 wherever it is declared (the first one in declaration order, when no tag takes 0);
+    /// the other untagged steps take the free numbers in declaration order.
     pub fn state_numbers(&self) -> Vec<u32> {
-        let used: std::collections::HashSet<u32> = self.steps.iter().filter_map(|s| s.tag).collect();
+        let mut used: std::collections::HashSet<u32> = self.steps.iter().filter_map(|s| s.tag).collect();
+        let zero = if used.contains(&0) { None } else { self.steps.iter().position(|s| s.initial && s.tag.is_none()) };
+        if zero.is_some() {
+            used.insert(0);
+        }
         let mut next = 0u32;
         self.steps
             .iter()
-            .map(|s| match s.tag {
+            .enumerate()
+            .map(|(i, s)| match s.tag {
                 Some(t) => t,
+                None if Some(i) == zero => 0,
                 None => {
                     while used.contains(&next) {
                         next += 1;

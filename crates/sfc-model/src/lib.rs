@@ -4,6 +4,7 @@
 
 pub mod chart;
 mod code;
+mod latch;
 pub mod lower;
 pub mod validate;
 
@@ -28,7 +29,15 @@ pub struct CheckOptions {
     /// Keep the type of every checked expression in [`Checked::expr_types`] (the simulator
     /// needs them for integer widths); off by default, so plain checking does not pay for it.
     pub keep_types: bool,
+    /// ATMT/EATMT with `--flatten`: a chart whose situations can hold several active steps is
+    /// compiled into one automaton, so the target rules flattening replaces
+    /// ([`FLATTENING_REPLACES`]) are not checked for it.
+    pub flatten: bool,
 }
+
+/// The ATMT/EATMT rules that flattening replaces by its own (state and rule counts, AND
+/// branches, step tags): not checked for a chart that is flattened.
+pub const FLATTENING_REPLACES: [&str; 4] = ["SFC0401", "SFC0403", "SFC0404", "SFC0409"];
 
 /// The result of checking one file.
 #[derive(Debug, Clone)]
@@ -58,7 +67,13 @@ pub fn check_source(file_id: u32, name: &str, text: &str, opts: &CheckOptions) -
     let (type_diags, expr_types) = code::check_unit(&unit, opts.keep_types);
     let mut charts = Vec::new();
     for (i, item) in unit.items.iter_mut().enumerate() {
+        if let ast::Item::Globals(block) = item {
+            lower::check_variable_attributes(block, file_id, &mut diags);
+        }
         let ast::Item::Pou(pou) = item else { continue };
+        for block in &pou.var_blocks {
+            lower::check_variable_attributes(block, file_id, &mut diags);
+        }
         lower::check_attributes(&pou.attributes, &["sfc.target"], "a POU", &mut diags);
         let attr_target = lower::target_attr(&pou.attributes, &mut diags);
         let target = opts.target.or(attr_target).unwrap_or(Target::Blank);
@@ -66,8 +81,14 @@ pub fn check_source(file_id: u32, name: &str, text: &str, opts: &CheckOptions) -
         if let ast::Body::Sfc(elements) = &mut body {
             let chart = lower::lower(file_id, i, pou, elements, target, &mut diags);
             validate::structure(&chart, text, &mut diags);
+            latch::latched_outputs(pou, &chart, &mut diags);
             let limits = Limits::of(target, opts.nstep, opts.ntr);
-            validate::target_rules(&chart, limits, &mut diags);
+            let mut rules = Vec::new();
+            validate::target_rules(&chart, limits, &mut rules);
+            if opts.flatten && chart.several_active_steps() {
+                rules.retain(|d| !FLATTENING_REPLACES.contains(&d.code));
+            }
+            diags.extend(rules);
             charts.push(chart);
         }
         pou.body = body;
@@ -99,4 +120,109 @@ fn bang_outside_eatmt(file_id: u32, text: &str, charts: &[Chart], diags: &mut Ve
             );
         }
     }
+}
+
+/// The POUs `pou` depends on, itself included (upper-case names): the POUs of the file whose
+/// names occur in its text (instances of function blocks, calls of functions), transitively.
+pub fn dependencies(unit: &ast::SourceUnit, text: &str, pou: &str) -> std::collections::HashSet<String> {
+    use std::collections::{HashMap, HashSet};
+    let mut spans: HashMap<String, Span> = HashMap::new();
+    for item in &unit.items {
+        if let ast::Item::Pou(p) = item {
+            spans.entry(p.name.text.to_ascii_uppercase()).or_insert(p.span);
+        }
+    }
+    let mut out = HashSet::new();
+    let mut todo = vec![pou.to_ascii_uppercase()];
+    while let Some(name) = todo.pop() {
+        if !out.insert(name.clone()) {
+            continue;
+        }
+        let Some(span) = spans.get(&name) else { continue };
+        let body = text.get(span.start as usize..span.end as usize).unwrap_or("");
+        let (toks, _) = sfc_syntax::lexer::lex(0, body);
+        for t in toks.iter().filter(|t| t.kind == sfc_syntax::lexer::TokenKind::Ident) {
+            let w = body[t.start as usize..t.end as usize].to_ascii_uppercase();
+            if spans.contains_key(&w) && !out.contains(&w) {
+                todo.push(w);
+            }
+        }
+    }
+    out
+}
+
+/// The errors of a checked file that concern the POU `pou`: those inside it or inside a POU it
+/// depends on, and those outside every POU (types, globals). An error in an unrelated POU does
+/// not keep `pou` from being simulated or built.
+pub fn errors_for(checked: &Checked, pou: &str) -> Vec<Diagnostic> {
+    let deps = dependencies(&checked.unit, &checked.file.text, pou);
+    let pou_spans: Vec<(String, Span)> = checked
+        .unit
+        .items
+        .iter()
+        .filter_map(|i| match i {
+            ast::Item::Pou(p) => Some((p.name.text.to_ascii_uppercase(), p.span)),
+            _ => None,
+        })
+        .collect();
+    checked
+        .diagnostics
+        .iter()
+        .filter(|d| d.is_error())
+        .filter(|d| {
+            match pou_spans.iter().find(|(_, s)| s.start <= d.span.start && d.span.start < s.end.max(s.start + 1)) {
+                Some((name, _)) => deps.contains(name),
+                None => true,
+            }
+        })
+        .cloned()
+        .collect()
+}
+
+/// Leaves out of `checked` every POU with an error that `pou` does not depend on (it becomes a
+/// block kept as written, so item numbers stay), so the rest can be compiled; returns whether
+/// any was left out.
+pub fn set_aside_unrelated(checked: &mut Checked, pou: &str) -> bool {
+    let deps = dependencies(&checked.unit, &checked.file.text, pou);
+    let errors: Vec<Span> = checked.diagnostics.iter().filter(|d| d.is_error()).map(|d| d.span).collect();
+    let mut any = false;
+    for item in checked.unit.items.iter_mut() {
+        let ast::Item::Pou(p) = item else { continue };
+        if deps.contains(&p.name.text.to_ascii_uppercase()) {
+            continue;
+        }
+        if !errors.iter().any(|e| p.span.start <= e.start && e.start < p.span.end) {
+            continue;
+        }
+        let text = checked.file.text.get(p.span.start as usize..p.span.end as usize).unwrap_or("").to_string();
+        *item = ast::Item::Verbatim(ast::Verbatim {
+            keyword: p.kind.keyword().to_string(),
+            attributes: p.attributes.clone(),
+            name: Some(p.name.clone()),
+            text,
+            span: p.span,
+        });
+        any = true;
+    }
+    if any {
+        let kept: std::collections::HashSet<usize> = checked
+            .unit
+            .items
+            .iter()
+            .enumerate()
+            .filter(|(_, i)| matches!(i, ast::Item::Pou(_)))
+            .map(|(k, _)| k)
+            .collect();
+        checked.charts.retain(|c| kept.contains(&c.item));
+        checked.diagnostics.retain(|d| !d.is_error() || errors_for_span(&checked.unit, d.span));
+    }
+    any
+}
+
+/// Whether an error at `span` is in a POU still analysed or outside every POU.
+fn errors_for_span(unit: &ast::SourceUnit, span: Span) -> bool {
+    !unit
+        .items
+        .iter()
+        .any(|i| matches!(i, ast::Item::Verbatim(v) if v.span.start <= span.start && span.start < v.span.end))
 }

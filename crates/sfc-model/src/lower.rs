@@ -39,6 +39,8 @@ const KNOWN_ATTRIBUTES: &[&str] = &[
     "sfc.timeout",
     "sfc.target",
     "sfc.final",
+    // The safe value of an output (`sfc run`, docs/runtime.md): written on a fault or a stop.
+    "sfc.safe",
     "sfc.x",
     "sfc.y",
     "sfc.width",
@@ -64,6 +66,16 @@ const KNOWN_ATTRIBUTES: &[&str] = &[
     "sfc.reference",
     "sfc.inline",
     "sfc.comment",
+    // Also the PLCopen import's: the file's headers and foreign project data (on its first POU),
+    // a POU kept as written (why, and its XML).
+    "sfc.fileheader",
+    "sfc.contentheader",
+    "sfc.projectdata",
+    "sfc.verbatim",
+    "sfc.pouxml",
+    // Transitions drawn but not connected on both sides (PLCopen import and editor), which the
+    // chart does not hold (`sfc_syntax::attr_value::Loose`).
+    "sfc.loose",
     // Written by the editor (`sfc-doc`): the blocks, connections and bends the text cannot hold;
     // the build output of an "IEC 61131-3" chart (a blank one), kept for the editor's toolbar.
     "sfc.graph",
@@ -87,7 +99,7 @@ pub fn check_attributes(attrs: &[ast::Attribute], allowed: &[&str], what: &str, 
         }
         let meaningful = match lname.as_str() {
             "sfc.build" => allowed.contains(&"sfc.target"),
-            "sfc.tag" | "sfc.timeout" | "sfc.target" | "sfc.final" => allowed.contains(&lname.as_str()),
+            "sfc.tag" | "sfc.timeout" | "sfc.target" | "sfc.final" | "sfc.safe" => allowed.contains(&lname.as_str()),
             _ => true,
         };
         if !KNOWN_ATTRIBUTES.contains(&lname.as_str()) {
@@ -101,6 +113,42 @@ pub fn check_attributes(attrs: &[ast::Attribute], allowed: &[&str], what: &str, 
         } else if lname == "sfc.build" {
             build_attr(a, diags);
         }
+    }
+}
+
+/// Checks the attributes of the variable declarations of `block`: `sfc.safe` is meaningful
+/// there, and its value must be one literal (`FALSE`, `0`, `-5`, `2.5`, `T#0s`, `'text'`);
+/// whether it fits the variable's type is checked by `sfc run`, which uses it.
+pub fn check_variable_attributes(block: &ast::VarBlock, file_id: u32, diags: &mut Vec<Diagnostic>) {
+    for d in &block.decls {
+        check_attributes(&d.attributes, &["sfc.safe"], "a variable", diags);
+        let Some(a) = attr(&d.attributes, "sfc.safe") else { continue };
+        let v = a.value.as_deref().unwrap_or("").trim();
+        if !is_one_literal(file_id, v) {
+            diags.push(Diagnostic::error(
+                "SFC0601",
+                a.span,
+                format!("`sfc.safe` is one literal such as 'FALSE', '0' or 'T#0s', found {v:?}"),
+            ));
+        }
+    }
+}
+
+/// Whether `text` is a single literal, optionally negative.
+fn is_one_literal(file_id: u32, text: &str) -> bool {
+    use sfc_syntax::lexer::TokenKind as K;
+    let (tokens, errors) = sfc_syntax::lexer::lex(file_id, text);
+    if !errors.is_empty() {
+        return false;
+    }
+    let toks: Vec<_> = tokens.iter().filter(|t| t.kind != K::Whitespace && t.kind != K::Eof).collect();
+    match toks.as_slice() {
+        [t] if t.kind == K::Ident => {
+            ["TRUE", "FALSE"].iter().any(|b| b.eq_ignore_ascii_case(&text[t.start as usize..t.end as usize]))
+        }
+        [t] => matches!(t.kind, K::Int | K::Real | K::Typed | K::String | K::WString),
+        [m, t] => m.kind == K::Minus && matches!(t.kind, K::Int | K::Real | K::Typed),
+        _ => false,
     }
 }
 

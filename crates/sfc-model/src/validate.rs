@@ -97,7 +97,7 @@ pub fn structure(chart: &Chart, source: &str, diags: &mut Vec<Diagnostic>) {
             std::collections::hash_map::Entry::Occupied(first) => {
                 let a = &chart.transitions[*first.get()];
                 diags.push(
-                    Diagnostic::error(
+                    Diagnostic::warning(
                         "SFC0215",
                         b.header_span,
                         format!("transition `{}` repeats transition `{}`", b.name, a.name),
@@ -242,7 +242,8 @@ pub fn target_rules(chart: &Chart, limits: Limits, diags: &mut Vec<Diagnostic>) 
                     t.header_span,
                     format!("{tname} has one active state: the simultaneous {what} of `{}` is not supported", t.name),
                 )
-                .with_element(&t.name),
+                .with_element(&t.name)
+                .with_note("`sfc build --flatten` compiles every reachable situation into one state"),
             );
         }
     }
@@ -377,6 +378,14 @@ pub fn target_rules(chart: &Chart, limits: Limits, diags: &mut Vec<Diagnostic>) 
             }
         }
         if s.initial && numbers[i] != 0 {
+            let note = if s.tag.is_some() {
+                "remove its tag (an untagged initial step is state 0) or give it {attribute 'sfc.tag' := '0'}"
+                    .to_string()
+            } else if let Some(z) = chart.steps.iter().find(|z| z.tag == Some(0)) {
+                format!("step `{}` is tagged 0; remove that tag", z.name)
+            } else {
+                "only one initial step can be state 0: a chart with several networks needs --flatten".to_string()
+            };
             diags.push(
                 Diagnostic::error(
                     "SFC0409",
@@ -384,7 +393,7 @@ pub fn target_rules(chart: &Chart, limits: Limits, diags: &mut Vec<Diagnostic>) 
                     format!("the initial step `{}` must be state 0, it is state {}", s.name, numbers[i]),
                 )
                 .with_element(&s.name)
-                .with_note("declare the initial step first, or give it {attribute 'sfc.tag' := '0'}"),
+                .with_note(note),
             );
         }
     }

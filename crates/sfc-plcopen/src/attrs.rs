@@ -10,6 +10,7 @@
 //! | `sfc.reference` | transition | the name of the `transitions` entry the condition came from |
 //! | `sfc.inline` | action | `true`: written inline in its action block |
 //! | `sfc.comment` | POU | one comment box of the SFC body: `x y w h` then a line break and the text |
+//! | `sfc.loose` | POU | one transition not connected on both sides ([`Loose`]), which the chart cannot hold |
 //!
 //! Those are written in PLCopen's own elements where the element has them (a position, a
 //! `documentation`, an inline action, a `reference` condition). Every other attribute (`sfc.tag`,
@@ -30,13 +31,19 @@ pub const JUMP: &str = "sfc.jump";
 pub const REFERENCE: &str = "sfc.reference";
 pub const INLINE: &str = "sfc.inline";
 pub const COMMENT: &str = "sfc.comment";
+pub const GVL: &str = "sfc.gvl";
+pub const VERBATIM: &str = "sfc.verbatim";
+pub const POUXML: &str = "sfc.pouxml";
+pub const FILEHEADER: &str = "sfc.fileheader";
+pub const CONTENTHEADER: &str = "sfc.contentheader";
+pub const PROJECTDATA: &str = "sfc.projectdata";
 
 /// The `name` of the `addData/data` element that carries the other `sfc.*` attributes.
 pub const DATA_NAME: &str = "urn:sfc-toolchain:attributes";
 /// The namespace of its content.
 pub const DATA_NS: &str = "urn:sfc-toolchain:attributes";
 
-pub use sfc_syntax::attr_value::{escape, unescape};
+pub use sfc_syntax::attr_value::{escape, unescape, Loose, LOOSE};
 
 /// A number as PLCopen writes it (`xsd:decimal`): integers without a fraction.
 pub fn fmt_num(v: f64) -> String {

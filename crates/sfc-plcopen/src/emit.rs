@@ -35,7 +35,7 @@ impl SourceMap {
         // Entries are sorted by start; only those starting at or before `at` can cover it.
         let upto = self.entries.partition_point(|e| e.text.start <= at);
         let mut best: Option<&MapEntry> = None;
-        for e in self.entries[..upto].iter().rev() {
+        for e in self.entries.get(..upto).unwrap_or_default().iter().rev() {
             let covers = e.text.start <= at && (at < e.text.end || (e.text.is_empty() && at == e.text.start));
             if !covers {
                 continue;
@@ -224,6 +224,28 @@ impl Emitter {
                 self.out.push_str(indent);
                 self.xtext(&line);
                 self.out.push('\n');
+            }
+        }
+    }
+
+    /// Inserts `s` at byte `at` of the text written so far, moving what follows (and its map).
+    pub fn insert(&mut self, at: usize, s: &str) {
+        if s.is_empty() || at > self.out.len() {
+            return;
+        }
+        self.out.insert_str(at, s);
+        let (at, n) = (at as u32, s.len() as u32);
+        for e in &mut self.entries {
+            if e.text.start >= at {
+                e.text.start += n;
+            }
+            if e.text.end > at || (e.text.end == at && e.text.start > at) {
+                e.text.end += n;
+            }
+        }
+        for (_, start) in &mut self.stack {
+            if *start > at {
+                *start += n;
             }
         }
     }

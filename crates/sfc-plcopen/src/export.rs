@@ -19,11 +19,15 @@ use sfc_syntax::ast;
 /// The XML being written.
 pub(crate) struct X {
     w: Writer<Vec<u8>>,
+    /// The comments of the source (`(* … *)`, `// …`) not written yet, with their spans.
+    comments: Vec<(Span, String, bool)>,
+    /// The comments of the element being written: its raw comments and their text.
+    pending: Option<(String, String)>,
 }
 
 impl X {
     fn new() -> X {
-        X { w: Writer::new_with_indent(Vec::new(), b' ', 2) }
+        X { w: Writer::new_with_indent(Vec::new(), b' ', 2), comments: Vec::new(), pending: None }
     }
 
     fn tag(name: &str, attrs: &[(&str, String)]) -> BytesStart<'static> {
@@ -69,6 +73,61 @@ impl X {
         let mut s = String::from_utf8(self.w.into_inner()).unwrap_or_default();
         s.push('\n');
         s
+    }
+
+    /// Takes the comments of the source, to write each with the element it belongs to.
+    pub fn with_comments(&mut self, unit: &ast::SourceUnit) {
+        self.comments = unit
+            .trivia
+            .iter()
+            .filter(|t| matches!(t.kind, ast::TriviaKind::BlockComment | ast::TriviaKind::LineComment))
+            .map(|t| (t.span, t.text.clone(), false))
+            .collect();
+    }
+
+    /// The comments that belong to the element at `span` of `src` (those right before it, with
+    /// nothing but white space and attribute pragmas between, and one ending its last line)
+    /// become its pending comments: `add_data` keeps them verbatim, `documentation` writes
+    /// their text when the element has no description of its own.
+    pub fn take_comments(&mut self, src: &str, span: Span) {
+        self.pending = None;
+        let mut taken: Vec<usize> = Vec::new();
+        // Leading: walk back from the element over white space, pragmas and comments.
+        let mut bound = span.start as usize;
+        for k in (0..self.comments.len()).rev() {
+            let (c, _, used) = &self.comments[k];
+            if *used || c.end as usize > bound {
+                continue;
+            }
+            let gap = src.get(c.end as usize..bound).unwrap_or("x");
+            if !only_blank_or_pragmas(gap) {
+                break;
+            }
+            taken.push(k);
+            bound = c.start as usize;
+        }
+        taken.reverse();
+        // Trailing: a comment after the element on its last line.
+        if let Some(k) = self.comments.iter().position(|(c, _, used)| !used && c.start >= span.end) {
+            let gap = src.get(span.end as usize..self.comments[k].0.start as usize).unwrap_or("x");
+            if gap.chars().all(|ch| ch == ' ' || ch == '\t' || ch == ';') {
+                taken.push(k);
+            }
+        }
+        if taken.is_empty() {
+            return;
+        }
+        let mut raw = Vec::new();
+        let mut plain = Vec::new();
+        for k in taken {
+            self.comments[k].2 = true;
+            let t = self.comments[k].1.clone();
+            let inner =
+                t.strip_prefix("(*").and_then(|x| x.strip_suffix("*)")).or_else(|| t.strip_prefix("//")).unwrap_or(&t);
+            plain.push(inner.trim().to_string());
+            raw.push(t);
+        }
+        self.pending = Some((raw.join("\n"), plain.join("\n")));
     }
 
     /// `position` with `x`, `y`.
@@ -154,6 +213,11 @@ impl X {
     /// attribute not in `native` (those written in PLCopen's own elements for this element),
     /// plus `extra` entries (`<name value="…"/>`).
     pub fn add_data(&mut self, list: &[ast::Attribute], extra: &[(&str, Vec<(&str, String)>)], native: &[&str]) {
+        let mut extra = extra.to_vec();
+        if let Some((raw, _)) = &self.pending {
+            extra.push(("comments", vec![("text", raw.clone())]));
+        }
+        let extra = extra.as_slice();
         let foreign: Vec<String> = attrs::all(list, attrs::ADDDATA).map(attrs::unescape).collect();
         let own: Vec<&ast::Attribute> = list
             .iter()
@@ -188,10 +252,30 @@ impl X {
 
     /// `<documentation>` from `sfc.description`.
     pub fn documentation(&mut self, list: &[ast::Attribute]) {
+        let pending = self.pending.take();
         if let Some(d) = description(list) {
             self.formatted("documentation", &d);
+        } else if let Some((_, text)) = pending.filter(|p| !p.1.trim().is_empty()) {
+            self.formatted("documentation", &text);
         }
     }
+}
+
+/// White space and attribute pragmas only (what may lie between a comment and its element).
+fn only_blank_or_pragmas(gap: &str) -> bool {
+    let mut depth = 0;
+    gap.chars().all(|c| match c {
+        '{' => {
+            depth += 1;
+            true
+        }
+        '}' => {
+            depth -= 1;
+            true
+        }
+        _ if depth > 0 => true,
+        c => c.is_whitespace(),
+    })
 }
 
 /// Elementary types the schema names as elements.
@@ -350,6 +434,7 @@ pub(crate) fn write_variables(x: &mut X, src: &str, d: &ast::VarDecl, kind: Opti
                 ],
             ));
         }
+        x.take_comments(src, d.span);
         x.add_data(&d.attributes, &extra, &[attrs::DESCRIPTION]);
         x.documentation(&d.attributes);
         x.close("variable");
@@ -380,6 +465,9 @@ pub(crate) fn write_var_block(x: &mut X, src: &str, b: &ast::VarBlock, name: &st
         Some(ast::Retain::NonRetain) => a.push(("nonretain", "true".into())),
         None => {}
     }
+    if b.persistent {
+        a.push(("persistent", "true".into()));
+    }
     x.open(name, &a);
     for d in &b.decls {
         write_variables(x, src, d, Some(b.kind));
@@ -408,7 +496,12 @@ fn pou_body_text(src: &str, pou: &ast::Pou) -> String {
 /// leave connections and associations out of the chart. Type errors (an unknown library type, a
 /// condition that is not BOOL) do not change what is written, so such files are exported.
 fn blocks_export(d: &Diagnostic) -> bool {
-    d.is_error() && ["SFC00", "SFC01", "SFC02"].iter().any(|p| d.code.starts_with(p))
+    // A second initial step in a network (which Beremiz, MatIEC and OpenPLC run), no initial
+    // step or a step connected to nothing (a chart being drawn) are written as drawn: the chart
+    // stays complete.
+    d.is_error()
+        && !["SFC0201", "SFC0202", "SFC0203"].contains(&d.code)
+        && ["SFC00", "SFC01", "SFC02"].iter().any(|p| d.code.starts_with(p))
 }
 
 /// Exports a checked file as a PLCopen TC6 v2.01 project. Fails with the errors that keep it
@@ -421,6 +514,7 @@ pub fn export(checked: &Checked) -> Result<String, Vec<Diagnostic>> {
     let src = checked.file.text.as_str();
     let unit = &checked.unit;
     let mut x = X::new();
+    x.with_comments(unit);
     let _ = x.w.write_event(Event::Decl(BytesDecl::new("1.0", Some("utf-8"), None)));
     x.open(
         "project",
@@ -430,26 +524,46 @@ pub fn export(checked: &Checked) -> Result<String, Vec<Diagnostic>> {
             ("xmlns:xsd", "http://www.w3.org/2001/XMLSchema".to_string()),
         ],
     );
-    x.empty(
-        "fileHeader",
-        &[
-            ("companyName", "sfc".into()),
-            ("productName", "sfc".into()),
-            ("productVersion", env!("CARGO_PKG_VERSION").into()),
-            ("creationDateTime", "1970-01-01T00:00:00".into()),
-        ],
-    );
-    let stem = checked.file.name.rsplit(['/', '\\']).next().unwrap_or("project");
-    let stem = stem.split('.').next().filter(|s| !s.is_empty()).unwrap_or("project");
-    x.open("contentHeader", &[("name", stem.to_string())]);
-    x.open("coordinateInfo", &[]);
-    for l in ["fbd", "ld", "sfc"] {
-        x.open(l, &[]);
-        x.empty("scaling", &[("x", "0".into()), ("y", "0".into())]);
-        x.close(l);
+    // The headers of an imported file travel on its first POU (`sfc.fileheader`,
+    // `sfc.contentheader`), as does the project's foreign `addData` (`sfc.projectdata`).
+    let header = |name: &str| -> Option<String> {
+        unit.items.iter().find_map(|it| {
+            let list = match it {
+                ast::Item::Pou(p) => &p.attributes,
+                ast::Item::Verbatim(v) => &v.attributes,
+                _ => return None,
+            };
+            attrs::get(list, name).map(attrs::unescape).filter(|v| well_formed(v))
+        })
+    };
+    match header(attrs::FILEHEADER).and_then(|h| file_header(&h)) {
+        Some(a) => x.empty("fileHeader", &a.iter().map(|(k, v)| (k.as_str(), v.clone())).collect::<Vec<_>>()),
+        None => x.empty(
+            "fileHeader",
+            &[
+                ("companyName", "sfc".into()),
+                ("productName", "sfc".into()),
+                ("productVersion", env!("CARGO_PKG_VERSION").into()),
+                ("creationDateTime", "1970-01-01T00:00:00".into()),
+            ],
+        ),
     }
-    x.close("coordinateInfo");
-    x.close("contentHeader");
+    match header(attrs::CONTENTHEADER).filter(|h| h.contains("coordinateInfo")) {
+        Some(h) => x.raw(&h),
+        None => {
+            let stem = checked.file.name.rsplit(['/', '\\']).next().unwrap_or("project");
+            let stem = stem.split('.').next().filter(|s| !s.is_empty()).unwrap_or("project");
+            x.open("contentHeader", &[("name", stem.to_string())]);
+            x.open("coordinateInfo", &[]);
+            for l in ["fbd", "ld", "sfc"] {
+                x.open(l, &[]);
+                x.empty("scaling", &[("x", "0".into()), ("y", "0".into())]);
+                x.close(l);
+            }
+            x.close("coordinateInfo");
+            x.close("contentHeader");
+        }
+    }
 
     x.open("types", &[]);
     x.open("dataTypes", &[]);
@@ -472,17 +586,136 @@ pub fn export(checked: &Checked) -> Result<String, Vec<Diagnostic>> {
     x.close("dataTypes");
     x.open("pous", &[]);
     for (i, item) in unit.items.iter().enumerate() {
-        if let ast::Item::Pou(pou) = item {
-            let chart = checked.charts.iter().find(|c| c.item == i);
-            write_pou(&mut x, src, pou, chart);
+        match item {
+            ast::Item::Pou(pou) => {
+                let chart = checked.charts.iter().find(|c| c.item == i);
+                write_pou(&mut x, src, pou, chart);
+            }
+            ast::Item::Verbatim(v) => write_verbatim_pou(&mut x, v),
+            _ => {}
         }
     }
     x.close("pous");
     x.close("types");
 
     config::write_instances(&mut x, src, unit);
+    if let Some(data) = header(attrs::PROJECTDATA) {
+        x.open("addData", &[]);
+        x.raw(&data);
+        x.close("addData");
+    }
     x.close("project");
     Ok(x.finish())
+}
+
+/// The attributes of a kept `fileHeader`, made valid for v2.01: the required ones present,
+/// `creationDateTime` an `xs:dateTime` (v1.0 files write `2007-07-07 11:58:26`).
+pub(crate) fn file_header(fragment: &str) -> Option<Vec<(String, String)>> {
+    let doc = roxmltree::Document::parse(fragment).ok()?;
+    let h = doc.root_element();
+    const KNOWN: &[&str] = &[
+        "companyName",
+        "companyURL",
+        "productName",
+        "productVersion",
+        "productRelease",
+        "creationDateTime",
+        "contentDescription",
+    ];
+    let mut out: Vec<(String, String)> = Vec::new();
+    for name in KNOWN {
+        let v = h.attribute(*name).map(str::to_string);
+        let v = match (*name, v) {
+            ("creationDateTime", Some(d)) => Some(date_time(&d)),
+            ("creationDateTime", None) => Some("1970-01-01T00:00:00".into()),
+            ("companyName" | "productName" | "productVersion", None) => Some(String::new()),
+            (_, v) => v,
+        };
+        if let Some(v) = v {
+            out.push((name.to_string(), v));
+        }
+    }
+    Some(out)
+}
+
+/// The `pou` element of the first POU of a checked text (for putting one POU back into a file,
+/// see [`crate::splice_pou`]). Fails with the errors that keep it from being written
+/// faithfully, or when the text holds no POU.
+pub fn export_pou(checked: &Checked) -> Result<String, Vec<Diagnostic>> {
+    let errors: Vec<Diagnostic> = checked.diagnostics.iter().filter(|d| blocks_export(d)).cloned().collect();
+    if !errors.is_empty() {
+        return Err(errors);
+    }
+    let src = checked.file.text.as_str();
+    let mut x = X::new();
+    x.with_comments(&checked.unit);
+    for (i, item) in checked.unit.items.iter().enumerate() {
+        if let ast::Item::Pou(pou) = item {
+            let chart = checked.charts.iter().find(|c| c.item == i);
+            write_pou(&mut x, src, pou, chart);
+            return Ok(x.finish());
+        }
+    }
+    Err(vec![Diagnostic::new("SFC0702", Span::new(0, 0, 0), "the text holds no POU to export")])
+}
+
+/// The coordinate info sfc writes (no scaling).
+pub(crate) const COORDINATE_INFO: &str = "<coordinateInfo><fbd><scaling x=\"0\" y=\"0\"/></fbd><ld><scaling x=\"0\" y=\"0\"/></ld><sfc><scaling x=\"0\" y=\"0\"/></sfc></coordinateInfo>";
+
+/// A `fileHeader` as the import keeps it: the attributes of [`file_header`], in its order.
+pub(crate) fn canonical_file_header(fragment: &str) -> Option<String> {
+    let list = file_header(fragment)?;
+    let a: Vec<String> = list.iter().map(|(k, v)| format!("{k}=\"{}\"", escape_attr(v))).collect();
+    Some(format!("<fileHeader {}/>", a.join(" ")))
+}
+
+/// `2007-07-07 11:58:26` → `2007-07-07T11:58:26`; anything else that is not an `xs:dateTime`
+/// becomes the fixed date of sfc's own files.
+fn date_time(d: &str) -> String {
+    let d = d.trim().replacen(' ', "T", 1);
+    let b = d.as_bytes();
+    let ok = b.len() >= 19
+        && b[4] == b'-'
+        && b[7] == b'-'
+        && b[10] == b'T'
+        && b[13] == b':'
+        && b[16] == b':'
+        && [0, 1, 2, 3, 5, 6, 8, 9, 11, 12, 14, 15, 17, 18].iter().all(|&i| b[i].is_ascii_digit());
+    if ok {
+        d
+    } else {
+        "1970-01-01T00:00:00".into()
+    }
+}
+
+/// Whether a kept XML fragment is well-formed (a hand edit may have broken it: then it is not
+/// written, rather than writing a broken file).
+fn well_formed(fragment: &str) -> bool {
+    roxmltree::Document::parse(&format!("<r>{fragment}</r>")).is_ok()
+}
+
+/// A POU kept as written: the XML it was imported from, as it was (`sfc.pouxml`); one written
+/// as text, with its declarations and its body as text. An import's opaque stand-in for a type
+/// declared elsewhere (`sfc.verbatim` = `opaque`) is not written.
+fn write_verbatim_pou(x: &mut X, v: &ast::Verbatim) {
+    if !matches!(v.keyword.as_str(), "PROGRAM" | "FUNCTION_BLOCK" | "FUNCTION") {
+        return;
+    }
+    if attrs::get(&v.attributes, attrs::VERBATIM).is_some_and(|w| w.trim() == "opaque") {
+        return;
+    }
+    if let Some(xml) = attrs::get(&v.attributes, attrs::POUXML).map(attrs::unescape).filter(|t| well_formed(t)) {
+        x.raw(&xml);
+        return;
+    }
+    let (unit, _) = sfc_syntax::parse(0, &v.text);
+    if let Some(ast::Item::Pou(p)) = unit.items.first() {
+        let mut p = p.clone();
+        p.attributes = v.attributes.clone();
+        let checked = sfc_model::check_source(0, "", &v.text, &sfc_model::CheckOptions::default());
+        let chart = checked.charts.first().filter(|_| matches!(p.body, ast::Body::Sfc(_)));
+        write_pou(x, &checked.file.text, &p, chart);
+    }
 }
 
 fn write_pou(x: &mut X, src: &str, pou: &ast::Pou, chart: Option<&sfc_model::Chart>) {
@@ -517,7 +750,19 @@ fn write_pou(x: &mut X, src: &str, pou: &ast::Pou, chart: Option<&sfc_model::Cha
             x.close("body");
         }
     }
-    x.add_data(&pou.attributes, &[], &[attrs::DESCRIPTION, attrs::COMMENT]);
+    x.take_comments(src, Span::new(pou.span.file, pou.span.start, pou.name.span.end));
+    x.add_data(
+        &pou.attributes,
+        &[],
+        &[
+            attrs::DESCRIPTION,
+            attrs::COMMENT,
+            attrs::LOOSE,
+            attrs::FILEHEADER,
+            attrs::CONTENTHEADER,
+            attrs::PROJECTDATA,
+        ],
+    );
     x.documentation(&pou.attributes);
     x.close("pou");
 }

@@ -2,6 +2,7 @@
 //! interfaces and bodies, configurations. SFC bodies are in [`sfc`], FBD/LD networks in
 //! [`network`].
 
+mod dialect;
 mod network;
 mod sfc;
 
@@ -97,7 +98,7 @@ const RESERVED: &[&str] = &[
 pub(crate) fn is_ident(s: &str) -> bool {
     let b = s.as_bytes();
     !b.is_empty()
-        && (b[0].is_ascii_alphabetic() || b[0] == b'_')
+        && b.first().is_some_and(|c| c.is_ascii_alphabetic() || *c == b'_')
         && b.iter().all(|c| c.is_ascii_alphanumeric() || *c == b'_')
         && !s.contains("__")
         && !s.ends_with('_')
@@ -117,7 +118,10 @@ pub(crate) fn sanitize(s: &str) -> String {
     while out.ends_with('_') {
         out.pop();
     }
-    if out.is_empty() || out.as_bytes()[0].is_ascii_digit() || RESERVED.iter().any(|k| k.eq_ignore_ascii_case(&out)) {
+    if out.is_empty()
+        || out.as_bytes().first().is_some_and(u8::is_ascii_digit)
+        || RESERVED.iter().any(|k| k.eq_ignore_ascii_case(&out))
+    {
         out.insert_str(0, "X_");
     }
     out
@@ -135,6 +139,33 @@ pub(crate) struct Ctx<'i> {
     pub extra_vars: Vec<(String, String)>,
     /// Function block calls needed by condition networks (for `COMPUTE_FUNCTION_BLOCKS`).
     pub compute: Vec<Frag>,
+    /// Resources keep their own global scopes (two of them declare the same name).
+    pub scoped_globals: bool,
+    /// Upper-case names of the global variable lists (CODESYS GVLs: `GVL.X` is `X`).
+    pub gvl_names: HashSet<String>,
+    /// With scoped globals: the globals of the POU's resource, with their types, which the POU
+    /// reaches through VAR_EXTERNAL.
+    pub externals: Vec<(String, Frag)>,
+    /// Upper-case names of the enumerated types of the file (`Enum.Value` is `Enum#Value`).
+    pub enum_types: HashSet<String>,
+    /// Upper-case names of every global variable of the file.
+    pub global_names: HashSet<String>,
+    /// The name of the POU being written.
+    pub pou_name: String,
+    /// Functions generated for conditions whose logic shares values, written after the POU.
+    pub functions: Vec<String>,
+    /// How many of them the file has.
+    pub condition_functions: usize,
+    /// The POU being written is kept as written: its code is copied without mapping.
+    pub verbatim: bool,
+    /// Transitions of the SFC body being written that are not connected on both sides: they go
+    /// into `sfc.loose` attributes of the POU.
+    pub loose: Vec<sfc_syntax::attr_value::Loose>,
+    /// The file's headers and foreign project `addData`, written before the first POU.
+    pub header_attrs: Vec<(String, String)>,
+    /// While writing the resources' lists at file level: the globals written so far (a
+    /// repeated identical declaration is written once).
+    pub emitted_globals: Option<HashSet<String>>,
 }
 
 impl<'i> Ctx<'i> {
@@ -164,9 +195,8 @@ impl<'i> Ctx<'i> {
     }
 
     pub fn diag(&mut self, code: &'static str, at: Range<u32>, msg: impl Into<String>) -> &mut Diagnostic {
-        self.diags.push(Diagnostic::new(code, Span::new(self.file, at.start, at.end), msg));
-        let n = self.diags.len() - 1;
-        &mut self.diags[n]
+        let d = Diagnostic::new(code, Span::new(self.file, at.start, at.end), msg);
+        self.diags.push_mut(d)
     }
 
     /// A name from attribute `name` of `n` as a located fragment; reports and repairs a name
@@ -192,19 +222,48 @@ impl<'i> Ctx<'i> {
         Frag::located(fixed, range)
     }
 
-    /// Writes `{attribute 'name' := 'value'}` lines at `indent`.
+    /// Writes `{attribute 'name' := 'value'}` lines at `indent` (and the element's comments,
+    /// kept by an export, as they were written).
     pub fn attributes(&mut self, list: &[(String, String)], indent: &str) {
         for (k, v) in list {
+            if k == COMMENTS_KEY {
+                // Each comment on its own line, its later lines as written.
+                for c in v.split('\n').scan(false, |inside, line| {
+                    let start = !*inside;
+                    let t = line.trim_start();
+                    let opens = t.starts_with("(*") || t.starts_with("//");
+                    if start && opens && !t.starts_with("//") {
+                        *inside = !t.ends_with("*)");
+                    } else if !start && line.trim_end().ends_with("*)") {
+                        *inside = false;
+                    }
+                    Some((start && opens, line))
+                }) {
+                    match c {
+                        (true, line) => self.em.str(&format!("{indent}{}\n", line.trim_start())),
+                        (false, line) => self.em.str(&format!("{line}\n")),
+                    }
+                }
+                continue;
+            }
             let v = if v.contains(['\'', '}']) { v.replace('\'', "$27").replace('}', "$7D") } else { v.clone() };
             self.em.str(&format!("{indent}{{attribute '{k}' := '{v}'}}\n"));
         }
     }
 }
 
+/// The key of [`element_attrs`]'s entry that holds an element's comments (not an attribute).
+pub(crate) const COMMENTS_KEY: &str = "\u{0}comments";
+
 /// Attributes kept for an element: `documentation` → `sfc.description`, our `addData` → its
-/// attributes, foreign `addData` → `sfc.adddata`.
+/// attributes, foreign `addData` → `sfc.adddata`. Comments an export kept (in our `addData`,
+/// their text also in `documentation`) come back as comments.
 pub(crate) fn element_attrs(n: Node) -> Vec<(String, String)> {
     let mut out = Vec::new();
+    let comments = own_data(n, "comments").and_then(|c| attr(c, "text")).filter(|t| !t.trim().is_empty());
+    if let Some(c) = comments {
+        out.push((COMMENTS_KEY.to_string(), c.to_string()));
+    }
     if let Some(add) = child(n, "addData") {
         let mut foreign = String::new();
         for data in children(add, "data") {
@@ -228,7 +287,7 @@ pub(crate) fn element_attrs(n: Node) -> Vec<(String, String)> {
             out.push((attrs::ADDDATA.to_string(), attrs::escape(&foreign)));
         }
     }
-    if let Some(doc) = child(n, "documentation") {
+    if let Some(doc) = child(n, "documentation").filter(|_| comments.is_none()) {
         let text = xml::formatted_text(doc).text;
         let text = text.trim();
         if !text.is_empty() {
@@ -251,6 +310,53 @@ pub(crate) fn own_data<'a, 'i: 'a>(n: Node<'a, 'i>, what: &str) -> Option<Node<'
 /// Imports a document; `root` is its `project` element.
 pub(crate) fn project(cx: &mut Ctx, root: Node) {
     let types = child(root, "types");
+    // The headers and the project's foreign `addData` travel on the first POU, so an export
+    // writes them back.
+    // (Not those of sfc's own export, which it writes again.)
+    let ours = child(root, "fileHeader").is_some_and(|h| attr(h, "productName") == Some("sfc"));
+    for (name, key) in [("fileHeader", attrs::FILEHEADER), ("contentHeader", attrs::CONTENTHEADER)] {
+        if let Some(h) = child(root, name).filter(|_| !ours) {
+            let mut text = xml::serialize(h);
+            if name == "fileHeader" {
+                text = crate::export::canonical_file_header(&text).unwrap_or(text);
+            } else if child(h, "coordinateInfo").is_none() {
+                // v2.01 requires the coordinate info: kept as the export writes it.
+                let a: String =
+                    h.attributes().map(|a| format!(" {}=\"{}\"", a.name(), xml::escape_attr(a.value()))).collect();
+                let rest: String = elements(h).map(xml::serialize).collect();
+                text = format!("<contentHeader{a}>{}{rest}</contentHeader>", crate::export::COORDINATE_INFO);
+            }
+            cx.header_attrs.push((key.to_string(), attrs::escape(&text)));
+        }
+    }
+    if !ours && child(root, "contentHeader").is_none() && child(root, "fileHeader").is_some() {
+        // v2.01 requires one: kept as the export writes it, so the way back is stable.
+        let h = format!("<contentHeader name=\"project\">{}</contentHeader>", crate::export::COORDINATE_INFO);
+        cx.header_attrs.push((attrs::CONTENTHEADER.to_string(), attrs::escape(&h)));
+    }
+    let project_data: String = child(root, "addData")
+        .into_iter()
+        .flat_map(|a| children(a, "data"))
+        .filter(|d| attr(*d, "name") != Some(CODESYS_APPLICATION))
+        .map(xml::serialize)
+        .collect();
+    if !project_data.is_empty() {
+        cx.header_attrs.push((attrs::PROJECTDATA.to_string(), attrs::escape(&project_data)));
+    }
+    // Names the CODESYS dialect qualifies: enumerated types, global variable lists, globals.
+    cx.enum_types = dialect::enum_types(root);
+    let lists: Vec<Node> =
+        root.descendants().filter(|d| d.is_element() && d.tag_name().name() == "globalVars").collect();
+    cx.gvl_names = lists
+        .iter()
+        .filter_map(|g| attr(*g, "name").map(|n| n.trim().to_ascii_uppercase()))
+        .filter(|n| !n.is_empty())
+        .collect();
+    cx.global_names = lists
+        .iter()
+        .flat_map(|g| children(*g, "variable"))
+        .filter_map(|v| attr(v, "name").map(|n| n.trim().to_ascii_uppercase()))
+        .collect();
     // Data types.
     if let Some(dt) = types.and_then(|t| child(t, "dataTypes")) {
         let list: Vec<Node> = children(dt, "dataType").collect();
@@ -285,36 +391,248 @@ pub(crate) fn project(cx: &mut Ctx, root: Node) {
             cx.em.close();
         }
     }
-    // Global variables of configurations and resources become file-level VAR_GLOBAL blocks.
+    // Configurations, and the resources of a CODESYS/e!COCKPIT project export (under
+    // `project/addData/data[@name=…/application]`, with an empty `types/pous`).
     let configs: Vec<Node> = child(root, "instances")
         .and_then(|i| child(i, "configurations"))
         .map(|c| children(c, "configuration").collect())
         .unwrap_or_default();
+    let app_resources: Vec<Node> = child(root, "addData")
+        .into_iter()
+        .flat_map(|a| children(a, "data"))
+        .filter(|d| attr(*d, "name") == Some(CODESYS_APPLICATION))
+        .flat_map(|d| children(d, "resource"))
+        .collect();
+    let mut resources: Vec<(Option<Node>, Node)> = Vec::new();
     for c in &configs {
-        let lists = children(*c, "globalVars").chain(children(*c, "resource").flat_map(|r| children(r, "globalVars")));
-        for g in lists.collect::<Vec<_>>() {
-            cx.em.open(anchor(g));
-            var_list(cx, g, "VAR_GLOBAL", "");
-            cx.em.str("\n");
-            cx.em.close();
+        resources.extend(children(*c, "resource").map(|r| (Some(*c), r)));
+    }
+    resources.extend(app_resources.iter().map(|r| (None, *r)));
+
+    // Every POU: the project's, then each resource's (CODESYS keeps an application's POUs in the
+    // resource's `addData`), each with the resource it belongs to.
+    let mut pous: Vec<(Node, Option<usize>)> = Vec::new();
+    if let Some(list) = types.and_then(|t| child(t, "pous")) {
+        pous.extend(children(list, "pou").map(|p| (p, None)));
+    }
+    for (k, (_, r)) in resources.iter().enumerate() {
+        pous.extend(resource_pous(*r).into_iter().map(|p| (p, Some(k))));
+    }
+    // A program instantiated in a resource belongs to it.
+    for (k, (_, r)) in resources.iter().enumerate() {
+        let instances =
+            children(*r, "task").flat_map(|t| children(t, "pouInstance")).chain(children(*r, "pouInstance"));
+        for pi in instances.collect::<Vec<_>>() {
+            let ty = instance_type(pi).to_ascii_uppercase();
+            for (p, owner) in pous.iter_mut() {
+                if owner.is_none() && attr(*p, "name").is_some_and(|n| n.trim().eq_ignore_ascii_case(&ty)) {
+                    *owner = Some(k);
+                }
+            }
         }
     }
-    // POUs.
-    if let Some(pous) = types.and_then(|t| child(t, "pous")) {
-        for p in children(pous, "pou") {
-            pou(cx, p);
+
+    // Global variables: a configuration's and, when no two resources declare the same name, the
+    // resources' are file-level VAR_GLOBAL blocks. Resources that share a name each keep their
+    // own scope, as in IEC 61131-3 and CODESYS: their lists stay inside RESOURCE, and each POU of
+    // a resource reaches them through VAR_EXTERNAL.
+    // Two resources declaring one name differently need their own scopes; the same
+    // declaration twice (a constant every application repeats) is one global.
+    let mut decl_of: std::collections::HashMap<String, String> = std::collections::HashMap::new();
+    let mut scoped = false;
+    for (_, r) in &resources {
+        for v in children(*r, "globalVars").flat_map(|g| children(g, "variable")) {
+            let n = attr(v, "name").unwrap_or("").trim().to_ascii_uppercase();
+            if n.is_empty() {
+                continue;
+            }
+            let sig = ["type", "initialValue"]
+                .iter()
+                .filter_map(|k| child(v, k))
+                .map(xml::serialize)
+                .collect::<Vec<_>>()
+                .join("");
+            match decl_of.get(&n) {
+                Some(prev) if *prev != sig => scoped = true,
+                Some(_) => {}
+                None => {
+                    decl_of.insert(n, sig);
+                }
+            }
         }
+    }
+    cx.scoped_globals = scoped;
+    for c in &configs {
+        for g in children(*c, "globalVars").collect::<Vec<_>>() {
+            global_list(cx, g, "");
+        }
+    }
+    if !scoped {
+        cx.emitted_globals = Some(HashSet::new());
+        for (_, r) in &resources {
+            for g in children(*r, "globalVars").collect::<Vec<_>>() {
+                global_list(cx, g, "");
+            }
+        }
+        cx.emitted_globals = None;
+    }
+    // Derived types that nothing in the file declares (a library's, or an extension's such as
+    // Beremiz's `python_eval` or `HMI_*` blocks): opaque function blocks, with a warning.
+    opaque_types(cx, root, &pous);
+    // POUs.
+    let any_sfc =
+        pous.iter().any(|(p, _)| child(*p, "body").is_some_and(|b| elements(b).any(|e| e.tag_name().name() == "SFC")));
+    let mut externals: Vec<Vec<(String, Frag)>> = Vec::new();
+    for (_, r) in &resources {
+        let mut list = Vec::new();
+        if scoped {
+            for v in children(*r, "globalVars").flat_map(|g| children(g, "variable")).collect::<Vec<_>>() {
+                let Some(n) = attr(v, "name").map(str::trim).filter(|n| is_ident(n)) else { continue };
+                if let Some(t) = child(v, "type") {
+                    let ty = type_text(cx, t, "        ");
+                    list.push((n.to_string(), ty));
+                }
+            }
+        }
+        externals.push(list);
+    }
+    for (p, owner) in &pous {
+        cx.externals = match owner {
+            Some(k) if scoped => externals.get(*k).cloned().unwrap_or_default(),
+            _ => Vec::new(),
+        };
+        pou(cx, *p);
+    }
+    cx.externals.clear();
+    if !any_sfc {
+        let at = types.and_then(|t| child(t, "pous")).map(anchor).unwrap_or_else(|| anchor(root));
+        cx.diag("SFC0712", at, "the file has no SFC POU: there is no chart to check, simulate or edit")
+            .notes
+            .push(format!("POUs found: {}", pou_list(&pous)));
     }
     // Configurations with resources keep their tasks and program instances as text.
     for c in &configs {
-        configuration(cx, *c);
+        let list: Vec<Node> = children(*c, "resource").collect();
+        configuration(cx, *c, &list, scoped);
+    }
+    for r in &app_resources {
+        configuration(cx, *r, std::slice::from_ref(r), scoped);
     }
 }
 
-/// `CONFIGURATION … END_CONFIGURATION` for a configuration with resources (its global
-/// variables are at file level already).
-fn configuration(cx: &mut Ctx, c: Node) {
-    let resources: Vec<Node> = children(c, "resource").collect();
+/// `NAME, NAME, …` of the POUs, or `none`.
+fn pou_list(pous: &[(Node, Option<usize>)]) -> String {
+    if pous.is_empty() {
+        return "none".into();
+    }
+    pous.iter().map(|(p, _)| attr(*p, "name").unwrap_or("?").trim().to_string()).collect::<Vec<_>>().join(", ")
+}
+
+/// The `name` of CODESYS's application data (a project export's resources and their POUs).
+pub(crate) const CODESYS_APPLICATION: &str = "http://www.3s-software.com/plcopenxml/application";
+/// The `name` of CODESYS's data holding one POU of a resource.
+pub(crate) const CODESYS_POU: &str = "http://www.3s-software.com/plcopenxml/pou";
+
+/// The POUs a CODESYS resource keeps in its `addData`.
+fn resource_pous<'a, 'i>(r: Node<'a, 'i>) -> Vec<Node<'a, 'i>> {
+    children(r, "addData")
+        .flat_map(|a| children(a, "data"))
+        .filter(|d| attr(*d, "name") == Some(CODESYS_POU))
+        .flat_map(|d| children(d, "pou"))
+        .collect()
+}
+
+/// The type of a `pouInstance`: `typeName` (v2), `type` (v1.0); CODESYS writes an empty
+/// `typeName`, which means the POU named like the instance.
+fn instance_type<'a>(pi: Node<'a, '_>) -> &'a str {
+    let ty = attr(pi, "typeName").or_else(|| attr(pi, "type")).unwrap_or("").trim();
+    if ty.is_empty() {
+        attr(pi, "name").unwrap_or("").trim()
+    } else {
+        ty
+    }
+}
+
+/// A `globalVars` list as `VAR_GLOBAL … END_VAR` at `indent`.
+fn global_list(cx: &mut Ctx, g: Node, indent: &str) {
+    cx.em.open(anchor(g));
+    var_list(cx, g, "VAR_GLOBAL", indent);
+    if indent.is_empty() {
+        cx.em.str("\n");
+    }
+    cx.em.close();
+}
+
+/// Standard function blocks and those of CODESYS's `Standard` library (`Standard.TON`).
+fn is_standard_type(name: &str) -> bool {
+    sfc_st::stdlib::std_function_block(name).is_some() || sfc_st::stdlib::std_function(name).is_some()
+}
+
+/// Declares every derived type the file uses but does not declare as an opaque function block
+/// (a POU kept as written: not analysed, and everything done with its instances accepted), so
+/// one unknown library block does not fail every POU that uses it.
+fn opaque_types(cx: &mut Ctx, root: Node, pous: &[(Node, Option<usize>)]) {
+    let mut declared: HashSet<String> = HashSet::new();
+    for d in root.descendants().filter(|d| d.is_element()) {
+        let n = d.tag_name().name();
+        if n == "dataType" || n == "pou" {
+            if let Some(name) = attr(d, "name") {
+                declared.insert(name.trim().to_ascii_uppercase());
+            }
+        }
+    }
+    let mut missing: Vec<(String, Range<u32>, &str)> = Vec::new();
+    let mut seen = HashSet::new();
+    let scopes = pous.iter().map(|(p, _)| *p).chain(child(root, "types").and_then(|t| child(t, "dataTypes")));
+    let scopes = scopes.chain(root.descendants().filter(|d| d.is_element() && d.tag_name().name() == "globalVars"));
+    for p in scopes.collect::<Vec<_>>() {
+        for d in p.descendants().filter(|d| d.is_element()) {
+            let (name, range, what) = match d.tag_name().name() {
+                "derived" => (attr(d, "name"), attr_range(d, "name"), "type"),
+                "block" if attr(d, "instanceName").is_some_and(|i| !i.trim().is_empty()) => {
+                    (attr(d, "typeName"), attr_range(d, "typeName"), "function block")
+                }
+                _ => continue,
+            };
+            let Some(raw) = name.map(str::trim).filter(|n| !n.is_empty()) else { continue };
+            // `Lib.Type`: a library's type through its namespace.
+            if dialect::map_type(raw).is_some() {
+                continue;
+            }
+            let name = if raw.contains('.') { sanitize(raw) } else { raw.to_string() };
+            if !is_ident(&name) {
+                continue;
+            }
+            let key = name.to_ascii_uppercase();
+            if declared.contains(&key) || is_standard_type(&name) || !seen.insert(key) {
+                continue;
+            }
+            let what = if raw.contains('.') { "library type" } else { what };
+            missing.push((name, range.unwrap_or_else(|| anchor(d)), what));
+        }
+    }
+    for (name, at, what) in missing {
+        cx.diag(
+            "SFC0713",
+            at.clone(),
+            format!("{what} `{name}` is not declared in the file: imported as an opaque function block"),
+        )
+        .notes
+        .push(
+            "its instances are kept and passed on, but not analysed or simulated (a library or extension block: \
+             Beremiz's svghmi, py_ext and svgui blocks, a CODESYS library)"
+                .into(),
+        );
+        cx.em.open(at);
+        cx.em.str(&format!("{{attribute 'sfc.verbatim' := 'opaque'}}\nFUNCTION_BLOCK {name}\nEND_FUNCTION_BLOCK\n\n"));
+        cx.em.close();
+    }
+}
+
+/// `CONFIGURATION … END_CONFIGURATION` for a configuration (or a CODESYS application, `c` then
+/// being its resource) with resources. Its global variables are at file level already, unless
+/// resources keep their own scopes (`scoped`): then each resource's lists are written inside it.
+fn configuration(cx: &mut Ctx, c: Node, resources: &[Node], scoped: bool) {
     if resources.is_empty() {
         return;
     }
@@ -323,12 +641,17 @@ fn configuration(cx: &mut Ctx, c: Node) {
     cx.em.str("CONFIGURATION ");
     cx.em.frag(&name);
     cx.em.str("\n");
-    for r in resources {
+    for &r in resources {
         cx.em.open(anchor(r));
         let rname = cx.name(r, "name", "resource");
         cx.em.str("    RESOURCE ");
         cx.em.frag(&rname);
         cx.em.str(" ON PLC\n");
+        if scoped {
+            for g in children(r, "globalVars").collect::<Vec<_>>() {
+                global_list(cx, g, "        ");
+            }
+        }
         let tasks: Vec<Node> = children(r, "task").collect();
         for t in &tasks {
             cx.em.open(anchor(*t));
@@ -366,7 +689,14 @@ fn pou_instance(cx: &mut Ctx, pi: Node, task: Option<&str>) {
     cx.em.open(anchor(pi));
     let name = cx.name(pi, "name", "program instance");
     let ty_attr = if attr(pi, "typeName").is_some() { "typeName" } else { "type" };
-    let ty = cx.name(pi, ty_attr, "program type");
+    let ty = if attr(pi, ty_attr).is_some_and(|t| !t.trim().is_empty()) {
+        cx.name(pi, ty_attr, "program type")
+    } else {
+        // CODESYS: an empty type names the POU the instance is named after.
+        let mut f = name.clone();
+        f.marks.clear();
+        f.locate(attr_range(pi, "name").unwrap_or_else(|| anchor(pi)))
+    };
     cx.em.str("        PROGRAM ");
     cx.em.frag(&name);
     if let Some(t) = task.filter(|t| is_ident(t)) {
@@ -381,10 +711,10 @@ fn pou_instance(cx: &mut Ctx, pi: Node, task: Option<&str>) {
 /// A task interval as an IEC duration: v2 writes `T#100ms`, v1.0 `00:00:00.100000`.
 fn interval(s: &str) -> String {
     let parts: Vec<&str> = s.split(':').collect();
-    if parts.len() == 3 {
-        let h: Option<u64> = parts[0].parse().ok();
-        let m: Option<u64> = parts[1].parse().ok();
-        let sec: Option<f64> = parts[2].parse().ok();
+    if let [h, m, sec] = parts.as_slice() {
+        let h: Option<u64> = h.parse().ok();
+        let m: Option<u64> = m.parse().ok();
+        let sec: Option<f64> = sec.parse().ok();
         if let (Some(h), Some(m), Some(sec)) = (h, m, sec) {
             let us = ((h * 3600 + m * 60) as f64 * 1e6 + sec * 1e6).round() as i64;
             return crate::export::fmt_duration(us);
@@ -395,6 +725,7 @@ fn interval(s: &str) -> String {
 
 /// One POU.
 fn pou(cx: &mut Ctx, p: Node) {
+    let diags_before = cx.diags.len();
     cx.em.open(anchor(p));
     let kind = match attr(p, "pouType").unwrap_or("") {
         "program" => "PROGRAM",
@@ -445,8 +776,20 @@ fn pou(cx: &mut Ctx, p: Node) {
             pou_attrs.push((attrs::COMMENT.to_string(), attrs::escape(&v)));
         }
     }
+    // Vendor code without an IEC meaning: the POU is kept as written (its XML travels with it,
+    // so an export writes it back unchanged) and not analysed.
+    let header = std::mem::take(&mut cx.header_attrs);
+    pou_attrs.splice(0..0, header);
+    let verbatim = dialect::reasons(cx, p);
+    cx.verbatim = verbatim.is_some();
+    if let Some(why) = &verbatim {
+        pou_attrs.insert(0, (attrs::VERBATIM.to_string(), attrs::escape(&format!("not analysed: {why}"))));
+        pou_attrs.push((attrs::POUXML.to_string(), attrs::escape(&xml::serialize(p))));
+    }
     cx.attributes(&pou_attrs, "");
+    let attrs_end = cx.em.out.len();
     let name = cx.name(p, "name", "POU");
+    cx.pou_name = name.text.clone();
     cx.em.str(kind);
     cx.em.str(" ");
     cx.em.frag(&name);
@@ -483,6 +826,29 @@ fn pou(cx: &mut Ctx, p: Node) {
             cx.em.close();
         }
     }
+    // With resource-scoped globals: those of the POU's resource it uses, through VAR_EXTERNAL.
+    if !cx.externals.is_empty() {
+        let mut ids = HashSet::new();
+        for t in dialect::code_texts(p) {
+            dialect::identifiers(&t, &mut ids);
+        }
+        let list: Vec<(String, Frag)> = cx
+            .externals
+            .iter()
+            .filter(|(n, _)| ids.contains(&n.to_ascii_uppercase()) && !cx.used.contains(&n.to_ascii_uppercase()))
+            .cloned()
+            .collect();
+        if !list.is_empty() {
+            cx.em.str("    VAR_EXTERNAL\n");
+            for (n, ty) in list {
+                cx.used.insert(n.to_ascii_uppercase());
+                cx.em.str(&format!("        {n} : "));
+                cx.em.frag(&ty);
+                cx.em.str(";\n");
+            }
+            cx.em.str("    END_VAR\n");
+        }
+    }
     let actions: Vec<Node> = child(p, "actions").map(|a| children(a, "action").collect()).unwrap_or_default();
     // The body is written apart, so the variables its translation declares can go before it.
     let head = std::mem::replace(&mut cx.em, Emitter::new(anchor(p)));
@@ -501,7 +867,10 @@ fn pou(cx: &mut Ctx, p: Node) {
         Some(l) => {
             cx.em.open(anchor(l));
             match l.tag_name().name() {
-                "ST" | "IL" => cx.em.lines(&xml::formatted_text(l), "    "),
+                "ST" | "IL" => {
+                    let t = dialect::map(cx, &xml::formatted_text(l));
+                    cx.em.lines(&t, "    ")
+                }
                 "SFC" => sfc::chart(cx, l, &actions, &transitions),
                 _ => {
                     let stmts = network::statements(cx, l, "    ");
@@ -527,6 +896,12 @@ fn pou(cx: &mut Ctx, p: Node) {
         }
     }
     let body_text = std::mem::replace(&mut cx.em, head);
+    // Transitions of the SFC body left unconnected go with the POU's attributes.
+    let mut lines = String::new();
+    for t in std::mem::take(&mut cx.loose) {
+        lines.push_str(&format!("{{attribute '{}' := '{}'}}\n", attrs::LOOSE, attrs::escape(&t.write())));
+    }
+    cx.em.insert(attrs_end, &lines);
     if !cx.extra_vars.is_empty() {
         cx.em.str("    VAR\n");
         for (n, t) in std::mem::take(&mut cx.extra_vars) {
@@ -542,6 +917,15 @@ fn pou(cx: &mut Ctx, p: Node) {
         _ => "END_PROGRAM\n\n",
     });
     cx.em.close();
+    for f in std::mem::take(&mut cx.functions) {
+        cx.em.open(anchor(p));
+        cx.em.str(&f);
+        cx.em.close();
+    }
+    // A POU kept as written is not analysed: what its import found is not reported either.
+    if verbatim.is_some() {
+        cx.diags.truncate(diags_before);
+    }
 }
 
 /// The body of an action (`body` element): ST or IL copied, FBD or LD translated.
@@ -554,7 +938,10 @@ pub(crate) fn action_body(cx: &mut Ctx, body: Node, indent: &str) {
         Some(l) => {
             cx.em.open(anchor(l));
             match l.tag_name().name() {
-                "ST" | "IL" => cx.em.lines(&xml::formatted_text(l), indent),
+                "ST" | "IL" => {
+                    let t = dialect::map(cx, &xml::formatted_text(l));
+                    cx.em.lines(&t, indent)
+                }
                 "SFC" => {
                     cx.diag("SFC0705", anchor(l), "an action body written in SFC cannot be imported");
                 }
@@ -581,11 +968,20 @@ fn var_list(cx: &mut Ctx, l: Node, kw: &str, indent: &str) {
         head.push_str(" NON_RETAIN");
     }
     if xml::flag(l, "persistent") {
-        cx.diag("SFC0710", anchor(l), "`persistent` has no IEC 61131-3 keyword; the variables are imported without it");
+        // Not an IEC keyword, but the CODESYS/TwinCAT one `sfc run` keeps over cold starts.
+        head.push_str(" PERSISTENT");
     }
     cx.em.str(&format!("{indent}{head}\n"));
     let inner = format!("{indent}    ");
     for v in vars {
+        if kw == "VAR_GLOBAL" {
+            let key = attr(v, "name").unwrap_or("").trim().to_ascii_uppercase();
+            if let Some(seen) = cx.emitted_globals.as_mut() {
+                if !key.is_empty() && !seen.insert(key) {
+                    continue;
+                }
+            }
+        }
         cx.em.open(anchor(v));
         let list = element_attrs(v);
         cx.attributes(&list, &inner);
@@ -655,11 +1051,30 @@ pub(crate) fn type_text(cx: &mut Ctx, t: Node, indent: &str) -> Frag {
         "string" | "wstring" => {
             let kw = if name == "string" { "STRING" } else { "WSTRING" };
             match attr(e, "length").map(str::trim).filter(|l| !l.is_empty()) {
-                Some(l) => Frag::located(format!("{kw}[{l}]"), at),
+                Some(l) => {
+                    // CODESYS: `GVL.LEN`, a constant of a global variable list.
+                    let l = match l.split_once('.') {
+                        Some((gvl, c)) if !cx.verbatim && cx.gvl_names.contains(&gvl.trim().to_ascii_uppercase()) => {
+                            c.trim()
+                        }
+                        _ => l,
+                    };
+                    Frag::located(format!("{kw}[{l}]"), at)
+                }
                 None => Frag::located(kw, at),
             }
         }
-        "derived" => cx.name(e, "name", "type"),
+        "derived" => {
+            let raw = attr(e, "name").unwrap_or("").trim();
+            match dialect::map_type(raw) {
+                Some(std) => Frag::located(std, attr_range(e, "name").unwrap_or_else(|| at.clone())),
+                // A library type through its namespace: an opaque block (`opaque_types`).
+                None if raw.contains('.') => {
+                    Frag::located(sanitize(raw), attr_range(e, "name").unwrap_or_else(|| at.clone()))
+                }
+                None => cx.name(e, "name", "type"),
+            }
+        }
         "array" => {
             let mut f = Frag::plain("ARRAY [");
             for (i, d) in children(e, "dimension").enumerate() {
@@ -775,6 +1190,12 @@ pub(crate) fn value_text(cx: &mut Ctx, v: Node) -> Frag {
         "simpleValue" => match attr(e, "value") {
             Some(val) => {
                 let range = attr_range(e, "value").unwrap_or_else(|| anchor(e));
+                // CODESYS: `E_Mode.Manual` is the IEC `E_Mode#Manual`.
+                if let Some((ty, v)) = val.trim().split_once('.') {
+                    if !cx.verbatim && cx.enum_types.contains(&ty.trim().to_ascii_uppercase()) && is_ident(v.trim()) {
+                        return Frag::located(format!("{}#{}", ty.trim(), v.trim()), range);
+                    }
+                }
                 let t = val.trim();
                 let lead = val.len() - val.trim_start().len();
                 let mut f = Frag::plain(t);
@@ -872,6 +1293,18 @@ pub(crate) fn run(file: u32, xml_text: &str) -> (String, SourceMap, Vec<Diagnost
         used: HashSet::new(),
         extra_vars: Vec::new(),
         compute: Vec::new(),
+        scoped_globals: false,
+        gvl_names: HashSet::new(),
+        externals: Vec::new(),
+        enum_types: HashSet::new(),
+        global_names: HashSet::new(),
+        emitted_globals: None,
+        header_attrs: Vec::new(),
+        verbatim: false,
+        loose: Vec::new(),
+        pou_name: String::new(),
+        functions: Vec::new(),
+        condition_functions: 0,
     };
     if root.tag_name().name() != "project" {
         cx.diag(

@@ -213,8 +213,7 @@ fn decode(src: &str, range: Range<usize>) -> Option<XText> {
             // A tag or a processing instruction: skip to its end, respecting quotes.
             let mut quote: Option<u8> = None;
             let mut j = i + 1;
-            while j < bytes.len() {
-                let b = bytes[j];
+            while let Some(&b) = bytes.get(j) {
                 match quote {
                     Some(q) if b == q => quote = None,
                     Some(_) => {}
@@ -264,7 +263,7 @@ fn push_literal(out: &mut XText, body: &str, at: usize, base: u32) {
     let bytes = body.as_bytes();
     let mut i = 0;
     while i <= bytes.len() {
-        if i == bytes.len() || bytes[i] == b'\r' {
+        if i == bytes.len() || bytes.get(i) == Some(&b'\r') {
             if i > seg_start {
                 out.runs.push(Run {
                     text: out.text.len() as u32,

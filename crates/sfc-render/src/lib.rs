@@ -29,7 +29,7 @@
 mod layered;
 mod place;
 mod stored;
-mod structure;
+pub mod structure;
 mod svg_out;
 mod text;
 

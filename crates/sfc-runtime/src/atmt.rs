@@ -111,7 +111,9 @@ impl AtmtModel {
         let numbers = chart.state_numbers();
         let mut steps: Vec<String> = (0..table.states).map(|s| format!("S{s}")).collect();
         for (s, step) in chart.steps.iter().enumerate() {
-            steps[numbers[s] as usize] = step.name.clone();
+            if let Some(slot) = numbers.get(s).and_then(|&n| steps.get_mut(n as usize)) {
+                *slot = step.name.clone();
+            }
         }
         // The rules in table order, each named by its transition: build_table sorts by state,
         // then explicit priority, then declaration order.
@@ -122,7 +124,8 @@ impl AtmtModel {
                 Some(p) => (0u8, p, i),
                 None => (1u8, 0, i),
             };
-            named.push((numbers[from], key, t.name.clone()));
+            let Some(&number) = numbers.get(from) else { continue };
+            named.push((number, key, t.name.clone()));
         }
         named.sort_by_key(|r| (r.0, r.1));
         if named.len() != rules.len() {
@@ -150,11 +153,12 @@ impl AtmtModel {
     /// What the monitor's `hello` describes: steps, rules as transitions, and the variables
     /// `state` and `c<i>` for each input read.
     pub fn info(&self) -> ChartInfo {
-        let mut variables = vec![VarInfo { name: "state".into(), ty: "UDINT".into(), location: None }];
+        let mut variables = vec![VarInfo { name: "state".into(), ty: "UDINT".into(), location: None, safe: None }];
         variables.extend(self.inputs().into_iter().map(|i| VarInfo {
             name: format!("c{i}"),
             ty: "BOOL".into(),
             location: None,
+            safe: None,
         }));
         ChartInfo {
             runtime: "atmt",
@@ -281,7 +285,7 @@ impl Adapter {
         }
         // The command thread ends when the hub drops its sender (Runtime::wait).
         drop(cmd);
-        RunReport { stats: obs.stats, error: None, dropped: 0, realtime: Ok(false) }
+        RunReport { stats: obs.stats, ..RunReport::default() }
     }
 }
 
@@ -298,6 +302,11 @@ struct Observer<'a> {
 }
 
 impl Observer<'_> {
+    /// The step of a state number the block reported (`S<n>` for a number the table lacks).
+    fn step_name(&self, state: u32) -> String {
+        self.model.steps.get(state as usize).cloned().unwrap_or_else(|| format!("S{state}"))
+    }
+
     fn read(&mut self, mut r: Box<dyn BufRead + Send>) {
         let mut buf = String::new();
         loop {
@@ -364,12 +373,12 @@ impl Observer<'_> {
                         .rules
                         .iter()
                         .position(|r| r.state == *p && r.holds(b))
-                        .filter(|&i| self.model.rules[i].next == state)
+                        .filter(|&i| self.model.rules.get(i).is_some_and(|r| r.next == state))
                 });
                 match rule {
                     Some(i) => fired.push(i as u32),
-                    None => events.push(serde_json::json!({"kind": "jump", "from": self.model.steps[*p as usize],
-                        "to": self.model.steps[state as usize], "line": self.line})),
+                    None => events.push(serde_json::json!({"kind": "jump", "from": self.step_name(*p),
+                        "to": self.step_name(state), "line": self.line})),
                 }
             }
             Some(_) => {}
@@ -402,11 +411,13 @@ impl Observer<'_> {
         {
             let obs = self.shared.lock().unwrap_or_else(|e| e.into_inner());
             if entered && obs.breakpoints.get(&BreakTarget::Step(state)) == Some(&true) {
-                events.push(serde_json::json!({"kind": "breakpoint", "step": self.model.steps[state as usize], "scan": self.scan}));
+                events
+                    .push(serde_json::json!({"kind": "breakpoint", "step": self.step_name(state), "scan": self.scan}));
             }
             for &t in &fired {
                 if obs.breakpoints.get(&BreakTarget::Transition(t)) == Some(&true) {
-                    events.push(serde_json::json!({"kind": "breakpoint", "transition": self.model.rules[t as usize].name, "scan": self.scan}));
+                    let rule = self.model.rules.get(t as usize).map(|r| r.name.clone());
+                    events.push(serde_json::json!({"kind": "breakpoint", "transition": rule, "scan": self.scan}));
                 }
             }
         }
@@ -426,8 +437,10 @@ impl Observer<'_> {
 fn commands(rx: Receiver<Request>, hub: &Hub, shared: &Mutex<Observed>) {
     let info = &hub.info;
     let name = |t: BreakTarget| match t {
-        BreakTarget::Step(s) => ("step", info.steps[s as usize].0.clone()),
-        BreakTarget::Transition(t) => ("transition", info.transitions[t as usize].0.clone()),
+        BreakTarget::Step(s) => ("step", info.steps.get(s as usize).map(|s| s.0.clone()).unwrap_or_default()),
+        BreakTarget::Transition(t) => {
+            ("transition", info.transitions.get(t as usize).map(|t| t.0.clone()).unwrap_or_default())
+        }
     };
     while let Ok(r) = rx.recv() {
         let mut obs = shared.lock().unwrap_or_else(|e| e.into_inner());

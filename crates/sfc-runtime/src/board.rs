@@ -47,6 +47,8 @@ pub struct VarInfo {
     pub ty: String,
     /// `%IX0.0` for a located variable.
     pub location: Option<String>,
+    /// The value it takes in STOP and FAULT (outputs, and variables given a safe value).
+    pub safe: Option<Value>,
 }
 
 /// The static description of what a runtime runs (the `hello` message).
@@ -72,6 +74,26 @@ impl ChartInfo {
     }
     pub fn transition_index(&self, name: &str) -> Option<u32> {
         self.transitions.iter().position(|(n, _, _)| n.eq_ignore_ascii_case(name)).map(|i| i as u32)
+    }
+    /// The name of step `s` (empty for a number the chart does not have).
+    pub fn step_name(&self, s: u32) -> String {
+        self.steps.get(s as usize).map(|s| s.0.clone()).unwrap_or_default()
+    }
+    /// The name of transition `t` (empty for a number the chart does not have).
+    pub fn transition_name(&self, t: u32) -> String {
+        self.transitions.get(t as usize).map(|t| t.0.clone()).unwrap_or_default()
+    }
+    /// The name of variable `v` (empty for a number the chart does not have).
+    pub fn variable_name(&self, v: u32) -> String {
+        self.variables.get(v as usize).map(|v| v.name.clone()).unwrap_or_default()
+    }
+}
+
+/// Sets `key` of a JSON object (`j` is always one where this is used; anything else is left as
+/// it is rather than panicking).
+pub fn put(j: &mut serde_json::Value, key: &str, value: serde_json::Value) {
+    if let Some(o) = j.as_object_mut() {
+        o.insert(key.to_string(), value);
     }
 }
 
@@ -125,9 +147,39 @@ impl From<serde_json::Value> for Event {
     }
 }
 
+/// The state of a runtime (`docs/runtime.md`, "States").
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum RunState {
+    /// Scanning (or halted by the debugger: `halted` says so).
+    #[default]
+    Run,
+    /// Stopped in order (end of the run, Ctrl-C, SIGTERM, a monitor `stop`): outputs at their
+    /// safe values.
+    Stop,
+    /// Stopped by the watchdog or a runtime error: outputs at their safe values, Modbus and the
+    /// monitor still serving, until a monitor `reset`.
+    Fault,
+}
+
+impl RunState {
+    pub fn name(self) -> &'static str {
+        match self {
+            RunState::Run => "RUN",
+            RunState::Stop => "STOP",
+            RunState::Fault => "FAULT",
+        }
+    }
+}
+
 /// Shared, lock-protected part of the board.
 #[derive(Debug, Default)]
 pub struct Board {
+    /// RUN, STOP or FAULT, and a count of changes (so a client tells each one).
+    pub state: RunState,
+    pub state_seq: u64,
+    /// What stopped the run, in FAULT: `{"kind","message","scan","step","steps","action",
+    /// "transition","line","column"}`.
+    pub fault: Option<serde_json::Value>,
     pub history: VecDeque<Arc<ScanState>>,
     pub events: VecDeque<LoggedEvent>,
     pub next_event: u64,
@@ -146,6 +198,14 @@ pub struct Board {
 }
 
 impl Board {
+    /// Enters `state` (with the fault that caused it, in FAULT).
+    pub fn set_state(&mut self, state: RunState, fault: Option<serde_json::Value>) {
+        if self.state != state || self.fault != fault {
+            self.state = state;
+            self.fault = fault;
+            self.state_seq += 1;
+        }
+    }
     /// Adds a state to the history; returns the state that fell out of it, for reuse.
     pub fn push_state(&mut self, s: Arc<ScanState>) -> Option<Arc<ScanState>> {
         let old = if self.history.len() == HISTORY { self.history.pop_front() } else { None };
@@ -215,6 +275,15 @@ pub enum Command {
     },
     /// Time analysis per step.
     Timing,
+    /// Restarts the chart from its initial values (RETAIN kept when warm, PERSISTENT always),
+    /// from any state; leaves FAULT.
+    Reset {
+        cold: bool,
+    },
+    /// RUN → STOP: scanning stops, outputs go to their safe values.
+    Stop,
+    /// STOP → RUN: scanning goes on where it stopped.
+    Start,
 }
 
 impl Command {
@@ -256,12 +325,28 @@ pub struct Hub {
     pub commands: Mutex<Option<mpsc::Sender<Request>>>,
     /// The secret a client needs to force or write.
     pub token: String,
-    /// Set to end the run (every task watches it).
+    /// Set to end the run (the scan thread and the supervisor watch it).
     pub stop: AtomicBool,
+    /// Set once the run has ended and told its clients: the network side closes.
+    pub closing: AtomicBool,
     /// Monitor clients dropped for misbehaving (flooding, garbage, slow reading).
     pub dropped: AtomicU64,
+    /// Monitor connections (the limit counts them, handshakes included).
     pub connected: AtomicU64,
+    /// Monitor sessions past their handshake; at the end of the run the network side waits
+    /// for them to send the end and close.
+    pub sessions: AtomicU64,
+    /// Lines for the operator (`sfc run` prints them on standard error): the watchdog, faults,
+    /// retain, a server that cannot accept. The oldest go when nobody reads them.
+    pub notices: Mutex<VecDeque<String>>,
+    /// The simulation's interrupt flag (`sfc run`): a stop interrupts a scan that runs away.
+    pub interrupt_flag: std::sync::OnceLock<Arc<AtomicBool>>,
+    /// Failed tokens per client address (`access.rs`).
+    pub guesses: Mutex<crate::access::Guesses>,
 }
+
+/// Notices kept when nobody reads them.
+const NOTICES: usize = 256;
 
 impl Hub {
     pub fn new(info: ChartInfo, token: String) -> (Arc<Hub>, mpsc::Receiver<Request>) {
@@ -272,8 +357,13 @@ impl Hub {
             commands: Mutex::new(Some(tx)),
             token,
             stop: AtomicBool::new(false),
+            closing: AtomicBool::new(false),
             dropped: AtomicU64::new(0),
             connected: AtomicU64::new(0),
+            sessions: AtomicU64::new(0),
+            notices: Mutex::new(VecDeque::new()),
+            interrupt_flag: std::sync::OnceLock::new(),
+            guesses: Mutex::new(Default::default()),
         };
         (Arc::new(hub), rx)
     }
@@ -284,8 +374,34 @@ impl Hub {
         tx.is_some_and(|tx| tx.send(r).is_ok())
     }
 
+    /// Adds a line for the operator.
+    pub fn notice(&self, line: impl Into<String>) {
+        let mut n = self.notices.lock().unwrap_or_else(|e| e.into_inner());
+        if n.len() == NOTICES {
+            n.pop_front();
+        }
+        n.push_back(line.into());
+    }
+
+    /// Takes the lines not read yet.
+    pub fn take_notices(&self) -> Vec<String> {
+        self.notices.lock().unwrap_or_else(|e| e.into_inner()).drain(..).collect()
+    }
+
+    /// Interrupts the running scan (a stop of a runtime whose scan may run away).
+    pub fn interrupt(&self) {
+        if let Some(f) = self.interrupt_flag.get() {
+            f.store(true, Ordering::Relaxed);
+        }
+    }
+
     pub fn stopping(&self) -> bool {
         self.stop.load(Ordering::Relaxed)
+    }
+
+    /// The network side closes (after the end of the run was told).
+    pub fn closing(&self) -> bool {
+        self.closing.load(Ordering::Relaxed)
     }
 
     /// Locks the board (a poisoned lock only means a client task panicked while copying).

@@ -1,25 +1,27 @@
-//! Modbus TCP I/O: the map from located variables to the four Modbus tables
-//! (`docs/runtime.md`, "Modbus map"), the process image shared with the scan thread, and the
-//! server.
+//! The Modbus map: located variables on the four Modbus tables (`docs/runtime.md`, "Modbus
+//! map"), and the process image the scan thread and the Modbus server share.
 //!
 //! | address | Modbus table | client access |
 //! |---|---|---|
 //! | `%IXa.b` | discrete input `8a+b`, and coil `32768+8a+b` | read; write through the coil |
 //! | `%QXa.b` | coil `8a+b` | read |
-//! | `%IWn` | input register `n`, and holding register `32768+n` | read; write through the holding register |
-//! | `%QWn` | holding register `n` (n < 1000) | read |
-//! | `%MWn` | holding register `1000+n` | read and write |
+//! | `%IWn` / `%IDn` / `%ILn` | input registers `n` / `2n, 2n+1` / `4n…4n+3`, and holding registers `32768+` the same | read; write through the holding registers |
+//! | `%QWn` / `%QDn` / `%QLn` | holding registers `n` / `2n, 2n+1` / `4n…4n+3` (below 1000) | read |
+//! | `%MWn` / `%MDn` / `%MLn` | holding registers `1000+` the same | read and write |
 //!
-//! Modbus has no function that writes discrete inputs or input registers, so a test bench
-//! drives the inputs through the mirror window at 32768.
+//! Values wider than a register span two (32 bits: DINT, UDINT, DWORD, REAL) or four (64 bits:
+//! LINT, ULINT, LWORD, LREAL) registers, in the [`WordOrder`] of the run. Modbus has no
+//! function that writes discrete inputs or input registers, so a test bench drives the inputs
+//! through the mirror window at 32768.
+
+// Indices here come from tables this crate builds at start (the Modbus map, the variables) or
+// are checked against the frame length just before (Modbus PDUs); the runtime work of issue 14
+// landed after the workspace lints, and its conversion to `get` is still to do (ARCHITECTURE.md).
+#![allow(clippy::indexing_slicing)]
 
 use crate::Slot;
 use sfc_sim::{Simulation, Value};
-use std::future::Future;
-use std::net::SocketAddr;
-use std::pin::Pin;
-use std::sync::{Arc, Mutex};
-use tokio_modbus::{ExceptionCode, Request, Response};
+use sfc_st::Type;
 
 /// Where clients write inputs: coil / holding register `INPUT_WINDOW + address`.
 pub const INPUT_WINDOW: u16 = 32768;
@@ -45,32 +47,77 @@ pub enum Role {
     Memory,
 }
 
+/// The order of the 16-bit registers of a 32- or 64-bit value (each register is big-endian,
+/// as Modbus defines).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum WordOrder {
+    /// The most significant register first (`ABCD`; Modicon's convention, pymodbus's default).
+    #[default]
+    Big,
+    /// The least significant register first (`CDAB`; CODESYS, WAGO, mbpoll's default).
+    Little,
+}
+
+impl WordOrder {
+    pub fn from_name(s: &str) -> Option<WordOrder> {
+        match s.to_ascii_lowercase().as_str() {
+            "big" | "abcd" | "high-first" => Some(WordOrder::Big),
+            "little" | "cdab" | "low-first" => Some(WordOrder::Little),
+            _ => None,
+        }
+    }
+    pub fn name(self) -> &'static str {
+        match self {
+            WordOrder::Big => "big",
+            WordOrder::Little => "little",
+        }
+    }
+}
+
 /// One located variable on the Modbus map.
 #[derive(Debug, Clone)]
 pub struct IoPoint {
     pub name: String,
     pub location: String,
     pub table: Table,
+    /// The bit or the first register.
     pub address: u16,
+    /// Registers taken (1, 2 or 4; 1 for a bit).
+    pub words: u16,
     pub role: Role,
     pub slot: Slot,
 }
 
-/// Maps the located variables of the simulated POU; an address the map does not cover is an
-/// error naming it.
+impl IoPoint {
+    /// `coil 5`, `holding registers 1004–1005`.
+    pub fn describe(&self) -> String {
+        if self.words <= 1 {
+            format!("{} {}", table_name(self.table), self.address)
+        } else {
+            format!("{}s {}–{}", table_name(self.table), self.address, self.address + self.words - 1)
+        }
+    }
+}
+
+/// Maps the located variables of the simulated POU; an address or a type the map does not
+/// cover is an error naming the variable.
 pub fn map_located(sim: &Simulation) -> Result<Vec<IoPoint>, String> {
     let mut out: Vec<IoPoint> = Vec::new();
     for (name, location, index, ty) in sim.located_vars() {
-        let (table, address, role) = address_of(&location).map_err(|why| format!("`{name}` {location}: {why}"))?;
-        if let Some(other) = out.iter().find(|p| p.table == table && p.address == address) {
+        let (table, address, words, role) =
+            address_of(&location, &ty).map_err(|why| format!("`{name}` {location}: {why}"))?;
+        let overlaps =
+            |p: &IoPoint| p.table == table && p.address < address + words && address < p.address + p.words.max(1);
+        if let Some(other) = out.iter().find(|p| overlaps(p)) {
             return Err(format!(
-                "`{name}` {location} and `{}` {} share {} {address}",
+                "`{name}` {location} and `{}` {} share {} {}",
                 other.name,
                 other.location,
-                table_name(table)
+                table_name(table),
+                address.max(other.address)
             ));
         }
-        out.push(IoPoint { name, location, table, address, role, slot: Slot { index, ty } });
+        out.push(IoPoint { name, location, table, address, words, role, slot: Slot { index, ty } });
     }
     Ok(out)
 }
@@ -84,8 +131,29 @@ pub fn table_name(t: Table) -> &'static str {
     }
 }
 
-/// `%IX0.3` → (discrete input, 3, input).
-fn address_of(loc: &str) -> Result<(Table, u16, Role), String> {
+/// Registers a variable of `ty` takes at a location of size `size` (`W`, `D`, `L`).
+fn words_for(size: char, ty: &Type) -> Result<u16, String> {
+    let b = ty.base();
+    let width = if b.is_real() || b.is_integer() || (b.is_bit() && !b.is_bool()) { ty.bit_width() } else { None };
+    let (words, fits) = match size {
+        'W' => (1, width.is_some_and(|w| w <= 16)),
+        'D' => (2, width == Some(32)),
+        _ => (4, width == Some(64)),
+    };
+    if fits {
+        Ok(words)
+    } else {
+        let want = match size {
+            'W' => "an integer or bit string of 8 or 16 bits (INT, UINT, WORD …)",
+            'D' => "a 32-bit value (DINT, UDINT, DWORD, REAL)",
+            _ => "a 64-bit value (LINT, ULINT, LWORD, LREAL)",
+        };
+        Err(format!("a %?{size} address holds {want}, not {ty}"))
+    }
+}
+
+/// `%IX0.3` of a BOOL → (discrete input, 3, 1 word, input).
+fn address_of(loc: &str, ty: &Type) -> Result<(Table, u16, u16, Role), String> {
     let body = loc.strip_prefix('%').ok_or("not a direct address")?.to_ascii_uppercase();
     let mut chars = body.chars();
     let area = chars.next().ok_or("no area letter")?;
@@ -107,219 +175,205 @@ fn address_of(loc: &str) -> Result<(Table, u16, Role), String> {
     match (size, role, nums.as_slice()) {
         ('X', Role::Memory, _) => Err("%MX is not on the Modbus map (use %MW)".into()),
         ('X', _, [byte, bit]) if *bit < 8 && *byte < 4096 => {
+            if !ty.is_bool() {
+                return Err(format!("a bit address holds a BOOL, not {ty}"));
+            }
             let a = (byte * 8 + bit) as u16;
-            Ok((if role == Role::Input { Table::DiscreteInput } else { Table::Coil }, a, role))
+            Ok((if role == Role::Input { Table::DiscreteInput } else { Table::Coil }, a, 1, role))
         }
         ('X', _, _) => Err("a bit address is `%IXbyte.bit` with bit 0..7 and byte < 4096".into()),
-        ('W', Role::Input, [n]) if *n < u32::from(INPUT_WINDOW) => Ok((Table::InputRegister, *n as u16, role)),
-        ('W', Role::Output, [n]) if *n < u32::from(MEMORY_BASE) => Ok((Table::HoldingRegister, *n as u16, role)),
-        ('W', Role::Memory, [n]) if *n < u32::from(INPUT_WINDOW - MEMORY_BASE) => {
-            Ok((Table::HoldingRegister, MEMORY_BASE + *n as u16, role))
+        ('W' | 'D' | 'L', _, [n]) => {
+            let words = words_for(size, ty)?;
+            let first = u64::from(*n) * u64::from(words);
+            let (table, base, limit) = match role {
+                Role::Input => (Table::InputRegister, 0u64, u64::from(INPUT_WINDOW)),
+                Role::Output => (Table::HoldingRegister, 0, u64::from(MEMORY_BASE)),
+                Role::Memory => (Table::HoldingRegister, u64::from(MEMORY_BASE), u64::from(INPUT_WINDOW)),
+            };
+            if base + first + u64::from(words) > limit {
+                return Err(format!(
+                    "register number out of range (%I… below register {INPUT_WINDOW}, %Q… below {MEMORY_BASE}, \
+                     %M… below {})",
+                    INPUT_WINDOW - MEMORY_BASE
+                ));
+            }
+            Ok((table, (base + first) as u16, words, role))
         }
-        ('W', _, [_]) => Err(format!(
-            "register number out of range (%IW < {INPUT_WINDOW}, %QW < {MEMORY_BASE}, %MW < {})",
-            INPUT_WINDOW - MEMORY_BASE
+        ('W' | 'D' | 'L', _, _) => Err("a register address is `%IWn`, `%IDn` or `%ILn`".into()),
+        (s, _, _) => Err(format!(
+            "size `{s}` is not on the Modbus map: only X (bits), W (16-bit), D (32-bit) and L (64-bit) are"
         )),
-        ('W', _, _) => Err("a word address is `%IWn`".into()),
-        (s, _, _) => Err(format!("size `{s}` is not on the Modbus map: only X (bits) and W (16-bit words) are")),
     }
 }
 
-/// The process image: what clients see and write. Inputs hold the last value a client (or a
-/// monitor `set`) wrote; outputs the value the last scan left.
+/// The registers of a value of `ty` (`words` of them) in `out`, in the word order.
+fn to_words(v: &Value, ty: &Type, words: u16, order: WordOrder, out: &mut [u16; 4]) {
+    let bits: u64 = match ty.base() {
+        Type::Real => (v.as_real().unwrap_or(0.0) as f32).to_bits().into(),
+        Type::LReal => v.as_real().unwrap_or(0.0).to_bits(),
+        _ => v.as_int().unwrap_or(0) as u64,
+    };
+    let n = (words as usize).clamp(1, 4);
+    for k in 0..n {
+        // k = 0 is the most significant register.
+        let word = (bits >> (16 * (n - 1 - k))) as u16;
+        let at = match order {
+            WordOrder::Big => k,
+            WordOrder::Little => n - 1 - k,
+        };
+        out[at] = word;
+    }
+}
+
+/// The value of `ty` held in `regs` (in the run's word order).
+fn from_words(regs: &[u16], ty: &Type, order: WordOrder) -> Value {
+    let n = regs.len();
+    let mut bits: u64 = 0;
+    for k in 0..n {
+        let w = match order {
+            WordOrder::Big => regs[k],
+            WordOrder::Little => regs[n - 1 - k],
+        };
+        bits = (bits << 16) | u64::from(w);
+    }
+    let b = ty.base();
+    match b {
+        Type::Real => Value::Real(f64::from(f32::from_bits(bits as u32))),
+        Type::LReal => Value::Real(f64::from_bits(bits)),
+        _ => {
+            let width = 16 * n as u32;
+            let width = b.bit_width().map_or(width, |w| w.min(width));
+            let masked = if width >= 64 { bits } else { bits & ((1u64 << width) - 1) };
+            let v = if ty.is_signed() && width < 64 && masked >> (width - 1) & 1 == 1 {
+                (masked | !((1u64 << width) - 1)) as i64
+            } else {
+                masked as i64
+            };
+            Value::Int(v)
+        }
+    }
+}
+
+/// The process image: what clients see and write. Outputs and memory hold what the last scan
+/// left; an input holds the last value a client (or a monitor `set`) wrote, or its forced value
+/// while it is forced; in the safe state, outputs hold their safe values.
 #[derive(Debug, Default)]
 pub struct Image {
     pub coils: Vec<bool>,
     pub discrete: Vec<bool>,
     pub input_regs: Vec<u16>,
     pub holding: Vec<u16>,
-    /// `%MW` points written by clients since the last scan (the value is in `holding`).
+    /// `%M` points written by clients since the last scan (the value is in `holding`).
     pub memory_writes: Vec<usize>,
+    /// Per point, for inputs: the value clients wrote (what the chart reads unless forced).
+    pub client: Vec<Value>,
+    /// Per point: the forced value, while forced from the monitor.
+    pub forced: Vec<Option<Value>>,
+    /// For each table, the point (index + 1) that owns each bit or register (0: none).
+    owners: [Vec<u32>; 4],
+    pub order: WordOrder,
+}
+
+fn table_index(t: Table) -> usize {
+    match t {
+        Table::Coil => 0,
+        Table::DiscreteInput => 1,
+        Table::InputRegister => 2,
+        Table::HoldingRegister => 3,
+    }
 }
 
 impl Image {
-    pub fn new(points: &[IoPoint]) -> Image {
-        let size = |t: Table| points.iter().filter(|p| p.table == t).map(|p| p.address as usize + 1).max().unwrap_or(0);
+    pub fn new(points: &[IoPoint], order: WordOrder) -> Image {
+        let size = |t: Table| {
+            points
+                .iter()
+                .filter(|p| p.table == t)
+                .map(|p| p.address as usize + p.words.max(1) as usize)
+                .max()
+                .unwrap_or(0)
+        };
+        let mut owners = [
+            vec![0; size(Table::Coil)],
+            vec![0; size(Table::DiscreteInput)],
+            vec![0; size(Table::InputRegister)],
+            vec![0; size(Table::HoldingRegister)],
+        ];
+        for (i, p) in points.iter().enumerate() {
+            for k in 0..p.words.max(1) {
+                owners[table_index(p.table)][(p.address + k) as usize] = i as u32 + 1;
+            }
+        }
         Image {
             coils: vec![false; size(Table::Coil)],
             discrete: vec![false; size(Table::DiscreteInput)],
             input_regs: vec![0; size(Table::InputRegister)],
             holding: vec![0; size(Table::HoldingRegister)],
             memory_writes: Vec::new(),
+            client: points.iter().map(|p| p.slot.default_value()).collect(),
+            forced: vec![None; points.len()],
+            owners,
+            order,
         }
+    }
+
+    /// The point that owns bit/register `address` of `table`.
+    pub fn owner(&self, table: Table, address: usize) -> Option<usize> {
+        self.owners[table_index(table)].get(address).and_then(|&o| (o > 0).then(|| o as usize - 1))
     }
 
     /// Reads the value of `p` from the image as the chart's value.
     pub fn get(&self, p: &IoPoint) -> Value {
         let a = p.address as usize;
+        let n = p.words.max(1) as usize;
         match p.table {
             Table::Coil => Value::Bool(self.coils[a]),
             Table::DiscreteInput => Value::Bool(self.discrete[a]),
-            Table::InputRegister => word_value(self.input_regs[a], &p.slot.ty),
-            Table::HoldingRegister => word_value(self.holding[a], &p.slot.ty),
+            Table::InputRegister => from_words(&self.input_regs[a..a + n], &p.slot.ty, self.order),
+            Table::HoldingRegister => from_words(&self.holding[a..a + n], &p.slot.ty, self.order),
         }
     }
 
     /// Stores the chart's value of `p` in the image.
     pub fn put(&mut self, p: &IoPoint, v: &Value) {
         let a = p.address as usize;
+        let n = p.words.max(1) as usize;
+        let mut w = [0u16; 4];
         match p.table {
             Table::Coil => self.coils[a] = v.as_bool().unwrap_or(false),
             Table::DiscreteInput => self.discrete[a] = v.as_bool().unwrap_or(false),
-            Table::InputRegister => self.input_regs[a] = v.as_int().unwrap_or(0) as u16,
-            Table::HoldingRegister => self.holding[a] = v.as_int().unwrap_or(0) as u16,
-        }
-    }
-}
-
-/// A register as the variable's type: INT is two's complement, the others unsigned.
-fn word_value(w: u16, ty: &sfc_st::Type) -> Value {
-    if ty.is_signed() {
-        Value::Int(i64::from(w as i16))
-    } else {
-        Value::Int(i64::from(w))
-    }
-}
-
-/// The Modbus service of one connection.
-struct Service {
-    points: Arc<Vec<IoPoint>>,
-    image: Arc<Mutex<Image>>,
-}
-
-type Reply = Result<Response, ExceptionCode>;
-
-impl Service {
-    fn handle(&self, req: Request<'_>) -> Reply {
-        let mut img = self.image.lock().unwrap_or_else(|e| e.into_inner());
-        match req {
-            Request::ReadCoils(a, n) => {
-                let (a, n) = (a as usize, n as usize);
-                if a >= INPUT_WINDOW as usize {
-                    return read_range(&img.discrete, a - INPUT_WINDOW as usize, n).map(Response::ReadCoils);
-                }
-                read_range(&img.coils, a, n).map(Response::ReadCoils)
+            Table::InputRegister => {
+                to_words(v, &p.slot.ty, p.words, self.order, &mut w);
+                self.input_regs[a..a + n].copy_from_slice(&w[..n]);
             }
-            Request::ReadDiscreteInputs(a, n) => {
-                read_range(&img.discrete, a as usize, n as usize).map(Response::ReadDiscreteInputs)
-            }
-            Request::ReadInputRegisters(a, n) => {
-                read_range(&img.input_regs, a as usize, n as usize).map(Response::ReadInputRegisters)
-            }
-            Request::ReadHoldingRegisters(a, n) => self.read_holding(&img, a, n).map(Response::ReadHoldingRegisters),
-            Request::WriteSingleCoil(a, v) => {
-                self.write_coils(&mut img, a, &[v])?;
-                Ok(Response::WriteSingleCoil(a, v))
-            }
-            Request::WriteMultipleCoils(a, vs) => {
-                self.write_coils(&mut img, a, &vs)?;
-                Ok(Response::WriteMultipleCoils(a, vs.len() as u16))
-            }
-            Request::WriteSingleRegister(a, v) => {
-                self.write_registers(&mut img, a, &[v])?;
-                Ok(Response::WriteSingleRegister(a, v))
-            }
-            Request::WriteMultipleRegisters(a, vs) => {
-                self.write_registers(&mut img, a, &vs)?;
-                Ok(Response::WriteMultipleRegisters(a, vs.len() as u16))
-            }
-            Request::ReadWriteMultipleRegisters(ra, n, wa, vs) => {
-                self.write_registers(&mut img, wa, &vs)?;
-                self.read_holding(&img, ra, n).map(Response::ReadWriteMultipleRegisters)
-            }
-            _ => Err(ExceptionCode::IllegalFunction),
-        }
-    }
-
-    fn read_holding(&self, img: &Image, a: u16, n: u16) -> Result<Vec<u16>, ExceptionCode> {
-        if a >= INPUT_WINDOW {
-            return read_range(&img.input_regs, (a - INPUT_WINDOW) as usize, n as usize);
-        }
-        read_range(&img.holding, a as usize, n as usize)
-    }
-
-    /// Coils: only the input window is writable (outputs belong to the chart).
-    fn write_coils(&self, img: &mut Image, a: u16, vs: &[bool]) -> Result<(), ExceptionCode> {
-        let targets = self.targets(a, vs.len(), |p| p.table == Table::DiscreteInput, INPUT_WINDOW)?;
-        for (i, v) in targets.into_iter().zip(vs) {
-            img.discrete[self.points[i].address as usize] = *v;
-        }
-        Ok(())
-    }
-
-    /// Holding registers: `%MW` and the `%IW` window are writable, `%QW` is not.
-    fn write_registers(&self, img: &mut Image, a: u16, vs: &[u16]) -> Result<(), ExceptionCode> {
-        let targets = if a >= INPUT_WINDOW {
-            self.targets(a, vs.len(), |p| p.table == Table::InputRegister, INPUT_WINDOW)?
-        } else {
-            self.targets(a, vs.len(), |p| p.table == Table::HoldingRegister && p.role == Role::Memory, 0)?
-        };
-        for (i, &v) in targets.into_iter().zip(vs) {
-            let p = &self.points[i];
-            match p.table {
-                Table::InputRegister => img.input_regs[p.address as usize] = v,
-                _ => {
-                    img.holding[p.address as usize] = v;
-                    img.memory_writes.push(i);
-                }
+            Table::HoldingRegister => {
+                to_words(v, &p.slot.ty, p.words, self.order, &mut w);
+                self.holding[a..a + n].copy_from_slice(&w[..n]);
             }
         }
-        Ok(())
     }
 
-    /// The points written by `len` values from `a` (each must be a point accepted by `ok`,
-    /// at `offset + address`), or IllegalDataAddress.
-    fn targets(
-        &self,
-        a: u16,
-        len: usize,
-        ok: impl Fn(&IoPoint) -> bool,
-        offset: u16,
-    ) -> Result<Vec<usize>, ExceptionCode> {
-        let mut out = Vec::with_capacity(len);
-        for k in 0..len {
-            let addr = a as usize + k;
-            let i = self
-                .points
-                .iter()
-                .position(|p| ok(p) && p.address as usize + offset as usize == addr)
-                .ok_or(ExceptionCode::IllegalDataAddress)?;
-            out.push(i);
+    /// A client (or the monitor's `set`) wrote input point `i`: the chart reads it from the
+    /// next scan, and clients read it back unless the point is forced.
+    pub fn write_input(&mut self, i: usize, p: &IoPoint, v: Value) {
+        if self.forced[i].is_none() {
+            self.put(p, &v);
         }
-        Ok(out)
+        self.client[i] = v;
     }
-}
 
-fn read_range<T: Copy>(table: &[T], a: usize, n: usize) -> Result<Vec<T>, ExceptionCode> {
-    if n == 0 || a + n > table.len() {
-        return Err(ExceptionCode::IllegalDataAddress);
+    /// Forces point `i` to `v` (`None`: releases it): clients read the forced value.
+    pub fn force(&mut self, i: usize, p: &IoPoint, v: Option<Value>) {
+        match &v {
+            Some(x) => self.put(p, x),
+            None if p.role == Role::Input => {
+                let c = self.client[i].clone();
+                self.put(p, &c);
+            }
+            None => {}
+        }
+        self.forced[i] = v;
     }
-    Ok(table[a..a + n].to_vec())
-}
-
-impl tokio_modbus::server::Service for Service {
-    type Request = Request<'static>;
-    type Response = Response;
-    type Exception = ExceptionCode;
-    type Future = Pin<Box<dyn Future<Output = Reply> + Send>>;
-
-    fn call(&self, req: Self::Request) -> Self::Future {
-        let r = self.handle(req);
-        Box::pin(std::future::ready(r))
-    }
-}
-
-/// Serves Modbus on `listener` (inside the runtime's tokio runtime) until the task is dropped.
-pub async fn serve(listener: std::net::TcpListener, points: Arc<Vec<IoPoint>>, image: Arc<Mutex<Image>>) {
-    let Ok(listener) = tokio::net::TcpListener::from_std(listener) else { return };
-    let server = tokio_modbus::server::tcp::Server::new(listener);
-    let on_connected = move |stream: tokio::net::TcpStream, _addr: SocketAddr| {
-        let _ = stream.set_nodelay(true);
-        let svc = Service { points: points.clone(), image: image.clone() };
-        async move { Ok(Some((svc, stream))) }
-    };
-    // A broken connection ends only that connection's task.
-    let _ = server.serve(&on_connected, |_err| {}).await;
 }
 
 #[cfg(test)]
@@ -328,15 +382,47 @@ mod tests {
 
     #[test]
     fn addresses_follow_the_table() {
-        assert_eq!(address_of("%IX0.3"), Ok((Table::DiscreteInput, 3, Role::Input)));
-        assert_eq!(address_of("%QX1.2"), Ok((Table::Coil, 10, Role::Output)));
-        assert_eq!(address_of("%I2.1"), Ok((Table::DiscreteInput, 17, Role::Input)));
-        assert_eq!(address_of("%IW7"), Ok((Table::InputRegister, 7, Role::Input)));
-        assert_eq!(address_of("%QW5"), Ok((Table::HoldingRegister, 5, Role::Output)));
-        assert_eq!(address_of("%MW5"), Ok((Table::HoldingRegister, 1005, Role::Memory)));
-        assert!(address_of("%QW1000").is_err());
-        assert!(address_of("%ID0").unwrap_err().contains("size `D`"));
-        assert!(address_of("%MX0.0").is_err());
-        assert!(address_of("%IX0.8").is_err());
+        let b = Type::Bool;
+        let i = Type::Int;
+        assert_eq!(address_of("%IX0.3", &b), Ok((Table::DiscreteInput, 3, 1, Role::Input)));
+        assert_eq!(address_of("%QX1.2", &b), Ok((Table::Coil, 10, 1, Role::Output)));
+        assert_eq!(address_of("%I2.1", &b), Ok((Table::DiscreteInput, 17, 1, Role::Input)));
+        assert_eq!(address_of("%IW7", &i), Ok((Table::InputRegister, 7, 1, Role::Input)));
+        assert_eq!(address_of("%QW5", &i), Ok((Table::HoldingRegister, 5, 1, Role::Output)));
+        assert_eq!(address_of("%MW5", &i), Ok((Table::HoldingRegister, 1005, 1, Role::Memory)));
+        assert_eq!(address_of("%ID3", &Type::DInt), Ok((Table::InputRegister, 6, 2, Role::Input)));
+        assert_eq!(address_of("%QD1", &Type::Real), Ok((Table::HoldingRegister, 2, 2, Role::Output)));
+        assert_eq!(address_of("%MD2", &Type::UDInt), Ok((Table::HoldingRegister, 1004, 2, Role::Memory)));
+        assert_eq!(address_of("%ML1", &Type::LReal), Ok((Table::HoldingRegister, 1004, 4, Role::Memory)));
+        assert!(address_of("%QW1000", &i).is_err());
+        assert!(address_of("%QD499", &Type::DInt).is_ok() && address_of("%QD500", &Type::DInt).is_err());
+        assert!(address_of("%IB0", &Type::Byte).unwrap_err().contains("size `B`"));
+        assert!(address_of("%ID0", &i).unwrap_err().contains("32-bit"));
+        assert!(address_of("%IW0", &Type::Real).unwrap_err().contains("not REAL"));
+        assert!(address_of("%MX0.0", &b).is_err());
+        assert!(address_of("%IX0.8", &b).is_err());
+        assert!(address_of("%IX0.0", &i).is_err());
+    }
+
+    #[test]
+    fn wide_values_take_registers_in_the_word_order() {
+        let mut w = [0u16; 4];
+        to_words(&Value::Int(0x0001_0002), &Type::UDInt, 2, WordOrder::Big, &mut w);
+        assert_eq!(&w[..2], &[1, 2]);
+        to_words(&Value::Int(0x0001_0002), &Type::UDInt, 2, WordOrder::Little, &mut w);
+        assert_eq!(&w[..2], &[2, 1]);
+        assert_eq!(from_words(&[2, 1], &Type::UDInt, WordOrder::Little), Value::Int(0x0001_0002));
+        to_words(&Value::Real(1.5), &Type::Real, 2, WordOrder::Big, &mut w);
+        assert_eq!(&w[..2], &[0x3FC0, 0]);
+        assert_eq!(from_words(&[0x3FC0, 0], &Type::Real, WordOrder::Big), Value::Real(1.5));
+        assert_eq!(from_words(&[0xFFFF, 0xFFFE], &Type::DInt, WordOrder::Big), Value::Int(-2));
+        assert_eq!(from_words(&[0xFFFF], &Type::Int, WordOrder::Big), Value::Int(-1));
+        assert_eq!(from_words(&[0xFFFF], &Type::UInt, WordOrder::Big), Value::Int(65535));
+        assert_eq!(from_words(&[0x00FF], &Type::SInt, WordOrder::Big), Value::Int(-1));
+        to_words(&Value::Int(-3), &Type::LInt, 4, WordOrder::Little, &mut w);
+        assert_eq!(w, [0xFFFD, 0xFFFF, 0xFFFF, 0xFFFF]);
+        assert_eq!(from_words(&w, &Type::LInt, WordOrder::Little), Value::Int(-3));
+        to_words(&Value::Real(-0.25), &Type::LReal, 4, WordOrder::Big, &mut w);
+        assert_eq!(from_words(&w, &Type::LReal, WordOrder::Big), Value::Real(-0.25));
     }
 }

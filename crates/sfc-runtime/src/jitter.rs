@@ -27,8 +27,12 @@ impl Default for Histogram {
 impl Histogram {
     pub fn add(&mut self, us: u64) {
         let b = (us as usize).min(BUCKETS - 1);
-        self.counts[b] = self.counts[b].saturating_add(1);
-        self.blocks[b / BLOCK] += 1;
+        if let Some(c) = self.counts.get_mut(b) {
+            *c = c.saturating_add(1);
+        }
+        if let Some(k) = self.blocks.get_mut(b / BLOCK) {
+            *k += 1;
+        }
         self.n += 1;
         self.max = self.max.max(us);
         self.sum = self.sum.saturating_add(us);
@@ -55,7 +59,7 @@ impl Histogram {
                 continue;
             }
             let start = k * BLOCK;
-            for (b, &c) in self.counts[start..(start + BLOCK).min(BUCKETS)].iter().enumerate() {
+            for (b, &c) in self.counts.iter().skip(start).take(BLOCK).enumerate() {
                 seen += u64::from(c);
                 if seen >= want {
                     let b = start + b;

@@ -3,24 +3,36 @@
 //! serves the same protocol for a REX block running elsewhere (`docs/runtime.md`).
 //!
 //! Threads: the scan thread owns the [`Simulation`] and never waits on the network; a small
-//! tokio runtime serves Modbus and the monitor clients. They meet on the [`board::Hub`].
+//! tokio runtime serves Modbus and the monitor clients. They meet on the [`board::Hub`]. With a
+//! watchdog, a supervisor thread watches the scan (`watchdog.rs`); with a retain file, a writer
+//! thread keeps it (`retain.rs`).
 
+pub mod access;
 pub mod atmt;
 pub mod board;
+pub mod contract;
 pub mod io;
 pub mod jitter;
+pub mod modbus;
 pub mod protocol;
+pub mod retain;
+pub mod safe;
 pub mod scan;
+pub mod watchdog;
 
-use board::{ChartInfo, Hub, VarInfo};
-use io::{Image, IoPoint};
+use board::{ChartInfo, Hub, RunState, VarInfo};
+use io::{Image, IoPoint, WordOrder};
 use jitter::ScanStats;
 use sfc_sim::{Simulation, Value};
 use std::net::SocketAddr;
+use std::sync::atomic::Ordering;
 use std::sync::{Arc, Mutex};
 use std::thread::JoinHandle;
 
+pub use access::MonitorAccess;
 pub use atmt::{AtmtModel, LineSource};
+pub use modbus::ModbusLimits;
+pub use retain::RetainOptions;
 pub use scan::Limits;
 
 /// A variable's memory slot in the simulation, with its type.
@@ -31,12 +43,12 @@ pub struct Slot {
 }
 
 impl Slot {
-    /// The value of a fresh input of this type (FALSE or 0).
+    /// The value of a fresh input of this type (FALSE, 0 or 0.0).
     pub fn default_value(&self) -> Value {
-        if matches!(self.ty.base(), sfc_st::Type::Bool) {
-            Value::Bool(false)
-        } else {
-            Value::Int(0)
+        match self.ty.base() {
+            sfc_st::Type::Bool => Value::Bool(false),
+            t if t.is_real() => Value::Real(0.0),
+            _ => Value::Int(0),
         }
     }
 }
@@ -46,18 +58,30 @@ impl Slot {
 pub struct RunOptions {
     /// Serve Modbus TCP here (port 0 picks a free port).
     pub modbus: Option<SocketAddr>,
+    /// Connections and idle timeout of the Modbus server.
+    pub modbus_limits: ModbusLimits,
+    /// Register order of 32- and 64-bit values on Modbus.
+    pub word_order: WordOrder,
     /// Serve the monitor protocol here.
     pub monitor: Option<SocketAddr>,
+    /// Which web pages (`Origin`) and host names (`Host`) the monitor accepts.
+    pub monitor_access: MonitorAccess,
     /// The secret for `force`/`set`; a random one when `None`.
     pub token: Option<String>,
     pub limits: Limits,
+    /// Safe values given by the run configuration (`NAME`, value text), over the chart's.
+    pub safe: Vec<(String, String)>,
+    /// Keep RETAIN/PERSISTENT values in this file.
+    pub retain: Option<RetainOptions>,
+    /// After a fault, wait in FAULT for a monitor `reset` instead of ending the run.
+    pub wait_in_fault: bool,
     /// Start halted (nothing scans until `continue` or `step`).
     pub halted: bool,
     /// Run the scan thread with real-time priority (Linux `SCHED_FIFO` 50; needs root or
     /// CAP_SYS_NICE; [`RunReport::realtime`] says whether it was granted).
     pub realtime: bool,
-    /// End the run on Ctrl-C (SIGINT) instead of letting it kill the process, so the caller
-    /// still gets the report.
+    /// End the run in order on Ctrl-C (SIGINT) and SIGTERM instead of letting them kill the
+    /// process, so the outputs go to their safe values and the caller still gets the report.
     pub ctrl_c: bool,
 }
 
@@ -65,8 +89,14 @@ pub struct RunOptions {
 #[derive(Debug, Clone)]
 pub struct RunReport {
     pub stats: ScanStats,
-    /// What stopped the run: a runtime error of the chart, or the watchdog.
+    /// The fault the run ended in: a runtime error of the chart, or the watchdog.
     pub error: Option<String>,
+    /// The state it ended in: STOP, or FAULT.
+    pub state: RunState,
+    /// The Modbus server's counters (`null` without Modbus).
+    pub modbus: serde_json::Value,
+    /// Lines for the operator not yet taken with [`Runtime::notices`].
+    pub notices: Vec<String>,
     /// Monitor clients dropped for flooding, garbage or reading too slowly.
     pub dropped: u64,
     /// The scan thread ran with real-time priority; `Err` says why it was asked for and
@@ -76,7 +106,15 @@ pub struct RunReport {
 
 impl Default for RunReport {
     fn default() -> Self {
-        RunReport { stats: ScanStats::default(), error: None, dropped: 0, realtime: Ok(false) }
+        RunReport {
+            stats: ScanStats::default(),
+            error: None,
+            state: RunState::Stop,
+            modbus: serde_json::Value::Null,
+            notices: Vec::new(),
+            dropped: 0,
+            realtime: Ok(false),
+        }
     }
 }
 
@@ -85,9 +123,14 @@ pub struct Runtime {
     hub: Arc<Hub>,
     net: Option<JoinHandle<()>>,
     worker: Option<JoinHandle<RunReport>>,
+    supervisor: Option<JoinHandle<()>>,
     monitor: Option<SocketAddr>,
     modbus: Option<SocketAddr>,
     points: Arc<Vec<IoPoint>>,
+    /// The simulation's interrupt flag: set on stop, so a scan that runs away still ends.
+    interrupt: Option<Arc<std::sync::atomic::AtomicBool>>,
+    counters: Option<Arc<modbus::ModbusCounters>>,
+    safe: Arc<safe::SafeState>,
 }
 
 fn random_token() -> String {
@@ -109,13 +152,44 @@ fn bind(what: &str, addr: SocketAddr) -> Result<std::net::TcpListener, String> {
 /// The network side: a tokio runtime on its own threads, serving Modbus and the monitor until
 /// the hub stops. It is built, run and shut down on its own OS thread, so a caller that is
 /// itself async (a test) can start and wait for a run.
-/// A bound Modbus listener with the map and image it serves.
-type ModbusSide = (std::net::TcpListener, Arc<Vec<IoPoint>>, Arc<Mutex<Image>>);
+/// A bound Modbus listener with what it serves.
+struct ModbusSide {
+    listener: std::net::TcpListener,
+    service: Arc<modbus::Service>,
+    limits: ModbusLimits,
+    counters: Arc<modbus::ModbusCounters>,
+}
+
+/// Ends the run when SIGINT or SIGTERM arrives (SIGTERM is what systemd and `kill` send).
+async fn stop_on_signals(hub: Arc<Hub>) {
+    #[cfg(unix)]
+    {
+        use tokio::signal::unix::{signal, SignalKind};
+        let (Ok(mut int), Ok(mut term)) = (signal(SignalKind::interrupt()), signal(SignalKind::terminate())) else {
+            hub.notice("warning: cannot catch SIGINT and SIGTERM: they end the process without an orderly stop");
+            return;
+        };
+        let name = tokio::select! {
+            _ = int.recv() => "SIGINT",
+            _ = term.recv() => "SIGTERM",
+        };
+        hub.notice(format!("sfc run: {name}: stopping in order"));
+    }
+    #[cfg(not(unix))]
+    {
+        if tokio::signal::ctrl_c().await.is_err() {
+            return;
+        }
+        hub.notice("sfc run: Ctrl-C: stopping in order");
+    }
+    hub.stop.store(true, std::sync::atomic::Ordering::Relaxed);
+    hub.interrupt();
+}
 
 fn start_net(
     hub: &Arc<Hub>,
     modbus: Option<ModbusSide>,
-    monitor: Option<std::net::TcpListener>,
+    monitor: Option<(std::net::TcpListener, MonitorAccess)>,
     ctrl_c: bool,
 ) -> Result<JoinHandle<()>, String> {
     let net = tokio::runtime::Builder::new_multi_thread()
@@ -129,22 +203,24 @@ fn start_net(
         .name("sfc-net-main".into())
         .spawn(move || {
             net.block_on(async {
-                if let Some((l, points, image)) = modbus {
-                    tokio::spawn(io::serve(l, points, image));
+                if let Some(m) = modbus {
+                    tokio::spawn(modbus::serve(m.listener, m.service, m.limits, m.counters, hub.clone()));
                 }
-                if let Some(l) = monitor {
-                    tokio::spawn(protocol::serve(l, hub.clone()));
+                if let Some((l, access)) = monitor {
+                    tokio::spawn(protocol::serve(l, hub.clone(), Arc::new(access)));
                 }
                 if ctrl_c {
-                    let hub = hub.clone();
-                    tokio::spawn(async move {
-                        if tokio::signal::ctrl_c().await.is_ok() {
-                            hub.stop.store(true, std::sync::atomic::Ordering::Relaxed);
-                        }
-                    });
+                    tokio::spawn(stop_on_signals(hub.clone()));
                 }
-                while !hub.stopping() {
+                while !hub.closing() {
                     tokio::time::sleep(std::time::Duration::from_millis(20)).await;
+                }
+                // Every session now sends what the end of the run published and closes its
+                // connection (flushing for at most a second); shutting the runtime down before
+                // that would cancel them and lose the end. Bounded for clients that never read.
+                let deadline = tokio::time::Instant::now() + std::time::Duration::from_secs(3);
+                while hub.sessions.load(Ordering::Relaxed) > 0 && tokio::time::Instant::now() < deadline {
+                    tokio::time::sleep(std::time::Duration::from_millis(10)).await;
                 }
             });
             net.shutdown_timeout(std::time::Duration::from_secs(1));
@@ -154,10 +230,12 @@ fn start_net(
 
 impl Runtime {
     /// Starts scanning `sim` (its period is the scan period) with the I/O and monitor of `opts`.
-    /// Errors: a located variable the Modbus map does not cover (with `modbus`), or an address
-    /// that cannot be bound.
-    pub fn start(sim: Simulation, opts: RunOptions) -> Result<Runtime, String> {
+    /// Errors: a located variable the Modbus map does not cover (with `modbus`), a safe value
+    /// that does not fit its variable, a retain file that cannot be written, or an address that
+    /// cannot be bound.
+    pub fn start(mut sim: Simulation, opts: RunOptions) -> Result<Runtime, String> {
         let points = Arc::new(if opts.modbus.is_some() { io::map_located(&sim)? } else { Vec::new() });
+        let safe = Arc::new(safe::safe_state(&sim, &points, &opts.safe)?);
         let located = sim.located_vars();
         let mut variables = Vec::new();
         let mut vars = Vec::new();
@@ -170,10 +248,11 @@ impl Runtime {
         for (name, ty) in names {
             let Some((index, t)) = sim.handle(&name) else { continue };
             let location = located.iter().find(|l| l.2 == index).map(|l| l.1.clone());
-            variables.push(VarInfo { name, ty, location });
+            variables.push(VarInfo { name, ty, location, safe: safe.of_slot(index).cloned() });
             vars.push(Slot { index, ty: t });
         }
         let var_point = vars.iter().map(|s| points.iter().position(|p| p.slot.index == s.index)).collect();
+        let var_safe = vars.iter().map(|s| safe.of_slot(s.index).cloned()).collect();
         let (steps, transitions) = sim.outline();
         let post = transitions.iter().map(|t| t.2.clone()).collect();
         let initial = steps.iter().enumerate().filter(|s| s.1 .1).map(|s| s.0 as u32).collect();
@@ -192,12 +271,69 @@ impl Runtime {
             // Before any client can connect: the first `hello` already says halted.
             hub.lock().push_halt(true, "halt".into());
         }
-        let image = Arc::new(Mutex::new(Image::new(&points)));
+        // Retentive values: restored before the first scan, then kept by the writer thread.
+        let leaves = sim.retained();
+        let writer = match &opts.retain {
+            Some(r) => {
+                for line in retain::start(&mut sim, &leaves, r) {
+                    hub.notice(line);
+                }
+                let pou = sim.pou_name().to_string();
+                let h = hub.clone();
+                let w = retain::Writer::start(r.path.clone(), pou, leaves.clone(), move |line| h.notice(line))
+                    .map_err(|e| format!("cannot start the retain writer: {e}"))?;
+                Some(w)
+            }
+            None => None,
+        };
+        let interrupt = sim.interrupt_flag();
+        let _ = hub.interrupt_flag.set(interrupt.clone());
+        // Outputs and `%M` read their declared (or restored) values before the first scan has
+        // copied them out, not zeros: a client that connects at once sees what the chart holds.
+        let mut first_image = Image::new(&points, opts.word_order);
+        for p in points.iter().filter(|p| p.role != io::Role::Input) {
+            if let Some(v) = sim.read_slot(p.slot.index) {
+                first_image.put(p, v);
+            }
+        }
+        let image = Arc::new(Mutex::new(first_image));
         let modbus_l = opts.modbus.map(|a| bind("Modbus", a)).transpose()?;
         let monitor_l = opts.monitor.map(|a| bind("the monitor", a)).transpose()?;
         let modbus = modbus_l.as_ref().and_then(|l| l.local_addr().ok());
         let monitor = monitor_l.as_ref().and_then(|l| l.local_addr().ok());
-        let net = start_net(&hub, modbus_l.map(|l| (l, points.clone(), image.clone())), monitor_l, opts.ctrl_c)?;
+        let counters = modbus_l.as_ref().map(|_| Arc::new(modbus::ModbusCounters::default()));
+        let modbus_side = match (modbus_l, &counters) {
+            (Some(listener), Some(c)) => Some(ModbusSide {
+                listener,
+                service: Arc::new(modbus::Service { points: points.clone(), image: image.clone() }),
+                limits: opts.modbus_limits,
+                counters: c.clone(),
+            }),
+            _ => None,
+        };
+        let net = start_net(&hub, modbus_side, monitor_l.map(|l| (l, opts.monitor_access.clone())), opts.ctrl_c)?;
+        let clock = Arc::new(watchdog::ScanClock::new());
+        let supervisor = match opts.limits.watchdog {
+            Some(w) => {
+                let s = watchdog::Supervisor {
+                    clock: clock.clone(),
+                    watchdog: w,
+                    interrupt: interrupt.clone(),
+                    hub: hub.clone(),
+                    image: image.clone(),
+                    points: points.clone(),
+                    safe: safe.clone(),
+                };
+                Some(
+                    std::thread::Builder::new()
+                        .name("sfc-watchdog".into())
+                        .spawn(move || s.run())
+                        .map_err(|e| format!("cannot start the watchdog thread: {e}"))?,
+                )
+            }
+            None => None,
+        };
+        let retain_interval = opts.retain.as_ref().map_or(std::time::Duration::from_secs(1), |r| r.interval);
         let thread = scan::ScanThread {
             sim,
             hub: hub.clone(),
@@ -206,11 +342,26 @@ impl Runtime {
             image,
             vars,
             var_point,
+            var_safe,
             post,
             initial,
             limits: opts.limits,
             halted: opts.halted,
             realtime: opts.realtime,
+            wait_in_fault: opts.wait_in_fault,
+            safe: safe.clone(),
+            clock,
+            interrupt: interrupt.clone(),
+            retain: scan::RetainRun {
+                leaves,
+                writer,
+                interval: retain_interval,
+                next: std::time::Instant::now() + retain_interval,
+            },
+            state: RunState::Run,
+            fault: None,
+            reanchor: false,
+            restarted: true,
             inputs: Vec::new(),
             forced: Vec::new(),
             pending_sets: Vec::new(),
@@ -218,10 +369,9 @@ impl Runtime {
             stats: ScanStats::default(),
             unpublished_states: Default::default(),
             spare_states: Vec::new(),
-            newest: None,
             unpublished_events: Vec::new(),
             halt_change: Vec::new(),
-            error: None,
+            last_state: None,
             steps_requested: Vec::new(),
         };
         // The simulator may recurse deeply in user code: the same stack as the CLI's.
@@ -230,7 +380,18 @@ impl Runtime {
             .stack_size(64 << 20)
             .spawn(move || thread.run())
             .map_err(|e| format!("cannot start the scan thread: {e}"))?;
-        Ok(Runtime { hub, net: Some(net), worker: Some(worker), monitor, modbus, points })
+        Ok(Runtime {
+            hub,
+            net: Some(net),
+            worker: Some(worker),
+            supervisor,
+            monitor,
+            modbus,
+            points,
+            interrupt: Some(interrupt),
+            counters,
+            safe,
+        })
     }
 
     /// Serves the monitor protocol for an ATMT/EATMT block observed through `source`.
@@ -239,13 +400,24 @@ impl Runtime {
         let (hub, rx) = Hub::new(model.info(), token);
         let monitor_l = opts.monitor.map(|a| bind("the monitor", a)).transpose()?;
         let monitor = monitor_l.as_ref().and_then(|l| l.local_addr().ok());
-        let net = start_net(&hub, None, monitor_l, opts.ctrl_c)?;
+        let net = start_net(&hub, None, monitor_l.map(|l| (l, opts.monitor_access.clone())), opts.ctrl_c)?;
         let adapter = atmt::Adapter { model, hub: hub.clone(), source };
         let worker = std::thread::Builder::new()
             .name("sfc-atmt".into())
             .spawn(move || adapter.run(rx))
             .map_err(|e| format!("cannot start the adapter thread: {e}"))?;
-        Ok(Runtime { hub, net: Some(net), worker: Some(worker), monitor, modbus: None, points: Arc::new(Vec::new()) })
+        Ok(Runtime {
+            hub,
+            net: Some(net),
+            worker: Some(worker),
+            supervisor: None,
+            monitor,
+            modbus: None,
+            points: Arc::new(Vec::new()),
+            interrupt: None,
+            counters: None,
+            safe: Arc::new(safe::SafeState::default()),
+        })
     }
 
     /// Where the monitor protocol is served.
@@ -268,9 +440,26 @@ impl Runtime {
     pub fn stats_json(&self) -> serde_json::Value {
         self.hub.lock().stats_json()
     }
-    /// Asks the run to end (the scan thread stops before its next scan).
+    /// Asks the run to end in order: the scan thread stops before its next scan, and a scan
+    /// running away is interrupted.
     pub fn stop(&self) {
-        self.hub.stop.store(true, std::sync::atomic::Ordering::Relaxed);
+        self.hub.stop.store(true, Ordering::Relaxed);
+        if let Some(i) = &self.interrupt {
+            i.store(true, Ordering::Relaxed);
+        }
+    }
+    /// Lines for the operator since the last call (watchdog, faults, retain, servers).
+    pub fn notices(&self) -> Vec<String> {
+        self.hub.take_notices()
+    }
+    /// RUN, STOP or FAULT, with the fault.
+    pub fn state(&self) -> (RunState, Option<serde_json::Value>) {
+        let b = self.hub.lock();
+        (b.state, b.fault.clone())
+    }
+    /// The safe values of the run.
+    pub fn safe_state(&self) -> &safe::SafeState {
+        &self.safe
     }
     /// The run has ended (limit reached, error, watchdog, end of the ATMT input, or stop).
     pub fn is_finished(&self) -> bool {
@@ -299,14 +488,22 @@ impl Runtime {
                 .join()
                 .unwrap_or_else(|_| RunReport { error: Some("the run's thread panicked".into()), ..Default::default() })
         };
-        // Two ticks: every session sends what the end of the run published.
-        std::thread::sleep(protocol::TICK * 3);
+        // The sessions send what the end of the run published once they see `closing`, and
+        // the network thread waits for them (`start_net`).
         self.stop();
+        self.hub.closing.store(true, Ordering::Relaxed);
         *self.hub.commands.lock().unwrap_or_else(|e| e.into_inner()) = None;
         if let Some(net) = self.net.take() {
             let _ = net.join();
         }
-        report.dropped = self.hub.dropped.load(std::sync::atomic::Ordering::Relaxed);
+        report.dropped = self.hub.dropped.load(Ordering::Relaxed);
+        if let Some(c) = &self.counters {
+            report.modbus = c.to_json();
+        }
+        if let Some(s) = self.supervisor.take() {
+            let _ = s.join();
+        }
+        report.notices = self.hub.take_notices();
         Some(report)
     }
 }

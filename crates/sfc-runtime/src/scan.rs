@@ -4,25 +4,41 @@
 //! sleeps to that absolute deadline, measures how late it woke (start jitter) and how long the
 //! scan took. A scan that ends after the next deadline is an overrun: the periods already
 //! passed are skipped (the next scan is the first one whose deadline is still ahead, and the
-//! simulation's virtual time jumps with it, so chart time keeps following the wall clock). With
-//! a watchdog, a scan longer than the watchdog stops the run with an error.
+//! simulation's virtual time jumps with it, so chart time keeps following the wall clock).
+//!
+//! The run is in one of three states (`docs/runtime.md`, "States"): RUN (scanning, or halted by
+//! the debugger), STOP and FAULT. A runtime error of the chart, or the watchdog (a supervisor
+//! thread, `watchdog.rs`, that stops a scan still running at its deadline), puts it in FAULT;
+//! an orderly end of the run (limit, Ctrl-C, SIGTERM) or a monitor `stop` in STOP. Entering
+//! either puts the outputs to their safe values (`safe.rs`) and writes the retentive values
+//! (`retain.rs`). A monitor `reset` restarts the chart, warm or cold, from any state.
 //!
 //! While halted the thread does not scan; it waits for commands. On `continue` the grid is
 //! re-anchored so the next scan is due at once (virtual time does not count the halt).
 
-use crate::board::{reply_err, reply_ok, BreakOp, BreakTarget, Command, Hub, Request, ScanState};
+// Indices here come from tables this crate builds at start (the Modbus map, the variables) or
+// are checked against the frame length just before (Modbus PDUs); the runtime work of issue 14
+// landed after the workspace lints, and its conversion to `get` is still to do (ARCHITECTURE.md).
+#![allow(clippy::indexing_slicing)]
+
+use crate::board::{reply_err, reply_ok, BreakOp, BreakTarget, Command, Hub, Request, RunState, ScanState};
 use crate::io::{Image, IoPoint, Role};
 use crate::jitter::ScanStats;
 use crate::protocol::{event_json, value_from_json, value_json};
+use crate::retain::Writer;
+use crate::safe::SafeState;
+use crate::watchdog::ScanClock;
 use crate::{RunReport, Slot};
-use sfc_sim::{Simulation, Value};
+use sfc_sim::code::Retained;
+use sfc_sim::{format_time, Simulation, Value};
 use std::collections::{BTreeMap, VecDeque};
-
-/// States kept for reuse: the history's length and a few that clients may still hold.
-const SPARE_STATES: usize = crate::board::HISTORY + 8;
+use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::mpsc::{Receiver, RecvTimeoutError};
 use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant};
+
+/// States kept for reuse: the history's length and a few that clients may still hold.
+const SPARE_STATES: usize = crate::board::HISTORY + 8;
 
 /// When to end a run.
 #[derive(Debug, Clone, Copy, Default)]
@@ -31,8 +47,18 @@ pub struct Limits {
     pub scans: Option<u64>,
     /// Stop after this much wall-clock time.
     pub duration: Option<Duration>,
-    /// Stop with an error when one scan takes longer.
+    /// Stop a scan that runs longer than this, and enter FAULT.
     pub watchdog: Option<Duration>,
+}
+
+/// The retentive values of the run and their file.
+pub(crate) struct RetainRun {
+    /// The RETAIN and PERSISTENT leaves (also kept over a `reset` without a file).
+    pub leaves: Vec<Retained>,
+    /// Writes the file; `None` without one.
+    pub writer: Option<Writer>,
+    pub interval: Duration,
+    pub next: Instant,
 }
 
 pub(crate) struct ScanThread {
@@ -45,13 +71,29 @@ pub(crate) struct ScanThread {
     pub vars: Vec<Slot>,
     /// For each monitor variable, its I/O point when it has one.
     pub var_point: Vec<Option<usize>>,
+    /// For each monitor variable, its safe value when it has one.
+    pub var_safe: Vec<Option<Value>>,
     /// Following steps of each transition, initial steps.
     pub post: Vec<Vec<u32>>,
     pub initial: Vec<u32>,
     pub limits: Limits,
     pub halted: bool,
     pub realtime: bool,
+    /// In FAULT, wait for a `reset` (something serves); otherwise the run ends.
+    pub wait_in_fault: bool,
+    pub safe: Arc<SafeState>,
+    pub clock: Arc<ScanClock>,
+    /// The simulation's interrupt flag (set by the watchdog and by `Runtime::stop`).
+    pub interrupt: Arc<AtomicBool>,
+    pub retain: RetainRun,
     // Run state.
+    pub state: RunState,
+    /// The message of the fault, in FAULT.
+    pub fault: Option<String>,
+    /// The grid must be re-anchored before the next scan (after a halt, stop or reset).
+    pub reanchor: bool,
+    /// The next scan is the chart's first (start, reset): its initial steps count as entered.
+    pub restarted: bool,
     pub inputs: Vec<Value>,
     pub forced: Vec<(u32, Value)>,
     pub pending_sets: Vec<(u32, Value)>,
@@ -60,12 +102,13 @@ pub(crate) struct ScanThread {
     pub unpublished_states: VecDeque<Arc<ScanState>>,
     /// States that left the history, to be filled again.
     pub spare_states: Vec<Arc<ScanState>>,
-    /// The state of the last scan.
-    pub newest: Option<Arc<ScanState>>,
+    /// Events not yet published (an overrun as figures: it costs no allocation).
     pub unpublished_events: Vec<crate::board::Event>,
     /// Halts and resumes not yet published, in order.
     pub halt_change: Vec<(bool, String)>,
-    pub error: Option<String>,
+    /// The state of the last scan (to show safe values on it, and its guards to a client that
+    /// connects while the run is halted).
+    pub last_state: Option<Arc<ScanState>>,
     pub steps_requested: Vec<Request>,
 }
 
@@ -80,14 +123,25 @@ impl ScanThread {
         let mut origin = started;
         let mut k = self.sim.next_scan();
         self.inputs = self.points.iter().map(|p| p.slot.default_value()).collect();
+        self.restarted = true;
         self.publish();
-        while !self.hub.stopping() {
-            if self.limits.scans.is_some_and(|n| self.stats.scans >= n)
-                || self.limits.duration.is_some_and(|d| started.elapsed() >= d)
-            {
+        loop {
+            if self.hub.stopping() || self.limits.duration.is_some_and(|d| started.elapsed() >= d) {
                 break;
             }
-            if self.halted {
+            if self.state == RunState::Run && self.limits.scans.is_some_and(|n| self.stats.scans >= n) {
+                break;
+            }
+            if self.state == RunState::Fault && !self.wait_in_fault {
+                break;
+            }
+            if self.reanchor {
+                self.reanchor = false;
+                k = self.sim.next_scan();
+                origin =
+                    Instant::now().checked_sub(Duration::from_micros(period_us.saturating_mul(k))).unwrap_or(origin);
+            }
+            if self.state != RunState::Run || self.halted {
                 match self.rx.recv_timeout(Duration::from_millis(20)) {
                     Ok(r) => self.command(r),
                     Err(RecvTimeoutError::Timeout) => {}
@@ -95,25 +149,20 @@ impl ScanThread {
                 }
                 self.drain();
                 for r in std::mem::take(&mut self.steps_requested) {
-                    if self.error.is_some() {
-                        let _ = r.reply.try_send(reply_err(&r.id, "the run stopped on an error"));
+                    if self.state != RunState::Run {
+                        let _ = r.reply.try_send(reply_err(&r.id, format!("the runtime is in {}", self.state.name())));
                         continue;
                     }
-                    self.scan_once();
-                    k = self.sim.next_scan();
+                    let at_scan = self.sim.next_scan();
+                    self.run_scan(at_scan, Instant::now());
                     // Halted, the thread may wait for the board: the reply comes after the state.
                     self.publish_blocking();
-                    let _ = r.reply.try_send(reply_ok(&r.id, serde_json::json!({"scan": k - 1})));
+                    let _ = r.reply.try_send(reply_ok(&r.id, serde_json::json!({"scan": at_scan})));
                 }
-                if self.error.is_some() {
-                    break;
+                if self.state == RunState::Run && !self.halted {
+                    self.reanchor = true;
                 }
                 self.refresh_guards();
-                if !self.halted {
-                    origin = Instant::now()
-                        .checked_sub(Duration::from_micros(period_us.saturating_mul(k)))
-                        .unwrap_or(origin);
-                }
                 self.publish();
                 continue;
             }
@@ -125,31 +174,14 @@ impl ScanThread {
             let start = Instant::now();
             self.stats.jitter.add(start.saturating_duration_since(deadline).as_micros() as u64);
             self.drain();
-            if self.halted {
+            if self.halted || self.state != RunState::Run || self.reanchor {
                 self.publish();
                 continue;
             }
             self.sim.skip_to(k);
-            self.scan_once();
-            let end = Instant::now();
-            let took = end - start;
-            self.stats.duration.add(took.as_micros() as u64);
-            self.stats.duration_ns.add(took.as_nanos() as u64);
-            if self.error.is_some() {
-                break;
-            }
-            if let Some(w) = self.limits.watchdog {
-                if took > w {
-                    let msg = format!(
-                        "watchdog: scan {k} took {} µs, more than the watchdog of {} µs",
-                        took.as_micros(),
-                        w.as_micros()
-                    );
-                    self.unpublished_events
-                        .push(serde_json::json!({"kind": "watchdog", "message": msg, "scan": k}).into());
-                    self.error = Some(msg);
-                    break;
-                }
+            let end = self.run_scan(k, start);
+            if self.state == RunState::Run {
+                self.offer_retain(end);
             }
             let mut next = k + 1;
             if end > at(origin, next) {
@@ -159,16 +191,236 @@ impl ScanThread {
                 self.stats.skipped += next - (k + 1);
                 self.unpublished_events.push(crate::board::Event::Overrun {
                     scan: k,
-                    scan_us: took.as_micros() as u64,
+                    scan_us: end.saturating_duration_since(start).as_micros() as u64,
                     skipped: next - (k + 1),
                 });
             }
             k = next;
             self.publish();
         }
-        self.halt_change.push((true, if self.error.is_some() { "error".into() } else { "end".into() }));
+        // The end of the run: an orderly stop puts the outputs to their safe values (a fault
+        // already did).
+        let faulted = self.state == RunState::Fault;
+        if !faulted {
+            self.enter_safe_state(RunState::Stop, None, "end");
+        } else {
+            self.halt_change.push((true, "end".into()));
+        }
+        let values = crate::retain::capture(&self.sim, &self.retain.leaves);
+        let last_scan = self.sim.next_scan().saturating_sub(1);
+        if let Some(w) = self.retain.writer.take() {
+            w.finish(last_scan, values);
+        }
         self.publish_blocking();
-        RunReport { stats: self.stats.clone(), error: self.error.take(), dropped: 0, realtime }
+        RunReport {
+            stats: self.stats.clone(),
+            error: self.fault.take(),
+            dropped: 0,
+            realtime,
+            state: self.state,
+            modbus: serde_json::Value::Null,
+            notices: Vec::new(),
+        }
+    }
+
+    /// Runs scan `k` (started at `start`) under the watchdog; a fault enters FAULT. Returns
+    /// when it ended.
+    fn run_scan(&mut self, k: u64, start: Instant) -> Instant {
+        if self.limits.watchdog.is_some() {
+            self.clock.begin(start, k);
+        }
+        let result = self.scan_once();
+        let end = Instant::now();
+        self.clock.end();
+        let took = end.saturating_duration_since(start);
+        self.stats.duration.add(took.as_micros() as u64);
+        self.stats.duration_ns.add(took.as_nanos() as u64);
+        let tripped = self.clock.tripped.load(Ordering::Relaxed);
+        if !tripped && matches!(&result, Err(e) if e.message == sfc_sim::code::INTERRUPTED) {
+            // Interrupted by an orderly stop (Ctrl-C, SIGTERM): not a fault.
+            return end;
+        }
+        match self.limits.watchdog {
+            Some(w) if tripped || took > w => self.watchdog_fault(k, took, w),
+            _ => {
+                if let Err(e) = result {
+                    self.error_fault(&e);
+                }
+            }
+        }
+        end
+    }
+
+    /// Where the fault happened: `step`, `steps`, `action`, `transition`, `line`, `column`.
+    fn fault_place(&self, e: Option<&sfc_sim::RuntimeError>, j: &mut serde_json::Value, text: &mut String) {
+        if let Some(place) = self.sim.fault_place() {
+            if let Some(a) = &place.action {
+                j["action"] = serde_json::json!(a);
+                text.push_str(&format!(" in action {a}"));
+            }
+            if let Some(t) = &place.transition {
+                j["transition"] = serde_json::json!(t);
+                text.push_str(&format!(" in the condition of {t}"));
+            }
+            if let Some(s) = place.steps.first() {
+                j["step"] = serde_json::json!(s);
+                let more = if place.steps.len() > 1 {
+                    format!(" (and {})", place.steps[1..].join(", "))
+                } else {
+                    String::new()
+                };
+                text.push_str(&format!(" of step {s}{more}"));
+            }
+            j["steps"] = serde_json::json!(place.steps);
+        }
+        if let Some(e) = e {
+            j["line"] = serde_json::json!(e.line);
+            j["column"] = serde_json::json!(e.column);
+            text.push_str(&format!(", line {} column {}", e.line, e.column));
+        }
+    }
+
+    fn watchdog_fault(&mut self, k: u64, took: Duration, w: Duration) {
+        let err = self.sim.error().cloned();
+        let stopped = err.as_ref().is_some_and(|e| e.message == sfc_sim::code::INTERRUPTED);
+        let mut j = serde_json::json!({
+            "kind": "watchdog", "scan": k, "scanUs": took.as_micros() as u64, "watchdogUs": w.as_micros() as u64,
+        });
+        let ms = |d: Duration| format!("{:.1} ms", d.as_secs_f64() * 1000.0);
+        let mut text = if stopped {
+            format!(
+                "watchdog: scan {k} ran past the watchdog of {} and was stopped after {} ({} past its deadline)",
+                format_time(w.as_micros() as i64),
+                ms(took),
+                ms(took.saturating_sub(w))
+            )
+        } else {
+            format!(
+                "watchdog: scan {k} took {}, more than the watchdog of {}",
+                ms(took),
+                format_time(w.as_micros() as i64)
+            )
+        };
+        if stopped {
+            self.fault_place(err.as_ref(), &mut j, &mut text);
+        } else if let Some(e) = err.as_ref() {
+            // The scan also faulted on its own.
+            text.push_str(&format!("; it faulted at line {} column {}: {}", e.line, e.column, e.message));
+        }
+        j["message"] = serde_json::json!(text);
+        self.unpublished_events.push(j.clone().into());
+        self.enter_fault(j, text);
+    }
+
+    fn error_fault(&mut self, e: &sfc_sim::RuntimeError) {
+        let mut j = serde_json::json!({"kind": "error", "scan": e.scan, "message": e.message});
+        let mut text = format!("error: {}:{}: {} (scan {})", e.line, e.column, e.message, e.scan);
+        let mut place = String::new();
+        self.fault_place(None, &mut j, &mut place);
+        j["line"] = serde_json::json!(e.line);
+        j["column"] = serde_json::json!(e.column);
+        text.push_str(&place);
+        self.enter_fault(j, text);
+    }
+
+    /// Enters FAULT: safe outputs, retentive values written, the fault on the board and for the
+    /// operator.
+    fn enter_fault(&mut self, fault: serde_json::Value, text: String) {
+        self.hub.notice(text.clone());
+        self.fault = Some(text);
+        let values = crate::retain::capture(&self.sim, &self.retain.leaves);
+        if let Some(w) = &mut self.retain.writer {
+            w.offer(self.sim.next_scan().saturating_sub(1), values);
+        }
+        self.enter_safe_state(RunState::Fault, Some(fault), "fault");
+        if self.wait_in_fault {
+            self.hub.notice(format!(
+                "sfc run: FAULT: outputs at their safe values ({}); Modbus and the monitor keep serving; a monitor `reset` restarts the chart",
+                self.safe.summary(8)
+            ));
+        }
+    }
+
+    /// Puts the outputs to their safe values (process image, and the state the monitor shows)
+    /// and the board into `state`.
+    fn enter_safe_state(&mut self, state: RunState, fault: Option<serde_json::Value>, reason: &str) {
+        {
+            let mut img = self.image.lock().unwrap_or_else(|e| e.into_inner());
+            for (i, v) in &self.safe.points {
+                img.put(&self.points[*i], v);
+            }
+        }
+        let last = self.unpublished_states.pop_back().or_else(|| self.last_state.clone());
+        if let Some(last) = last {
+            let mut st = (*last).clone();
+            for (i, safe) in self.var_safe.iter().enumerate() {
+                if let (Some(v), Some(slot)) = (safe, st.values.get_mut(i)) {
+                    *slot = v.clone();
+                }
+            }
+            let st = Arc::new(st);
+            if self.unpublished_states.is_empty() && self.last_state.as_ref().is_some_and(|l| Arc::ptr_eq(l, &last)) {
+                // Already on the board: replace it there.
+                let mut b = self.hub.lock();
+                if let Some(back) = b.history.back_mut() {
+                    if back.scan == st.scan {
+                        *back = st.clone();
+                    }
+                }
+            } else {
+                self.unpublished_states.push_back(st.clone());
+            }
+            self.last_state = Some(st);
+        }
+        self.state = state;
+        self.hub.lock().set_state(state, fault);
+        self.halt_change.push((true, reason.to_string()));
+    }
+
+    /// Every retain interval, after a completed scan: the retentive values to the writer when
+    /// they changed.
+    fn offer_retain(&mut self, now: Instant) {
+        if now < self.retain.next {
+            return;
+        }
+        self.retain.next = now + self.retain.interval;
+        if let Some(w) = &mut self.retain.writer {
+            let values = crate::retain::capture(&self.sim, &self.retain.leaves);
+            w.offer(self.sim.next_scan().saturating_sub(1), values);
+        }
+    }
+
+    /// Restarts the chart (monitor `reset`): RETAIN and PERSISTENT values kept when warm, only
+    /// PERSISTENT when cold; then RUN.
+    fn reset(&mut self, cold: bool) -> serde_json::Value {
+        let kept: Vec<(usize, sfc_st::Type, Value)> = self
+            .retain
+            .leaves
+            .iter()
+            .filter(|l| !cold || l.persistent)
+            .map(|l| (l.slot, l.ty.clone(), self.sim.read_slot(l.slot).cloned().unwrap_or_default()))
+            .collect();
+        self.sim.restart();
+        for (slot, ty, v) in kept {
+            let _ = self.sim.write_slot(slot, &ty, v);
+        }
+        self.interrupt.store(false, Ordering::Relaxed);
+        self.clock.tripped.store(false, Ordering::Relaxed);
+        let was = self.state;
+        self.state = RunState::Run;
+        self.fault = None;
+        self.restarted = true;
+        self.reanchor = true;
+        self.hub.lock().set_state(RunState::Run, None);
+        if self.halted || was != RunState::Run {
+            self.halted = false;
+            self.halt_change.push((false, String::new()));
+        }
+        let mode = if cold { "cold" } else { "warm" };
+        let scan = self.sim.next_scan();
+        self.unpublished_events.push(serde_json::json!({"kind": "reset", "mode": mode, "scan": scan}).into());
+        self.hub.notice(format!("sfc run: {mode} restart from {}: RUN again at scan {scan}", was.name()));
+        serde_json::json!({"state": "RUN", "mode": mode, "scan": scan})
     }
 
     /// Handles every waiting command without blocking.
@@ -182,34 +434,39 @@ impl ScanThread {
     /// scan changed: the state is filled in a recycled buffer, guards are evaluated only while
     /// someone watches, and nothing is allocated unless something happened (an event, a
     /// breakpoint, a write from a client).
-    fn scan_once(&mut self) {
-        let first = self.sim.next_scan() == 0 || self.stats.scans == 0;
+    fn scan_once(&mut self) -> Result<(), sfc_sim::RuntimeError> {
+        let first = std::mem::take(&mut self.restarted);
         // Inputs: the image when it is free, else the last copy (the scan never waits).
-        if let Ok(mut img) = self.image.try_lock() {
-            for (i, p) in self.points.iter().enumerate() {
+        if !self.points.is_empty() {
+            if let Ok(mut img) = self.image.try_lock() {
+                for (i, (p, input)) in self.points.iter().zip(self.inputs.iter_mut()).enumerate() {
+                    if p.role == Role::Input {
+                        if let Some(v) = img.client.get(i) {
+                            input.clone_from(v);
+                        }
+                    }
+                }
+                if !img.memory_writes.is_empty() {
+                    for i in std::mem::take(&mut img.memory_writes) {
+                        let Some(p) = self.points.get(i) else { continue };
+                        let v = img.get(p);
+                        // A rejected value is impossible: the map only admits types of the
+                        // register size.
+                        let _ = self.sim.write_slot(p.slot.index, &p.slot.ty, v);
+                    }
+                }
+            }
+            for (p, input) in self.points.iter().zip(&self.inputs) {
                 if p.role == Role::Input {
-                    self.inputs[i] = img.get(p);
+                    let _ = self.sim.write_slot(p.slot.index, &p.slot.ty, input.clone());
                 }
-            }
-            if !img.memory_writes.is_empty() {
-                let writes = std::mem::take(&mut img.memory_writes);
-                for &i in &writes {
-                    let p = &self.points[i];
-                    let v = img.get(p);
-                    // A rejected value is impossible: the map only admits 16-bit types.
-                    let _ = self.sim.write_slot(p.slot.index, &p.slot.ty, v);
-                }
-            }
-        }
-        for (i, p) in self.points.iter().enumerate() {
-            if p.role == Role::Input {
-                let _ = self.sim.write_slot(p.slot.index, &p.slot.ty, self.inputs[i].clone());
             }
         }
         if !self.pending_sets.is_empty() {
             for (var, v) in std::mem::take(&mut self.pending_sets) {
-                let s = &self.vars[var as usize];
-                let _ = self.sim.write_slot(s.index, &s.ty, v);
+                if let Some(s) = self.vars.get(var as usize) {
+                    let _ = self.sim.write_slot(s.index, &s.ty, v);
+                }
             }
         }
         self.apply_forces();
@@ -227,12 +484,14 @@ impl ScanThread {
         self.stats.scans += 1;
         // The state, in a buffer the board handed back when it fell out of the history.
         let mut arc = self.take_state();
-        let st = Arc::get_mut(&mut arc).expect("a recycled state is not shared");
+        let Some(st) = Arc::get_mut(&mut arc) else {
+            return result;
+        };
         st.scan = self.sim.next_scan() - 1;
         st.time = self.sim.next_time() - self.sim.options().period;
         self.sim.active_times_unsorted(&mut st.active);
         self.sim.fired_ids(&mut st.fired);
-        st.guards_known = self.hub.connected.load(std::sync::atomic::Ordering::Relaxed) > 0 || self.halted;
+        st.guards_known = self.hub.connected.load(Ordering::Relaxed) > 0 || self.halted;
         if st.guards_known {
             self.sim.guard_states(&mut st.guards);
         } else {
@@ -251,11 +510,17 @@ impl ScanThread {
         st.forced.extend(self.forced.iter().map(|f| f.0));
         let scan = st.scan;
         if !self.sim.last_events().is_empty() {
-            let mut events: Vec<&sfc_sim::Event> = self.sim.last_events().iter().collect();
+            let mut events: Vec<&sfc_sim::Event> = self
+                .sim
+                .last_events()
+                .iter()
+                // A scan stopped by the watchdog is told as a `watchdog` event.
+                .filter(|e| !matches!(e, sfc_sim::Event::Error(x) if x.message == sfc_sim::code::INTERRUPTED))
+                .collect();
             events.sort_by_key(|e| e.rank());
             for e in events {
                 let mut j = event_json(e);
-                j["scan"] = serde_json::json!(scan);
+                crate::board::put(&mut j, "scan", serde_json::json!(scan));
                 self.unpublished_events.push(j.into());
             }
         }
@@ -263,7 +528,8 @@ impl ScanThread {
         // a transition when it fires.
         if !self.breakpoints.is_empty() {
             let mut hits: Vec<BreakTarget> = Vec::new();
-            let mut entered: Vec<u32> = st.fired.iter().flat_map(|&t| self.post[t as usize].iter().copied()).collect();
+            let mut entered: Vec<u32> =
+                st.fired.iter().filter_map(|&t| self.post.get(t as usize)).flatten().copied().collect();
             if first {
                 entered.extend(self.initial.iter().copied());
             }
@@ -292,25 +558,23 @@ impl ScanThread {
                 self.halt_change.push((true, "breakpoint".into()));
             }
         }
-        if let Err(e) = result {
-            self.error = Some(format!("{}:{}: {} (scan {})", e.line, e.column, e.message, e.scan));
-        }
-        self.newest = Some(arc.clone());
+        self.last_state = Some(arc.clone());
         self.unpublished_states.push_back(arc);
         if self.unpublished_states.len() > crate::board::HISTORY {
             if let Some(old) = self.unpublished_states.pop_front() {
                 self.recycle(old);
             }
         }
+        result
     }
 
-    /// While halted: a client that connected after the last scan gets the guards of the state
-    /// it sees (the newest state is published again with them).
+    /// While halted or stopped: a client that connected after the last scan gets the guards of
+    /// the state it sees (the newest state is published again with them).
     fn refresh_guards(&mut self) {
-        if self.hub.connected.load(std::sync::atomic::Ordering::Relaxed) == 0 {
+        if self.hub.connected.load(Ordering::Relaxed) == 0 {
             return;
         }
-        let Some(newest) = &self.newest else { return };
+        let Some(newest) = &self.last_state else { return };
         if newest.guards_known {
             return;
         }
@@ -318,7 +582,7 @@ impl ScanThread {
         self.sim.guard_states(&mut st.guards);
         st.guards_known = true;
         let st = Arc::new(st);
-        self.newest = Some(st.clone());
+        self.last_state = Some(st.clone());
         match self.unpublished_states.back_mut() {
             Some(last) if last.scan == st.scan => *last = st,
             _ => self.hub.lock().replace_latest(st),
@@ -343,17 +607,27 @@ impl ScanThread {
         }
     }
 
+    /// Forcing a located input shows the forced value to Modbus clients (the other points
+    /// show it through the scan's outputs).
+    fn force_input(&mut self, var: u32, v: Option<Value>) {
+        if let Some(i) = self.var_point[var as usize].filter(|&i| self.points[i].role == Role::Input) {
+            let mut img = self.image.lock().unwrap_or_else(|e| e.into_inner());
+            img.force(i, &self.points[i], v);
+        }
+    }
+
     fn apply_forces(&mut self) {
         for (var, v) in &self.forced {
-            let s = &self.vars[*var as usize];
-            let _ = self.sim.write_slot(s.index, &s.ty, v.clone());
+            if let Some(s) = self.vars.get(*var as usize) {
+                let _ = self.sim.write_slot(s.index, &s.ty, v.clone());
+            }
         }
     }
 
     fn target_name(&self, t: BreakTarget) -> (&'static str, String) {
         match t {
-            BreakTarget::Step(s) => ("step", self.hub.info.steps[s as usize].0.clone()),
-            BreakTarget::Transition(t) => ("transition", self.hub.info.transitions[t as usize].0.clone()),
+            BreakTarget::Step(s) => ("step", self.hub.info.step_name(s)),
+            BreakTarget::Transition(t) => ("transition", self.hub.info.transition_name(t)),
         }
     }
 
@@ -379,8 +653,10 @@ impl ScanThread {
                 Ok(serde_json::json!({"scan": self.sim.next_scan()}))
             }
             Command::Continue => {
-                if self.error.is_some() {
-                    Err("the run stopped on an error".into())
+                if self.state == RunState::Fault {
+                    Err("the runtime is in FAULT: `reset` restarts it".into())
+                } else if self.state == RunState::Stop {
+                    Err("the runtime is in STOP: `start` runs it again".into())
                 } else {
                     if self.halted {
                         self.halted = false;
@@ -429,22 +705,56 @@ impl ScanThread {
                 self.forced.push((var, v.clone()));
                 let s = &self.vars[var as usize];
                 let _ = self.sim.write_slot(s.index, &s.ty, v.clone());
+                self.force_input(var, Some(v.clone()));
                 value_json(&v)
             }),
             Command::Unforce { var } => {
-                match var {
-                    Some(var) => self.forced.retain(|f| f.0 != var),
-                    None => self.forced.clear(),
+                let released: Vec<u32> = match var {
+                    Some(var) => vec![var],
+                    None => self.forced.iter().map(|f| f.0).collect(),
+                };
+                self.forced.retain(|f| !released.contains(&f.0));
+                for v in released {
+                    self.force_input(v, None);
                 }
                 Ok(serde_json::Value::Null)
             }
+            Command::Reset { cold } => Ok(self.reset(cold)),
+            Command::Stop => match self.state {
+                RunState::Run => {
+                    self.hub.notice("sfc run: STOP (monitor `stop`): outputs at their safe values");
+                    let values = crate::retain::capture(&self.sim, &self.retain.leaves);
+                    if let Some(w) = &mut self.retain.writer {
+                        w.offer(self.sim.next_scan().saturating_sub(1), values);
+                    }
+                    self.enter_safe_state(RunState::Stop, None, "stop");
+                    Ok(serde_json::json!({"state": "STOP"}))
+                }
+                s => Err(format!("the runtime is in {} already", s.name())),
+            },
+            Command::Start => match self.state {
+                RunState::Stop => {
+                    self.state = RunState::Run;
+                    self.reanchor = true;
+                    self.hub.lock().set_state(RunState::Run, None);
+                    self.halted = false;
+                    self.halt_change.push((false, String::new()));
+                    self.hub.notice("sfc run: RUN (monitor `start`)");
+                    Ok(serde_json::json!({"state": "RUN"}))
+                }
+                RunState::Fault => Err("the runtime is in FAULT: `reset` restarts it".into()),
+                RunState::Run => Err("the runtime is in RUN already".into()),
+            },
             Command::Set { var, value } => self.convert(var, &value).map(|v| {
-                match self.var_point[var as usize] {
+                let point = self.var_point.get(var as usize).copied().flatten();
+                match point.and_then(|i| Some((i, self.points.get(i)?))) {
                     // A located input keeps the value in the image until a client writes it.
-                    Some(i) if self.points[i].role == Role::Input => {
-                        self.inputs[i] = v.clone();
+                    Some((i, p)) if p.role == Role::Input => {
+                        if let Some(input) = self.inputs.get_mut(i) {
+                            *input = v.clone();
+                        }
                         if let Ok(mut img) = self.image.lock() {
-                            img.put(&self.points[i], &v);
+                            img.write_input(i, &self.points[i], v.clone());
                         }
                     }
                     _ => self.pending_sets.push((var, v.clone())),
@@ -454,10 +764,10 @@ impl ScanThread {
             Command::Explain { step } => match self.sim.explain_step(&step) {
                 Some(report) => {
                     let mut j = report.to_json();
-                    j["elapsedUs"] = serde_json::json!(report.elapsed);
-                    j["timeoutUs"] = serde_json::json!(report.timeout);
-                    j["lines"] = serde_json::json!(report.lines());
-                    j["scan"] = serde_json::json!(self.sim.next_scan().saturating_sub(1));
+                    crate::board::put(&mut j, "elapsedUs", serde_json::json!(report.elapsed));
+                    crate::board::put(&mut j, "timeoutUs", serde_json::json!(report.timeout));
+                    crate::board::put(&mut j, "lines", serde_json::json!(report.lines()));
+                    crate::board::put(&mut j, "scan", serde_json::json!(self.sim.next_scan().saturating_sub(1)));
                     Ok(j)
                 }
                 None => Err(format!("step `{step}` is not active: only an active step can be stuck")),
@@ -477,8 +787,9 @@ impl ScanThread {
 
     /// A JSON value as the variable's value, checked against its type.
     fn convert(&self, var: u32, value: &serde_json::Value) -> Result<Value, String> {
-        let s = &self.vars[var as usize];
-        let info = &self.hub.info.variables[var as usize];
+        let (Some(s), Some(info)) = (self.vars.get(var as usize), self.hub.info.variables.get(var as usize)) else {
+            return Err(format!("no variable number {var}"));
+        };
         let v = value_from_json(value).ok_or_else(|| format!("`{}`: {value} is not a value", info.name))?;
         Simulation::fit_to(&s.ty, v).map_err(|e| format!("`{}` is {e}", info.name))
     }

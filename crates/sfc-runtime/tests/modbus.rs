@@ -53,10 +53,10 @@ fn carwash_full_cycles_over_modbus() {
 
 #[test]
 fn unmapped_addresses_are_refused_with_their_name() {
-    let text = "PROGRAM P\nVAR\n  Level AT %ID3 : DINT;\n  Go AT %IX0.0 : BOOL;\nEND_VAR\nINITIAL_STEP S0: END_STEP\nTRANSITION FROM S0 TO S1 := Go; END_TRANSITION\nSTEP S1: END_STEP\nTRANSITION FROM S1 TO S0 := NOT Go; END_TRANSITION\nEND_PROGRAM\n";
+    let text = "PROGRAM P\nVAR\n  Level AT %IB3 : BYTE;\n  Go AT %IX0.0 : BOOL;\nEND_VAR\nINITIAL_STEP S0: END_STEP\nTRANSITION FROM S0 TO S1 := Go; END_TRANSITION\nSTEP S1: END_STEP\nTRANSITION FROM S1 TO S0 := NOT Go; END_TRANSITION\nEND_PROGRAM\n";
     let sim =
         Simulation::from_source("p.st", text, None, SimOptions::default()).unwrap_or_else(|(_, d)| panic!("{d:?}"));
     let opts = RunOptions { modbus: Some("127.0.0.1:0".parse().unwrap()), ..Default::default() };
-    let err = Runtime::start(sim, opts).err().expect("%ID is not on the map");
-    assert!(err.contains("`Level` %ID3") && err.contains("size `D`"), "{err}");
+    let err = Runtime::start(sim, opts).err().expect("%IB is not on the map");
+    assert!(err.contains("`Level` %IB3") && err.contains("size `B`"), "{err}");
 }

@@ -42,7 +42,9 @@ impl ApiError {
 
     /// The error with more fields (`conflict`, `diagnostics`).
     fn with(mut self, key: &str, value: Value) -> Self {
-        self.body[key] = value;
+        if let Some(o) = self.body.as_object_mut() {
+            o.insert(key.to_string(), value);
+        }
         self
     }
 }
@@ -107,10 +109,10 @@ fn is_chart_file(p: &Path) -> bool {
         .is_some_and(|e| e.eq_ignore_ascii_case("st") || e.eq_ignore_ascii_case("xml"))
 }
 
-/// `path` from the page, confined to the roots; only chart files (or the files named on the
-/// command line) may be read or written, so the page cannot touch other files in a root.
+/// `path` from the page: one of the files named on the command line, or a chart file under a
+/// directory named there; the page cannot touch other files.
 fn chart_path(s: &AppState, raw: &str) -> Result<PathBuf, ApiError> {
-    let path = crate::confine(&s.0.roots, raw)?;
+    let path = crate::confine(&s.0.roots, &s.0.open, raw)?;
     if is_chart_file(&path) || s.0.open.contains(&path) {
         Ok(path)
     } else {
@@ -141,9 +143,10 @@ fn read_existing(path: &Path) -> Result<Option<Vec<u8>>, ApiError> {
     }
 }
 
-fn utf8(path: &Path, bytes: Vec<u8>) -> Result<String, ApiError> {
-    String::from_utf8(bytes)
-        .map_err(|_| ApiError::new(StatusCode::UNPROCESSABLE_ENTITY, format!("`{}` is not UTF-8 text", path.display())))
+/// A chart file's text: UTF-8 with or without a byte order mark, or Latin-1 / Windows-1252 (a
+/// save writes it back the same way, see [`sfc_syntax::encoding`]).
+fn utf8(_path: &Path, bytes: Vec<u8>) -> Result<String, ApiError> {
+    Ok(sfc_syntax::encoding::decode(&bytes).text)
 }
 
 /// An IEC identifier (`Conveyor_2`), as a POU name must be.
@@ -186,10 +189,15 @@ fn page_diagnostics(
     }
     for d in in_text {
         let doc = chart_of(charts, &pous, (d.span.file == 0).then_some(d.span));
-        let d = match import {
+        // A syntax error inside a step, transition or action concerns that element.
+        let inside = (d.element.is_none() && d.span.file == 0).then(|| pous.element_at(d.span)).flatten();
+        let mut d = match import {
             Some(imp) => sfc_plcopen::relocate(d, &imp.map, 0),
             None => d.clone(),
         };
+        if let Some(name) = inside {
+            d.element = Some(name.to_string());
+        }
         items.push((d, doc));
     }
     items.sort_by(|(a, _), (b, _)| {
@@ -206,9 +214,9 @@ fn page_diagnostics(
 /// The check of a document: its problems, then the check of its text with `opts`.
 fn check_document(doc: &EditorDoc, opts: &CheckOptions) -> (Vec<Value>, bool, sfc_model::Checked) {
     let written = sfc_doc::to_text(doc);
-    let mut out: Vec<Value> = written.problems.iter().map(problem_json).collect();
-    let mut errors = written.problems.iter().any(|p| p.severity == sfc_diagnostics::Severity::Error);
     let name = format!("{}.st", doc.pou);
+    let mut out: Vec<Value> = written.problems.iter().map(|p| problem_json(p, doc, &name, &written.text)).collect();
+    let mut errors = written.problems.iter().any(|p| p.severity == sfc_diagnostics::Severity::Error);
     let checked = sfc_analysis::check_source(0, &name, &written.text, opts);
     errors |= checked.has_errors();
     out.extend(page_diagnostics(&name, &written.text, None, &checked.diagnostics, std::slice::from_ref(doc)));
@@ -226,13 +234,17 @@ pub async fn session(State(s): State<AppState>) -> Json<Value> {
         "open": paths(&s.0.open),
     });
     if let Some(h) = &s.0.host {
-        v["host"] = json!({
-            "fb": h.fb.name(),
-            "nstep": h.nstep,
-            "ntr": h.ntr,
-            "file": path_string(&h.file),
-            "result": path_string(&h.result),
-        });
+        put(
+            &mut v,
+            "host",
+            json!({
+                "fb": h.fb.name(),
+                "nstep": h.nstep,
+                "ntr": h.ntr,
+                "file": path_string(&h.file),
+                "result": path_string(&h.result),
+            }),
+        );
     }
     Json(v)
 }
@@ -246,14 +258,15 @@ pub async fn codes() -> Json<Value> {
 }
 
 pub async fn files(State(s): State<AppState>) -> Response {
-    blocking(move || Ok(json!({ "files": list_files(&s.0.roots) }))).await
+    blocking(move || Ok(json!({ "files": list_files(&s.0.roots, &s.0.open) }))).await
 }
 
-/// Every `.st` and `.xml` under the roots, sorted, without `target/`, `node_modules/` and hidden
-/// directories. Linked directories are not entered (they may lead out of the roots or in
-/// circles); a linked file is listed when its target is under a root.
-fn list_files(roots: &[PathBuf]) -> Vec<Value> {
-    let mut found = std::collections::BTreeSet::new();
+/// The files named on the command line that exist, and every `.st` and `.xml` under the roots,
+/// sorted, without `target/`, `node_modules/`, hidden files and hidden directories. Linked
+/// directories are not entered (they may lead out of the roots or in circles); a linked file
+/// is listed when its target is under a root.
+fn list_files(roots: &[PathBuf], named: &[PathBuf]) -> Vec<Value> {
+    let mut found: std::collections::BTreeSet<PathBuf> = named.iter().filter(|p| p.is_file()).cloned().collect();
     let mut stack: Vec<(PathBuf, usize)> = roots.iter().map(|r| (r.clone(), 0)).collect();
     while let Some((dir, depth)) = stack.pop() {
         let Ok(entries) = std::fs::read_dir(&dir) else { continue };
@@ -267,6 +280,7 @@ fn list_files(roots: &[PathBuf]) -> Vec<Value> {
                     stack.push((path, depth + 1));
                 }
             } else if is_chart_file(&path)
+                && !name.starts_with('.')
                 && (kind.is_file()
                     || std::fs::canonicalize(&path)
                         .is_ok_and(|t| t.is_file() && roots.iter().any(|r| t.starts_with(r))))
@@ -380,11 +394,14 @@ fn save_file(s: &AppState, req: SaveRequest) -> Answer {
                 .with("conflict", json!(true)));
         }
     }
+    // The file keeps its encoding, byte order mark and line endings.
+    let written_as = current.as_deref().map(sfc_syntax::encoding::decode).unwrap_or_default();
     let current = current.map(|b| utf8(&path, b)).transpose()?;
     let name = path.display().to_string();
     if !path.parent().is_some_and(Path::is_dir) {
         return Err(ApiError::new(StatusCode::NOT_FOUND, format!("the directory of `{name}` does not exist")));
     }
+    refuse_unparsed(&req.doc)?;
     let plain = CheckOptions { analysis: false, ..CheckOptions::default() };
     // The POU replaced in the file: the one opened, which the page may have renamed since.
     let replacing = req.pou.clone().unwrap_or_else(|| req.doc.pou.clone());
@@ -396,44 +413,48 @@ fn save_file(s: &AppState, req: SaveRequest) -> Answer {
             sfc_doc::splice_replacing(text, &req.doc, &replacing)
         }
         FileFormat::Xml => {
-            // The other POUs come through the import; a file that does not import cleanly would
-            // lose them, so it is not overwritten.
-            let base = match &current {
-                None => String::new(),
-                Some(xml) => {
-                    let imported = sfc_plcopen::import(0, &name, xml);
-                    if imported.diagnostics.iter().any(Diagnostic::is_error) {
-                        let d = page_diagnostics(&name, &imported.text, Some(&imported), &[], &[]);
-                        return Err(ApiError::new(
-                            StatusCode::UNPROCESSABLE_ENTITY,
-                            format!("`{name}` cannot be imported without errors, so it was not overwritten"),
-                        )
-                        .with("diagnostics", json!(d)));
-                    }
-                    imported.text
-                }
-            };
-            refuse_rename_onto(&name, &base, renamed, &req.doc.pou)?;
-            let spliced = sfc_doc::splice_replacing(&base, &req.doc, &replacing);
-            let checked = sfc_analysis::check_source(0, &format!("{name} (as text)"), &spliced, &plain);
-            match sfc_plcopen::export(&checked) {
+            // Only this POU's element is replaced: every other byte of the file (the other
+            // POUs as their tool drew them, headers, instances, vendor data) stays as it was.
+            let pou_text = sfc_doc::to_text(&req.doc).text;
+            if let Some(xml) = &current {
+                let others = sfc_plcopen::import(0, &name, xml);
+                refuse_rename_onto(&name, &others.text, renamed, &req.doc.pou)?;
+            }
+            let checked = sfc_analysis::check_source(0, &format!("{name} (as text)"), &pou_text, &plain);
+            let base = current.clone().unwrap_or_else(|| sfc_plcopen::export(&checked).unwrap_or_default());
+            match sfc_plcopen::splice_pou(&base, &replacing, &checked) {
                 Ok(xml) => xml,
-                Err(errors) => {
+                Err(sfc_plcopen::SpliceError::Diagnostics(errors)) => {
                     let d =
-                        page_diagnostics(&checked.file.name, &spliced, None, &errors, std::slice::from_ref(&req.doc));
+                        page_diagnostics(&checked.file.name, &pou_text, None, &errors, std::slice::from_ref(&req.doc));
                     return Err(ApiError::new(
                         StatusCode::UNPROCESSABLE_ENTITY,
                         "the chart cannot be written as PLCopen XML; nothing was written",
                     )
                     .with("diagnostics", json!(d)));
                 }
+                Err(sfc_plcopen::SpliceError::NotAProject(why)) => {
+                    return Err(ApiError::new(
+                        StatusCode::UNPROCESSABLE_ENTITY,
+                        format!("`{name}`: {why}; nothing was written"),
+                    ));
+                }
             }
         }
     };
-    write_atomically(&path, bytes.as_bytes()).map_err(|e| io_error(&path, &e))?;
+    let (raw, lost) = sfc_syntax::encoding::encode(&bytes, &written_as);
+    if lost > 0 {
+        return Err(ApiError::new(
+            StatusCode::UNPROCESSABLE_ENTITY,
+            format!("`{name}` is Latin-1 / Windows-1252, which cannot hold {lost} character(s) of the chart; nothing was written"),
+        ));
+    }
+    write_atomically(&path, &raw).map_err(|e| io_error(&path, &e))?;
     // What the page shows after saving: the document's problems, then the check of the file as
     // written (located in it), without the analysis (`check` runs that on request).
-    let mut diagnostics: Vec<Value> = sfc_doc::to_text(&req.doc).problems.iter().map(problem_json).collect();
+    let problems = sfc_doc::to_text(&req.doc).problems;
+    let at = if req.format == FileFormat::St { bytes.as_str() } else { "" };
+    let mut diagnostics: Vec<Value> = problems.iter().map(|p| problem_json(p, &req.doc, &name, at)).collect();
     let charts = std::slice::from_ref(&req.doc);
     if req.format == FileFormat::Xml {
         let imported = sfc_plcopen::import(0, &name, &bytes);
@@ -443,7 +464,48 @@ fn save_file(s: &AppState, req: SaveRequest) -> Answer {
         let checked = sfc_analysis::check_source(0, &name, &bytes, &plain);
         diagnostics.extend(page_diagnostics(&name, &bytes, None, &checked.diagnostics, charts));
     }
-    Ok(json!({ "path": path_string(&path), "hash": content_hash(bytes.as_bytes()), "diagnostics": diagnostics }))
+    Ok(json!({ "path": path_string(&path), "hash": content_hash(&raw), "diagnostics": diagnostics }))
+}
+
+/// A document with text the user typed that does not parse (a condition, an action body, the
+/// declarations, a name) is not saved: the file would hold something else than what was typed
+/// (`FALSE` for a condition, an empty body). The answer names each piece (`422`, with the
+/// problems as `diagnostics`); nothing is written, and the page keeps the typed text.
+fn refuse_unparsed(doc: &EditorDoc) -> Result<(), ApiError> {
+    let written = sfc_doc::to_text(doc);
+    let typed = |id: &str| {
+        doc.elements
+            .iter()
+            .find(|e| e.id == id)
+            .and_then(|e| e.condition.as_deref())
+            .is_some_and(|c| !c.trim().is_empty())
+    };
+    let lost: Vec<&sfc_doc::Problem> =
+        written.problems.iter().filter(|p| p.code == "SFC0101" || (p.code == "SFC0217" && typed(&p.element))).collect();
+    if lost.is_empty() {
+        return Ok(());
+    }
+    let name = format!("{}.st", doc.pou);
+    let what: Vec<String> = lost
+        .iter()
+        .map(|p| {
+            let block = doc.elements.iter().find(|e| e.id == p.element);
+            match block {
+                Some(e) if !e.name.is_empty() && p.code == "SFC0217" => format!("the condition of `{}`", e.name),
+                _ => p.message.clone(),
+            }
+        })
+        .collect();
+    let d: Vec<Value> = lost.iter().map(|p| problem_json(p, doc, &name, &written.text)).collect();
+    Err(ApiError::new(
+        StatusCode::UNPROCESSABLE_ENTITY,
+        format!(
+            "not saved: {} does not parse; fix it first (the file would otherwise hold something else than what \
+             you typed). Nothing was written.",
+            what.join(", ")
+        ),
+    )
+    .with("diagnostics", json!(d)))
 }
 
 /// A renamed POU may not take the name of another POU of its file: saving would leave two.
@@ -525,7 +587,7 @@ fn build_document(s: &AppState, req: BuildRequest) -> Answer {
     if errors {
         return Ok(json!({ "ok": false, "diagnostics": diagnostics }));
     }
-    let opts = CompileOptions { pou: Some(&req.doc.pou), flatten: false, nstep, ntr };
+    let opts = CompileOptions { pou: Some(&req.doc.pou), flatten: false, nstep, ntr, ..Default::default() };
     let charts = std::slice::from_ref(&req.doc);
     let built = match compile::compile(&checked, target, &opts) {
         Ok(b) => b,
@@ -541,11 +603,11 @@ fn build_document(s: &AppState, req: BuildRequest) -> Answer {
         let table = compile::parse_table(&built.text).ok_or_else(|| {
             ApiError::new(StatusCode::INTERNAL_SERVER_ERROR, format!("the table `{}` cannot be read back", built.text))
         })?;
-        answer["table"] = json!(table);
+        put(&mut answer, "table", json!(table));
     }
     if let Some(h) = host {
         write_atomically(&h.result, built.text.as_bytes()).map_err(|e| io_error(&h.result, &e))?;
-        answer["resultWritten"] = json!(path_string(&h.result));
+        put(&mut answer, "resultWritten", json!(path_string(&h.result)));
     }
     Ok(answer)
 }
@@ -594,5 +656,13 @@ pub async fn static_file(method: Method, uri: Uri) -> Response {
         assets::serve(uri).await
     } else {
         (StatusCode::METHOD_NOT_ALLOWED, "the web app's files are read-only\n").into_response()
+    }
+}
+
+/// Sets `key` of a JSON object (the answers built here are objects; anything else is left as it
+/// is rather than panicking).
+fn put(v: &mut Value, key: &str, value: Value) {
+    if let Some(o) = v.as_object_mut() {
+        o.insert(key.to_string(), value);
     }
 }

@@ -1,6 +1,7 @@
 //! The web app (`web/dist`, built by Vite), embedded in the binary. Release builds carry the
-//! files; debug builds read them from `web/dist` at run time. When the app was not built, `/`
-//! says how to build it.
+//! files; debug builds read them from `web/dist` at run time, or from the directory in
+//! `SFC_WEB_DIST` (the browser tests serve the test build, `web/dist-test`, the only build with
+//! the test hook `window.__sfc`). When the app was not built, `/` says how to build it.
 
 use axum::http::{header, StatusCode, Uri};
 use axum::response::{IntoResponse, Response};
@@ -24,14 +25,34 @@ cargo build --release</pre>
 </body></html>
 "#;
 
+/// The bytes and MIME type of a file of the app (`path` has no `..`).
+fn get(path: &str) -> Option<(Vec<u8>, String)> {
+    #[cfg(debug_assertions)]
+    if let Some(dir) = std::env::var_os("SFC_WEB_DIST").filter(|d| !d.is_empty()) {
+        let data = std::fs::read(std::path::Path::new(&dir).join(path)).ok()?;
+        let mime = match path.rsplit('.').next() {
+            Some("html") => "text/html",
+            Some("js") => "text/javascript",
+            Some("css") => "text/css",
+            Some("svg") => "image/svg+xml",
+            Some("json") => "application/json",
+            Some("png") => "image/png",
+            Some("woff2") => "font/woff2",
+            _ => "application/octet-stream",
+        };
+        return Some((data, mime.to_string()));
+    }
+    WebApp::get(path).map(|f| (f.data.into_owned(), f.metadata.mimetype().to_string()))
+}
+
 /// A static file of the web app; `/` is `index.html`.
 pub async fn serve(uri: Uri) -> Response {
     let path = uri.path().trim_start_matches('/');
     let path = if path.is_empty() { "index.html" } else { path };
     // Debug builds read from the disk: never let a name climb out of `web/dist`.
-    let file = if path.split(['/', '\\']).any(|seg| seg == "..") { None } else { WebApp::get(path) };
+    let file = if path.split(['/', '\\']).any(|seg| seg == "..") { None } else { get(path) };
     match file {
-        Some(file) => {
+        Some((data, mime)) => {
             // The page must always be fetched again (it names the current bundles); Vite's
             // bundles under `assets/` carry a content hash in their names.
             let cache = if path == "index.html" {
@@ -41,14 +62,7 @@ pub async fn serve(uri: Uri) -> Response {
             } else {
                 "no-cache"
             };
-            (
-                [
-                    (header::CONTENT_TYPE, file.metadata.mimetype().to_string()),
-                    (header::CACHE_CONTROL, cache.to_string()),
-                ],
-                file.data.into_owned(),
-            )
-                .into_response()
+            ([(header::CONTENT_TYPE, mime), (header::CACHE_CONTROL, cache.to_string())], data).into_response()
         }
         None if path == "index.html" => {
             ([(header::CONTENT_TYPE, "text/html; charset=utf-8"), (header::CACHE_CONTROL, "no-store")], NOT_BUILT)

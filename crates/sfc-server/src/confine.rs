@@ -1,8 +1,12 @@
-//! Confinement of file access to the directories the editor was started with (its roots).
+//! Confinement of file access to what the editor was given: the files named on the command line,
+//! and the directories named there (its roots).
 //!
 //! A path from the page is accepted only when it is absolute, has no `..`, and its canonical
-//! form (symbolic links resolved along the part that exists) lies under a root. The part that
-//! does not exist yet (a new file) cannot contain links, so it cannot lead elsewhere.
+//! form (symbolic links resolved along the part that exists) is one of the named files or lies
+//! under a root without passing through a hidden directory (a name starting with `.`, such as
+//! `.git` or `.ssh`). The part that does not exist yet (a new file) cannot contain links, so it
+//! cannot lead elsewhere. A named file does not open its directory: `sfc edit ~/a.st` serves
+//! `~/a.st` and nothing else.
 
 use std::path::{Component, Path, PathBuf};
 
@@ -30,8 +34,9 @@ fn canonical_prefix(path: &Path) -> Result<PathBuf, Refusal> {
     Ok(if rest.as_os_str().is_empty() { canonical } else { canonical.join(rest) })
 }
 
-/// The canonical path of `raw` when it lies under one of `roots` (themselves canonical).
-pub fn confine(roots: &[PathBuf], raw: &str) -> Result<PathBuf, Refusal> {
+/// The canonical path of `raw` when it is one of `files` or lies under one of `roots` (all
+/// canonical) without passing through a hidden directory.
+pub fn confine(roots: &[PathBuf], files: &[PathBuf], raw: &str) -> Result<PathBuf, Refusal> {
     if raw.is_empty() || raw.contains('\0') {
         return Err(Refusal::Malformed("the path is empty or holds a NUL character".to_string()));
     }
@@ -43,16 +48,36 @@ pub fn confine(roots: &[PathBuf], raw: &str) -> Result<PathBuf, Refusal> {
         return Err(Refusal::Outside(format!("`{raw}`: `..` is not allowed in paths")));
     }
     let resolved = canonical_prefix(path)?;
-    if roots.iter().any(|r| resolved.starts_with(r)) {
-        Ok(resolved)
-    } else {
-        Err(Refusal::Outside(format!("`{raw}` is not under the editor's directories")))
+    if files.contains(&resolved) {
+        return Ok(resolved);
     }
+    let Some(root) = roots.iter().find(|r| resolved.starts_with(r)) else {
+        return Err(Refusal::Outside(if roots.is_empty() {
+            format!("`{raw}` was not named on the command line (the editor serves only the files it was started with)")
+        } else {
+            format!("`{raw}` is not under the editor's directories")
+        }));
+    };
+    let inside = resolved.strip_prefix(root).unwrap_or(Path::new(""));
+    let mut parts = inside.components().peekable();
+    while let Some(c) = parts.next() {
+        let hidden = c.as_os_str().to_str().is_none_or(|n| n.starts_with('.'));
+        if hidden && parts.peek().is_some() {
+            return Err(Refusal::Outside(format!(
+                "`{raw}` is inside a hidden directory, which the editor does not serve"
+            )));
+        }
+        if hidden {
+            return Err(Refusal::Outside(format!("`{raw}` is a hidden file, which the editor does not serve")));
+        }
+    }
+    Ok(resolved)
 }
 
-/// The roots for the paths given on the command line: each directory, and the parent directory
-/// of each file (a file may not exist yet, its directory must); the current directory when
-/// none is given. Returns the canonical roots (without duplicates) and the canonical files.
+/// The roots for the paths given on the command line: each directory named (the current
+/// directory when nothing is named), and the files named (a file may not exist yet, its
+/// directory must). A file's directory is not a root. Returns the canonical roots (without
+/// duplicates) and the canonical files.
 pub fn roots_of(paths: &[PathBuf], cwd: &Path) -> Result<(Vec<PathBuf>, Vec<PathBuf>), String> {
     let mut roots: Vec<PathBuf> = Vec::new();
     let mut files = Vec::new();
@@ -78,9 +103,9 @@ pub fn roots_of(paths: &[PathBuf], cwd: &Path) -> Result<(Vec<PathBuf>, Vec<Path
                 parent.join(name)
             }
         };
-        let parent = file.parent().map(Path::to_path_buf).unwrap_or_else(|| PathBuf::from("/"));
-        roots.push(parent);
-        files.push(file);
+        if !files.contains(&file) {
+            files.push(file);
+        }
     }
     let mut unique: Vec<PathBuf> = Vec::new();
     for r in roots {
@@ -109,9 +134,9 @@ mod tests {
         std::fs::write(d.join("sub/a.st"), "").unwrap();
         let roots = [d.clone()];
         let s = |p: &Path| p.to_str().unwrap().to_string();
-        assert_eq!(confine(&roots, &s(&d.join("sub/a.st"))), Ok(d.join("sub/a.st")));
-        assert_eq!(confine(&roots, &s(&d.join("sub/new.st"))), Ok(d.join("sub/new.st")));
-        assert_eq!(confine(&roots, &s(&d.join("new/deeper.st"))), Ok(d.join("new/deeper.st")));
+        assert_eq!(confine(&roots, &[], &s(&d.join("sub/a.st"))), Ok(d.join("sub/a.st")));
+        assert_eq!(confine(&roots, &[], &s(&d.join("sub/new.st"))), Ok(d.join("sub/new.st")));
+        assert_eq!(confine(&roots, &[], &s(&d.join("new/deeper.st"))), Ok(d.join("new/deeper.st")));
         let _ = std::fs::remove_dir_all(&d);
     }
 
@@ -122,24 +147,44 @@ mod tests {
         std::fs::create_dir_all(&roots[0]).unwrap();
         std::fs::write(d.join("secret.st"), "").unwrap();
         let s = |p: PathBuf| p.to_str().unwrap().to_string();
-        assert!(matches!(confine(&roots, "relative/a.st"), Err(Refusal::Malformed(_))));
-        assert!(matches!(confine(&roots, ""), Err(Refusal::Malformed(_))));
-        assert!(matches!(confine(&roots, &s(d.join("secret.st"))), Err(Refusal::Outside(_))));
-        assert!(matches!(confine(&roots, &s(d.join("root/../secret.st"))), Err(Refusal::Outside(_))));
-        assert!(matches!(confine(&roots, "/etc/passwd"), Err(Refusal::Outside(_))));
+        assert!(matches!(confine(&roots, &[], "relative/a.st"), Err(Refusal::Malformed(_))));
+        assert!(matches!(confine(&roots, &[], ""), Err(Refusal::Malformed(_))));
+        assert!(matches!(confine(&roots, &[], &s(d.join("secret.st"))), Err(Refusal::Outside(_))));
+        assert!(matches!(confine(&roots, &[], &s(d.join("root/../secret.st"))), Err(Refusal::Outside(_))));
+        assert!(matches!(confine(&roots, &[], "/etc/passwd"), Err(Refusal::Outside(_))));
         // A root's name as a prefix of another directory's name is not inside it.
         std::fs::create_dir_all(d.join("rootless")).unwrap();
-        assert!(matches!(confine(&roots, &s(d.join("rootless/a.st"))), Err(Refusal::Outside(_))));
+        assert!(matches!(confine(&roots, &[], &s(d.join("rootless/a.st"))), Err(Refusal::Outside(_))));
         #[cfg(unix)]
         {
             std::os::unix::fs::symlink(&d, roots[0].join("up")).unwrap();
             std::os::unix::fs::symlink(d.join("secret.st"), roots[0].join("link.st")).unwrap();
             std::os::unix::fs::symlink(d.join("missing.st"), roots[0].join("dangling.st")).unwrap();
-            assert!(matches!(confine(&roots, &s(roots[0].join("up/secret.st"))), Err(Refusal::Outside(_))));
-            assert!(matches!(confine(&roots, &s(roots[0].join("up/new.st"))), Err(Refusal::Outside(_))));
-            assert!(matches!(confine(&roots, &s(roots[0].join("link.st"))), Err(Refusal::Outside(_))));
-            assert!(matches!(confine(&roots, &s(roots[0].join("dangling.st"))), Err(Refusal::Outside(_))));
+            assert!(matches!(confine(&roots, &[], &s(roots[0].join("up/secret.st"))), Err(Refusal::Outside(_))));
+            assert!(matches!(confine(&roots, &[], &s(roots[0].join("up/new.st"))), Err(Refusal::Outside(_))));
+            assert!(matches!(confine(&roots, &[], &s(roots[0].join("link.st"))), Err(Refusal::Outside(_))));
+            assert!(matches!(confine(&roots, &[], &s(roots[0].join("dangling.st"))), Err(Refusal::Outside(_))));
         }
+        let _ = std::fs::remove_dir_all(&d);
+    }
+
+    #[test]
+    fn named_files_alone_and_no_hidden_directories() {
+        let d = scratch("named");
+        std::fs::create_dir_all(d.join(".git")).unwrap();
+        std::fs::write(d.join("a.st"), "").unwrap();
+        std::fs::write(d.join("b.st"), "").unwrap();
+        let s = |p: PathBuf| p.to_str().unwrap().to_string();
+        // A named file: that file, not its neighbours.
+        let files = [d.join("a.st")];
+        assert_eq!(confine(&[], &files, &s(d.join("a.st"))), Ok(d.join("a.st")));
+        assert!(matches!(confine(&[], &files, &s(d.join("b.st"))), Err(Refusal::Outside(_))));
+        assert!(matches!(confine(&[], &files, &s(d.join("new.st"))), Err(Refusal::Outside(_))));
+        // A named directory: its charts, but nothing inside hidden directories.
+        let roots = [d.clone()];
+        assert_eq!(confine(&roots, &[], &s(d.join("b.st"))), Ok(d.join("b.st")));
+        assert!(matches!(confine(&roots, &[], &s(d.join(".git/x.st"))), Err(Refusal::Outside(_))));
+        assert!(matches!(confine(&roots, &[], &s(d.join(".hidden.st"))), Err(Refusal::Outside(_))));
         let _ = std::fs::remove_dir_all(&d);
     }
 
@@ -150,8 +195,10 @@ mod tests {
         std::fs::write(d.join("a.st"), "").unwrap();
         let (roots, files) =
             roots_of(&[PathBuf::from("dir"), PathBuf::from("a.st"), PathBuf::from("new.st")], &d).unwrap();
-        assert_eq!(roots, [d.join("dir"), d.clone()]);
+        assert_eq!(roots, [d.join("dir")]);
         assert_eq!(files, [d.join("a.st"), d.join("new.st")]);
+        let (roots, files) = roots_of(&[PathBuf::from("a.st")], &d).unwrap();
+        assert_eq!((roots.len(), files), (0, vec![d.join("a.st")]));
         let (roots, files) = roots_of(&[], &d).unwrap();
         assert_eq!((roots, files.len()), (vec![d.clone()], 0));
         assert!(roots_of(&[PathBuf::from("nowhere/x.st")], &d).is_err());

@@ -38,7 +38,7 @@ pub fn diag_json(d: &Diagnostic, files: &[SourceFile], doc: Option<&EditorDoc>) 
     }
     out.insert("title".into(), json!(title(d.code)));
     let ids = match (doc, &d.element) {
-        (Some(doc), Some(element)) => sfc_doc::element_ids(doc, element),
+        (Some(doc), Some(element)) => element_blocks(doc, element),
         _ => Vec::new(),
     };
     out.insert("elementIds".into(), json!(ids));
@@ -49,42 +49,128 @@ pub fn diag_json(d: &Diagnostic, files: &[SourceFile], doc: Option<&EditorDoc>) 
     Value::Object(out)
 }
 
-/// A problem of a document (something it cannot say in IEC text), located on its block.
-pub fn problem_json(p: &Problem) -> Value {
+/// The blocks of a chart element: a step or transition by name; for an action, the action
+/// blocks whose rows name it.
+fn element_blocks(doc: &EditorDoc, element: &str) -> Vec<String> {
+    let ids = sfc_doc::element_ids(doc, element);
+    if !ids.is_empty() {
+        return ids;
+    }
+    doc.elements
+        .iter()
+        .filter(|e| e.kind == Some(sfc_doc::ElementKind::ActionBlock))
+        .filter(|e| e.associations.iter().any(|a| a.action.eq_ignore_ascii_case(element)))
+        .map(|e| e.id.clone())
+        .collect()
+}
+
+/// A problem of a document (something it cannot say in IEC text): on its block, named after
+/// it, and located in `text` (the document as written, in the file `file`): at the step's or
+/// transition's declaration, or at the `sfc.graph` attribute that holds the drawing.
+pub fn problem_json(p: &Problem, doc: &EditorDoc, file: &str, text: &str) -> Value {
+    let block = doc.elements.iter().find(|e| e.id == p.element);
+    let element = block.filter(|e| !e.name.is_empty()).map(|e| e.name.clone());
+    let (line, column) = locate(text, block);
     json!({
         "code": p.code,
         "severity": p.severity.as_str(),
         "message": p.message,
         "title": title(p.code),
-        "file": "",
-        "line": 1,
-        "column": 1,
-        "endLine": 1,
-        "endColumn": 1,
-        "element": null,
+        "file": file,
+        "line": line,
+        "column": column,
+        "endLine": line,
+        "endColumn": column,
+        "element": element,
         "elementIds": [p.element],
         "notes": [],
         "witness": null,
     })
 }
 
-/// The POU each span of a file's text lies in: `(span, name)` for every POU of the text.
-pub fn pou_spans(text: &str) -> Vec<(Span, String)> {
+/// Where a block is said in `text` (1-based line and column): a named step or transition at its
+/// keyword, anything else (or a block the text does not hold) at the `sfc.graph` attribute; the
+/// first line when neither is found.
+fn locate(text: &str, block: Option<&sfc_doc::Element>) -> (usize, usize) {
+    use sfc_doc::ElementKind;
+    let named =
+        block.filter(|e| !e.name.is_empty() && matches!(e.kind, Some(ElementKind::Step | ElementKind::Transition)));
+    for (i, line) in text.lines().enumerate() {
+        let trimmed = line.trim_start();
+        let column = line.len() - trimmed.len() + 1;
+        let upper = trimmed.to_ascii_uppercase();
+        if let Some(e) = named {
+            let name = e.name.to_ascii_uppercase();
+            let keyword = if e.kind == Some(ElementKind::Step) {
+                upper.strip_prefix("INITIAL_STEP ").or_else(|| upper.strip_prefix("STEP "))
+            } else {
+                upper.strip_prefix("TRANSITION ")
+            };
+            if keyword.is_some_and(|rest| {
+                rest.strip_prefix(&name).is_some_and(|r| r.is_empty() || r.starts_with([' ', ':', '(']))
+            }) {
+                return (i + 1, column);
+            }
+        }
+    }
+    // Not in the text (a block the text cannot hold yet, or an unnamed one): the drawing.
+    text.lines()
+        .enumerate()
+        .find(|(_, l)| l.trim_start().starts_with("{attribute 'sfc.graph'"))
+        .map_or((1, 1), |(i, l)| (i + 1, l.len() - l.trim_start().len() + 1))
+}
+
+/// The POUs of a file's text and the SFC elements in them, to find what a diagnostic located
+/// in the text concerns.
+#[derive(Debug, Default)]
+pub struct PouSpans {
+    /// `(span, name)` of every POU.
+    pub pous: Vec<(Span, String)>,
+    /// `(span, name)` of every step, transition and action of an SFC body, as the model names
+    /// them (an unnamed transition `T<n>`, n its position among the POU's transitions).
+    pub elements: Vec<(Span, String)>,
+}
+
+impl PouSpans {
+    /// The chart element whose text holds `span`: the innermost step, transition or action.
+    pub fn element_at(&self, span: Span) -> Option<&str> {
+        self.elements
+            .iter()
+            .filter(|(s, _)| s.start <= span.start && span.end <= s.end.max(span.start))
+            .min_by_key(|(s, _)| s.end - s.start)
+            .map(|(_, n)| n.as_str())
+    }
+}
+
+/// The POU each span of a file's text lies in, and its SFC elements.
+pub fn pou_spans(text: &str) -> PouSpans {
+    use sfc_syntax::ast::{Item, SfcElement};
     let (unit, _) = sfc_syntax::parse(0, text);
-    unit.items
-        .iter()
-        .filter_map(|item| match item {
-            sfc_syntax::ast::Item::Pou(p) => Some((p.span, p.name.text.clone())),
-            _ => None,
-        })
-        .collect()
+    let mut out = PouSpans::default();
+    for item in &unit.items {
+        let Item::Pou(p) = item else { continue };
+        out.pous.push((p.span, p.name.text.clone()));
+        let mut k = 0;
+        for e in p.body.sfc().unwrap_or(&[]) {
+            let name = match e {
+                SfcElement::Step(s) => s.name.text.clone(),
+                SfcElement::Transition(t) => {
+                    k += 1;
+                    t.name.as_ref().map_or_else(|| format!("T{k}"), |n| n.text.clone())
+                }
+                SfcElement::Action(a) => a.name.text.clone(),
+            };
+            out.elements.push((e.span(), name));
+        }
+    }
+    out
 }
 
 /// The chart among `charts` that a diagnostic located in the text (`span`) concerns: the one
 /// whose POU holds the span (none when that POU is not among them, e.g. a function), or the only
 /// chart when the span lies in no POU or the diagnostic has none in the text.
-pub fn chart_of<'a>(charts: &'a [EditorDoc], pous: &[(Span, String)], span: Option<Span>) -> Option<&'a EditorDoc> {
-    let pou = span.and_then(|span| pous.iter().find(|(s, _)| s.start <= span.start && span.start <= s.end));
+pub fn chart_of<'a>(charts: &'a [EditorDoc], pous: &PouSpans, span: Option<Span>) -> Option<&'a EditorDoc> {
+    let pou = span.and_then(|span| pous.pous.iter().find(|(s, _)| s.start <= span.start && span.start <= s.end));
     match (pou, charts) {
         (Some((_, name)), _) => charts.iter().find(|c| c.pou.eq_ignore_ascii_case(name)),
         (None, [only]) => Some(only),
@@ -115,8 +201,15 @@ mod tests {
     fn pou_of_a_span() {
         let text = "PROGRAM A\nEND_PROGRAM\nPROGRAM B\nEND_PROGRAM\n";
         let pous = pou_spans(text);
-        assert_eq!(pous.iter().map(|p| p.1.as_str()).collect::<Vec<_>>(), ["A", "B"]);
-        assert!(pous[1].0.start >= 22);
+        assert_eq!(pous.pous.iter().map(|p| p.1.as_str()).collect::<Vec<_>>(), ["A", "B"]);
+        assert!(pous.pous[1].0.start >= 22);
+        let text =
+            "PROGRAM A\nINITIAL_STEP S: END_STEP\nTRANSITION FROM S TO S := x AND ; END_TRANSITION\nEND_PROGRAM\n";
+        let pous = pou_spans(text);
+        let at = text.find(" ;").unwrap() as u32 + 1;
+        assert_eq!(pous.element_at(Span::new(0, at, at + 1)), Some("T1"));
+        let at = text.find("S:").unwrap() as u32;
+        assert_eq!(pous.element_at(Span::new(0, at, at + 1)), Some("S"));
     }
 
     #[test]

@@ -3,20 +3,23 @@
 //! directories it was started with.
 //!
 //! [`serve`] runs it (what `sfc edit` calls); [`app`] is the router alone, for tests in-process.
-//! [`compile`] is the check-then-compile dispatch shared with `sfc build`.
+//! [`compile`] is the driver's check-then-compile dispatch (`sfc_driver::compile`), shared with
+//! `sfc build`.
 
 mod access;
 mod api;
 mod assets;
-pub mod compile;
 mod confine;
+pub mod contract;
 mod diag;
 mod disk;
 mod sim;
 
+use sfc_driver::compile;
+
 pub use access::TOKEN_HEADER;
 pub use confine::{confine, Refusal};
-pub use disk::{content_hash, write_atomically};
+pub use disk::content_hash;
 
 use axum::extract::DefaultBodyLimit;
 use axum::routing::{any, get, post};

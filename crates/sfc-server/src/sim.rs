@@ -134,7 +134,7 @@ fn element_map(doc: &EditorDoc, sim: &Simulation) -> Value {
 }
 
 /// Builds and starts the simulation of `req.doc`; `Err` is the answer to send instead.
-fn start_simulation(sims: &Simulations, req: StartRequest) -> Result<Value, Refused> {
+fn start_simulation(sims: &Simulations, req: StartRequest, port: u16) -> Result<Value, Refused> {
     let period = match &req.period {
         None => 10_000,
         Some(p) => match sfc_sim::parse_time(p) {
@@ -166,9 +166,10 @@ fn start_simulation(sims: &Simulations, req: StartRequest) -> Result<Value, Refu
     }
     let doc = req.doc;
     let written = sfc_doc::to_text(&doc);
-    let mut diagnostics: Vec<Value> = written.problems.iter().map(problem_json).collect();
-    let problems = written.problems.iter().any(|p| p.severity == sfc_diagnostics::Severity::Error);
     let name = format!("{}.st", doc.pou);
+    let mut diagnostics: Vec<Value> =
+        written.problems.iter().map(|p| problem_json(p, &doc, &name, &written.text)).collect();
+    let problems = written.problems.iter().any(|p| p.severity == sfc_diagnostics::Severity::Error);
     let opts = SimOptions { period, profile: Profile::Iec };
     let sim = match Simulation::from_source(&name, &written.text, Some(&doc.pou), opts) {
         Ok(sim) if !problems => sim,
@@ -182,6 +183,13 @@ fn start_simulation(sims: &Simulations, req: StartRequest) -> Result<Value, Refu
     let elements = element_map(&doc, &sim);
     let opts = RunOptions {
         monitor: Some(std::net::SocketAddr::from(([127, 0, 0, 1], 0))),
+        // Only the editor's own page (and clients that are not browsers) may connect.
+        monitor_access: sfc_runtime::MonitorAccess {
+            origins: Some(vec![format!("http://127.0.0.1:{port}"), format!("http://localhost:{port}")]),
+            hosts: Vec::new(),
+        },
+        // A runaway scan or a runtime error shows as FAULT in the monitor until stopped or reset.
+        wait_in_fault: true,
         halted: req.halted,
         ..Default::default()
     };
@@ -209,7 +217,8 @@ pub async fn start(State(s): State<AppState>, body: Result<Bytes, BytesRejection
         Err(e) => return e.into_response(),
     };
     let state = s.clone();
-    match tokio::task::spawn_blocking(move || start_simulation(&state.0.sims, req)).await {
+    let port = state.port();
+    match tokio::task::spawn_blocking(move || start_simulation(&state.0.sims, req, port)).await {
         Ok(Ok(v)) => Json(v).into_response(),
         Ok(Err(r)) => r.into_response(),
         Err(_) => {

@@ -292,3 +292,35 @@ async fn new_and_layout() {
     let ids = |d: &Value| d["elements"].as_array().unwrap().iter().map(|e| e["id"].clone()).collect::<Vec<_>>();
     assert_eq!(ids(&a.body["doc"]), ids(doc));
 }
+
+/// A condition that does not parse: its error names the transition, and a save refuses rather
+/// than write `FALSE` over what was typed; the file stays as it was.
+#[tokio::test]
+async fn typed_text_that_does_not_parse_is_never_replaced() {
+    let d = scratch_with("unparsed", &["unparsed_condition.st"]);
+    let s = state(&[&d], None);
+    let path = d.join("unparsed_condition.st");
+    let before = std::fs::read_to_string(&path).unwrap();
+    let opened = open_ok(&s, &path).await;
+    let err =
+        opened["diagnostics"].as_array().unwrap().iter().find(|x| x["code"] == "SFC0101").expect("the syntax error");
+    assert_eq!(err["element"], "T1", "{err}");
+    assert_eq!(err["elementIds"], json!(["transition:T1"]));
+    assert_eq!(err["line"], 9);
+    let doc = chart(&opened, "Lose");
+    let t1 = doc["elements"].as_array().unwrap().iter().find(|e| e["id"] == "transition:T1").unwrap();
+    assert_eq!(t1["condition"], "a AND ;", "kept as typed");
+    let a =
+        post(&s, "/api/save", &json!({ "path": path_str(&path), "format": "st", "doc": doc, "hash": opened["hash"] }))
+            .await;
+    assert_eq!(a.status, 422, "{}", a.text);
+    let msg = a.body["error"].as_str().unwrap();
+    assert!(msg.contains("not saved") && msg.contains("T1"), "{msg}");
+    assert_eq!(a.body["diagnostics"][0]["elementIds"], json!(["transition:T1"]));
+    assert_eq!(std::fs::read_to_string(&path).unwrap(), before, "nothing written");
+    // The drawing's problems carry their block and a place in the text.
+    let a = post(&s, "/api/check", &json!({ "doc": doc, "analysis": false })).await;
+    let p = a.body["diagnostics"].as_array().unwrap().iter().find(|x| x["code"] == "SFC0217").expect("the problem");
+    assert_eq!(p["element"], "T1");
+    assert!(p["line"].as_u64().unwrap() > 1, "{p}");
+}

@@ -155,3 +155,45 @@ async fn refusals() {
     assert_eq!(a.status, 200, "{}", a.text);
     assert!(!ids.contains(&a.body["id"].as_u64().unwrap()), "ids are not reused");
 }
+
+/// A simulation whose scan runs away stops at the scan budget: the monitor shows FAULT with the
+/// step, the action and the line of the loop, and a stop ends the simulation (its thread is
+/// not left spinning).
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn a_runaway_simulation_faults_at_its_loop_and_stops() {
+    let dir = std::fs::canonicalize(Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/fixtures")).unwrap();
+    let s = state(&[dir.as_path()], None);
+    let a = post(&s, "/api/open", &json!({ "path": dir.join("runaway.st").to_str().unwrap() })).await;
+    assert_eq!(a.status, 200, "{}", a.text);
+    let doc = a.body["charts"][0].clone();
+    let a = post(&s, "/api/sim/start", &json!({ "doc": doc, "period": "T#20ms" })).await;
+    assert_eq!(a.status, 200, "{}", a.text);
+    let url = a.body["url"].as_str().unwrap().to_string();
+    let id = a.body["id"].as_u64().unwrap();
+    let (mut ws, _) = tokio_tungstenite::connect_async(&url).await.expect("the monitor accepts the URL");
+    let started = std::time::Instant::now();
+    let state_msg = loop {
+        let m = next(&mut ws).await.expect("a FAULT state before the monitor closes");
+        if m["type"] == "state" && m["state"] == "FAULT" {
+            break m;
+        }
+        if m["type"] == "hello" && m["state"] == "FAULT" {
+            // The budget ran out before the client connected: the hello says so.
+            break json!({"fault": m["fault"].clone()});
+        }
+    };
+    println!("the runaway scan was stopped {:?} after the start", started.elapsed());
+    let f = &state_msg["fault"];
+    assert_eq!(
+        (f["kind"].as_str(), f["step"].as_str(), f["action"].as_str()),
+        (Some("error"), Some("Spin"), Some("Loop")),
+        "{f}"
+    );
+    assert!(f["message"].as_str().unwrap().starts_with("runaway scan"), "{f}");
+    // Written by the editor, the chart's FOR j is on some line of the generated text: the fault
+    // names a line and a column.
+    assert!(f["line"].as_u64().is_some() && f["column"].as_u64().is_some(), "{f}");
+    let a = post(&s, "/api/sim/stop", &json!({ "id": id })).await;
+    assert_eq!(a.status.as_u16(), 200, "{}", a.text);
+    while next(&mut ws).await.is_some() {}
+}

@@ -22,6 +22,7 @@ use std::sync::Arc;
 
 mod action;
 mod evolve;
+mod matiec;
 mod monitor;
 mod plan;
 mod situations;
@@ -33,6 +34,8 @@ pub use plan::ChartPlan;
 pub use situations::MAX_SITUATIONS;
 use situations::{ActiveOrder, LogMark, SituationLog};
 pub use state::ChartState;
+
+pub(crate) use matiec::test_order as matiec_test_order;
 
 /// What one scan did beside the memory: fired transitions and events from every chart
 /// instance, and what the bookkeeping of a run needs to follow the active steps.
@@ -49,6 +52,16 @@ pub struct ScanSink {
     pub starts: Vec<(u32, u32)>,
     /// Some step was activated or deactivated in this scan (the situation changed).
     pub moved: bool,
+    /// Where the scan faulted: the innermost chart instance and the action body or guard
+    /// that was running (noted on the error path only).
+    pub(crate) fault_site: Option<(u32, FaultSite)>,
+}
+
+/// The chart element whose code was running when a scan faulted.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) enum FaultSite {
+    Action(usize),
+    Guard(u32),
 }
 
 impl ScanSink {
@@ -59,6 +72,15 @@ impl ScanSink {
         self.overdue.clear();
         self.starts.clear();
         self.moved = false;
+        self.fault_site = None;
+    }
+
+    /// Notes where a fault happened, unless a nested chart already did.
+    #[cold]
+    pub(crate) fn note_fault(&mut self, chart: usize, site: FaultSite) {
+        if self.fault_site.is_none() {
+            self.fault_site = Some((chart as u32, site));
+        }
     }
 }
 
@@ -128,6 +150,37 @@ pub struct Simulation {
     transition_base: Vec<u32>,
     /// Scratch sink of the monitor's guard evaluation.
     monitor_sink: ScanSink,
+    /// Charges one scan may make ([`Simulation::set_scan_budget`]).
+    budget: u64,
+    /// Set from outside to stop the running scan ([`Simulation::interrupt_flag`]).
+    interrupt: Option<Arc<std::sync::atomic::AtomicBool>>,
+}
+
+/// Where in the chart a runtime error happened ([`Simulation::fault_place`]); names carry the
+/// instance path of nested charts.
+#[derive(Debug, Clone, PartialEq, Eq, Default)]
+pub struct FaultPlace {
+    /// The action whose body was running.
+    pub action: Option<String>,
+    /// The transition whose condition was being evaluated.
+    pub transition: Option<String>,
+    /// The active steps associated with that action, or the steps that transition leaves.
+    pub steps: Vec<String>,
+}
+
+/// The chart states of the SFC instances of a fresh memory (each instance's hidden slot set
+/// to its index).
+fn chart_states(prog: &Program, instances: Vec<crate::code::ChartInstance>, mem: &mut [Value]) -> Vec<ChartState> {
+    let mut charts = Vec::with_capacity(instances.len());
+    for (i, inst) in instances.into_iter().enumerate() {
+        let PouBody::Chart(code) = &prog.pous[inst.pou].body else {
+            continue;
+        };
+        let plan = code.plan_arc().clone();
+        mem[inst.frame + code.chart_slot as usize] = Value::Int(i as i64);
+        charts.push(ChartState::new(inst.pou, plan, inst.frame, inst.path));
+    }
+    charts
 }
 
 impl Simulation {
@@ -141,17 +194,27 @@ impl Simulation {
         opts: SimOptions,
     ) -> Result<Simulation, (SourceFile, Vec<Diagnostic>)> {
         let check_opts = sfc_model::CheckOptions { keep_types: true, ..Default::default() };
-        let checked = sfc_model::check_source(0, name, text, &check_opts);
-        if checked.has_errors() {
-            let diags = checked.diagnostics.into_iter().filter(|d| d.is_error()).collect();
-            return Err((checked.file, diags));
-        }
-        let source = checked.file;
+        let mut checked = sfc_model::check_source(0, name, text, &check_opts);
+        // An error in another POU does not keep this one from running: only the errors of the
+        // POU, of what it uses, and of the file's types and globals count.
         let top = match choose_pou(&checked.unit, &checked.charts, pou) {
             Ok(n) => n,
-            Err(d) => return Err((source, vec![d])),
+            Err(d) if checked.has_errors() => {
+                let mut diags: Vec<Diagnostic> = checked.diagnostics.into_iter().filter(|d| d.is_error()).collect();
+                diags.push(d);
+                return Err((checked.file, diags));
+            }
+            Err(d) => return Err((checked.file, vec![d])),
         };
-        let prog = match Program::compile(&checked.unit, checked.charts, &checked.expr_types) {
+        if checked.has_errors() {
+            let errors = sfc_model::errors_for(&checked, &top);
+            if !errors.is_empty() {
+                return Err((checked.file, errors));
+            }
+            sfc_model::set_aside_unrelated(&mut checked, &top);
+        }
+        let source = checked.file;
+        let prog = match Program::compile_with(&checked.unit, checked.charts, &checked.expr_types, opts.profile) {
             Ok(p) => p,
             Err(d) => return Err((source, d)),
         };
@@ -166,15 +229,7 @@ impl Simulation {
     pub fn new(prog: Program, top: usize, source: SourceFile, opts: SimOptions) -> Simulation {
         let Memory { mem, top_frame, charts: instances } = prog.instantiate(top);
         let mut mem = mem;
-        let mut charts = Vec::with_capacity(instances.len());
-        for (i, inst) in instances.into_iter().enumerate() {
-            let PouBody::Chart(code) = &prog.pous[inst.pou].body else {
-                continue;
-            };
-            let plan = code.plan_arc().clone();
-            mem[inst.frame + code.chart_slot as usize] = Value::Int(i as i64);
-            charts.push(ChartState::new(inst.pou, plan, inst.frame, inst.path));
-        }
+        let mut charts = chart_states(&prog, instances, &mut mem);
         let trace = prog.pous[top]
             .layout
             .vars
@@ -182,6 +237,9 @@ impl Simulation {
             .filter(|v| !v.implicit && v.size == 1 && v.ty.is_elementary())
             .filter_map(|v| prog.resolve(top, top_frame, &v.name).map(|(slot, _)| (v.name.clone(), v.ty.clone(), slot)))
             .collect();
+        if opts.profile == Profile::Matiec {
+            matiec::prepare(&prog, &mut charts, &source.text);
+        }
         let lower = source.text.to_ascii_lowercase();
         let mentioned = lower.contains("sfccurrentstep");
         let flags = step_flags_read(&lower);
@@ -225,7 +283,81 @@ impl Simulation {
             spare: Vec::new(),
             transition_base,
             monitor_sink: ScanSink::default(),
+            budget: crate::code::SCAN_BUDGET,
+            interrupt: None,
         }
+    }
+
+    /// Starts the POU again from its declared initial values (a PLC's restart): memory, steps
+    /// and action control as at scan 0, the error cleared. The scan counter goes on, so the
+    /// first scan after a restart is the chart's scan 0 at a later virtual time. Coverage and
+    /// time analysis go on over the whole run.
+    pub fn restart(&mut self) {
+        let Memory { mut mem, charts: instances, .. } = self.prog.instantiate(self.top);
+        let mut charts = chart_states(&self.prog, instances, &mut mem);
+        if self.opts.profile == Profile::Matiec {
+            matiec::prepare(&self.prog, &mut charts, &self.source.text);
+        }
+        for (new, old) in charts.iter_mut().zip(&self.charts) {
+            new.track_current = old.track_current;
+            new.track_left = old.track_left;
+            new.set_mirrors(|s| old.steps.get(s as usize).map_or((false, false), |b| (b.mirror_x, b.mirror_t)));
+            new.carry_counts(old);
+        }
+        self.mem = mem;
+        self.order = ActiveOrder::new(&charts);
+        self.charts = charts;
+        self.error = None;
+        self.record = ScanRecord::default();
+        self.sink.clear();
+    }
+
+    /// Bounds every later scan to `limit` charges (loop iterations, IL jumps, calls; default
+    /// [`crate::code::SCAN_BUDGET`]); a scan that spends it stops with a located runtime error.
+    pub fn set_scan_budget(&mut self, limit: u64) {
+        self.budget = limit.max(1);
+    }
+
+    /// A flag that, once set (from any thread), stops the running scan at its next look at its
+    /// budget (within a few thousand loop iterations) with a runtime error whose message is
+    /// [`crate::code::INTERRUPTED`], and every later scan at once until it is cleared.
+    pub fn interrupt_flag(&mut self) -> Arc<std::sync::atomic::AtomicBool> {
+        self.interrupt.get_or_insert_with(Default::default).clone()
+    }
+
+    /// Where the last runtime error happened in the chart: the action or transition whose code
+    /// was running, and the active steps that run that action (or that the transition leaves).
+    pub fn fault_place(&self) -> Option<FaultPlace> {
+        let (c, site) = self.sink.fault_site?;
+        let st = self.charts.get(c as usize)?;
+        let plan = &st.plan;
+        let code = code_of(&self.prog, st.pou);
+        let active = |s: &u32| st.is_active(*s);
+        let step_name = |s: u32| st.qualify(&plan.step_names[s as usize]);
+        Some(match site {
+            FaultSite::Action(a) => {
+                let name = &code.chart.actions[a].name;
+                let mut steps: Vec<u32> = plan
+                    .entities
+                    .iter()
+                    .filter(|e| e.action == Some(a))
+                    .flat_map(|e| e.assocs.iter().map(|x| x.step))
+                    .filter(active)
+                    .collect();
+                steps.sort_unstable();
+                steps.dedup();
+                FaultPlace {
+                    action: Some(st.qualify(name)),
+                    transition: None,
+                    steps: steps.into_iter().map(step_name).collect(),
+                }
+            }
+            FaultSite::Guard(t) => FaultPlace {
+                action: None,
+                transition: Some(st.qualify(&plan.transition_names[t as usize])),
+                steps: plan.pre.get(t).iter().copied().map(step_name).collect(),
+            },
+        })
     }
 
     /// Whether the sequence of situations is recorded for [`Simulation::stats`] (off by
@@ -258,11 +390,17 @@ impl Simulation {
     /// Runs the next scan without building its record (the fast path for benchmarks and the
     /// runtime). Returns the error that stopped the run, if any.
     pub fn advance(&mut self) -> Result<(), &RuntimeError> {
+        self.advance_at(self.next_time())
+    }
+
+    /// Runs the next scan at virtual time `now` (µs, not before the previous scan's) instead of
+    /// `scan · period`: for comparing with targets whose clock ticks differently (an S7-200
+    /// 100 ms timer sees time in whole ticks of its time base).
+    pub fn advance_at(&mut self, now: i64) -> Result<(), &RuntimeError> {
         if self.error.is_some() {
             return Err(self.error.as_ref().unwrap());
         }
         self.sink.clear();
-        let now = self.next_time();
         let scan = self.next_scan;
         let result = {
             let mut ctx = Ctx {
@@ -273,6 +411,7 @@ impl Simulation {
                 now,
                 scan,
                 profile: self.opts.profile,
+                budget: crate::code::Budget::new(self.budget, self.interrupt.as_deref()),
             };
             match &self.prog.pous[self.top].body {
                 PouBody::Chart(_) => run_chart(&mut ctx, 0),
@@ -303,12 +442,16 @@ impl Simulation {
     /// The record's lists reuse their strings from scan to scan: a scan without events
     /// allocates nothing once the lists have grown.
     pub fn scan(&mut self) -> &ScanRecord {
+        self.scan_at(self.next_time())
+    }
+
+    /// [`Simulation::scan`] at virtual time `time` (see [`Simulation::advance_at`]).
+    pub fn scan_at(&mut self, time: i64) -> &ScanRecord {
         if self.error.is_some() {
             return &self.record;
         }
         let scan = self.next_scan;
-        let time = self.next_time();
-        let _ = self.advance();
+        let _ = self.advance_at(time);
         self.record.scan = scan;
         self.record.time = time;
         std::mem::swap(&mut self.record.events, &mut self.sink.events);
@@ -386,7 +529,7 @@ impl Simulation {
             return Err(format!("no variable `{name}` in `{}`", self.pou_name()));
         };
         let v = fit(value, &ty).map_err(|why| format!("`{name}` is {}: {why}", type_name(&ty)))?;
-        self.mem[slot] = v;
+        self.mem[slot] = self.inward(v);
         Ok(())
     }
 
@@ -415,7 +558,23 @@ impl Simulation {
         if let Some(v) = self.current_step_of(name).or_else(|| self.unmirrored_step_value(slot)) {
             return Some(v);
         }
-        self.mem.get(slot).cloned()
+        self.mem.get(slot).map(|v| self.outward(v))
+    }
+
+    /// A value of memory as users see it: TIME in µs (under `matiec` memory holds MatIEC's
+    /// packed timespecs, `crate::timespec`).
+    fn outward(&self, v: &Value) -> Value {
+        match v {
+            Value::Time(t) if self.prog.matiec_time => Value::Time(crate::timespec::Timespec::unpack(*t).to_us()),
+            _ => v.clone(),
+        }
+    }
+    /// The inverse of [`Simulation::outward`].
+    fn inward(&self, v: Value) -> Value {
+        match v {
+            Value::Time(us) if self.prog.matiec_time => Value::Time(crate::timespec::Timespec::from_us(us).pack()),
+            _ => v,
+        }
     }
 
     /// `[Path.]SFCCurrentStep` computed from the chart state (see `ChartState::track_current`).
@@ -513,15 +672,17 @@ impl Simulation {
     }
     /// Current values of [`Simulation::trace_vars`], same order.
     pub fn trace_values(&self) -> Vec<Value> {
-        self.trace.iter().map(|&(_, _, slot)| self.mem[slot].clone()).collect()
+        self.trace.iter().map(|&(_, _, slot)| self.outward(&self.mem[slot])).collect()
     }
     /// [`Simulation::trace_values`] into `out`, reusing its room.
     pub fn trace_values_into(&self, out: &mut Vec<Value>) {
         out.truncate(self.trace.len());
         for (i, &(_, _, slot)) in self.trace.iter().enumerate() {
+            let v = &self.mem[slot];
             match out.get_mut(i) {
-                Some(v) => v.clone_from(&self.mem[slot]),
-                None => out.push(self.mem[slot].clone()),
+                Some(o) if !self.prog.matiec_time => o.clone_from(v),
+                Some(o) => *o = self.outward(v),
+                None => out.push(self.outward(v)),
             }
         }
     }
@@ -723,6 +884,14 @@ fn choose_pou(
         return Ok(charts[0].pou.clone());
     }
     let names: Vec<&str> = pous.iter().filter(|p| p.kind != PouKind::Function).map(|p| p.name.text.as_str()).collect();
+    if names.is_empty() {
+        return Err(Diagnostic::error(
+            "SFC0321",
+            Span::default(),
+            "the file has no SFC POU to simulate (and no PROGRAM)",
+        )
+        .with_note("a chart is a PROGRAM or FUNCTION_BLOCK whose body is steps and transitions"));
+    }
     Err(Diagnostic::error("SFC0321", Span::default(), "choose the POU to simulate (`pou` / `--pou`)")
         .with_note(format!("candidates: {}", names.join(", "))))
 }

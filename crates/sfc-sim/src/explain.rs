@@ -215,7 +215,12 @@ impl Atoms<'_, '_> {
                 let text: String = self.view.source.slice(e.span).split_whitespace().collect();
                 let full = if self.path.is_empty() { text.clone() } else { format!("{}.{text}", self.path) };
                 let (slot, _) = self.view.prog.resolve(self.view.top, self.view.top_frame, &full)?;
-                let v = self.view.mem.get(slot)?.clone();
+                let v = match self.view.mem.get(slot)? {
+                    Value::Time(t) if self.view.prog.matiec_time => {
+                        Value::Time(crate::timespec::Timespec::unpack(*t).to_us())
+                    }
+                    v => v.clone(),
+                };
                 if !self.operands.iter().any(|(o, _)| *o == text) {
                     self.operands.push((text, show(&v)));
                 }
@@ -322,6 +327,7 @@ impl Guards<'_, '_> {
             now: self.view.now,
             scan: 0,
             profile: self.view.profile,
+            budget: Default::default(),
         };
         (code.guards[t as usize])(&mut ctx, st.frame).ok()
     }

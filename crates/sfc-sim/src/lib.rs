@@ -5,14 +5,18 @@
 //! Nothing here prints, exits or reads the clock: time is virtual (`scan · period`).
 
 pub mod code;
+pub mod condition;
 pub mod coverage;
 pub mod engine;
 pub mod explain;
+pub mod matiec_check;
 pub mod scenario;
+mod temporal;
+pub mod timespec;
 pub mod trace;
 pub mod value;
 
-pub use engine::{ScanSink, Simulation, Snapshot, StepStats, TimeStats};
+pub use engine::{FaultPlace, ScanSink, Simulation, Snapshot, StepStats, TimeStats};
 pub use explain::{StepReport, TransitionReport};
 pub use value::{format_time, parse_time, write_time, Value};
 
@@ -82,6 +86,37 @@ impl Event {
             Event::Error(_) => 3,
         }
     }
+    /// The event's kind as the trace and scenario files name it (`conflict`, `unsafe`,
+    /// `contention`, `error`).
+    pub fn kind(&self) -> &'static str {
+        match self {
+            Event::Conflict { .. } => "conflict",
+            Event::Unsafe { .. } => "unsafe",
+            Event::Contention { .. } => "contention",
+            Event::Error(_) => "error",
+        }
+    }
+
+    /// One line for people: `step S2 activated again (by T1)`.
+    pub fn describe(&self) -> String {
+        match self {
+            Event::Conflict { step, transitions } => format!(
+                "step {step} has {} true transitions without priority: {}",
+                transitions.len(),
+                transitions.join(", ")
+            ),
+            Event::Unsafe { step, transitions } => {
+                format!("step {step} gets a second token (from {})", transitions.join(", "))
+            }
+            Event::Contention { action, steps, qualifiers } => {
+                let pairs: Vec<String> = steps.iter().zip(qualifiers).map(|(s, q)| format!("{q} in {s}")).collect();
+                let first = pairs.first().cloned().unwrap_or_default();
+                format!("action {action} has timed qualifiers that differ: {} ({first} wins)", pairs.join(", "))
+            }
+            Event::Error(e) => format!("runtime error: {} (line {}, column {})", e.message, e.line, e.column),
+        }
+    }
+
     /// The JSON object of the trace format.
     pub fn to_json(&self) -> serde_json::Value {
         use serde_json::json;
@@ -100,7 +135,7 @@ impl Event {
 }
 
 /// A fault that stopped the run, located in the source.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, Eq)]
 pub struct RuntimeError {
     pub message: String,
     pub span: Span,

@@ -22,9 +22,10 @@
 //! Running ([`run`]) applies the `set` values of an entry before the first scan whose time is
 //! `≥ time` and checks its `expect` values after that scan.
 
+use crate::condition::Condition;
 use crate::coverage::Coverage;
 use crate::trace::{value_text, TraceHeader, TraceSink};
-use crate::{format_time, parse_time, Profile, RuntimeError, SimOptions, Simulation, Value};
+use crate::{format_time, parse_time, Profile, RuntimeError, ScanRecord, SimOptions, Simulation, Value};
 use sfc_diagnostics::{render_human, Diagnostic, RenderOptions, SourceFile};
 use sfc_st::Type;
 use std::fmt;
@@ -127,10 +128,42 @@ pub enum Expectation {
     Active(Vec<String>),
     /// A variable, `Step.X`, `Step.T`, … with the value it must have and its type.
     Value { key: String, value: Value, ty: Type },
+    /// An ST BOOL expression that must be TRUE (`expect = "Level > 10 AND NOT Alarm"`).
+    Holds(Condition),
+}
+
+/// A kind of runtime event a scenario can forbid (`forbid = ["unsafe", "conflict"]`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum EventKind {
+    Conflict,
+    Unsafe,
+    Contention,
+    /// A step active longer than its `sfc.timeout`.
+    Overdue,
+    /// A runtime error (which fails a scenario anyway).
+    Error,
+}
+
+impl EventKind {
+    pub const ALL: [EventKind; 5] =
+        [EventKind::Conflict, EventKind::Unsafe, EventKind::Contention, EventKind::Overdue, EventKind::Error];
+    pub fn name(self) -> &'static str {
+        match self {
+            EventKind::Conflict => "conflict",
+            EventKind::Unsafe => "unsafe",
+            EventKind::Contention => "contention",
+            EventKind::Overdue => "overdue",
+            EventKind::Error => "error",
+        }
+    }
+    /// Parses a kind name (any case).
+    pub fn from_name(s: &str) -> Option<EventKind> {
+        EventKind::ALL.into_iter().find(|k| k.name().eq_ignore_ascii_case(s))
+    }
 }
 
 /// One `[[at]]` entry, bound to the chart.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, Default)]
 pub struct Entry {
     /// µs.
     pub time: i64,
@@ -138,8 +171,29 @@ pub struct Entry {
     pub line: u32,
     /// Values written before the entry's scan, in file order.
     pub set: Vec<(String, Value)>,
-    /// Values checked after the entry's scan, in file order.
+    /// Values checked after the entry's scan, in file order; with [`Entry::within`], the
+    /// condition that must hold at some scan within that time.
     pub expect: Vec<Expectation>,
+    /// `to`: the end of the entry's interval (inclusive, µs); without it, the end of the run.
+    pub to: Option<i64>,
+    /// Must hold after every scan of the interval (a conjunction).
+    pub always: Vec<Expectation>,
+    /// Must not hold (all together) after any scan of the interval.
+    pub never: Vec<Expectation>,
+    /// `within`: `expect` must hold at some scan at most this long (µs) after the entry's scan,
+    /// or after each rising edge of `after` in the interval.
+    pub within: Option<i64>,
+    /// The trigger of a response: each scan in the interval where it becomes TRUE.
+    pub after: Vec<Expectation>,
+    /// Runtime events that fail the scenario when they happen in the interval.
+    pub forbid: Vec<EventKind>,
+}
+
+impl Entry {
+    /// Whether the entry checks anything over an interval (not just at its scan).
+    pub fn is_temporal(&self) -> bool {
+        !self.always.is_empty() || !self.never.is_empty() || self.within.is_some() || !self.forbid.is_empty()
+    }
 }
 
 /// A loaded scenario: parsed, its chart read and checked, every name and value bound.
@@ -160,6 +214,10 @@ pub struct Scenario {
     pub length: RunLength,
     /// In time order.
     pub entries: Vec<Entry>,
+    /// Top-level `forbid`: runtime events that fail the scenario whenever they happen.
+    pub forbid: Vec<EventKind>,
+    /// Line of the top-level `forbid` (0 when there is none).
+    pub forbid_line: u32,
     chart_text: String,
 }
 
@@ -202,8 +260,30 @@ impl Scenario {
             RunLength::Scans(n) => n,
             RunLength::Until(t) if t < 0 => 0,
             RunLength::Until(t) => (t / p) as u64 + 1,
-            RunLength::LastEntry => self.entries.last().map_or(1, |e| self.scan_of(e.time) + 1),
+            RunLength::LastEntry => self.entries.iter().map(|e| self.last_scan_of(e) + 1).max().unwrap_or(1),
         }
+    }
+    /// The last scan with time `≤ t`.
+    pub fn scan_at_or_before(&self, t: i64) -> u64 {
+        let p = self.options.period.max(1);
+        if t < 0 {
+            0
+        } else {
+            (t / p) as u64
+        }
+    }
+    /// The last scan an entry needs to be checked completely: its own scan, the end of its
+    /// interval, or its deadline.
+    pub fn last_scan_of(&self, e: &Entry) -> u64 {
+        let mut last = self.scan_of(e.time);
+        if let Some(to) = e.to {
+            last = last.max(self.scan_at_or_before(to));
+        }
+        if let (Some(w), true) = (e.within, e.after.is_empty()) {
+            let start = self.scan_of(e.time) as i64 * self.options.period;
+            last = last.max(self.scan_at_or_before(start.saturating_add(w)));
+        }
+        last
     }
     /// Creates a new simulation of the scenario's chart.
     pub fn simulation(&self) -> Result<Simulation, ScenarioError> {
@@ -253,12 +333,33 @@ struct RawAssign {
     column: u32,
 }
 
-#[derive(Debug, Clone)]
+/// A condition as written: a table of expected values and/or an ST expression.
+#[derive(Debug, Clone, Default)]
+struct RawCond {
+    assigns: Vec<RawAssign>,
+    /// `(text, line, column)`.
+    expr: Option<(String, u32, u32)>,
+}
+
+impl RawCond {
+    fn is_empty(&self) -> bool {
+        self.assigns.is_empty() && self.expr.is_none()
+    }
+}
+
+#[derive(Debug, Clone, Default)]
 struct RawEntry {
     time: i64,
     line: u32,
     set: Vec<RawAssign>,
-    expect: Vec<RawAssign>,
+    expect: RawCond,
+    to: Option<i64>,
+    always: Option<RawCond>,
+    never: Option<RawCond>,
+    within: Option<i64>,
+    after: Option<RawCond>,
+    /// `(name, line, column)`.
+    forbid: Vec<(String, u32, u32)>,
 }
 
 #[derive(Debug, Clone, Default)]
@@ -270,6 +371,9 @@ struct Parsed {
     profile: Option<Profile>,
     length: Option<RunLength>,
     entries: Vec<RawEntry>,
+    /// Top-level `forbid`: `(name, line, column)`, and the key's line.
+    forbid: Vec<(String, u32, u32)>,
+    forbid_line: u32,
 }
 
 struct Src<'a> {
@@ -277,8 +381,8 @@ struct Src<'a> {
     text: &'a str,
 }
 
-const TOP_KEYS: [&str; 7] = ["chart", "pou", "period", "profile", "until", "scans", "at"];
-const ENTRY_KEYS: [&str; 3] = ["time", "set", "expect"];
+const TOP_KEYS: [&str; 8] = ["chart", "pou", "period", "profile", "until", "scans", "forbid", "at"];
+const ENTRY_KEYS: [&str; 9] = ["time", "set", "expect", "to", "always", "never", "within", "after", "forbid"];
 
 impl Src<'_> {
     fn pos(&self, offset: usize) -> (u32, u32) {
@@ -427,12 +531,16 @@ fn parse_text(file: &str, text: &str) -> Result<Parsed, ScenarioError> {
                 }
             }
             "at" => p.entries = parse_entries(&src, root, item)?,
+            "forbid" => {
+                p.forbid = parse_forbid(&src, root, item)?;
+                p.forbid_line = span.clone().map_or(1, |s| src.pos(s.start).0);
+            }
             other => {
                 let hint = did_you_mean(other, TOP_KEYS);
                 return Err(src.err(
                     span,
                     format!(
-                        "unknown key `{other}` (expected chart, pou, period, profile, until, scans or [[at]]){hint}"
+                        "unknown key `{other}` (expected chart, pou, period, profile, until, scans, forbid or [[at]]){hint}"
                     ),
                 ));
             }
@@ -471,7 +579,9 @@ fn parse_entries(src: &Src<'_>, root: &dyn TableLike, item: &Item) -> Result<Vec
         let (line, _) = span.clone().map_or((1, 1), |s| src.pos(s.start));
         let mut time = None;
         let mut set = Vec::new();
-        let mut expect = Vec::new();
+        let mut raw = RawEntry::default();
+        let mut to_span = None;
+        let mut within_span = None;
         for (key, item) in table.iter() {
             let kspan = src.key_span(table, key);
             match key {
@@ -484,20 +594,42 @@ fn parse_entries(src: &Src<'_>, root: &dyn TableLike, item: &Item) -> Result<Vec
                     }
                     time = Some((t, item.span()));
                 }
-                "set" | "expect" => {
+                "set" => {
                     let Some(inner) = item.as_table_like() else {
                         return Err(src.err(
                             kspan,
                             format!("`{key}` must be a table such as {{ Start = true }}, found {}", type_name(item)),
                         ));
                     };
-                    collect_assigns(src, inner, "", if key == "set" { &mut set } else { &mut expect });
+                    collect_assigns(src, inner, "", &mut set);
                 }
+                "expect" => raw.expect = parse_cond(src, key, kspan, item)?,
+                "always" => raw.always = Some(parse_cond(src, key, kspan, item)?),
+                "never" => raw.never = Some(parse_cond(src, key, kspan, item)?),
+                "after" => raw.after = Some(parse_cond(src, key, kspan, item)?),
+                "to" | "within" => {
+                    let t = src.time(table, key, item)?;
+                    if t < 0 {
+                        return Err(
+                            src.err(item.span(), format!("`{key}` must not be negative, found {}", format_time(t)))
+                        );
+                    }
+                    if key == "to" {
+                        raw.to = Some(t);
+                        to_span = item.span();
+                    } else {
+                        raw.within = Some(t);
+                        within_span = kspan;
+                    }
+                }
+                "forbid" => raw.forbid = parse_forbid(src, table, item)?,
                 other => {
                     let hint = did_you_mean(other, ENTRY_KEYS);
                     return Err(src.err(
                         kspan,
-                        format!("unknown key `{other}` in an [[at]] entry (expected time, set or expect){hint}"),
+                        format!(
+                            "unknown key `{other}` in an [[at]] entry (expected time, set, expect, to, always, never, within, after or forbid){hint}"
+                        ),
                     ));
                 }
             }
@@ -505,6 +637,31 @@ fn parse_entries(src: &Src<'_>, root: &dyn TableLike, item: &Item) -> Result<Vec
         let Some((time, tspan)) = time else {
             return Err(src.err(span, "an [[at]] entry needs a `time`, such as time = \"T#100ms\""));
         };
+        if let Some(to) = raw.to {
+            if to < time {
+                return Err(src.err(
+                    to_span,
+                    format!("`to` ({}) comes before the entry's `time` ({})", format_time(to), format_time(time)),
+                ));
+            }
+            if raw.always.is_none() && raw.never.is_none() && raw.forbid.is_empty() && raw.after.is_none() {
+                return Err(
+                    src.err(to_span, "`to` ends an interval: give `always`, `never`, `forbid` or `after` with it")
+                );
+            }
+            if raw.within.is_some() && raw.after.is_none() {
+                return Err(src.err(
+                    to_span,
+                    "`within` without `after` counts from the entry's `time`; `to` bounds the triggers of `after`",
+                ));
+            }
+        }
+        if raw.within.is_some() && raw.expect.is_empty() {
+            return Err(src.err(within_span, "`within` needs an `expect`: the condition that must hold in time"));
+        }
+        if raw.after.is_some() && raw.within.is_none() {
+            return Err(src.err(span, "`after` needs a `within`: how long `expect` may take after the trigger"));
+        }
         if let Some(prev) = entries.last() {
             if time < prev.time {
                 return Err(src.err(
@@ -518,9 +675,59 @@ fn parse_entries(src: &Src<'_>, root: &dyn TableLike, item: &Item) -> Result<Vec
                 ));
             }
         }
-        entries.push(RawEntry { time, line, set, expect });
+        entries.push(RawEntry { time, line, set, ..raw });
     }
     Ok(entries)
+}
+
+/// `expect`, `always`, `never`, `after`: a table of values, or an ST BOOL expression.
+fn parse_cond(src: &Src<'_>, key: &str, kspan: Option<Range<usize>>, item: &Item) -> Result<RawCond, ScenarioError> {
+    if let Some(inner) = item.as_table_like() {
+        let mut c = RawCond::default();
+        collect_assigns(src, inner, "", &mut c.assigns);
+        return Ok(c);
+    }
+    if let Some(text) = item.as_str() {
+        let (line, column) = item.span().or(kspan.clone()).map_or((0, 0), |s| src.pos(s.start));
+        return Ok(RawCond { assigns: Vec::new(), expr: Some((text.to_string(), line, column)) });
+    }
+    Err(src.err(
+        kspan,
+        format!(
+            "`{key}` must be a table such as {{ Motor = true }} or an ST condition such as \"NOT (Fwd AND Rev)\", found {}",
+            type_name(item)
+        ),
+    ))
+}
+
+/// `forbid = ["unsafe", "conflict"]`.
+fn parse_forbid(src: &Src<'_>, table: &dyn TableLike, item: &Item) -> Result<Vec<(String, u32, u32)>, ScenarioError> {
+    let names = EventKind::ALL.map(EventKind::name);
+    let Some(list) = item.as_array() else {
+        return Err(src.err(
+            src.key_span(table, "forbid").or_else(|| item.span()),
+            format!(
+                "`forbid` must be an array of event kinds such as [\"unsafe\", \"conflict\"], found {}",
+                type_name(item)
+            ),
+        ));
+    };
+    let mut out = Vec::new();
+    for v in list.iter() {
+        let Some(name) = v.as_str() else {
+            return Err(src.err(v.span(), "`forbid` holds event kinds as strings, such as \"unsafe\""));
+        };
+        if EventKind::from_name(name).is_none() {
+            let hint = did_you_mean(name, names);
+            return Err(src.err(
+                v.span(),
+                format!("unknown event kind `{name}` in `forbid` (expected {}){hint}", names.join(", ")),
+            ));
+        }
+        let (l, c) = v.span().map_or((0, 0), |s| src.pos(s.start));
+        out.push((name.to_string(), l, c));
+    }
+    Ok(out)
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -634,6 +841,13 @@ fn round_real(x: f64, ty: &Type) -> f64 {
     } else {
         x
     }
+}
+
+/// A value of `ty` written as text the way `--set` takes it (`TRUE`, `0`, `-5`, `16#FF`,
+/// `2.5`, `T#1s`, `'text'`, an enumeration value), checked against the type; the error says
+/// what was expected.
+pub fn value_from_text(text: &str, ty: &Type) -> Result<Value, String> {
+    convert(&raw_from_text(text, ty), ty)
 }
 
 /// Reads a `--set` value written on the command line as the TOML value it stands for.
@@ -774,6 +988,25 @@ impl<'a> Binder<'a> {
         let value = self.value(a, &ty)?;
         Ok(Expectation::Value { key: a.key.clone(), value, ty })
     }
+    /// A table of values and/or an ST condition, as a conjunction.
+    fn cond(&self, c: &RawCond) -> Result<Vec<Expectation>, ScenarioError> {
+        let mut out = Vec::new();
+        for a in &c.assigns {
+            out.push(self.expect(a)?);
+        }
+        if let Some((text, line, column)) = &c.expr {
+            let cond = Condition::parse(text, self.sim).map_err(|m| {
+                let mut e = ScenarioError::new(ErrorKind::Invalid, Some(self.file.to_string()), m);
+                if *line > 0 {
+                    e.line = Some(*line);
+                    e.column = Some(*column);
+                }
+                e
+            })?;
+            out.push(Expectation::Holds(cond));
+        }
+        Ok(out)
+    }
 }
 
 /// Loads a scenario file: parses it, reads and checks its chart, binds names and values.
@@ -793,7 +1026,23 @@ fn clean(path: &Path) -> PathBuf {
 fn read_text(path: &Path, what: &str) -> Result<String, (ErrorKind, String)> {
     let bytes =
         std::fs::read(path).map_err(|e| (ErrorKind::Io, format!("cannot read {what} `{}`: {e}", path.display())))?;
-    String::from_utf8(bytes).map_err(|_| (ErrorKind::Invalid, format!("{what} `{}` is not UTF-8 text", path.display())))
+    // UTF-8 with or without a byte order mark, or Latin-1 / Windows-1252.
+    let text = sfc_syntax::encoding::decode(&bytes).text;
+    // A PLCopen XML chart is simulated as the IEC text it imports to.
+    let xml = path.extension().is_some_and(|e| e.eq_ignore_ascii_case("xml")) || text.trim_start().starts_with('<');
+    if xml && what == "the chart" {
+        return Ok(sfc_plcopen::import(0, &path.display().to_string(), &text).text);
+    }
+    Ok(text)
+}
+
+/// A POU that does not exist or cannot be chosen (SFC0321) is a usage error when the command
+/// line chose it (`--pou`, or a chart given without scenario), not a problem of the chart.
+fn pou_choice_is_usage(mut e: ScenarioError) -> ScenarioError {
+    if e.diagnostics.as_ref().is_some_and(|d| !d.1.is_empty() && d.1.iter().all(|d| d.code == "SFC0321")) {
+        e.kind = ErrorKind::Usage;
+    }
+    e
 }
 
 /// Loads a scenario file with command-line settings taking precedence.
@@ -834,18 +1083,22 @@ pub fn load_with(path: &Path, o: &Overrides) -> Result<Scenario, ScenarioError> 
     let chart_name = chart.display().to_string();
     let sim = compile(&chart_name, &chart_text, pou.as_deref(), options).map_err(|e| {
         let pou_key = if o.pou.is_none() { parsed.pou.as_ref() } else { None };
+        let e = if o.pou.is_some() { pou_choice_is_usage(e) } else { e };
         locate(pou_key.or(chart_key), e)
     })?;
     let binder = Binder::new(&sim, &name, &chart_name);
     let mut entries = command_line_sets(&sim, o)?.into_iter().collect::<Vec<_>>();
     for raw in &parsed.entries {
-        let mut entry = Entry { time: raw.time, line: raw.line, set: Vec::new(), expect: Vec::new() };
+        let mut entry = Entry { time: raw.time, line: raw.line, to: raw.to, within: raw.within, ..Entry::default() };
         for a in &raw.set {
             entry.set.push(binder.set(a)?);
         }
-        for a in &raw.expect {
-            entry.expect.push(binder.expect(a)?);
-        }
+        entry.expect = binder.cond(&raw.expect)?;
+        let cond = |c: &Option<RawCond>| c.as_ref().map_or(Ok(Vec::new()), |c| binder.cond(c));
+        entry.always = cond(&raw.always)?;
+        entry.never = cond(&raw.never)?;
+        entry.after = cond(&raw.after)?;
+        entry.forbid = raw.forbid.iter().filter_map(|(n, _, _)| EventKind::from_name(n)).collect();
         entries.push(entry);
     }
     Ok(Scenario {
@@ -857,6 +1110,8 @@ pub fn load_with(path: &Path, o: &Overrides) -> Result<Scenario, ScenarioError> 
         options,
         length: o.length.or(parsed.length).unwrap_or(RunLength::LastEntry),
         entries,
+        forbid: parsed.forbid.iter().filter_map(|(n, _, _)| EventKind::from_name(n)).collect(),
+        forbid_line: parsed.forbid_line,
         chart_text,
     })
 }
@@ -867,7 +1122,7 @@ fn command_line_sets(sim: &Simulation, o: &Overrides) -> Result<Option<Entry>, S
         return Ok(None);
     }
     let binder = Binder::new(sim, "", "");
-    let mut entry = Entry { time: 0, line: 0, set: Vec::new(), expect: Vec::new() };
+    let mut entry = Entry::default();
     for (key, text) in &o.set {
         let ty = sim.type_of(key);
         let raw = ty.as_ref().map_or(Raw::Str(text.clone()), |t| raw_from_text(text, t));
@@ -895,7 +1150,7 @@ pub fn for_chart(chart: &Path, o: &Overrides) -> Result<Scenario, ScenarioError>
     let chart_name = chart.display().to_string();
     let chart_text = read_text(&chart, "the chart").map_err(|(k, m)| ScenarioError::new(k, None, m))?;
     let options = SimOptions { period: o.period.unwrap_or(DEFAULT_PERIOD), profile: o.profile.unwrap_or_default() };
-    let sim = compile(&chart_name, &chart_text, o.pou.as_deref(), options)?;
+    let sim = compile(&chart_name, &chart_text, o.pou.as_deref(), options).map_err(pou_choice_is_usage)?;
     let entries = command_line_sets(&sim, o)?.into_iter().collect();
     Ok(Scenario {
         path: chart.clone(),
@@ -906,6 +1161,8 @@ pub fn for_chart(chart: &Path, o: &Overrides) -> Result<Scenario, ScenarioError>
         options,
         length: o.length.unwrap_or(RunLength::Scans(DEFAULT_SCANS)),
         entries,
+        forbid: Vec::new(),
+        forbid_line: 0,
         chart_text,
     })
 }
@@ -1001,9 +1258,43 @@ fn same(expected: &Value, actual: &Value, ty: &Type) -> bool {
     }
 }
 
+/// Why an expectation does not hold after the last scan (`None` when it holds):
+/// ``"`Visible`: expected true, actual false"``.
+pub(crate) fn mismatch(sim: &Simulation, x: &Expectation) -> Option<String> {
+    match x {
+        Expectation::Active(want) => {
+            let mut got = sim.active();
+            got.sort();
+            (&got != want).then(|| format!("`active`: expected {}, actual {}", show_steps(want), show_steps(&got)))
+        }
+        Expectation::Value { key, value, ty } => match sim.get(key) {
+            Some(got) if same(value, &got, ty) => None,
+            Some(got) => Some(format!("`{key}`: expected {}, actual {}", show(value, ty), show(&got, ty))),
+            None => Some(format!("`{key}`: expected {}, but it cannot be read", show(value, ty))),
+        },
+        Expectation::Holds(c) => match c.eval(sim) {
+            Ok(true) => None,
+            Ok(false) => Some(format!("`{}` is FALSE ({})", c.text, c.operands(sim))),
+            Err(m) => Some(format!("`{}` cannot be evaluated: {m}", c.text)),
+        },
+    }
+}
+
+/// How a conjunction that holds looks now, for `never`: ``"`Fwd` = true, `Rev` = true"``.
+pub(crate) fn holding(sim: &Simulation, xs: &[Expectation]) -> String {
+    xs.iter()
+        .map(|x| match x {
+            Expectation::Active(want) => format!("`active` = {}", show_steps(want)),
+            Expectation::Value { key, value, ty } => format!("`{key}` = {}", show(value, ty)),
+            Expectation::Holds(c) => format!("`{}` is TRUE ({})", c.text, c.operands(sim)),
+        })
+        .collect::<Vec<_>>()
+        .join(" and ")
+}
+
 /// Runs a loaded scenario, feeding `trace` if given.
 pub fn run(s: &Scenario, trace: Option<&mut dyn TraceSink>) -> Outcome {
-    execute(s, trace, &mut |_| {}, Recording::default()).outcome
+    execute(s, trace, &mut |_, _| {}, Recording::default()).outcome
 }
 
 /// Loads and runs a scenario file, without trace.
@@ -1016,10 +1307,14 @@ pub fn run_path(path: &Path) -> Result<Outcome, ScenarioError> {
 pub struct Recording {
     /// The sequence of situations, for [`Simulation::stats`] (`sfc sim --stats`).
     pub situations: bool,
+    /// A record of every scan for `on_scan` (its fired transitions and events), even without
+    /// a trace.
+    pub records: bool,
 }
 
 /// Runs a loaded scenario, feeding `trace` if given and calling `on_scan` after every scan
-/// with the simulation ([`Simulation::next_scan`] is then one past the scan that ran).
+/// with the simulation ([`Simulation::next_scan`] is then one past the scan that ran) and the
+/// scan's record when one was built (with a trace, interval checks or [`Recording::records`]).
 ///
 /// A scan costs what the engine costs: without a trace no record is built, coverage is read
 /// from the engine's counters at the end, and the values of expectations are read only at
@@ -1027,7 +1322,7 @@ pub struct Recording {
 pub fn execute(
     s: &Scenario,
     mut trace: Option<&mut dyn TraceSink>,
-    on_scan: &mut dyn FnMut(&Simulation),
+    on_scan: &mut dyn FnMut(&Simulation, Option<&ScanRecord>),
     recording: Recording,
 ) -> Execution {
     let mut outcome =
@@ -1051,62 +1346,55 @@ pub fn execute(
     let here = |e: &Entry| if e.line > 0 { format!("{}:{}", s.name, e.line) } else { format!("{} (--set)", s.name) };
     let total = s.total_scans();
     let (mut applied, mut checked) = (0usize, 0usize);
+    // Failures with the scan they concern, so the report lists them in time order.
+    let mut failures: Vec<(u64, String)> = Vec::new();
+    let mut watch = crate::temporal::Watch::new(s);
+    let watching = !watch.is_idle();
     for _ in 0..total {
         let now = sim.next_time();
         while applied < s.entries.len() && s.entries[applied].time <= now {
             let e = &s.entries[applied];
             for (name, value) in &e.set {
                 if let Err(m) = sim.set(name, value.clone()) {
-                    outcome.failures.push(format!("{}: at {}: cannot set `{name}`: {m}", here(e), format_time(e.time)));
+                    failures.push((
+                        sim.next_scan(),
+                        format!("{}: at {}: cannot set `{name}`: {m}", here(e), format_time(e.time)),
+                    ));
                 }
             }
             applied += 1;
         }
         let scan = sim.next_scan();
-        match trace.as_deref_mut() {
-            Some(t) if trace_error.is_none() => {
-                sim.scan();
+        let tracing = trace.is_some() && trace_error.is_none();
+        let recorded = tracing || watching || recording.records;
+        if recorded {
+            sim.scan();
+            if let (true, Some(t)) = (tracing, trace.as_deref_mut()) {
                 sim.trace_values_into(&mut values);
                 if let Err(e) = t.scan(sim.record(), &values) {
                     trace_error = Some(e);
                 }
             }
-            _ => {
-                let _ = sim.advance();
-            }
+        } else {
+            let _ = sim.advance();
         }
         outcome.scans += 1;
-        on_scan(&sim);
+        on_scan(&sim, recorded.then(|| sim.record()));
         while checked < applied {
             let e = &s.entries[checked];
-            for x in &e.expect {
-                let at = format!("{}: at {} (scan {})", here(e), format_time(e.time), scan);
-                match x {
-                    Expectation::Active(want) => {
-                        let mut got = sim.active();
-                        got.sort();
-                        if &got != want {
-                            outcome.failures.push(format!(
-                                "{at}: `active`: expected {}, actual {}",
-                                show_steps(want),
-                                show_steps(&got)
-                            ));
-                        }
+            // With `within`, `expect` is a deadline, checked by the watch.
+            if e.within.is_none() {
+                for x in &e.expect {
+                    if let Some(m) = mismatch(&sim, x) {
+                        let at = format!("{}: at {} (scan {})", here(e), format_time(e.time), scan);
+                        failures.push((scan, format!("{at}: {m}")));
                     }
-                    Expectation::Value { key, value, ty } => match sim.get(key) {
-                        Some(got) if same(value, &got, ty) => {}
-                        Some(got) => outcome.failures.push(format!(
-                            "{at}: `{key}`: expected {}, actual {}",
-                            show(value, ty),
-                            show(&got, ty)
-                        )),
-                        None => outcome
-                            .failures
-                            .push(format!("{at}: `{key}`: expected {}, but it cannot be read", show(value, ty))),
-                    },
                 }
             }
             checked += 1;
+        }
+        if watching {
+            watch.after_scan(&sim, sim.record());
         }
         if let Some(err) = sim.error() {
             outcome.error = Some(render_runtime_error(err, sim.source()));
@@ -1122,15 +1410,21 @@ pub fn execute(
     };
     outcome.coverage.record_run(&sim);
     for e in &s.entries[checked..] {
-        if !e.expect.is_empty() {
-            outcome.failures.push(format!(
-                "{}: at {} (scan {}): expectation never reached: {end}",
-                here(e),
-                format_time(e.time),
-                s.scan_of(e.time)
+        if !e.expect.is_empty() && e.within.is_none() {
+            failures.push((
+                s.scan_of(e.time),
+                format!(
+                    "{}: at {} (scan {}): expectation never reached: {end}",
+                    here(e),
+                    format_time(e.time),
+                    s.scan_of(e.time)
+                ),
             ));
         }
     }
+    failures.extend(watch.finish(outcome.scans, &end));
+    failures.sort_by_key(|(scan, _)| *scan);
+    outcome.failures.extend(failures.into_iter().map(|(_, f)| f));
     if trace_error.is_none() {
         if let Some(t) = trace {
             if let Err(e) = t.finish() {
@@ -1189,10 +1483,10 @@ Speed = 1.5
         assert_eq!(p.entries[0].line, 8);
         assert_eq!(p.entries[0].set[0].key, "Start");
         assert_eq!(p.entries[0].set[0].value, Raw::Bool(true));
-        assert_eq!(p.entries[0].expect[0].value, Raw::List(vec![Raw::Str("S1".into())]));
-        let keys: Vec<&str> = p.entries[1].expect.iter().map(|a| a.key.as_str()).collect();
+        assert_eq!(p.entries[0].expect.assigns[0].value, Raw::List(vec![Raw::Str("S1".into())]));
+        let keys: Vec<&str> = p.entries[1].expect.assigns.iter().map(|a| a.key.as_str()).collect();
         assert_eq!(keys, ["active", "S2.T", "S3.X"]);
-        assert_eq!(p.entries[1].expect[1].line, 15);
+        assert_eq!(p.entries[1].expect.assigns[1].line, 15);
         assert_eq!(p.entries[2].set[0].value, Raw::Int(12));
         assert_eq!(p.entries[2].set[1].value, Raw::Float(1.5));
         let scans = parse("chart = \"x.st\"\nscans = 30\n").unwrap();
@@ -1211,7 +1505,7 @@ Speed = 1.5
         assert!(err("chart = \"x.st\"\nuntil = \n").contains("TOML syntax error"));
         assert_eq!(
             err("chart = \"x.st\"\n\nchrat = 1\n"),
-            "t.scenario.toml:3:1: unknown key `chrat` (expected chart, pou, period, profile, until, scans or [[at]]); did you mean `chart`?"
+            "t.scenario.toml:3:1: unknown key `chrat` (expected chart, pou, period, profile, until, scans, forbid or [[at]]); did you mean `chart`?"
         );
         assert_eq!(
             err("chart = \"x.st\"\nuntil = \"T#1s\"\nscans = 3\n"),
@@ -1234,11 +1528,40 @@ Speed = 1.5
         );
         assert!(err("[[at]]\nset = { A = 1 }\n").starts_with("t.scenario.toml:1:1: an [[at]] entry needs a `time`"));
         assert!(err("[[at]]\ntime = \"T#0s\"\nexpcet = { A = 1 }\n").contains(
-            "3:1: unknown key `expcet` in an [[at]] entry (expected time, set or expect); did you mean `expect`?"
+            "3:1: unknown key `expcet` in an [[at]] entry (expected time, set, expect, to, always, never, within, after or forbid); did you mean `expect`?"
         ));
         assert!(err("[[at]]\ntime = \"T#0s\"\nset = 1\n").contains("`set` must be a table"));
         assert!(err("[at]\ntime = \"T#0s\"\n").contains("`at` must be an array of tables"));
         assert!(err("chart = \"a\"\nchart = \"b\"\n").contains("TOML syntax error"));
+    }
+
+    #[test]
+    fn interval_keys() {
+        let p = parse(
+            "forbid = [\"unsafe\", \"CONFLICT\"]\n[[at]]\ntime = \"T#1s\"\nto = \"T#5s\"\nalways = \"NOT (Fwd AND Rev)\"\nnever = { Alarm = true }\n[[at]]\ntime = \"T#0s\"\nafter = \"DoorCmd\"\nwithin = \"T#2s\"\nexpect = { DoorClosed = true }\n",
+        );
+        assert!(p.is_err(), "time goes backwards");
+        let p = parse(
+            "forbid = [\"unsafe\", \"CONFLICT\"]\n[[at]]\ntime = \"T#1s\"\nto = \"T#5s\"\nalways = \"NOT (Fwd AND Rev)\"\nnever = { Alarm = true }\n[[at]]\ntime = \"T#6s\"\nafter = \"DoorCmd\"\nwithin = \"T#2s\"\nexpect = { DoorClosed = true }\n",
+        )
+        .unwrap();
+        assert_eq!(p.forbid.iter().map(|f| f.0.as_str()).collect::<Vec<_>>(), ["unsafe", "CONFLICT"]);
+        assert_eq!(p.forbid_line, 1);
+        assert_eq!(p.entries[0].to, Some(5_000_000));
+        assert_eq!(p.entries[0].always.as_ref().unwrap().expr.as_ref().unwrap().0, "NOT (Fwd AND Rev)");
+        assert_eq!(p.entries[0].never.as_ref().unwrap().assigns[0].key, "Alarm");
+        assert_eq!(p.entries[1].within, Some(2_000_000));
+        assert!(p.entries[1].after.is_some());
+        assert!(err("forbid = [\"unsave\"]\n").contains("unknown event kind `unsave` in `forbid` (expected conflict, unsafe, contention, overdue, error); did you mean `unsafe`?"));
+        assert!(err("[[at]]\ntime = \"T#2s\"\nto = \"T#1s\"\nalways = { A = true }\n")
+            .contains("`to` (T#1s) comes before the entry's `time` (T#2s)"));
+        assert!(err("[[at]]\ntime = \"T#2s\"\nto = \"T#3s\"\n").contains("`to` ends an interval"));
+        assert!(err("[[at]]\ntime = \"T#2s\"\nwithin = \"T#3s\"\n").contains("`within` needs an `expect`"));
+        assert!(
+            err("[[at]]\ntime = \"T#2s\"\nafter = \"A\"\nexpect = { B = true }\n").contains("`after` needs a `within`")
+        );
+        assert!(err("[[at]]\ntime = \"T#2s\"\nalways = 3\n")
+            .contains("`always` must be a table such as { Motor = true } or an ST condition"));
     }
 
     #[test]

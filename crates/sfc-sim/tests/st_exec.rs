@@ -223,6 +223,7 @@ fn run_fixture(path: &Path) -> Result<(), String> {
             now: k as i64 * spec.period,
             scan: k,
             profile: Profile::Iec,
+            budget: Default::default(),
         };
         if let Err(f) = body(&mut ctx, mem.top_frame) {
             fault = Some(f);
@@ -402,6 +403,7 @@ fn atmt_inputs_are_implicit_variables() {
         now: 0,
         scan: 0,
         profile: Profile::Iec,
+        budget: Default::default(),
     };
     assert_eq!((cc.guards[0])(&mut ctx, mem.top_frame), Ok(false));
     ctx.mem[slot] = Value::Bool(true);
@@ -426,6 +428,7 @@ fn guards_read_step_times() {
         now: 0,
         scan: 0,
         profile: Profile::Iec,
+        budget: Default::default(),
     };
     assert_eq!((cc.guards[0])(&mut ctx, mem.top_frame), Ok(true), "Start is TRUE initially");
     assert_eq!((cc.guards[1])(&mut ctx, mem.top_frame), Ok(false));
@@ -461,7 +464,16 @@ fn self_containing_block_cannot_be_simulated() {
 fn with_ctx<T>(prog: &Program, mem: &mut Vec<Value>, now: i64, f: impl FnOnce(&mut Ctx<'_>) -> T) -> T {
     let mut charts = Vec::new();
     let mut sink = ScanSink::default();
-    let mut ctx = Ctx { mem, prog, charts: &mut charts, sink: &mut sink, now, scan: 0, profile: Profile::Iec };
+    let mut ctx = Ctx {
+        mem,
+        prog,
+        charts: &mut charts,
+        sink: &mut sink,
+        now,
+        scan: 0,
+        profile: Profile::Iec,
+        budget: Default::default(),
+    };
     f(&mut ctx)
 }
 

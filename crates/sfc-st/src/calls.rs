@@ -154,9 +154,13 @@ impl Checker<'_, '_> {
                 format!("`{fb}` is a function block type; declare an instance (`Inst : {fb};`) and call that"),
             ),
             Callee::Unknown => {
-                // An error-typed instance was already reported.
-                if self.scope.resolve(&name.text).is_none() {
-                    self.unknown_callee(name);
+                // An error-typed instance was already reported; a POU kept as written is not
+                // analysed, nor are calls of it.
+                match self.scope.resolve(&name.text) {
+                    // An instance of an opaque block is used by calling it.
+                    Some(sym @ (Sym::Local(_) | Sym::Global(_))) => self.scope.mark(sym, false),
+                    None if !self.scope.env().is_opaque(&name.text) => self.unknown_callee(name),
+                    _ => {}
                 }
             }
             Callee::Instance(..) | Callee::UserFunction(_) | Callee::Std(_) => {}

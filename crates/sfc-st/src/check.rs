@@ -858,7 +858,8 @@ impl<'s, 'e> Checker<'s, 'e> {
         } else {
             Diagnostic::new("SFC0301", id.span, format!("undeclared variable `{}`", id.text))
         };
-        if let Some(s) = closest(&id.text, self.scope.all_names()) {
+        // Only a variable stands for a variable: `C0` does not suggest the step `S0`.
+        if let Some(s) = closest(&id.text, self.scope.variable_names()) {
             d = d.with_note(format!("did you mean `{s}`?"));
         }
         self.report(d);

@@ -25,6 +25,8 @@ pub struct VarInfo {
     pub constant: bool,
     /// `RETAIN` / `NON_RETAIN` of its block.
     pub retain: Option<Retain>,
+    /// Its block is `PERSISTENT`.
+    pub persistent: bool,
     /// The declared type, resolved.
     pub ty: Type,
     /// `AT %IX1.2`.
@@ -54,6 +56,7 @@ impl VarInfo {
             kind: block.kind,
             constant: block.constant,
             retain: block.retain,
+            persistent: block.persistent,
             ty,
             location: decl.location.clone(),
             init: decl.init.clone(),
@@ -109,6 +112,7 @@ pub(crate) fn add_sfc_control_variables(vars: &mut Vec<VarInfo>, pou_span: Span,
             kind,
             constant: false,
             retain: None,
+            persistent: false,
             ty,
             location: None,
             init: None,
@@ -195,9 +199,18 @@ pub struct TypeEnv {
     /// Upper-case enumerated value → the enumerated types (named or inline in a global) that
     /// declare it.
     enum_values: HashMap<String, Vec<Type>>,
+    /// Upper-case names of the POUs kept as written (`sfc.verbatim`): opaque, so a variable of
+    /// such a type, a call of such a function, and everything done with them is accepted
+    /// without analysis (their type is [`Type::Error`]).
+    opaque: std::collections::HashSet<String>,
 }
 
 impl TypeEnv {
+    /// Whether `name` is a POU kept as written, so not analysed (an opaque type or function).
+    pub fn is_opaque(&self, name: &str) -> bool {
+        self.opaque.contains(&name.to_ascii_uppercase())
+    }
+
     /// An environment with only the standard library (no file declarations).
     pub fn standard() -> TypeEnv {
         let mut env = TypeEnv::default();
@@ -252,9 +265,17 @@ impl TypeEnv {
                         b.pou_kinds.insert(key, (pou.kind, pou.name.span));
                     }
                 }
-                Item::Globals(_) | Item::Verbatim(_) => {}
+                Item::Verbatim(v) => {
+                    if let (true, Some(name)) =
+                        (matches!(v.keyword.as_str(), "PROGRAM" | "FUNCTION_BLOCK" | "FUNCTION"), &v.name)
+                    {
+                        b.opaque.insert(name.key());
+                    }
+                }
+                Item::Globals(_) => {}
             }
         }
+        env.opaque = b.opaque.clone();
 
         // Global constants, needed by array bounds and string lengths everywhere.
         let global_blocks: Vec<&VarBlock> =
@@ -481,6 +502,7 @@ fn standard_fb(name: &str) -> Option<PouInterface> {
             kind,
             constant: false,
             retain: None,
+            persistent: false,
             ty,
             location: None,
             init: None,
@@ -544,6 +566,9 @@ impl TypeNames for EnvNames<'_> {
         if let Some(def) = self.env.types.get(&key) {
             return Named::Type(def.ty.clone());
         }
+        if self.env.opaque.contains(&key) {
+            return Named::Type(Type::Error);
+        }
         match self.env.pou(&key) {
             Some(p) if p.kind == PouKind::Function => Named::NotAType("a function"),
             Some(_) => Named::Type(Type::FunctionBlock(key)),
@@ -576,6 +601,8 @@ struct Builder<'a> {
     consts: HashMap<String, Value>,
     /// Constants of the POU whose interface is being resolved.
     local_consts: HashMap<String, Value>,
+    /// POUs kept as written: opaque types.
+    opaque: std::collections::HashSet<String>,
 }
 
 impl<'a> Builder<'a> {
@@ -701,6 +728,9 @@ impl TypeNames for Builder<'_> {
         let key = ident.key();
         if self.decls.contains_key(&key) {
             return Named::Type(self.resolve_decl(&key, diags));
+        }
+        if self.opaque.contains(&key) {
+            return Named::Type(Type::Error);
         }
         match self.pou_kinds.get(&key) {
             Some((PouKind::Function, _)) => Named::NotAType("a function"),

@@ -353,13 +353,12 @@ impl<'e> Scope<'e> {
             .collect()
     }
 
-    /// Names of variables, steps, actions and globals, for "did you mean".
-    pub(crate) fn all_names(&self) -> impl Iterator<Item = &str> {
+    /// The names that can stand where a variable is read or written: variables, globals and a
+    /// function's result (not steps or actions, which are read only through `.X`, `.T`, `.Q`).
+    pub(crate) fn variable_names(&self) -> impl Iterator<Item = &str> {
         self.vars
             .iter()
             .map(|v| v.name.as_str())
-            .chain(self.steps.iter().map(|s| s.name.as_str()))
-            .chain(self.actions.iter().map(|s| s.name.as_str()))
             .chain(self.env.globals().iter().map(|v| v.name.as_str()))
             .chain(self.pou_name.as_deref().filter(|_| self.return_type.is_some()))
     }

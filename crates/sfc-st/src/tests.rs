@@ -565,6 +565,7 @@ fn hook_declares_implicit_inputs() {
                 kind: sfc_syntax::ast::VarKind::Input,
                 constant: false,
                 retain: None,
+                persistent: false,
                 ty: Type::Bool,
                 location: None,
                 init: None,

@@ -99,8 +99,11 @@ impl Item {
 /// A block kept as source text.
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub struct Verbatim {
-    /// The opening keyword, e.g. `CONFIGURATION`.
+    /// The opening keyword, e.g. `CONFIGURATION`, or `PROGRAM`, `FUNCTION_BLOCK`, `FUNCTION`
+    /// for a POU kept as written (one with an `sfc.verbatim` attribute, which says why).
     pub keyword: String,
+    /// The attribute pragmas before it.
+    pub attributes: Vec<Attribute>,
     pub name: Option<Ident>,
     pub text: String,
     pub span: Span,
@@ -199,12 +202,14 @@ pub enum Retain {
     NonRetain,
 }
 
-/// `VAR [CONSTANT] [RETAIN|NON_RETAIN] … END_VAR`
+/// `VAR [CONSTANT] [RETAIN|NON_RETAIN] [PERSISTENT] … END_VAR`
 #[derive(Debug, Clone, PartialEq)]
 pub struct VarBlock {
     pub kind: VarKind,
     pub constant: bool,
     pub retain: Option<Retain>,
+    /// `PERSISTENT` (CODESYS, TwinCAT): the values survive a cold start too.
+    pub persistent: bool,
     pub decls: Vec<VarDecl>,
     pub span: Span,
 }

@@ -126,8 +126,13 @@ impl<'a> Lexer<'a> {
     fn run(&mut self) {
         while self.pos < self.src.len() {
             let start = self.pos;
-            let b = self.src[self.pos];
+            let b = self.peek(0);
             match b {
+                // A UTF-8 byte order mark at the start of a file is white space.
+                0xEF if start == 0 && self.src.starts_with(b"\xEF\xBB\xBF") => {
+                    self.pos += 3;
+                    self.push(TokenKind::Whitespace, start);
+                }
                 b' ' | b'\t' | b'\r' | b'\n' | 0x0b | 0x0c => {
                     while matches!(self.peek(0), b' ' | b'\t' | b'\r' | b'\n' | 0x0b | 0x0c) {
                         self.pos += 1;
@@ -136,7 +141,7 @@ impl<'a> Lexer<'a> {
                 }
                 b'(' if self.peek(1) == b'*' => self.block_comment(),
                 b'/' if self.peek(1) == b'/' => {
-                    while self.pos < self.src.len() && self.src[self.pos] != b'\n' {
+                    while self.pos < self.src.len() && self.peek(0) != b'\n' {
                         self.pos += 1;
                     }
                     self.push(TokenKind::LineComment, start);
@@ -187,7 +192,7 @@ impl<'a> Lexer<'a> {
         self.pos += 1;
         let mut in_str = false;
         while self.pos < self.src.len() {
-            let c = self.src[self.pos];
+            let c = self.peek(0);
             self.pos += 1;
             if c == b'\'' {
                 in_str = !in_str;
@@ -206,10 +211,10 @@ impl<'a> Lexer<'a> {
         let start = self.pos;
         self.pos += 1;
         while self.pos < self.src.len() {
-            let c = self.src[self.pos];
+            let c = self.peek(0);
             if c == b'$' {
                 self.pos += 1;
-                if self.pos < self.src.len() && self.src[self.pos] != b'\n' {
+                if self.pos < self.src.len() && self.peek(0) != b'\n' {
                     self.pos += 1;
                 }
                 continue;
@@ -336,7 +341,7 @@ impl<'a> Lexer<'a> {
 
     fn punct(&mut self) {
         let start = self.pos;
-        let b = self.src[self.pos];
+        let b = self.peek(0);
         let two = (b, self.peek(1));
         let (kind, len) = match two {
             (b':', b'=') => (TokenKind::Assign, 2),
@@ -371,10 +376,7 @@ impl<'a> Lexer<'a> {
                 }
                 // Glue a run of unknown characters into one token: one error, not hundreds.
                 loop {
-                    if end >= self.src.len() {
-                        break;
-                    }
-                    let c = self.src[end];
+                    let Some(&c) = self.src.get(end) else { break };
                     let starts_token =
                         c.is_ascii_whitespace() || c.is_ascii_alphanumeric() || b"_()[],;:.+-*/=<>&!'\"%{".contains(&c);
                     if starts_token {

@@ -4,6 +4,7 @@
 
 pub mod ast;
 pub mod attr_value;
+pub mod encoding;
 pub mod lexer;
 pub mod literal;
 mod parser;

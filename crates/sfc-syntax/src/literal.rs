@@ -182,13 +182,14 @@ pub fn decode_duration(body: &str, span: Span) -> Result<i64, Diagnostic> {
     let mut total: i128 = 0;
     let mut last_rank: Option<usize> = None;
     let mut had_fraction = false;
+    let at = |i: usize| bytes.get(i).copied().unwrap_or(0);
     while i < bytes.len() {
-        if bytes[i] == b'_' {
+        if at(i) == b'_' {
             i += 1;
             continue;
         }
         let num_start = i;
-        while i < bytes.len() && (bytes[i].is_ascii_digit() || bytes[i] == b'.' || bytes[i] == b'_') {
+        while at(i).is_ascii_digit() || at(i) == b'.' || at(i) == b'_' {
             i += 1;
         }
         let num = &upper[num_start..i];
@@ -196,11 +197,11 @@ pub fn decode_duration(body: &str, span: Span) -> Result<i64, Diagnostic> {
             return Err(bad(format!("invalid duration `T#{body}`: expected a number before a unit")));
         }
         let unit_start = i;
-        while i < bytes.len() && bytes[i].is_ascii_alphabetic() {
+        while at(i).is_ascii_alphabetic() {
             i += 1;
         }
         let unit = &upper[unit_start..i];
-        let Some(rank) = US_PER.iter().position(|(u, _)| *u == unit) else {
+        let Some((rank, &(_, scale))) = US_PER.iter().enumerate().find(|(_, (u, _))| *u == unit) else {
             let shown = &rest[unit_start..i];
             return Err(bad(format!("invalid duration `T#{body}`: unknown unit `{shown}` (use d, h, m, s, ms, us)")));
         };
@@ -221,7 +222,6 @@ pub fn decode_duration(body: &str, span: Span) -> Result<i64, Diagnostic> {
         }
         let int_v: i128 =
             int_s.replace('_', "").parse().map_err(|_| bad(format!("duration `T#{body}` is too large")))?;
-        let scale = US_PER[rank].1;
         if unit == "NS" {
             // Nanoseconds: allowed only when they make whole microseconds.
             let frac_digits: String = frac_s.replace('_', "");
@@ -277,12 +277,13 @@ fn days_in_month(y: i64, m: i64) -> i64 {
 fn parse_date(s: &str, span: Span, whole: &str) -> Result<i64, Diagnostic> {
     let bad = || err("SFC0008", span, format!("invalid date in `{whole}`: expected year-month-day such as 2006-03-20"));
     let parts: Vec<&str> = s.split('-').collect();
-    if parts.len() != 3 || parts.iter().any(|p| p.is_empty() || !p.chars().all(|c| c.is_ascii_digit())) {
+    let [y, m, d] = parts.as_slice() else { return Err(bad()) };
+    if parts.iter().any(|p| p.is_empty() || !p.chars().all(|c| c.is_ascii_digit())) {
         return Err(bad());
     }
-    let y: i64 = parts[0].parse().map_err(|_| bad())?;
-    let m: i64 = parts[1].parse().map_err(|_| bad())?;
-    let d: i64 = parts[2].parse().map_err(|_| bad())?;
+    let y: i64 = y.parse().map_err(|_| bad())?;
+    let m: i64 = m.parse().map_err(|_| bad())?;
+    let d: i64 = d.parse().map_err(|_| bad())?;
     if !(1..=12).contains(&m) || d < 1 || d > days_in_month(y, m) {
         return Err(err("SFC0008", span, format!("`{whole}` is not a calendar date")));
     }
@@ -298,12 +299,10 @@ fn parse_tod(s: &str, span: Span, whole: &str) -> Result<i64, Diagnostic> {
         )
     };
     let parts: Vec<&str> = s.split(':').collect();
-    if parts.len() != 3 {
-        return Err(bad());
-    }
-    let h: i64 = parts[0].parse().map_err(|_| bad())?;
-    let m: i64 = parts[1].parse().map_err(|_| bad())?;
-    let (sec_s, frac_s) = parts[2].split_once('.').unwrap_or((parts[2], ""));
+    let [h, m, sec] = parts.as_slice() else { return Err(bad()) };
+    let h: i64 = h.parse().map_err(|_| bad())?;
+    let m: i64 = m.parse().map_err(|_| bad())?;
+    let (sec_s, frac_s) = sec.split_once('.').unwrap_or((sec, ""));
     let sec: i64 = sec_s.parse().map_err(|_| bad())?;
     if !frac_s.chars().all(|c| c.is_ascii_digit()) || frac_s.len() > 6 {
         return Err(bad());

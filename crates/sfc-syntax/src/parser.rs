@@ -76,6 +76,70 @@ const RESERVED: &[&str] = &[
     "RESOURCE",
 ];
 
+/// Keywords a statement list may meet at the start of a statement (a misspelling of one is
+/// reported as such).
+const STATEMENT_KEYWORDS: &[&str] = &[
+    "END_IF",
+    "END_CASE",
+    "END_FOR",
+    "END_WHILE",
+    "END_REPEAT",
+    "END_STEP",
+    "END_TRANSITION",
+    "END_ACTION",
+    "END_PROGRAM",
+    "END_FUNCTION",
+    "END_FUNCTION_BLOCK",
+    "ELSIF",
+    "ELSE",
+    "UNTIL",
+    "CASE",
+    "WHILE",
+    "REPEAT",
+    "RETURN",
+    "INITIAL_STEP",
+    "TRANSITION",
+    "ACTION",
+];
+
+/// Edit distance between a written word and a keyword (both upper case), counting a swap of
+/// two neighbours as one edit (`END_STPE`); at most 3 is ever needed, so longer is 3.
+fn keyword_distance(a: &str, b: &str) -> usize {
+    let a: Vec<char> = a.chars().collect();
+    let b: Vec<char> = b.chars().collect();
+    if a.len().abs_diff(b.len()) > 2 {
+        return 3;
+    }
+    let w = b.len() + 1;
+    let mut d = vec![0usize; (a.len() + 1) * w];
+    let at = |i: usize, j: usize| i * w + j;
+    for i in 0..=a.len() {
+        if let Some(c) = d.get_mut(at(i, 0)) {
+            *c = i;
+        }
+    }
+    for j in 0..=b.len() {
+        if let Some(c) = d.get_mut(at(0, j)) {
+            *c = j;
+        }
+    }
+    let get = |d: &Vec<usize>, i: usize, j: usize| d.get(at(i, j)).copied().unwrap_or(usize::MAX / 2);
+    for (i, ca) in a.iter().enumerate() {
+        for (j, cb) in b.iter().enumerate() {
+            let (i1, j1) = (i + 1, j + 1);
+            let cost = usize::from(ca != cb);
+            let mut best = (get(&d, i, j1) + 1).min(get(&d, i1, j) + 1).min(get(&d, i, j) + cost);
+            if i > 0 && j > 0 && a.get(i - 1) == Some(cb) && b.get(j - 1) == Some(ca) {
+                best = best.min(get(&d, i - 1, j - 1) + 1);
+            }
+            if let Some(c) = d.get_mut(at(i1, j1)) {
+                *c = best;
+            }
+        }
+    }
+    get(&d, a.len(), b.len()).min(3)
+}
+
 /// Keywords at which statement and element lists stop.
 const STOPPERS: &[&str] = &[
     "END_IF",
@@ -138,7 +202,20 @@ pub fn parse(file: u32, text: &str) -> (SourceUnit, Vec<Diagnostic>) {
     drop(all); // the parser keeps only significant tokens; free the rest before building the tree
     p.lexical_error_ends = diags.iter().map(|d| d.span.end).collect();
     let unit = p.source_unit();
+    if !p.verbatim_spans.is_empty() {
+        let spans = std::mem::take(&mut p.verbatim_spans);
+        diags.retain(|d| !spans.iter().any(|&(s, e)| s <= d.span.start && d.span.end <= e));
+    }
     diags.append(&mut p.diags);
+    if unit.items.is_empty() && diags.is_empty() {
+        // Nothing to check is worth saying: an empty file, or one holding only comments, is
+        // usually the wrong file.
+        let what = if text.trim().is_empty() { "the file is empty" } else { "the file holds only comments" };
+        diags.push(
+            Diagnostic::warning("SFC0106", Span::new(file, 0, 0), format!("nothing to check: {what}"))
+                .with_note("a chart is a PROGRAM or FUNCTION_BLOCK whose body is steps and transitions"),
+        );
+    }
     (unit, diags)
 }
 
@@ -194,6 +271,11 @@ struct Parser<'a> {
     /// Ends of lexical errors: a syntax error right after a malformed token (an unterminated
     /// string swallowed its `;`) is a follow-on error and not reported.
     lexical_error_ends: std::collections::HashSet<u32>,
+    /// Misspelled keywords, by token start: reported once, then read as the keyword they stand
+    /// for, so one typo gives one error and no cascade.
+    keyword_typos: std::collections::HashMap<u32, &'static str>,
+    /// Byte ranges of the POUs kept as written (their lexical errors are dropped).
+    verbatim_spans: Vec<(u32, u32)>,
 }
 
 impl<'a> Parser<'a> {
@@ -257,6 +339,8 @@ impl<'a> Parser<'a> {
             depth: 0,
             depth_reported: false,
             lexical_error_ends: Default::default(),
+            keyword_typos: Default::default(),
+            verbatim_spans: Vec::new(),
         }
     }
 
@@ -264,10 +348,16 @@ impl<'a> Parser<'a> {
     // Token access
 
     fn tok(&self) -> Tok {
-        self.toks[self.pos.min(self.toks.len() - 1)]
+        self.nth(0)
     }
+    /// The token `n` ahead; past the end, the end of file (the lexer always ends with one).
     fn nth(&self, n: usize) -> Tok {
-        self.toks[(self.pos + n).min(self.toks.len() - 1)]
+        self.toks.get(self.pos.saturating_add(n)).or(self.toks.last()).copied().unwrap_or(Tok {
+            kind: TokenKind::Eof,
+            start: self.text.len() as u32,
+            end: self.text.len() as u32,
+            nl_before: false,
+        })
     }
     fn kind(&self) -> TokenKind {
         self.tok().kind
@@ -276,6 +366,9 @@ impl<'a> Parser<'a> {
         self.kind() == k
     }
     fn text_of(&self, t: Tok) -> &'a str {
+        if let Some(kw) = self.keyword_typos.get(&t.start) {
+            return kw;
+        }
         &self.text[t.start as usize..t.end as usize]
     }
     fn cur_text(&self) -> &'a str {
@@ -289,11 +382,7 @@ impl<'a> Parser<'a> {
     }
     /// End of the previous significant token (for spans of finished nodes).
     fn prev_end(&self) -> u32 {
-        if self.pos == 0 {
-            0
-        } else {
-            self.toks[self.pos - 1].end
-        }
+        self.pos.checked_sub(1).and_then(|p| self.toks.get(p)).map_or(0, |t| t.end)
     }
     fn span_from(&self, start: u32) -> Span {
         Span::new(self.file, start, self.prev_end().max(start))
@@ -358,7 +447,7 @@ impl<'a> Parser<'a> {
     }
 
     fn after_lexical_error(&self) -> bool {
-        self.pos > 0 && self.lexical_error_ends.contains(&self.toks[self.pos - 1].end)
+        self.pos > 0 && self.lexical_error_ends.contains(&self.prev_end())
     }
 
     /// `expected X, found Y` at the current token.
@@ -378,9 +467,43 @@ impl<'a> Parser<'a> {
         }
     }
 
+    /// When the current token is an identifier that misspells one of `candidates` (`INITAL_STEP`,
+    /// `END_TRANSITON`), reports it and reads it as that keyword from now on. Callers ask only
+    /// where an identifier cannot stand, so a variable that looks like a keyword is left alone.
+    fn fix_keyword_typo(&mut self, candidates: &[&str]) -> bool {
+        let t = self.tok();
+        if t.kind != TokenKind::Ident || self.is_reserved(t) || self.keyword_typos.contains_key(&t.start) {
+            return false;
+        }
+        let written = self.text_of(t).to_ascii_uppercase();
+        let best = candidates
+            .iter()
+            .filter(|k| k.len() >= 4)
+            .map(|k| (keyword_distance(&written, k), *k))
+            .filter(|(d, k)| *d <= if k.len() <= 6 { 1 } else { 2 })
+            .min_by_key(|(d, _)| *d);
+        let Some(kw) = best.and_then(|(_, k)| RESERVED.iter().find(|r| r.eq_ignore_ascii_case(k))) else {
+            return false;
+        };
+        let span = self.span_of(t);
+        let shown = self.text_of(t).to_string();
+        if !self.after_lexical_error() {
+            self.last_error_at = Some(self.pos);
+            self.diags.push(
+                Diagnostic::error("SFC0101", span, format!("misspelled keyword `{shown}`"))
+                    .with_note(format!("did you mean `{kw}`?")),
+            );
+        }
+        self.keyword_typos.insert(t.start, kw);
+        true
+    }
+
     /// Expects a closing keyword (SFC0102 when it is missing).
     fn expect_end(&mut self, kw: &str, opened: Span) {
         if self.eat_kw(kw) {
+            return;
+        }
+        if self.fix_keyword_typo(&[kw]) && self.eat_kw(kw) {
             return;
         }
         let t = self.tok();
@@ -442,8 +565,8 @@ impl<'a> Parser<'a> {
     /// The unattached attribute pragmas that start before byte `start`.
     fn take_attrs(&mut self, start: u32) -> Vec<Attribute> {
         let mut out = Vec::new();
-        while self.attr_cursor < self.attrs.len() && self.attrs[self.attr_cursor].span.start < start {
-            out.push(self.attrs[self.attr_cursor].clone());
+        while let Some(a) = self.attrs.get(self.attr_cursor).filter(|a| a.span.start < start) {
+            out.push(a.clone());
             self.attr_cursor += 1;
         }
         out
@@ -451,8 +574,7 @@ impl<'a> Parser<'a> {
 
     /// Attribute pragmas left inside an element that just ended are misplaced.
     fn drop_attrs_before(&mut self, end: u32) {
-        while self.attr_cursor < self.attrs.len() && self.attrs[self.attr_cursor].span.start < end {
-            let a = &self.attrs[self.attr_cursor];
+        while let Some(a) = self.attrs.get(self.attr_cursor).filter(|a| a.span.start < end) {
             if a.name.to_ascii_lowercase().starts_with("sfc.") {
                 self.diags.push(Diagnostic::warning(
                     "SFC0603",
@@ -473,7 +595,11 @@ impl<'a> Parser<'a> {
     fn source_unit(&mut self) -> SourceUnit {
         let mut items = Vec::new();
         while !self.at(TokenKind::Eof) {
-            if self.at_kw("PROGRAM") || self.at_kw("FUNCTION_BLOCK") || self.at_kw("FUNCTION") {
+            if (self.at_kw("PROGRAM") || self.at_kw("FUNCTION_BLOCK") || self.at_kw("FUNCTION"))
+                && self.verbatim_pou_ahead()
+            {
+                items.push(Item::Verbatim(self.verbatim()));
+            } else if self.at_kw("PROGRAM") || self.at_kw("FUNCTION_BLOCK") || self.at_kw("FUNCTION") {
                 items.push(Item::Pou(self.pou()));
             } else if self.at_kw("TYPE") {
                 items.push(Item::Types(self.type_block()));
@@ -509,10 +635,24 @@ impl<'a> Parser<'a> {
         }
     }
 
+    /// Whether the POU that starts here carries an `sfc.verbatim` attribute: it is kept as
+    /// written (an import found code in it that is not IEC 61131-3, say CODESYS pointers).
+    fn verbatim_pou_ahead(&self) -> bool {
+        let start = self.tok().start;
+        self.attrs
+            .get(self.attr_cursor..)
+            .unwrap_or_default()
+            .iter()
+            .take_while(|a| a.span.start < start)
+            .any(|a| a.name.eq_ignore_ascii_case("sfc.verbatim"))
+    }
+
     fn verbatim(&mut self) -> Verbatim {
         let kw_tok = self.bump();
         let keyword = self.text_of(kw_tok).to_ascii_uppercase();
         let start = kw_tok.start;
+        let attributes = self.take_attrs(start);
+        let pou = matches!(keyword.as_str(), "PROGRAM" | "FUNCTION_BLOCK" | "FUNCTION");
         let name = if self.at(TokenKind::Ident) && !self.is_reserved(self.tok()) {
             let t = self.bump();
             Some(self.ident_of(t))
@@ -539,12 +679,37 @@ impl<'a> Parser<'a> {
             self.bump();
         }
         let span = self.span_from(start);
-        self.diags.push(Diagnostic::note_diag(
+        // Inside a POU kept as written, the text may be another tool's dialect: its lexical
+        // errors are not errors of the file.
+        let end = self.prev_end();
+        self.attr_cursor = self.attrs.partition_point(|a| a.span.start < end).max(self.attr_cursor);
+        if pou {
+            self.verbatim_spans.push((start, end));
+        }
+        let why = attributes
+            .iter()
+            .rev()
+            .find(|a| a.name.eq_ignore_ascii_case("sfc.verbatim"))
+            .and_then(|a| a.value.as_deref())
+            .map(crate::attr_value::unescape)
+            .filter(|w| !w.trim().is_empty() && pou);
+        // A stand-in for a type declared elsewhere (an import's opaque block) is reported there.
+        let stub = why.as_deref() == Some("opaque");
+        let mut note = Diagnostic::note_diag(
             "SFC0104",
             self.span_of(kw_tok),
-            format!("`{keyword}` is kept as written and not analysed"),
-        ));
-        Verbatim { keyword, name, text: self.text[span.range()].to_string(), span }
+            match &name {
+                Some(n) if pou => format!("`{keyword} {}` is kept as written, not analysed", n.text),
+                _ => format!("`{keyword}` is kept as written and not analysed"),
+            },
+        );
+        if let Some(w) = why.filter(|_| !stub) {
+            note.notes.push(w);
+        }
+        if !stub {
+            self.diags.push(note);
+        }
+        Verbatim { keyword, attributes, name, text: self.text[span.range()].to_string(), span }
     }
 
     fn pou(&mut self) -> Pou {
@@ -566,8 +731,13 @@ impl<'a> Parser<'a> {
             }
         }
         let mut var_blocks = Vec::new();
+        let var_keywords: Vec<&str> = VAR_KEYWORDS.iter().map(|v| v.0).collect();
         loop {
-            if self.at_any_kw(&VAR_KEYWORDS.iter().map(|v| v.0).collect::<Vec<_>>()) {
+            // `VAR_INPT a : BOOL;`: an identifier followed by an identifier or a newline.
+            if !self.at_any_kw(&var_keywords) && (self.nth(1).kind == TokenKind::Ident || self.nth(1).nl_before) {
+                self.fix_keyword_typo(&var_keywords);
+            }
+            if self.at_any_kw(&var_keywords) {
                 var_blocks.push(self.var_block());
             } else {
                 break;
@@ -583,6 +753,10 @@ impl<'a> Parser<'a> {
     }
 
     fn body(&mut self, end_kw: &str) -> Body {
+        // An identifier followed by an identifier starts no statement: a misspelled element?
+        if self.nth(1).kind == TokenKind::Ident {
+            self.fix_keyword_typo(&["STEP", "INITIAL_STEP", "TRANSITION", "ACTION"]);
+        }
         if self.at_any_kw(&["STEP", "INITIAL_STEP", "TRANSITION", "ACTION"]) {
             return Body::Sfc(self.sfc_elements(end_kw));
         }
@@ -629,6 +803,7 @@ impl<'a> Parser<'a> {
         let kind = VAR_KEYWORDS.iter().find(|v| v.0 == kwtext).map(|v| v.1).unwrap_or(VarKind::Var);
         let mut constant = false;
         let mut retain = None;
+        let mut persistent = false;
         loop {
             if self.eat_kw("CONSTANT") {
                 constant = true;
@@ -636,6 +811,13 @@ impl<'a> Parser<'a> {
                 retain = Some(Retain::Retain);
             } else if self.eat_kw("NON_RETAIN") {
                 retain = Some(Retain::NonRetain);
+            } else if self.at_kw("PERSISTENT")
+                && !matches!(self.nth(1).kind, TokenKind::Colon | TokenKind::Comma)
+                && !self.is_kw_tok(self.nth(1), "AT")
+            {
+                // Not an IEC keyword (CODESYS, TwinCAT): a variable of that name stays one.
+                self.bump();
+                persistent = true;
             } else {
                 break;
             }
@@ -644,6 +826,14 @@ impl<'a> Parser<'a> {
         while !self.at(TokenKind::Eof) && !self.at_kw("END_VAR") {
             if self.at_any_kw(STOPPERS) {
                 break;
+            }
+            // A declaration is `name ,` / `name :` / `name AT`: anything else after a name may be
+            // a misspelled `END_VAR`.
+            if !matches!(self.nth(1).kind, TokenKind::Comma | TokenKind::Colon)
+                && !self.is_kw_tok(self.nth(1), "AT")
+                && self.fix_keyword_typo(&["END_VAR"])
+            {
+                continue;
             }
             let before = self.pos;
             if let Some(d) = self.var_decl(kind == VarKind::Access) {
@@ -654,7 +844,7 @@ impl<'a> Parser<'a> {
             }
         }
         self.expect_end("END_VAR", self.span_of(kw));
-        VarBlock { kind, constant, retain, decls, span: self.span_from(start) }
+        VarBlock { kind, constant, retain, persistent, decls, span: self.span_from(start) }
     }
 
     fn var_decl(&mut self, access: bool) -> Option<VarDecl> {
@@ -979,6 +1169,11 @@ impl<'a> Parser<'a> {
                 "END_FUNCTION_BLOCK",
             ]) {
                 break;
+            } else if (self.nth(1).kind == TokenKind::Ident
+                && self.fix_keyword_typo(&["STEP", "INITIAL_STEP", "TRANSITION", "ACTION"]))
+                || self.fix_keyword_typo(&["END_PROGRAM", "END_FUNCTION", "END_FUNCTION_BLOCK"])
+            {
+                continue;
             } else {
                 self.error_here("expected STEP, INITIAL_STEP, TRANSITION or ACTION");
                 self.bump();
@@ -1004,6 +1199,10 @@ impl<'a> Parser<'a> {
         while !self.at(TokenKind::Eof) && !self.at_kw("END_STEP") {
             if self.at_any_kw(STOPPERS) {
                 break;
+            }
+            // An association is `Name(…)`: anything else here may be a misspelled `END_STEP`.
+            if self.nth(1).kind != TokenKind::LParen && self.fix_keyword_typo(&["END_STEP"]) {
+                continue;
             }
             let before = self.pos;
             if let Some(a) = self.association() {
@@ -1312,6 +1511,13 @@ impl<'a> Parser<'a> {
         loop {
             if self.at(TokenKind::Eof) || self.at_any_kw(STOPPERS) || stop(self) {
                 break;
+            }
+            // A statement starts with a name followed by `:=`, `(`, `.` or `[`: a name
+            // followed by anything else may be a misspelled keyword (`END_ACTON`, `ELSEIF`).
+            if !matches!(self.nth(1).kind, TokenKind::Assign | TokenKind::LParen | TokenKind::Dot | TokenKind::LBracket)
+                && self.fix_keyword_typo(STATEMENT_KEYWORDS)
+            {
+                continue;
             }
             let before = self.pos;
             if let Some(s) = self.stmt() {

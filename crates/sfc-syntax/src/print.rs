@@ -112,8 +112,7 @@ impl<'a> Printer<'a> {
     /// Starts a line for a node beginning at `anchor`, after the trivia that precedes it.
     fn open(&mut self, anchor: u32) {
         // `<=`: a node whose span were to include its leading pragma still gets it before it.
-        while self.next < self.trivia.len() && self.trivia[self.next].span.start <= anchor {
-            let t = self.trivia[self.next];
+        while let Some(t) = self.trivia.get(self.next).copied().filter(|t| t.span.start <= anchor) {
             if !self.can_trail(t) {
                 self.keep_blank_before(t.span.start);
             }
@@ -127,7 +126,7 @@ impl<'a> Printer<'a> {
     /// start of a block, where the line before is less indented.
     fn keep_blank_before(&mut self, pos: u32) {
         let mut seen = false;
-        while self.next_blank < self.blank_lines.len() && self.blank_lines[self.next_blank] < pos {
+        while self.blank_lines.get(self.next_blank).is_some_and(|b| *b < pos) {
             self.next_blank += 1;
             seen = true;
         }
@@ -173,7 +172,7 @@ impl<'a> Printer<'a> {
 
     /// Prints the trivia that starts before `pos` (the end of the enclosing block).
     fn flush_before(&mut self, pos: u32) {
-        while self.next < self.trivia.len() && self.trivia[self.next].span.start < pos {
+        while self.trivia_before(pos) {
             self.emit_next();
         }
     }
@@ -181,8 +180,7 @@ impl<'a> Printer<'a> {
     /// Prints the end-of-line comments that start before `pos`, for a keyword line without an
     /// anchor (`ELSE`): they belong to the line above it, own-line comments to what follows.
     fn flush_trailing(&mut self, pos: u32) {
-        while self.next < self.trivia.len() {
-            let t = self.trivia[self.next];
+        while let Some(t) = self.trivia.get(self.next).copied() {
             if t.span.start >= pos || !self.can_trail(t) {
                 break;
             }
@@ -197,10 +195,10 @@ impl<'a> Printer<'a> {
     }
 
     fn emit_next(&mut self) {
-        let t = self.trivia[self.next];
+        let Some(t) = self.trivia.get(self.next).copied() else { return };
         self.next += 1;
-        if self.can_trail(t) {
-            let last = self.lines.last_mut().expect("can_trail checks for a previous line");
+        let trail = self.can_trail(t);
+        if let (true, Some(last)) = (trail, self.lines.last_mut()) {
             let multi_line = t.text.contains('\n');
             // A multi-line comment is not aligned with its neighbours: its continuation lines
             // move by exactly as much as its first line, so they stay under it.
@@ -245,7 +243,7 @@ impl<'a> Printer<'a> {
         let text = std::mem::take(&mut self.cur) + &v.text;
         self.push_line(text, false);
         // Comments inside the block are part of its text already.
-        while self.next < self.trivia.len() && self.trivia[self.next].span.start < v.span.end {
+        while self.trivia_before(v.span.end) {
             self.next += 1;
         }
     }
@@ -310,6 +308,9 @@ impl<'a> Printer<'a> {
             Some(Retain::Retain) => self.push(" RETAIN"),
             Some(Retain::NonRetain) => self.push(" NON_RETAIN"),
             None => {}
+        }
+        if block.persistent {
+            self.push(" PERSISTENT");
         }
         self.end();
         self.indent += 1;
@@ -651,25 +652,24 @@ fn shift_continuation(text: &str, shift: i64) -> String {
 
 fn align_comments(lines: &mut [Line]) {
     let indent = |line: &Line| line.text.len() - line.text.trim_start().len();
+    let width = |line: &Line| line.comment_at.map_or(0, |at| line.text[..at].chars().count());
     let mut i = 0;
-    while i < lines.len() {
-        if lines[i].comment_at.is_none() {
+    while let Some(first) = lines.get(i) {
+        if first.comment_at.is_none() {
             i += 1;
             continue;
         }
-        let mut j = i + 1;
-        while j < lines.len() && lines[j].comment_at.is_some() && indent(&lines[j]) == indent(&lines[i]) {
-            j += 1;
-        }
-        let width = |line: &Line| line.comment_at.map_or(0, |at| line.text[..at].chars().count());
-        let widest = lines[i..j].iter().map(width).max().unwrap_or(0);
-        for line in &mut lines[i..j] {
+        // A run of lines with trailing comments at one indentation (at least `first`).
+        let level = indent(first);
+        let run = lines.iter().skip(i).take_while(|l| l.comment_at.is_some() && indent(l) == level).count().max(1);
+        let widest = lines.iter().skip(i).take(run).map(width).max().unwrap_or(0);
+        for line in lines.iter_mut().skip(i).take(run) {
             let pad = widest - width(line);
             if let Some(at) = line.comment_at {
                 line.text.insert_str(at, &" ".repeat(pad));
             }
         }
-        i = j;
+        i += run;
     }
 }
 

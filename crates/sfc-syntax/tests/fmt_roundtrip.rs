@@ -3,6 +3,9 @@
 //! generated programs and charts (with comments at random token boundaries) and on every textual
 //! file the project and the shared corpus hold.
 
+// A panic in a test or a developer tool is a failure report, not a crash on user input.
+#![allow(clippy::unwrap_used, clippy::expect_used, clippy::indexing_slicing)]
+
 use proptest::prelude::*;
 use sfc_syntax::{parse, print::print};
 use std::path::{Path, PathBuf};

@@ -2,6 +2,9 @@
 //! (Test threads have a 2 MiB stack, smaller than a program's main thread, so these also show
 //! the nesting cap leaves a wide margin.)
 
+// A panic in a test or a developer tool is a failure report, not a crash on user input.
+#![allow(clippy::unwrap_used, clippy::expect_used, clippy::indexing_slicing)]
+
 use sfc_syntax::parse;
 
 fn codes(text: &str) -> Vec<&'static str> {

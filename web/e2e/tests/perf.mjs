@@ -1,14 +1,18 @@
 // A 500-step chart: the time from navigation to the chart drawn (target: under 1 s), and the
-// frame times while a step is dragged by mouse for about 60 frames. The figures are printed;
-// only a generous sanity bound is asserted (the machine running the tests may be busy).
+// frame times while a step is dragged by mouse for about 60 frames (target: p95 under 50 ms).
+// The figures are printed, with the machine's load; only a generous sanity bound is asserted
+// (the machine running the tests may be busy). It runs the release binary when there is one
+// (SFC_RELEASE_BIN, default target/release/sfc), which serves the production build of the app
+// (no test hook), so it reads only the page's DOM.
 //
 // The chart is IEC text without any layout (no sfc.* positions), as another tool would write
 // it, so the server lays it out on opening: a sequence of 125 sections, each a step with a
 // two-way selection whose branches (one step each) meet again in a step: 500 steps, 625
 // transitions, and a jump from the last step back to the initial one.
 import fs from 'node:fs';
+import os from 'node:os';
 import path from 'node:path';
-import { assert, box, openEditor, shotPath } from '../helpers.mjs';
+import { assert, shotPath } from '../helpers.mjs';
 
 const SECTIONS = 125;
 
@@ -41,42 +45,57 @@ export const tests = [
       const { page } = t;
       const file = path.join(t.scratch, 'big.st');
       fs.writeFileSync(file, bigChartText());
-      const server = await t.edit([file]);
+      const release = process.env.SFC_RELEASE_BIN ?? path.join(t.root, 'target', 'release', 'sfc');
+      const useRelease = fs.existsSync(release);
+      const server = await t.edit([file], t.scratch, useRelease ? { bin: release, production: true } : {});
       await page.addInitScript(() => localStorage.setItem('sfc.language', 'en'));
+      // 11 blocks and 12 wires per section, and the jump back.
+      const blocks = 11 * SECTIONS + 1;
+      const wires = 12 * SECTIONS;
 
       // Navigation → every block and wire drawn.
       const started = Date.now();
       await page.goto(server.url);
       const drawnAt = await page.waitForFunction(
-        () => {
-          const d = window.__sfc?.doc();
-          if (!d) return false;
+        ([b, w]) => {
           const shapes = document.querySelectorAll('.canvas-pane.active .djs-shape').length;
-          const wires = document.querySelectorAll('.canvas-pane.active .djs-connection').length;
-          return shapes === d.elements.length && wires === d.connections.length ? performance.now() : false;
+          const lines = document.querySelectorAll('.canvas-pane.active .djs-connection').length;
+          return shapes === b && lines === w ? performance.now() : false;
         },
-        null,
+        [blocks, wires],
         { polling: 'raf', timeout: 30_000 },
       );
       const openMs = Date.now() - started;
       const inPageMs = await drawnAt.jsonValue();
-      const d = await page.evaluate(() => window.__sfc.doc());
-      const steps = d.elements.filter((e) => e.kind === 'step');
-      assert(steps.length === 4 * SECTIONS, `${steps.length} steps`);
-      t.log(`open: ${openMs} ms from navigation to ${steps.length} steps, ${d.elements.length} blocks and ${d.connections.length} wires drawn (${inPageMs.toFixed(0)} ms after navigation start in the page); target < 1000 ms`);
-      assert(openMs < 10_000, `opening took ${openMs} ms`);
+      // The server's share: the API requests of the page (opening the chart, its diagnostics).
+      const api = await page.evaluate(() =>
+        performance
+          .getEntriesByType('resource')
+          .filter((e) => e.name.includes('/api/'))
+          .map((e) => `${new URL(e.name).pathname} ${e.duration.toFixed(0)} ms`)
+          .join(', '),
+      );
+      t.log(`requests to the server while opening: ${api}`);
+      const load = os.loadavg().map((x) => x.toFixed(2)).join(' ');
+      t.log(
+        `open (${useRelease ? 'release' : 'debug'} binary): ${openMs} ms from navigation to ${4 * SECTIONS} steps, ${blocks} blocks and ${wires} wires drawn (${inPageMs.toFixed(0)} ms after navigation start in the page); target < 1000 ms; load average ${load} on ${os.cpus().length} cores`,
+      );
+      assert(openMs < 20_000, `opening took ${openMs} ms`);
       await page.screenshot({ path: shotPath(t, 'big-500-steps.png') });
 
       // Drag a visible step for 60 frames, one mouse move per animation frame.
       const pane = await page.locator('.canvas-pane.active').boundingBox();
-      let target = null;
-      for (const s of steps.slice(1)) {
-        const b = await box(page, s.id);
-        if (b.x > pane.x + 250 && b.y > pane.y + 40 && b.x + b.width < pane.x + pane.width - 200 && b.y + b.height < pane.y + pane.height - 200) {
-          target = { id: s.id, b };
-          break;
+      const target = await page.evaluate((p) => {
+        for (const g of document.querySelectorAll('.canvas-pane.active .djs-shape[data-element-id^="step:"]')) {
+          const id = g.getAttribute('data-element-id');
+          if (id === 'step:P0') continue;
+          const r = g.getBoundingClientRect();
+          if (r.x > p.x + 250 && r.y > p.y + 40 && r.right < p.x + p.width - 200 && r.bottom < p.y + p.height - 200) {
+            return { id, b: { x: r.x, y: r.y, width: r.width, height: r.height }, transform: g.getAttribute('transform') };
+          }
         }
-      }
+        return null;
+      }, pane);
       assert(target, 'no step fully in view to drag');
       const from = { x: target.b.x + target.b.width / 2, y: target.b.y + target.b.height / 2 };
       await page.evaluate(() => {
@@ -109,9 +128,8 @@ export const tests = [
         window.__framesOn = false;
         return window.__frames;
       });
-      const moved = await page.evaluate((id) => window.__sfc.doc().elements.find((e) => e.id === id), target.id);
-      const before = steps.find((s) => s.id === target.id);
-      assert(moved.x !== before.x || moved.y !== before.y, 'the step did not move');
+      const moved = await page.evaluate((id) => document.querySelector(`.canvas-pane.active [data-element-id="${id}"]`).getAttribute('transform'), target.id);
+      assert(moved !== target.transform, 'the step did not move');
       // Frame times (ms) between frames `a` and `b` of the recording.
       const span = (a, b) => frames.slice(a + 1, b + 1).map((f, i) => f - frames[a + i]);
       const deltas = span(moving, up).sort((a, b) => a - b);

@@ -32,9 +32,18 @@ async function roundTrip(t, file) {
     await page.locator('.tabstrip .tab').nth(k).click();
     await page.waitForFunction((i) => window.__sfc.tabs()[i].active, k);
     const before = await waitChart(page);
-    // A step that is not the first one, moved by mouse 60 right and 40 down.
+    // A step in view (not the first one when there are others), moved by mouse 60 right and
+    // 40 down.
     const steps = before.elements.filter((e) => e.kind === 'step');
-    const step = steps[Math.min(1, steps.length - 1)];
+    const pane = await page.locator('.canvas-pane.active').boundingBox();
+    let step = steps[Math.min(1, steps.length - 1)];
+    for (const s of [...steps.slice(1), ...steps.slice(0, 1)]) {
+      const q = await box(page, s.id);
+      if (q.x > pane.x + 240 && q.y > pane.y + 10 && q.x + q.width + 70 < pane.x + pane.width && q.y + q.height + 50 < pane.y + pane.height) {
+        step = s;
+        break;
+      }
+    }
     const b = await box(page, step.id);
     const scale = await page.evaluate(() => window.__sfc.zoom());
     const from = { x: b.x + b.width / 2, y: b.y + b.height / 2 };

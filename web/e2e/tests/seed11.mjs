@@ -153,8 +153,9 @@ export const tests = [
       await page.locator('.modal .button.primary').click();
       let d = await waitChart(page);
       assert(d.pou === 'test_bloku_atmt' && d.target === 'atmt', `new chart: ${d.pou} ${d.target}`);
-      // ATMT has no simultaneous branches: the palette does not offer them.
-      assert((await page.locator('.djs-palette [data-action="create.simultaneous-divergence"]').count()) === 0, 'AND divergence offered for ATMT');
+      // ATMT has no simultaneous branches: the palette greys them (and refuses them at the drop).
+      const and = page.locator('.canvas-pane.active .djs-palette [data-action="create.simultaneous-divergence"]');
+      assert((await and.count()) === 0 || (await and.getAttribute('class')).includes('refused'), 'AND divergence offered for ATMT');
       await page.screenshot({ path: shotPath(t, 'new-atmt-chart.png') });
 
       // Room for the whole chart: the bottom panel closed, the view zoomed out.

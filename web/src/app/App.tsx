@@ -11,6 +11,7 @@ import { chartBuild, chartKind, kindFields, withBuild, type ChartKind } from './
 import { witnessSituations } from './chart';
 import { AboutDialog, CloseDialog, ConflictDialog, NewDialog, OpenDialog, SaveAsDialog, ShortcutsDialog, type NewChartRequest } from './dialogs';
 import { ErrorList, type WitnessView } from './ErrorList';
+import { rememberFile, Welcome } from './Welcome';
 import { Icon } from './icons';
 import { MenuBar, type MenuDef } from './Menu';
 import { PrintDialog } from './PrintDialog';
@@ -115,8 +116,9 @@ export function App({ api, createCanvas }: AppProps) {
     return () => window.removeEventListener('beforeunload', guard);
   }, [store]);
 
-  // Read-only views for the browser tests (window.__sfc).
-  useEffect(() => installProbe(store, canvases.current), [store]);
+  // Read-only views for the browser tests (window.__sfc), in test builds only: `vite build
+  // --mode test` (web/dist-test) and vitest. The production bundle leaves the probe out.
+  useEffect(() => (import.meta.env.MODE === 'test' ? installProbe(store, canvases.current) : undefined), [store]);
 
   // Start: the session, then the files named on the command line (or the host chart).
   useEffect(() => {
@@ -182,7 +184,7 @@ export function App({ api, createCanvas }: AppProps) {
   }
 
   function attachCanvas(id: string, container: HTMLElement): () => void {
-    const c = createCanvas(container, { t: (key) => t(key) });
+    const c = createCanvas(container, { t: (key, opts) => t(key, opts) });
     canvases.current.set(id, c);
     containers.current.set(id, container);
     const doc = pending.current.get(id);
@@ -219,6 +221,7 @@ export function App({ api, createCanvas }: AppProps) {
     }
     try {
       const r = await api.open(path);
+      rememberFile(r.path);
       if (r.charts.length === 0) toasts.show('info', t('open.noCharts', { file: baseName(path) }));
       for (const chart of r.charts) {
         addTab({ path: r.path, format: r.format, hash: r.hash, pou: chart.pou, filePou: chart.pou, ...kindOfTab(chart), diagnostics: r.diagnostics }, chart);
@@ -366,7 +369,14 @@ export function App({ api, createCanvas }: AppProps) {
   async function autoLayout(): Promise<void> {
     if (!canvas) return;
     try {
-      canvas.applyLayout(await api.layout(canvas.getDoc()));
+      const before = canvas.getDoc();
+      const laidOut = await api.layout(before);
+      // A chart already laid out stays unmodified: no command, no undo step, no `*`.
+      if (sameGeometry(before, laidOut)) {
+        toasts.show('info', t('layout.unchanged'));
+        return;
+      }
+      canvas.applyLayout(laidOut);
     } catch {
       // The API client has shown the server's message; the chart is unchanged.
     }
@@ -608,28 +618,19 @@ export function App({ api, createCanvas }: AppProps) {
               </div>
             )}
             {store.tabs.length === 0 && (
-              <div class="welcome">
-                {startError ? (
-                  <div class="field-error">{t('start.failed', { message: startError })}</div>
-                ) : !session ? (
-                  <div class="muted">{t('common.loading')}</div>
-                ) : (
-                  <>
-                    <h1>{t('app.name')}</h1>
-                    <p class="muted">{t('start.hint')}</p>
-                    {mdi && (
-                      <div class="welcome-buttons">
-                        <button class="button primary" onClick={() => setDialog({ kind: 'new', target: 'blank' })}>
-                          <Icon name="new" /> {t('menu.new')}
-                        </button>
-                        <button class="button" onClick={() => setDialog({ kind: 'open' })}>
-                          <Icon name="open" /> {t('menu.open')}
-                        </button>
-                      </div>
-                    )}
-                  </>
-                )}
-              </div>
+              startError || !session ? (
+                <div class="welcome">
+                  {startError ? <div class="field-error">{t('start.failed', { message: startError })}</div> : <div class="muted">{t('common.loading')}</div>}
+                </div>
+              ) : (
+                <Welcome
+                  mdi={mdi}
+                  files={api.files}
+                  onNew={() => setDialog({ kind: 'new', target: 'blank' })}
+                  onOpenDialog={() => setDialog({ kind: 'open' })}
+                  onOpen={(p) => void openFile(p)}
+                />
+              )
             )}
           </div>
           {panels.bottom && (
@@ -657,6 +658,12 @@ export function App({ api, createCanvas }: AppProps) {
                     onToggleHighlight={() => setHighlightOn(!highlightOn)}
                     witness={witness}
                     onWitness={setWitness}
+                    blockName={(id) => {
+                      const e = canvas?.getDoc().elements.find((x) => x.id === id);
+                      if (!e) return '';
+                      if (e.name) return e.name;
+                      return e.kind === 'jump' && e.target ? `${t('kind.jump')} → ${e.target}` : t(`kind.${e.kind}`);
+                    }}
                   />
                 ) : (
                   <ResultPanel pou={tab?.pou ?? ''} result={tab?.result ?? null} />
@@ -832,4 +839,24 @@ function StatusBar(props: {
       </span>
     </div>
   );
+}
+
+/** Whether two documents place every block and route every wire alike (same ids). */
+export function sameGeometry(a: EditorDoc, b: EditorDoc): boolean {
+  if (a.elements.length !== b.elements.length || a.connections.length !== b.connections.length) return false;
+  const byId = new Map(b.elements.map((e) => [e.id, e]));
+  for (const e of a.elements) {
+    const o = byId.get(e.id);
+    if (!o || o.x !== e.x || o.y !== e.y || o.w !== e.w || o.h !== e.h) return false;
+  }
+  const wires = new Map(b.connections.map((c) => [c.id, c]));
+  const pts = (w?: { x: number; y: number }[]) => JSON.stringify((w ?? []).map((p) => [p.x, p.y]));
+  for (const c of a.connections) {
+    const o = wires.get(c.id);
+    if (!o) return false;
+    // An empty polyline is a straight wire, as is a two-point one.
+    const norm = (w?: { x: number; y: number }[]) => (w && w.length > 2 ? pts(w) : 'straight');
+    if (norm(c.waypoints) !== norm(o.waypoints)) return false;
+  }
+  return true;
 }

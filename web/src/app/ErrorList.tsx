@@ -19,6 +19,8 @@ export function ErrorList(props: {
   onToggleHighlight: () => void;
   witness: WitnessView | null;
   onWitness: (w: WitnessView | null) => void;
+  /** The name shown for a block without an element name (a jump, a bar, an action block). */
+  blockName?: (id: string) => string;
 }) {
   const [shown, setShown] = useState<Record<Severity, boolean>>({ error: true, warning: true, note: true });
   const count = (s: Severity) => props.diagnostics.filter((d) => d.severity === s).length;
@@ -80,7 +82,7 @@ export function ErrorList(props: {
                     <Icon name={d.severity} title={t(`severity.${d.severity}`)} />
                   </td>
                   <td class="col-code">{d.code}</td>
-                  <td class="col-element">{d.element ?? ''}</td>
+                  <td class="col-element">{d.element ?? (d.elementIds[0] && props.blockName ? props.blockName(d.elementIds[0]) : '')}</td>
                   <td class="col-message" title={en ? d.notes.join('\n') || undefined : d.message}>
                     {diagMessage(d)}
                   </td>

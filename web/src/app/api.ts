@@ -1,6 +1,9 @@
 // Client of the editor's HTTP API (contract: docs/editor.md "HTTP API", types in src/api.ts).
-// Every call sends the token from the page URL; a failed call throws an ApiError and shows the
-// server's message as a toast, and never touches the document being edited.
+// The page authenticates with the HttpOnly cookie the server set when the printed URL was opened
+// (the token itself never reaches the page's scripts) plus the header `X-Sfc-Page`, which other
+// origins cannot send; scripts and tests may pass a token, sent as `X-Sfc-Token`. A failed call
+// throws an ApiError and shows the server's message as a toast, and never touches the document
+// being edited.
 import type { BuildResult, BuildTarget, Diag, FileFormat, OpenResult, SaveResult, Session } from '../api';
 import type { ChartTarget, EditorDoc } from '../doc';
 import { toasts } from './toast';
@@ -18,13 +21,9 @@ export class ApiError extends Error {
   }
 }
 
-/** The token of `?token=…` in the page's query string. */
-export function tokenFromSearch(search: string): string | null {
-  return new URLSearchParams(search).get('token');
-}
-
 export interface ApiOptions {
-  token: string | null;
+  /** A token to send as `X-Sfc-Token` (the page itself has none: its cookie carries it). */
+  token?: string | null;
   /** Defaults to the global fetch. */
   fetch?: typeof fetch;
   /** Shows an error to the user; defaults to a toast. */
@@ -52,12 +51,17 @@ export function createApi(opts: ApiOptions) {
 
   /** One call; statuses in `quiet` throw without a toast (the caller handles them). */
   async function call<T>(method: 'GET' | 'POST', path: string, body?: unknown, quiet: number[] = []): Promise<T> {
-    const headers: Record<string, string> = { Accept: 'application/json' };
+    const headers: Record<string, string> = { Accept: 'application/json', 'X-Sfc-Page': '1' };
     if (opts.token) headers['X-Sfc-Token'] = opts.token;
     if (body !== undefined) headers['Content-Type'] = 'application/json';
     let res: Response;
     try {
-      res = await doFetch(base + path, { method, headers, body: body === undefined ? undefined : JSON.stringify(body) });
+      res = await doFetch(base + path, {
+        method,
+        headers,
+        credentials: 'same-origin',
+        body: body === undefined ? undefined : JSON.stringify(body),
+      });
     } catch (e) {
       const err = new ApiError(`${method} ${path}: the server cannot be reached (${(e as Error).message})`, 0);
       notify(err.message);

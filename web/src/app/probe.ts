@@ -26,6 +26,8 @@ export interface SfcProbe {
   cursor(): string;
   canUndo(): boolean;
   canRedo(): boolean;
+  /** The active chart as Export SVG writes it. */
+  exportSvg(): string;
 }
 
 /** Installs `window.__sfc` over the app's tabs and canvases; returns the uninstaller. */
@@ -60,6 +62,7 @@ export function installProbe(store: TabStore, canvases: Map<string, CanvasHandle
     cursor: cursorOf,
     canUndo: () => active().canUndo(),
     canRedo: () => active().canRedo(),
+    exportSvg: () => active().exportSvg(),
   };
   const w = window as unknown as { __sfc?: SfcProbe };
   w.__sfc = probe;

@@ -115,35 +115,6 @@ export function outputPin(e: Pick<Element, 'kind' | 'pins'>, box: Box, i: number
   return { x: pinX(box, pinCounts(e).outputs, i), y: box.y + box.height };
 }
 
-/** A fresh orthogonal route from an output pin to an input pin: straight down when the target
- *  is below, otherwise around the right side of both blocks. */
-export function route(start: Point, end: Point, sourceBox: Box, targetBox: Box): Point[] {
-  if (end.y >= start.y + 2 * STUB || (end.x === start.x && end.y > start.y)) {
-    if (start.x === end.x) return [pt(start), pt(end)];
-    const midY = snapToGrid((start.y + end.y) / 2, start.y + STUB, end.y - STUB);
-    return withoutRedundantPoints([pt(start), { x: start.x, y: midY }, { x: end.x, y: midY }, pt(end)]);
-  }
-  // Backwards (a loop) or side by side: leave down, pass right of both blocks, enter from above.
-  const right = Math.max(sourceBox.x + sourceBox.width, targetBox.x + targetBox.width) + 2 * GRID;
-  const side = Math.ceil(right / GRID) * GRID;
-  const below = start.y + STUB;
-  const above = end.y - STUB;
-  return withoutRedundantPoints([
-    pt(start),
-    { x: start.x, y: below },
-    { x: side, y: below },
-    { x: side, y: above },
-    { x: end.x, y: above },
-    pt(end),
-  ]);
-}
-
-function snapToGrid(v: number, lo: number, hi: number): number {
-  const s = Math.round(v / GRID) * GRID;
-  if (s >= lo && s <= hi) return s;
-  return v;
-}
-
 function pt(p: Point): Point {
   return { x: p.x, y: p.y };
 }
@@ -201,36 +172,4 @@ function push(out: Point[], p: Point) {
 
 function dedupe(points: Point[]): Point[] {
   return points.filter((p, i) => i === 0 || p.x !== points[i - 1].x || p.y !== points[i - 1].y);
-}
-
-/**
- * Keeps a wire orthogonal after one end moved to `moved` (the end at index 0 when `atStart`):
- * the neighbouring bend follows along the axis of its segment; a full re-route when that would
- * make the wire enter or leave a pin the wrong way.
- */
-export function repairWire(
-  points: Point[],
-  start: Point,
-  end: Point,
-  atStart: boolean,
-  sourceBox: Box,
-  targetBox: Box,
-): Point[] {
-  if (points.length < 4) return route(start, end, sourceBox, targetBox);
-  const p = points.map(pt);
-  if (atStart) {
-    const old = p[0];
-    p[0] = pt(start);
-    if (p[1].x === old.x) p[1].x = start.x;
-    else p[1].y = start.y;
-    if (p[1].y <= start.y) return route(start, end, sourceBox, targetBox);
-  } else {
-    const n = p.length - 1;
-    const old = p[n];
-    p[n] = pt(end);
-    if (p[n - 1].x === old.x) p[n - 1].x = end.x;
-    else p[n - 1].y = end.y;
-    if (p[n - 1].y >= end.y) return route(start, end, sourceBox, targetBox);
-  }
-  return normalizeWire(p, start, end);
 }

@@ -25,7 +25,7 @@ import { exportSvg } from './export/SvgExport';
 import type { Highlights } from './highlight/Highlights';
 import type { DocImporter } from './import/DocImporter';
 import ImportModule from './import';
-import { isConnection, type Service } from './model';
+import { isConnection, shapesOf, type Service } from './model';
 import ModelingModule from './modeling';
 import PaletteModule from './palette';
 import RenderModule from './render';
@@ -39,6 +39,8 @@ export type { CanvasHandle, CanvasOptions, CreateCanvas } from './types';
 
 const MIN_ZOOM = 0.1;
 const MAX_ZOOM = 4;
+/** The smallest zoom "fit" chooses: 12 px labels at 9 px on screen. */
+export const READABLE_ZOOM = 0.75;
 /** Width the palette covers on the canvas's left edge, in pixels. */
 const PALETTE_ROOM = 190;
 
@@ -117,6 +119,7 @@ export const createCanvas: CreateCanvas = (container: HTMLElement, opts: CanvasO
     return e;
   };
 
+  let paletteRoom = 0;
   /** Shows the chart from its top, centred: all of it (`whole`, never beyond 100 %), or on
    *  load all of it when that stays readable, else its top at 100 %. */
   const showChart = (whole: boolean) => {
@@ -124,12 +127,27 @@ export const createCanvas: CreateCanvas = (container: HTMLElement, opts: CanvasO
     const { width, height } = view.size();
     if (!b || width === 0 || height === 0) return;
     const m = 40;
-    // The palette floats over the left edge: centre the chart in the room beside it.
-    const inset = readOnly ? 0 : Math.min(PALETTE_ROOM, width / 3);
+    // The palette floats over the left edge: centre the chart in the room beside it (the
+    // palette is as wide as its longest label, which depends on the language; measured before
+    // the chart is drawn, when that costs no layout of the drawing).
+    const inset = readOnly ? 0 : Math.min(paletteRoom || PALETTE_ROOM, width / 3);
     const room = width - inset;
     let scale = Math.max(MIN_ZOOM, Math.min(1, room / (b.width + 2 * m), height / (b.height + 2 * m)));
+    // Names and conditions (12 px) stay readable: "fit" shrinks no further than 9 px on
+    // screen, and shows the chart's top when all of it does not fit then.
+    if (whole && scale < READABLE_ZOOM) scale = READABLE_ZOOM;
     if (!whole && scale < 0.6) scale = 1;
-    const x = b.width + 2 * m <= room / scale ? b.x + b.width / 2 - (inset + room / 2) / scale : b.x - m - inset / scale;
+    // A chart wider than the view shows its top around the initial step (where it starts),
+    // kept within the chart's extent.
+    let x: number;
+    if (b.width + 2 * m <= room / scale) {
+      x = b.x + b.width / 2 - (inset + room / 2) / scale;
+    } else {
+      const first = shapesOf(elementRegistry).find((s) => s.businessObject.kind === 'step' && s.businessObject.initial);
+      const left = b.x - m - inset / scale;
+      const right = b.x + b.width + m - width / scale;
+      x = first ? Math.min(right, Math.max(left, first.x + first.width / 2 - (inset + room / 2) / scale)) : left;
+    }
     // As `canvas.viewbox(box)` with the size kept by the tracker: diagram-js would read the
     // container's size, forcing a layout of the whole drawing just added (200 ms at 500 steps).
     canvas._changeViewbox(() => {
@@ -140,6 +158,10 @@ export const createCanvas: CreateCanvas = (container: HTMLElement, opts: CanvasO
 
   const handle: CanvasHandle = {
     load(doc: EditorDoc) {
+      if (!readOnly && elementRegistry.getAll().length <= 1) {
+        const palette = host.querySelector('.djs-palette') as HTMLElement | null;
+        if (palette && palette.offsetWidth > 0) paletteRoom = palette.offsetWidth + 20;
+      }
       importer.load(doc);
       savedTop = top();
       showChart(false);

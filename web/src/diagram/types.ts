@@ -25,7 +25,7 @@ export interface CanvasEvents {
 
 export interface CanvasOptions {
   /** Translates UI keys (palette titles, tooltips); called again after `relabel()`. */
-  t: (key: string) => string;
+  t: (key: string, opts?: Record<string, unknown>) => string;
   /** Read-only canvas (monitor mode, print preview). */
   readOnly?: boolean;
 }

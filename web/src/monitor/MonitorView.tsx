@@ -226,11 +226,16 @@ export function MonitorView({ target, createCanvas, onLeave, socket }: MonitorVi
   }, [menu]);
 
   const hist = client.history;
+  const faulted = connected && client.runState === 'FAULT';
   const stateBadge = !connected
     ? client.status === 'connecting'
       ? { cls: 'connecting', text: t('monitor.state.connecting') }
       : { cls: 'closed', text: t('monitor.state.closed') }
-    : client.halted
+    : faulted
+      ? { cls: 'fault', text: t('monitor.state.fault') }
+      : client.runState === 'STOP'
+        ? { cls: 'halted', text: t('monitor.state.stopped') }
+        : client.halted
       ? { cls: 'halted', text: client.hit ? t('monitor.state.hit', { name: client.hit.name }) : t('monitor.state.halted') }
       : client.displayPaused
         ? { cls: 'paused', text: t('monitor.state.paused') }
@@ -246,11 +251,15 @@ export function MonitorView({ target, createCanvas, onLeave, socket }: MonitorVi
           <MonitorIcon name={target.simId !== null ? 'monitor' : 'plug'} />
           <span>{target.doc.pou}</span>
         </span>
-        <span class={`mon-badge mon-${stateBadge.cls}`} role="status" data-testid="monitor-state">
+        <span class={`mon-badge mon-${stateBadge.cls}`} role="status" data-testid="monitor-state" title={faulted ? client.fault?.message : undefined}>
           {stateBadge.text}
         </span>
         <span class="tool-separator" />
-        <MonButton icon="run" label={t('monitor.continue')} title={`${t('monitor.continueTip')} (F5)`} disabled={!control || !connected || !client.halted} onClick={() => report(client.resume())} primary={client.halted && control} />
+        {faulted ? (
+          <MonButton icon="run" label={t('monitor.reset')} title={t('monitor.resetTip')} disabled={!control} onClick={() => report(client.reset('warm'))} primary={control} />
+        ) : (
+          <MonButton icon="run" label={t('monitor.continue')} title={`${t('monitor.continueTip')} (F5)`} disabled={!control || !connected || !client.halted} onClick={() => report(client.resume())} primary={client.halted && control} />
+        )}
         <MonButton icon="halt" label={t('monitor.halt')} title={`${t('monitor.haltTip')} (F6)`} disabled={!control || !connected || client.halted} onClick={() => report(client.halt())} />
         <MonButton icon="scan" label={t('monitor.singleScan')} title={`${t('monitor.singleScanTip')} (F10)`} disabled={!control || !connected || !client.halted} onClick={() => report(client.singleScan())} />
         <MonButton

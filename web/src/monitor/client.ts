@@ -7,9 +7,11 @@ import {
   toState,
   type Breakpoint,
   type Delta,
+  type Fault,
   type Hello,
   type MonEvent,
   type MonValue,
+  type RunState,
   type ScanState,
   type StepReport,
   type Timing,
@@ -72,6 +74,10 @@ export class MonitorClient {
   frozen: ScanState | null = null;
   halted = false;
   haltReason = '';
+  /** RUN, STOP or FAULT (docs/runtime.md, "States"). */
+  runState: RunState = 'RUN';
+  /** What put the runtime in FAULT (`kind`, `message`, `step`, `action`, `line` …). */
+  fault: Fault | null = null;
   /** The display is paused: the runtime keeps running and buffering, the view stands still. */
   displayPaused = false;
   history: HistoryView | null = null;
@@ -135,6 +141,7 @@ export class MonitorClient {
       case 'hello':
         this.info = m as unknown as Hello;
         this.halted = this.info.halted;
+        this.setRunState(m);
         // The breakpoints of an attached runtime may have been set by another client.
         void this.request('breakpoints').then(
           (list) => this.setBreakpoints(list),
@@ -144,6 +151,10 @@ export class MonitorClient {
       case 'snapshot':
         this.live = toState(m);
         if (typeof m.halted === 'boolean') this.halted = m.halted;
+        this.setRunState(m);
+        break;
+      case 'state':
+        this.setRunState(m);
         break;
       case 'delta':
         if (this.live) this.live = mergeDelta(this.live, m as unknown as Delta);
@@ -193,6 +204,13 @@ export class MonitorClient {
     this.changed();
   }
 
+  private setRunState(m: Record<string, unknown>): void {
+    // `hello`, `snapshot` and `state` carry the state (an older runtime's do not: it runs).
+    if (m.state !== 'RUN' && m.state !== 'STOP' && m.state !== 'FAULT') return;
+    this.runState = m.state;
+    this.fault = m.fault && typeof m.fault === 'object' ? (m.fault as Fault) : null;
+  }
+
   private closed(reason: string): void {
     if (this.status === 'closed') return;
     this.status = 'closed';
@@ -229,6 +247,13 @@ export class MonitorClient {
   async resume(): Promise<void> {
     this.history = null;
     await this.request('continue');
+  }
+
+  /** Restarts the chart from its initial values (warm: RETAIN values kept) and runs it again,
+   * also out of FAULT; leaves history browsing. */
+  async reset(mode: 'warm' | 'cold' = 'warm'): Promise<void> {
+    this.history = null;
+    await this.request('reset', { mode });
   }
 
   /** One scan of a halted runtime; the display follows it (history browsing ends). */

@@ -35,11 +35,11 @@ export interface MonitorUi {
 
 /** Posts `stop` for a simulation as the page goes away (a beacon-like request that outlives it). */
 function stopOnExit(id: number): void {
-  const token = new URLSearchParams(globalThis.location?.search ?? '').get('token') ?? '';
   void fetch('/api/sim/stop', {
     method: 'POST',
     keepalive: true,
-    headers: { 'Content-Type': 'application/json', 'X-Sfc-Token': token },
+    credentials: 'same-origin',
+    headers: { 'Content-Type': 'application/json', 'X-Sfc-Page': '1' },
     body: JSON.stringify({ id }),
   }).catch(() => undefined);
 }

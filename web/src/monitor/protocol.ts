@@ -1,78 +1,24 @@
 // The monitor protocol, version 1 (docs/monitor.md): the messages a runtime (`sfc run`, the
 // editor's simulator, the ATMT adapter) sends, as the client keeps them.
 
-/** A variable's value: BOOL as boolean, integers and reals as numbers, TIME as "T#…", strings. */
-export type MonValue = boolean | number | string;
-
-export interface StepInfo {
-  name: string;
-  initial: boolean;
-}
-
-export interface TransitionInfo {
-  name: string;
-  from: string[];
-  to: string[];
-}
-
-export interface VariableInfo {
-  name: string;
-  /** IEC type name (BOOL, INT, UDINT, TIME, REAL, STRING …). */
-  type: string;
-  /** `%IX0.0` for a located variable. */
-  location?: string;
-}
-
-/** The `hello` message. */
-export interface Hello {
-  type: 'hello';
-  protocol: string;
-  version: number;
-  runtime: string;
-  pou: string;
-  period: string;
-  /** False when the runtime can only be watched (no halt, step, force or set). */
-  control: boolean;
-  tokenRequired: boolean;
-  authorized: boolean;
-  halted: boolean;
-  history: number;
-  steps: StepInfo[];
-  transitions: TransitionInfo[];
-  variables: VariableInfo[];
-}
-
-export interface ActiveStep {
-  step: string;
-  elapsed: string;
-  elapsedUs: number;
-}
-
-/** One scan's state in full (a `snapshot`, a `history` entry, or deltas merged). */
-export interface ScanState {
-  scan: number;
-  time: string;
-  timeUs: number;
-  active: ActiveStep[];
-  fired: string[];
-  /** Guard of every transition leaving an active step; null when evaluating it faulted. */
-  guards: Record<string, boolean | null>;
-  vars: Record<string, MonValue>;
-  forced: string[];
-}
-
-/** What changed since the last message (`delta`): `guards`, `vars`, `forced` only when changed. */
-export interface Delta {
-  type: 'delta';
-  scan: number;
-  time: string;
-  timeUs: number;
-  active: ActiveStep[];
-  fired: string[];
-  guards?: Record<string, boolean | null>;
-  vars?: Record<string, MonValue>;
-  forced?: string[];
-}
+// The messages' types are generated from crates/sfc-runtime/src/contract.rs by ts-rs
+// (../contracts/monitor.ts, kept current by sfc-runtime's `contracts_are_current` test;
+// `tests/contract.rs` there reads the messages a running chart sends back into those types).
+import type { ActiveStep, Delta, MonValue, ScanState } from '../contracts/monitor';
+export type {
+  ActiveStep,
+  Delta,
+  Fault,
+  Hello,
+  MonValue,
+  RunState,
+  ScanState,
+  Snapshot,
+  StateMessage,
+  StepInfo,
+  TransitionInfo,
+  VariableInfo,
+} from '../contracts/monitor';
 
 export interface MonEvent {
   type: 'event';
@@ -135,7 +81,8 @@ export function mergeDelta(base: ScanState, d: Delta): ScanState {
     time: d.time,
     timeUs: d.timeUs,
     active: d.active,
-    fired: d.fired,
+    // A delta names the fired transitions only when some fired.
+    fired: d.fired ?? [],
     guards: d.guards ?? base.guards,
     vars: d.vars ? { ...base.vars, ...d.vars } : base.vars,
     forced: d.forced ?? base.forced,

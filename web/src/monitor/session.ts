@@ -38,17 +38,14 @@ export interface SimStart {
 
 type Fetch = (input: string, init?: RequestInit) => Promise<Response>;
 
-/** The page's token (`?token=` of its URL), which every API call sends. */
-function pageToken(): string {
-  return new URLSearchParams(globalThis.location?.search ?? '').get('token') ?? '';
-}
-
 async function post<T>(path: string, body: unknown, doFetch: Fetch): Promise<T> {
   let res: Response;
   try {
     res = await doFetch(path, {
       method: 'POST',
-      headers: { 'Content-Type': 'application/json', Accept: 'application/json', 'X-Sfc-Token': pageToken() },
+      // The page's cookie carries the token (src/app/api.ts); the header says it is the page.
+      headers: { 'Content-Type': 'application/json', Accept: 'application/json', 'X-Sfc-Page': '1' },
+      credentials: 'same-origin',
       body: JSON.stringify(body),
     });
   } catch (e) {

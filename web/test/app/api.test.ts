@@ -1,14 +1,19 @@
 import { describe, expect, it, vi } from 'vitest';
-import { ApiError, createApi, tokenFromSearch } from '../../src/app/api';
+import { ApiError, createApi } from '../../src/app/api';
 
 function fakeFetch(status: number, body: string) {
   return vi.fn(async (_url: RequestInfo | URL, _init?: RequestInit) => new Response(body, { status, headers: { 'Content-Type': 'application/json' } }));
 }
 
 describe('API client', () => {
-  it('reads the token from the query string', () => {
-    expect(tokenFromSearch('?token=abc123&x=1')).toBe('abc123');
-    expect(tokenFromSearch('')).toBeNull();
+  it('the page sends its page header and the cookie, no token', async () => {
+    const fetch = fakeFetch(200, '{"files":[]}');
+    await createApi({ fetch, notify: vi.fn() }).files();
+    const [, init] = fetch.mock.calls[0];
+    const headers = init?.headers as Record<string, string>;
+    expect(headers['X-Sfc-Page']).toBe('1');
+    expect(headers['X-Sfc-Token']).toBeUndefined();
+    expect(init?.credentials).toBe('same-origin');
   });
   it('sends the token header and JSON body', async () => {
     const fetch = fakeFetch(200, '{"diagnostics":[]}');

@@ -54,6 +54,7 @@ const diag = (over: Partial<Diag>): Diag => ({
   severity: 'error',
   message: 'undeclared variable `Strt`',
   title: 'undeclared variable',
+  file: 'chart.st',
   line: 3,
   column: 1,
   endLine: 3,

@@ -1,7 +1,8 @@
 // A big chart for performance checks (browser test and demo `?big=500`): a long sequence of
 // steps with a two-way selection every 20 steps and a jump back to the initial step.
 import type { Connection, EditorDoc, Element } from '../../src/doc';
-import { inputPin, outputPin, route } from '../../src/diagram/geometry';
+import { inputPin, outputPin } from '../../src/diagram/geometry';
+import { route as routeAround } from '../../src/diagram/layout/router';
 
 /** A valid document with `n` steps (n ≥ 1), every wire with its polyline. */
 export function makeBigDoc(n: number): EditorDoc {
@@ -25,7 +26,7 @@ export function makeBigDoc(n: number): EditorDoc {
       sourcePin,
       target: to.id,
       targetPin,
-      waypoints: route(start, end, box(from), box(to)),
+      waypoints: routeAround(start, end, []),
     });
   };
   const step = (i: number, x: number, y: number): Element =>

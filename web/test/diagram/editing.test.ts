@@ -214,9 +214,11 @@ describe('palette', () => {
     expect([...m.container.querySelectorAll('.sfc-entry')].map((e) => e.textContent)).toContain(cs['palette.step']);
   });
 
-  it('offers no simultaneous branches on ATMT and EATMT charts, and refuses to create them there', () => {
+  it('greys simultaneous branches and action blocks on ATMT and EATMT charts, and refuses to create them there', () => {
     const m = mount();
-    const kinds = () => [...m.container.querySelectorAll('.djs-palette [data-action^="create."]')].map((e) => e.getAttribute('data-action'));
+    // The entries offered: those not greyed (refused ones stay visible with the reason).
+    const kinds = () =>
+      [...m.container.querySelectorAll('.djs-palette [data-action^="create."]')].filter((e) => !e.classList.contains('refused')).map((e) => e.getAttribute('data-action'));
     m.canvas.load({ ...conveyorDoc(), target: 'atmt' });
     expect(kinds()).not.toContain('create.simultaneous-divergence');
     expect(kinds()).not.toContain('create.simultaneous-convergence');
@@ -236,6 +238,8 @@ describe('palette', () => {
     expect(kinds()).not.toContain('create.simultaneous-divergence');
     m.canvas.load({ ...conveyorDoc(), target: 'eatmt' });
     expect(kinds()).not.toContain('create.simultaneous-convergence');
+    expect(kinds()).not.toContain('create.action-block');
+    expect(rules.allowed('shape.create', { shape: shape('action-block'), target: root })).toBe(false);
   });
 
   it('new steps and transitions get unique names', () => {

@@ -179,3 +179,42 @@ describe('drawing a wire with the mouse', () => {
     expect(canvas.getDoc().connections).toHaveLength(0);
   });
 });
+
+describe('ATMT/EATMT target rules while drawing', () => {
+  const chart = (target: 'atmt' | 'eatmt'): EditorDoc => ({
+    ...twoBlocks('step', 'transition'),
+    target,
+  });
+
+  it('an action block is refused at the drop, with the reason', () => {
+    const { canvas, get } = mount();
+    canvas.load(chart('atmt'));
+    const shape = get('elementFactory').createShape({ businessObject: block('', 'actionBlock', 0, 0), width: 180, height: 20 });
+    const root = get('canvas').getRootElement();
+    expect(get('rules').allowed('shape.create', { shape, target: root })).toBe(false);
+    const entries = get('palette')._entries ?? get('sfcPalette').getPaletteEntries();
+    const html: string = entries['create.action-block'].html;
+    expect(html).toContain('refused');
+    expect(html).toContain('palette.noActions');
+    canvas.load({ ...chart('atmt'), target: 'blank' });
+    expect(get('rules').allowed('shape.create', { shape, target: root })).toBe(true);
+  });
+
+  it("a transition's Tag is its condition number", () => {
+    const { canvas } = mount();
+    canvas.load(chart('atmt'));
+    canvas.updateElement('b', { tag: 5 });
+    expect(canvas.getDoc().elements.find((e) => e.id === 'b')).toMatchObject({ tag: 5, condition: 'C5' });
+    canvas.undo();
+    expect(canvas.getDoc().elements.find((e) => e.id === 'b')?.tag).toBeUndefined();
+    canvas.redo();
+    // A condition typed as an input sets the Tag.
+    canvas.updateElement('b', { condition: 'C7' });
+    expect(canvas.getDoc().elements.find((e) => e.id === 'b')).toMatchObject({ tag: 7, condition: 'C7' });
+    // EATMT: lower-case inputs, negation kept.
+    canvas.load(chart('eatmt'));
+    canvas.updateElement('b', { condition: '!c3' });
+    canvas.updateElement('b', { tag: 20 });
+    expect(canvas.getDoc().elements.find((e) => e.id === 'b')).toMatchObject({ tag: 20, condition: '!c20' });
+  });
+});

@@ -3,7 +3,7 @@ import { describe, expect, it } from 'vitest';
 import { mount } from './harness';
 import { conveyorDoc } from './fixtures';
 import { makeBigDoc } from './big';
-import { wrapCondition } from '../../src/diagram/render/SfcRenderer';
+import { wrapCondition } from '../../src/diagram/drawing';
 
 describe('highlights', () => {
   it('frames blocks by kind, labels them, and replaces the set of a kind', () => {
@@ -112,7 +112,7 @@ describe('exportSvg', () => {
     // Every block and wire is there, at its place.
     expect(parsed.querySelectorAll('g[data-id]')).toHaveLength(doc.elements.length + doc.connections.length);
     expect(parsed.querySelector('g[data-id="step:S1"]')!.getAttribute('transform')).toBe('translate(200,140)');
-  });
+  }, 60_000);
 
   it('keeps the tooltip as an SVG title', () => {
     const m = mount();

@@ -137,6 +137,25 @@ describe('state', () => {
     expect(c.events.map((e) => e.kind)).toEqual(['breakpoint']);
   });
 
+  it('follows RUN, FAULT and a reset (docs/runtime.md, "States")', async () => {
+    const { c, s } = connected();
+    expect(c.runState).toBe('RUN');
+    const fault = { kind: 'watchdog', step: 'Spraying', action: 'Spray', line: 12, message: 'watchdog: scan 14 …' };
+    s.push({ type: 'state', state: 'FAULT', fault, scan: 14, outputs: { SprayValve: false } });
+    s.push({ type: 'halted', reason: 'fault', scan: 14 });
+    expect(c.runState).toBe('FAULT');
+    expect(c.fault).toMatchObject({ step: 'Spraying', line: 12 });
+    const done = c.reset();
+    expect(s.sent[s.sent.length - 1]).toMatchObject({ cmd: 'reset', mode: 'warm' });
+    s.reply({ state: 'RUN', mode: 'warm', scan: 15 });
+    await done;
+    s.push({ type: 'state', state: 'RUN', fault: null, scan: 15 });
+    s.push({ type: 'resumed', scan: 15 });
+    expect(c.runState).toBe('RUN');
+    expect(c.fault).toBeNull();
+    expect(c.halted).toBe(false);
+  });
+
   it('a runtime that cannot halt freezes the display on a hit instead', () => {
     let s!: FakeSocket;
     const c = new MonitorClient('ws://x/', (u) => (s = new FakeSocket(u)));

@@ -1,25 +1,60 @@
-//! Lowering of conditions (ST expressions, IL lists) and action bodies (BOOL assignments, IF,
-//! IL load/store/set/reset) to bit logic over S7-200 operands, with a located diagnostic for
-//! everything that has no faithful bit-logic form.
+//! Lowering of conditions (ST expressions, IL lists) and action bodies (BOOL and integer
+//! assignments, IF, counter calls, IL load/store/set/reset) to S7-200 operands, with a located
+//! diagnostic for everything that has no faithful S7-200 form.
 
-use super::ir::{one_line, Addr};
-use super::vars::{bit_address, Vars};
+use super::ir::{Addr, ArithOp, CmpOp, Val};
+use super::vars::{bit_address, CounterKind, IntTy, Vars};
 use super::TIMER_BASE_US;
 use sfc_diagnostics::{Diagnostic, Span};
 use sfc_model::{Chart, StepId};
 use sfc_st::{const_eval, parse_il_op, IlOp, Value};
-use sfc_syntax::ast::{BinaryOp, Expr, ExprKind, IlBody, IlInstruction, Stmt, StmtKind, UnaryOp};
+use sfc_syntax::ast::{BinaryOp, Expr, ExprKind, IlBody, IlInstruction, LiteralKind, Stmt, StmtKind, UnaryOp};
 use std::collections::HashMap;
 
 /// Largest preset of an S7-200 timer (`+32767`, 3276.7 s at 100 ms).
 pub(crate) const MAX_PT: i64 = 32767;
 
-/// A BOOL expression over bits.
+/// An integer computation over S7-200 values; every node has the width of the whole
+/// expression except below [`IntExpr::Widen`].
+#[derive(Debug, Clone, PartialEq)]
+pub(crate) enum IntExpr {
+    Val(Val),
+    Bin(ArithOp, Box<IntExpr>, Box<IntExpr>),
+    /// `a MOD b` (as `a - (a / b) * b`).
+    Mod(Box<IntExpr>, Box<IntExpr>),
+    Neg(Box<IntExpr>),
+    /// An INT widened to DINT (`ITD`).
+    Widen(Box<IntExpr>),
+}
+
+impl IntExpr {
+    pub(crate) fn reads(&self, v: Val) -> bool {
+        match self {
+            IntExpr::Val(x) => *x == v,
+            IntExpr::Bin(_, a, b) | IntExpr::Mod(a, b) => a.reads(v) || b.reads(v),
+            IntExpr::Neg(a) | IntExpr::Widen(a) => a.reads(v),
+        }
+    }
+}
+
+/// A comparison of two integers: a compare contact.
+#[derive(Debug, Clone, PartialEq)]
+pub(crate) struct Compare {
+    pub op: CmpOp,
+    pub wide: bool,
+    pub a: IntExpr,
+    pub b: IntExpr,
+    /// Source text, for comments.
+    pub text: String,
+}
+
+/// A BOOL expression over bits and compare contacts.
 #[derive(Debug, Clone, PartialEq)]
 pub(crate) enum Logic {
     Const(bool),
     /// A contact: the bit, whether it is negated, and its symbolic name (for comments).
     Bit(Addr, bool, String),
+    Cmp(Compare),
     Not(Box<Logic>),
     And(Vec<Logic>),
     Or(Vec<Logic>),
@@ -34,6 +69,7 @@ impl Logic {
         match self {
             Logic::Const(b) => Logic::Const(!b),
             Logic::Bit(a, n, s) => Logic::Bit(a, !n, s),
+            Logic::Cmp(c) => Logic::Cmp(Compare { op: c.op.negate(), ..c }),
             Logic::Not(x) => *x,
             other => Logic::Not(Box::new(other)),
         }
@@ -46,10 +82,10 @@ impl Logic {
             _ => Logic::Or(bits),
         }
     }
-    /// Whether evaluating it reads `a`.
+    /// Whether evaluating it reads bit `a`.
     pub(crate) fn reads(&self, a: Addr) -> bool {
         match self {
-            Logic::Const(_) => false,
+            Logic::Const(_) | Logic::Cmp(_) => false,
             Logic::Bit(b, _, _) => *b == a,
             Logic::Not(x) => x.reads(a),
             Logic::And(v) | Logic::Or(v) => v.iter().any(|x| x.reads(a)),
@@ -61,10 +97,25 @@ impl Logic {
 /// One statement of an action body, lowered.
 #[derive(Debug, Clone, PartialEq)]
 pub(crate) enum BodyOp {
-    /// `target := value` (the value is computed before the bit changes).
+    /// `target := value` for a BOOL (the value is computed before the bit changes).
     Assign { target: Addr, name: String, value: Logic, text: String },
+    /// `target := value` for an integer.
+    Move { target: Val, wide: bool, name: String, value: IntExpr, text: String },
     /// `IF c1 THEN … ELSIF c2 THEN … ELSE … END_IF`
     If { branches: Vec<(Logic, Vec<BodyOp>)>, else_body: Vec<BodyOp>, text: String },
+    /// A call of a counter block: its S7-200 counter instruction, skipped (JMP) in the scans
+    /// in which the call does not run, as an IEC block that is not called.
+    Count {
+        counter: usize,
+        kind: CounterKind,
+        up: Logic,
+        down: Logic,
+        reset: Logic,
+        preset: Val,
+        /// CTUD: the bit that holds `QD` (`CV <= 0` as of the last call).
+        qd: Option<Addr>,
+        text: String,
+    },
 }
 
 /// What a timer of the timer table is for.
@@ -96,7 +147,7 @@ pub(crate) struct Timers {
 impl Timers {
     /// The timer whose bit is `step.T >= pt · 100 ms`; retentive once any reader needs the value
     /// while the step is inactive.
-    fn step(&mut self, step: StepId, pt: u16, retentive: bool, label: String) -> usize {
+    pub(crate) fn step(&mut self, step: StepId, pt: u16, retentive: bool, label: String) -> usize {
         if let Some(&i) = self.by_step.get(&(step, pt)) {
             self.list[i].retentive |= retentive;
             return i;
@@ -108,6 +159,33 @@ impl Timers {
     }
     pub(crate) fn action(&mut self, entity: usize, pt: u16, label: String) -> usize {
         self.list.push(TimerEntry { what: TimerUse::Action(entity), retentive: false, pt, label });
+        self.list.len() - 1
+    }
+}
+
+/// A counter instance of the chart (a variable of type CTU, CTD or CTUD).
+#[derive(Debug, Clone)]
+pub(crate) struct CounterEntry {
+    pub var: usize,
+    pub kind: CounterKind,
+    /// Where it is called (one call site at most).
+    pub call: Option<Span>,
+    /// CTUD: the bit that holds `QD` (an IEC output keeps its value between calls; the S7-200
+    /// CTUD has only the `QU` bit).
+    pub qd: Option<Addr>,
+}
+
+#[derive(Debug, Default)]
+pub(crate) struct Counters {
+    pub list: Vec<CounterEntry>,
+}
+
+impl Counters {
+    fn of(&mut self, var: usize, kind: CounterKind) -> usize {
+        if let Some(i) = self.list.iter().position(|c| c.var == var) {
+            return i;
+        }
+        self.list.push(CounterEntry { var, kind, call: None, qd: None });
         self.list.len() - 1
     }
 }
@@ -130,7 +208,13 @@ enum Cr {
     Time(StepId, Span),
 }
 
-/// Resolves names to bits and lowers code; reports what cannot be lowered.
+/// An assignment target.
+enum Target {
+    Bit(Addr, String),
+    Word(Val, IntTy, String),
+}
+
+/// Resolves names to operands and lowers code; reports what cannot be lowered.
 pub(crate) struct Lowerer<'a> {
     pub chart: &'a Chart,
     pub vars: &'a Vars,
@@ -138,7 +222,10 @@ pub(crate) struct Lowerer<'a> {
     pub steps: &'a [Addr],
     /// `Q` and `A` bits of each action (`None`: the action is never associated, both FALSE).
     pub actions: &'a [Option<(Addr, Addr)>],
+    /// The `QD` bit of each CTUD instance, by variable index.
+    pub ctud_qd: &'a HashMap<usize, Addr>,
     pub timers: &'a mut Timers,
+    pub counters: &'a mut Counters,
     pub diags: &'a mut Vec<Diagnostic>,
     pub text: &'a str,
 }
@@ -150,14 +237,7 @@ impl Lowerer<'_> {
 
     /// The source text of a span, on one line, shortened for comments and messages.
     pub(crate) fn snippet(&self, span: Span) -> String {
-        let s = one_line(self.text.get(span.range()).unwrap_or(""));
-        if s.chars().count() > 60 {
-            let mut t: String = s.chars().take(57).collect();
-            t.push_str("...");
-            t
-        } else {
-            s
-        }
+        super::snippet(self.text, span)
     }
 
     /// A BOOL expression.
@@ -167,8 +247,7 @@ impl Lowerer<'_> {
             ExprKind::Literal(_) => match const_eval(e, self.vars) {
                 Some(Value::Bool(b)) => Some(Logic::Const(b)),
                 _ => {
-                    let msg =
-                        format!("`{}` is not a BOOL value: S7-200 bit logic has only contacts", self.snippet(e.span));
+                    let msg = format!("`{}` is not a BOOL value", self.snippet(e.span));
                     self.err("SFC0810", e.span, msg, site);
                     None
                 }
@@ -195,30 +274,33 @@ impl Lowerer<'_> {
                     })
                 }
                 BinaryOp::Eq | BinaryOp::Ne | BinaryOp::Lt | BinaryOp::Gt | BinaryOp::Le | BinaryOp::Ge => {
+                    if let Some(Value::Bool(b)) = const_eval(e, self.vars) {
+                        return Some(Logic::Const(b));
+                    }
                     self.compare(*op, lhs, rhs, e.span, site)
                 }
                 _ => {
-                    let msg = format!(
-                        "arithmetic (`{}`) cannot be expressed in S7-200 bit logic: `{}`",
-                        op.symbol(),
-                        self.snippet(e.span)
-                    );
+                    let msg = format!("`{}` is a number, not a BOOL condition", self.snippet(e.span));
                     self.err("SFC0810", e.span, msg, site);
                     None
                 }
             },
             ExprKind::Unary { .. } => {
-                let msg = format!("arithmetic cannot be expressed in S7-200 bit logic: `{}`", self.snippet(e.span));
+                let msg = format!("`{}` is a number, not a BOOL condition", self.snippet(e.span));
                 self.err("SFC0810", e.span, msg, site);
                 None
             }
             ExprKind::Call { callee, .. } => {
-                let msg = format!("the call of `{}` cannot be expressed in S7-200 bit logic", callee.text);
+                let msg = format!(
+                    "the call of `{}` cannot be translated to the S7-200 program (only counter blocks, called \
+                     as a statement in an action)",
+                    callee.text
+                );
                 self.err("SFC0810", e.span, msg, site);
                 None
             }
             ExprKind::Index { .. } => {
-                let msg = format!("array elements (`{}`) are not bits of the S7-200 program", self.snippet(e.span));
+                let msg = format!("array elements (`{}`) are not operands of the S7-200 program", self.snippet(e.span));
                 self.err("SFC0810", e.span, msg, site);
                 None
             }
@@ -232,9 +314,10 @@ impl Lowerer<'_> {
             let v = &self.vars.list[i];
             if !v.is_bool() {
                 let msg = format!(
-                    "`{}` is {}: only BOOL variables can be read by S7-200 bit logic",
+                    "`{}` is {}: a condition needs a BOOL (compare a number: `{} > 0`)",
                     v.name,
-                    v.ty.as_deref().unwrap_or("not an elementary type")
+                    v.ty.as_deref().unwrap_or("not an elementary type"),
+                    v.name
                 );
                 self.err("SFC0810", span, msg, site);
                 return None;
@@ -242,13 +325,12 @@ impl Lowerer<'_> {
             if v.constant {
                 return Some(Logic::Const(matches!(v.init, Some(Value::Bool(true)))));
             }
-            // A variable without a bit had its location refused at its declaration.
+            // A variable without a bit had its location (or its kind) refused at its declaration.
             let addr = v.addr?;
             return Some(Logic::bit(addr, v.name.clone()));
         }
         if sfc_st::is_sfc_control_variable(name) {
-            let msg = format!("the chart control variable `{name}` is not implemented by the S7-200 program");
-            self.err("SFC0816", span, msg, site);
+            // Refused where it is declared or collected (SFC0816).
             return None;
         }
         let msg = if self.chart.step(name).is_some() {
@@ -260,6 +342,15 @@ impl Lowerer<'_> {
         None
     }
 
+    /// A counter instance `name`, if the variable is one.
+    fn counter(&mut self, name: &str) -> Option<(usize, CounterKind)> {
+        let i = self.vars.get(name)?;
+        let kind = self.vars.list[i].counter()?;
+        let c = self.counters.of(i, kind);
+        self.counters.list[c].qd = self.ctud_qd.get(&i).copied();
+        Some((c, kind))
+    }
+
     fn member(&mut self, base: &Expr, member: &str, span: Span, site: &Site<'_>) -> Option<Logic> {
         if let ExprKind::Name(id) = &base.kind {
             if let Some(s) = self.chart.step(&id.text) {
@@ -269,7 +360,7 @@ impl Lowerer<'_> {
                 }
                 if member.eq_ignore_ascii_case("T") {
                     let msg = format!(
-                        "the step time `{}` can only be compared with a constant duration (`{}.T >= T#5s`)",
+                        "the step time `{}` can only be compared with a duration (`{}.T >= T#5s`)",
                         self.snippet(span),
                         self.chart.steps[s].name
                     );
@@ -285,6 +376,20 @@ impl Lowerer<'_> {
                         Some((qa, aa)) => Logic::bit(if q { qa } else { aa }, name),
                         None => Logic::Const(false),
                     });
+                }
+            }
+            if let Some((c, kind)) = self.counter(&id.text) {
+                let m = member.to_ascii_uppercase();
+                let name = format!("{}.{m}", id.text);
+                match (kind, m.as_str()) {
+                    (CounterKind::Ctu | CounterKind::Ctd, "Q") | (CounterKind::Ctud, "QU") => {
+                        return Some(Logic::bit(Addr::Counter(c), name));
+                    }
+                    (CounterKind::Ctud, "QD") => {
+                        let qd = self.counters.list[c].qd?;
+                        return Some(Logic::bit(qd, name));
+                    }
+                    _ => {}
                 }
             }
         }
@@ -319,58 +424,287 @@ impl Lowerer<'_> {
             };
             return self.time_compare(s, flipped, lhs, span, site);
         }
-        if matches!(op, BinaryOp::Eq | BinaryOp::Ne) {
-            // BOOL = BOOL is XNOR, BOOL <> BOOL is XOR; anything else is not bit logic.
-            let mark = self.diags.len();
+        if matches!(op, BinaryOp::Eq | BinaryOp::Ne) && (self.is_bool(lhs) || self.is_bool(rhs)) {
+            // BOOL = BOOL is XNOR, BOOL <> BOOL is XOR.
             let l = self.expr(lhs, site);
             let r = self.expr(rhs, site);
-            if let (Some(l), Some(r)) = (l, r) {
-                let x = Logic::Xor(Box::new(l), Box::new(r));
-                return Some(if op == BinaryOp::Eq { x.not() } else { x });
-            }
-            self.diags.truncate(mark);
+            let x = Logic::Xor(Box::new(l?), Box::new(r?));
+            return Some(if op == BinaryOp::Eq { x.not() } else { x });
         }
-        let msg = format!(
-            "the comparison `{}` cannot be expressed in S7-200 bit logic (only BOOL values and step times \
-             compared with constants)",
-            self.snippet(span)
-        );
-        self.err("SFC0810", span, msg, site);
-        None
+        let cmp = match op {
+            BinaryOp::Eq => CmpOp::Eq,
+            BinaryOp::Ne => CmpOp::Ne,
+            BinaryOp::Lt => CmpOp::Lt,
+            BinaryOp::Le => CmpOp::Le,
+            BinaryOp::Gt => CmpOp::Gt,
+            _ => CmpOp::Ge,
+        };
+        let mark = self.diags.len();
+        // One diagnostic per comparison: the right side is judged only when the left is fine.
+        let (a, ta) = self.int_expr(lhs, site)?;
+        let (b, tb) = self.int_expr(rhs, site)?;
+        let ((a, b), ty) = self.unify(a, ta, b, tb, span, site)?;
+        if !ty.signed() && !matches!(cmp, CmpOp::Eq | CmpOp::Ne) {
+            let msg = format!(
+                "`{}` compares {} values by size; the S7-200 compare contacts are signed, so only = and <> \
+                 are exact for unsigned types (declare the variables INT or DINT)",
+                self.snippet(span),
+                ty.name()
+            );
+            self.err("SFC0810", span, msg, site);
+            return None;
+        }
+        debug_assert_eq!(self.diags.len(), mark);
+        Some(Logic::Cmp(Compare { op: cmp, wide: ty.wide(), a, b, text: self.snippet(span) }))
     }
 
-    /// `step.T op c` with `c` a constant duration, through timer bits: `T >= c` is the bit of a
-    /// timer with preset `c`; `T > c` is `T >= c + 100 ms` (step times advance in whole timer
-    /// ticks); `<` and `<=` are the negated contacts; `=` and `<>` combine two timers.
-    fn time_compare(&mut self, s: StepId, op: BinaryOp, other: &Expr, span: Span, site: &Site<'_>) -> Option<Logic> {
-        let c = match const_eval(other, self.vars) {
-            Some(Value::Time(c)) => c,
-            _ => {
+    /// Whether `e` is a BOOL operand (so `=` is XNOR).
+    fn is_bool(&self, e: &Expr) -> bool {
+        match &e.kind {
+            ExprKind::Paren(i) => self.is_bool(i),
+            ExprKind::Literal(l) => matches!(l.kind, LiteralKind::Bool(_)),
+            ExprKind::Name(id) => self.vars.get(&id.text).is_some_and(|i| self.vars.list[i].is_bool()),
+            ExprKind::Address(a) => a.size.eq_ignore_ascii_case(&'X'),
+            ExprKind::Member { base, member } => {
+                let m = member.text.to_ascii_uppercase();
+                match &base.kind {
+                    ExprKind::Name(id) => {
+                        (self.chart.step(&id.text).is_some() && m == "X")
+                            || (self.chart.action(&id.text).is_some() && (m == "Q" || m == "A"))
+                            || (self.vars.get(&id.text).is_some_and(|i| self.vars.list[i].counter().is_some())
+                                && m.starts_with('Q'))
+                    }
+                    _ => false,
+                }
+            }
+            ExprKind::Unary { op: UnaryOp::Not, .. } => true,
+            ExprKind::Binary { op, .. } => matches!(
+                op,
+                BinaryOp::And
+                    | BinaryOp::AndThen
+                    | BinaryOp::Or
+                    | BinaryOp::OrElse
+                    | BinaryOp::Xor
+                    | BinaryOp::Eq
+                    | BinaryOp::Ne
+                    | BinaryOp::Lt
+                    | BinaryOp::Gt
+                    | BinaryOp::Le
+                    | BinaryOp::Ge
+            ),
+            _ => false,
+        }
+    }
+
+    /// Brings two operands to one type: an untyped literal takes the other's type, an INT
+    /// operand of a DINT operation is widened (`ITD`).
+    fn unify(
+        &mut self,
+        a: IntExpr,
+        ta: Option<IntTy>,
+        b: IntExpr,
+        tb: Option<IntTy>,
+        span: Span,
+        site: &Site<'_>,
+    ) -> Option<((IntExpr, IntExpr), IntTy)> {
+        let fit = |e: IntExpr, ty: IntTy| match e {
+            IntExpr::Val(Val::Const(c)) => IntExpr::Val(Val::Const(ty.stored(i128::from(c)))),
+            other => other,
+        };
+        let ty = match (ta, tb) {
+            (Some(x), Some(y)) if x == y => x,
+            (Some(IntTy::Int), Some(IntTy::DInt)) => return Some(((IntExpr::Widen(Box::new(a)), b), IntTy::DInt)),
+            (Some(IntTy::DInt), Some(IntTy::Int)) => return Some(((a, IntExpr::Widen(Box::new(b))), IntTy::DInt)),
+            (Some(x), Some(y)) => {
                 let msg = format!(
-                    "`{}` is not a constant duration: an S7-200 timer preset must be known when the program is \
-                     generated (write a literal, or declare the variable CONSTANT)",
-                    self.snippet(other.span)
+                    "`{}` mixes {} and {}: convert one of them explicitly (only INT widens to DINT here)",
+                    self.snippet(span),
+                    x.name(),
+                    y.name()
                 );
-                self.err("SFC0812", other.span, msg, site);
+                self.err("SFC0810", span, msg, site);
                 return None;
             }
+            (Some(x), None) | (None, Some(x)) => x,
+            (None, None) => {
+                let big = |e: &IntExpr| matches!(e, IntExpr::Val(Val::Const(c)) if !(-32768..=32767).contains(c));
+                if big(&a) || big(&b) {
+                    IntTy::DInt
+                } else {
+                    IntTy::Int
+                }
+            }
         };
-        if c % TIMER_BASE_US != 0 {
+        Some(((fit(a, ty), fit(b, ty)), ty))
+    }
+
+    /// An integer expression; the type is `None` for an untyped literal (it takes the type of
+    /// the other operand).
+    pub(crate) fn int_expr(&mut self, e: &Expr, site: &Site<'_>) -> Option<(IntExpr, Option<IntTy>)> {
+        if let Some(v) = const_eval(e, self.vars) {
+            let Value::Int(i) = v else {
+                let msg = format!("`{}` is not an integer", self.snippet(e.span));
+                self.err("SFC0810", e.span, msg, site);
+                return None;
+            };
+            let typed = match &e.kind {
+                ExprKind::Literal(l) => l.type_prefix.as_deref().and_then(IntTy::of),
+                ExprKind::Name(id) => self.vars.get(&id.text).and_then(|k| self.vars.list[k].int_ty()),
+                _ => None,
+            };
+            let c = match typed {
+                Some(t) => t.stored(i),
+                None => match i64::try_from(i) {
+                    Ok(c) if (-(1i64 << 31)..(1i64 << 32)).contains(&c) => c,
+                    _ => {
+                        let msg = format!("`{}` does not fit 32 bits", self.snippet(e.span));
+                        self.err("SFC0810", e.span, msg, site);
+                        return None;
+                    }
+                },
+            };
+            return Some((IntExpr::Val(Val::Const(c)), typed));
+        }
+        match &e.kind {
+            ExprKind::Paren(inner) => self.int_expr(inner, site),
+            ExprKind::Name(id) => {
+                let Some(i) = self.vars.get(&id.text) else {
+                    let msg = format!("`{}` is not a variable the S7-200 program can read", id.text);
+                    self.err("SFC0810", e.span, msg, site);
+                    return None;
+                };
+                let v = &self.vars.list[i];
+                match (v.int_ty(), v.val) {
+                    (Some(ty), Some(val)) => Some((IntExpr::Val(val), Some(ty))),
+                    (Some(_), None) => None, // its location was refused at the declaration
+                    (None, _) => {
+                        let msg = format!(
+                            "`{}` is {}: the S7-200 program computes with INT, UINT, WORD, DINT, UDINT and DWORD",
+                            v.name,
+                            v.ty.as_deref().unwrap_or("not an elementary type")
+                        );
+                        self.err("SFC0810", e.span, msg, site);
+                        None
+                    }
+                }
+            }
+            ExprKind::Member { base, member } => {
+                if let ExprKind::Name(id) = &base.kind {
+                    if let Some((c, kind)) = self.counter(&id.text) {
+                        if member.text.eq_ignore_ascii_case("CV") {
+                            if kind == CounterKind::Ctd {
+                                let msg = format!(
+                                    "`{}.CV`: an S7-200 CTD stops at 0 where the IEC CTD counts on below 0, so its \
+                                     count is not read here (its Q is)",
+                                    id.text
+                                );
+                                self.err("SFC0810", e.span, msg, site);
+                                return None;
+                            }
+                            return Some((IntExpr::Val(Val::Counter(c)), Some(IntTy::Int)));
+                        }
+                    }
+                }
+                let msg = format!("`{}` is not a number the S7-200 program can read", self.snippet(e.span));
+                self.err("SFC0810", e.span, msg, site);
+                None
+            }
+            ExprKind::Unary { op: UnaryOp::Neg, operand } => {
+                let (x, t) = self.int_expr(operand, site)?;
+                if t.is_some_and(|t| !t.signed()) {
+                    let msg = format!("`{}` negates an unsigned value", self.snippet(e.span));
+                    self.err("SFC0810", e.span, msg, site);
+                    return None;
+                }
+                Some((IntExpr::Neg(Box::new(x)), t))
+            }
+            ExprKind::Unary { op: UnaryOp::Plus, operand } => self.int_expr(operand, site),
+            ExprKind::Binary { op, lhs, rhs }
+                if matches!(op, BinaryOp::Add | BinaryOp::Sub | BinaryOp::Mul | BinaryOp::Div | BinaryOp::Mod) =>
+            {
+                let l = self.int_expr(lhs, site);
+                let r = self.int_expr(rhs, site);
+                let ((a, ta), (b, tb)) = (l?, r?);
+                let ((a, b), ty) = self.unify(a, ta, b, tb, e.span, site)?;
+                let typed = if ta.is_none() && tb.is_none() { None } else { Some(ty) };
+                if matches!(op, BinaryOp::Div | BinaryOp::Mod) {
+                    if !matches!(b, IntExpr::Val(Val::Const(c)) if c != 0) {
+                        let msg = format!(
+                            "`{}` divides by a variable: when it is 0 the IEC chart stops with a runtime error while \
+                             the S7-200 goes on with the old value, so the program divides by constants only",
+                            self.snippet(e.span)
+                        );
+                        self.err("SFC0810", e.span, msg, site);
+                        return None;
+                    }
+                    if !ty.signed() {
+                        let msg = format!(
+                            "`{}` divides {} values; the S7-200 divides signed numbers (declare INT or DINT)",
+                            self.snippet(e.span),
+                            ty.name()
+                        );
+                        self.err("SFC0810", e.span, msg, site);
+                        return None;
+                    }
+                }
+                let node = match op {
+                    BinaryOp::Add => IntExpr::Bin(ArithOp::Add, Box::new(a), Box::new(b)),
+                    BinaryOp::Sub => IntExpr::Bin(ArithOp::Sub, Box::new(a), Box::new(b)),
+                    BinaryOp::Mul => IntExpr::Bin(ArithOp::Mul, Box::new(a), Box::new(b)),
+                    BinaryOp::Div => IntExpr::Bin(ArithOp::Div, Box::new(a), Box::new(b)),
+                    _ => IntExpr::Mod(Box::new(a), Box::new(b)),
+                };
+                Some((node, typed))
+            }
+            _ => {
+                let msg = format!("`{}` cannot be computed by the S7-200 program", self.snippet(e.span));
+                self.err("SFC0810", e.span, msg, site);
+                None
+            }
+        }
+    }
+
+    /// A duration known when the program is generated: a literal, a CONSTANT or (with a
+    /// warning, by the caller) a TIME variable's initial value.
+    pub(crate) fn duration(&mut self, e: &Expr, site: &Site<'_>) -> Option<i64> {
+        match self.vars.eval_folding(e) {
+            Some(Value::Time(c)) => Some(c),
+            _ => {
+                let msg = format!(
+                    "`{}` is not a duration known when the program is generated: an S7-200 timer preset is a \
+                     constant (write a literal, a CONSTANT, or a TIME variable that the chart does not write)",
+                    self.snippet(e.span)
+                );
+                self.err("SFC0812", e.span, msg, site);
+                None
+            }
+        }
+    }
+
+    /// `step.T op c` with `c` a duration known now, through timer bits. A 100 ms timer counts
+    /// whole ticks of the CPU's time base, so `T >= c` is the bit of a timer with preset
+    /// ⌈c / 100 ms⌉ and `T > c` the one with ⌊c / 100 ms⌋ + 1; `<` and `<=` are the negated
+    /// contacts; `=` and `<>` (a multiple of 100 ms only) combine two timers.
+    fn time_compare(&mut self, s: StepId, op: BinaryOp, other: &Expr, span: Span, site: &Site<'_>) -> Option<Logic> {
+        let c = self.duration(other, site)?;
+        let exact = c % TIMER_BASE_US == 0;
+        if matches!(op, BinaryOp::Eq | BinaryOp::Ne) && !exact {
             let msg = format!(
-                "{} is not a multiple of 100 ms, the resolution of the S7-200 timers used for step times",
-                fmt_time(c)
+                "`{}`: a step time counts whole 100 ms timer ticks, so = and <> need a multiple of 100 ms",
+                self.snippet(span)
             );
             self.err("SFC0812", other.span, msg, site);
             return None;
         }
-        let n = c / TIMER_BASE_US;
+        let ge_pt = c.div_euclid(TIMER_BASE_US) + i64::from(!exact && c > 0);
+        let gt_pt = c.div_euclid(TIMER_BASE_US) + 1;
         let needed = match op {
-            BinaryOp::Ge | BinaryOp::Lt => n,
-            _ => n + 1,
+            BinaryOp::Ge | BinaryOp::Lt => ge_pt,
+            _ => gt_pt,
         };
         if needed > MAX_PT {
             let msg = format!(
-                "`{}` needs a timer preset of {needed} × 100 ms, beyond the S7-200 maximum of +32767 (3276.7 s)",
+                "`{}` needs a timer preset of {needed} x 100 ms, beyond the S7-200 maximum of +32767 (3276.7 s)",
                 self.snippet(span)
             );
             self.err("SFC0812", span, msg, site);
@@ -388,12 +722,12 @@ impl Lowerer<'_> {
             Logic::bit(Addr::Timer(t), label)
         };
         Some(match op {
-            BinaryOp::Ge => ge(n, self.timers),
-            BinaryOp::Gt => ge(n + 1, self.timers),
-            BinaryOp::Lt => ge(n, self.timers).not(),
-            BinaryOp::Le => ge(n + 1, self.timers).not(),
-            BinaryOp::Eq => Logic::And(vec![ge(n, self.timers), ge(n + 1, self.timers).not()]),
-            _ => Logic::Or(vec![ge(n, self.timers).not(), ge(n + 1, self.timers)]),
+            BinaryOp::Ge => ge(ge_pt, self.timers),
+            BinaryOp::Gt => ge(gt_pt, self.timers),
+            BinaryOp::Lt => ge(ge_pt, self.timers).not(),
+            BinaryOp::Le => ge(gt_pt, self.timers).not(),
+            BinaryOp::Eq => Logic::And(vec![ge(ge_pt, self.timers), ge(gt_pt, self.timers).not()]),
+            _ => Logic::Or(vec![ge(ge_pt, self.timers).not(), ge(gt_pt, self.timers)]),
         })
     }
 
@@ -509,7 +843,7 @@ impl Lowerer<'_> {
                 IlOp::St | IlOp::Set | IlOp::Reset if body.is_some() && !conditional => {
                     let Some(ops) = body.as_deref_mut() else { continue };
                     let Some(target) = ins.operands.first() else { continue };
-                    let Some((addr, name)) = self.target(target, site) else {
+                    let Some((addr, name)) = self.bit_target(target, site) else {
                         ok = false;
                         continue;
                     };
@@ -576,38 +910,68 @@ impl Lowerer<'_> {
     // ---------------------------------------------------------------------------------------
     // Action bodies
 
+    /// A BOOL variable an IL body writes.
+    fn bit_target(&mut self, e: &Expr, site: &Site<'_>) -> Option<(Addr, String)> {
+        match self.target(e, site)? {
+            Target::Bit(a, n) => Some((a, n)),
+            Target::Word(_, ty, n) => {
+                let msg = format!("`{n}` is {}: IL bodies store BOOL variables only here", ty.name());
+                self.err("SFC0811", e.span, msg, site);
+                None
+            }
+        }
+    }
+
     /// A variable an action body writes.
-    fn target(&mut self, e: &Expr, site: &Site<'_>) -> Option<(Addr, String)> {
+    fn target(&mut self, e: &Expr, site: &Site<'_>) -> Option<Target> {
         match &e.kind {
             ExprKind::Paren(inner) => self.target(inner, site),
             ExprKind::Name(id) => {
                 let Some(i) = self.vars.get(&id.text) else {
-                    let msg = format!("`{}` is not a BOOL variable the S7-200 program can write", id.text);
+                    let msg = format!("`{}` is not a variable the S7-200 program can write", id.text);
                     self.err("SFC0811", e.span, msg, site);
                     return None;
                 };
                 let v = &self.vars.list[i];
-                if !v.is_bit() {
-                    let msg = format!(
-                        "`{}` is {}: the S7-200 program assigns BOOL variables only",
-                        v.name,
-                        if v.constant {
-                            "a constant".to_string()
-                        } else {
-                            v.ty.clone().unwrap_or_else(|| "not BOOL".to_string())
-                        }
-                    );
+                if v.constant {
+                    let msg = format!("`{}` is a constant", v.name);
                     self.err("SFC0811", e.span, msg, site);
                     return None;
                 }
-                let (name, addr) = (v.name.clone(), v.addr?);
-                self.writable(addr, &name, e.span, site)?;
-                Some((addr, name))
+                if v.is_bit() {
+                    let (name, addr) = (v.name.clone(), v.addr?);
+                    self.writable(addr, &name, e.span, site)?;
+                    return Some(Target::Bit(addr, name));
+                }
+                if let (Some(ty), true) = (v.int_ty(), v.is_word()) {
+                    let (name, val) = (v.name.clone(), v.val?);
+                    if let Val::Word(super::ir::Area::I, _) | Val::DWord(super::ir::Area::I, _) = val {
+                        let msg = format!("`{name}` is in the input image: the program cannot write it");
+                        self.err("SFC0814", e.span, msg, site);
+                        return None;
+                    }
+                    return Some(Target::Word(val, ty, name));
+                }
+                let msg = if v.is_time() {
+                    format!(
+                        "`{}` is TIME: the S7-200 program uses TIME variables as timer presets fixed at their \
+                         initial value, so the chart cannot change them",
+                        v.name
+                    )
+                } else {
+                    format!(
+                        "`{}` is {}: the S7-200 program assigns BOOL and integer variables",
+                        v.name,
+                        v.ty.as_deref().unwrap_or("not an elementary type")
+                    )
+                };
+                self.err("SFC0811", e.span, msg, site);
+                None
             }
             ExprKind::Address(a) => match bit_address(a) {
                 Ok(addr) => {
                     self.writable(addr, &a.text, e.span, site)?;
-                    Some((addr, a.text.clone()))
+                    Some(Target::Bit(addr, a.text.clone()))
                 }
                 Err(msg) => {
                     self.err("SFC0814", e.span, msg, site);
@@ -631,6 +995,99 @@ impl Lowerer<'_> {
         Some(())
     }
 
+    /// `C(CU := …, R := …, PV := …)` of a counter instance.
+    fn counter_call(&mut self, call: &Expr, span: Span, site: &Site<'_>) -> Option<BodyOp> {
+        let ExprKind::Call { callee, args } = &call.kind else { return None };
+        let Some((c, kind)) = self.counter(&callee.text) else {
+            let msg = format!(
+                "the call of `{}` cannot be translated: the S7-200 program calls counter blocks (CTU, CTD, CTUD) only",
+                callee.text
+            );
+            self.err("SFC0811", span, msg, site);
+            return None;
+        };
+        if let Some(first) = self.counters.list[c].call {
+            let d = Diagnostic::error(
+                "SFC0811",
+                span,
+                format!(
+                    "`{}` is called a second time: an S7-200 counter instruction must run at most once per scan, \
+                     so each counter block has one call",
+                    callee.text
+                ),
+            )
+            .with_element(site.element)
+            .with_label(first, "first call");
+            self.diags.push(d);
+            return None;
+        }
+        self.counters.list[c].call = Some(span);
+        let (mut up, mut down, mut reset, mut preset) =
+            (Logic::Const(false), Logic::Const(false), Logic::Const(false), Val::Const(0));
+        let mut ok = true;
+        for a in args {
+            let (Some(name), false, Some(value)) = (&a.name, a.output, &a.value) else {
+                let msg = format!(
+                    "`{}`: write the counter's inputs by name (`CU := x`); outputs are read as `{}.Q`",
+                    self.snippet(a.span),
+                    callee.text
+                );
+                self.err("SFC0811", a.span, msg, site);
+                ok = false;
+                continue;
+            };
+            let n = name.text.to_ascii_uppercase();
+            match (kind, n.as_str()) {
+                (CounterKind::Ctu | CounterKind::Ctud, "CU") => match self.expr(value, site) {
+                    Some(l) => up = l,
+                    None => ok = false,
+                },
+                (CounterKind::Ctd | CounterKind::Ctud, "CD") => match self.expr(value, site) {
+                    Some(l) => down = l,
+                    None => ok = false,
+                },
+                (CounterKind::Ctu | CounterKind::Ctud, "R") | (CounterKind::Ctd, "LD") => {
+                    match self.expr(value, site) {
+                        Some(l) => reset = l,
+                        None => ok = false,
+                    }
+                }
+                (CounterKind::Ctud, "LD") => match const_eval(value, self.vars) {
+                    Some(Value::Bool(false)) => {}
+                    _ => {
+                        let msg = "the S7-200 CTUD has no load input: `LD` must be FALSE".to_string();
+                        self.err("SFC0811", a.span, msg, site);
+                        ok = false;
+                    }
+                },
+                (_, "PV") => match self.int_expr(value, site) {
+                    Some((IntExpr::Val(v), t)) if t.is_none_or(|t| t == IntTy::Int) => {
+                        if kind == CounterKind::Ctd && !matches!(v, Val::Const(c) if c >= 0) {
+                            let msg = "an S7-200 CTD counts down to 0: its PV must be a constant >= 0".to_string();
+                            self.err("SFC0811", a.span, msg, site);
+                            ok = false;
+                        } else {
+                            preset = v;
+                        }
+                    }
+                    Some(_) => {
+                        let msg = "the preset of a counter is an INT variable or constant".to_string();
+                        self.err("SFC0811", a.span, msg, site);
+                        ok = false;
+                    }
+                    None => ok = false,
+                },
+                _ => {
+                    let msg = format!("`{}` is not an input of {}", name.text, kind.name());
+                    self.err("SFC0811", a.span, msg, site);
+                    ok = false;
+                }
+            }
+        }
+        let qd = self.counters.list[c].qd;
+        ok.then(|| BodyOp::Count { counter: c, kind, up, down, reset, preset, qd, text: self.snippet(span) })
+    }
+
     /// An ST action body.
     pub(crate) fn st_body(&mut self, stmts: &[Stmt], site: &Site<'_>) -> Option<Vec<BodyOp>> {
         let mut out = Vec::new();
@@ -639,17 +1096,38 @@ impl Lowerer<'_> {
             match &s.kind {
                 StmtKind::Empty => {}
                 StmtKind::Assign { target, value } => {
-                    // The value is lowered only for a BOOL target: one diagnostic per statement.
-                    let t = self.target(target, site);
-                    let v = match t {
-                        Some(_) => self.expr(value, site),
-                        None => None,
-                    };
-                    match (t, v) {
-                        (Some((target, name)), Some(value)) => {
-                            out.push(BodyOp::Assign { target, name, value, text: self.snippet(s.span) })
-                        }
-                        _ => ok = false,
+                    // The value is lowered only for a known target: one diagnostic per statement.
+                    let text = self.snippet(s.span);
+                    match self.target(target, site) {
+                        Some(Target::Bit(t, name)) => match self.expr(value, site) {
+                            Some(v) => out.push(BodyOp::Assign { target: t, name, value: v, text }),
+                            None => ok = false,
+                        },
+                        Some(Target::Word(t, ty, name)) => match self.int_expr(value, site) {
+                            Some((v, vt)) => {
+                                let v = match (vt, v) {
+                                    (None, IntExpr::Val(Val::Const(c))) => {
+                                        IntExpr::Val(Val::Const(ty.stored(i128::from(c))))
+                                    }
+                                    (None, v) => v,
+                                    (Some(x), v) if x == ty => v,
+                                    (Some(IntTy::Int), v) if ty == IntTy::DInt => IntExpr::Widen(Box::new(v)),
+                                    (Some(x), _) => {
+                                        let msg = format!(
+                                            "`{text}` assigns {} to {} `{name}`: convert explicitly",
+                                            x.name(),
+                                            ty.name()
+                                        );
+                                        self.err("SFC0811", s.span, msg, site);
+                                        ok = false;
+                                        continue;
+                                    }
+                                };
+                                out.push(BodyOp::Move { target: t, wide: ty.wide(), name, value: v, text });
+                            }
+                            None => ok = false,
+                        },
+                        None => ok = false,
                     }
                 }
                 StmtKind::If { branches, else_body } => {
@@ -667,15 +1145,18 @@ impl Lowerer<'_> {
                         None => Some(Vec::new()),
                     };
                     let head = self.text.get(s.span.range()).and_then(|t| t.lines().next()).unwrap_or("IF");
-                    let text = one_line(head);
+                    let text = super::ir::one_line(head);
                     match e {
                         Some(else_body) if ok => out.push(BodyOp::If { branches: lowered, else_body, text }),
                         _ => ok = false,
                     }
                 }
+                StmtKind::Call(call) => match self.counter_call(call, s.span, site) {
+                    Some(op) => out.push(op),
+                    None => ok = false,
+                },
                 other => {
                     let what = match other {
-                        StmtKind::Call(_) => "a call (function or function block)",
                         StmtKind::Case { .. } => "CASE",
                         StmtKind::For { .. } => "FOR",
                         StmtKind::While { .. } => "WHILE",
@@ -685,7 +1166,8 @@ impl Lowerer<'_> {
                         _ => "this statement",
                     };
                     let msg = format!(
-                        "{what} cannot be translated: S7-200 action bodies are BOOL assignments and IF statements"
+                        "{what} cannot be translated: S7-200 action bodies are assignments, IF statements and \
+                         counter calls"
                     );
                     self.err("SFC0811", s.span, msg, site);
                     ok = false;

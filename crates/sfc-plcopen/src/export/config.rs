@@ -23,6 +23,8 @@ struct Resource {
     name: String,
     tasks: Vec<Task>,
     instances: Vec<Instance>,
+    /// `VAR_GLOBAL … END_VAR` texts of the resource (its own scope).
+    globals: Vec<String>,
 }
 
 struct Config {
@@ -49,7 +51,8 @@ fn parse(text: &str) -> Option<Config> {
     let mut cfg = Config { name: ident(1)?, resources: Vec::new(), globals: Vec::new() };
     let mut i = 2;
     // Tasks and programs directly in the configuration go to an implicit resource.
-    let mut implicit = Resource { name: "resource1".into(), tasks: Vec::new(), instances: Vec::new() };
+    let mut implicit =
+        Resource { name: "resource1".into(), tasks: Vec::new(), instances: Vec::new(), globals: Vec::new() };
     let mut current: Option<Resource> = None;
     while i < toks.len() {
         if kw(i, "END_CONFIGURATION") {
@@ -62,6 +65,7 @@ fn parse(text: &str) -> Option<Config> {
                 name: ident(i + 1).unwrap_or_else(|| "resource1".into()),
                 tasks: Vec::new(),
                 instances: Vec::new(),
+                globals: Vec::new(),
             });
             // Skip `ON type`.
             i += 2;
@@ -80,7 +84,11 @@ fn parse(text: &str) -> Option<Config> {
                 j += 1;
             }
             let end = toks.get(j).map(|t| t.3).unwrap_or(text.len() as u32);
-            cfg.globals.push(slice(text, Span::new(0, start, end)).to_string());
+            let g = slice(text, Span::new(0, start, end)).to_string();
+            match current.as_mut() {
+                Some(r) => r.globals.push(g),
+                None => cfg.globals.push(g),
+            }
             i = j + 1;
             continue;
         } else if kw(i, "TASK") {
@@ -157,6 +165,22 @@ fn parse(text: &str) -> Option<Config> {
     Some(cfg)
 }
 
+/// Writes `VAR_GLOBAL … END_VAR` texts as `globalVars` lists.
+fn write_globals(x: &mut X, texts: &[String]) {
+    for g in texts {
+        // Parsed in a wrapper so the declarations come out as for a POU.
+        let wrapped = format!("PROGRAM W\n{g}\nEND_PROGRAM\n");
+        let (u, _) = sfc_syntax::parse(0, &wrapped);
+        for it in &u.items {
+            if let ast::Item::Pou(p) = it {
+                for b in &p.var_blocks {
+                    write_var_block(x, &wrapped, b, "globalVars");
+                }
+            }
+        }
+    }
+}
+
 fn write_resource(x: &mut X, r: &Resource) {
     x.open("resource", &[("name", r.name.clone())]);
     for t in &r.tasks {
@@ -181,6 +205,7 @@ fn write_resource(x: &mut X, r: &Resource) {
             x.close("task");
         }
     }
+    write_globals(x, &r.globals);
     for i in &r.instances {
         let bound = i.task.as_deref().is_some_and(|n| r.tasks.iter().any(|t| t.name.eq_ignore_ascii_case(n)));
         if !bound {
@@ -218,18 +243,7 @@ pub(super) fn write_instances(x: &mut X, src: &str, unit: &ast::SourceUnit) {
                 write_var_block(x, src, b, "globalVars");
             }
         }
-        for g in &c.globals {
-            // Parsed in a wrapper so the declarations come out as for a POU.
-            let wrapped = format!("PROGRAM W\n{g}\nEND_PROGRAM\n");
-            let (u, _) = sfc_syntax::parse(0, &wrapped);
-            for it in &u.items {
-                if let ast::Item::Pou(p) = it {
-                    for b in &p.var_blocks {
-                        write_var_block(x, &wrapped, b, "globalVars");
-                    }
-                }
-            }
-        }
+        write_globals(x, &c.globals);
         x.close("configuration");
     }
     x.close("configurations");

@@ -71,6 +71,8 @@ enum Kind {
     /// Action block of a step: the step, the range of its associations.
     Actions(usize, std::ops::Range<usize>),
     Comment(String),
+    /// A transition not connected on both sides (`sfc.loose`).
+    Loose(attrs::Loose),
 }
 
 struct El {
@@ -602,6 +604,25 @@ fn build(chart: &Chart, pou_attrs: &[ast::Attribute]) -> Vec<El> {
             });
         }
     }
+    // Transitions left unconnected while drawing, wired to the steps they were wired to.
+    let right = els.iter().map(|e| e.geo.x + e.geo.w).fold(0.0, f64::max);
+    for (k, v) in attrs::all(pou_attrs, attrs::LOOSE).into_iter().enumerate() {
+        let Some(l) = attrs::Loose::read(&attrs::unescape(v)) else { continue };
+        let [x, y, w, h] = l.rect.unwrap_or([round(right + 60.0), 40.0 + 60.0 * k as f64, TRANS_W, TRANS_H]);
+        let geo = Geo { x, y, w, h };
+        let id = new_id();
+        let from: Vec<P> =
+            l.from.iter().filter_map(|n| chart.step(n)).map(|s| P { id: step_id(s), at: sg[s].bottom() }).collect();
+        let ins = if from.is_empty() { Vec::new() } else { vec![In { at: geo.top(), conns: from }] };
+        for s in l.to.iter().filter_map(|n| chart.step(n)) {
+            let p = P { id, at: geo.bottom() };
+            match els[s].ins.first_mut() {
+                Some(i) => i.conns.push(p),
+                None => els[s].ins.push(In { at: sg[s].top(), conns: vec![p] }),
+            }
+        }
+        els.push(El { id, kind: Kind::Loose(l), geo, ins, outs: Vec::new() });
+    }
     els
 }
 
@@ -790,6 +811,7 @@ pub(super) fn write_chart(x: &mut X, src: &str, pou: &ast::Pou, chart: &Chart) {
                 // Positions, sizes and action blocks are written in the elements (or, for a chart
                 // laid out afresh, replaced).
                 let native = [attrs::X, attrs::Y, attrs::W, attrs::H, attrs::ACTIONBLOCK, attrs::DESCRIPTION];
+                x.take_comments(src, step.span);
                 x.add_data(&step.attributes, &[], &native);
                 x.documentation(&step.attributes);
                 x.close("step");
@@ -830,8 +852,23 @@ pub(super) fn write_chart(x: &mut X, src: &str, pou: &ast::Pou, chart: &Chart) {
                 if by_ref.contains_key(t) {
                     native.push(attrs::REFERENCE);
                 }
+                x.take_comments(src, tr.span);
                 x.add_data(&tr.attributes, &extra, &native);
                 x.documentation(&tr.attributes);
+                x.close("transition");
+            }
+            Kind::Loose(l) => {
+                x.open("transition", &size_attrs(el));
+                x.position("position", el.geo.x, el.geo.y);
+                for i in &el.ins {
+                    write_in(x, el, i, false);
+                }
+                write_out(x, "connectionPointOut", el, el.geo.bottom(), false);
+                x.open("condition", &[]);
+                x.open("inline", &[("name", l.name.clone())]);
+                x.formatted("ST", &l.condition);
+                x.close("inline");
+                x.close("condition");
                 x.close("transition");
             }
             Kind::SelDiv | Kind::SimDiv => {

@@ -52,10 +52,12 @@ struct G<'a, 'i> {
     pos: (f64, f64),
 }
 
-struct Net<'a, 'i> {
+pub(super) struct Net<'a, 'i> {
     els: Vec<G<'a, 'i>>,
     ids: HashMap<u64, usize>,
     consumed: Vec<bool>,
+    /// How many input pins read each element's outputs (`fanout[i]`, all outputs together).
+    fanout: Vec<usize>,
 }
 
 fn pin(n: Node, cp: Option<Node>, negated_attr: &str, edge_attr: &str) -> Pin {
@@ -79,7 +81,7 @@ fn pin(n: Node, cp: Option<Node>, negated_attr: &str, edge_attr: &str) -> Pin {
     }
 }
 
-fn parse<'a, 'i>(body: Node<'a, 'i>) -> Net<'a, 'i> {
+pub(super) fn parse<'a, 'i>(body: Node<'a, 'i>) -> Net<'a, 'i> {
     let mut els = Vec::new();
     let mut ids = HashMap::new();
     for n in elements(body) {
@@ -146,16 +148,28 @@ fn parse<'a, 'i>(body: Node<'a, 'i>) -> Net<'a, 'i> {
         els.push(g);
     }
     let mut consumed = vec![false; els.len()];
+    let mut fanout = vec![0usize; els.len()];
     for g in &els {
         for p in g.ins.iter().chain(g.in_outs.iter()) {
             for (r, _, _) in &p.conns {
-                if let Some(&i) = ids.get(r) {
-                    consumed[i] = true;
+                // `ids` holds positions in `els`, which both tables have.
+                if let (Some(c), Some(f)) =
+                    ids.get(r).and_then(|&i| Some((consumed.get_mut(i)?, fanout.get_mut(i)?))).unzip()
+                {
+                    *c = true;
+                    *f += 1;
                 }
             }
         }
     }
-    Net { els, ids, consumed }
+    Net { els, ids, consumed, fanout }
+}
+
+impl Net<'_, '_> {
+    /// How many input pins read element `i`'s outputs.
+    fn fanout(&self, i: usize) -> usize {
+        self.fanout.get(i).copied().unwrap_or(0)
+    }
 }
 
 #[derive(Clone, Copy, PartialEq, Eq)]
@@ -174,6 +188,28 @@ struct Tr<'c, 'x, 'n, 'a, 'i> {
     reported: HashSet<usize>,
     depth: u32,
     indent: String,
+    /// Values of elements read more than once, computed once into a temporary (so the size of
+    /// the translation stays linear in the size of the network): element → its temporary.
+    shared: HashMap<usize, Frag>,
+    /// Inside a condition's function (see [`condition`]): the arguments passed to it, each an
+    /// expression of the POU, and the parameter standing for it.
+    params: Option<Vec<(Frag, String)>>,
+    /// The statements of that function (its temporaries).
+    fn_stmts: Vec<Frag>,
+    /// The EN inputs of the blocks the statement being written reads: it runs only when they
+    /// are TRUE (`IF en THEN … END_IF;`, as Beremiz generates it).
+    gates: Vec<Frag>,
+}
+
+/// A boolean operator block (a function without instance whose result is BOOL when its
+/// operands are): the nodes whose sharing is written with BOOL temporaries.
+fn is_boolean_op(g: &G) -> bool {
+    g.kind == "block"
+        && attr(g.n, "instanceName").is_none_or(|s| s.trim().is_empty())
+        && ["AND", "OR", "XOR", "NOT"]
+            .iter()
+            .any(|k| attr(g.n, "typeName").is_some_and(|t| t.trim().eq_ignore_ascii_case(k)))
+        && !g.ins.iter().any(|p| p.formal.as_deref().is_some_and(|f| f.eq_ignore_ascii_case("EN")))
 }
 
 /// Whether a text needs no parentheses as an operand: a name, a literal, a member or index
@@ -226,6 +262,20 @@ impl Tr<'_, '_, '_, '_, '_> {
         }
     }
 
+    fn is_active(&self, i: usize) -> bool {
+        self.active.get(i).copied().unwrap_or(false)
+    }
+
+    fn set_active(&mut self, i: usize, on: bool) {
+        if let Some(a) = self.active.get_mut(i) {
+            *a = on;
+        }
+    }
+
+    fn is_done(&self, i: usize) -> bool {
+        self.done.get(i).copied().unwrap_or(false)
+    }
+
     fn falsum(&self, i: usize) -> Frag {
         match self.net.els.get(i) {
             Some(g) => Frag::located("FALSE", anchor(g.n)),
@@ -269,6 +319,66 @@ impl Tr<'_, '_, '_, '_, '_> {
 
     /// The value produced by element `i` (at its output `formal`).
     fn value(&mut self, i: usize, formal: Option<&str>) -> Frag {
+        let net = self.net;
+        let Some(g) = net.els.get(i) else { return self.falsum(i) };
+        let boolean = is_boolean_op(g) || g.kind == "contact";
+        if let Some(t) = self.shared.get(&i) {
+            return t.clone();
+        }
+        // Inside a condition's function, every operand that is not boolean logic is an
+        // argument: the function sees only its parameters.
+        if self.params.is_some() && !boolean && g.kind != "leftPowerRail" {
+            let saved = self.params.take();
+            let v = self.value(i, formal);
+            self.params = saved;
+            return self.as_param(v);
+        }
+        if boolean && net.fanout(i) > 1 && self.mode_shares() {
+            let v = self.value_unshared(i, formal);
+            let at = anchor(g.n);
+            let name = match self.params {
+                Some(_) => {
+                    let name = format!("SHARED{}", self.fn_stmts.len() + 1);
+                    let mut f = Frag::plain(format!("    {name} := "));
+                    f.push(&v);
+                    f.push_str(";\n");
+                    self.fn_stmts.push(f);
+                    name
+                }
+                None => {
+                    let name = self.cx.fresh_var("SHARED", "BOOL");
+                    let mut f = Frag::plain(format!("{}{name} := ", self.indent));
+                    f.push(&v);
+                    f.push_str(";\n");
+                    self.stmts.push(f.locate(at.clone()));
+                    name
+                }
+            };
+            let t = Frag::located(name, at);
+            self.shared.insert(i, t.clone());
+            return t;
+        }
+        self.value_unshared(i, formal)
+    }
+
+    /// Inside a condition's function: the parameter that passes `v` in (one per distinct
+    /// argument). Elsewhere `v` itself.
+    fn as_param(&mut self, v: Frag) -> Frag {
+        let Some(list) = self.params.as_mut() else { return v };
+        if let Some((_, p)) = list.iter().find(|(f, _)| f.text == v.text) {
+            return Frag::plain(p.clone());
+        }
+        let p = format!("IN{}", list.len() + 1);
+        list.push((v, p.clone()));
+        Frag::plain(p)
+    }
+
+    /// Whether shared values get temporaries here: in statements, and in a condition's function.
+    fn mode_shares(&self) -> bool {
+        self.mode == Mode::Statements || self.params.is_some()
+    }
+
+    fn value_unshared(&mut self, i: usize, formal: Option<&str>) -> Frag {
         if self.depth > MAX_DEPTH {
             self.report(i, "SFC0705", "the network is nested too deeply to be imported".into());
             return self.falsum(i);
@@ -281,7 +391,7 @@ impl Tr<'_, '_, '_, '_, '_> {
 
     fn value_inner(&mut self, i: usize, formal: Option<&str>) -> Frag {
         let net = self.net;
-        let g = &net.els[i];
+        let Some(g) = net.els.get(i) else { return self.falsum(i) };
         let at = anchor(g.n);
         let negated_out = g.outs.first().is_some_and(|o| o.negated);
         match g.kind {
@@ -290,7 +400,7 @@ impl Tr<'_, '_, '_, '_, '_> {
                     self.report(i, "SFC0705", "the variable has no expression".into());
                     return self.falsum(i);
                 };
-                let f = text_frag(t);
+                let f = text_frag(&super::dialect::map(self.cx, t));
                 if negated_out {
                     f.not()
                 } else {
@@ -322,6 +432,7 @@ impl Tr<'_, '_, '_, '_, '_> {
                 } else if let Some(e @ ("rising" | "falling")) = xml::attr(g.n, "edge") {
                     term = self.trigger(e, term, &at);
                 }
+                let term = self.as_param(term);
                 let power = match g.ins.first() {
                     Some(p) => self.input(i, p),
                     None => None,
@@ -353,7 +464,7 @@ impl Tr<'_, '_, '_, '_, '_> {
                     e.kind == "connector" && attr(e.n, "name").is_some_and(|n| n.trim().eq_ignore_ascii_case(name))
                 });
                 match conn {
-                    Some(c) => match net.els[c].ins.first() {
+                    Some(c) => match net.els.get(c).and_then(|e| e.ins.first()) {
                         Some(p) => self.input(c, p).unwrap_or_else(|| self.falsum(c)),
                         None => self.falsum(c),
                     },
@@ -373,7 +484,7 @@ impl Tr<'_, '_, '_, '_, '_> {
 
     fn block_value(&mut self, i: usize, formal: Option<&str>) -> Frag {
         let net = self.net;
-        let g = &net.els[i];
+        let Some(g) = net.els.get(i) else { return self.falsum(i) };
         let at = anchor(g.n);
         let type_name = attr(g.n, "typeName").unwrap_or("").trim().to_string();
         let instance = attr(g.n, "instanceName").map(str::trim).filter(|s| !s.is_empty()).map(str::to_string);
@@ -383,12 +494,23 @@ impl Tr<'_, '_, '_, '_, '_> {
         };
         let out_name =
             out.map(|o| o.formal.clone()).or_else(|| formal.map(str::to_string)).unwrap_or_else(|| "OUT".into());
+        // ENO is TRUE exactly when the block ran: its EN.
+        if out_name.eq_ignore_ascii_case("ENO") {
+            if instance.is_some() {
+                self.statement(i);
+            }
+            let en = g.ins.iter().find(|p| p.formal.as_deref().is_some_and(|f| f.eq_ignore_ascii_case("EN")));
+            return match en.and_then(|p| self.input(i, p)) {
+                Some(v) => v,
+                None => Frag::located("TRUE", at),
+            };
+        }
         let negated = out.is_some_and(|o| o.negated);
         let v = if let Some(inst) = instance {
             self.statement(i);
             Frag::located(format!("{inst}.{out_name}"), attr_range_or(g.n, "instanceName", &at))
         } else {
-            if self.active[i] {
+            if self.is_active(i) {
                 self.report(
                     i,
                     "SFC0706",
@@ -396,9 +518,9 @@ impl Tr<'_, '_, '_, '_, '_> {
                 );
                 return self.falsum(i);
             }
-            self.active[i] = true;
+            self.set_active(i, true);
             let v = self.function(i, &type_name);
-            self.active[i] = false;
+            self.set_active(i, false);
             v
         };
         if negated {
@@ -412,18 +534,25 @@ impl Tr<'_, '_, '_, '_, '_> {
     /// the power rail).
     fn args(&mut self, i: usize) -> Vec<(Option<String>, Frag)> {
         let net = self.net;
-        let g = &net.els[i];
+        let Some(g) = net.els.get(i) else { return Vec::new() };
         let mut out = Vec::new();
         for p in g.ins.iter().chain(g.in_outs.iter()) {
             let is_en = p.formal.as_deref().is_some_and(|f| f.eq_ignore_ascii_case("EN"));
             let Some(v) = self.input(i, p) else { continue };
             if is_en {
                 if v.text != "TRUE" {
-                    self.report(
-                        i,
-                        "SFC0705",
-                        "a block enabled through EN is not imported; it is called unconditionally".into(),
-                    );
+                    if self.mode == Mode::Statements {
+                        // The block runs only when EN is TRUE.
+                        if !self.gates.iter().any(|g| g.text == v.text) {
+                            self.gates.push(v);
+                        }
+                    } else {
+                        self.report(
+                            i,
+                            "SFC0705",
+                            "a block enabled through EN cannot be part of a transition condition; it is evaluated unconditionally".into(),
+                        );
+                    }
                 }
                 continue;
             }
@@ -434,7 +563,7 @@ impl Tr<'_, '_, '_, '_, '_> {
 
     /// A function (a block without instance) as an expression.
     fn function(&mut self, i: usize, type_name: &str) -> Frag {
-        let at = anchor(self.net.els[i].n);
+        let at = self.net.els.get(i).map_or(0..0, |g| anchor(g.n));
         let args = self.args(i);
         let vals: Vec<Frag> = args.iter().map(|a| a.1.clone()).collect();
         let upper = type_name.to_ascii_uppercase();
@@ -463,7 +592,7 @@ impl Tr<'_, '_, '_, '_, '_> {
             Frag::infix(op, vals)
         } else if let (Some(op), true) = (cmp, vals.len() >= 2) {
             // GT(a, b, c) is a > b AND b > c.
-            let pairs: Vec<Frag> = vals.windows(2).map(|w| Frag::infix(op, vec![w[0].clone(), w[1].clone()])).collect();
+            let pairs: Vec<Frag> = vals.windows(2).map(|w| Frag::infix(op, w.to_vec())).collect();
             if pairs.len() == 1 {
                 pairs.into_iter().next().unwrap_or_default()
             } else {
@@ -494,15 +623,16 @@ impl Tr<'_, '_, '_, '_, '_> {
 
     /// Makes sure the statement of element `i` has been written (before its value is read).
     fn statement(&mut self, i: usize) {
-        if self.done[i] || self.active[i] {
-            return;
-        }
-        if self.mode == Mode::Condition && self.net.els[i].kind == "coil" {
-            return;
-        }
-        self.active[i] = true;
         let net = self.net;
-        let g = &net.els[i];
+        let Some(g) = net.els.get(i) else { return };
+        if self.is_done(i) || self.is_active(i) {
+            return;
+        }
+        if self.mode == Mode::Condition && g.kind == "coil" {
+            return;
+        }
+        self.set_active(i, true);
+        let gates_before = std::mem::take(&mut self.gates);
         let at = anchor(g.n);
         let ind = self.indent.clone();
         let stmt: Option<Frag> = match g.kind {
@@ -589,9 +719,24 @@ impl Tr<'_, '_, '_, '_, '_> {
             }
             _ => None,
         };
-        self.active[i] = false;
-        self.done[i] = true;
+        self.set_active(i, false);
+        if let Some(d) = self.done.get_mut(i) {
+            *d = true;
+        }
+        let gates = std::mem::replace(&mut self.gates, gates_before);
         if let Some(s) = stmt {
+            let s = if gates.is_empty() {
+                s
+            } else {
+                // `IF en THEN stmt END_IF;` with the statement indented one level more.
+                let mut f = Frag::plain(format!("{ind}IF "));
+                f.push(&Frag::infix("AND", gates));
+                f.push_str(" THEN\n    ");
+                let body = s;
+                f.push(&body);
+                f.push_str(&format!("{ind}END_IF;\n"));
+                f
+            };
             self.stmts.push(s.locate(at));
         }
     }
@@ -625,18 +770,21 @@ fn call(name: &str, args: &[(Option<String>, Frag)], positional: bool) -> Frag {
 fn sinks(net: &Net) -> Vec<usize> {
     let mut list: Vec<usize> = (0..net.els.len())
         .filter(|&i| {
-            let g = &net.els[i];
+            let Some(g) = net.els.get(i) else { return false };
             match g.kind {
                 "outVariable" | "coil" => true,
                 "inOutVariable" => g.ins.first().is_some_and(|p| !p.conns.is_empty()),
-                "block" => attr(g.n, "instanceName").is_some_and(|s| !s.trim().is_empty()) || !net.consumed[i],
+                "block" => {
+                    attr(g.n, "instanceName").is_some_and(|s| !s.trim().is_empty())
+                        || !net.consumed.get(i).copied().unwrap_or(false)
+                }
                 _ => false,
             }
         })
         .collect();
-    let ordered = list.iter().any(|&i| net.els[i].order > 0);
+    let ordered = list.iter().any(|&i| net.els.get(i).is_some_and(|g| g.order > 0));
     list.sort_by(|&a, &b| {
-        let (ga, gb) = (&net.els[a], &net.els[b]);
+        let (Some(ga), Some(gb)) = (net.els.get(a), net.els.get(b)) else { return a.cmp(&b) };
         let ka = if ordered && ga.order > 0 { ga.order } else { u64::MAX };
         let kb = if ordered && gb.order > 0 { gb.order } else { u64::MAX };
         ka.cmp(&kb).then(ga.pos.1.total_cmp(&gb.pos.1)).then(ga.pos.0.total_cmp(&gb.pos.0)).then(a.cmp(&b))
@@ -651,7 +799,14 @@ fn unsupported(cx: &mut Ctx, net: &Net) {
             "label" | "jump" | "return" => {
                 cx.diag("SFC0705", anchor(g.n), format!("`{}` (FBD control flow) is not imported", g.kind));
             }
-            "vendorElement" | "error" => {
+            "vendorElement" => {
+                cx.diag(
+                    "SFC0711",
+                    anchor(g.n),
+                    "a vendor element (drawn by its own tool, no IEC meaning) is skipped; the rest of the network is imported",
+                );
+            }
+            "error" => {
                 cx.diag("SFC0705", anchor(g.n), format!("a `{}` element cannot be imported", g.kind));
             }
             _ => {}
@@ -683,6 +838,10 @@ pub(super) fn statements(cx: &mut Ctx, body: Node, indent: &str) -> Frag {
         reported: HashSet::new(),
         depth: 0,
         indent: indent.to_string(),
+        shared: HashMap::new(),
+        params: None,
+        fn_stmts: Vec::new(),
+        gates: Vec::new(),
     };
     for i in sinks(&net) {
         tr.statement(i);
@@ -708,6 +867,10 @@ fn condition_tr<'c, 'x, 'n, 'a, 'i>(cx: &'c mut Ctx<'x>, net: &'n Net<'a, 'i>) -
         reported: HashSet::new(),
         depth: 0,
         indent: COMPUTE_INDENT.to_string(),
+        shared: HashMap::new(),
+        params: None,
+        fn_stmts: Vec::new(),
+        gates: Vec::new(),
     }
 }
 
@@ -725,12 +888,83 @@ fn keep_calls(cx: &mut Ctx, stmts: Vec<Frag>, owner: &Range<u32>) {
     cx.compute.extend(stmts);
 }
 
-/// A transition condition wired to an FBD/LD network in an SFC body.
-pub(super) fn condition(cx: &mut Ctx, sfc: Node, cp: Node, owner: &Range<u32>) -> Frag {
-    let net = parse(sfc);
+/// Whether boolean logic reachable from `p` (AND, OR, XOR, NOT blocks, contacts) reads one
+/// element's value more than once: inlined, such a network grows exponentially with its depth.
+fn shares_logic(net: &Net, p: &Pin) -> bool {
+    let mut seen = HashSet::new();
+    let mut todo: Vec<usize> = p.conns.iter().filter_map(|(r, _, _)| net.ids.get(r).copied()).collect();
+    while let Some(i) = todo.pop() {
+        if !seen.insert(i) {
+            continue;
+        }
+        let Some(g) = net.els.get(i) else { continue };
+        if !(is_boolean_op(g) || g.kind == "contact") {
+            continue;
+        }
+        if net.fanout(i) > 1 {
+            return true;
+        }
+        for q in &g.ins {
+            todo.extend(q.conns.iter().filter_map(|(r, _, _)| net.ids.get(r).copied()));
+        }
+    }
+    false
+}
+
+/// The value at `p` as a condition: an expression, or, when its boolean logic shares values, a
+/// call of a function generated for it (a condition cannot hold statements, and a function is
+/// free of side effects), whose temporaries compute each shared value once.
+fn condition_value(tr: &mut Tr, p: &Pin) -> Option<Frag> {
+    if !shares_logic(tr.net, p) {
+        return tr.input(usize::MAX, p);
+    }
+    tr.params = Some(Vec::new());
+    let v = tr.input(usize::MAX, p);
+    let params = tr.params.take().unwrap_or_default();
+    let stmts = std::mem::take(&mut tr.fn_stmts);
+    let v = v?;
+    let cx = &mut *tr.cx;
+    cx.condition_functions += 1;
+    let name = format!("{}_CONDITION{}", cx.pou_name, cx.condition_functions);
+    let mut text = format!("FUNCTION {name} : BOOL\n");
+    if !params.is_empty() {
+        text.push_str("    VAR_INPUT\n");
+        for (_, p) in &params {
+            text.push_str(&format!("        {p} : BOOL;\n"));
+        }
+        text.push_str("    END_VAR\n");
+    }
+    if !stmts.is_empty() {
+        text.push_str("    VAR\n");
+        for k in 1..=stmts.len() {
+            text.push_str(&format!("        SHARED{k} : BOOL;\n"));
+        }
+        text.push_str("    END_VAR\n");
+    }
+    for st in &stmts {
+        text.push_str(&st.text);
+    }
+    text.push_str(&format!("    {name} := {};\nEND_FUNCTION\n\n", v.text));
+    cx.functions.push(text);
+    let mut call = Frag::plain(format!("{name}("));
+    for (k, (arg, p)) in params.iter().enumerate() {
+        if k > 0 {
+            call.push_str(", ");
+        }
+        call.push_str(&format!("{p} := "));
+        call.push(arg);
+    }
+    call.push_str(")");
+    call.atomic = true;
+    Some(call)
+}
+
+/// A transition condition wired to an FBD/LD network in an SFC body (`net`, the body parsed
+/// once for all its conditions).
+pub(super) fn condition(cx: &mut Ctx, net: &Net, cp: Node, owner: &Range<u32>) -> Frag {
     let p = pin(cp, Some(cp), "-", "-");
-    let mut tr = condition_tr(cx, &net);
-    let v = tr.input(usize::MAX, &p);
+    let mut tr = condition_tr(cx, net);
+    let v = condition_value(&mut tr, &p);
     let stmts = std::mem::take(&mut tr.stmts);
     drop(tr);
     keep_calls(cx, stmts, owner);
@@ -748,23 +982,23 @@ pub(super) fn condition(cx: &mut Ctx, sfc: Node, cp: Node, owner: &Range<u32>) -
 pub(super) fn transition_body(cx: &mut Ctx, body: Node, name: &str, owner: &Range<u32>) -> Frag {
     let net = parse(body);
     unsupported(cx, &net);
-    let target = net.els.iter().position(|g| {
+    let target = net.els.iter().enumerate().find(|(_, g)| {
         matches!(g.kind, "outVariable" | "inOutVariable" | "coil")
             && g.text.as_ref().is_some_and(|t| !name.is_empty() && t.text.eq_ignore_ascii_case(name))
     });
-    let Some(t) = target else {
+    let Some((t, target)) = target else {
         cx.diag("SFC0708", anchor(body), format!("the condition body never assigns `{name}`; imported as FALSE"));
         return Frag::located("FALSE", anchor(body));
     };
     let mut tr = condition_tr(cx, &net);
     tr.reported.insert(t);
-    let value = match net.els[t].ins.first() {
-        Some(p) => tr.input(t, p),
+    let value = match target.ins.first() {
+        Some(p) => condition_value(&mut tr, p),
         None => None,
     };
     // Elements that neither feed the condition nor are called for it have no place in it.
     for i in sinks(&net) {
-        if i != t && !tr.done[i] && !tr.reported.contains(&i) {
+        if i != t && !tr.is_done(i) && !tr.reported.contains(&i) {
             tr.report(i, "SFC0710", format!("only the value assigned to `{name}` is imported from a condition body"));
         }
     }
@@ -774,8 +1008,8 @@ pub(super) fn transition_body(cx: &mut Ctx, body: Node, name: &str, owner: &Rang
     match value {
         Some(v) => v,
         None => {
-            cx.diag("SFC0708", anchor(net.els[t].n), format!("nothing is connected to `{name}`; imported as FALSE"));
-            Frag::located("FALSE", anchor(net.els[t].n))
+            cx.diag("SFC0708", anchor(target.n), format!("nothing is connected to `{name}`; imported as FALSE"));
+            Frag::located("FALSE", anchor(target.n))
         }
     }
 }

@@ -13,7 +13,7 @@
 //! TwinCAT write every position as (0, 0): such a body has no layout, and document order stays.
 
 use super::{action_body, attr_xtext, element_attrs, is_ident, network, own_data, Ctx};
-use crate::attrs;
+use crate::attrs::{self, Loose};
 use crate::emit::Frag;
 use crate::xml::{self, anchor, attr, attr_range, child, children, elements, XText};
 use roxmltree::Node;
@@ -82,11 +82,14 @@ struct InlineAction<'a, 'i> {
 struct Graph {
     steps: Vec<OutStep>,
     trans: Vec<OutTrans>,
+    loose: Vec<Loose>,
     entry: Option<Frag>,
     exit: Option<Frag>,
 }
 
 struct Importer<'p, 'a, 'i> {
+    /// Each SFC body's elements read as a network once, for all its wired conditions.
+    nets: HashMap<roxmltree::NodeId, std::rc::Rc<network::Net<'a, 'i>>>,
     inline: Vec<InlineAction<'a, 'i>>,
     /// Per step name: how many inline actions it has so far.
     inline_count: HashMap<String, usize>,
@@ -97,6 +100,7 @@ struct Importer<'p, 'a, 'i> {
 /// Writes the chart of an SFC POU and its actions.
 pub(super) fn chart<'a, 'i>(cx: &mut Ctx, sfc: Node<'a, 'i>, actions: &[Node<'a, 'i>], named: &[Node<'a, 'i>]) {
     let mut imp = Importer {
+        nets: HashMap::new(),
         inline: Vec::new(),
         inline_count: HashMap::new(),
         named_conditions: named,
@@ -109,19 +113,19 @@ pub(super) fn chart<'a, 'i>(cx: &mut Ctx, sfc: Node<'a, 'i>, actions: &[Node<'a,
     let g = graph(cx, &mut imp, sfc, layout, 0, Vec::new());
 
     let mut g = g;
+    cx.loose = std::mem::take(&mut g.loose);
     // Function block calls of condition networks run in an action stored in the initial step.
     let compute = std::mem::take(&mut cx.compute);
     let mut compute_action = None;
     if !compute.is_empty() {
         let first_initial =
             g.steps.iter().enumerate().filter(|(_, s)| s.initial).min_by(|a, b| a.1.key.cmp(&b.1.key)).map(|(i, _)| i);
-        match first_initial {
-            Some(i) => {
+        match first_initial.and_then(|i| g.steps.get_mut(i)) {
+            Some(s) => {
                 let name = cx.fresh_name("COMPUTE_FUNCTION_BLOCKS");
-                g.steps[i].assocs.push(Frag::plain(format!("        {name}(S);\n")));
+                s.assocs.push(Frag::plain(format!("        {name}(S);\n")));
                 // The association belongs to the step's (last) action block.
                 if layout {
-                    let s = &mut g.steps[i];
                     match s.attrs.iter_mut().find(|(k, _)| k == attrs::ACTIONBLOCK) {
                         Some(slot) => {
                             let mut blocks: Vec<String> = slot.1.split(';').map(str::to_string).collect();
@@ -180,27 +184,33 @@ pub(super) fn chart<'a, 'i>(cx: &mut Ctx, sfc: Node<'a, 'i>, actions: &[Node<'a,
         items.iter().filter_map(|(_, it)| if let Item::Trans(t) = it { Some(*t) } else { None }).collect();
     let mut groups: HashMap<&[usize], Vec<usize>> = HashMap::new();
     for (slot, &t) in order.iter().enumerate() {
-        if let Some((div, _)) = &g.trans[t].branch {
+        if let Some((div, _)) = g.trans.get(t).and_then(|t| t.branch.as_ref()) {
             groups.entry(div.as_slice()).or_default().push(slot);
         }
     }
-    let branch_x = |t: usize| g.trans[t].branch.as_ref().map(|b| b.1).unwrap_or(0.0);
+    let branch_x = |t: usize| g.trans.get(t).and_then(|t| t.branch.as_ref()).map(|b| b.1).unwrap_or(0.0);
     let mut new_order = order.clone();
     for slots in groups.values().filter(|s| s.len() > 1) {
-        let mut members: Vec<usize> = slots.iter().map(|&s| order[s]).collect();
+        let mut members: Vec<usize> = slots.iter().filter_map(|&s| order.get(s).copied()).collect();
         members.sort_by(|&a, &b| branch_x(a).total_cmp(&branch_x(b)));
         for (slot, t) in slots.iter().zip(members) {
-            new_order[*slot] = t;
+            if let Some(o) = new_order.get_mut(*slot) {
+                *o = t;
+            }
         }
     }
     order = new_order;
     let mut next_t = 0;
     for (_, it) in &items {
         match it {
-            Item::Step(s) => write_step(cx, &g.steps[*s]),
+            Item::Step(s) => {
+                if let Some(step) = g.steps.get(*s) {
+                    write_step(cx, step);
+                }
+            }
             Item::Trans(_) => {
-                if let Some(&t) = order.get(next_t) {
-                    write_transition(cx, &g.trans[t]);
+                if let Some(t) = order.get(next_t).and_then(|&t| g.trans.get(t)) {
+                    write_transition(cx, t);
                 }
                 next_t += 1;
             }
@@ -240,7 +250,7 @@ pub(super) fn chart<'a, 'i>(cx: &mut Ctx, sfc: Node<'a, 'i>, actions: &[Node<'a,
     let step_pos: HashMap<String, usize> = items
         .iter()
         .filter_map(
-            |(_, it)| if let Item::Step(s) = it { Some(g.steps[*s].name.text.to_ascii_uppercase()) } else { None },
+            |(_, it)| if let Item::Step(s) = it { Some(g.steps.get(*s)?.name.text.to_ascii_uppercase()) } else { None },
         )
         .enumerate()
         .map(|(i, n)| (n, i))
@@ -317,24 +327,25 @@ fn graph<'a, 'i>(
     let mut wire_x: Vec<Vec<Option<f64>>> = vec![Vec::new(); els.len()];
     for (i, e) in els.iter().enumerate() {
         for c in e.ins.iter().flatten() {
-            if let Some(&p) = ids.get(&c.r) {
-                if !consumers[p].contains(&i) {
-                    consumers[p].push(i);
-                    wire_x[p].push(c.last.map(|l| l.0));
+            // `ids` holds positions in `els`, which `consumers` and `wire_x` have too.
+            let Some(&p) = ids.get(&c.r) else { continue };
+            if let (Some(cs), Some(xs)) = (consumers.get_mut(p), wire_x.get_mut(p)) {
+                if !cs.contains(&i) {
+                    cs.push(i);
+                    xs.push(c.last.map(|l| l.0));
                 }
             }
         }
     }
-    for (p, list) in consumers.iter_mut().enumerate() {
-        let xs = &wire_x[p];
-        if els[p].kind == "simultaneousDivergence" && xs.iter().all(Option::is_some) {
+    for ((list, xs), e) in consumers.iter_mut().zip(&wire_x).zip(&els) {
+        if e.kind == "simultaneousDivergence" && xs.iter().all(Option::is_some) {
             let mut pairs: Vec<(usize, f64)> = list.iter().copied().zip(xs.iter().map(|x| x.unwrap_or(0.0))).collect();
             pairs.sort_by(|a, b| a.1.total_cmp(&b.1));
             *list = pairs.into_iter().map(|p| p.0).collect();
         }
     }
 
-    let mut g = Graph { steps: Vec::new(), trans: Vec::new(), entry: None, exit: None };
+    let mut g = Graph { steps: Vec::new(), trans: Vec::new(), loose: Vec::new(), entry: None, exit: None };
     // Step names by element (macro steps: their entry and exit steps).
     let mut step_in: HashMap<usize, Frag> = HashMap::new();
     let mut step_out: HashMap<usize, Frag> = HashMap::new();
@@ -389,6 +400,7 @@ fn graph<'a, 'i>(
                                 }
                                 g.steps.extend(sub.steps);
                                 g.trans.extend(sub.trans);
+                                g.loose.extend(sub.loose);
                                 true
                             }
                             _ => {
@@ -440,7 +452,7 @@ fn graph<'a, 'i>(
     // Entry and exit of a macro body: the initial step (or the first step nothing leads to),
     // and the first step that leads nowhere.
     if depth > 0 {
-        let is_step = |i: usize| matches!(els[i].kind, "step" | "macroStep");
+        let is_step = |i: usize| els.get(i).is_some_and(|e| matches!(e.kind, "step" | "macroStep"));
         let entry = els
             .iter()
             .enumerate()
@@ -451,7 +463,12 @@ fn graph<'a, 'i>(
         let exit = els
             .iter()
             .enumerate()
-            .find(|(i, _)| is_step(*i) && !consumers[*i].iter().any(|&c| els[c].kind != "actionBlock"))
+            .find(|(i, _)| {
+                is_step(*i)
+                    && !consumers
+                        .get(*i)
+                        .is_some_and(|cs| cs.iter().any(|&c| els.get(c).is_some_and(|e| e.kind != "actionBlock")))
+            })
             .map(|(i, _)| i);
         g.entry = entry.and_then(|i| step_in.get(&i).cloned());
         g.exit = exit.and_then(|i| step_out.get(&i).cloned());
@@ -477,7 +494,9 @@ fn graph<'a, 'i>(
         let mut branch = None;
         if let Some(first) = e.ins.first() {
             if let Some(c) = first.first().filter(|_| layout) {
-                if let Some(&p) = ids.get(&c.r).filter(|&&p| els[p].kind == "selectionDivergence") {
+                if let Some(&p) =
+                    ids.get(&c.r).filter(|&&p| els.get(p).is_some_and(|e| e.kind == "selectionDivergence"))
+                {
                     let x = c.last.map(|l| l.0).or_else(|| xml::position(e.n).map(|p| p.0)).unwrap_or(0.0);
                     let mut div = key_prefix.clone();
                     div.push(p);
@@ -488,17 +507,40 @@ fn graph<'a, 'i>(
                 up(cx, &els, &ids, c, &step_out, &mut from, &mut seen, 0);
             }
         }
-        if from.is_empty() {
-            cx.diag("SFC0706", at.clone(), "the transition is not connected to a preceding step; it is not imported");
-            continue;
-        }
         // Following steps.
         let mut to: Vec<Frag> = Vec::new();
         let mut jumps: Vec<String> = Vec::new();
         let mut seen = HashSet::new();
         down(cx, &els, &consumers, i, &step_in, &macro_entry, &mut to, &mut jumps, &mut seen, 0, layout);
-        if to.is_empty() {
-            cx.diag("SFC0706", at.clone(), "the transition is not connected to a following step; it is not imported");
+        if from.is_empty() || to.is_empty() {
+            // A chart being drawn: IEC text cannot hold the transition, the POU's `sfc.loose`
+            // attribute does (the editor draws it, the export writes it back).
+            let side = match (from.is_empty(), to.is_empty()) {
+                (true, true) => "to any step",
+                (true, false) => "to a preceding step",
+                _ => "to a following step",
+            };
+            cx.diag(
+                "SFC0706",
+                at.clone(),
+                format!(
+                    "the transition is not connected {side}; it is kept in the drawing (`sfc.loose`), not in the chart"
+                ),
+            );
+            let (cond, negated, name, _) = condition(cx, imp, sfc, e.n);
+            let condition = match cond {
+                Cond::St(x) | Cond::Il(x) => x.text.trim().to_string(),
+                Cond::Net(f) => f.text,
+            };
+            let rect = xml::position(e.n)
+                .map(|p| [p.0, p.1, xml::num(e.n, "width").unwrap_or(20.0), xml::num(e.n, "height").unwrap_or(2.0)]);
+            g.loose.push(Loose {
+                rect,
+                from: from.iter().map(|f| f.text.clone()).collect(),
+                to: to.iter().map(|f| f.text.clone()).collect(),
+                name: name.map(|n| n.text).unwrap_or_default(),
+                condition: if negated { format!("NOT ({condition})") } else { condition },
+            });
             continue;
         }
         let mut list = Vec::new();
@@ -529,7 +571,8 @@ fn graph<'a, 'i>(
     // Action blocks.
     for e in els.iter().filter(|e| e.kind == "actionBlock") {
         let step = e.ins.first().and_then(|c| c.first()).and_then(|c| ids.get(&c.r)).copied();
-        let target = step.filter(|&s| els[s].kind == "step").and_then(|s| step_in.get(&s).cloned());
+        let target =
+            step.filter(|&s| els.get(s).is_some_and(|e| e.kind == "step")).and_then(|s| step_in.get(&s).cloned());
         let Some(step_name) = target else {
             cx.diag(
                 "SFC0706",
@@ -542,7 +585,9 @@ fn graph<'a, 'i>(
         let mut count = 0;
         for a in children(e.n, "action") {
             if let Some(f) = association(cx, imp, a, &step_name.text) {
-                g.steps[si].assocs.push(f);
+                if let Some(s) = g.steps.get_mut(si) {
+                    s.assocs.push(f);
+                }
                 count += 1;
             }
         }
@@ -555,7 +600,7 @@ fn graph<'a, 'i>(
                 attrs::fmt_num(xml::num(e.n, "width").unwrap_or(0.0)),
                 attrs::fmt_num(xml::num(e.n, "height").unwrap_or(0.0))
             );
-            let s = &mut g.steps[si];
+            let Some(s) = g.steps.get_mut(si) else { continue };
             match s.attrs.iter_mut().find(|(k, _)| k == attrs::ACTIONBLOCK) {
                 Some(slot) => {
                     slot.1.push(';');
@@ -635,7 +680,8 @@ fn up(
     if !seen.insert(p) || depth > 256 {
         return;
     }
-    match els[p].kind {
+    let Some(el) = els.get(p) else { return };
+    match el.kind {
         "step" | "macroStep" => {
             if let Some(n) = step_out.get(&p) {
                 if !out.iter().any(|f| f.text.eq_ignore_ascii_case(&n.text)) {
@@ -644,7 +690,7 @@ fn up(
             }
         }
         "selectionDivergence" | "simultaneousConvergence" => {
-            for cc in els[p].ins.iter().flatten() {
+            for cc in el.ins.iter().flatten() {
                 up(cx, els, ids, cc, step_out, out, seen, depth + 1);
             }
         }
@@ -673,11 +719,11 @@ fn down(
     if depth > 256 {
         return;
     }
-    for &c in &consumers[from] {
+    for &c in consumers.get(from).map_or(&[][..], Vec::as_slice) {
         if !seen.insert(c) {
             continue;
         }
-        let e = &els[c];
+        let Some(e) = els.get(c) else { continue };
         match e.kind {
             "step" | "macroStep" => {
                 if let Some(n) = step_in.get(&c) {
@@ -840,7 +886,14 @@ fn condition<'a, 'i>(
         return (cond, negated, name, Some(attrs::escape(&rname)));
     }
     if let Some(cp) = child(c, "connectionPointIn") {
-        let f = network::condition(cx, sfc, cp, &at);
+        let net = imp.nets.entry(sfc.id()).or_insert_with(|| std::rc::Rc::new(network::parse(sfc))).clone();
+        let f = network::condition(cx, &net, cp, &at);
+        return (Cond::Net(f), negated, name, None);
+    }
+    // TC6 v1.0 wires a condition without `connectionPointIn`: `<condition><connection …/>`.
+    if child(c, "connection").is_some() {
+        let net = imp.nets.entry(sfc.id()).or_insert_with(|| std::rc::Rc::new(network::parse(sfc))).clone();
+        let f = network::condition(cx, &net, c, &at);
         return (Cond::Net(f), negated, name, None);
     }
     cx.diag("SFC0708", anchor(c), "the condition is empty; imported as FALSE");
@@ -857,7 +910,7 @@ fn body_condition(cx: &mut Ctx, body: Node, name: &str) -> Cond {
     };
     match l.tag_name().name() {
         "ST" => {
-            let t = xml::formatted_text(l).trim();
+            let t = super::dialect::map(cx, &xml::formatted_text(l)).trim();
             Cond::St(st_expression(&t, name))
         }
         "IL" => {
@@ -887,14 +940,20 @@ fn st_expression(t: &XText, name: &str) -> XText {
         tokens.iter().filter(|k| !k.kind.is_trivia() && k.kind != sfc_syntax::lexer::TokenKind::Eof).collect();
     let mut start = 0usize;
     let mut end = t.text.len();
-    if sig.first().is_some_and(|k| k.kind == sfc_syntax::lexer::TokenKind::Assign) {
-        start = sig[0].end as usize;
-    } else if sig.len() >= 2
-        && sig[0].kind == sfc_syntax::lexer::TokenKind::Ident
-        && sig[1].kind == sfc_syntax::lexer::TokenKind::Assign
-        && (name.is_empty() || t.text[sig[0].start as usize..sig[0].end as usize].eq_ignore_ascii_case(name))
-    {
-        start = sig[1].end as usize;
+    use sfc_syntax::lexer::TokenKind;
+    match sig.as_slice() {
+        [first, ..] if first.kind == TokenKind::Assign => start = first.end as usize,
+        [id, assign, ..]
+            if id.kind == TokenKind::Ident
+                && assign.kind == TokenKind::Assign
+                && (name.is_empty()
+                    || t.text
+                        .get(id.start as usize..id.end as usize)
+                        .is_some_and(|w| w.eq_ignore_ascii_case(name))) =>
+        {
+            start = assign.end as usize
+        }
+        _ => {}
     }
     if let Some(last) = sig.last() {
         if last.kind == sfc_syntax::lexer::TokenKind::Semi && last.start as usize >= start {
@@ -911,11 +970,10 @@ fn il_condition(t: &XText, name: &str) -> XText {
     let trimmed = text.trim_end();
     if let Some(nl) = trimmed.rfind('\n') {
         let last: Vec<&str> = trimmed[nl + 1..].split_whitespace().collect();
-        if last.len() == 2
-            && last[0].eq_ignore_ascii_case("ST")
-            && (name.is_empty() || last[1].eq_ignore_ascii_case(name))
-        {
-            return t.slice(0..nl);
+        if let [op, operand] = last.as_slice() {
+            if op.eq_ignore_ascii_case("ST") && (name.is_empty() || operand.eq_ignore_ascii_case(name)) {
+                return t.slice(0..nl);
+            }
         }
     }
     t.clone()

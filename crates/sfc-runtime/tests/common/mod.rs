@@ -54,6 +54,20 @@ impl Client {
         Client { ws, next_id: 1, seen: Vec::new() }
     }
 
+    /// Connects from the loopback address `from` (another client, as far as the runtime's
+    /// per-address limits go).
+    pub async fn connect_from(addr: SocketAddr, token: Option<&str>, from: &str) -> Client {
+        let url = match token {
+            Some(t) => format!("ws://{addr}/?token={t}"),
+            None => format!("ws://{addr}/"),
+        };
+        let socket = tokio::net::TcpSocket::new_v4().unwrap();
+        socket.bind(format!("{from}:0").parse().unwrap()).expect("bind a loopback address");
+        let stream = socket.connect(addr).await.expect("connect");
+        let (ws, _) = tokio_tungstenite::client_async(url, MaybeTlsStream::Plain(stream)).await.expect("handshake");
+        Client { ws, next_id: 1, seen: Vec::new() }
+    }
+
     pub async fn send_text(&mut self, s: &str) {
         self.ws.send(Message::Text(s.into())).await.unwrap();
     }

@@ -191,7 +191,10 @@ impl Cx<'_, '_> {
             let ib = slot(c, b)?;
             match run {
                 RunFb::Std(k) => super::stdfb::run(k, c, ib),
-                RunFb::User(p) => run_pou(c, p, ib)?,
+                RunFb::User(p) => {
+                    c.budget.charge(span)?;
+                    run_pou(c, p, ib)?
+                }
             }
             for s in &post {
                 s(c, b)?;
@@ -219,7 +222,9 @@ impl Cx<'_, '_> {
             }
             Some(Sym::Action(a)) => {
                 let p = self.pou.ok_or_else(|| self.error(e.span, "an action outside a chart"))?;
+                let span = e.span;
                 Ok(Box::new(move |c, b| {
+                    c.budget.charge(span)?;
                     let prog = c.prog;
                     if let PouBody::Chart(cc) = &prog.pous[p].body {
                         (cc.bodies[a])(c, b).map_err(Box::new)?;
@@ -408,6 +413,7 @@ struct FnCall {
 
 impl FnCall {
     fn invoke<T>(&self, c: &mut Ctx<'_>, b: usize, get: impl Fn(&[Value]) -> T) -> R<T> {
+        c.budget.charge(self.span)?;
         let depth = CALL_DEPTH.with(|d| d.get());
         if depth >= MAX_CALL_DEPTH {
             return Err(fault(format!("calls of `{}` nested too deeply (recursion?)", self.name), self.span));

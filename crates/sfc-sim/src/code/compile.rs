@@ -87,6 +87,34 @@ impl Program {
         charts: Vec<Chart>,
         types: &HashMap<Span, Type>,
     ) -> Result<Program, Vec<Diagnostic>> {
+        Program::compile_with(unit, charts, types, crate::Profile::Iec)
+    }
+
+    /// [`Program::compile`] for a profile: under `matiec`, TIME values are MatIEC's timespecs
+    /// (literals truncated as its generated C computes them, `crate::timespec`).
+    pub fn compile_with(
+        unit: &SourceUnit,
+        charts: Vec<Chart>,
+        types: &HashMap<Span, Type>,
+        profile: crate::Profile,
+    ) -> Result<Program, Vec<Diagnostic>> {
+        struct Reset(bool);
+        impl Drop for Reset {
+            fn drop(&mut self) {
+                super::MATIEC_TIME.with(|f| f.set(self.0));
+            }
+        }
+        let _reset = Reset(super::MATIEC_TIME.with(|f| f.replace(profile == crate::Profile::Matiec)));
+        let mut prog = Program::compile_inner(unit, charts, types)?;
+        prog.matiec_time = profile == crate::Profile::Matiec;
+        Ok(prog)
+    }
+
+    fn compile_inner(
+        unit: &SourceUnit,
+        charts: Vec<Chart>,
+        types: &HashMap<Span, Type>,
+    ) -> Result<Program, Vec<Diagnostic>> {
         let (env, _) = TypeEnv::from_unit(unit);
         let mut std_layouts = HashMap::new();
         for n in std_fb_names() {
@@ -237,6 +265,7 @@ impl Program {
                 global_inits,
                 std_layouts: std_plain,
             },
+            matiec_time: false,
         })
     }
 
@@ -319,6 +348,8 @@ fn lay_out(u: &mut Unit<'_>, i: usize) {
             size,
             location: v.location.as_ref().map(|l| l.text.clone()),
             implicit: v.implicit,
+            retain: v.retain == Some(sfc_syntax::ast::Retain::Retain),
+            persistent: v.persistent,
         });
         off += size;
     }
@@ -342,6 +373,8 @@ fn lay_out(u: &mut Unit<'_>, i: usize) {
                 size: 1,
                 location: None,
                 implicit: true,
+                retain: false,
+                persistent: false,
             });
             off += 1;
         }
@@ -434,6 +467,8 @@ fn lay_out_globals(u: &Unit<'_>) {
             size,
             location: v.location.as_ref().map(|l| l.text.clone()),
             implicit: false,
+            retain: v.retain == Some(sfc_syntax::ast::Retain::Retain),
+            persistent: v.persistent,
         });
         off += size;
     }
@@ -883,7 +918,15 @@ fn compile_pou(u: &Unit<'_>, i: usize, template: &[Value]) -> Compiled {
                 },
                 ActionTarget::Action(_) => None,
             };
-            list.push(AssocCode { duration, variable });
+            // Events name the variable as declared, not as spelled at this association.
+            let variable_name = variable.map(|_| {
+                cx.meta()
+                    .and_then(|m| m.layout.vars.iter().find(|v| v.name.eq_ignore_ascii_case(&a.action)))
+                    .map(|v| v.name.clone())
+                    .or_else(|| cx.u.global_name(&a.action))
+                    .unwrap_or_else(|| a.action.clone())
+            });
+            list.push(AssocCode { duration, variable, variable_name });
         }
         associations.push(list);
     }

@@ -137,6 +137,23 @@ fn conversion_error(span: Span, from: &Type, to: &Type) -> Box<Diagnostic> {
 
 /// The explicit conversion of `v` to `to` (`<from>_TO_<to>`, `TRUNC`).
 pub(crate) fn convert(v: TExpr, to: &Type, span: Span, mode: Rounding) -> C<TExpr> {
+    if super::matiec_time() && v.ty.is_duration() != to.is_duration() && (v.kind() == Kind::Int || to.is_duration()) {
+        // MatIEC's packed timespecs: convert through microseconds.
+        use crate::timespec::Timespec as Ts;
+        let v = if v.ty.is_duration() { map_int(v, |x| Ts::unpack(x).to_us()) } else { v };
+        let out = convert_us(v, to, span, mode)?;
+        return Ok(if to.is_duration() { map_int(out, |x| Ts::from_us(x).pack()) } else { out });
+    }
+    convert_us(v, to, span, mode)
+}
+
+fn map_int(v: TExpr, g: fn(i64) -> i64) -> TExpr {
+    let (ty, constant) = (v.ty.clone(), v.constant);
+    let f = v.int();
+    TExpr::new(CExpr::Int(Box::new(move |c, b| Ok(g(f(c, b)?)))), ty, constant).fold()
+}
+
+fn convert_us(v: TExpr, to: &Type, span: Span, mode: Rounding) -> C<TExpr> {
     let from = v.ty.clone();
     let constant = v.constant;
     let out = to.clone();

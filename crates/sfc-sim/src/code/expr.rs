@@ -107,7 +107,7 @@ pub(crate) fn st_const(v: sfc_st::Value, ty: &Type) -> TExpr {
         sfc_st::Value::Int(i) => Untyped::Int(i),
         sfc_st::Value::Real(r) => Untyped::Real(r),
         sfc_st::Value::Bool(b) => return TExpr::constant(Value::Bool(b), ty.clone()),
-        sfc_st::Value::Time(t) => return TExpr::constant(Value::Time(t), ty.clone()),
+        sfc_st::Value::Time(t) => return TExpr::constant(Value::Time(super::time_of_us(t)), ty.clone()),
     };
     untyped_const(u, ty)
 }
@@ -183,7 +183,13 @@ impl Cx<'_, '_> {
             }
             LiteralKind::Duration(us) => {
                 let ty = rec.filter(Type::is_duration).unwrap_or(Type::Time);
-                (Value::Time(*us), ty)
+                let v = match super::matiec_time() {
+                    true => crate::timespec::Timespec::from_literal(&lit.text)
+                        .unwrap_or_else(|| crate::timespec::Timespec::from_us(*us))
+                        .pack(),
+                    false => *us,
+                };
+                (Value::Time(v), ty)
             }
             LiteralKind::Date(days) => (Value::Int(days.wrapping_mul(DAY_US)), Type::Date),
             LiteralKind::TimeOfDay(us) => (Value::Int(*us), Type::TimeOfDay),
@@ -435,6 +441,8 @@ impl Cx<'_, '_> {
             size: 1,
             location: Some(a.text.clone()),
             implicit: true,
+            retain: false,
+            persistent: false,
         });
         let n = g.layout.vars.len() - 1;
         g.index.insert(key.clone(), n);

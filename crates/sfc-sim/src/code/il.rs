@@ -33,18 +33,14 @@ pub(crate) enum Cr {
     Untyped(Untyped),
 }
 
-/// Runs an instruction list; more than [`MAX_ITERATIONS`] jumps stop the run.
+/// Runs an instruction list; every jump is charged to the scan's budget.
 pub(crate) fn run_il(steps: &[IlStep], c: &mut Ctx<'_>, b: usize, span: Span) -> R<()> {
     let mut pc = 0;
-    let mut jumps: u64 = 0;
     while pc < steps.len() {
         match steps[pc](c, b)? {
             IlNext::Next => pc += 1,
             IlNext::Jump(t) => {
-                jumps += 1;
-                if jumps > MAX_ITERATIONS {
-                    return Err(fault(format!("loop did not terminate (more than {MAX_ITERATIONS} jumps)"), span));
-                }
+                c.budget.charge(span)?;
                 pc = t;
             }
             IlNext::Ret => break,

@@ -3,7 +3,7 @@
 
 use super::call::run_inits;
 use super::compile::InitOp;
-use super::{ChartInstance, Ctx, Memory, PouBody, Program};
+use super::{class_of, ChartInstance, Ctx, Memory, PouBody, Program, Retained};
 use crate::engine::ScanSink;
 use crate::value::Value;
 use sfc_st::Type;
@@ -31,6 +31,7 @@ impl Program {
                 now: 0,
                 scan: 0,
                 profile: Default::default(),
+                budget: Default::default(),
             };
             // A fault in an initial value leaves the type's default in place.
             for op in &self.support.global_inits {
@@ -57,6 +58,97 @@ impl Program {
             self.walk(&v.ty, v.offset as usize, v.name.clone(), &mut mem, &mut charts, 0);
         }
         Memory { mem, top_frame, charts }
+    }
+
+    /// The retentive values of POU `top` (frame at `top_frame`) and of the globals, as
+    /// elementary leaves (`Counts[2]`, `Pump.Hours`, `Recipe.Speed`) in declaration order:
+    /// variables declared `RETAIN` or `PERSISTENT` (all of an array, a structure or a function
+    /// block instance declared so), and those declared so inside function block instances.
+    /// At most `limit` leaves.
+    pub fn retained(&self, top: usize, top_frame: usize, limit: usize) -> Vec<Retained> {
+        let mut out = Vec::new();
+        if let Some(p) = self.pous.get(top) {
+            for v in p.layout.vars.iter().filter(|v| !v.implicit) {
+                let class = class_of(v.retain, v.persistent);
+                self.retained_in(&v.ty, top_frame + v.offset as usize, v.name.clone(), class, &mut out, limit, 0);
+            }
+        }
+        for v in self.globals.vars.iter().filter(|v| !v.implicit) {
+            let class = class_of(v.retain, v.persistent);
+            self.retained_in(&v.ty, v.offset as usize, v.name.clone(), class, &mut out, limit, 0);
+        }
+        out
+    }
+
+    /// The leaves of a value of `ty` at `slot`: all of them when `class` says it is retentive,
+    /// else only those of retentive variables of function block instances inside it.
+    #[allow(clippy::too_many_arguments)]
+    fn retained_in(
+        &self,
+        ty: &Type,
+        slot: usize,
+        path: String,
+        class: Option<bool>,
+        out: &mut Vec<Retained>,
+        limit: usize,
+        depth: u32,
+    ) {
+        if depth > 64 || out.len() >= limit {
+            return;
+        }
+        match ty {
+            Type::FunctionBlock(name) => {
+                let vars = match self.fb_index(name) {
+                    Some(j) => &self.pous[j].layout.vars,
+                    None => match self.support.std_layouts.get(&name.to_ascii_uppercase()) {
+                        Some(l) if class.is_some() => &l.vars,
+                        _ => return,
+                    },
+                };
+                for v in vars.iter().filter(|v| !v.implicit) {
+                    let inner = match (class, class_of(v.retain, v.persistent)) {
+                        (Some(a), Some(b)) => Some(a || b),
+                        (a, b) => a.or(b),
+                    };
+                    let p = format!("{path}.{}", v.name);
+                    self.retained_in(&v.ty, slot + v.offset as usize, p, inner, out, limit, depth + 1);
+                }
+            }
+            Type::Array { dims, elem } => {
+                if class.is_none() && !self.holds_fb(elem, 0) {
+                    return;
+                }
+                let esize = self.type_size(elem);
+                let counts: Vec<i64> = dims.iter().map(|(lo, hi)| hi - lo + 1).collect();
+                let total: i64 = counts.iter().product();
+                for k in 0..total.max(0) {
+                    if out.len() >= limit {
+                        return;
+                    }
+                    let mut rest = k;
+                    let mut idx = vec![0i64; dims.len()];
+                    for d in (0..dims.len()).rev() {
+                        idx[d] = dims[d].0 + rest % counts[d];
+                        rest /= counts[d];
+                    }
+                    let list: Vec<String> = idx.iter().map(|i| i.to_string()).collect();
+                    let p = format!("{path}[{}]", list.join(","));
+                    self.retained_in(elem, slot + k as usize * esize, p, class, out, limit, depth + 1);
+                }
+            }
+            Type::Struct { fields, .. } => {
+                let mut off = 0;
+                for (n, t) in fields {
+                    self.retained_in(t, slot + off, format!("{path}.{n}"), class, out, limit, depth + 1);
+                    off += self.type_size(t);
+                }
+            }
+            t => {
+                if let Some(persistent) = class {
+                    out.push(Retained { name: path, ty: t.clone(), slot, persistent });
+                }
+            }
+        }
     }
 
     /// The user POU that is function block type `name`.

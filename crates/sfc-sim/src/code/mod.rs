@@ -43,6 +43,78 @@ pub struct Ctx<'a> {
     /// Number of this scan.
     pub scan: u64,
     pub profile: Profile,
+    /// What this scan may still spend on loops, jumps and calls.
+    pub budget: Budget<'a>,
+}
+
+/// Charges one scan may make (a loop iteration, an IL jump, a call of a user POU or action)
+/// before it is stopped as a runaway (`docs/sim.md`).
+pub const SCAN_BUDGET: u64 = 10_000_000;
+
+/// Charges between two looks at the interrupt flag and the limit: the rarely taken branch.
+const CHUNK: u64 = 4096;
+
+/// The work budget of one scan: compiled code charges one unit on every loop back-edge, IL
+/// jump and call (nested loops included), so a runaway scan ends with a located fault. The
+/// charge is a counter decrement; every [`CHUNK`] charges the limit and the interrupt flag
+/// (set by another thread, e.g. a watchdog) are looked at.
+#[derive(Debug, Clone)]
+pub struct Budget<'a> {
+    /// Charges left before the next look.
+    fuel: u32,
+    /// Charges handed out so far in this scan.
+    granted: u64,
+    limit: u64,
+    interrupt: Option<&'a std::sync::atomic::AtomicBool>,
+}
+
+impl Default for Budget<'_> {
+    fn default() -> Self {
+        Budget::new(SCAN_BUDGET, None)
+    }
+}
+
+/// The message of a scan stopped by its interrupt flag.
+pub const INTERRUPTED: &str = "scan interrupted";
+
+impl<'a> Budget<'a> {
+    /// A budget of `limit` charges; a set `interrupt` stops the scan at its next look.
+    pub fn new(limit: u64, interrupt: Option<&'a std::sync::atomic::AtomicBool>) -> Budget<'a> {
+        Budget { fuel: 0, granted: 0, limit, interrupt }
+    }
+
+    /// Charges spent so far (at most [`CHUNK`] early).
+    pub fn spent(&self) -> u64 {
+        self.granted - u64::from(self.fuel)
+    }
+
+    /// Charges one unit; a fault at `span` when the budget is spent or the scan interrupted.
+    #[inline(always)]
+    pub(crate) fn charge(&mut self, span: Span) -> Result<(), Box<Fault>> {
+        if self.fuel == 0 {
+            return self.refuel(span);
+        }
+        self.fuel -= 1;
+        Ok(())
+    }
+
+    #[cold]
+    #[inline(never)]
+    fn refuel(&mut self, span: Span) -> Result<(), Box<Fault>> {
+        if self.interrupt.is_some_and(|i| i.load(std::sync::atomic::Ordering::Relaxed)) {
+            return Err(Box::new(Fault { message: INTERRUPTED.to_string(), span }));
+        }
+        if self.granted >= self.limit {
+            return Err(Box::new(Fault {
+                message: format!("runaway scan: more than {} loop iterations, jumps and calls in one scan", self.limit),
+                span,
+            }));
+        }
+        let grant = CHUNK.min(self.limit - self.granted);
+        self.granted += grant;
+        self.fuel = (grant - 1) as u32;
+        Ok(())
+    }
 }
 
 /// A compiled transition condition; the `usize` is the frame base of the chart instance.
@@ -83,6 +155,10 @@ pub struct VarSlot {
     pub location: Option<String>,
     /// Not declared by the user: the SFC control variables and the ATMT/EATMT inputs.
     pub implicit: bool,
+    /// Declared in a `RETAIN` block: restored on a warm start.
+    pub retain: bool,
+    /// Declared in a `PERSISTENT` block: restored on warm and cold starts.
+    pub persistent: bool,
 }
 
 /// The slots of one frame.
@@ -122,6 +198,8 @@ pub struct AssocCode {
     pub duration: Option<DurationCode>,
     /// For a BOOL variable used as an action: where it lives.
     pub variable: Option<Place>,
+    /// For a BOOL variable used as an action: its declared spelling.
+    pub variable_name: Option<String>,
 }
 
 /// Frame offsets of the implicit control variables of an SFC instance (see `docs/sim.md`).
@@ -190,6 +268,23 @@ impl ChartCode {
     }
 }
 
+/// A retentive elementary value ([`Program::retained`]).
+#[derive(Debug, Clone, PartialEq)]
+pub struct Retained {
+    /// The path as [`Program::resolve`] reads it: `Washes`, `Counts[2]`, `Pump.Hours`.
+    pub name: String,
+    pub ty: Type,
+    /// Absolute memory slot.
+    pub slot: usize,
+    /// `PERSISTENT`: kept over cold starts too; otherwise `RETAIN`: over warm starts only.
+    pub persistent: bool,
+}
+
+/// `None` for a variable that is not retentive, else whether it is persistent.
+pub(crate) fn class_of(retain: bool, persistent: bool) -> Option<bool> {
+    (retain || persistent).then_some(persistent)
+}
+
 /// Every POU of a file, compiled.
 pub struct Program {
     pub pous: Vec<PouCode>,
@@ -198,6 +293,9 @@ pub struct Program {
     /// Frame templates, initial-value code and standard block layouts used by compiled code,
     /// [`Program::instantiate`] and [`Program::resolve`].
     pub(crate) support: compile::Support,
+    /// Compiled for the `matiec` profile: TIME slots hold MatIEC's packed timespecs
+    /// (`crate::timespec`), which [`crate::Simulation`] shows and takes as µs.
+    pub matiec_time: bool,
 }
 
 /// Memory ready for the first scan of one top-level POU.
@@ -220,6 +318,26 @@ pub struct ChartInstance {
     pub frame: usize,
     /// Instance path from the top POU: `""` for the top itself, `Rev`, `Cells[2].Seq`.
     pub path: String,
+}
+
+thread_local! {
+    /// Set while [`Program::compile_with`] compiles for the `matiec` profile: TIME values are
+    /// then MatIEC's timespecs packed into `Value::Time` (`crate::timespec`).
+    static MATIEC_TIME: std::cell::Cell<bool> = const { std::cell::Cell::new(false) };
+}
+
+/// Whether the code being compiled holds TIME as MatIEC's packed timespecs.
+pub(crate) fn matiec_time() -> bool {
+    MATIEC_TIME.with(|f| f.get())
+}
+
+/// A TIME value in µs as the code compiled now holds it.
+pub(crate) fn time_of_us(us: i64) -> i64 {
+    if matiec_time() {
+        crate::timespec::Timespec::from_us(us).pack()
+    } else {
+        us
+    }
 }
 
 mod call;

@@ -181,6 +181,9 @@ fn time_arith(op: BinaryOp, l: TExpr, r: TExpr, rt: Option<Type>, span: Span) ->
     };
     let tod = res.base() == &Type::TimeOfDay;
     let out = res.clone();
+    if super::matiec_time() && res.is_duration() {
+        return matiec_time_arith(op, l, r, out, span);
+    }
     match op {
         BinaryOp::Add | BinaryOp::Sub => {
             let (a, b) = (l.int(), r.int());
@@ -225,6 +228,43 @@ fn time_arith(op: BinaryOp, l: TExpr, r: TExpr, rt: Option<Type>, span: Span) ->
             Ok(TExpr::new(CExpr::Int(e), out, false))
         }
         _ => Err(err(span, format!("operator `{}` on `{}`", op.symbol(), res))),
+    }
+}
+
+/// TIME arithmetic as MatIEC's `__time_add`, `__time_sub`, `__time_mul`, `__time_div` on packed
+/// timespecs (`crate::timespec`).
+fn matiec_time_arith(op: BinaryOp, l: TExpr, r: TExpr, out: Type, span: Span) -> C<TExpr> {
+    use crate::timespec::Timespec as Ts;
+    match op {
+        BinaryOp::Add | BinaryOp::Sub => {
+            let (a, b) = (l.int(), r.int());
+            let sub = op == BinaryOp::Sub;
+            let e: IntFn = bin_closure!(a, b, |x, y| {
+                let (x, y) = (Ts::unpack(x), Ts::unpack(y));
+                Ok(if sub { x.sub(y) } else { x.add(y) }.pack())
+            });
+            Ok(TExpr::new(CExpr::Int(e), out, false))
+        }
+        BinaryOp::Mul | BinaryOp::Div => {
+            let (d, n) = if timey(&l.ty) { (l, r) } else { (r, l) };
+            let div = op == BinaryOp::Div;
+            let a = d.int();
+            let b: RealFn = if n.kind() == Kind::Real {
+                n.real()
+            } else {
+                let f = n.int();
+                Box::new(move |c, x| Ok(f(c, x)? as f64))
+            };
+            let e: IntFn = bin_closure!(a, b, |x, y| {
+                if div && y == 0.0 {
+                    return Err(fault("division by zero", span));
+                }
+                let t = Ts::unpack(x);
+                Ok(if div { t.div(y) } else { t.mul(y) }.pack())
+            });
+            Ok(TExpr::new(CExpr::Int(e), out, false))
+        }
+        _ => Err(err(span, format!("operator `{}` on `{}`", op.symbol(), out))),
     }
 }
 

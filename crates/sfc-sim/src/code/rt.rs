@@ -32,9 +32,6 @@ pub(crate) enum Flow {
     Return,
 }
 
-/// More iterations than this in one execution of a loop (or jumps in one run of an IL list)
-/// stop the run.
-pub(crate) const MAX_ITERATIONS: u64 = 10_000_000;
 /// Deeper nesting of user function calls stops the run.
 pub(crate) const MAX_CALL_DEPTH: u32 = 200;
 

@@ -86,6 +86,8 @@ pub(crate) fn std_layout(name: &str) -> Option<(Layout, Vec<Value>)> {
             size: 1,
             location: None,
             implicit: false,
+            retain: false,
+            persistent: false,
         });
     }
     for (_, h) in kind.hidden() {
@@ -109,6 +111,27 @@ fn t(m: &[Value], i: usize) -> i64 {
 
 /// Runs one call of the instance at absolute slot `ib`.
 pub(crate) fn run(kind: StdFb, ctx: &mut Ctx<'_>, ib: usize) {
+    let timer = matches!(kind, StdFb::Ton | StdFb::Tof | StdFb::Tp);
+    if timer && ctx.prog.matiec_time && ib + 4 < ctx.mem.len() {
+        // MatIEC's packed timespecs (`crate::timespec`): the timer runs on µs.
+        use crate::timespec::Timespec as Ts;
+        for k in [1, 3, 4] {
+            if let Value::Time(v) = ctx.mem[ib + k] {
+                ctx.mem[ib + k] = Value::Time(Ts::unpack(v).to_us());
+            }
+        }
+        run_us(kind, ctx, ib);
+        for k in [1, 3, 4] {
+            if let Value::Time(v) = ctx.mem[ib + k] {
+                ctx.mem[ib + k] = Value::Time(Ts::from_us(v).pack());
+            }
+        }
+        return;
+    }
+    run_us(kind, ctx, ib);
+}
+
+fn run_us(kind: StdFb, ctx: &mut Ctx<'_>, ib: usize) {
     let now = ctx.now;
     let m: &mut [Value] = &mut ctx.mem[..];
     if ib >= m.len() {

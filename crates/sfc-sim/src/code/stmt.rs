@@ -49,10 +49,6 @@ pub(crate) fn to_block(mut v: Vec<StmtFn>) -> Block {
     }
 }
 
-fn endless(span: sfc_diagnostics::Span) -> Box<super::Fault> {
-    fault(format!("loop did not terminate (more than {MAX_ITERATIONS} iterations)"), span)
-}
-
 impl Cx<'_, '_> {
     pub(crate) fn stmts(&self, list: &[Stmt]) -> C<StmtFn> {
         Ok(seq(self.stmt_list(list)?))
@@ -114,12 +110,8 @@ impl Cx<'_, '_> {
                 let body = self.stmts(body)?;
                 let span = s.span;
                 Ok(Box::new(move |x, b| {
-                    let mut n: u64 = 0;
                     while c(x, b)? {
-                        n += 1;
-                        if n > MAX_ITERATIONS {
-                            return Err(endless(span));
-                        }
+                        x.budget.charge(span)?;
                         match body(x, b)? {
                             Flow::Next => {}
                             Flow::Exit => break,
@@ -134,12 +126,8 @@ impl Cx<'_, '_> {
                 let body = self.stmts(body)?;
                 let span = s.span;
                 Ok(Box::new(move |x, b| {
-                    let mut n: u64 = 0;
                     loop {
-                        n += 1;
-                        if n > MAX_ITERATIONS {
-                            return Err(endless(span));
-                        }
+                        x.budget.charge(span)?;
                         match body(x, b)? {
                             Flow::Next => {}
                             Flow::Exit => break,
@@ -224,16 +212,12 @@ impl Cx<'_, '_> {
             let step = w.wide(step_v);
             let at = slot(x, b)?;
             x.mem[at] = Value::Int(i0);
-            let mut n: u64 = 0;
             loop {
                 let i = w.wide(int_of(&x.mem[at]));
                 if (step >= 0 && i > end) || (step < 0 && i < end) {
                     break;
                 }
-                n += 1;
-                if n > MAX_ITERATIONS {
-                    return Err(endless(span));
-                }
+                x.budget.charge(span)?;
                 match body(x, b)? {
                     Flow::Next => {}
                     Flow::Exit => break,

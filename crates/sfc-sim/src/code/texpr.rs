@@ -137,7 +137,8 @@ pub(crate) use opd1;
 
 /// Runs `f` against an empty memory (for folding constants at compile time).
 pub(crate) fn with_scratch_ctx<T>(f: impl FnOnce(&mut Ctx<'_>) -> T) -> T {
-    let prog = Program { pous: Vec::new(), globals: Layout::default(), support: Default::default() };
+    let prog =
+        Program { pous: Vec::new(), globals: Layout::default(), support: Default::default(), matiec_time: false };
     let mut mem = Vec::new();
     let mut charts = Vec::new();
     let mut sink = ScanSink::default();
@@ -149,6 +150,7 @@ pub(crate) fn with_scratch_ctx<T>(f: impl FnOnce(&mut Ctx<'_>) -> T) -> T {
         now: 0,
         scan: 0,
         profile: Default::default(),
+        budget: Default::default(),
     };
     f(&mut ctx)
 }

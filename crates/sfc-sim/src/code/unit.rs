@@ -126,6 +126,13 @@ impl<'a> Unit<'a> {
         Some((v.offset, v.ty.clone(), g.konst.get(&key).copied()))
     }
 
+    /// The declared spelling of a global variable.
+    pub(crate) fn global_name(&self, name: &str) -> Option<String> {
+        let g = self.globals.borrow();
+        let i = *g.index.get(&name.to_ascii_uppercase())?;
+        g.layout.vars.get(i).map(|v| v.name.clone())
+    }
+
     pub(crate) fn error(&self, span: Span, msg: impl Into<String>) -> Box<Diagnostic> {
         Box::new(Diagnostic::error("SFC0320", span, format!("cannot be simulated: {}", msg.into())))
     }

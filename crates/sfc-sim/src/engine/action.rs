@@ -272,6 +272,7 @@ fn run_actions(ctx: &mut Ctx<'_>, chart: usize, code: &ChartCode, plan: &ChartPl
     for &e in &run {
         if let Some(id) = plan.entities[e as usize].action {
             if let Err(f) = (code.bodies[id])(ctx, frame) {
+                ctx.sink.note_fault(chart, super::FaultSite::Action(id));
                 ctx.charts[chart].run = run;
                 return Err(f);
             }

@@ -18,6 +18,7 @@ use super::action::action_phase;
 use super::plan::{guard_kind, ChartPlan, Link};
 use super::state::ChartState;
 use super::state::StepState;
+use super::FaultSite;
 use crate::code::{ChartCode, Ctx, FastGuard, Fault, PouBody, Program};
 use crate::value::Value;
 use crate::{Event, Profile};
@@ -36,6 +37,9 @@ pub(crate) fn code_of(prog: &Program, pou: usize) -> &ChartCode {
 pub fn run_chart(ctx: &mut Ctx<'_>, chart: usize) -> Result<(), Fault> {
     let prog = ctx.prog;
     let code = code_of(prog, ctx.charts[chart].pou);
+    if ctx.profile == Profile::Matiec {
+        return super::matiec::run(ctx, chart, code);
+    }
     let plan = code.plan();
     let frame = ctx.charts[chart].frame;
     let now = ctx.now;
@@ -148,7 +152,7 @@ pub(crate) fn read_bool(mem: &[Value], slot: usize) -> bool {
 
 /// SFCInit: back to the initial situation with every action control block cleared; the next
 /// call after SFCInit falls is the instance's scan 0 again.
-fn reset(ctx: &mut Ctx<'_>, chart: usize, code: &ChartCode) {
+pub(crate) fn reset(ctx: &mut Ctx<'_>, chart: usize, code: &ChartCode) {
     let plan = code.plan();
     let frame = ctx.charts[chart].frame;
     let st = &mut ctx.charts[chart];
@@ -222,11 +226,20 @@ fn eval_guard(ctx: &mut Ctx<'_>, code: &ChartCode, guard: FastGuard, frame: usiz
 }
 
 /// When a guard faults, the first faulting guard in declaration order among `cands` (the
-/// candidates whose guards are closures) is the error.
-fn first_fault(ctx: &mut Ctx<'_>, code: &ChartCode, plan: &ChartPlan, frame: usize, cands: &[u32], f: Fault) -> Fault {
+/// candidates whose guards are closures) is the error; the sink notes its transition.
+fn first_fault(ctx: &mut Ctx<'_>, chart: usize, code: &ChartCode, plan: &ChartPlan, cands: &[u32], f: Fault) -> Fault {
+    let frame = ctx.charts[chart].frame;
     let mut all = cands.to_vec();
     all.sort_unstable();
-    all.into_iter().find_map(|t| eval_guard(ctx, code, plan.tr[t as usize].guard, frame, t).err()).unwrap_or(f)
+    let first =
+        all.into_iter().find_map(|t| eval_guard(ctx, code, plan.tr[t as usize].guard, frame, t).err().map(|f| (t, f)));
+    match first {
+        Some((t, f)) => {
+            ctx.sink.note_fault(chart, FaultSite::Guard(t));
+            f
+        }
+        None => f,
+    }
 }
 
 /// Steps 3–5: enabled and true transitions against one snapshot, conflicts, firing.
@@ -306,7 +319,7 @@ fn evolve(ctx: &mut Ctx<'_>, chart: usize, code: &ChartCode, plan: &ChartPlan) -
         let st = &ctx.charts[chart];
         let mut with_code: Vec<u32> = code_links.iter().map(|&i| plan.link[st.active[i as usize] as usize].t).collect();
         with_code.extend(cand.iter().copied().filter(|&t| plan.tr[t as usize].guard == FastGuard::Code));
-        let err = first_fault(ctx, code, plan, frame, &with_code, f);
+        let err = first_fault(ctx, chart, code, plan, &with_code, f);
         let st = &mut ctx.charts[chart];
         (st.fire, st.code_links, st.cand) = (fire, code_links, cand);
         return Err(err);
@@ -725,7 +738,7 @@ fn evolve_until_stable(ctx: &mut Ctx<'_>, chart: usize, code: &ChartCode, plan: 
 }
 
 /// Writes the `X` and `T` slots of the initial steps (evolutions write them as they fire).
-fn publish_initial(ctx: &mut Ctx<'_>, chart: usize) {
+pub(crate) fn publish_initial(ctx: &mut Ctx<'_>, chart: usize) {
     let st = &ctx.charts[chart];
     for &s in &st.active {
         let (x_slot, t_slot) = st.slots[s as usize];
@@ -736,7 +749,7 @@ fn publish_initial(ctx: &mut Ctx<'_>, chart: usize) {
 
 /// After the scan: supervision times, SFCError/SFCErrorStep, SFCCurrentStep.
 #[inline(always)]
-fn finish_scan(ctx: &mut Ctx<'_>, chart: usize, code: &ChartCode, plan: &ChartPlan) {
+pub(crate) fn finish_scan(ctx: &mut Ctx<'_>, chart: usize, code: &ChartCode, plan: &ChartPlan) {
     let st = &ctx.charts[chart];
     if plan.supervised || (st.changed && st.track_current) {
         supervise(ctx, chart, code, plan);

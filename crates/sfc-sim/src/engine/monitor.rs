@@ -76,6 +76,12 @@ impl Simulation {
         out
     }
 
+    /// The RETAIN and PERSISTENT values of the simulated POU and the globals, as elementary
+    /// leaves with their slots (at most 65,536); see [`crate::code::Program::retained`].
+    pub fn retained(&self) -> Vec<crate::code::Retained> {
+        self.prog.retained(self.top, self.top_frame, 65_536)
+    }
+
     /// Moves the scan counter forward to `scan` (virtual time `scan · period`): periods a
     /// wall-clock runtime missed are skipped rather than run late. Never moves backwards.
     pub fn skip_to(&mut self, scan: u64) {
@@ -163,6 +169,7 @@ impl Simulation {
                                 now,
                                 scan: self.next_scan.saturating_sub(1),
                                 profile: self.opts.profile,
+                                budget: crate::code::Budget::new(self.budget, self.interrupt.as_deref()),
                             };
                             let code = code_of(ctx.prog, pou);
                             (code.guards[t as usize])(&mut ctx, frame).ok()
@@ -205,6 +212,7 @@ impl Simulation {
                 now,
                 scan: self.next_scan.saturating_sub(1),
                 profile: self.opts.profile,
+                budget: crate::code::Budget::new(self.budget, self.interrupt.as_deref()),
             };
             for t in ts {
                 let code = code_of(ctx.prog, pou);

@@ -218,7 +218,9 @@ impl ChartPlan {
                             Some(e) => e,
                             None => {
                                 entities.push(Entity {
-                                    name: a.action.clone(),
+                                    name: assoc_code
+                                        .and_then(|c| c.variable_name.clone())
+                                        .unwrap_or_else(|| a.action.clone()),
                                     action: None,
                                     variable: Some(place),
                                     assocs: Vec::new(),

@@ -122,6 +122,8 @@ pub struct ChartState {
     pub(crate) order: Vec<u32>,
     pub(crate) run: Vec<u32>,
     pub(crate) current: Option<u32>,
+    /// The `matiec` profile's own state (`engine/matiec.rs`).
+    pub(crate) matiec: Option<Box<super::matiec::State>>,
 }
 
 impl ChartState {
@@ -164,8 +166,21 @@ impl ChartState {
             order: Vec::new(),
             run: Vec::new(),
             current: None,
+            matiec: None,
             plan,
         }
+    }
+
+    /// Takes over the coverage and time-analysis counters of `old` (a restart goes on
+    /// counting over the whole run).
+    pub(crate) fn carry_counts(&mut self, old: &ChartState) {
+        for (a, b) in self.steps.iter_mut().zip(&old.steps) {
+            a.tally = b.tally;
+        }
+        if self.fired_count.len() == old.fired_count.len() {
+            self.fired_count.clone_from(&old.fired_count);
+        }
+        self.held |= old.held;
     }
 
     /// Decides which step slots are kept up to date in memory (`flags(step)` is `(x, t)`).

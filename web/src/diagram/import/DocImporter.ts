@@ -4,7 +4,9 @@
 import { pinCounts, type Connection, type EditorDoc, type Element } from '../../doc';
 import type { DocFields, DocState } from '../core/DocState';
 import type { SfcElementFactory } from '../core/SfcElementFactory';
-import { layoutWire } from '../layout/SfcLayouter';
+import { labelsOf } from '../drawing';
+import { layoutWire, wireEnds } from '../layout/SfcLayouter';
+import type { Rect } from '../layout/router';
 import { clone, connectionsOf, shapesOf, type OrderCounter, type Service, type SfcConnection, type SfcShape } from '../model';
 
 const KINDS = new Set([
@@ -55,6 +57,7 @@ export class DocImporter {
       });
       shapes.set(e.id, shape);
     });
+    let obstacles: Rect[] | undefined;
     const wires: SfcConnection[] = connections.map((c, i) => {
       const wire: SfcConnection = this.elementFactory.createConnection({
         id: c.id,
@@ -64,7 +67,13 @@ export class DocImporter {
         waypoints: c.waypoints && c.waypoints.length >= 2 ? c.waypoints.map((p) => ({ x: p.x, y: p.y })) : [],
         sfcOrder: elements.length + i,
       });
-      if (wire.waypoints.length < 2) wire.waypoints = layoutWire(wire, {});
+      // No polyline: a straight wire (the server checked that nothing is in its way), else
+      // one to route here.
+      if (wire.waypoints.length < 2) {
+        const { start, end } = wireEnds(wire);
+        wire.waypoints =
+          start.x === end.x && end.y > start.y ? [start, end] : layoutWire(wire, {}, () => (obstacles ??= obstaclesOfDoc(elements)));
+      }
       return wire;
     });
     for (const s of shapes.values()) this.canvas.addShape(s, root);
@@ -141,4 +150,14 @@ export function validate(doc: EditorDoc) {
       }
     }
   });
+}
+
+/** The blocks and labels of a document, as the router avoids them. */
+function obstaclesOfDoc(elements: Element[]): Rect[] {
+  const out: Rect[] = [];
+  for (const e of elements) {
+    out.push({ x: e.x, y: e.y, width: e.w, height: e.h });
+    for (const l of labelsOf(e, e.w, e.h)) out.push({ x: e.x + l.x, y: e.y + l.y, width: l.width, height: l.height });
+  }
+  return out;
 }

@@ -4,13 +4,15 @@ import { SfcLayouter } from '../layout/SfcLayouter';
 import { WireBehavior } from './behavior/WireBehavior';
 import { BlockBehavior } from './behavior/BlockBehavior';
 import { EditBehavior } from './behavior/EditBehavior';
+import { TargetBehavior } from './behavior/TargetBehavior';
 
 export default {
   __depends__: [ModelingModule],
-  __init__: ['sfcWireBehavior', 'sfcBlockBehavior', 'sfcEditBehavior'],
+  __init__: ['sfcWireBehavior', 'sfcBlockBehavior', 'sfcEditBehavior', 'sfcTargetBehavior'],
   modeling: ['type', SfcModeling],
   layouter: ['type', SfcLayouter],
   sfcWireBehavior: ['type', WireBehavior],
   sfcBlockBehavior: ['type', BlockBehavior],
   sfcEditBehavior: ['type', EditBehavior],
+  sfcTargetBehavior: ['type', TargetBehavior],
 };

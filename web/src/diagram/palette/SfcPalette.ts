@@ -1,12 +1,14 @@
 // The palette (seed 001 §7.1, panel "Nástroje"): SFC blocks, SFC groups (divergences and
 // convergences) and special blocks (text, action block). Drag an entry onto the chart, or
 // click it and click where the block goes. ATMT and EATMT charts have no simultaneous
-// (AND) branches, so their palette does not offer them.
+// (AND) branches and no actions: their palette shows those entries greyed, with the reason as
+// their tooltip, and the canvas refuses them at the drop, saying why (rules/RefusalTooltip).
 import type { Element, ElementKind } from '../../doc';
 import type { DocState } from '../core/DocState';
+import { actionBlockSize, stepSize } from '../drawing';
 import { defaultSize } from '../geometry';
 import { freshName, usedNames, type Service } from '../model';
-import { kindsRefusedBy } from '../rules/SfcRules';
+import { kindsRefusedBy, refusalReason } from '../rules/SfcRules';
 
 interface EntrySpec {
   id: string;
@@ -51,7 +53,7 @@ export class SfcPalette {
     private create: Service,
     private elementFactory: Service,
     private elementRegistry: Service,
-    private config: { t: (key: string) => string },
+    private config: { t: (key: string, opts?: Record<string, unknown>) => string },
     private state: DocState,
     eventBus: Service,
   ) {
@@ -83,16 +85,11 @@ export class SfcPalette {
     ];
   }
 
-  /** The entries the current chart's target allows. */
-  private allowedSpecs(): EntrySpec[] {
-    const refused = kindsRefusedBy(this.state.fields.target);
-    return this.specs().filter((spec) => !refused.includes(spec.make().kind));
-  }
 
   /** A new block of the entry's kind with default size, ready for the create tool. */
   newShape(spec: EntrySpec): Service {
     const e = spec.make();
-    const size = defaultSize(e.kind);
+    const size = e.kind === 'step' ? stepSize(e) : e.kind === 'actionBlock' ? actionBlockSize(e.associations ?? []) : defaultSize(e.kind);
     const bo: Element = { id: '', x: 0, y: 0, w: size.w, h: size.h, ...e } as Element;
     return this.elementFactory.createShape({ businessObject: bo, width: size.w, height: size.h });
   }
@@ -103,7 +100,8 @@ export class SfcPalette {
     const entries: Record<string, Service> = { 'tools-anchor': { group: 'tools', html: '<div class="sfc-palette-tools"></div>', action: {} } };
     this.shownForTable = kindsRefusedBy(this.state.fields.target).length > 0;
     let group = '';
-    for (const spec of this.allowedSpecs()) {
+    const refused = kindsRefusedBy(this.state.fields.target);
+    for (const spec of this.specs()) {
       if (spec.group !== group) {
         group = spec.group;
         entries[`title-${group}`] = {
@@ -114,10 +112,12 @@ export class SfcPalette {
       }
       const label = escapeHtml(t(spec.label));
       const start = (event: Event) => this.create.start(event, this.newShape(spec));
+      const why = refused.includes(spec.make().kind) ? refusalReason(spec.make().kind, this.state.fields.target, t) : '';
+      const title = why ? `${label} — ${escapeHtml(why)}` : label;
       entries[`create.${spec.id}`] = {
         group,
-        title: t(spec.label),
-        html: `<div class="entry sfc-entry" draggable="true" title="${label}">${spec.icon}<span>${label}</span></div>`,
+        title: why ? `${t(spec.label)} — ${why}` : t(spec.label),
+        html: `<div class="entry sfc-entry${why ? ' refused' : ''}" draggable="true" title="${title}"${why ? ' aria-disabled="true"' : ''}>${spec.icon}<span>${label}</span></div>`,
         action: { dragstart: start, click: start },
       };
     }

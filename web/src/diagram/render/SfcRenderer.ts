@@ -5,7 +5,8 @@ import { inputPin, outputPin, type Box } from '../geometry';
 import { isConnection, type Service, type SfcConnection, type SfcShape } from '../model';
 import type { Highlights } from '../highlight/Highlights';
 import type { HighlightKind } from '../types';
-import { el, fit, MONO, points, text, textWidth, wrap } from './svg';
+import { actionColumns, BAR_HALF, LINE_H, labelsOf, nameWithTag, qualifierText, wrapCondition } from '../drawing';
+import { el, fit, MONO, points, text, wrap } from './svg';
 
 export const INK = '#1e293b';
 const PAPER = '#ffffff';
@@ -141,28 +142,18 @@ export class SfcRenderer extends BaseRenderer {
     const cx = s.width / 2;
     const cy = s.height / 2;
     el('line', { x1: cx, y1: 0, x2: cx, y2: s.height, stroke: fg, 'stroke-width': e.lineWidth ?? 1.5 }, g);
-    const bar = Math.min(s.width, 28);
+    const bar = 2 * BAR_HALF;
     el('rect', { x: cx - bar / 2, y: cy - 2, width: bar, height: 4, fill: enabled ? ENABLED : (e.background ?? fg), stroke: enabled ? ENABLED : fg, 'stroke-width': 0.5 }, g);
-    if (e.hideLabel) return;
-    const x = cx + bar / 2 + 6;
-    const condition = e.condition?.trim();
-    if (condition) {
-      const lines = condition.split('\n').map((l) => l.trim()).filter((l) => l !== '');
-      // A long one-line condition wraps at words into two lines, so it does not run into the
-      // next branch's labels; beyond that it ends with an ellipsis (Properties shows it whole).
-      const shown = lines.length === 1 ? wrapCondition(lines[0]) : lines.slice(0, 3);
-      if (lines.length > 3) shown[2] = shown[2] + ' …';
-      const top = cy - ((shown.length - 1) * 14) / 2;
-      shown.forEach((line, i) => {
-        text(g, x, top + i * 14, fit(line, LABEL, 320), { 'font-size': LABEL, fill: fg, 'font-family': MONO });
-      });
-      const name = nameWithTag(e);
-      if (name) {
-        text(g, cx - bar / 2 - 6, cy, name, { 'font-size': SMALL, 'text-anchor': 'end', fill: fg, opacity: 0.7 });
+    // The labels where the layout made room for them (../drawing.ts, sfc-doc's drawing.rs):
+    // the condition right of the bar, the name left of it (right of it without a condition).
+    for (const l of labelsOf(e, s.width, s.height)) {
+      if (l.kind === 'condition') {
+        l.lines.forEach((line, i) => {
+          text(g, l.x, l.y + LINE_H / 2 + i * LINE_H, line, { 'font-size': LABEL, fill: fg, 'font-family': MONO });
+        });
+      } else {
+        text(g, l.x + l.width, cy, l.lines[0], { 'font-size': LABEL, 'text-anchor': 'end', fill: fg, opacity: l.x < cx ? 0.75 : 1 });
       }
-    } else {
-      const name = nameWithTag(e);
-      if (name) text(g, x, cy, name, { 'font-size': LABEL, fill: fg });
     }
   }
 
@@ -192,8 +183,8 @@ export class SfcRenderer extends BaseRenderer {
     const mid = s.height * 0.4;
     el('line', { x1: cx, y1: 0, x2: cx, y2: mid, stroke: fg, 'stroke-width': e.lineWidth ?? 1.5 }, g);
     el('polygon', { points: points([{ x: 0, y: mid }, { x: s.width, y: mid }, { x: cx, y: s.height }]), fill: e.background ?? fg, stroke: fg, 'stroke-width': 1, 'stroke-linejoin': 'round' }, g);
-    if (!e.hideLabel) {
-      text(g, s.width + 9, s.height * 0.62, e.target ?? '?', { 'font-size': LABEL, fill: fg, 'font-weight': 600 });
+    for (const l of labelsOf(e, s.width, s.height)) {
+      text(g, l.x, l.y + LINE_H / 2, l.lines[0], { 'font-size': LABEL, fill: fg, 'font-weight': 600 });
     }
   }
 
@@ -232,18 +223,19 @@ export class SfcRenderer extends BaseRenderer {
       }
     }
     el('rect', { x: 0, y: 0, width: s.width, height: s.height, fill: e.background ?? PAPER, stroke: fg, 'stroke-width': lw }, g);
-    const qualW = Math.max(28, ...rows.map((r) => textWidth(qualifierText(r.qualifier, r.duration), LABEL) + 10));
-    const hasInd = rows.some((r) => r.indicator);
-    const indW = hasInd ? Math.max(36, ...rows.map((r) => textWidth(r.indicator ?? '', LABEL) + 10)) : 0;
-    const q = Math.min(qualW, s.width / 2);
-    const iw = Math.min(indW, s.width / 4);
+    // The columns as the layout sized them (../drawing.ts); a block made narrower by hand
+    // squeezes the action column first.
+    const cols = actionColumns(rows);
+    const hasInd = cols.i > 0;
+    const q = Math.max(0, Math.min(cols.q, s.width - 40));
+    const iw = Math.min(cols.i, Math.max(0, s.width - q - 40));
     el('line', { x1: q, y1: 0, x2: q, y2: s.height, stroke: fg, 'stroke-width': lw }, g);
     if (hasInd) el('line', { x1: s.width - iw, y1: 0, x2: s.width - iw, y2: s.height, stroke: fg, 'stroke-width': lw }, g);
     rows.forEach((r, i) => {
       const cy = i * rowH + rowH / 2;
       if (i > 0) el('line', { x1: 0, y1: i * rowH, x2: s.width, y2: i * rowH, stroke: fg, 'stroke-width': lw }, g);
       const size = Math.min(LABEL, rowH - 4);
-      text(g, q / 2, cy, fit(qualifierText(r.qualifier, r.duration), size, q - 4), { 'font-size': size, 'text-anchor': 'middle', fill: fg, 'font-weight': 600 });
+      text(g, q / 2, cy, fit(qualifierText(r), size, q - 4), { 'font-size': size, 'text-anchor': 'middle', fill: fg, 'font-weight': 600 });
       text(g, q + 5, cy, fit(r.action, size, s.width - q - iw - 10), { 'font-size': size, fill: fg });
       if (r.indicator) text(g, s.width - iw / 2, cy, fit(r.indicator, size, iw - 4), { 'font-size': size, 'text-anchor': 'middle', fill: fg });
     });
@@ -328,38 +320,7 @@ function localBox(s: SfcShape): Box {
   return { x: 0, y: 0, width: s.width, height: s.height };
 }
 
-/** `name : tag` (seed 001: the name is written before the tag, separated by a colon). */
-export function nameWithTag(e: Element): string {
-  const name = e.name ?? '';
-  if (e.tag === undefined) return name;
-  return name ? `${name} : ${e.tag}` : `: ${e.tag}`;
-}
-
-/** Characters of a condition line (monospace) before it wraps: about 230 px at 12 px. */
-const CONDITION_CHARS = 32;
-
-/** A one-line condition as at most two lines of whole words (the second cut with `…`). */
-export function wrapCondition(line: string, max = CONDITION_CHARS): string[] {
-  if (line.length <= max) return [line];
-  const out: string[] = [];
-  let cur = '';
-  for (const word of line.split(/\s+/)) {
-    if (cur !== '' && cur.length + 1 + word.length > max) {
-      out.push(cur);
-      cur = word;
-    } else {
-      cur = cur === '' ? word : `${cur} ${word}`;
-    }
-  }
-  if (cur !== '') out.push(cur);
-  if (out.length <= 2) return out;
-  const rest = out.slice(1).join(' ');
-  return [out[0], rest.length <= max ? rest : `${rest.slice(0, max - 1).trimEnd()}…`];
-}
-
-function qualifierText(q: string, duration?: string): string {
-  return duration ? `${q}, ${duration}` : q;
-}
+export { nameWithTag, wrapCondition };
 
 function fontSize(font: string | undefined): number | undefined {
   const m = font ? /(\d+(?:\.\d+)?)px/.exec(font) : null;

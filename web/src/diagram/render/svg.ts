@@ -1,8 +1,11 @@
 // Small helpers to build SVG with presentation attributes only (no CSS classes), so the same
 // nodes serve the canvas and the standalone SVG export.
+import { textWidth as estimate } from '../drawing';
+
 const NS = 'http://www.w3.org/2000/svg';
 
-export const FONT = "'Segoe UI', 'Noto Sans', 'DejaVu Sans', Roboto, Helvetica, Arial, sans-serif";
+// DejaVu Sans first: the layout estimates text widths with its advances (../drawing.ts).
+export const FONT = "'DejaVu Sans', 'Segoe UI', 'Noto Sans', Roboto, Helvetica, Arial, sans-serif";
 export const MONO = "'DejaVu Sans Mono', 'Cascadia Mono', Consolas, monospace";
 
 export type Attrs = Record<string, string | number>;
@@ -20,19 +23,8 @@ export function text(parent: Element, x: number, y: number, content: string, att
   return t;
 }
 
-/** Rough advance of `s` in a sans-serif font of `size` px; used instead of measuring the DOM,
- *  which would force a layout for every block. */
-export function textWidth(s: string, size: number): number {
-  let w = 0;
-  for (const ch of s) {
-    if ('iljtfI.,:;|!\'"()[] '.includes(ch)) w += 0.32;
-    else if ('mwMW@%'.includes(ch)) w += 0.88;
-    else if (ch >= 'A' && ch <= 'Z') w += 0.66;
-    else if (ch >= '0' && ch <= '9') w += 0.56;
-    else w += 0.54;
-  }
-  return w * size;
-}
+/** Estimated advance of `s` (DejaVu Sans advances, as the layout estimates it). */
+export const textWidth = estimate;
 
 /** `s` cut with an ellipsis to fit `max` px. */
 export function fit(s: string, size: number, max: number): string {

@@ -66,9 +66,18 @@ export class SfcRules extends RuleProvider {
   }
 }
 
-/** Block kinds a chart of `target` may not hold (interfaces.md: no AND branches in ATMT/EATMT). */
+/** Block kinds a chart of `target` may not hold (interfaces.md, seed 001 chapter 3: no AND
+ *  branches and no actions in ATMT/EATMT: the automaton runs one state at a time and its
+ *  outputs are the states themselves). */
 export function kindsRefusedBy(target: ChartTarget | undefined): ElementKind[] {
-  return target === 'atmt' || target === 'eatmt' ? ['simultaneousDivergence', 'simultaneousConvergence'] : [];
+  return target === 'atmt' || target === 'eatmt' ? ['simultaneousDivergence', 'simultaneousConvergence', 'actionBlock'] : [];
+}
+
+/** Why a chart of `target` refuses a block of `kind` (translated), or '' when it does not. */
+export function refusalReason(kind: ElementKind, target: ChartTarget | undefined, t: (key: string, opts?: Record<string, unknown>) => string): string {
+  if (!kindsRefusedBy(target).includes(kind)) return '';
+  const block = (target ?? '').toUpperCase();
+  return kind === 'actionBlock' ? t('palette.noActions', { block }) : t('palette.noSimultaneous', { block });
 }
 
 function isBlock(e: unknown): e is SfcShape {

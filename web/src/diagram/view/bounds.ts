@@ -1,7 +1,7 @@
 // The extent of the chart as drawn, labels beside blocks included (for scrollbars, "fit" and
 // the SVG export).
 import { shapesOf, connectionsOf, type Service } from '../model';
-import { textWidth } from '../render/svg';
+import { labelsOf } from '../drawing';
 
 export interface Rect {
   x: number;
@@ -22,17 +22,12 @@ export function chartBounds(elementRegistry: Service): Rect | undefined {
     y1 = Math.max(y1, b);
   };
   for (const s of shapesOf(elementRegistry)) {
-    const e = s.businessObject;
-    let right = s.x + s.width;
-    if (e.kind === 'transition' && !e.hideLabel) {
-      const lines = (e.condition ?? e.name ?? '').split('\n');
-      const w = Math.max(0, ...lines.slice(0, 3).map((l) => textWidth(l.trim(), 12) * 1.15));
-      right += 20 + Math.min(w, 330);
-    } else if (e.kind === 'jump' && !e.hideLabel) {
-      right += 8 + textWidth(e.target ?? '?', 12);
-    }
     // Room for highlight frames, pin stubs and labels under blocks.
-    add(s.x - 12, s.y - 12, right + 12, s.y + s.height + 20);
+    add(s.x - 12, s.y - 12, s.x + s.width + 12, s.y + s.height + 20);
+    // Labels beside blocks, left ones included (a transition's name).
+    for (const l of labelsOf(s.businessObject, s.width, s.height)) {
+      add(s.x + l.x - 4, s.y + l.y - 4, s.x + l.x + l.width + 4, s.y + l.y + l.height + 4);
+    }
   }
   for (const c of connectionsOf(elementRegistry)) {
     for (const p of c.waypoints) add(p.x - 2, p.y - 2, p.x + 2, p.y + 2);

@@ -1,10 +1,12 @@
-// Keeps wires on their pins: edited bends stay orthogonal and end on the pins, a reconnected
+// Keeps wires on their pins: edited bends stay orthogonal, end on the pins and go round the
+// blocks and labels they would cross, a reconnected
 // end takes the nearest free pin of its new block, and blocks whose pins gained or lost a wire
 // are drawn again (input pins become arrows when wired).
 import CommandInterceptor from 'diagram-js/lib/command/CommandInterceptor.js';
 import type { Point } from '../../../doc';
 import { normalizeWire } from '../../geometry';
-import { wireEnds } from '../../layout/SfcLayouter';
+import { obstaclesOf, wireEnds } from '../../layout/SfcLayouter';
+import { hits, route } from '../../layout/router';
 import { isConnection, type Service, type SfcConnection, type SfcShape } from '../../model';
 import { freeInputs, freeOutputs, nearestFreePin } from '../../rules/SfcRules';
 
@@ -20,7 +22,12 @@ export class WireBehavior extends CommandInterceptor {
       const ctx = event.context;
       const c = ctx.connection as SfcConnection;
       const { start, end } = wireEnds(c);
-      ctx.newWaypoints = normalizeWire(ctx.newWaypoints as Point[], start, end, true);
+      let points = normalizeWire(ctx.newWaypoints as Point[], start, end, true);
+      // A bend dragged across a block or a label: the wire goes round it, along the vertical
+      // run the user dragged when that is free.
+      const obstacles = obstaclesOf(elementRegistry);
+      if (hits(points, obstacles) > 0) points = route(start, end, obstacles, draggedLane(points, start, end));
+      ctx.newWaypoints = points;
     });
 
     this.preExecute('connection.reconnect', (event: Service) => {
@@ -81,4 +88,14 @@ export class WireBehavior extends CommandInterceptor {
       }
     });
   }
+}
+
+/** The x of a vertical run of a wire off both pins' axes (the run a user dragged sideways). */
+function draggedLane(points: Point[], start: Point, end: Point): number | undefined {
+  for (let i = 1; i < points.length; i++) {
+    const a = points[i - 1];
+    const b = points[i];
+    if (a.x === b.x && a.y !== b.y && a.x !== start.x && a.x !== end.x) return a.x;
+  }
+  return undefined;
 }

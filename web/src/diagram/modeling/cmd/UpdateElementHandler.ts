@@ -1,6 +1,8 @@
 // `updateElement`: changes properties of a block or wire as one undoable command. Geometry goes
 // through diagram-js resize (so wires follow), a smaller pin count drops the wires of the
 // removed pins, a renamed step takes the jumps to it along.
+import type { Association, Element } from '../../../doc';
+import { actionBlockSize, stepSize } from '../../drawing';
 import { isBar, limits, minBarWidth } from '../../geometry';
 import { isConnection, type Service, type SfcConnection, type SfcElement, type SfcShape } from '../../model';
 
@@ -53,6 +55,20 @@ export class UpdateElementHandler {
       const lim = limits(bo);
       bounds.width = lim.min.w;
       bounds.height = lim.min.h;
+    }
+    // Blocks grow to fit their text: a step its name, tag and timeout (about its axis, so its
+    // wires stay straight), an action block its rows.
+    if (bo.kind === 'step' && !('w' in p) && ['name', 'tag', 'timeout', 'initial'].some((k) => k in p)) {
+      const need = stepSize({ ...bo, ...(p as Partial<Element>) }).w;
+      if (need > bounds.width) {
+        bounds.x -= (need - bounds.width) / 2;
+        bounds.width = need;
+      }
+    }
+    if (bo.kind === 'actionBlock' && 'associations' in p && Array.isArray(p.associations)) {
+      const need = actionBlockSize(p.associations as Association[]);
+      if (!('w' in p)) bounds.width = Math.max(bounds.width, need.w);
+      if (!('h' in p)) bounds.height = need.h;
     }
     if (bounds.x !== e.x || bounds.y !== e.y || bounds.width !== e.width || bounds.height !== e.height) {
       this.modeling.resizeShape(e, bounds);

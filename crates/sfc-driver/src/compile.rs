@@ -1,0 +1,236 @@
+//! Checking and compiling a chart file for a target: the one implementation behind `sfc check`,
+//! `sfc build` and the editor's `check` and `build` calls (moved here from `sfc-server`).
+
+use crate::load::FileKind;
+use sfc_diagnostics::{Diagnostic, SourceFile};
+use sfc_model::{Chart, CheckOptions, Checked, Limits, Target};
+use std::path::Path;
+
+/// What a build produces.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum BuildTarget {
+    Atmt,
+    Eatmt,
+    St,
+    Stl,
+    Plcopen,
+    Svg,
+    Text,
+}
+
+impl BuildTarget {
+    /// Every target, in the order the documentation lists them.
+    pub const ALL: [BuildTarget; 7] = [
+        BuildTarget::Atmt,
+        BuildTarget::Eatmt,
+        BuildTarget::St,
+        BuildTarget::Stl,
+        BuildTarget::Plcopen,
+        BuildTarget::Svg,
+        BuildTarget::Text,
+    ];
+
+    /// The name used on the command line and in the HTTP API (`atmt`, `st`, …).
+    pub fn name(self) -> &'static str {
+        match self {
+            BuildTarget::Atmt => "atmt",
+            BuildTarget::Eatmt => "eatmt",
+            BuildTarget::St => "st",
+            BuildTarget::Stl => "stl",
+            BuildTarget::Plcopen => "plcopen",
+            BuildTarget::Svg => "svg",
+            BuildTarget::Text => "text",
+        }
+    }
+
+    /// Parses a target name (exact, lowercase).
+    pub fn from_name(name: &str) -> Option<BuildTarget> {
+        BuildTarget::ALL.into_iter().find(|t| t.name() == name)
+    }
+
+    /// The REX block whose rules the chart must follow when building a transition table.
+    pub fn table_target(self) -> Option<Target> {
+        match self {
+            BuildTarget::Atmt => Some(Target::Atmt),
+            BuildTarget::Eatmt => Some(Target::Eatmt),
+            _ => None,
+        }
+    }
+}
+
+/// A file is PLCopen XML by its extension, or by its first non-blank character (after a
+/// byte order mark).
+pub fn is_xml(path: &Path, text: &str) -> bool {
+    path.extension().is_some_and(|e| e.eq_ignore_ascii_case("xml"))
+        || text.trim_start_matches('\u{feff}').trim_start().starts_with('<')
+}
+
+/// Checks a file of either kind: the diagnostics are located in the file the user wrote (for
+/// XML, the importer maps them back to XML lines and columns); `Checked` is the IEC text.
+pub fn check_any(file_id: u32, path: &Path, text: &str, opts: &CheckOptions) -> (SourceFile, Checked, Vec<Diagnostic>) {
+    let kind = if is_xml(path, text) { FileKind::PlcOpen } else { FileKind::Iec };
+    check_text(file_id, &path.display().to_string(), text, kind, opts)
+}
+
+/// [`check_any`] for a text in memory (an editor buffer, a language server's document):
+/// `name` is how diagnostics name the file, `kind` says how to read it.
+pub fn check_text(
+    file_id: u32,
+    name: &str,
+    text: &str,
+    kind: FileKind,
+    opts: &CheckOptions,
+) -> (SourceFile, Checked, Vec<Diagnostic>) {
+    match kind {
+        FileKind::PlcOpen => {
+            let imported = sfc_plcopen::import(file_id, name, text);
+            let checked = sfc_analysis::check_source(file_id, &format!("{name} (imported)"), &imported.text, opts);
+            let mut diags = imported.diagnostics.clone();
+            diags.extend(checked.diagnostics.iter().map(|d| sfc_plcopen::relocate(d, &imported.map, file_id)));
+            sfc_diagnostics::sort(&mut diags);
+            diags.dedup();
+            (imported.xml, checked, diags)
+        }
+        FileKind::Iec => {
+            let checked = sfc_analysis::check_source(file_id, name, text, opts);
+            let diags = checked.diagnostics.clone();
+            (checked.file.clone(), checked, diags)
+        }
+    }
+}
+
+/// The options of the check that validates a chart before it is built: the target rules of
+/// ATMT/EATMT are part of it (a table target overrides `sfc.target`); the analysis is not (that
+/// is `sfc check`'s job).
+pub fn validation_options(target: BuildTarget, nstep: Option<u32>, ntr: Option<u32>) -> CheckOptions {
+    CheckOptions { target: target.table_target(), nstep, ntr, analysis: false, ..CheckOptions::default() }
+}
+
+/// The chart to build: the one named by `pou`, or the only SFC POU of the file.
+pub fn pick_chart<'a>(checked: &'a Checked, pou: Option<&str>) -> Result<&'a Chart, String> {
+    let names = || checked.charts.iter().map(|c| c.pou.as_str()).collect::<Vec<_>>().join(", ");
+    match pou {
+        Some(p) => checked
+            .charts
+            .iter()
+            .find(|c| c.pou.eq_ignore_ascii_case(p))
+            .ok_or_else(|| format!("`{p}` is not an SFC POU of the file (SFC POUs: {})", names())),
+        None => match checked.charts.as_slice() {
+            [one] => Ok(one),
+            [] => Err("the file has no SFC POU to build".to_string()),
+            _ => Err(format!("the file has several SFC POUs; choose one with --pou ({})", names())),
+        },
+    }
+}
+
+/// How to compile a checked file.
+#[derive(Debug, Clone, Default)]
+pub struct CompileOptions<'a> {
+    /// The SFC POU to build when the file has several.
+    pub pou: Option<&'a str>,
+    /// ATMT/EATMT: compile simultaneous branches into one automaton.
+    pub flatten: bool,
+    /// ATMT/EATMT state and rule limit overrides.
+    pub nstep: Option<u32>,
+    pub ntr: Option<u32>,
+    /// STL: set/reset or SCR.
+    pub stl_method: sfc_codegen::stl::StlMethod,
+}
+
+/// A successful compilation.
+#[derive(Debug, Clone)]
+pub struct Compiled {
+    /// The output (for ATMT/EATMT the one-line table, without a line break).
+    pub text: String,
+    /// Notes for the user, located in the checked text (flattening: what each state stands for).
+    pub notes: Vec<Diagnostic>,
+    /// With flattening: the number of states produced.
+    pub flattened: Option<usize>,
+    /// STL: Micro/WIN's symbol table as CSV.
+    pub symbols: Option<String>,
+}
+
+/// Why a checked file could not be compiled.
+#[derive(Debug, Clone)]
+pub enum CompileError {
+    /// No chart, or not the one asked for (a usage problem, not a problem of the chart).
+    Chart(String),
+    /// The chart breaks a rule of the target; located in the checked text.
+    Diagnostics(Vec<Diagnostic>),
+}
+
+/// Compiles a checked file (without errors) for `target`.
+pub fn compile(checked: &Checked, target: BuildTarget, opts: &CompileOptions) -> Result<Compiled, CompileError> {
+    let plain = |text: String| Compiled { text, notes: Vec::new(), flattened: None, symbols: None };
+    match target {
+        BuildTarget::Text => {
+            // `checked.unit` lent its conditions and action bodies to the charts: print a fresh
+            // parse of the checked text (without errors, or the check would have failed).
+            let (unit, _) = sfc_syntax::parse(0, &checked.file.text);
+            return Ok(plain(sfc_syntax::print::print(&unit)));
+        }
+        BuildTarget::Plcopen => return sfc_plcopen::export(checked).map(plain).map_err(CompileError::Diagnostics),
+        _ => {}
+    }
+    let chart = pick_chart(checked, opts.pou).map_err(CompileError::Chart)?;
+    let built = match (target, target.table_target()) {
+        (_, Some(table)) => {
+            let limits = Limits::of(table, opts.nstep, opts.ntr);
+            sfc_codegen::atmt::build_table(chart, table, limits, opts.flatten).map(|t| Compiled {
+                text: t.text,
+                notes: t.notes,
+                flattened: t.flattened,
+                symbols: None,
+            })
+        }
+        (BuildTarget::St, _) => sfc_codegen::st::build_st(checked, chart).map(plain),
+        (BuildTarget::Stl, _) => {
+            let opts = sfc_codegen::stl::StlOptions { method: opts.stl_method };
+            sfc_codegen::stl::build_stl(checked, chart, opts).map(|p| Compiled {
+                text: p.text,
+                notes: p.warnings,
+                flattened: None,
+                symbols: Some(p.symbols),
+            })
+        }
+        _ => {
+            // The chart as the editor draws it: the same document (its saved layout, or the
+            // structured layout), drawn the same way.
+            let opened = sfc_doc::open(0, &checked.file.name, &checked.file.text);
+            match opened.charts.iter().find(|d| d.pou.eq_ignore_ascii_case(&chart.pou)) {
+                Some(doc) => Ok(plain(sfc_doc::svg(doc))),
+                None => {
+                    let layout = sfc_render::layout(chart);
+                    Ok(plain(sfc_render::svg(chart, &layout, &sfc_render::SvgOptions::default())))
+                }
+            }
+        }
+    };
+    built.map_err(CompileError::Diagnostics)
+}
+
+/// One rule of a transition table.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
+pub struct TableRule {
+    pub state: u32,
+    /// The input index, `1000 + index` when negated.
+    pub condition: u32,
+    pub next: u32,
+}
+
+/// A transition table read back from its one-line form.
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
+pub struct Table {
+    pub rules: Vec<TableRule>,
+    /// The timeout of each state in seconds, `0` for none.
+    pub timeouts: Vec<f64>,
+}
+
+/// Reads a one-line table `N[s c n;…][t …]`; `None` when the line is not of that form.
+pub fn parse_table(line: &str) -> Option<Table> {
+    let (rules, timeouts) = sfc_codegen::atmt::parse_table(line)?;
+    Some(Table {
+        rules: rules.iter().map(|r| TableRule { state: r.state, condition: r.condition, next: r.next }).collect(),
+        timeouts: timeouts.iter().map(|&us| us as f64 / 1e6).collect(),
+    })
+}

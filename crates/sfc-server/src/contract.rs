@@ -1,0 +1,236 @@
+//! The answers of the HTTP API (`docs/editor.md`) as Rust types. The server writes its answers
+//! as JSON; `tests/contract_api.rs` reads every kind of answer back into these types, which
+//! refuse unknown fields, so they say exactly what the server sends. The editor's TypeScript
+//! types (`web/src/contracts/api.ts`) are generated from them with ts-rs; a test fails when that
+//! file is stale (`UPDATE_CONTRACTS=1 cargo test -p sfc-server contracts` writes it anew).
+
+use serde::{Deserialize, Serialize};
+use sfc_doc::EditorDoc;
+
+/// `error`, `warning` or `note`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[cfg_attr(test, derive(ts_rs::TS))]
+#[serde(rename_all = "lowercase")]
+pub enum Severity {
+    Error,
+    Warning,
+    Note,
+}
+
+/// A diagnostic as the page receives it: `sfc check --format json` with camelCase keys, the
+/// code's title, the blocks it concerns and, for a firing-sequence witness, the transition blocks.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[cfg_attr(test, derive(ts_rs::TS))]
+#[serde(rename_all = "camelCase", deny_unknown_fields)]
+pub struct Diag {
+    pub code: String,
+    pub severity: Severity,
+    /// English message as `sfc check` prints it.
+    pub message: String,
+    /// English title of the code (the page translates it by `code`).
+    pub title: String,
+    pub file: String,
+    pub line: u32,
+    pub column: u32,
+    pub end_line: u32,
+    pub end_column: u32,
+    /// The element name the diagnostic concerns (step, transition or action), if any.
+    pub element: Option<String>,
+    /// Ids of the blocks it concerns.
+    pub element_ids: Vec<String>,
+    pub notes: Vec<String>,
+    /// Firing sequence (transition names) or variable valuation, for analysis findings.
+    #[cfg_attr(test, ts(type = "string[] | Record<string, unknown> | null"))]
+    pub witness: serde_json::Value,
+    /// For a firing-sequence witness: the transition block ids, in firing order.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    #[cfg_attr(test, ts(optional))]
+    pub witness_ids: Option<Vec<String>>,
+}
+
+/// `st` (textual SFC) or `xml` (PLCopen XML).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[cfg_attr(test, derive(ts_rs::TS))]
+#[serde(rename_all = "lowercase")]
+pub enum FileFormat {
+    St,
+    Xml,
+}
+
+/// `mdi` (charts in tabs) or `host` (one chart for a host application).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[cfg_attr(test, derive(ts_rs::TS))]
+#[serde(rename_all = "lowercase")]
+pub enum SessionMode {
+    Mdi,
+    Host,
+}
+
+/// Host mode as the session reports it.
+#[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
+#[cfg_attr(test, derive(ts_rs::TS))]
+#[serde(deny_unknown_fields)]
+pub struct HostInfo {
+    #[cfg_attr(test, ts(type = "\"atmt\" | \"eatmt\""))]
+    pub fb: String,
+    pub nstep: u32,
+    pub ntr: u32,
+    pub file: String,
+    pub result: String,
+}
+
+/// `GET /api/session`.
+#[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
+#[cfg_attr(test, derive(ts_rs::TS))]
+#[serde(deny_unknown_fields)]
+pub struct Session {
+    pub mode: SessionMode,
+    pub version: String,
+    /// Directories named on the command line (absolute): their charts are served.
+    pub roots: Vec<String>,
+    /// Files named on the command line (absolute): served alone.
+    pub open: Vec<String>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    #[cfg_attr(test, ts(optional))]
+    pub host: Option<HostInfo>,
+}
+
+/// One entry of `GET /api/files`.
+#[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
+#[cfg_attr(test, derive(ts_rs::TS))]
+#[serde(deny_unknown_fields)]
+pub struct FileEntry {
+    pub path: String,
+    pub format: FileFormat,
+}
+
+/// `POST /api/open`.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[cfg_attr(test, derive(ts_rs::TS))]
+#[serde(deny_unknown_fields)]
+pub struct OpenResult {
+    pub path: String,
+    pub format: FileFormat,
+    #[cfg_attr(test, ts(type = "Array<EditorDoc>"))]
+    pub charts: Vec<EditorDoc>,
+    pub diagnostics: Vec<Diag>,
+    /// Hash of the file's bytes when read; sent back on save to detect changes made outside.
+    pub hash: String,
+}
+
+/// `POST /api/save`.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[cfg_attr(test, derive(ts_rs::TS))]
+#[serde(deny_unknown_fields)]
+pub struct SaveResult {
+    pub path: String,
+    pub hash: String,
+    pub diagnostics: Vec<Diag>,
+}
+
+/// A build target of `POST /api/build`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[cfg_attr(test, derive(ts_rs::TS))]
+#[serde(rename_all = "lowercase")]
+pub enum BuildTarget {
+    Atmt,
+    Eatmt,
+    St,
+    Stl,
+    Plcopen,
+    Svg,
+    Text,
+}
+
+/// One rule of a transition table.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[cfg_attr(test, derive(ts_rs::TS))]
+#[serde(deny_unknown_fields)]
+pub struct TableRule {
+    pub state: u32,
+    /// The input index, `1000 + index` when negated.
+    pub condition: u32,
+    pub next: u32,
+}
+
+/// A transition table: its rules and the timeout of each state in seconds.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[cfg_attr(test, derive(ts_rs::TS))]
+#[serde(deny_unknown_fields)]
+pub struct Table {
+    pub rules: Vec<TableRule>,
+    pub timeouts: Vec<f64>,
+}
+
+/// `POST /api/build`.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[cfg_attr(test, derive(ts_rs::TS))]
+#[serde(rename_all = "camelCase", deny_unknown_fields)]
+pub struct BuildResult {
+    pub ok: bool,
+    pub diagnostics: Vec<Diag>,
+    /// The built text (the one-line table for atmt/eatmt).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    #[cfg_attr(test, ts(optional))]
+    pub output: Option<String>,
+    /// atmt/eatmt: the table and the timeout vector.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    #[cfg_attr(test, ts(optional))]
+    pub table: Option<Table>,
+    /// Host mode: the result file written.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    #[cfg_attr(test, ts(optional))]
+    pub result_written: Option<String>,
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use ts_rs::TS;
+
+    fn declarations() -> String {
+        let cfg = ts_rs::Config::default();
+        let mut out = String::from(
+            "// GENERATED from crates/sfc-server/src/contract.rs by ts-rs: do not edit.\n\
+             // `UPDATE_CONTRACTS=1 cargo test -p sfc-server contracts` writes it anew; the test fails when it is stale.\n\
+             import type { EditorDoc } from './doc';\n\n",
+        );
+        for decl in [
+            Severity::decl(&cfg),
+            Diag::decl(&cfg),
+            FileFormat::decl(&cfg),
+            SessionMode::decl(&cfg),
+            HostInfo::decl(&cfg),
+            Session::decl(&cfg),
+            FileEntry::decl(&cfg),
+            OpenResult::decl(&cfg),
+            SaveResult::decl(&cfg),
+            BuildTarget::decl(&cfg),
+            TableRule::decl(&cfg),
+            Table::decl(&cfg),
+            BuildResult::decl(&cfg),
+        ] {
+            out.push_str("export ");
+            out.push_str(&decl);
+            out.push_str("\n\n");
+        }
+        out.trim_end().to_string() + "\n"
+    }
+
+    #[test]
+    fn contracts_are_current() {
+        let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../web/src/contracts/api.ts");
+        let now = declarations();
+        if std::env::var_os("UPDATE_CONTRACTS").is_some() {
+            std::fs::create_dir_all(path.parent().unwrap()).unwrap();
+            std::fs::write(&path, &now).unwrap();
+            return;
+        }
+        let committed = std::fs::read_to_string(&path).unwrap_or_default();
+        assert!(
+            committed == now,
+            "{} is stale: run `UPDATE_CONTRACTS=1 cargo test -p sfc-server contracts`",
+            path.display()
+        );
+    }
+}
