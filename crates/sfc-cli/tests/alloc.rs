@@ -222,8 +222,10 @@ fn commands_that_run_charts_do_not_allocate_per_scan() {
     );
     let (d1, d2) = (scenario(n), scenario(2 * n));
     check("sfc test --coverage", n, 8, |k| test(if k == n { &d1 } else { &d2 }), &mut failures);
-    // The run has its network thread beside the scan thread: a little more slack.
-    check("sfc run, dense chart", 500, 40, |k| run(&dense, k), &mut failures);
-    check("sfc run, ST actions", 500, 40, |k| run(&arith, k), &mut failures);
+    // The run has its threads beside the scan thread, and on a loaded machine overruns (each
+    // an event in the bounded log, which grows to its size): more slack, still far below one
+    // allocation per scan.
+    check("sfc run, dense chart", 500, 150, |k| run(&dense, k), &mut failures);
+    check("sfc run, ST actions", 500, 150, |k| run(&arith, k), &mut failures);
     assert!(failures.is_empty(), "allocation per scan:\n{}", failures.join("\n"));
 }

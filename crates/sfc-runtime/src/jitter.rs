@@ -113,7 +113,9 @@ fn ns_value(b: usize) -> u64 {
 
 impl NsHistogram {
     pub fn add(&mut self, ns: u64) {
-        self.counts[ns_bucket(ns)] += 1;
+        if let Some(c) = self.counts.get_mut(ns_bucket(ns)) {
+            *c += 1;
+        }
         self.n += 1;
         self.max = self.max.max(ns);
         self.sum = self.sum.saturating_add(ns);

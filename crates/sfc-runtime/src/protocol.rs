@@ -483,9 +483,13 @@ impl Session<'_> {
             }
             tokio::time::sleep(TICK).await;
         }
+        // A change of RUN/STOP/FAULT since the hello is told as a `state` message, even when the
+        // first snapshot (which may wait for guards) already shows it.
+        let told = self.state_seq;
         if !self.send_snapshot() {
             return End::Dropped;
         }
+        self.state_seq = told;
         let mut tick = tokio::time::interval(TICK);
         tick.set_missed_tick_behavior(tokio::time::MissedTickBehavior::Skip);
         loop {
