@@ -127,15 +127,22 @@ EOF
   "$out/driver" "$scans"
 }
 
+# Wall time of a command in seconds (µs resolution).
+wall() {
+  local t0=$EPOCHREALTIME
+  "$@" >/dev/null 2>&1
+  awk -v a="$t0" -v b="$EPOCHREALTIME" 'BEGIN { printf "%.6f", b - a }'
+}
+
 # sfc sim: (wall(2N) − wall(N)) / N, the best of 3 (the start-up cancels out).
-sim_per_scan() { # sim_per_scan CHART
-  local best=""
+sim_per_scan() { # sim_per_scan CHART N
+  local best="" n=$2
   for _ in 1 2 3; do
     local t1 t2
-    t1=$( { /usr/bin/time -f %e "$sfc" sim "$1" --scans "$scans" >/dev/null; } 2>&1 | tail -1)
-    t2=$( { /usr/bin/time -f %e "$sfc" sim "$1" --scans $((2 * scans)) >/dev/null; } 2>&1 | tail -1)
+    t1=$(wall "$sfc" sim "$1" --scans "$n")
+    t2=$(wall "$sfc" sim "$1" --scans $((2 * n)))
     local per
-    per=$(awk -v a="$t1" -v b="$t2" -v n="$scans" 'BEGIN { printf "%.1f", (b - a) * 1e9 / n }')
+    per=$(awk -v a="$t1" -v b="$t2" -v n="$n" 'BEGIN { printf "%.1f", (b - a) * 1e9 / n }')
     if [ -z "$best" ] || awk -v p="$per" -v b="$best" 'BEGIN { exit !(p < b) }'; then best=$per; fi
   done
   echo "$best"
@@ -157,19 +164,21 @@ echo "ns per scan (the sfc engine figure for the ring is its 100-step ring: the 
 printf '| %-40s | %14s | %10s | %12s | %12s |\n' chart "MatIEC C (-O1)" "sfc sim" "sfc run p50" "engine"
 printf '|%s|%s|%s|%s|%s|\n' "$(printf -- '-%.0s' {1..42})" "$(printf -- '-%.0s' {1..16})" "$(printf -- '-%.0s' {1..12})" "$(printf -- '-%.0s' {1..14})" "$(printf -- '-%.0s' {1..14})"
 printf '| %-40s | %14s | %10s | %12s | %12s |\n' "ring of 1,000 steps, one token moving" \
-  "$(matiec_per_scan "$work/ring.st" Ring)" "$(sim_per_scan "$work/ring.st")" "$(run_p50 "$work/ring.st")" "${engine_ring:-?}"
+  "$(matiec_per_scan "$work/ring.st" Ring)" "$(sim_per_scan "$work/ring.st" $((50 * scans)))" "$(run_p50 "$work/ring.st")" "${engine_ring:-?}"
 printf '| %-40s | %14s | %10s | %12s | %12s |\n' "1,000 two-step loops, all moving" \
-  "$(matiec_per_scan "$work/loops.st" Loops)" "$(sim_per_scan "$work/loops.st")" "$(run_p50 "$work/loops.st")" "${engine_loops:-?}"
+  "$(matiec_per_scan "$work/loops.st" Loops)" "$(sim_per_scan "$work/loops.st" "$scans")" "$(run_p50 "$work/loops.st")" "${engine_loops:-?}"
 
 # sfc check against iec2c on the 10,000-step ring: wall time and peak memory, best of 3.
-best_of_3() { # best_of_3 CMD…: "seconds MB"
-  local best=""
+best_of_3() { # best_of_3 CMD…: "seconds, MB" (the fastest of 3 runs, the peak memory of the largest)
+  local best="" mem=0
   for _ in 1 2 3; do
-    local r
-    r=$( { /usr/bin/time -f '%e %M' "$@" >/dev/null 2>&1; } 2>&1 | tail -1)
-    if [ -z "$best" ] || awk -v a="${r%% *}" -v b="${best%% *}" 'BEGIN { exit !(a < b) }'; then best=$r; fi
+    local t
+    t=$(wall "$@")
+    if [ -z "$best" ] || awk -v a="$t" -v b="$best" 'BEGIN { exit !(a < b) }'; then best=$t; fi
   done
-  awk -v s="${best%% *}" -v k="${best##* }" 'BEGIN { printf "%.3f s, %.0f MB", s, k / 1024 }'
+  /usr/bin/time -o "$work/time" -f '%M' "$@" >/dev/null 2>&1 || true
+  mem=$(tail -1 "$work/time")
+  awk -v s="$best" -v k="$mem" 'BEGIN { printf "%.3f s, %.0f MB", s, k / 1024 }'
 }
 mkdir -p "$work/c-big"
 echo
