@@ -583,6 +583,29 @@ fn completion_knows_the_context() {
     c.stop();
 }
 
+/// While typing in a long chart, completion answers from the last analysis with the edits made
+/// since (the index worker parses the new text in the background): the same answers, at the
+/// shifted places.
+#[test]
+fn completion_while_typing_follows_the_edits_since_the_last_analysis() {
+    let text = std::fs::read_to_string(fixture("tank.st")).unwrap();
+    let mut c = Client::start(None, no_idle());
+    let u = c.open(&fixture("tank.st"), &text);
+    // Analysed once (a hover needs it), then two lines inserted above everything.
+    let _ = hover_text(&mut c, &u, at(&text, "Level", 0, 1));
+    let head = "(* a comment\n   over two lines *)\n";
+    c.change(&u, 2, Range::new(Position::new(0, 0), Position::new(0, 0)), head);
+    let text2 = format!("{head}{text}");
+    let p = at(&text2, "Start;", 0, 0);
+    c.change(&u, 3, Range::new(p, p), "Fill.");
+    assert_eq!(labels(&mut c, &u, Position::new(p.line, p.character + 5)), ["X", "T"]);
+    let text3 = text2.replacen("Start;", "Fill.Start;", 1);
+    assert_eq!(labels(&mut c, &u, at(&text3, "FROM Fill", 0, 5)), ["Idle", "Fill", "Heat", "Drain"]);
+    let q = at(&text3, "Open(N)", 0, 5);
+    assert_eq!(labels(&mut c, &u, q)[0], "N");
+    c.stop();
+}
+
 #[test]
 fn outline_and_semantic_tokens() {
     let text = std::fs::read_to_string(fixture("tank.st")).unwrap();

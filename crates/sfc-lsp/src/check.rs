@@ -8,6 +8,7 @@
 //! were computed for; the server drops those of an older version.
 
 use crate::text::LineIndex;
+use crate::workspace::Analysis;
 use crossbeam_channel::{Receiver, RecvTimeoutError, Sender};
 use lsp_types::{CodeDescription, DiagnosticRelatedInformation, DiagnosticSeverity, Location, NumberOrString, Uri};
 use sfc_diagnostics::{Diagnostic, Severity, SourceFile, Witness};
@@ -154,6 +155,10 @@ pub struct Outcome {
     pub elapsed: Duration,
     /// The check failed inside (a bug): its message, for the log.
     pub failure: Option<String>,
+    /// From the index worker (no diagnostics): the parse and index of this version, None when
+    /// it failed inside (`failure` says why).
+    pub from_index: bool,
+    pub indexed: Option<Arc<Analysis>>,
 }
 
 /// Starts a worker thread: it takes jobs from `jobs`, keeps only the newest per document, waits
@@ -164,14 +169,62 @@ pub fn spawn_worker(
     out: Sender<Outcome>,
     providers: Arc<Vec<Box<dyn DiagnosticsProvider>>>,
 ) -> std::io::Result<std::thread::JoinHandle<()>> {
+    spawn(name, jobs, out, providers, run)
+}
+
+/// Starts the index worker: as [`spawn_worker`], but it parses and indexes each job's text
+/// (what completion, hover and navigation read) instead of checking it, so that requests find
+/// the analysis made when they come.
+pub fn spawn_index_worker(
+    name: &str,
+    jobs: Receiver<Job>,
+    out: Sender<Outcome>,
+) -> std::io::Result<std::thread::JoinHandle<()>> {
+    spawn(name, jobs, out, Arc::new(Vec::new()), index)
+}
+
+type Runner = fn(&Job, &[Box<dyn DiagnosticsProvider>]) -> Outcome;
+
+fn spawn(
+    name: &str,
+    jobs: Receiver<Job>,
+    out: Sender<Outcome>,
+    providers: Arc<Vec<Box<dyn DiagnosticsProvider>>>,
+    runner: Runner,
+) -> std::io::Result<std::thread::JoinHandle<()>> {
     std::thread::Builder::new()
         .name(name.to_string())
         // Parsing and checking recurse along the (depth-capped) tree, as in the CLI.
         .stack_size(64 << 20)
-        .spawn(move || worker(jobs, out, providers))
+        .spawn(move || worker(jobs, out, providers, runner))
 }
 
-fn worker(jobs: Receiver<Job>, out: Sender<Outcome>, providers: Arc<Vec<Box<dyn DiagnosticsProvider>>>) {
+/// The parse and index of one job's text (a panic inside becomes a failure for the log).
+fn index(job: &Job, _: &[Box<dyn DiagnosticsProvider>]) -> Outcome {
+    let start = Instant::now();
+    let made = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| Arc::new(Analysis::new(job.text.clone()))));
+    let (indexed, failure) = match made {
+        Ok(a) => (Some(a), None),
+        Err(_) => (None, Some(format!("indexing `{}` failed inside sfc", job.path.display()))),
+    };
+    Outcome {
+        uri: job.uri.clone(),
+        version: job.version,
+        analysis: false,
+        diagnostics: Vec::new(),
+        elapsed: start.elapsed(),
+        failure,
+        from_index: true,
+        indexed,
+    }
+}
+
+fn worker(
+    jobs: Receiver<Job>,
+    out: Sender<Outcome>,
+    providers: Arc<Vec<Box<dyn DiagnosticsProvider>>>,
+    runner: Runner,
+) {
     // Pending jobs by URI with the time each becomes due.
     let mut pending: HashMap<String, (Instant, Job)> = HashMap::new();
     loop {
@@ -193,7 +246,7 @@ fn worker(jobs: Receiver<Job>, out: Sender<Outcome>, providers: Arc<Vec<Box<dyn 
         let due: Vec<String> = pending.iter().filter(|(_, (d, _))| *d <= now).map(|(k, _)| k.clone()).collect();
         for key in due {
             let Some((_, job)) = pending.remove(&key) else { continue };
-            if out.send(run(&job, &providers)).is_err() {
+            if out.send(runner(&job, &providers)).is_err() {
                 return;
             }
         }
@@ -210,6 +263,8 @@ pub fn run(job: &Job, providers: &[Box<dyn DiagnosticsProvider>]) -> Outcome {
         diagnostics: Vec::new(),
         elapsed: Duration::ZERO,
         failure: None,
+        from_index: false,
+        indexed: None,
     };
     let Some(provider) = providers.iter().find(|p| p.handles(&job.path, &job.language, &job.text)) else {
         return outcome;

@@ -5,7 +5,8 @@
 
 use crate::hover::QUALIFIERS;
 use crate::index::{FileIndex, SymbolKind};
-use crate::workspace::Analysis;
+use crate::text::Shift;
+use crate::workspace::{Analysis, View};
 use lsp_types::{
     CompletionItem, CompletionItemKind, CompletionItemLabelDetails, Documentation, InsertTextFormat, MarkupContent,
     MarkupKind,
@@ -44,15 +45,19 @@ fn upper(text: &str, t: &Token) -> String {
 
 /// The completion context at `offset`.
 pub fn context(a: &Analysis, offset: u32) -> Context {
-    let text = a.text.as_str();
-    let Some(pou) = a.index.pou_at(offset) else { return Context::TopLevel };
+    context_in(&a.index, &a.text, Shift(&[]), offset)
+}
+
+/// The completion context at `offset` of `text`, with the index of an earlier version of it
+/// and the edits made since (`shift`).
+fn context_in(index: &FileIndex, text: &str, shift: Shift<'_>, offset: u32) -> Context {
+    let Some(pou) = index.pou_at(shift.backward(offset)) else { return Context::TopLevel };
     // Lex from the start of the element before the cursor: enough to see the context, and
     // cheap in a long file.
-    let pou_start = a.index.pous.get(pou).map_or(0, |p| p.span.start);
-    let anchor = a
-        .index
+    let pou_start = index.pous.get(pou).map_or(0, |p| shift.forward(p.span.start));
+    let anchor = index
         .pou_symbols(pou)
-        .map(|(_, s)| s.span.start)
+        .map(|(_, s)| shift.forward(s.span.start))
         .filter(|&s| s <= offset && s >= pou_start)
         .max()
         .unwrap_or(pou_start);
@@ -102,7 +107,7 @@ pub fn context(a: &Analysis, offset: u32) -> Context {
         .enumerate()
         .rev()
         .find(|(_, t)| t.kind == TokenKind::Ident && structural.contains(&upper(piece, t).as_str()));
-    let in_sfc = a.index.pous.get(pou).is_some_and(|p| p.sfc);
+    let in_sfc = index.pous.get(pou).is_some_and(|p| p.sfc);
     let Some((at, kw)) = last_kw else {
         // At the start of a POU's body (or its header).
         return if in_sfc && toks.is_empty() { Context::ChartBody } else { Context::Code };
@@ -192,9 +197,18 @@ fn keyword(k: &str) -> CompletionItem {
 
 /// The completion items at `offset`.
 pub fn complete(a: &Analysis, offset: u32) -> Vec<CompletionItem> {
-    let ix = &a.index;
-    let pou = ix.pou_at(offset);
-    let ctx = context(a, offset);
+    complete_in(&a.index, &a.text, Shift(&[]), offset)
+}
+
+/// The completion items at `offset` of the current text of `view` (which may carry the index
+/// of an earlier version: names declared since are missing until it is analysed again).
+pub fn complete_view(view: &View, offset: u32) -> Vec<CompletionItem> {
+    complete_in(&view.analysis.index, &view.text, view.shift(), offset)
+}
+
+fn complete_in(ix: &FileIndex, text: &str, shift: Shift<'_>, offset: u32) -> Vec<CompletionItem> {
+    let pou = ix.pou_at(shift.backward(offset));
+    let ctx = context_in(ix, text, shift, offset);
     let mut out = Vec::new();
     let names = |out: &mut Vec<CompletionItem>, want: &dyn Fn(&SymbolKind) -> bool| {
         let locals = pou.map(|p| ix.pou_symbols(p).collect::<Vec<_>>()).unwrap_or_default();

@@ -3,7 +3,7 @@
 //! current.
 
 use crate::check::{self, DiagnosticsProvider, Job, Outcome};
-use crate::workspace::{path_of, DocKind, Document, Workspace};
+use crate::workspace::{path_of, DocKind, Document, View, Workspace};
 use crate::{actions, complete, format, hover, navigate, symbols, text, tokens};
 use crossbeam_channel::{select, Receiver, Sender};
 use lsp_server::{Connection, ErrorCode, Message, Notification, Request, RequestId, Response};
@@ -132,16 +132,21 @@ pub fn serve(connection: Connection, mut options: ServerOptions) -> Result<(), S
     let providers = Arc::new(std::mem::take(&mut options.providers));
     let (check_tx, check_rx) = crossbeam_channel::unbounded();
     let (analysis_tx, analysis_rx) = crossbeam_channel::unbounded();
+    let (index_tx, index_rx) = crossbeam_channel::unbounded();
     let (out_tx, out_rx) = crossbeam_channel::unbounded();
     let workers = [
         check::spawn_worker("sfc-lsp-check", check_rx, out_tx.clone(), providers.clone()),
-        check::spawn_worker("sfc-lsp-analysis", analysis_rx, out_tx, providers),
+        check::spawn_worker("sfc-lsp-analysis", analysis_rx, out_tx.clone(), providers),
+        check::spawn_index_worker("sfc-lsp-index", index_rx, out_tx),
     ];
     let mut server = Server {
         conn: &connection,
         ws: Workspace::new(roots),
         check_tx,
         analysis_tx,
+        index_tx,
+        indexing: HashMap::new(),
+        outcomes: out_rx.clone(),
         published: HashMap::new(),
         options,
     };
@@ -158,6 +163,12 @@ struct Server<'c> {
     ws: Workspace,
     check_tx: Sender<Job>,
     analysis_tx: Sender<Job>,
+    /// Parses and indexes each new version in the background (requests then find it made).
+    index_tx: Sender<Job>,
+    /// URI → the version the index worker was last asked to parse (until it answers).
+    indexing: HashMap<String, i32>,
+    /// The workers' outcomes (also read while a request waits for the index worker).
+    outcomes: Receiver<Outcome>,
     /// URI → (version, with analysis) of the diagnostics last published.
     published: HashMap<String, (i32, bool)>,
     options: ServerOptions,
@@ -223,6 +234,15 @@ impl Server<'_> {
         if let Some(f) = &o.failure {
             self.log(MessageType::ERROR, f.clone());
         }
+        if o.from_index {
+            if self.indexing.get(o.uri.as_str()) == Some(&o.version) {
+                self.indexing.remove(o.uri.as_str());
+            }
+            if let (Some(a), Some(doc)) = (o.indexed, self.ws.open.get_mut(o.uri.as_str())) {
+                doc.offer(o.version, a);
+            }
+            return;
+        }
         let Some(doc) = self.ws.open.get(o.uri.as_str()) else { return };
         if doc.version != o.version {
             return; // stale: a newer version is on its way
@@ -238,7 +258,8 @@ impl Server<'_> {
         )));
     }
 
-    fn schedule(&self, doc: &Document, quick: Option<Duration>, analysis: Option<Duration>) {
+    /// Sends the document's jobs to the workers; true when the index worker got one.
+    fn schedule(&self, doc: &Document, quick: Option<Duration>, analysis: Option<Duration>) -> bool {
         let job = |analysis: bool, delay: Duration| Job {
             uri: doc.uri.clone(),
             version: doc.version,
@@ -254,6 +275,9 @@ impl Server<'_> {
         if let Some(d) = analysis {
             let _ = self.analysis_tx.send(job(true, d));
         }
+        doc.kind == DocKind::Iec
+            && !doc.analysed()
+            && self.index_tx.send(job(false, quick.unwrap_or(Duration::ZERO))).is_ok()
     }
 
     fn notification(&mut self, n: Notification) {
@@ -262,24 +286,30 @@ impl Server<'_> {
                 let Ok(p) = serde_json::from_value::<DidOpenTextDocumentParams>(n.params) else { return };
                 let d = p.text_document;
                 let doc = Document::new(d.uri.clone(), d.language_id, d.version, d.text);
-                self.schedule(&doc, Some(Duration::ZERO), self.options.idle);
+                if self.schedule(&doc, Some(Duration::ZERO), self.options.idle) {
+                    self.indexing.insert(d.uri.as_str().to_string(), d.version);
+                }
                 self.ws.open.insert(d.uri.as_str().to_string(), doc);
             }
             note::DidChangeTextDocument::METHOD => {
                 let Ok(p) = serde_json::from_value::<DidChangeTextDocumentParams>(n.params) else { return };
                 let Some(doc) = self.ws.open.get_mut(p.text_document.uri.as_str()) else { return };
                 let mut t = doc.text.as_str().to_string();
-                text::apply_changes(&mut t, p.content_changes);
-                doc.set_text(p.text_document.version, t);
+                let edits = text::apply_changes(&mut t, p.content_changes);
+                doc.set_text_edited(p.text_document.version, t, edits);
                 let (debounce, idle) = (self.options.debounce, self.options.idle);
                 if let Some(doc) = self.ws.open.get(p.text_document.uri.as_str()) {
-                    self.schedule(doc, Some(debounce), idle);
+                    if self.schedule(doc, Some(debounce), idle) {
+                        self.indexing.insert(p.text_document.uri.as_str().to_string(), p.text_document.version);
+                    }
                 }
             }
             note::DidSaveTextDocument::METHOD => {
                 let Ok(p) = serde_json::from_value::<DidSaveTextDocumentParams>(n.params) else { return };
                 if let Some(doc) = self.ws.open.get(p.text_document.uri.as_str()) {
-                    self.schedule(doc, None, Some(Duration::ZERO));
+                    if self.schedule(doc, None, Some(Duration::ZERO)) {
+                        self.indexing.insert(p.text_document.uri.as_str().to_string(), doc.version);
+                    }
                 }
             }
             note::DidCloseTextDocument::METHOD => {
@@ -287,6 +317,7 @@ impl Server<'_> {
                 let uri = p.text_document.uri;
                 self.ws.open.remove(uri.as_str());
                 self.published.remove(uri.as_str());
+                self.indexing.remove(uri.as_str());
                 self.send(Message::Notification(Notification::new(
                     note::PublishDiagnostics::METHOD.to_string(),
                     PublishDiagnosticsParams { uri, diagnostics: Vec::new(), version: None },
@@ -312,7 +343,27 @@ impl Server<'_> {
                 return Err(failed("only IEC text has this feature (PLCopen XML: diagnostics only)"));
             }
         }
+        self.await_index(uri);
         self.ws.analysis(uri).ok_or_else(|| failed(format!("`{}` is not an open or readable IEC text", uri.as_str())))
+    }
+
+    /// When the index worker is parsing the current version of an open document, waits for it
+    /// (publishing what the other workers send meanwhile) rather than parsing it a second time;
+    /// bounded, then the request parses it itself.
+    fn await_index(&mut self, uri: &Uri) {
+        let key = uri.as_str();
+        let deadline = std::time::Instant::now() + INDEX_WAIT;
+        loop {
+            let Some(doc) = self.ws.open.get(key) else { return };
+            if doc.analysed() || self.indexing.get(key) != Some(&doc.version) {
+                return;
+            }
+            let Some(left) = deadline.checked_duration_since(std::time::Instant::now()) else { return };
+            match self.outcomes.recv_timeout(left) {
+                Ok(o) => self.publish(o),
+                Err(_) => return,
+            }
+        }
     }
 
     fn handle(&mut self, r: Request) -> Handled {
@@ -328,13 +379,21 @@ impl Server<'_> {
             req::Completion::METHOD => {
                 let p: CompletionParams = params(r.params)?;
                 let uri = p.text_document_position.text_document.uri;
-                let a = self.analysis_of(&uri)?;
-                let offset = a.offset(p.text_document_position.position);
-                let mut items = complete::complete(&a, offset);
+                // While typing in a long chart, the last analysis with the edits since answers
+                // at once (parsing again takes a while); else the current one.
+                let view = match self.ws.open.get(uri.as_str()).and_then(|d| d.quick_view()) {
+                    Some(v) => v,
+                    None => {
+                        let a = self.analysis_of(&uri)?;
+                        View { text: a.text.clone(), lines: Arc::new(a.lines.clone()), analysis: a, edits: Vec::new() }
+                    }
+                };
+                let offset = view.offset(p.text_document_position.position);
+                let mut items = complete::complete_view(&view, offset);
                 // A long chart has thousands of names: send those that match what is typed.
                 let mut incomplete = false;
                 if items.len() > MAX_ITEMS {
-                    let prefix = typed_prefix(&a.text, offset).to_ascii_uppercase();
+                    let prefix = typed_prefix(&view.text, offset).to_ascii_uppercase();
                     items.retain(|i| i.label.to_ascii_uppercase().starts_with(&prefix));
                     if items.len() > MAX_ITEMS {
                         items.truncate(MAX_ITEMS);
@@ -444,6 +503,9 @@ impl Server<'_> {
 }
 
 /// At most this many completion items are sent at once.
+/// A request waits at most this long for the index worker before parsing the text itself.
+const INDEX_WAIT: Duration = Duration::from_secs(10);
+
 const MAX_ITEMS: usize = 500;
 
 /// The part of an identifier before `offset`.

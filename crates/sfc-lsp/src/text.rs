@@ -75,16 +75,66 @@ impl LineIndex {
 }
 
 /// Applies the changes of a `textDocument/didChange` in order (ranged or whole-text changes).
-pub fn apply_changes(text: &mut String, changes: Vec<TextDocumentContentChangeEvent>) {
+pub fn apply_changes(text: &mut String, changes: Vec<TextDocumentContentChangeEvent>) -> Option<Vec<Edit>> {
+    let mut edits = Some(Vec::new());
     for change in changes {
         match change.range {
-            None => *text = change.text,
+            None => {
+                *text = change.text;
+                edits = None;
+            }
             Some(range) => {
                 let index = LineIndex::new(text);
                 let (s, e) = index.offsets(text, range);
                 text.replace_range(s as usize..e as usize, &change.text);
+                if let Some(list) = edits.as_mut() {
+                    list.push(Edit { start: s, end: e, len: change.text.len() as u32 });
+                }
             }
         }
+    }
+    edits
+}
+
+/// One replacement made in a text: bytes `start..end` of the text as it was became `len` bytes.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Edit {
+    pub start: u32,
+    pub end: u32,
+    pub len: u32,
+}
+
+/// The edits made to a text since it was analysed, in order: maps offsets between the analysed
+/// text and the current one.
+#[derive(Debug, Clone, Copy)]
+pub struct Shift<'a>(pub &'a [Edit]);
+
+impl Shift<'_> {
+    /// Analysed → current: an offset after an edit moves with it; one inside a replaced piece
+    /// goes to its start.
+    pub fn forward(&self, mut offset: u32) -> u32 {
+        for e in self.0 {
+            if offset >= e.end {
+                offset = offset - (e.end - e.start) + e.len;
+            } else if offset > e.start {
+                offset = e.start;
+            }
+        }
+        offset
+    }
+
+    /// Current → analysed: an offset inside an inserted piece goes to the end of what it
+    /// replaced (where the typing happened).
+    pub fn backward(&self, mut offset: u32) -> u32 {
+        for e in self.0.iter().rev() {
+            let new_end = e.start + e.len;
+            if offset >= new_end {
+                offset = offset - e.len + (e.end - e.start);
+            } else if offset > e.start {
+                offset = e.end;
+            }
+        }
+        offset
     }
 }
 
@@ -104,6 +154,19 @@ mod tests {
         assert_eq!(idx.offset(text, Position::new(1, 99)), text.find("\r\n").unwrap() as u32);
         assert_eq!(idx.offset(text, Position::new(9, 0)), text.len() as u32);
         assert_eq!(idx.position(text, 999), Position::new(2, 3));
+    }
+
+    #[test]
+    fn shifts_between_the_analysed_and_the_current_text() {
+        // "abc def" → insert "XY" at 4 → "abc XYdef" → delete 0..1 → "bc XYdef"
+        let edits = [Edit { start: 4, end: 4, len: 2 }, Edit { start: 0, end: 1, len: 0 }];
+        let shift = Shift(&edits);
+        assert_eq!(shift.forward(4), 5); // "d" of "def"
+        assert_eq!(shift.forward(0), 0);
+        assert_eq!(shift.forward(2), 1);
+        assert_eq!(shift.backward(5), 4);
+        assert_eq!(shift.backward(4), 4); // inside "XY": where it was typed
+        assert_eq!(shift.backward(1), 2);
     }
 
     #[test]

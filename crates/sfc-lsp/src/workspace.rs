@@ -3,7 +3,7 @@
 //! them, re-read when they change), each with its index, parsed at most once per version.
 
 use crate::index::FileIndex;
-use crate::text::LineIndex;
+use crate::text::{Edit, LineIndex, Shift};
 use lsp_types::Uri;
 use sfc_syntax::ast::SourceUnit;
 use std::collections::HashMap;
@@ -36,6 +36,9 @@ impl Analysis {
     }
 }
 
+/// Completion answers from an older analysis for at most this many edits (then it parses).
+const MAX_STALE_EDITS: usize = 200;
+
 /// How a document is read.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum DocKind {
@@ -57,21 +60,150 @@ pub struct Document {
     pub text: Arc<String>,
     pub kind: DocKind,
     analysis: Option<Arc<Analysis>>,
+    /// The last analysis made, of an earlier version, and the edits made since (completion
+    /// answers from it while the current text is not analysed yet).
+    stale: Option<(Arc<Analysis>, Vec<Edit>)>,
+    /// The edits that made each version since the last analysis (version made, its edits), so
+    /// an analysis of an earlier version that arrives late can still serve; empty after a
+    /// whole-text replacement.
+    log: Vec<(i32, Vec<Edit>)>,
+    /// The version the first entry of `log` was made from.
+    log_base: i32,
+}
+
+/// An analysis with the current text: the analysis of this version, or of an earlier one with
+/// the edits made since (offsets in `index` are then those of `analysis.text`).
+#[derive(Debug, Clone)]
+pub struct View {
+    pub analysis: Arc<Analysis>,
+    pub text: Arc<String>,
+    pub lines: Arc<LineIndex>,
+    pub edits: Vec<Edit>,
+}
+
+impl View {
+    pub fn shift(&self) -> Shift<'_> {
+        Shift(&self.edits)
+    }
+
+    /// The offset in the current text of a position.
+    pub fn offset(&self, pos: lsp_types::Position) -> u32 {
+        self.lines.offset(&self.text, pos)
+    }
 }
 
 impl Document {
     pub fn new(uri: Uri, language: String, version: i32, text: String) -> Document {
         let path = path_of(&uri);
         let kind = kind_of(&path, &language, &text);
-        Document { uri, path, language, version, text: Arc::new(text), kind, analysis: None }
+        Document {
+            uri,
+            path,
+            language,
+            version,
+            text: Arc::new(text),
+            kind,
+            analysis: None,
+            stale: None,
+            log: Vec::new(),
+            log_base: version,
+        }
     }
 
-    /// Replaces the text (an edit); the analysis is recomputed on the next request.
+    /// Replaces the text (an edit); the analysis is recomputed on the next request. `edits` are
+    /// the replacements that made it from the previous text (None: replaced whole).
     pub fn set_text(&mut self, version: i32, text: String) {
+        self.set_text_edited(version, text, None);
+    }
+
+    /// As [`Document::set_text`], keeping the last analysis for completion when the edits are
+    /// known.
+    pub fn set_text_edited(&mut self, version: i32, text: String, edits: Option<Vec<Edit>>) {
+        let previous = self.version;
         self.version = version;
         self.kind = kind_of(&self.path, &self.language, &text);
         self.text = Arc::new(text);
-        self.analysis = None;
+        let analysis = self.analysis.take();
+        let Some(edits) = edits else {
+            self.stale = None;
+            self.log.clear();
+            self.log_base = version;
+            return;
+        };
+        if analysis.is_some() || self.log.is_empty() {
+            self.log.clear();
+            self.log_base = previous;
+        }
+        self.log.push((version, edits.clone()));
+        self.stale = match (analysis, self.stale.take()) {
+            (Some(a), _) => Some((a, edits)),
+            (None, Some((a, mut before))) if before.len() + edits.len() <= MAX_STALE_EDITS => {
+                before.extend(edits);
+                Some((a, before))
+            }
+            _ => None,
+        };
+        if self.log.iter().map(|(_, e)| e.len()).sum::<usize>() > MAX_STALE_EDITS {
+            self.log.clear();
+            self.log_base = version;
+        }
+    }
+
+    /// The current text is parsed and indexed.
+    pub fn analysed(&self) -> bool {
+        self.analysis.is_some()
+    }
+
+    /// The analysis of version `version` made elsewhere (the index worker): the current one if
+    /// it is of this text, else the base of completion's view when the edits since are known
+    /// and it is newer than the one there.
+    pub fn offer(&mut self, version: i32, analysis: Arc<Analysis>) {
+        if self.kind != DocKind::Iec || self.analysis.is_some() {
+            return;
+        }
+        if version == self.version {
+            if Arc::ptr_eq(&analysis.text, &self.text) {
+                self.analysis = Some(analysis);
+                self.stale = None;
+                self.log.clear();
+                self.log_base = version;
+            }
+            return;
+        }
+        // The log must hold every change made after `version`.
+        if version != self.log_base && !self.log.iter().any(|(v, _)| *v == version) {
+            return;
+        }
+        let edits: Vec<Edit> =
+            self.log.iter().filter(|(v, _)| *v > version).flat_map(|(_, e)| e.iter().copied()).collect();
+        let newer = self.stale.as_ref().is_none_or(|(_, since)| since.len() > edits.len());
+        if newer {
+            self.stale = Some((analysis, edits));
+        }
+    }
+
+    /// The current analysis if there is one, else the last one with the edits since (no
+    /// parsing: completion answers at once while typing in a long chart); None for a text never
+    /// analysed or not IEC text.
+    pub fn quick_view(&self) -> Option<View> {
+        if self.kind != DocKind::Iec {
+            return None;
+        }
+        if let Some(a) = &self.analysis {
+            return Some(View {
+                analysis: a.clone(),
+                text: a.text.clone(),
+                lines: Arc::new(a.lines.clone()),
+                edits: Vec::new(),
+            });
+        }
+        let (a, edits) = self.stale.as_ref()?;
+        Some(View {
+            analysis: a.clone(),
+            text: self.text.clone(),
+            lines: Arc::new(LineIndex::new(&self.text)),
+            edits: edits.clone(),
+        })
     }
 
     /// The parse and index of the current text (IEC text only).
@@ -233,5 +365,38 @@ mod tests {
         let u: Uri = "file:///tmp/no%20such/a%C5%BE.st".parse().unwrap();
         assert_eq!(path_of(&u), PathBuf::from("/tmp/no such/až.st"));
         assert_eq!(uri_of(Path::new("/tmp/no such/až.st")).unwrap().as_str(), "file:///tmp/no%20such/a%C5%BE.st");
+    }
+}
+
+#[cfg(test)]
+mod stale_tests {
+    use super::*;
+
+    #[test]
+    fn a_late_analysis_serves_completion_with_the_edits_made_since() {
+        let text = "PROGRAM P\n    INITIAL_STEP S1:\n    END_STEP\nEND_PROGRAM\n";
+        let uri: Uri = "file:///t.st".parse().unwrap();
+        let mut d = Document::new(uri, "sfc".into(), 1, text.into());
+        let first = Arc::new(Analysis::new(d.text.clone()));
+        d.set_text_edited(2, format!("(*a*){text}"), Some(vec![Edit { start: 0, end: 0, len: 5 }]));
+        d.set_text_edited(3, format!("(*a*)(*b*){text}"), Some(vec![Edit { start: 5, end: 5, len: 5 }]));
+        // Nothing analysed yet: completion must wait.
+        assert!(d.quick_view().is_none());
+        // The worker's analysis of version 1 arrives late: it serves, with both edits.
+        d.offer(1, first.clone());
+        let v = d.quick_view().unwrap();
+        assert!(Arc::ptr_eq(&v.analysis, &first));
+        assert_eq!(v.edits.len(), 2);
+        assert_eq!(v.shift().forward(0), 10);
+        // An analysis of a version that is not the one it claims is refused.
+        d.offer(3, first.clone());
+        assert!(!d.analysed());
+        // The current version's analysis replaces the view's base.
+        let current = Arc::new(Analysis::new(d.text.clone()));
+        d.offer(3, current);
+        assert!(d.analysed() && d.quick_view().unwrap().edits.is_empty());
+        // A whole-text replacement leaves nothing to shift from.
+        d.set_text_edited(4, text.into(), None);
+        assert!(d.quick_view().is_none());
     }
 }

@@ -56,17 +56,22 @@ export const tests = [
       // Navigation → every block and wire drawn.
       const started = Date.now();
       await page.goto(server.url);
+      // Checked before each frame is rendered: the frame in which everything is in the page is
+      // then styled, laid out and painted, and a task posted now runs after that (`painted`).
       const drawnAt = await page.waitForFunction(
         ([b, w]) => {
           const shapes = document.querySelectorAll('.canvas-pane.active .djs-shape').length;
           const lines = document.querySelectorAll('.canvas-pane.active .djs-connection').length;
-          return shapes === b && lines === w ? performance.now() : false;
+          if (shapes !== b || lines !== w) return false;
+          setTimeout(() => (window.__painted = performance.now()));
+          return performance.now();
         },
         [blocks, wires],
         { polling: 'raf', timeout: 30_000 },
       );
-      const openMs = Date.now() - started;
       const inPageMs = await drawnAt.jsonValue();
+      const paintedMs = await (await page.waitForFunction(() => window.__painted ?? false, null, { timeout: 30_000 })).jsonValue();
+      const openMs = Date.now() - started;
       // The server's share: the API requests of the page (opening the chart, its diagnostics).
       const api = await page.evaluate(() =>
         performance
@@ -76,9 +81,16 @@ export const tests = [
           .join(', '),
       );
       t.log(`requests to the server while opening: ${api}`);
+      // index.html asks for the session and the named file while the app loads; the app takes
+      // both answers over instead of asking again.
+      for (const p of ['/api/session', '/api/open']) {
+        const n = api.split(', ').filter((x) => x.startsWith(`${p} `)).length;
+        assert(n === 1, `${p} was requested ${n} times while opening (${api})`);
+      }
       const load = os.loadavg().map((x) => x.toFixed(2)).join(' ');
       t.log(
-        `open (${useRelease ? 'release' : 'debug'} binary): ${openMs} ms from navigation to ${4 * SECTIONS} steps, ${blocks} blocks and ${wires} wires drawn (${inPageMs.toFixed(0)} ms after navigation start in the page); target < 1000 ms; load average ${load} on ${os.cpus().length} cores`,
+        `open (${useRelease ? 'release' : 'debug'} binary): ${paintedMs.toFixed(0)} ms from navigation start to ${4 * SECTIONS} steps, ${blocks} blocks and ${wires} wires painted on screen ` +
+          `(all in the page at ${inPageMs.toFixed(0)} ms, then styled, laid out and painted; ${openMs} ms by the test's clock, with its own round trips); target < 1000 ms; load average ${load} on ${os.cpus().length} cores`,
       );
       assert(openMs < 20_000, `opening took ${openMs} ms`);
       await page.screenshot({ path: shotPath(t, 'big-500-steps.png') });

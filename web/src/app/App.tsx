@@ -96,7 +96,11 @@ export function App({ api, createCanvas }: AppProps) {
   const tab = store.active();
   const canvas = tab ? canvases.current.get(tab.id) : undefined;
   // Monitor mode (web/src/monitor): its menu, toolbar button and view over the workspace.
-  const monitor = useMonitor({ createCanvas, current: () => (canvas && tab ? { doc: canvas.getDoc(), title: tabTitle(tab).replace(/\*$/, '') } : null) });
+  const monitor = useMonitor({
+    createCanvas,
+    current: () => (canvas && tab ? { doc: canvas.getDoc(), title: tabTitle(tab).replace(/\*$/, '') } : null),
+    hasChart: !!canvas && !!tab,
+  });
 
   // Language: every string is re-read on render; the canvases re-translate their palettes.
   useEffect(() => {
@@ -516,7 +520,10 @@ export function App({ api, createCanvas }: AppProps) {
 
   const counts = { error: 0, warning: 0, note: 0 };
   for (const d of diagnostics) counts[d.severity]++;
-  const doc = canvas?.getDoc();
+  // The properties panel's copy of the document, made again only when it changed (a copy of a
+  // 500-step chart costs about 30 ms, and the shell renders on every store update).
+  const revision = canvas?.revision();
+  const doc = useMemo(() => canvas?.getDoc(), [canvas, revision]);
 
   return (
     <>

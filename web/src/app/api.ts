@@ -30,6 +30,14 @@ export interface ApiOptions {
   notify?: (message: string) => void;
   /** Base URL of the server; defaults to the page's origin. */
   base?: string;
+  /** Requests the page started before the app loaded (index.html), each taken over once. */
+  start?: StartRequests;
+}
+
+/** The session, and the first named file's opening, requested by index.html's inline script. */
+export interface StartRequests {
+  session: Promise<Response>;
+  open: Promise<{ path: string; res: Promise<Response> } | null>;
 }
 
 export interface SaveRequest {
@@ -48,6 +56,26 @@ export function createApi(opts: ApiOptions) {
   const doFetch = opts.fetch ?? ((input: RequestInfo | URL, init?: RequestInit) => fetch(input, init));
   const notify = opts.notify ?? ((m: string) => toasts.show('error', m));
   const base = opts.base ?? '';
+  let session = opts.start?.session;
+  let opening = opts.start?.open;
+
+  /** The response of a request index.html already made, if this is it (each taken once; one
+   *  that failed to arrive is made again). */
+  async function started(method: string, path: string, body: unknown): Promise<Response | undefined> {
+    if (method === 'GET' && path === '/api/session' && session) {
+      const s = session;
+      session = undefined;
+      return s.catch(() => undefined);
+    }
+    if (method === 'POST' && path === '/api/open' && opening) {
+      const o = await opening.catch(() => null);
+      if (o && opening && o.path === (body as { path?: string } | undefined)?.path) {
+        opening = undefined;
+        return o.res.catch(() => undefined);
+      }
+    }
+    return undefined;
+  }
 
   /** One call; statuses in `quiet` throw without a toast (the caller handles them). */
   async function call<T>(method: 'GET' | 'POST', path: string, body?: unknown, quiet: number[] = []): Promise<T> {
@@ -56,12 +84,12 @@ export function createApi(opts: ApiOptions) {
     if (body !== undefined) headers['Content-Type'] = 'application/json';
     let res: Response;
     try {
-      res = await doFetch(base + path, {
+      res = (await started(method, path, body)) ?? (await doFetch(base + path, {
         method,
         headers,
         credentials: 'same-origin',
         body: body === undefined ? undefined : JSON.stringify(body),
-      });
+      }));
     } catch (e) {
       const err = new ApiError(`${method} ${path}: the server cannot be reached (${(e as Error).message})`, 0);
       notify(err.message);

@@ -97,7 +97,11 @@ export const createCanvas: CreateCanvas = (container: HTMLElement, opts: CanvasO
     for (const cb of [...(listeners.get(event) ?? [])]) cb(...args);
   };
 
-  eventBus.on('commandStack.changed', () => emit('change'));
+  let revision = 0;
+  eventBus.on('commandStack.changed', () => {
+    revision++;
+    emit('change');
+  });
   eventBus.on('selection.changed', (e: Service) => emit('selection', (e.newSelection as Service[]).map((x) => x.id)));
   eventBus.on('sfc.properties', (e: Service) => emit('properties', e.id));
   let lastZoom = 1;
@@ -163,10 +167,12 @@ export const createCanvas: CreateCanvas = (container: HTMLElement, opts: CanvasO
         if (palette && palette.offsetWidth > 0) paletteRoom = palette.offsetWidth + 20;
       }
       importer.load(doc);
+      revision++;
       savedTop = top();
       showChart(false);
     },
     getDoc: () => importer.getDoc(),
+    revision: () => revision,
     updateElement(id, props) {
       modeling.updateElement(find(id, 'updateElement'), props as Record<string, unknown>);
     },

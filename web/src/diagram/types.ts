@@ -33,8 +33,11 @@ export interface CanvasOptions {
 export interface CanvasHandle {
   /** Replaces the contents with `doc` and clears the undo history. */
   load(doc: EditorDoc): void;
-  /** The current document (blocks, connections, geometry, and the doc-level fields). */
+  /** The current document (blocks, connections, geometry, and the doc-level fields): a copy. */
   getDoc(): EditorDoc;
+  /** A number that changes whenever the document does (load, every command, undo, redo), so a
+   *  view can keep its copy of `getDoc()` until then. */
+  revision(): number;
   /** Changes properties of a block or connection (one undoable command). */
   updateElement(id: string, props: Partial<Element> & Record<string, unknown>): void;
   /** Changes document-level fields (one undoable command); `attributes` are the POU's pragmas

@@ -19,8 +19,11 @@ export { MonitorView } from './MonitorView';
 
 export interface UseMonitorOptions {
   createCanvas: CreateCanvas;
-  /** The open chart and its tab title, or null when no chart is open. */
+  /** The open chart and its tab title, or null when no chart is open (called when monitoring
+   *  starts: it copies the whole document). */
   current: () => { doc: EditorDoc; title: string } | null;
+  /** A chart is open (read on every render, so cheap). */
+  hasChart: boolean;
 }
 
 export interface MonitorUi {
@@ -96,7 +99,7 @@ export function useMonitor(opts: UseMonitorOptions): MonitorUi {
     setTarget({ url, doc, elements: elementsByName(doc), simId: null, title: open.title });
   }
 
-  const hasChart = opts.current() !== null;
+  const hasChart = opts.hasChart;
   const menu: MenuDef = {
     id: 'monitor',
     label: t('monitor.menu'),

@@ -6,6 +6,33 @@ function fakeFetch(status: number, body: string) {
 }
 
 describe('API client', () => {
+  it('takes over the session and the named file index.html already asked for, once each', async () => {
+    const fetch = fakeFetch(200, '{"path":"/w/b.st","charts":[]}');
+    const json = (v: unknown) => Promise.resolve(new Response(JSON.stringify(v), { status: 200 }));
+    const start = {
+      session: json({ mode: 'mdi', open: ['/w/a.st'] }),
+      open: Promise.resolve({ path: '/w/a.st', res: json({ path: '/w/a.st', charts: [] }) }),
+    };
+    const api = createApi({ fetch, notify: vi.fn(), start });
+    expect(await api.session()).toMatchObject({ open: ['/w/a.st'] });
+    expect(await api.open('/w/a.st')).toMatchObject({ path: '/w/a.st' });
+    expect(fetch).not.toHaveBeenCalled();
+    // Asked again, or for another file: the server is asked.
+    expect(await api.open('/w/a.st')).toMatchObject({ path: '/w/b.st' });
+    expect(fetch).toHaveBeenCalledTimes(1);
+  });
+  it('asks the server itself when the early request failed or was for another file', async () => {
+    const fetch = fakeFetch(200, '{"path":"/w/b.st","charts":[]}');
+    const start = {
+      session: Promise.reject(new Error('offline')),
+      open: Promise.resolve({ path: '/w/a.st', res: Promise.reject(new Error('offline')) }),
+    };
+    start.session.catch(() => undefined);
+    const api = createApi({ fetch, notify: vi.fn(), start });
+    expect(await api.open('/w/b.st')).toMatchObject({ path: '/w/b.st' });
+    expect(await api.open('/w/a.st')).toMatchObject({ path: '/w/b.st' });
+    expect(fetch).toHaveBeenCalledTimes(2);
+  });
   it('the page sends its page header and the cookie, no token', async () => {
     const fetch = fakeFetch(200, '{"files":[]}');
     await createApi({ fetch, notify: vi.fn() }).files();

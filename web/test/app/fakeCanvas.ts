@@ -14,6 +14,7 @@ const clone = <T>(x: T): T => JSON.parse(JSON.stringify(x));
 
 export function createFakeCanvas(container: HTMLElement): FakeCanvas {
   let doc: EditorDoc | null = null;
+  let revision = 0;
   let undo: EditorDoc[] = [];
   let redo: EditorDoc[] = [];
   let savedAt = 0;
@@ -30,6 +31,7 @@ export function createFakeCanvas(container: HTMLElement): FakeCanvas {
     undo.push(current());
     redo = [];
     doc = next;
+    revision++;
     fc.emit('change');
   };
   const fc: FakeCanvas = {
@@ -41,11 +43,13 @@ export function createFakeCanvas(container: HTMLElement): FakeCanvas {
     },
     load(d) {
       doc = clone(d);
+      revision++;
       undo = [];
       redo = [];
       savedAt = 0;
     },
     getDoc: () => clone(current()),
+    revision: () => revision,
     updateElement(id, props) {
       const d = clone(current());
       d.elements = d.elements.map((e) => (e.id === id ? { ...e, ...props } : e));
@@ -63,6 +67,7 @@ export function createFakeCanvas(container: HTMLElement): FakeCanvas {
       if (prev) {
         redo.push(current());
         doc = prev;
+        revision++;
         fc.emit('change');
       }
     },
@@ -71,6 +76,7 @@ export function createFakeCanvas(container: HTMLElement): FakeCanvas {
       if (next) {
         undo.push(current());
         doc = next;
+        revision++;
         fc.emit('change');
       }
     },
