@@ -9,6 +9,7 @@
 # g++), or a directory where it is already built (it has `iec2c` and `lib/`). Without MATIEC the
 # script says so and exits 0. SFC=path uses that `sfc` binary instead of building
 # target/release/sfc; SCANS=N sets the scans of each timed run (default 20000).
+# It takes several minutes: gcc needs most of them for the generated C of the 1,000 loops.
 set -euo pipefail
 
 root=$(cd "$(dirname "$0")/.." && pwd)
