@@ -135,7 +135,13 @@ pub fn analyze_guards(chart: &Chart, cx: &GuardContext) -> Vec<GuardFinding> {
             })
             .unwrap_or_else(|| Scope::globals_only(&env)),
     };
-    let mut tr = Translator { chart, scope: &scope, expr_types: cx.expr_types, tables: Tables::default() };
+    let mut tr = Translator {
+        chart,
+        scope: &scope,
+        expr_types: cx.expr_types,
+        tables: Tables::default(),
+        names: translate::chart_names(chart),
+    };
     let guards: Vec<Option<Guard>> = chart.transitions.iter().map(|t| tr.guard(&t.condition).ok().flatten()).collect();
     let tables = tr.tables;
     let engine = Engine::new(chart, cx.together, tables, guards);

@@ -8,47 +8,12 @@ use std::process::ExitCode;
 
 mod build;
 mod check;
-mod ci;
 mod edit;
 mod fmt;
 mod lsp;
 mod prove;
-mod run;
-mod run_config;
-mod sim;
-mod term;
-mod test;
 
-/// `0.1.0 (commit date)`: the version with the git commit it was built from (`build.rs`).
-pub const VERSION: &str = concat!(env!("CARGO_PKG_VERSION"), " (", env!("SFC_BUILD_COMMIT"), ")");
-
-/// Exit status of a command, ordered by precedence: a usage or I/O problem outweighs findings.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord)]
-pub enum Status {
-    /// 0: done, nothing found.
-    Ok,
-    /// 1: the input has errors, a test failed, or denied warnings.
-    Findings,
-    /// 2: usage or I/O error.
-    Usage,
-}
-
-impl Status {
-    pub fn code(self) -> u8 {
-        match self {
-            Status::Ok => 0,
-            Status::Findings => 1,
-            Status::Usage => 2,
-        }
-    }
-}
-
-/// `--deny warnings`.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
-pub enum DenyArg {
-    /// Warnings fail the command (exit 1) as errors do.
-    Warnings,
-}
+use sfc_cli::{run, sim, term, test, DenyArg, Status, VERSION};
 
 #[derive(Parser)]
 #[command(

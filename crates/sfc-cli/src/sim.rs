@@ -4,10 +4,9 @@
 use crate::term::{self, Progress};
 use crate::Status;
 use sfc_diagnostics::{render_human, RenderOptions};
-use sfc_sim::scenario::{self, Execution, Overrides, RunLength, Scenario, ScenarioError};
+use sfc_sim::scenario::{self, Execution, Overrides, Recording, RunLength, Scenario, ScenarioError};
 use sfc_sim::trace::{TraceFormat, TraceSink};
 use sfc_sim::{format_time, Event, Profile, ScanRecord, Simulation, StepReport, TimeStats, TransitionReport};
-use std::collections::HashSet;
 use std::fmt::Write as _;
 use std::io::Write;
 use std::path::{Path, PathBuf};
@@ -109,14 +108,14 @@ fn timeout_text(r: &StepReport) -> String {
     }
 }
 
-/// The automatic report of a step that exceeded its `sfc.timeout`.
-fn overdue_text(rec: &ScanRecord, r: &StepReport) -> String {
+/// The automatic report of a step that exceeded its `sfc.timeout` in `scan` at `time`.
+fn overdue_text(scan: u64, time: i64, r: &StepReport) -> String {
     let names: Vec<&str> = r.transitions.iter().map(|t| t.transition.as_str()).collect();
     let waiting = if names.is_empty() { "no outgoing transition".to_string() } else { names.join(" or ") };
     let mut out = format!(
         "scan {}, {}: step {} active for {} (timeout {}): waiting for {waiting}",
-        rec.scan,
-        format_time(rec.time),
+        scan,
+        format_time(time),
         r.step,
         format_time(r.elapsed),
         r.timeout.map_or_else(|| "none".to_string(), format_time)
@@ -226,6 +225,15 @@ fn stats_text(stats: &TimeStats, full: bool, end: i64) -> String {
     if groups.len() > shown.len() {
         let _ =
             write!(out, "\n  … and {} more (--stats-full lists every situation in order)", groups.len() - shown.len());
+    }
+    if stats.dropped > 0 {
+        let _ = write!(
+            out,
+            "\n  … {} later change{} of situation not recorded (the time analysis keeps the first {})",
+            stats.dropped,
+            if stats.dropped == 1 { "" } else { "s" },
+            sfc_sim::engine::MAX_SITUATIONS
+        );
     }
     out
 }
@@ -340,54 +348,63 @@ pub fn sim(r: SimRequest) -> u8 {
             println!("{text}");
         }
     };
-    let mut overdue_seen: HashSet<String> = HashSet::new();
     let mut overdue_json: Vec<serde_json::Value> = Vec::new();
     let json = r.json;
     let mut events = EventLog::default();
     let mut progress = Progress::new(scen.total_scans(), "scans");
-    let mut on_scan = |sim: &Simulation, rec: &ScanRecord| {
-        progress.set(rec.scan + 1, || format_time(rec.time));
+    let period = scen.options.period;
+    let mut on_scan = |sim: &Simulation, rec: Option<&ScanRecord>| {
+        let scan = sim.next_scan() - 1;
+        let time = rec.map_or(scan as i64 * period, |r| r.time);
+        progress.set(scan + 1, || format_time(time));
         // Runtime events: the first few of each kind as they happen (errors are reported at
-        // the end, rustc-like).
-        for e in rec.events.iter().filter(|e| !matches!(e, Event::Error(_))) {
-            let n = events.count(e.kind());
-            if n > EVENTS_SHOWN {
-                continue;
-            }
-            if json {
-                let mut v = e.to_json();
-                v["scan"] = rec.scan.into();
-                v["time"] = format_time(rec.time).into();
-                events.json.push(v);
-            } else {
-                report(&format!("scan {}, {}: {}: {}", rec.scan, format_time(rec.time), e.kind(), e.describe()));
+        // the end, rustc-like). Without a record the engine's list is read (unsorted).
+        let happened = match rec {
+            Some(r) => &r.events[..],
+            None => sim.last_events(),
+        };
+        if !happened.is_empty() {
+            let mut list: Vec<&Event> = happened.iter().filter(|e| !matches!(e, Event::Error(_))).collect();
+            list.sort_by_key(|e| e.rank());
+            for e in list {
+                let n = events.count(e.kind());
+                if n > EVENTS_SHOWN {
+                    continue;
+                }
+                if json {
+                    let mut v = e.to_json();
+                    v["scan"] = scan.into();
+                    v["time"] = format_time(time).into();
+                    events.json.push(v);
+                } else {
+                    report(&format!("scan {scan}, {}: {}: {}", format_time(time), e.kind(), e.describe()));
+                }
             }
         }
-        // Reports are built only for steps that have just overrun.
-        let steps = sim.overdue_steps();
-        let now: HashSet<String> = steps.iter().cloned().collect();
-        for step in &steps {
-            if overdue_seen.contains(step) {
-                continue;
-            }
-            let Some(x) = &sim.explain_step(step) else { continue };
+        // Reports are built only for steps that have just overrun (the engine notes each
+        // activation's overrun once: a step reports again only after it was left or restarted
+        // and overran again). Asking costs nothing in the other scans.
+        if !sim.any_newly_overdue() {
+            return;
+        }
+        for step in sim.newly_overdue() {
+            let Some(x) = &sim.explain_step(&step) else { continue };
             if json {
                 let mut v = x.to_json();
-                v["scan"] = rec.scan.into();
-                v["time"] = format_time(rec.time).into();
+                v["scan"] = scan.into();
+                v["time"] = format_time(time).into();
                 overdue_json.push(v);
             } else {
-                report(&overdue_text(rec, x));
+                report(&overdue_text(scan, time, x));
             }
         }
-        // A step reports again only after it was left (or restarted) and overran again.
-        overdue_seen = now;
     };
     let trace_ref: Option<&mut dyn TraceSink> = match sink.as_mut() {
         Some(b) => Some(&mut **b),
         None => None,
     };
-    let Execution { outcome, sim, trace_error } = scenario::execute(&scen, trace_ref, &mut on_scan);
+    let recording = Recording { situations: r.stats, records: false };
+    let Execution { outcome, sim, trace_error } = scenario::execute(&scen, trace_ref, &mut on_scan, recording);
     progress.finish();
     drop(sink);
     if let Some(e) = trace_error {

@@ -161,22 +161,35 @@ pub fn test(a: TestArgs) -> u8 {
         };
         let mut runtime_events: Vec<String> = Vec::new();
         let total = s.total_scans();
-        let mut on_scan = |_: &Simulation, rec: &ScanRecord| {
-            progress.set(i as u64, || format!("{name}: scan {}/{total}", rec.scan + 1));
+        let period = s.options.period;
+        let mut on_scan = |sim: &Simulation, rec: Option<&ScanRecord>| {
+            let scan = sim.next_scan() - 1;
+            progress.set(i as u64, || format!("{name}: scan {}/{total}", scan + 1));
             if deny {
-                for e in rec.events.iter().filter(|e| !matches!(e, Event::Error(_))) {
+                // The scan's events: from its record when one was built, else the engine's list.
+                let happened = match rec {
+                    Some(r) => &r.events[..],
+                    None => sim.last_events(),
+                };
+                if happened.is_empty() {
+                    return;
+                }
+                let time = rec.map_or(scan as i64 * period, |r| r.time);
+                let mut list: Vec<&Event> = happened.iter().filter(|e| !matches!(e, Event::Error(_))).collect();
+                list.sort_by_key(|e| e.rank());
+                for e in list {
                     runtime_events.push(format!(
                         "{}: at {} (scan {}): runtime event `{}`: {} (denied by --deny warnings)",
                         name,
-                        sfc_sim::format_time(rec.time),
-                        rec.scan,
+                        sfc_sim::format_time(time),
+                        scan,
                         e.kind(),
                         e.describe()
                     ));
                 }
             }
         };
-        let outcome = scenario::execute(&s, None, &mut on_scan).outcome;
+        let outcome = scenario::execute(&s, None, &mut on_scan, scenario::Recording::default()).outcome;
         progress.set(i as u64 + 1, || name.clone());
         if outcome.scans > 0 || !outcome.coverage.steps.is_empty() {
             cov.add(&outcome.coverage);

@@ -404,6 +404,7 @@ impl Observer<'_> {
             active: vec![(state, now - self.entered_at)],
             fired: fired.clone(),
             guards,
+            guards_known: true,
             values,
             forced: Vec::new(),
         };

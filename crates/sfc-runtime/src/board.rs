@@ -3,6 +3,7 @@
 //! waits on it: it publishes with `try_lock` and keeps what it could not publish for the next
 //! scan; the clients copy `Arc`s out under the lock and build their JSON outside it.
 
+use crate::jitter::StatsDigest;
 use sfc_sim::Value;
 use std::collections::VecDeque;
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
@@ -14,17 +15,24 @@ pub const HISTORY: usize = 100;
 pub const EVENT_LOG: usize = 1000;
 
 /// What one scan left, in the numbers of the [`ChartInfo`].
+///
+/// The scan thread fills states in recycled buffers (the board hands back the states that fall
+/// out of the history) and in the engine's own order: whoever reads a state sorts what it shows.
 #[derive(Debug, Clone, Default)]
 pub struct ScanState {
     pub scan: u64,
     /// Virtual time, µs.
     pub time: i64,
-    /// Active steps with elapsed time (µs), ascending by step.
+    /// Active steps with elapsed time (µs), in no particular order.
     pub active: Vec<(u32, i64)>,
     /// Transitions fired in this scan.
     pub fired: Vec<u32>,
-    /// Guard values of the transitions leaving active steps; `None` when the guard faulted.
+    /// Guard values of the transitions leaving active steps, in no particular order; `None`
+    /// when the guard faulted. Evaluated only while a monitor client is connected or the run is
+    /// halted (a state recorded with nobody watching has none).
     pub guards: Vec<(u32, Option<bool>)>,
+    /// The guards were evaluated for this state (someone was watching).
+    pub guards_known: bool,
     /// Values of [`ChartInfo::variables`], same order.
     pub values: Vec<Value>,
     /// Forced variables (indices into [`ChartInfo::variables`]).
@@ -101,11 +109,42 @@ pub struct HaltChange {
     pub reason: String,
 }
 
-/// A runtime event, already in its JSON form (`docs/monitor.md`, "event").
+/// A runtime event (`docs/monitor.md`, "event").
 #[derive(Debug, Clone)]
 pub struct LoggedEvent {
     pub seq: u64,
-    pub json: Arc<serde_json::Value>,
+    pub event: Event,
+}
+
+/// A runtime event as the runtime side records it: the frequent ones as plain figures (their
+/// JSON is made by the clients that show them), the others in their JSON form.
+#[derive(Debug, Clone)]
+pub enum Event {
+    /// A scan ended after the next deadline; `skipped` periods were skipped.
+    Overrun {
+        scan: u64,
+        scan_us: u64,
+        skipped: u64,
+    },
+    Json(Arc<serde_json::Value>),
+}
+
+impl Event {
+    /// The event's JSON object (`{"kind":…,…}`).
+    pub fn to_json(&self) -> serde_json::Value {
+        match self {
+            Event::Overrun { scan, scan_us, skipped } => {
+                serde_json::json!({"kind": "overrun", "scan": scan, "scanUs": scan_us, "skipped": skipped})
+            }
+            Event::Json(j) => (**j).clone(),
+        }
+    }
+}
+
+impl From<serde_json::Value> for Event {
+    fn from(j: serde_json::Value) -> Event {
+        Event::Json(Arc::new(j))
+    }
 }
 
 /// The state of a runtime (`docs/runtime.md`, "States").
@@ -152,7 +191,10 @@ pub struct Board {
     /// tick still tells each one, even a resume followed by a breakpoint hit within a tick.
     pub halts: VecDeque<HaltChange>,
     pub next_halt: u64,
+    /// Statistics as JSON (the ATMT adapter's).
     pub stats: serde_json::Value,
+    /// The scan thread's statistics as figures (their JSON is made by whoever reads them).
+    pub digest: Option<StatsDigest>,
 }
 
 impl Board {
@@ -164,11 +206,27 @@ impl Board {
             self.state_seq += 1;
         }
     }
-    pub fn push_state(&mut self, s: Arc<ScanState>) {
-        if self.history.len() == HISTORY {
-            self.history.pop_front();
-        }
+    /// Adds a state to the history; returns the state that fell out of it, for reuse.
+    pub fn push_state(&mut self, s: Arc<ScanState>) -> Option<Arc<ScanState>> {
+        let old = if self.history.len() == HISTORY { self.history.pop_front() } else { None };
         self.history.push_back(s);
+        old
+    }
+    /// Replaces the newest state by a fuller copy of it (its guards evaluated).
+    pub fn replace_latest(&mut self, s: Arc<ScanState>) {
+        match self.history.back_mut() {
+            Some(last) if last.scan == s.scan => *last = s,
+            _ => {
+                let _ = self.push_state(s);
+            }
+        }
+    }
+    /// The latest statistics as JSON (`docs/monitor.md`, "stats").
+    pub fn stats_json(&self) -> serde_json::Value {
+        match &self.digest {
+            Some(d) => d.to_json(),
+            None => self.stats.clone(),
+        }
     }
     /// Records a halt (`halted`, with its reason) or a resume.
     pub fn push_halt(&mut self, halted: bool, reason: String) {
@@ -180,11 +238,11 @@ impl Board {
         self.halts.push_back(HaltChange { seq: self.next_halt, halted, reason });
         self.next_halt += 1;
     }
-    pub fn push_event(&mut self, json: serde_json::Value) {
+    pub fn push_event(&mut self, event: impl Into<Event>) {
         if self.events.len() == EVENT_LOG {
             self.events.pop_front();
         }
-        self.events.push_back(LoggedEvent { seq: self.next_event, json: Arc::new(json) });
+        self.events.push_back(LoggedEvent { seq: self.next_event, event: event.into() });
         self.next_event += 1;
     }
 }

@@ -367,7 +367,8 @@ impl Runtime {
             pending_sets: Vec::new(),
             breakpoints: Default::default(),
             stats: ScanStats::default(),
-            unpublished_states: Vec::new(),
+            unpublished_states: Default::default(),
+            spare_states: Vec::new(),
             unpublished_events: Vec::new(),
             halt_change: Vec::new(),
             last_state: None,
@@ -437,7 +438,7 @@ impl Runtime {
     }
     /// The latest published scan statistics (`{"scans":…,"jitterUs":{…},…}`).
     pub fn stats_json(&self) -> serde_json::Value {
-        self.hub.lock().stats.clone()
+        self.hub.lock().stats_json()
     }
     /// Asks the run to end in order: the scan thread stops before its next scan, and a scan
     /// running away is interrupted.

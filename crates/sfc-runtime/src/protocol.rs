@@ -41,6 +41,8 @@ pub const MAX_MESSAGE: usize = 64 * 1024;
 pub const MAX_CLIENTS: u64 = 512;
 /// Update period of a session.
 pub const TICK: Duration = Duration::from_millis(20);
+/// How long a new client waits for a state with guards before its first snapshot (ticks).
+const GUARD_WAIT_TICKS: u32 = 100;
 
 /// A value as JSON: BOOL as `true`/`false`, numbers as numbers, TIME as `T#…`, strings as
 /// strings.
@@ -134,19 +136,29 @@ pub fn hello(
     })
 }
 
+/// The active steps in step order (the scan thread publishes them in the engine's order).
 fn active_json(info: &ChartInfo, st: &ScanState) -> serde_json::Value {
+    let mut active = st.active.clone();
+    active.sort_unstable();
     serde_json::Value::Array(
-        st.active
+        active
             .iter()
             .map(|&(s, t)| serde_json::json!({"step": info.step_name(s), "elapsed": format_time(t), "elapsedUs": t}))
             .collect(),
     )
 }
 
+/// The guard values in transition order.
+fn sorted_guards(st: &ScanState) -> Vec<(u32, Option<bool>)> {
+    let mut g = st.guards.clone();
+    g.sort_unstable();
+    g
+}
+
 fn guards_json(info: &ChartInfo, st: &ScanState) -> serde_json::Map<String, serde_json::Value> {
-    st.guards
-        .iter()
-        .map(|&(t, v)| (info.transition_name(t), v.map_or(serde_json::Value::Null, serde_json::Value::Bool)))
+    sorted_guards(st)
+        .into_iter()
+        .map(|(t, v)| (info.transition_name(t), v.map_or(serde_json::Value::Null, serde_json::Value::Bool)))
         .collect()
 }
 
@@ -216,7 +228,7 @@ pub fn delta(info: &ChartInfo, old: &ScanState, new: &ScanState, between: &[Arc<
     if !fired.is_empty() {
         crate::board::put(&mut j, "fired", serde_json::json!(names(info, &fired)));
     }
-    if old.guards != new.guards {
+    if sorted_guards(old) != sorted_guards(new) {
         crate::board::put(&mut j, "guards", serde_json::Value::Object(guards_json(info, new)));
     }
     let changed: serde_json::Map<String, serde_json::Value> = info
@@ -459,9 +471,25 @@ impl Session<'_> {
             let b = self.hub.lock();
             self.next_event = b.next_event;
         }
+        // Guards are evaluated while someone watches: the first snapshot is the first state
+        // evaluated since this client connected (the next scan, or at once when halted).
+        for _ in 0..GUARD_WAIT_TICKS {
+            let ready = {
+                let b = self.hub.lock();
+                b.history.back().is_none_or(|s| s.guards_known)
+            };
+            if ready || self.hub.stopping() {
+                break;
+            }
+            tokio::time::sleep(TICK).await;
+        }
+        // A change of RUN/STOP/FAULT since the hello is told as a `state` message, even when the
+        // first snapshot (which may wait for guards) already shows it.
+        let told = self.state_seq;
         if !self.send_snapshot() {
             return End::Dropped;
         }
+        self.state_seq = told;
         let mut tick = tokio::time::interval(TICK);
         tick.set_missed_tick_behavior(tokio::time::MissedTickBehavior::Skip);
         loop {
@@ -506,7 +534,7 @@ impl Session<'_> {
             let b = self.hub.lock();
             self.next_halt = b.next_halt;
             self.state_seq = b.state_seq;
-            (b.history.back().cloned(), b.halted, b.stats.clone(), b.state, b.fault.clone())
+            (b.history.back().cloned(), b.halted, b.stats_json(), b.state, b.fault.clone())
         };
         self.halted = Some(halted);
         match latest {
@@ -547,7 +575,7 @@ impl Session<'_> {
         }
         for e in events {
             self.next_event = e.seq + 1;
-            let mut j = (*e.json).clone();
+            let mut j = e.event.to_json();
             crate::board::put(&mut j, "type", serde_json::json!("event"));
             if !self.send(j) {
                 return false;

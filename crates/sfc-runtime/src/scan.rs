@@ -31,11 +31,14 @@ use crate::watchdog::ScanClock;
 use crate::{RunReport, Slot};
 use sfc_sim::code::Retained;
 use sfc_sim::{format_time, Simulation, Value};
-use std::collections::BTreeMap;
+use std::collections::{BTreeMap, VecDeque};
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::mpsc::{Receiver, RecvTimeoutError};
 use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant};
+
+/// States kept for reuse: the history's length and a few that clients may still hold.
+const SPARE_STATES: usize = crate::board::HISTORY + 8;
 
 /// When to end a run.
 #[derive(Debug, Clone, Copy, Default)]
@@ -96,11 +99,15 @@ pub(crate) struct ScanThread {
     pub pending_sets: Vec<(u32, Value)>,
     pub breakpoints: BTreeMap<BreakTarget, bool>,
     pub stats: ScanStats,
-    pub unpublished_states: Vec<Arc<ScanState>>,
-    pub unpublished_events: Vec<serde_json::Value>,
+    pub unpublished_states: VecDeque<Arc<ScanState>>,
+    /// States that left the history, to be filled again.
+    pub spare_states: Vec<Arc<ScanState>>,
+    /// Events not yet published (an overrun as figures: it costs no allocation).
+    pub unpublished_events: Vec<crate::board::Event>,
     /// Halts and resumes not yet published, in order.
     pub halt_change: Vec<(bool, String)>,
-    /// The state last published (to show safe values on it).
+    /// The state of the last scan (to show safe values on it, and its guards to a client that
+    /// connects while the run is halted).
     pub last_state: Option<Arc<ScanState>>,
     pub steps_requested: Vec<Request>,
 }
@@ -155,6 +162,7 @@ impl ScanThread {
                 if self.state == RunState::Run && !self.halted {
                     self.reanchor = true;
                 }
+                self.refresh_guards();
                 self.publish();
                 continue;
             }
@@ -181,10 +189,11 @@ impl ScanThread {
                 let behind = ((end - origin).as_micros() / period.as_micros()) as u64;
                 next = behind + 1;
                 self.stats.skipped += next - (k + 1);
-                self.unpublished_events.push(serde_json::json!({
-                    "kind": "overrun", "scan": k, "scanUs": end.saturating_duration_since(start).as_micros() as u64,
-                    "skipped": next - (k + 1)
-                }));
+                self.unpublished_events.push(crate::board::Event::Overrun {
+                    scan: k,
+                    scan_us: end.saturating_duration_since(start).as_micros() as u64,
+                    skipped: next - (k + 1),
+                });
             }
             k = next;
             self.publish();
@@ -225,6 +234,7 @@ impl ScanThread {
         self.clock.end();
         let took = end.saturating_duration_since(start);
         self.stats.duration.add(took.as_micros() as u64);
+        self.stats.duration_ns.add(took.as_nanos() as u64);
         let tripped = self.clock.tripped.load(Ordering::Relaxed);
         if !tripped && matches!(&result, Err(e) if e.message == sfc_sim::code::INTERRUPTED) {
             // Interrupted by an orderly stop (Ctrl-C, SIGTERM): not a fault.
@@ -298,7 +308,7 @@ impl ScanThread {
             text.push_str(&format!("; it faulted at line {} column {}: {}", e.line, e.column, e.message));
         }
         j["message"] = serde_json::json!(text);
-        self.unpublished_events.push(j.clone());
+        self.unpublished_events.push(j.clone().into());
         self.enter_fault(j, text);
     }
 
@@ -340,7 +350,7 @@ impl ScanThread {
                 img.put(&self.points[*i], v);
             }
         }
-        let last = self.unpublished_states.pop().or_else(|| self.last_state.clone());
+        let last = self.unpublished_states.pop_back().or_else(|| self.last_state.clone());
         if let Some(last) = last {
             let mut st = (*last).clone();
             for (i, safe) in self.var_safe.iter().enumerate() {
@@ -358,7 +368,7 @@ impl ScanThread {
                     }
                 }
             } else {
-                self.unpublished_states.push(st.clone());
+                self.unpublished_states.push_back(st.clone());
             }
             self.last_state = Some(st);
         }
@@ -408,7 +418,7 @@ impl ScanThread {
         }
         let mode = if cold { "cold" } else { "warm" };
         let scan = self.sim.next_scan();
-        self.unpublished_events.push(serde_json::json!({"kind": "reset", "mode": mode, "scan": scan}));
+        self.unpublished_events.push(serde_json::json!({"kind": "reset", "mode": mode, "scan": scan}).into());
         self.hub.notice(format!("sfc run: {mode} restart from {}: RUN again at scan {scan}", was.name()));
         serde_json::json!({"state": "RUN", "mode": mode, "scan": scan})
     }
@@ -420,106 +430,181 @@ impl ScanThread {
         }
     }
 
-    /// One scan: inputs in, chart, outputs out, monitor state and breakpoints.
+    /// One scan: inputs in, chart, outputs out, monitor state and breakpoints. Costs what the
+    /// scan changed: the state is filled in a recycled buffer, guards are evaluated only while
+    /// someone watches, and nothing is allocated unless something happened (an event, a
+    /// breakpoint, a write from a client).
     fn scan_once(&mut self) -> Result<(), sfc_sim::RuntimeError> {
         let first = std::mem::take(&mut self.restarted);
         // Inputs: the image when it is free, else the last copy (the scan never waits).
-        if let Ok(mut img) = self.image.try_lock() {
-            for (i, (p, input)) in self.points.iter().zip(self.inputs.iter_mut()).enumerate() {
-                if p.role == Role::Input {
-                    if let Some(v) = img.client.get(i) {
-                        input.clone_from(v);
+        if !self.points.is_empty() {
+            if let Ok(mut img) = self.image.try_lock() {
+                for (i, (p, input)) in self.points.iter().zip(self.inputs.iter_mut()).enumerate() {
+                    if p.role == Role::Input {
+                        if let Some(v) = img.client.get(i) {
+                            input.clone_from(v);
+                        }
+                    }
+                }
+                if !img.memory_writes.is_empty() {
+                    for i in std::mem::take(&mut img.memory_writes) {
+                        let Some(p) = self.points.get(i) else { continue };
+                        let v = img.get(p);
+                        // A rejected value is impossible: the map only admits types of the
+                        // register size.
+                        let _ = self.sim.write_slot(p.slot.index, &p.slot.ty, v);
                     }
                 }
             }
-            for i in std::mem::take(&mut img.memory_writes) {
-                let Some(p) = self.points.get(i) else { continue };
-                let v = img.get(p);
-                // A rejected value is impossible: the map only admits types of the register size.
-                let _ = self.sim.write_slot(p.slot.index, &p.slot.ty, v);
+            for (p, input) in self.points.iter().zip(&self.inputs) {
+                if p.role == Role::Input {
+                    let _ = self.sim.write_slot(p.slot.index, &p.slot.ty, input.clone());
+                }
             }
         }
-        for (p, input) in self.points.iter().zip(&self.inputs) {
-            if p.role == Role::Input {
-                let _ = self.sim.write_slot(p.slot.index, &p.slot.ty, input.clone());
-            }
-        }
-        for (var, v) in std::mem::take(&mut self.pending_sets) {
-            if let Some(s) = self.vars.get(var as usize) {
-                let _ = self.sim.write_slot(s.index, &s.ty, v);
+        if !self.pending_sets.is_empty() {
+            for (var, v) in std::mem::take(&mut self.pending_sets) {
+                if let Some(s) = self.vars.get(var as usize) {
+                    let _ = self.sim.write_slot(s.index, &s.ty, v);
+                }
             }
         }
         self.apply_forces();
         let result = self.sim.advance().map_err(|e| e.clone());
         self.apply_forces();
-        if let Ok(mut img) = self.image.try_lock() {
-            for p in self.points.iter().filter(|p| p.role != Role::Input) {
-                if let Some(v) = self.sim.read_slot(p.slot.index) {
-                    img.put(p, v);
+        if !self.points.is_empty() {
+            if let Ok(mut img) = self.image.try_lock() {
+                for p in self.points.iter().filter(|p| p.role != Role::Input) {
+                    if let Some(v) = self.sim.read_slot(p.slot.index) {
+                        img.put(p, v);
+                    }
                 }
             }
         }
         self.stats.scans += 1;
-        let mut st = ScanState {
-            scan: self.sim.next_scan() - 1,
-            time: self.sim.next_time() - self.sim.options().period,
-            ..Default::default()
+        // The state, in a buffer the board handed back when it fell out of the history.
+        let mut arc = self.take_state();
+        let Some(st) = Arc::get_mut(&mut arc) else {
+            return result;
         };
-        self.sim.active_times(&mut st.active);
+        st.scan = self.sim.next_scan() - 1;
+        st.time = self.sim.next_time() - self.sim.options().period;
+        self.sim.active_times_unsorted(&mut st.active);
         self.sim.fired_ids(&mut st.fired);
-        let mut guards = Vec::new();
-        self.sim.guard_values(&mut guards);
-        st.guards = guards.into_iter().map(|(t, v)| (t, v.ok())).collect();
-        st.values = self.vars.iter().map(|s| self.sim.read_slot(s.index).cloned().unwrap_or_default()).collect();
-        st.forced = self.forced.iter().map(|f| f.0).collect();
-        let mut events: Vec<&sfc_sim::Event> = self
-            .sim
-            .last_events()
-            .iter()
-            // A scan stopped by the watchdog is told as a `watchdog` event.
-            .filter(|e| !matches!(e, sfc_sim::Event::Error(x) if x.message == sfc_sim::code::INTERRUPTED))
-            .collect();
-        events.sort_by_key(|e| e.rank());
-        for e in events {
-            let mut j = event_json(e);
-            crate::board::put(&mut j, "scan", serde_json::json!(st.scan));
-            self.unpublished_events.push(j);
+        st.guards_known = self.hub.connected.load(Ordering::Relaxed) > 0 || self.halted;
+        if st.guards_known {
+            self.sim.guard_states(&mut st.guards);
+        } else {
+            st.guards.clear();
+        }
+        st.values.truncate(self.vars.len());
+        for (i, s) in self.vars.iter().enumerate() {
+            let v = self.sim.read_slot(s.index);
+            match (st.values.get_mut(i), v) {
+                (Some(slot), Some(v)) => slot.clone_from(v),
+                (Some(slot), None) => *slot = Value::default(),
+                (None, v) => st.values.push(v.cloned().unwrap_or_default()),
+            }
+        }
+        st.forced.clear();
+        st.forced.extend(self.forced.iter().map(|f| f.0));
+        let scan = st.scan;
+        if !self.sim.last_events().is_empty() {
+            let mut events: Vec<&sfc_sim::Event> = self
+                .sim
+                .last_events()
+                .iter()
+                // A scan stopped by the watchdog is told as a `watchdog` event.
+                .filter(|e| !matches!(e, sfc_sim::Event::Error(x) if x.message == sfc_sim::code::INTERRUPTED))
+                .collect();
+            events.sort_by_key(|e| e.rank());
+            for e in events {
+                let mut j = event_json(e);
+                crate::board::put(&mut j, "scan", serde_json::json!(scan));
+                self.unpublished_events.push(j.into());
+            }
         }
         // Breakpoints: a step is hit when a fired transition enters it (or it starts the chart),
         // a transition when it fires.
-        let mut hits: Vec<BreakTarget> = Vec::new();
-        let mut entered: Vec<u32> =
-            st.fired.iter().filter_map(|&t| self.post.get(t as usize)).flatten().copied().collect();
-        if first {
-            entered.extend(self.initial.iter().copied());
-        }
-        entered.sort_unstable();
-        entered.dedup();
-        for s in entered {
-            if self.breakpoints.get(&BreakTarget::Step(s)) == Some(&true) {
-                hits.push(BreakTarget::Step(s));
+        if !self.breakpoints.is_empty() {
+            let mut hits: Vec<BreakTarget> = Vec::new();
+            let mut entered: Vec<u32> =
+                st.fired.iter().filter_map(|&t| self.post.get(t as usize)).flatten().copied().collect();
+            if first {
+                entered.extend(self.initial.iter().copied());
+            }
+            entered.sort_unstable();
+            entered.dedup();
+            for s in entered {
+                if self.breakpoints.get(&BreakTarget::Step(s)) == Some(&true) {
+                    hits.push(BreakTarget::Step(s));
+                }
+            }
+            let mut fired = st.fired.clone();
+            fired.sort_unstable();
+            fired.dedup();
+            for t in fired {
+                if self.breakpoints.get(&BreakTarget::Transition(t)) == Some(&true) {
+                    hits.push(BreakTarget::Transition(t));
+                }
+            }
+            for h in &hits {
+                let (kind, name) = self.target_name(*h);
+                self.unpublished_events
+                    .push(serde_json::json!({"kind": "breakpoint", kind: name, "scan": scan}).into());
+            }
+            if !hits.is_empty() && !self.halted {
+                self.halted = true;
+                self.halt_change.push((true, "breakpoint".into()));
             }
         }
-        for &t in &st.fired {
-            if self.breakpoints.get(&BreakTarget::Transition(t)) == Some(&true) {
-                hits.push(BreakTarget::Transition(t));
-            }
-        }
-        for h in &hits {
-            let (kind, name) = self.target_name(*h);
-            self.unpublished_events.push(serde_json::json!({"kind": "breakpoint", kind: name, "scan": st.scan}));
-        }
-        if !hits.is_empty() && !self.halted {
-            self.halted = true;
-            self.halt_change.push((true, "breakpoint".into()));
-        }
-        let st = Arc::new(st);
-        self.last_state = Some(st.clone());
-        self.unpublished_states.push(st);
+        self.last_state = Some(arc.clone());
+        self.unpublished_states.push_back(arc);
         if self.unpublished_states.len() > crate::board::HISTORY {
-            self.unpublished_states.remove(0);
+            if let Some(old) = self.unpublished_states.pop_front() {
+                self.recycle(old);
+            }
         }
         result
+    }
+
+    /// While halted or stopped: a client that connected after the last scan gets the guards of
+    /// the state it sees (the newest state is published again with them).
+    fn refresh_guards(&mut self) {
+        if self.hub.connected.load(Ordering::Relaxed) == 0 {
+            return;
+        }
+        let Some(newest) = &self.last_state else { return };
+        if newest.guards_known {
+            return;
+        }
+        let mut st = (**newest).clone();
+        self.sim.guard_states(&mut st.guards);
+        st.guards_known = true;
+        let st = Arc::new(st);
+        self.last_state = Some(st.clone());
+        match self.unpublished_states.back_mut() {
+            Some(last) if last.scan == st.scan => *last = st,
+            _ => self.hub.lock().replace_latest(st),
+        }
+    }
+
+    /// A state to fill: a recycled one nobody else holds, or a new one.
+    fn take_state(&mut self) -> Arc<ScanState> {
+        while let Some(mut s) = self.spare_states.pop() {
+            if Arc::get_mut(&mut s).is_some() {
+                return s;
+            }
+        }
+        Arc::new(ScanState::default())
+    }
+
+    /// Keeps a state that left the history for reuse (while no client still holds it, it is
+    /// filled again; otherwise it is dropped when the client lets go).
+    fn recycle(&mut self, s: Arc<ScanState>) {
+        if Arc::strong_count(&s) == 1 && self.spare_states.len() < SPARE_STATES {
+            self.spare_states.push(s);
+        }
     }
 
     /// Forcing a located input shows the forced value to Modbus clients (the other points
@@ -725,8 +810,10 @@ impl ScanThread {
     }
 
     fn flush(&mut self, b: &mut crate::board::Board) {
-        for s in self.unpublished_states.drain(..) {
-            b.push_state(s);
+        while let Some(s) = self.unpublished_states.pop_front() {
+            if let Some(old) = b.push_state(s) {
+                self.recycle(old);
+            }
         }
         for e in self.unpublished_events.drain(..) {
             b.push_event(e);
@@ -735,7 +822,7 @@ impl ScanThread {
             b.push_halt(halted, reason);
         }
         if self.stats.scans.is_multiple_of(50) || b.halted {
-            b.stats = self.stats.to_json();
+            b.digest = Some(self.stats.digest());
         }
     }
 }

@@ -1,8 +1,75 @@
 //! Coverage of a set of runs: which steps were ever active and which transitions ever fired,
 //! merged over the runs of one chart file and POU.
+//!
+//! The engine counts activations and firings as they happen
+//! ([`Simulation::coverage_counts`]); a run's coverage is read once at its end
+//! ([`Coverage::record_run`]), so coverage costs nothing per scan.
 
 use crate::{ScanRecord, Simulation};
 use std::collections::HashMap;
+
+/// A fixed number of bits: one per step or transition.
+#[derive(Debug, Clone, Default, PartialEq, Eq)]
+pub struct Bits {
+    words: Vec<u64>,
+    len: usize,
+}
+
+impl Bits {
+    /// `len` bits, all clear.
+    pub fn new(len: usize) -> Bits {
+        Bits { words: vec![0; len.div_ceil(64)], len }
+    }
+    pub fn len(&self) -> usize {
+        self.len
+    }
+    pub fn is_empty(&self) -> bool {
+        self.len == 0
+    }
+    /// Bit `i` (false beyond the end).
+    pub fn get(&self, i: usize) -> bool {
+        i < self.len && self.words[i / 64] >> (i % 64) & 1 == 1
+    }
+    /// Sets bit `i` (`i < len`).
+    pub fn set(&mut self, i: usize) {
+        assert!(i < self.len, "bit {i} of {}", self.len);
+        self.words[i / 64] |= 1 << (i % 64);
+    }
+    /// Appends one bit.
+    pub fn push(&mut self, b: bool) {
+        if self.len % 64 == 0 {
+            self.words.push(0);
+        }
+        self.len += 1;
+        if b {
+            self.set(self.len - 1);
+        }
+    }
+    /// The number of set bits.
+    pub fn count_ones(&self) -> usize {
+        self.words.iter().map(|w| w.count_ones() as usize).sum()
+    }
+    /// Every bit, in order.
+    pub fn iter(&self) -> impl Iterator<Item = bool> + '_ {
+        (0..self.len).map(|i| self.get(i))
+    }
+    /// The indices of the set bits, ascending.
+    pub fn ones(&self) -> impl Iterator<Item = usize> + '_ {
+        self.iter().enumerate().filter(|(_, b)| *b).map(|(i, _)| i)
+    }
+}
+
+impl std::ops::Index<usize> for Bits {
+    type Output = bool;
+    fn index(&self, i: usize) -> &bool {
+        assert!(i < self.len, "bit {i} of {}", self.len);
+        if self.get(i) {
+            &true
+        } else {
+            &false
+        }
+    }
+}
 
 /// Steps ever active and transitions ever fired in the runs of one chart (file and POU).
 #[derive(Debug, Clone, Default)]
@@ -17,10 +84,16 @@ pub struct Coverage {
     pub steps: Vec<String>,
     /// Every transition (qualified), in declaration order.
     pub transitions: Vec<String>,
-    /// `step_hit[i]`: `steps[i]` was active after some scan.
-    pub step_hit: Vec<bool>,
-    /// `transition_hit[i]`: `transitions[i]` fired in some scan.
-    pub transition_hit: Vec<bool>,
+    /// Bit `i`: `steps[i]` was active after some scan.
+    pub step_hit: Bits,
+    /// Bit `i`: `transitions[i]` fired in some scan.
+    pub transition_hit: Bits,
+    /// Activations of each step over the runs (at least 1 for a step that was active without an
+    /// activation: an initial step held by SFCInit; from [`Coverage::record`], at least 1 per
+    /// hit).
+    pub step_count: Vec<u64>,
+    /// Firings of each transition over the runs.
+    pub transition_count: Vec<u64>,
     /// Number of runs merged.
     pub runs: usize,
     step_index: HashMap<String, usize>,
@@ -36,6 +109,8 @@ impl PartialEq for Coverage {
             && self.transitions == other.transitions
             && self.step_hit == other.step_hit
             && self.transition_hit == other.transition_hit
+            && self.step_count == other.step_count
+            && self.transition_count == other.transition_count
             && self.runs == other.runs
     }
 }
@@ -68,8 +143,10 @@ impl Coverage {
             key: key.into(),
             chart: chart.into(),
             pou: pou.into(),
-            step_hit: vec![false; steps.len()],
-            transition_hit: vec![false; transitions.len()],
+            step_hit: Bits::new(steps.len()),
+            transition_hit: Bits::new(transitions.len()),
+            step_count: vec![0; steps.len()],
+            transition_count: vec![0; transitions.len()],
             steps,
             transitions,
             runs: 1,
@@ -83,35 +160,75 @@ impl Coverage {
         Coverage::new(key, chart, sim.pou_name(), sim.step_names(), sim.transition_names())
     }
 
-    fn hit_step(&mut self, name: &str) {
+    /// The coverage of a simulation's run so far, read from the engine's counters.
+    pub fn of_run(sim: &Simulation, key: impl Into<String>, chart: impl Into<String>) -> Coverage {
+        let mut c = Coverage::of(sim, key, chart);
+        c.record_run(sim);
+        c
+    }
+
+    /// Adds the activations and firings a simulation counted ([`Simulation::coverage_counts`])
+    /// to this coverage of the same simulation (made by [`Coverage::of`]).
+    pub fn record_run(&mut self, sim: &Simulation) {
+        let (steps, transitions) = sim.coverage_counts();
+        for (i, n) in steps.into_iter().enumerate().filter(|(_, n)| *n > 0) {
+            self.hit_step_at(i, n);
+        }
+        for (i, n) in transitions.into_iter().enumerate().filter(|(_, n)| *n > 0) {
+            self.hit_transition_at(i, n);
+        }
+    }
+
+    fn hit_step_at(&mut self, i: usize, n: u64) {
+        if i < self.steps.len() && n > 0 {
+            self.step_hit.set(i);
+            self.step_count[i] += n;
+        }
+    }
+
+    fn hit_transition_at(&mut self, i: usize, n: u64) {
+        if i < self.transitions.len() && n > 0 {
+            self.transition_hit.set(i);
+            self.transition_count[i] += n;
+        }
+    }
+
+    fn hit_step(&mut self, name: &str, n: u64) {
         match self.step_index.get(name) {
-            Some(&i) => self.step_hit[i] = true,
+            Some(&i) => self.hit_step_at(i, n),
             None => {
                 self.step_index.insert(name.to_string(), self.steps.len());
                 self.steps.push(name.to_string());
-                self.step_hit.push(true);
+                self.step_hit.push(n > 0);
+                self.step_count.push(n);
             }
         }
     }
 
-    fn hit_transition(&mut self, name: &str) {
+    fn hit_transition(&mut self, name: &str, n: u64) {
         match self.transition_index.get(name) {
-            Some(&i) => self.transition_hit[i] = true,
+            Some(&i) => self.hit_transition_at(i, n),
             None => {
                 self.transition_index.insert(name.to_string(), self.transitions.len());
                 self.transitions.push(name.to_string());
-                self.transition_hit.push(true);
+                self.transition_hit.push(n > 0);
+                self.transition_count.push(n);
             }
         }
     }
 
-    /// Counts the active steps and fired transitions of one scan.
+    /// Counts the active steps and fired transitions of one scan (for records that did not come
+    /// from a run of this crate's engine; a run's coverage is better read at its end with
+    /// [`Coverage::record_run`]).
     pub fn record(&mut self, record: &ScanRecord) {
         for s in &record.active {
-            self.hit_step(s);
+            match self.step_index.get(s.as_str()) {
+                Some(&i) if self.step_hit.get(i) => {}
+                _ => self.hit_step(s, 1),
+            }
         }
         for t in &record.fired {
-            self.hit_transition(t);
+            self.hit_transition(t, 1);
         }
     }
 
@@ -121,43 +238,38 @@ impl Coverage {
             *self = other.clone();
             return;
         }
-        for (s, &hit) in other.steps.iter().zip(&other.step_hit) {
-            if hit {
-                self.hit_step(s);
-            } else if !self.step_index.contains_key(s) {
-                self.step_index.insert(s.clone(), self.steps.len());
-                self.steps.push(s.clone());
-                self.step_hit.push(false);
-            }
+        // A hit counts at least once, also when a caller set the bit without a count.
+        for (i, s) in other.steps.iter().enumerate() {
+            let n = if other.step_hit.get(i) { other.step_count.get(i).copied().unwrap_or(0).max(1) } else { 0 };
+            self.hit_step(s, n);
         }
-        for (t, &hit) in other.transitions.iter().zip(&other.transition_hit) {
-            if hit {
-                self.hit_transition(t);
-            } else if !self.transition_index.contains_key(t) {
-                self.transition_index.insert(t.clone(), self.transitions.len());
-                self.transitions.push(t.clone());
-                self.transition_hit.push(false);
-            }
+        for (i, t) in other.transitions.iter().enumerate() {
+            let n = if other.transition_hit.get(i) {
+                other.transition_count.get(i).copied().unwrap_or(0).max(1)
+            } else {
+                0
+            };
+            self.hit_transition(t, n);
         }
         self.runs += other.runs;
     }
 
     pub fn steps_hit(&self) -> usize {
-        self.step_hit.iter().filter(|h| **h).count()
+        self.step_hit.count_ones()
     }
 
     pub fn transitions_hit(&self) -> usize {
-        self.transition_hit.iter().filter(|h| **h).count()
+        self.transition_hit.count_ones()
     }
 
     /// Steps never active, in declaration order.
     pub fn never_active(&self) -> Vec<&str> {
-        self.steps.iter().zip(&self.step_hit).filter(|(_, h)| !**h).map(|(s, _)| s.as_str()).collect()
+        self.steps.iter().zip(self.step_hit.iter()).filter(|(_, h)| !*h).map(|(s, _)| s.as_str()).collect()
     }
 
     /// Transitions never fired, in declaration order.
     pub fn never_fired(&self) -> Vec<&str> {
-        self.transitions.iter().zip(&self.transition_hit).filter(|(_, h)| !**h).map(|(s, _)| s.as_str()).collect()
+        self.transitions.iter().zip(self.transition_hit.iter()).filter(|(_, h)| !*h).map(|(s, _)| s.as_str()).collect()
     }
 
     /// `steps 7/9 (78%), transitions 10/12 (83%)`.

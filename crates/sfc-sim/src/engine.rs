@@ -4,28 +4,54 @@
 //! Per-scan cost grows with the active steps and the live actions, not with the chart: the
 //! engine keeps the active steps as a list, tests only the transitions leaving them, and runs
 //! action control only for actions that are associated with an active step or still hold
-//! state (stored flags, running timers, pending final scans).
+//! state (stored flags, running timers, pending final scans). What a run records beside the
+//! scan (coverage, time analysis, the sequence of situations, the active steps in name order)
+//! is updated when a step is activated or deactivated, never by a pass over the chart.
+//!
+//! Modules: `plan` (what the instances of one POU share), `state` (one instance), `evolve`
+//! (one scan of one instance), `action` (ACTION_CONTROL and bodies), `situations` (the
+//! bounded situation log and the name order), `monitor` (what a runtime needs beyond the scan).
 
-use crate::code::{ChartCode, Ctx, DurationCode, FastGuard, Fault, Memory, Place, PouBody, Program};
+use crate::code::{Ctx, Memory, PouBody, Program};
 use crate::explain::StepReport;
 use crate::value::Value;
 use crate::{Event, Profile, RuntimeError, ScanRecord, SimOptions};
 use sfc_diagnostics::{Diagnostic, SourceFile, Span};
-use sfc_model::{ActionTarget, Qualifier};
 use sfc_st::Type;
 use std::sync::Arc;
 
+mod action;
+mod evolve;
 mod matiec;
 mod monitor;
+mod plan;
+mod situations;
+mod state;
+
+use evolve::code_of;
+pub use evolve::run_chart;
+pub use plan::ChartPlan;
+pub use situations::MAX_SITUATIONS;
+use situations::{ActiveOrder, LogMark, SituationLog};
+pub use state::ChartState;
 
 pub(crate) use matiec::test_order as matiec_test_order;
 
-/// Fired transitions and events collected during one scan (from every chart instance).
+/// What one scan did beside the memory: fired transitions and events from every chart
+/// instance, and what the bookkeeping of a run needs to follow the active steps.
 #[derive(Debug, Default)]
 pub struct ScanSink {
     /// `(chart instance, transition)` in firing order.
     pub fired: Vec<(u32, u32)>,
     pub events: Vec<Event>,
+    /// Steps whose `sfc.timeout` expired in this scan, `(chart instance, step)` (each
+    /// activation of a step once).
+    pub overdue: Vec<(u32, u32)>,
+    /// Instances that entered their initial situation in this scan (first call, or reset by
+    /// `SFCInit`): `(number of firings before it, chart instance)`.
+    pub starts: Vec<(u32, u32)>,
+    /// Some step was activated or deactivated in this scan (the situation changed).
+    pub moved: bool,
     /// Where the scan faulted: the innermost chart instance and the action body or guard
     /// that was running (noted on the error path only).
     pub(crate) fault_site: Option<(u32, FaultSite)>,
@@ -39,1404 +65,21 @@ pub(crate) enum FaultSite {
 }
 
 impl ScanSink {
+    /// Empties the sink for the next scan, keeping its buffers.
+    pub fn clear(&mut self) {
+        self.fired.clear();
+        self.events.clear();
+        self.overdue.clear();
+        self.starts.clear();
+        self.moved = false;
+        self.fault_site = None;
+    }
+
     /// Notes where a fault happened, unless a nested chart already did.
     #[cold]
-    fn note_fault(&mut self, chart: usize, site: FaultSite) {
+    pub(crate) fn note_fault(&mut self, chart: usize, site: FaultSite) {
         if self.fault_site.is_none() {
             self.fault_site = Some((chart as u32, site));
-        }
-    }
-}
-
-/// What drives an action control block: an ACTION, or a BOOL variable used as an action.
-#[derive(Debug, Clone)]
-pub(crate) struct Entity {
-    pub(crate) name: String,
-    pub(crate) action: Option<usize>,
-    pub(crate) variable: Option<Place>,
-    /// Associations in text order (step declaration order, then order inside the step).
-    pub(crate) assocs: Vec<Assoc>,
-}
-
-#[derive(Debug, Clone)]
-pub(crate) struct Assoc {
-    pub(crate) step: u32,
-    pub(crate) qualifier: Qualifier,
-    pub(crate) duration: Option<DurationCode>,
-}
-
-/// A list per index, stored flat (compressed rows): `rows[i]` is `items[start[i]..start[i+1]]`.
-#[derive(Debug, Clone, Default)]
-pub(crate) struct Rows {
-    start: Vec<u32>,
-    items: Vec<u32>,
-}
-
-impl Rows {
-    fn from_lists(lists: impl Iterator<Item = Vec<u32>>) -> Rows {
-        let mut rows = Rows { start: vec![0], items: Vec::new() };
-        for l in lists {
-            rows.items.extend(l);
-            rows.start.push(rows.items.len() as u32);
-        }
-        rows
-    }
-    #[inline]
-    pub(crate) fn get(&self, i: u32) -> &[u32] {
-        let i = i as usize;
-        &self.items[self.start[i] as usize..self.start[i + 1] as usize]
-    }
-}
-
-/// One transition as the evolution sees it.
-#[derive(Debug, Clone, Copy)]
-pub(crate) struct TrInfo {
-    /// The guard, when it can be evaluated without calling its closure.
-    guard: FastGuard,
-    /// `from` and `to` of a transition between one step and one step; `from` is `u32::MAX` for
-    /// the others.
-    from: u32,
-    to: u32,
-    /// One preceding step: enabled whenever that step is active.
-    single_pre: bool,
-    /// Leaves a step that has other outgoing transitions: only such transitions can conflict.
-    may_conflict: bool,
-}
-
-impl TrInfo {
-    #[inline(always)]
-    fn is_link(&self) -> bool {
-        self.from != u32::MAX
-    }
-}
-
-/// What every instance of one SFC POU shares: the net and the action control plan. Built once
-/// per POU ([`ChartCode::plan`]).
-#[derive(Debug)]
-pub struct ChartPlan {
-    pub(crate) outgoing: Rows,
-    pub(crate) pre: Rows,
-    pub(crate) post: Rows,
-    /// What the evolution reads of each transition, packed so one transition is one load.
-    tr: Vec<TrInfo>,
-    /// Per step: its only outgoing transition when that transition has no other preceding
-    /// step (a candidate whenever the step is active), `u32::MAX` otherwise.
-    single_out: Vec<u32>,
-    /// Frame offsets of the `X` and `T` slots of each step.
-    x_slots: Vec<u32>,
-    t_slots: Vec<u32>,
-    /// Sort key of each transition for conflict resolution: explicit priorities first.
-    pub(crate) order_key: Vec<(u8, i64, u32)>,
-    pub(crate) explicit: Vec<bool>,
-    pub(crate) initial: Vec<u32>,
-    pub(crate) timeouts: Vec<Option<i64>>,
-    pub(crate) supervised: bool,
-    pub(crate) entities: Vec<Entity>,
-    /// Entities each step associates, without repetition.
-    pub(crate) step_entities: Rows,
-    /// Entities that are BOOL variables: written with Q every scan.
-    pub(crate) variable_entities: Vec<u32>,
-    pub(crate) step_names: Vec<String>,
-    /// The step names as STRING values (for SFCCurrentStep and SFCErrorStep, shared, so
-    /// writing them allocates nothing).
-    step_values: Vec<Value>,
-    pub(crate) transition_names: Vec<String>,
-    pub(crate) action_names: Vec<String>,
-}
-
-impl ChartPlan {
-    pub(crate) fn new(code: &ChartCode) -> ChartPlan {
-        let chart = &code.chart;
-        let n = chart.steps.len();
-        let dedup = |v: &[usize]| {
-            let mut out: Vec<u32> = Vec::new();
-            for &s in v {
-                if !out.contains(&(s as u32)) {
-                    out.push(s as u32);
-                }
-            }
-            out
-        };
-        let mut outgoing = vec![Vec::new(); n];
-        for (t, tr) in chart.transitions.iter().enumerate() {
-            for s in dedup(&tr.from) {
-                outgoing[s as usize].push(t as u32);
-            }
-        }
-        let pre = Rows::from_lists(chart.transitions.iter().map(|t| dedup(&t.from)));
-        let post = Rows::from_lists(chart.transitions.iter().map(|t| dedup(&t.to)));
-        let order_key = chart
-            .transitions
-            .iter()
-            .enumerate()
-            .map(|(i, t)| match t.priority {
-                Some(p) => (0u8, p, i as u32),
-                None => (1u8, 0, i as u32),
-            })
-            .collect();
-        let explicit = chart.transitions.iter().map(|t| t.priority.is_some()).collect();
-        let mut entities: Vec<Entity> = chart
-            .actions
-            .iter()
-            .enumerate()
-            .map(|(i, a)| Entity { name: a.name.clone(), action: Some(i), variable: None, assocs: Vec::new() })
-            .collect();
-        let mut step_entities = vec![Vec::new(); n];
-        let mut variable_entities = Vec::new();
-        for (s, step) in chart.steps.iter().enumerate() {
-            for (k, a) in step.associations.iter().enumerate() {
-                let assoc_code = code.associations.get(s).and_then(|v| v.get(k));
-                let e = match a.target {
-                    ActionTarget::Action(id) => id,
-                    ActionTarget::Variable => {
-                        let Some(place) = assoc_code.and_then(|c| c.variable) else {
-                            continue;
-                        };
-                        match entities.iter().position(|e| e.variable == Some(place)) {
-                            Some(e) => e,
-                            None => {
-                                entities.push(Entity {
-                                    name: assoc_code
-                                        .and_then(|c| c.variable_name.clone())
-                                        .unwrap_or_else(|| a.action.clone()),
-                                    action: None,
-                                    variable: Some(place),
-                                    assocs: Vec::new(),
-                                });
-                                variable_entities.push((entities.len() - 1) as u32);
-                                entities.len() - 1
-                            }
-                        }
-                    }
-                };
-                entities[e].assocs.push(Assoc {
-                    step: s as u32,
-                    qualifier: a.qualifier,
-                    duration: assoc_code.and_then(|c| c.duration),
-                });
-                if !step_entities[s].contains(&(e as u32)) {
-                    step_entities[s].push(e as u32);
-                }
-            }
-        }
-        let timeouts: Vec<Option<i64>> = chart.steps.iter().map(|s| s.timeout).collect();
-        let tr: Vec<TrInfo> = (0..chart.transitions.len() as u32)
-            .map(|t| {
-                let (from, to) = match (pre.get(t), post.get(t)) {
-                    ([from], [to]) => (*from, *to),
-                    _ => (u32::MAX, 0),
-                };
-                TrInfo {
-                    guard: code.fast[t as usize],
-                    from,
-                    to,
-                    single_pre: pre.get(t).len() == 1,
-                    may_conflict: pre.get(t).iter().any(|&s| outgoing[s as usize].len() > 1),
-                }
-            })
-            .collect();
-        let single_out = outgoing
-            .iter()
-            .map(|o| match o.as_slice() {
-                [t] if tr[*t as usize].single_pre => *t,
-                _ => u32::MAX,
-            })
-            .collect();
-        ChartPlan {
-            outgoing: Rows::from_lists(outgoing.into_iter()),
-            tr,
-            single_out,
-            x_slots: code.step_x.clone(),
-            t_slots: code.step_t.clone(),
-            pre,
-            post,
-            order_key,
-            explicit,
-            initial: chart.steps.iter().enumerate().filter(|(_, s)| s.initial).map(|(i, _)| i as u32).collect(),
-            supervised: timeouts.iter().any(Option::is_some),
-            timeouts,
-            entities,
-            step_entities: Rows::from_lists(step_entities.into_iter()),
-            variable_entities,
-            step_names: chart.steps.iter().map(|s| s.name.clone()).collect(),
-            step_values: chart.steps.iter().map(|s| Value::Str(Arc::from(s.name.as_str()))).collect(),
-            transition_names: chart.transitions.iter().map(|t| t.name.clone()).collect(),
-            action_names: chart.actions.iter().map(|a| a.name.clone()).collect(),
-        }
-    }
-}
-
-/// The ACTION_CONTROL block of one entity (IEC 61131-3 2nd ed. 2.6.4.5) with its timers on
-/// virtual time: a timer holds the time its input was first seen TRUE.
-#[derive(Debug, Clone, Copy, Default, PartialEq)]
-pub(crate) struct Control {
-    s_ff: bool,
-    sd_ff: bool,
-    ds_ff: bool,
-    sl_ff: bool,
-    l_tmr: Option<i64>,
-    d_tmr: Option<i64>,
-    sd_tmr: Option<i64>,
-    ds_tmr: Option<i64>,
-    sl_tmr: Option<i64>,
-    p_mem: bool,
-    p1_mem: bool,
-    p0_mem: bool,
-    /// The duration of each timed qualifier (L, D, SD, DS, SL): the last one a winning
-    /// association of that qualifier gave, so a stored SD/SL keeps its own duration after its
-    /// step was left.
-    t: [i64; 5],
-    pub(crate) q: bool,
-    pub(crate) a: bool,
-    live: bool,
-}
-
-/// The inputs of one ACTION_CONTROL block in one scan.
-#[derive(Debug, Clone, Copy, Default)]
-struct Inputs {
-    n: bool,
-    r: bool,
-    s: bool,
-    l: bool,
-    d: bool,
-    p: bool,
-    sd: bool,
-    ds: bool,
-    sl: bool,
-    p1: bool,
-    p0: bool,
-}
-
-impl Inputs {
-    fn set(&mut self, q: Qualifier, v: bool, or: bool) {
-        let slot = match q {
-            Qualifier::N => &mut self.n,
-            Qualifier::R => &mut self.r,
-            Qualifier::S => &mut self.s,
-            Qualifier::L => &mut self.l,
-            Qualifier::D => &mut self.d,
-            Qualifier::P => &mut self.p,
-            Qualifier::SD => &mut self.sd,
-            Qualifier::DS => &mut self.ds,
-            Qualifier::SL => &mut self.sl,
-            Qualifier::P1 => &mut self.p1,
-            Qualifier::P0 => &mut self.p0,
-        };
-        *slot = if or { *slot || v } else { v };
-    }
-}
-
-/// TON on virtual time: `Q = elapsed ≥ PT`, elapsed counted from the scan the input rose.
-fn ton(mem: &mut Option<i64>, input: bool, pt: i64, now: i64) -> bool {
-    if !input {
-        *mem = None;
-        return false;
-    }
-    let start = *mem.get_or_insert(now);
-    now - start >= pt
-}
-
-impl Control {
-    /// One execution of the block; returns `(Q, A)`.
-    fn update(&mut self, i: Inputs, now: i64, profile: Profile) -> (bool, bool) {
-        let [t_l, t_d, t_sd, t_ds, t_sl] = self.t;
-        let r = i.r;
-        self.s_ff = !r && (self.s_ff || i.s);
-        let l_q = ton(&mut self.l_tmr, i.l, t_l, now);
-        let d_q = ton(&mut self.d_tmr, i.d, t_d, now);
-        let p_q = i.p && !self.p_mem;
-        self.p_mem = i.p;
-        // MatIEC does not let R cancel a pending SD.
-        let sd_reset = r && profile != Profile::Matiec;
-        self.sd_ff = !sd_reset && (self.sd_ff || i.sd);
-        let sd_q = ton(&mut self.sd_tmr, self.sd_ff, t_sd, now);
-        let ds_q = ton(&mut self.ds_tmr, i.ds, t_ds, now);
-        self.ds_ff = !r && (self.ds_ff || ds_q);
-        self.sl_ff = !r && (self.sl_ff || i.sl);
-        let sl_q = ton(&mut self.sl_tmr, self.sl_ff, t_sl, now);
-        let q = !r && (i.n || (i.l && !l_q) || d_q || p_q || self.s_ff || sd_q || self.ds_ff || (self.sl_ff && !sl_q));
-        let p1 = i.p1 && !self.p1_mem;
-        let p0 = !i.p0 && self.p0_mem;
-        self.p1_mem = i.p1;
-        self.p0_mem = i.p0;
-        let fell = self.q && !q && profile != Profile::Matiec;
-        self.q = q;
-        self.a = q || fell || p1 || p0;
-        (self.q, self.a)
-    }
-
-    /// Holds no state: no flip-flop set, no timer running, no edge memory, Q and A FALSE.
-    fn idle(&self) -> bool {
-        !(self.s_ff
-            || self.sd_ff
-            || self.ds_ff
-            || self.sl_ff
-            || self.p_mem
-            || self.p1_mem
-            || self.p0_mem
-            || self.q
-            || self.a)
-            && self.l_tmr.is_none()
-            && self.d_tmr.is_none()
-            && self.sd_tmr.is_none()
-            && self.ds_tmr.is_none()
-            && self.sl_tmr.is_none()
-    }
-}
-
-/// Activations and active time of one step, for the time analysis.
-#[derive(Debug, Clone, Copy, Default)]
-struct StepTally {
-    activations: u64,
-    completed: u64,
-    min: i64,
-    max: i64,
-    sum: i64,
-}
-
-/// The run-time state of one step, kept together so a step touches one cache line.
-#[derive(Debug, Clone, Copy, Default)]
-pub(crate) struct StepState {
-    /// Elapsed time, µs (mirrored into the `T` slot).
-    pub(crate) t: i64,
-    /// Position in `ChartState::active` while active.
-    pos: u32,
-    pub(crate) x: bool,
-    /// `sfc.timeout` already reported for the current activation.
-    overdue: bool,
-    /// Scratch: consumed by an accepted transition / member of the deactivated set.
-    consumed: bool,
-    /// Scratch: accepted transitions activating it in this scan, or conflicting ones.
-    hits: u8,
-    /// Scratch: the evolution in which a true transition leaving it was seen (conflict test).
-    seen: u32,
-    /// Scratch: the evolution that deactivates it (member of `D`).
-    dmark: u32,
-    /// Scratch: the evolution that activates it (member of `A`).
-    amark: u32,
-    /// Absolute memory slots of its `X` and `T`.
-    x_slot: u32,
-    t_slot: u32,
-    /// Keep the `X` / `T` slot up to date: only when some code of the file may read it
-    /// (otherwise [`Simulation::get`] answers from the step state).
-    mirror_x: bool,
-    mirror_t: bool,
-    /// The step associates actions (its activation makes them live).
-    has_entities: bool,
-    /// Time analysis: activations and active times.
-    tally: StepTally,
-}
-
-impl StepState {
-    /// Ends the current activation in the time analysis.
-    #[inline(always)]
-    fn complete(&mut self) {
-        let d = self.t;
-        let tl = &mut self.tally;
-        if tl.completed == 0 {
-            tl.min = d;
-            tl.max = d;
-        } else {
-            tl.min = tl.min.min(d);
-            tl.max = tl.max.max(d);
-        }
-        tl.completed += 1;
-        tl.sum = tl.sum.saturating_add(d);
-    }
-    #[inline]
-    fn publish_x(&self, mem: &mut [Value], x: bool) {
-        if self.mirror_x {
-            put_bool(mem, self.x_slot as usize, x);
-        }
-    }
-    #[inline]
-    fn publish_t(&self, mem: &mut [Value]) {
-        if self.mirror_t {
-            put_time(mem, self.t_slot as usize, self.t);
-        }
-    }
-}
-
-/// The run-time state of one SFC instance.
-#[derive(Debug, Clone)]
-pub struct ChartState {
-    /// Index of the POU in `Program::pous`.
-    pub pou: usize,
-    /// Absolute frame base.
-    pub frame: usize,
-    /// Instance path, `""` for the top POU.
-    pub path: String,
-    pub(crate) plan: Arc<ChartPlan>,
-    started: bool,
-    last_time: i64,
-    /// Active steps, in no particular order.
-    pub(crate) active: Vec<u32>,
-    pub(crate) steps: Vec<StepState>,
-    pub(crate) controls: Vec<Control>,
-    live: Vec<u32>,
-    /// Steps left by the last evolution (CODESYS body order), kept only under that profile.
-    left: Vec<u32>,
-    track_left: bool,
-    /// Steps activated since the last action phase.
-    entered: Vec<u32>,
-    /// The active set changed since the last `finish_scan`.
-    changed: bool,
-    /// Keep `SFCCurrentStep` up to date in memory: only when some code of the file reads it
-    /// (writing a STRING every scan costs more than the rest of a scan). Readers from outside
-    /// (`Simulation::get`) get it computed.
-    pub(crate) track_current: bool,
-    // Scratch buffers, kept to avoid allocation per scan.
-    stamp: Vec<u32>,
-    /// Number of evolutions so far, modulo 2^32: the epoch marking scratch fields.
-    evolutions: u32,
-    cand: Vec<u32>,
-    accepted: Vec<u32>,
-    run: Vec<u32>,
-    current: Option<u32>,
-    /// `(time, transition)` of every firing, to rebuild the sequence of situations.
-    pub(crate) log: Vec<(i64, u32)>,
-    /// The `matiec` profile's own state (`engine/matiec.rs`).
-    matiec: Option<Box<matiec::State>>,
-}
-
-/// At most this many firings are kept per instance for the sequence of situations.
-const LOG_LIMIT: usize = 1 << 20;
-
-impl ChartState {
-    pub(crate) fn new(pou: usize, plan: Arc<ChartPlan>, frame: usize, path: String) -> ChartState {
-        let n = plan.step_names.len();
-        let m = plan.entities.len();
-        let nt = plan.transition_names.len();
-        let steps = (0..n)
-            .map(|s| StepState {
-                x_slot: (frame + plan.x_slots[s] as usize) as u32,
-                t_slot: (frame + plan.t_slots[s] as usize) as u32,
-                mirror_x: true,
-                mirror_t: true,
-                has_entities: !plan.step_entities.get(s as u32).is_empty(),
-                ..StepState::default()
-            })
-            .collect();
-        ChartState {
-            pou,
-            frame,
-            path,
-            started: false,
-            last_time: 0,
-            active: Vec::new(),
-            steps,
-            controls: vec![Control::default(); m],
-            live: Vec::new(),
-            left: Vec::new(),
-            track_left: true,
-            entered: Vec::new(),
-            changed: true,
-            track_current: true,
-            stamp: vec![0; nt],
-            evolutions: 0,
-            cand: Vec::new(),
-            accepted: Vec::new(),
-            run: Vec::new(),
-            current: None,
-            log: Vec::new(),
-            matiec: None,
-            plan,
-        }
-    }
-
-    /// `Path.Name`, or `Name` for the top chart.
-    pub(crate) fn qualify(&self, name: &str) -> String {
-        if self.path.is_empty() {
-            name.to_string()
-        } else {
-            format!("{}.{name}", self.path)
-        }
-    }
-
-    /// Starts a new evolution and returns its epoch (never 0: 0 marks nothing). When the
-    /// counter wraps, every mark is cleared so an old mark cannot equal a new epoch.
-    fn next_epoch(&mut self) -> u32 {
-        self.evolutions = self.evolutions.wrapping_add(1);
-        if self.evolutions == 0 {
-            for step in &mut self.steps {
-                step.seen = 0;
-                step.dmark = 0;
-                step.amark = 0;
-            }
-            self.stamp.fill(0);
-            self.evolutions = 1;
-        }
-        self.evolutions
-    }
-
-    /// Whether step `s` is active.
-    pub(crate) fn is_active(&self, s: u32) -> bool {
-        self.steps[s as usize].x
-    }
-
-    /// Elapsed time of step `s`, µs.
-    pub(crate) fn time(&self, s: u32) -> i64 {
-        self.steps[s as usize].t
-    }
-
-    /// Activates `s` (or restarts its time if it stays active).
-    fn activate(&mut self, s: u32) {
-        let st = &mut self.steps[s as usize];
-        if !st.x {
-            st.x = true;
-            st.pos = self.active.len() as u32;
-            self.active.push(s);
-        }
-        st.t = 0;
-        st.overdue = false;
-        if st.has_entities {
-            self.entered.push(s);
-        }
-        self.steps[s as usize].tally.activations += 1;
-        self.changed = true;
-    }
-
-    fn deactivate(&mut self, s: u32) {
-        let i = s as usize;
-        let st = &mut self.steps[i];
-        if !st.x {
-            return;
-        }
-        st.x = false;
-        let pos = st.pos as usize;
-        self.active.swap_remove(pos);
-        if let Some(&moved) = self.active.get(pos) {
-            self.steps[moved as usize].pos = pos as u32;
-        }
-        self.complete(s);
-    }
-
-    /// Ends the current activation of `s` in the time analysis (the step is left, or left and
-    /// re-entered).
-    fn complete(&mut self, s: u32) {
-        self.steps[s as usize].complete();
-        self.changed = true;
-    }
-}
-
-fn code_of(prog: &Program, pou: usize) -> &ChartCode {
-    match &prog.pous[pou].body {
-        PouBody::Chart(c) => c,
-        PouBody::Code(_) => unreachable!("chart state of a POU without SFC body"),
-    }
-}
-
-/// Runs one scan of the SFC instance `chart` (an index into `ctx.charts`), as a call of its
-/// function block does. The first call is the instance's scan 0.
-pub fn run_chart(ctx: &mut Ctx<'_>, chart: usize) -> Result<(), Fault> {
-    let prog = ctx.prog;
-    let code = code_of(prog, ctx.charts[chart].pou);
-    if ctx.profile == Profile::Matiec {
-        return matiec::run(ctx, chart, code);
-    }
-    let plan = code.plan();
-    let frame = ctx.charts[chart].frame;
-    let now = ctx.now;
-    let ctl = code.control;
-    // Chart control: SFCInit resets and holds the initial situation.
-    if read_bool(ctx.mem, frame + ctl.init as usize) {
-        reset(ctx, chart, code);
-        return Ok(());
-    }
-    if read_bool(ctx.mem, frame + ctl.quit_error as usize) {
-        ctx.mem[frame + ctl.error as usize] = Value::Bool(false);
-    }
-    let st = &mut ctx.charts[chart];
-    if !st.started {
-        st.started = true;
-        st.last_time = now;
-        for &s in &plan.initial {
-            st.activate(s);
-        }
-        for &e in &plan.variable_entities {
-            let c = &mut st.controls[e as usize];
-            if !c.live {
-                c.live = true;
-                st.live.push(e);
-            }
-        }
-        if ctx.profile == Profile::Matiec {
-            // No activation edge for the initial step: its edge memories start as if it had
-            // been active before.
-            for &s in &plan.initial {
-                for &e in plan.step_entities.get(s) {
-                    let c = &mut st.controls[e as usize];
-                    for a in plan.entities[e as usize].assocs.iter().filter(|a| a.step == s) {
-                        match a.qualifier {
-                            Qualifier::P => c.p_mem = true,
-                            Qualifier::P1 => c.p1_mem = true,
-                            _ => {}
-                        }
-                    }
-                }
-            }
-        }
-        publish_initial(ctx, chart);
-        action_phase(ctx, chart, code, plan)?;
-        finish_scan(ctx, chart, code, plan);
-        return Ok(());
-    }
-    let paused = read_bool(ctx.mem, frame + ctl.pause as usize);
-    let st = &mut ctx.charts[chart];
-    let delta = now - st.last_time;
-    st.last_time = now;
-    // Step times advance unless paused; the evolution does it in its pass over the active steps.
-    match ctx.profile {
-        Profile::Codesys => {
-            if !paused && delta != 0 {
-                for &s in &st.active {
-                    let step = &mut st.steps[s as usize];
-                    step.t += delta;
-                    step.publish_t(ctx.mem);
-                }
-            }
-            action_phase(ctx, chart, code, plan)?;
-            if !paused {
-                evolve(ctx, chart, code, plan, 0)?;
-            }
-        }
-        Profile::Grafcet => {
-            if !paused {
-                evolve_until_stable(ctx, chart, code, plan, delta)?;
-            }
-            action_phase(ctx, chart, code, plan)?;
-        }
-        Profile::Iec | Profile::Matiec => {
-            if !paused {
-                evolve(ctx, chart, code, plan, delta)?;
-            }
-            action_phase(ctx, chart, code, plan)?;
-        }
-    }
-    finish_scan(ctx, chart, code, plan);
-    Ok(())
-}
-
-/// Writes a BOOL slot in place (no drop glue for the old value on the hot path).
-#[inline]
-fn put_bool(mem: &mut [Value], slot: usize, b: bool) {
-    match &mut mem[slot] {
-        Value::Bool(x) => *x = b,
-        other => *other = Value::Bool(b),
-    }
-}
-
-/// Writes a TIME slot in place.
-#[inline]
-fn put_time(mem: &mut [Value], slot: usize, t: i64) {
-    match &mut mem[slot] {
-        Value::Time(x) => *x = t,
-        other => *other = Value::Time(t),
-    }
-}
-
-#[inline]
-fn read_bool(mem: &[Value], slot: usize) -> bool {
-    matches!(mem.get(slot), Some(Value::Bool(true)))
-}
-
-/// SFCInit: back to the initial situation with every action control block cleared; the next
-/// call after SFCInit falls is the instance's scan 0 again.
-fn reset(ctx: &mut Ctx<'_>, chart: usize, code: &ChartCode) {
-    let plan = code.plan();
-    let frame = ctx.charts[chart].frame;
-    let st = &mut ctx.charts[chart];
-    if !st.started && !st.active.is_empty() {
-        return; // already held in the initial situation
-    }
-    while let Some(&s) = st.active.last() {
-        st.deactivate(s);
-    }
-    st.left.clear();
-    st.entered.clear();
-    for c in st.controls.iter_mut() {
-        *c = Control::default();
-    }
-    st.live.clear();
-    st.started = false;
-    for step in st.steps.iter_mut() {
-        step.t = 0;
-        step.overdue = false;
-    }
-    for &s in &plan.initial {
-        let step = &mut st.steps[s as usize];
-        step.x = true;
-        step.pos = st.active.len() as u32;
-        st.active.push(s);
-    }
-    st.changed = true;
-    for (s, &off) in code.step_x.iter().enumerate() {
-        ctx.mem[frame + off as usize] = Value::Bool(plan.initial.contains(&(s as u32)));
-        ctx.mem[frame + code.step_t[s] as usize] = Value::Time(0);
-    }
-    for (&q, &a) in code.action_q.iter().zip(&code.action_a) {
-        ctx.mem[frame + q as usize] = Value::Bool(false);
-        ctx.mem[frame + a as usize] = Value::Bool(false);
-    }
-    for &e in &plan.variable_entities {
-        if let Some(p) = plan.entities[e as usize].variable {
-            ctx.mem[p.slot(frame)] = Value::Bool(false);
-        }
-    }
-    ctx.mem[frame + code.control.error as usize] = Value::Bool(false);
-    ctx.mem[frame + code.control.error_step as usize] = Value::Str(Arc::from(""));
-    // SFCCurrentStep follows the initial situation while SFCInit holds it.
-    let st = &mut ctx.charts[chart];
-    if st.track_current {
-        st.changed = false;
-        let first = st.active.iter().copied().min();
-        st.current = first;
-        ctx.mem[frame + code.control.current_step as usize] = match first {
-            Some(s) => plan.step_values[s as usize].clone(),
-            None => Value::Str(Arc::from("")),
-        };
-    }
-}
-
-/// Evaluates the guard of `t` on the current memory: plain BOOL reads inline, the rest through
-/// the compiled closure.
-#[inline(always)]
-fn eval_guard(ctx: &mut Ctx<'_>, code: &ChartCode, guard: FastGuard, frame: usize, t: u32) -> Result<bool, Fault> {
-    match guard {
-        FastGuard::Local(o, neg) => Ok(read_bool(ctx.mem, frame + o as usize) != neg),
-        FastGuard::Global(g, neg) => Ok(read_bool(ctx.mem, g as usize) != neg),
-        FastGuard::Const(b) => Ok(b),
-        FastGuard::Code => (code.guards[t as usize])(ctx, frame),
-    }
-}
-
-/// Steps 3–5: enabled and true transitions against one snapshot, conflicts, firing.
-/// Returns whether anything fired.
-/// `delta`: first advance the time of every active step by this much (in the same pass).
-fn evolve(ctx: &mut Ctx<'_>, chart: usize, code: &ChartCode, plan: &ChartPlan, delta: i64) -> Result<bool, Fault> {
-    let frame = ctx.charts[chart].frame;
-    let (mut cand, epoch) = {
-        let st = &mut ctx.charts[chart];
-        let mut cand = std::mem::take(&mut st.cand);
-        cand.clear();
-        let epoch = st.next_epoch();
-        for &s in &st.active {
-            if delta != 0 {
-                let step = &mut st.steps[s as usize];
-                step.t += delta;
-                step.publish_t(ctx.mem);
-            }
-            let only = plan.single_out[s as usize];
-            if only != u32::MAX {
-                cand.push(only);
-                continue;
-            }
-            for &t in plan.outgoing.get(s) {
-                // A transition with one preceding step is met only from that (active) step.
-                if plan.tr[t as usize].single_pre {
-                    cand.push(t);
-                    continue;
-                }
-                let mark = &mut st.stamp[t as usize];
-                if *mark == epoch {
-                    continue;
-                }
-                *mark = epoch;
-                if plan.pre.get(t).iter().all(|&p| st.steps[p as usize].x) {
-                    cand.push(t);
-                }
-            }
-        }
-        (cand, epoch)
-    };
-    // Guards against the snapshot. They have no side effects, so their order does not matter;
-    // when one faults, the first faulting guard in declaration order is reported.
-    // The same pass notes whether the true transitions are all links and whether two of them
-    // can share a step, so the firing needs no further pass to decide its path.
-    let mut e_len = 0;
-    let mut links_only = true;
-    let mut may_conflict = false;
-    for k in 0..cand.len() {
-        let t = cand[k];
-        let info = plan.tr[t as usize];
-        match eval_guard(ctx, code, info.guard, frame, t) {
-            Ok(true) => {
-                cand[e_len] = t;
-                e_len += 1;
-                links_only &= info.is_link();
-                may_conflict |= info.may_conflict;
-            }
-            Ok(false) => {}
-            Err(f) => {
-                let mut all = cand[k..].to_vec();
-                all.sort_unstable();
-                let (t, first) = all
-                    .into_iter()
-                    .find_map(|t| eval_guard(ctx, code, plan.tr[t as usize].guard, frame, t).err().map(|f| (t, f)))
-                    .unwrap_or((t, f));
-                ctx.sink.note_fault(chart, FaultSite::Guard(t));
-                ctx.charts[chart].cand = cand;
-                return Err(first);
-            }
-        }
-    }
-    cand.truncate(e_len);
-    let st = &mut ctx.charts[chart];
-    if cand.is_empty() {
-        st.cand = cand;
-        return Ok(false);
-    }
-    if cand.len() == 1 {
-        let t = cand[0];
-        // The common case, a transition between two steps of a sequence (or a self-loop) whose
-        // target is not active: fire it without the general bookkeeping.
-        let TrInfo { from, to, .. } = plan.tr[t as usize];
-        if from != u32::MAX {
-            if from == to || !st.steps[to as usize].x {
-                st.cand = cand;
-                st.left.clear();
-                st.steps[to as usize].amark = epoch;
-                take_link(st, ctx.mem, ctx.sink, chart, ctx.now, t, from, to, epoch);
-                return Ok(true);
-            }
-        }
-    }
-    // Two true transitions sharing a step are a conflict; without one, all of them fire. Only
-    // transitions leaving a divergence can share a step.
-    let mut shared = false;
-    if cand.len() > 1 && may_conflict {
-        for &t in &cand {
-            for &p in plan.pre.get(t) {
-                let step = &mut st.steps[p as usize];
-                shared |= step.seen == epoch;
-                step.seen = epoch;
-            }
-        }
-    }
-    let accepted = if shared {
-        cand.sort_unstable();
-        let mut accepted = std::mem::take(&mut st.accepted);
-        accepted.clear();
-        resolve_conflicts(st, plan, &cand, &mut accepted, ctx.profile, &mut ctx.sink.events);
-        st.cand = cand;
-        accepted
-    } else {
-        cand
-    };
-    // Accepted transitions share no preceding step (always, except MatIEC's firing of every
-    // true alternative); when they are all links, the link path fires them.
-    if links_only && (!shared || ctx.profile != Profile::Matiec) {
-        fire_links(ctx, chart, plan, &accepted, epoch);
-    } else {
-        fire_general(ctx, chart, plan, &accepted, epoch);
-    }
-    let st = &mut ctx.charts[chart];
-    if shared {
-        st.accepted = accepted;
-    } else {
-        st.cand = accepted;
-    }
-    Ok(true)
-}
-
-/// Step 5: fires the accepted transitions together. `D = ∪ pre` is marked with `dmark`,
-/// `A = ∪ post` with `amark`; a step of `A` that is active and not in `D`, or that two
-/// transitions activate, is unsafe. Steps of `D` not in `A` are deactivated, then every step of
-/// `A` is activated once (a step left and re-entered stays active, its time restarts).
-/// Also handles accepted transitions that share a preceding step (MatIEC accepts every true
-/// alternative).
-fn fire_general(ctx: &mut Ctx<'_>, chart: usize, plan: &ChartPlan, accepted: &[u32], epoch: u32) {
-    let st = &mut ctx.charts[chart];
-    for &t in accepted {
-        for &s in plan.pre.get(t) {
-            st.steps[s as usize].dmark = epoch;
-        }
-    }
-    let mut unsafe_steps: Vec<u32> = Vec::new();
-    for &t in accepted {
-        for &s in plan.post.get(t) {
-            let step = &mut st.steps[s as usize];
-            if (step.amark == epoch || (step.x && step.dmark != epoch)) && !unsafe_steps.contains(&s) {
-                unsafe_steps.push(s);
-            }
-            step.amark = epoch;
-        }
-    }
-    if !unsafe_steps.is_empty() {
-        unsafe_steps.sort_unstable();
-        let mut in_order = accepted.to_vec();
-        in_order.sort_unstable();
-        for &s in &unsafe_steps {
-            let trs = in_order
-                .iter()
-                .filter(|&&t| plan.post.get(t).contains(&s))
-                .map(|&t| st.qualify(&plan.transition_names[t as usize]))
-                .collect();
-            ctx.sink.events.push(Event::Unsafe { step: st.qualify(&plan.step_names[s as usize]), transitions: trs });
-        }
-    }
-    st.left.clear();
-    for &t in accepted {
-        for &s in plan.pre.get(t) {
-            let step = &mut st.steps[s as usize];
-            // Each step of D once (MatIEC may accept transitions sharing a step).
-            if step.dmark != epoch {
-                continue;
-            }
-            step.dmark = 0;
-            if !step.x {
-                continue;
-            }
-            if step.amark == epoch {
-                st.complete(s);
-            } else {
-                st.deactivate(s);
-                st.steps[s as usize].publish_x(ctx.mem, false);
-            }
-            st.left.push(s);
-        }
-    }
-    let now = ctx.now;
-    for &t in accepted {
-        for &s in plan.post.get(t) {
-            let step = &mut st.steps[s as usize];
-            if step.amark == epoch {
-                step.amark = 0;
-                st.activate(s);
-                let step = &st.steps[s as usize];
-                step.publish_x(ctx.mem, true);
-                step.publish_t(ctx.mem);
-            }
-        }
-        if st.log.len() < LOG_LIMIT {
-            st.log.push((now, t));
-        }
-        ctx.sink.fired.push((chart as u32, t));
-    }
-}
-
-/// [`fire_general`] for disjoint transitions that each link one step to one step (sequences, loops, the
-/// branches of a selection): the same rule without walking the pre/post lists.
-#[inline(never)]
-fn fire_links(ctx: &mut Ctx<'_>, chart: usize, plan: &ChartPlan, accepted: &[u32], epoch: u32) {
-    let st = &mut ctx.charts[chart];
-    // A = the entered steps (marked); two transitions entering one step are unsafe.
-    let mut safe = true;
-    let mut entering_active = false;
-    for &t in accepted {
-        let step = &mut st.steps[plan.tr[t as usize].to as usize];
-        safe &= step.amark != epoch;
-        entering_active |= step.x;
-        step.amark = epoch;
-    }
-    // Entering an active step is unsafe unless that step is also left (D) in this scan; D is
-    // only needed then.
-    if safe && entering_active {
-        for &t in accepted {
-            st.steps[plan.tr[t as usize].from as usize].dmark = epoch;
-        }
-        for &t in accepted {
-            let step = &st.steps[plan.tr[t as usize].to as usize];
-            safe &= !step.x || step.dmark == epoch;
-        }
-    }
-    if !safe {
-        // Rare: clear the activation marks and take the general path, which names the unsafe
-        // steps.
-        for &t in accepted {
-            st.steps[plan.tr[t as usize].to as usize].amark = 0;
-        }
-        return fire_general(ctx, chart, plan, accepted, epoch);
-    }
-    // One pass: each transition leaves its step and enters the next, which takes the left
-    // step's place in `active`. A step of both D and A (left by one transition, entered by
-    // another, or a self-loop) carries both marks: it is not deactivated, and its entry restarts
-    // its time. The marks stay until the next epoch, so the order of the transitions does not
-    // matter.
-    st.left.clear();
-    let now = ctx.now;
-    for &t in accepted {
-        let TrInfo { from, to, .. } = plan.tr[t as usize];
-        take_link(st, ctx.mem, ctx.sink, chart, now, t, from, to, epoch);
-    }
-}
-
-/// Fires the one-step-to-one-step transition `t`: leaves `from` (unless it carries the
-/// activation mark of `epoch`: it is entered again in the same scan) and enters `to`, which
-/// takes `from`'s place in the active list; the `X`/`T` slots, the time analysis, the action
-/// queue and the firing log follow. The caller has checked that the firing is safe and marked
-/// `to` with `epoch`. (`fire_links` stays out of line: inlined into `evolve`, it slows the
-/// candidate loop down by a fifth.)
-#[inline(always)]
-#[allow(clippy::too_many_arguments)]
-fn take_link(
-    st: &mut ChartState,
-    mem: &mut [Value],
-    sink: &mut ScanSink,
-    chart: usize,
-    now: i64,
-    t: u32,
-    from: u32,
-    to: u32,
-    epoch: u32,
-) {
-    let step = &mut st.steps[from as usize];
-    let mut free = None;
-    if step.amark != epoch {
-        step.x = false;
-        free = Some(step.pos);
-        step.publish_x(mem, false);
-    }
-    step.complete();
-    st.changed = true;
-    if st.track_left {
-        st.left.push(from);
-    }
-    let step = &mut st.steps[to as usize];
-    if !step.x {
-        step.x = true;
-        match free.take() {
-            Some(pos) => {
-                step.pos = pos;
-                st.active[pos as usize] = to;
-            }
-            None => {
-                step.pos = st.active.len() as u32;
-                st.active.push(to);
-            }
-        }
-    }
-    step.t = 0;
-    step.overdue = false;
-    step.publish_x(mem, true);
-    step.publish_t(mem);
-    step.tally.activations += 1;
-    if step.has_entities {
-        st.entered.push(to);
-    }
-    if let Some(pos) = free {
-        st.active.swap_remove(pos as usize);
-        if let Some(&moved) = st.active.get(pos as usize) {
-            st.steps[moved as usize].pos = pos;
-        }
-    }
-    if st.log.len() < LOG_LIMIT {
-        st.log.push((now, t));
-    }
-    sink.fired.push((chart as u32, t));
-}
-
-/// Step 4 for two or more true transitions: `conflict` events, then acceptance in priority
-/// order, each step consumed once (MatIEC: a true transition without priority always fires;
-/// CODESYS: no priorities, declaration order).
-fn resolve_conflicts(
-    st: &mut ChartState,
-    plan: &ChartPlan,
-    cand: &[u32],
-    accepted: &mut Vec<u32>,
-    profile: Profile,
-    events: &mut Vec<Event>,
-) {
-    let codesys = profile == Profile::Codesys;
-    let explicit = |t: u32| !codesys && plan.explicit[t as usize];
-    for &t in cand {
-        if !explicit(t) {
-            for &s in plan.pre.get(t) {
-                let step = &mut st.steps[s as usize];
-                step.hits = step.hits.saturating_add(1);
-            }
-        }
-    }
-    let mut steps: Vec<u32> = Vec::new();
-    for &t in cand {
-        for &s in plan.pre.get(t) {
-            if st.steps[s as usize].hits >= 2 && !steps.contains(&s) {
-                steps.push(s);
-            }
-        }
-    }
-    for &t in cand {
-        for &s in plan.pre.get(t) {
-            st.steps[s as usize].hits = 0;
-        }
-    }
-    steps.sort_unstable();
-    for s in steps {
-        let trs = cand
-            .iter()
-            .filter(|&&t| !explicit(t) && plan.pre.get(t).contains(&s))
-            .map(|&t| st.qualify(&plan.transition_names[t as usize]))
-            .collect();
-        events.push(Event::Conflict { step: st.qualify(&plan.step_names[s as usize]), transitions: trs });
-    }
-    let mut order = cand.to_vec();
-    if !codesys {
-        order.sort_unstable_by_key(|&t| plan.order_key[t as usize]);
-    }
-    for &t in &order {
-        let pre = plan.pre.get(t);
-        let free = pre.iter().all(|&s| !st.steps[s as usize].consumed);
-        if free || (profile == Profile::Matiec && !explicit(t)) {
-            for &s in pre {
-                st.steps[s as usize].consumed = true;
-            }
-            accepted.push(t);
-        }
-    }
-    for &t in accepted.iter() {
-        for &s in plan.pre.get(t) {
-            st.steps[s as usize].consumed = false;
-        }
-    }
-    accepted.sort_unstable();
-}
-
-/// GRAFCET (IEC 60848): evolve on frozen inputs until nothing fires; a situation met twice
-/// is an endless cycle and stops the run.
-fn evolve_until_stable(
-    ctx: &mut Ctx<'_>,
-    chart: usize,
-    code: &ChartCode,
-    plan: &ChartPlan,
-    mut delta: i64,
-) -> Result<(), Fault> {
-    let mut seen: Vec<Vec<u32>> = Vec::new();
-    loop {
-        let mut now_active = ctx.charts[chart].active.clone();
-        now_active.sort_unstable();
-        if seen.contains(&now_active) {
-            return Err(Fault {
-                message: "the situation never becomes stable (GRAFCET evolution cycles on frozen inputs)".into(),
-                span: code.chart.name_span,
-            });
-        }
-        seen.push(now_active);
-        let fired = evolve(ctx, chart, code, plan, delta)?;
-        delta = 0;
-        if !fired {
-            return Ok(());
-        }
-    }
-}
-
-/// Every `(name, b'x' | b't')` such that the (lowercase) source text contains `name.x` /
-/// `name.t` (spaces allowed around the dot) with `name` a whole identifier: the step flags
-/// that some code may read. Comments and strings count too, which only keeps more slots
-/// up to date than needed.
-fn step_flags_read(lower: &str) -> std::collections::HashSet<(String, u8)> {
-    let b = lower.as_bytes();
-    let ident = |c: u8| c.is_ascii_alphanumeric() || c == b'_';
-    let mut out = std::collections::HashSet::new();
-    for (i, _) in lower.match_indices('.') {
-        let mut k = i + 1;
-        while k < b.len() && b[k] == b' ' {
-            k += 1;
-        }
-        let flag = match b.get(k) {
-            Some(&c @ (b'x' | b't')) if !b.get(k + 1).is_some_and(|&n| ident(n)) => c,
-            _ => continue,
-        };
-        let mut end = i;
-        while end > 0 && b[end - 1] == b' ' {
-            end -= 1;
-        }
-        let mut start = end;
-        while start > 0 && ident(b[start - 1]) {
-            start -= 1;
-        }
-        if start < end {
-            out.insert((lower[start..end].to_string(), flag));
-        }
-    }
-    out
-}
-
-/// Writes the `X` and `T` slots of the initial steps (evolutions write them as they fire).
-fn publish_initial(ctx: &mut Ctx<'_>, chart: usize) {
-    let st = &ctx.charts[chart];
-    for &s in &st.active {
-        let step = &st.steps[s as usize];
-        put_bool(ctx.mem, step.x_slot as usize, true);
-        put_time(ctx.mem, step.t_slot as usize, step.t);
-    }
-}
-
-/// Steps 6–7: action control for every live entity, then the bodies with `A` TRUE.
-#[inline(always)]
-fn action_phase(ctx: &mut Ctx<'_>, chart: usize, code: &ChartCode, plan: &ChartPlan) -> Result<(), Fault> {
-    let st = &ctx.charts[chart];
-    if st.entered.is_empty() && st.live.is_empty() {
-        return Ok(()); // no action holds state and none was activated
-    }
-    run_actions(ctx, chart, code, plan)
-}
-
-fn run_actions(ctx: &mut Ctx<'_>, chart: usize, code: &ChartCode, plan: &ChartPlan) -> Result<(), Fault> {
-    let now = ctx.now;
-    let profile = ctx.profile;
-    let frame = ctx.charts[chart].frame;
-    let st = &mut ctx.charts[chart];
-    // Entities of newly active steps become live; they stay live while one of their steps is
-    // active or they hold state.
-    for &s in &st.entered {
-        for &e in plan.step_entities.get(s) {
-            let c = &mut st.controls[e as usize];
-            if !c.live {
-                c.live = true;
-                st.live.push(e);
-            }
-        }
-    }
-    st.entered.clear();
-    if st.live.is_empty() {
-        return Ok(());
-    }
-    let mut run = std::mem::take(&mut st.run);
-    run.clear();
-    let mut k = 0;
-    while k < st.live.len() {
-        let e = st.live[k] as usize;
-        let ent = &plan.entities[e];
-        let mut inputs = Inputs::default();
-        let or = profile != Profile::Matiec;
-        let mut winner: Option<(u32, Qualifier, i64)> = None;
-        let mut contenders: Vec<(u32, Qualifier)> = Vec::new();
-        let mut any_active = false;
-        for a in &ent.assocs {
-            let active = st.steps[a.step as usize].x;
-            any_active |= active;
-            if a.qualifier.is_timed() {
-                if !active {
-                    if !or {
-                        inputs.set(a.qualifier, false, false);
-                    }
-                    continue;
-                }
-                let dur = match a.duration {
-                    Some(DurationCode::Literal(d)) => d,
-                    Some(DurationCode::Variable(p)) => match &ctx.mem[p.slot(frame)] {
-                        Value::Time(d) => *d,
-                        _ => 0,
-                    },
-                    None => 0,
-                };
-                match winner {
-                    None => {
-                        winner = Some((a.step, a.qualifier, dur));
-                        inputs.set(a.qualifier, true, or);
-                    }
-                    Some((_, q, d)) if q == a.qualifier && d == dur => inputs.set(a.qualifier, true, true),
-                    Some(_) => contenders.push((a.step, a.qualifier)),
-                }
-            } else {
-                inputs.set(a.qualifier, active, or);
-            }
-        }
-        if let Some((ws, wq, d)) = winner {
-            let k = match wq {
-                Qualifier::L => 0,
-                Qualifier::D => 1,
-                Qualifier::SD => 2,
-                Qualifier::DS => 3,
-                _ => 4,
-            };
-            st.controls[e].t[k] = d;
-            if !contenders.is_empty() {
-                let mut steps = vec![st.qualify(&plan.step_names[ws as usize])];
-                let mut quals = vec![wq.name().to_string()];
-                for (s, q) in &contenders {
-                    steps.push(st.qualify(&plan.step_names[*s as usize]));
-                    quals.push(q.name().to_string());
-                }
-                ctx.sink.events.push(Event::Contention { action: st.qualify(&ent.name), steps, qualifiers: quals });
-            }
-        }
-        let c = &mut st.controls[e];
-        let (q, a) = c.update(inputs, now, profile);
-        match (ent.action, ent.variable) {
-            (Some(id), _) => {
-                put_bool(ctx.mem, frame + code.action_q[id] as usize, q);
-                put_bool(ctx.mem, frame + code.action_a[id] as usize, a);
-                if a {
-                    run.push(e as u32);
-                }
-            }
-            (None, Some(p)) => put_bool(ctx.mem, p.slot(frame), q),
-            (None, None) => {}
-        }
-        if c.idle() && ent.variable.is_none() && !any_active {
-            c.live = false;
-            st.live.swap_remove(k);
-        } else {
-            k += 1;
-        }
-    }
-    // Bodies: declaration order of the actions (entity index = action index), or CODESYS
-    // order: alphabetical, those of steps left in the previous scan first.
-    if profile == Profile::Codesys && run.len() > 1 {
-        let left = &st.left;
-        run.sort_by_cached_key(|&e| {
-            let ent = &plan.entities[e as usize];
-            (!ent.assocs.iter().any(|a| left.contains(&a.step)), ent.name.to_ascii_uppercase())
-        });
-    } else if run.len() > 1 {
-        run.sort_unstable();
-    }
-    if profile == Profile::Codesys {
-        st.left.clear();
-    }
-    for &e in &run {
-        if let Some(id) = plan.entities[e as usize].action {
-            if let Err(f) = (code.bodies[id])(ctx, frame) {
-                ctx.sink.note_fault(chart, FaultSite::Action(id));
-                ctx.charts[chart].run = run;
-                return Err(f);
-            }
-        }
-    }
-    ctx.charts[chart].run = run;
-    Ok(())
-}
-
-/// After the scan: supervision times, SFCError/SFCErrorStep, SFCCurrentStep.
-#[inline(always)]
-fn finish_scan(ctx: &mut Ctx<'_>, chart: usize, code: &ChartCode, plan: &ChartPlan) {
-    let st = &ctx.charts[chart];
-    if plan.supervised || (st.changed && st.track_current) {
-        supervise(ctx, chart, code, plan);
-    }
-}
-
-fn supervise(ctx: &mut Ctx<'_>, chart: usize, code: &ChartCode, plan: &ChartPlan) {
-    let frame = ctx.charts[chart].frame;
-    let st = &mut ctx.charts[chart];
-    if plan.supervised {
-        let mut expired: Option<u32> = None;
-        for &s in &st.active {
-            if let Some(limit) = plan.timeouts[s as usize] {
-                let step = &mut st.steps[s as usize];
-                if step.t > limit && !step.overdue {
-                    step.overdue = true;
-                    if expired.is_none_or(|f| s < f) {
-                        expired = Some(s);
-                    }
-                }
-            }
-        }
-        if let Some(s) = expired {
-            ctx.mem[frame + code.control.error as usize] = Value::Bool(true);
-            ctx.mem[frame + code.control.error_step as usize] = plan.step_values[s as usize].clone();
-        }
-    }
-    if st.changed && st.track_current {
-        st.changed = false;
-        let first = st.active.iter().copied().min();
-        if first != st.current {
-            st.current = first;
-            ctx.mem[frame + code.control.current_step as usize] = match first {
-                Some(s) => plan.step_values[s as usize].clone(),
-                None => Value::Str(Arc::from("")),
-            };
         }
     }
 }
@@ -1459,8 +102,12 @@ pub struct TimeStats {
     /// Every step of every instance, in declaration order (top chart first).
     pub steps: Vec<StepStats>,
     /// The sequence of situations passed: `(time µs, active steps)` each time the active set
-    /// changed, starting with the initial situation.
+    /// changed, starting with the initial situation (empty when the simulation does not record
+    /// situations, see [`Simulation::record_situations`]).
     pub sequence: Vec<(i64, Vec<String>)>,
+    /// Later changes of situation that were not recorded: the log keeps the first
+    /// [`MAX_SITUATIONS`].
+    pub dropped: u64,
 }
 
 /// A simulation of one top-level POU of a checked file.
@@ -1472,6 +119,7 @@ pub struct Snapshot {
     record: ScanRecord,
     error: Option<RuntimeError>,
     next_scan: u64,
+    log: LogMark,
 }
 
 pub struct Simulation {
@@ -1488,6 +136,20 @@ pub struct Simulation {
     next_scan: u64,
     /// The traced variables with their slots, resolved once.
     trace: Vec<(String, Type, usize)>,
+    /// Qualified transition names of every instance.
+    transition_qnames: Vec<Vec<String>>,
+    /// The sequence of situations (time analysis).
+    log: SituationLog,
+    /// The active steps in name order.
+    order: ActiveOrder,
+    /// Scratch: the fired transitions of a scan in record order.
+    fired_scratch: Vec<(u32, u32)>,
+    /// Spare strings of the record's lists, reused so a record costs no allocation.
+    spare: Vec<String>,
+    /// Global number of the first transition of each instance.
+    transition_base: Vec<u32>,
+    /// Scratch sink of the monitor's guard evaluation.
+    monitor_sink: ScanSink,
     /// Charges one scan may make ([`Simulation::set_scan_budget`]).
     budget: u64,
     /// Set from outside to stop the running scan ([`Simulation::interrupt_flag`]).
@@ -1584,12 +246,23 @@ impl Simulation {
         for c in &mut charts {
             c.track_current = mentioned;
             c.track_left = opts.profile == Profile::Codesys;
-            for (step, name) in c.steps.iter_mut().zip(&c.plan.step_names) {
-                let name = name.to_ascii_lowercase();
-                step.mirror_x = flags.contains(&(name.clone(), b'x'));
-                step.mirror_t = flags.contains(&(name, b't'));
-            }
+            let plan = c.plan.clone();
+            c.set_mirrors(|s| {
+                let name = plan.step_names[s as usize].to_ascii_lowercase();
+                (flags.contains(&(name.clone(), b'x')), flags.contains(&(name, b't')))
+            });
         }
+        let transition_qnames =
+            charts.iter().map(|c| c.plan.transition_names.iter().map(|t| c.qualify(t)).collect()).collect();
+        let order = ActiveOrder::new(&charts);
+        let transition_base = charts
+            .iter()
+            .scan(0u32, |base, c| {
+                let b = *base;
+                *base += c.plan.transition_names.len() as u32;
+                Some(b)
+            })
+            .collect();
         Simulation {
             prog,
             mem,
@@ -1603,6 +276,13 @@ impl Simulation {
             error: None,
             next_scan: 0,
             trace,
+            transition_qnames,
+            log: SituationLog::new(),
+            order,
+            fired_scratch: Vec::new(),
+            spare: Vec::new(),
+            transition_base,
+            monitor_sink: ScanSink::default(),
             budget: crate::code::SCAN_BUDGET,
             interrupt: None,
         }
@@ -1610,25 +290,26 @@ impl Simulation {
 
     /// Starts the POU again from its declared initial values (a PLC's restart): memory, steps
     /// and action control as at scan 0, the error cleared. The scan counter goes on, so the
-    /// first scan after a restart is the chart's scan 0 at a later virtual time.
+    /// first scan after a restart is the chart's scan 0 at a later virtual time. Coverage and
+    /// time analysis go on over the whole run.
     pub fn restart(&mut self) {
         let Memory { mut mem, charts: instances, .. } = self.prog.instantiate(self.top);
         let mut charts = chart_states(&self.prog, instances, &mut mem);
+        if self.opts.profile == Profile::Matiec {
+            matiec::prepare(&self.prog, &mut charts, &self.source.text);
+        }
         for (new, old) in charts.iter_mut().zip(&self.charts) {
             new.track_current = old.track_current;
             new.track_left = old.track_left;
-            for (a, b) in new.steps.iter_mut().zip(&old.steps) {
-                a.mirror_x = b.mirror_x;
-                a.mirror_t = b.mirror_t;
-            }
+            new.set_mirrors(|s| old.steps.get(s as usize).map_or((false, false), |b| (b.mirror_x, b.mirror_t)));
+            new.carry_counts(old);
         }
         self.mem = mem;
+        self.order = ActiveOrder::new(&charts);
         self.charts = charts;
         self.error = None;
         self.record = ScanRecord::default();
-        self.sink.fired.clear();
-        self.sink.events.clear();
-        self.sink.fault_site = None;
+        self.sink.clear();
     }
 
     /// Bounds every later scan to `limit` charges (loop iterations, IL jumps, calls; default
@@ -1651,7 +332,7 @@ impl Simulation {
         let st = self.charts.get(c as usize)?;
         let plan = &st.plan;
         let code = code_of(&self.prog, st.pou);
-        let active = |s: &u32| st.steps[*s as usize].x;
+        let active = |s: &u32| st.is_active(*s);
         let step_name = |s: u32| st.qualify(&plan.step_names[s as usize]);
         Some(match site {
             FaultSite::Action(a) => {
@@ -1677,6 +358,13 @@ impl Simulation {
                 steps: plan.pre.get(t).iter().copied().map(step_name).collect(),
             },
         })
+    }
+
+    /// Whether the sequence of situations is recorded for [`Simulation::stats`] (off by
+    /// default: a run that never asks for it pays nothing). Recording is bounded: the first
+    /// 100,000 changes of situation are kept, later ones counted in [`TimeStats::dropped`].
+    pub fn record_situations(&mut self, on: bool) {
+        self.log.enabled = on;
     }
 
     /// The checked source (to render runtime errors and diagnostics).
@@ -1712,9 +400,7 @@ impl Simulation {
         if self.error.is_some() {
             return Err(self.error.as_ref().unwrap());
         }
-        self.sink.fired.clear();
-        self.sink.events.clear();
-        self.sink.fault_site = None;
+        self.sink.clear();
         let scan = self.next_scan;
         let result = {
             let mut ctx = Ctx {
@@ -1733,6 +419,7 @@ impl Simulation {
             }
         };
         self.next_scan += 1;
+        self.log.record(now, &self.sink, &self.charts);
         if let Err(fault) = result {
             let lc = self.source.line_col(fault.span.start);
             let e = RuntimeError {
@@ -1752,6 +439,8 @@ impl Simulation {
 
     /// Runs the next scan. When it faults, the record holds the `error` event and
     /// [`Simulation::error`] is set; once stopped, `scan` runs nothing and returns that record.
+    /// The record's lists reuse their strings from scan to scan: a scan without events
+    /// allocates nothing once the lists have grown.
     pub fn scan(&mut self) -> &ScanRecord {
         self.scan_at(self.next_time())
     }
@@ -1763,26 +452,35 @@ impl Simulation {
         }
         let scan = self.next_scan;
         let _ = self.advance_at(time);
-        let mut events = std::mem::take(&mut self.sink.events);
-        events.sort_by_key(Event::rank);
+        self.record.scan = scan;
+        self.record.time = time;
+        std::mem::swap(&mut self.record.events, &mut self.sink.events);
+        self.sink.events.clear();
+        self.record.events.sort_by_key(Event::rank);
         // Within one chart's evolution, `fired` is in declaration order.
+        let fired = &mut self.fired_scratch;
+        fired.clear();
+        fired.extend_from_slice(&self.sink.fired);
         let mut k = 0;
-        while k < self.sink.fired.len() {
-            let c = self.sink.fired[k].0;
-            let end = self.sink.fired[k..].iter().position(|f| f.0 != c).map_or(self.sink.fired.len(), |n| k + n);
-            self.sink.fired[k..end].sort_unstable();
+        while k < fired.len() {
+            let c = fired[k].0;
+            let end = fired[k..].iter().position(|f| f.0 != c).map_or(fired.len(), |n| k + n);
+            fired[k..end].sort_unstable();
             k = end;
         }
-        let fired = self
-            .sink
-            .fired
-            .iter()
-            .map(|&(c, t)| {
-                let st = &self.charts[c as usize];
-                st.qualify(&st.plan.transition_names[t as usize])
-            })
-            .collect();
-        self.record = ScanRecord { scan, time, active: self.active(), fired, events };
+        let names = &self.transition_qnames;
+        fill_names(
+            &mut self.record.fired,
+            &mut self.spare,
+            fired.iter().map(|&(c, t)| names[c as usize][t as usize].as_str()),
+        );
+        self.order.refresh(scan, &self.sink, &self.charts);
+        let order = &self.order;
+        fill_names(
+            &mut self.record.active,
+            &mut self.spare,
+            order.sorted.iter().map(|&r| order.names[r as usize].as_str()),
+        );
         &self.record
     }
 
@@ -1795,6 +493,7 @@ impl Simulation {
             record: self.record.clone(),
             error: self.error.clone(),
             next_scan: self.next_scan,
+            log: self.log.mark(),
         }
     }
 
@@ -1829,8 +528,9 @@ impl Simulation {
         self.record = snap.record.clone();
         self.error = snap.error.clone();
         self.next_scan = snap.next_scan;
-        self.sink.fired.clear();
-        self.sink.events.clear();
+        self.sink.clear();
+        self.log.rewind(snap.log);
+        self.order.valid = None;
     }
 
     /// The record of the last scan run.
@@ -1904,14 +604,16 @@ impl Simulation {
     /// `[Path.]SFCCurrentStep` computed from the chart state (see `ChartState::track_current`).
     /// The `X` or `T` of a step whose slot is not mirrored in memory, from the step state.
     fn unmirrored_step_value(&self, slot: usize) -> Option<Value> {
-        self.charts.iter().flat_map(|c| &c.steps).find_map(|s| {
-            if !s.mirror_x && s.x_slot as usize == slot {
-                Some(Value::Bool(s.x))
-            } else if !s.mirror_t && s.t_slot as usize == slot {
-                Some(Value::Time(s.t))
-            } else {
-                None
-            }
+        self.charts.iter().find_map(|c| {
+            c.steps.iter().zip(&c.slots).enumerate().find_map(|(s, (step, &(x_slot, t_slot)))| {
+                if !step.mirror_x && x_slot as usize == slot {
+                    Some(Value::Bool(step.x))
+                } else if !step.mirror_t && t_slot as usize == slot {
+                    Some(Value::Time(c.time(s as u32)))
+                } else {
+                    None
+                }
+            })
         })
     }
 
@@ -1934,14 +636,57 @@ impl Simulation {
 
     /// Active steps now, sorted by code points (nested instances as `Path.Step`).
     pub fn active(&self) -> Vec<String> {
-        let mut out: Vec<String> = Vec::new();
-        for st in &self.charts {
-            for &s in &st.active {
-                out.push(st.qualify(&st.plan.step_names[s as usize]));
-            }
+        let order = &self.order;
+        if self.next_scan > 0 && order.valid == Some(self.next_scan - 1) {
+            return order.sorted.iter().map(|&r| order.names[r as usize].clone()).collect();
         }
-        out.sort();
-        out
+        let mut ranks: Vec<u32> = Vec::new();
+        for (c, st) in self.charts.iter().enumerate() {
+            ranks.extend(st.active.iter().map(|&s| order.rank[c][s as usize]));
+        }
+        ranks.sort_unstable();
+        ranks.into_iter().map(|r| order.names[r as usize].clone()).collect()
+    }
+
+    /// The number of active steps now (every instance).
+    pub fn active_count(&self) -> usize {
+        self.charts.iter().map(|c| c.active.len()).sum()
+    }
+
+    /// The steps whose `sfc.timeout` expired in the last scan (qualified; each activation of a
+    /// step once), so a caller can report each overrun when it happens without asking every
+    /// step every scan.
+    pub fn newly_overdue(&self) -> impl Iterator<Item = String> + '_ {
+        self.sink
+            .overdue
+            .iter()
+            .map(|&(c, s)| self.order.names[self.order.rank[c as usize][s as usize] as usize].clone())
+    }
+
+    /// Whether the last scan saw a step's `sfc.timeout` expire (cheap: no names are built).
+    pub fn any_newly_overdue(&self) -> bool {
+        !self.sink.overdue.is_empty()
+    }
+
+    /// Coverage of the run so far, in the order of [`Simulation::step_names`] and
+    /// [`Simulation::transition_names`]: per step its activations (at least 1 for an initial
+    /// step that SFCInit held active, 0 when never active), per transition its firings. Kept by
+    /// the engine as steps are entered and transitions fire; reading it costs one pass.
+    pub fn coverage_counts(&self) -> (Vec<u64>, Vec<u64>) {
+        let mut steps = Vec::new();
+        let mut transitions = Vec::new();
+        for c in &self.charts {
+            steps.extend((0..c.steps.len() as u32).map(|s| {
+                let n = c.steps[s as usize].tally.activations;
+                if n == 0 && c.covered(s) {
+                    1
+                } else {
+                    n
+                }
+            }));
+            transitions.extend_from_slice(&c.fired_count);
+        }
+        (steps, transitions)
     }
 
     /// The variables a trace shows: every declared variable of elementary type of the top
@@ -1952,6 +697,18 @@ impl Simulation {
     /// Current values of [`Simulation::trace_vars`], same order.
     pub fn trace_values(&self) -> Vec<Value> {
         self.trace.iter().map(|&(_, _, slot)| self.outward(&self.mem[slot])).collect()
+    }
+    /// [`Simulation::trace_values`] into `out`, reusing its room.
+    pub fn trace_values_into(&self, out: &mut Vec<Value>) {
+        out.truncate(self.trace.len());
+        for (i, &(_, _, slot)) in self.trace.iter().enumerate() {
+            let v = &self.mem[slot];
+            match out.get_mut(i) {
+                Some(o) if !self.prog.matiec_time => o.clone_from(v),
+                Some(o) => *o = self.outward(v),
+                None => out.push(self.outward(v)),
+            }
+        }
     }
     /// Every step (qualified), in declaration order, top chart first.
     pub fn step_names(&self) -> Vec<String> {
@@ -2040,14 +797,9 @@ impl Simulation {
                 let mut count = tl.completed;
                 let (mut min, mut max, mut sum) = (tl.min, tl.max, tl.sum);
                 if st.steps[s].x {
-                    let d = st.steps[s].t;
-                    if count == 0 {
-                        min = d;
-                        max = d;
-                    } else {
-                        min = min.min(d);
-                        max = max.max(d);
-                    }
+                    let d = st.time(s as u32);
+                    min = min.min(d);
+                    max = max.max(d);
                     sum = sum.saturating_add(d);
                     count += 1;
                 }
@@ -2061,72 +813,67 @@ impl Simulation {
                 });
             }
         }
-        TimeStats { steps, sequence: self.sequence() }
-    }
-
-    /// Rebuilds the sequence of situations from the firing logs of all instances.
-    fn sequence(&self) -> Vec<(i64, Vec<String>)> {
-        let mut x: Vec<Vec<bool>> = self
-            .charts
-            .iter()
-            .map(|c| {
-                let mut v = vec![false; c.plan.step_names.len()];
-                if c.started || !c.log.is_empty() || c.steps.iter().any(|s| s.tally.activations > 0) {
-                    for &s in &c.plan.initial {
-                        v[s as usize] = true;
-                    }
-                }
-                v
-            })
-            .collect();
-        let names = |x: &Vec<Vec<bool>>| {
-            let mut out = Vec::new();
-            for (c, flags) in self.charts.iter().zip(x) {
-                for (s, &on) in flags.iter().enumerate() {
-                    if on {
-                        out.push(c.qualify(&c.plan.step_names[s]));
-                    }
-                }
-            }
-            out.sort();
-            out
+        let order = &self.order;
+        let sequence = if self.log.enabled || self.log.dropped > 0 {
+            self.log.sequence(&self.charts, |c, s| order.names[order.rank[c as usize][s as usize] as usize].clone())
+        } else {
+            Vec::new()
         };
-        let mut events: Vec<(i64, usize, usize, u32)> = Vec::new();
-        for (c, st) in self.charts.iter().enumerate() {
-            for (k, &(time, t)) in st.log.iter().enumerate() {
-                events.push((time, c, k, t));
-            }
-        }
-        events.sort_by_key(|&(time, c, k, _)| (time, c, k));
-        let mut out = vec![(0, names(&x))];
-        let mut i = 0;
-        while i < events.len() {
-            let time = events[i].0;
-            // All firings of one scan form one step of the sequence.
-            let mut j = i;
-            while j < events.len() && events[j].0 == time {
-                j += 1;
-            }
-            for &(_, c, _, t) in &events[i..j] {
-                let plan = &self.charts[c].plan;
-                for &s in plan.pre.get(t) {
-                    x[c][s as usize] = false;
-                }
-            }
-            for &(_, c, _, t) in &events[i..j] {
-                let plan = &self.charts[c].plan;
-                for &s in plan.post.get(t) {
-                    x[c][s as usize] = true;
-                }
-            }
-            let now = names(&x);
-            if out.last().map(|l| &l.1) != Some(&now) {
-                out.push((time, now));
-            }
-            i = j;
-        }
-        out
+        TimeStats { steps, sequence, dropped: self.log.dropped }
     }
+}
+
+/// Every `(name, b'x' | b't')` such that the (lowercase) source text contains `name.x` /
+/// `name.t` (spaces allowed around the dot) with `name` a whole identifier: the step flags
+/// that some code may read. Comments and strings count too, which only keeps more slots
+/// up to date than needed.
+fn step_flags_read(lower: &str) -> std::collections::HashSet<(String, u8)> {
+    let b = lower.as_bytes();
+    let ident = |c: u8| c.is_ascii_alphanumeric() || c == b'_';
+    let mut out = std::collections::HashSet::new();
+    for (i, _) in lower.match_indices('.') {
+        let mut k = i + 1;
+        while k < b.len() && b[k] == b' ' {
+            k += 1;
+        }
+        let flag = match b.get(k) {
+            Some(&c @ (b'x' | b't')) if !b.get(k + 1).is_some_and(|&n| ident(n)) => c,
+            _ => continue,
+        };
+        let mut end = i;
+        while end > 0 && b[end - 1] == b' ' {
+            end -= 1;
+        }
+        let mut start = end;
+        while start > 0 && ident(b[start - 1]) {
+            start -= 1;
+        }
+        if start < end {
+            out.insert((lower[start..end].to_string(), flag));
+        }
+    }
+    out
+}
+
+/// Refills `dst` with `names`, reusing the strings it holds (and spare ones), so a list of
+/// names that does not grow costs no allocation.
+fn fill_names<'a>(dst: &mut Vec<String>, spare: &mut Vec<String>, names: impl Iterator<Item = &'a str>) {
+    let mut n = 0;
+    for name in names {
+        if n < dst.len() {
+            if dst[n] != name {
+                dst[n].clear();
+                dst[n].push_str(name);
+            }
+        } else {
+            let mut s = spare.pop().unwrap_or_default();
+            s.clear();
+            s.push_str(name);
+            dst.push(s);
+        }
+        n += 1;
+    }
+    spare.extend(dst.drain(n..));
 }
 
 /// Picks the POU to simulate: the named one, else the only SFC POU, else the only PROGRAM.

@@ -18,7 +18,7 @@ pub mod value;
 
 pub use engine::{FaultPlace, ScanSink, Simulation, Snapshot, StepStats, TimeStats};
 pub use explain::{StepReport, TransitionReport};
-pub use value::{format_time, parse_time, Value};
+pub use value::{format_time, parse_time, write_time, Value};
 
 use sfc_diagnostics::Span;
 

@@ -1308,7 +1308,7 @@ pub(crate) fn holding(sim: &Simulation, xs: &[Expectation]) -> String {
 
 /// Runs a loaded scenario, feeding `trace` if given.
 pub fn run(s: &Scenario, trace: Option<&mut dyn TraceSink>) -> Outcome {
-    execute(s, trace, &mut |_, _| {}).outcome
+    execute(s, trace, &mut |_, _| {}, Recording::default()).outcome
 }
 
 /// Loads and runs a scenario file, without trace.
@@ -1316,12 +1316,28 @@ pub fn run_path(path: &Path) -> Result<Outcome, ScenarioError> {
     Ok(run(&load(path)?, None))
 }
 
+/// What a run records beyond its outcome and coverage.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct Recording {
+    /// The sequence of situations, for [`Simulation::stats`] (`sfc sim --stats`).
+    pub situations: bool,
+    /// A record of every scan for `on_scan` (its fired transitions and events), even without
+    /// a trace.
+    pub records: bool,
+}
+
 /// Runs a loaded scenario, feeding `trace` if given and calling `on_scan` after every scan
-/// with the simulation and the scan's record.
+/// with the simulation ([`Simulation::next_scan`] is then one past the scan that ran) and the
+/// scan's record when one was built (with a trace, interval checks or [`Recording::records`]).
+///
+/// A scan costs what the engine costs: without a trace no record is built, coverage is read
+/// from the engine's counters at the end, and the values of expectations are read only at
+/// their times.
 pub fn execute(
     s: &Scenario,
     mut trace: Option<&mut dyn TraceSink>,
-    on_scan: &mut dyn FnMut(&Simulation, &ScanRecord),
+    on_scan: &mut dyn FnMut(&Simulation, Option<&ScanRecord>),
+    recording: Recording,
 ) -> Execution {
     let mut outcome =
         Outcome { name: s.name.clone(), failures: Vec::new(), error: None, coverage: Coverage::default(), scans: 0 };
@@ -1332,8 +1348,10 @@ pub fn execute(
             return Execution { outcome, sim: None, trace_error: None };
         }
     };
+    sim.record_situations(recording.situations);
     outcome.coverage = Coverage::of(&sim, s.coverage_key(), s.chart_name());
     let mut trace_error = None;
+    let mut values = Vec::new();
     if let Some(t) = trace.as_deref_mut() {
         if let Err(e) = t.header(&TraceHeader::of(&sim)) {
             trace_error = Some(e);
@@ -1345,6 +1363,7 @@ pub fn execute(
     // Failures with the scan they concern, so the report lists them in time order.
     let mut failures: Vec<(u64, String)> = Vec::new();
     let mut watch = crate::temporal::Watch::new(s);
+    let watching = !watch.is_idle();
     for _ in 0..total {
         let now = sim.next_time();
         while applied < s.entries.len() && s.entries[applied].time <= now {
@@ -1359,31 +1378,38 @@ pub fn execute(
             }
             applied += 1;
         }
-        let record = sim.scan().clone();
-        outcome.scans += 1;
-        outcome.coverage.record(&record);
-        if trace_error.is_none() {
-            if let Some(t) = trace.as_deref_mut() {
-                if let Err(e) = t.scan(&record, &sim.trace_values()) {
+        let scan = sim.next_scan();
+        let tracing = trace.is_some() && trace_error.is_none();
+        let recorded = tracing || watching || recording.records;
+        if recorded {
+            sim.scan();
+            if let (true, Some(t)) = (tracing, trace.as_deref_mut()) {
+                sim.trace_values_into(&mut values);
+                if let Err(e) = t.scan(sim.record(), &values) {
                     trace_error = Some(e);
                 }
             }
+        } else {
+            let _ = sim.advance();
         }
-        on_scan(&sim, &record);
+        outcome.scans += 1;
+        on_scan(&sim, recorded.then(|| sim.record()));
         while checked < applied {
             let e = &s.entries[checked];
             // With `within`, `expect` is a deadline, checked by the watch.
             if e.within.is_none() {
                 for x in &e.expect {
                     if let Some(m) = mismatch(&sim, x) {
-                        let at = format!("{}: at {} (scan {})", here(e), format_time(e.time), record.scan);
-                        failures.push((record.scan, format!("{at}: {m}")));
+                        let at = format!("{}: at {} (scan {})", here(e), format_time(e.time), scan);
+                        failures.push((scan, format!("{at}: {m}")));
                     }
                 }
             }
             checked += 1;
         }
-        watch.after_scan(&sim, &record);
+        if watching {
+            watch.after_scan(&sim, sim.record());
+        }
         if let Some(err) = sim.error() {
             outcome.error = Some(render_runtime_error(err, sim.source()));
             break;
@@ -1396,6 +1422,7 @@ pub fn execute(
         (None, 0) => "the run has no scans".to_string(),
         (None, n) => format!("the run ended after scan {} ({})", n - 1, format_time((n as i64 - 1) * s.options.period)),
     };
+    outcome.coverage.record_run(&sim);
     for e in &s.entries[checked..] {
         if !e.expect.is_empty() && e.within.is_none() {
             failures.push((

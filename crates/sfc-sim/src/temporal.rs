@@ -95,6 +95,11 @@ impl<'s> Watch<'s> {
         Watch { s, entries, forbid: Default::default(), overdue: wants_overdue.then(HashSet::new) }
     }
 
+    /// Nothing to check: no interval entry and no top-level `forbid` (scans need no record).
+    pub(crate) fn is_idle(&self) -> bool {
+        self.entries.is_empty() && self.s.forbid.is_empty()
+    }
+
     fn here(&self, index: usize) -> String {
         match self.s.entries.get(index) {
             Some(e) if e.line > 0 => format!("{}:{}", self.s.name, e.line),

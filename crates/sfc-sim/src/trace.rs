@@ -18,9 +18,10 @@
 //!   string (BYTE … LWORD); values are dumped at `#0`, then only changes, at the scan's time
 //!   in µs, and the file ends with the time at which the last scan's period ends.
 
-use crate::{format_time, Event, ScanRecord, Simulation, Value};
+use crate::{format_time, write_time, Event, ScanRecord, Simulation, Value};
 use sfc_st::Type;
 use std::collections::HashSet;
+use std::fmt::Write as _;
 use std::io::{self, Write};
 use std::path::Path;
 
@@ -99,7 +100,49 @@ impl TraceFormat {
 // Value texts shared by the writers
 
 fn json_string(s: &str) -> String {
-    serde_json::to_string(s).unwrap_or_else(|_| "\"\"".to_string())
+    let mut out = String::with_capacity(s.len() + 2);
+    push_json_str(&mut out, s);
+    out
+}
+
+/// Appends `s` as a JSON string, escaped as serde_json escapes it (`"`, `\\` and control
+/// characters).
+pub fn push_json_str(out: &mut String, s: &str) {
+    out.push('"');
+    let mut start = 0;
+    for (i, b) in s.bytes().enumerate() {
+        let esc = match b {
+            b'"' => "\\\"",
+            b'\\' => "\\\\",
+            b'\n' => "\\n",
+            b'\r' => "\\r",
+            b'\t' => "\\t",
+            0x08 => "\\b",
+            0x0C => "\\f",
+            0..=0x1F => "",
+            _ => continue,
+        };
+        out.push_str(&s[start..i]);
+        if esc.is_empty() {
+            let _ = write!(out, "\\u{b:04x}");
+        } else {
+            out.push_str(esc);
+        }
+        start = i + 1;
+    }
+    out.push_str(&s[start..]);
+    out.push('"');
+}
+
+fn push_json_str_array(out: &mut String, items: &[String]) {
+    out.push('[');
+    for (i, s) in items.iter().enumerate() {
+        if i > 0 {
+            out.push(',');
+        }
+        push_json_str(out, s);
+    }
+    out.push(']');
 }
 
 fn json_string_array(items: &[String]) -> String {
@@ -120,11 +163,11 @@ fn is_unsigned_64(ty: &Type) -> bool {
 
 /// A REAL/LREAL as text: the shortest decimal that reads back to the same value (REAL at single
 /// precision).
-fn real_text(r: f64, ty: &Type) -> String {
+fn push_real(out: &mut String, r: f64, ty: &Type) {
     if matches!(ty.base(), Type::Real) {
-        format!("{:?}", r as f32)
+        let _ = write!(out, "{:?}", r as f32);
     } else {
-        format!("{r:?}")
+        let _ = write!(out, "{r:?}");
     }
 }
 
@@ -144,70 +187,121 @@ fn civil_from_days(days: i64) -> (i64, u32, u32) {
 
 const DAY_US: i64 = 86_400_000_000;
 
-fn tod_text(us: i64) -> String {
+fn push_tod(out: &mut String, us: i64) {
     let us = us.rem_euclid(DAY_US);
     let (h, m, s, frac) = (us / 3_600_000_000, us / 60_000_000 % 60, us / 1_000_000 % 60, us % 1_000_000);
-    if frac == 0 {
-        format!("{h:02}:{m:02}:{s:02}")
-    } else {
-        let f = format!("{frac:06}");
-        format!("{h:02}:{m:02}:{s:02}.{}", f.trim_end_matches('0'))
+    let _ = write!(out, "{h:02}:{m:02}:{s:02}");
+    if frac != 0 {
+        let mut frac = frac;
+        let mut digits = 6;
+        while frac % 10 == 0 {
+            frac /= 10;
+            digits -= 1;
+        }
+        let _ = write!(out, ".{frac:0digits$}");
     }
 }
 
-fn date_text(us: i64) -> String {
+fn push_date(out: &mut String, us: i64) {
     let (y, m, d) = civil_from_days(us.div_euclid(DAY_US));
-    format!("{y:04}-{m:02}-{d:02}")
+    let _ = write!(out, "{y:04}-{m:02}-{d:02}");
+}
+
+/// Appends the IEC literal of a DATE, TIME_OF_DAY or DATE_AND_TIME value; `false` (nothing
+/// written) for other types.
+fn push_date_literal(out: &mut String, us: i64, ty: &Type) -> bool {
+    match ty.base() {
+        Type::Date => {
+            out.push_str("D#");
+            push_date(out, us);
+        }
+        Type::TimeOfDay => {
+            out.push_str("TOD#");
+            push_tod(out, us);
+        }
+        Type::DateAndTime => {
+            out.push_str("DT#");
+            push_date(out, us);
+            out.push('-');
+            push_tod(out, us);
+        }
+        _ => return false,
+    }
+    true
 }
 
 /// The IEC literal of a DATE, TIME_OF_DAY or DATE_AND_TIME value held as microseconds.
 pub fn date_literal(us: i64, ty: &Type) -> Option<String> {
-    match ty.base() {
-        Type::Date => Some(format!("D#{}", date_text(us))),
-        Type::TimeOfDay => Some(format!("TOD#{}", tod_text(us))),
-        Type::DateAndTime => Some(format!("DT#{}-{}", date_text(us), tod_text(us))),
-        _ => None,
-    }
+    let mut out = String::new();
+    push_date_literal(&mut out, us, ty).then_some(out)
 }
 
 /// A value as plain text (CSV cells, reports): BOOL `TRUE`/`FALSE`, numbers, TIME and dates as
 /// literals, strings as they are.
 pub fn value_text(v: &Value, ty: &Type) -> String {
+    let mut out = String::new();
+    push_value_text(&mut out, v, ty);
+    out
+}
+
+/// [`value_text`] appended to `out`.
+pub fn push_value_text(out: &mut String, v: &Value, ty: &Type) {
     match v {
-        Value::Bool(b) => if *b { "TRUE" } else { "FALSE" }.to_string(),
+        Value::Bool(b) => out.push_str(if *b { "TRUE" } else { "FALSE" }),
         Value::Int(i) => {
-            if let Some(lit) = date_literal(*i, ty) {
-                lit
+            if push_date_literal(out, *i, ty) {
             } else if ty.is_duration() {
-                format_time(*i)
+                write_time(out, *i);
             } else if is_unsigned_64(ty) {
-                (*i as u64).to_string()
+                let _ = write!(out, "{}", *i as u64);
             } else {
-                i.to_string()
+                let _ = write!(out, "{i}");
             }
         }
-        Value::Real(r) => real_text(*r, ty),
-        Value::Time(t) => format_time(*t),
-        Value::Str(s) => s.to_string(),
+        Value::Real(r) => push_real(out, *r, ty),
+        Value::Time(t) => write_time(out, *t),
+        Value::Str(s) => out.push_str(s),
     }
 }
 
 /// A value as JSON text (traces): BOOL `true`/`false`, numbers as numbers, TIME and dates as
 /// literal strings, strings as strings.
 pub fn value_json(v: &Value, ty: &Type) -> String {
+    let mut out = String::new();
+    push_value_json(&mut out, v, ty);
+    out
+}
+
+/// [`value_json`] appended to `out`.
+pub fn push_value_json(out: &mut String, v: &Value, ty: &Type) {
     match v {
-        Value::Bool(b) => b.to_string(),
-        Value::Int(i) => match date_literal(*i, ty) {
-            Some(lit) => json_string(&lit),
-            None if ty.is_duration() => json_string(&format_time(*i)),
-            None if is_unsigned_64(ty) => (*i as u64).to_string(),
-            None => i.to_string(),
-        },
+        Value::Bool(b) => out.push_str(if *b { "true" } else { "false" }),
+        Value::Int(i) => {
+            let at = out.len();
+            out.push('"');
+            if push_date_literal(out, *i, ty) {
+                out.push('"');
+            } else if ty.is_duration() {
+                write_time(out, *i);
+                out.push('"');
+            } else {
+                out.truncate(at);
+                if is_unsigned_64(ty) {
+                    let _ = write!(out, "{}", *i as u64);
+                } else {
+                    let _ = write!(out, "{i}");
+                }
+            }
+        }
         // `{:?}` writes `1e20` and `1.5e-7`, both valid JSON numbers.
-        Value::Real(r) if r.is_finite() => real_text(*r, ty),
-        Value::Real(_) => "null".to_string(),
-        Value::Time(t) => json_string(&format_time(*t)),
-        Value::Str(s) => json_string(s),
+        Value::Real(r) if r.is_finite() => push_real(out, *r, ty),
+        Value::Real(_) => out.push_str("null"),
+        Value::Time(t) => {
+            out.push('"');
+            write_time(out, *t);
+            out.push('"');
+        }
+        Value::Str(s) => push_json_str(out, s),
     }
 }
 
@@ -243,20 +337,28 @@ pub fn event_json(e: &Event) -> String {
 
 /// One JSON-lines row: `{"scan":k,"time":"T#…","active":[…],"fired":[…],"vars":{…},"events":[…]}`.
 pub fn json_row(record: &ScanRecord, vars: &[(String, Type)], values: &[Value]) -> String {
-    let mut out = format!(
-        "{{\"scan\":{},\"time\":{},\"active\":{},\"fired\":{},\"vars\":{{",
-        record.scan,
-        json_string(&format_time(record.time)),
-        json_string_array(&record.active),
-        json_string_array(&record.fired)
-    );
+    let mut out = String::new();
+    push_json_row(&mut out, record, vars, values);
+    out
+}
+
+/// [`json_row`] appended to `out` (no allocation when `out` has room and the scan has no
+/// events).
+pub fn push_json_row(out: &mut String, record: &ScanRecord, vars: &[(String, Type)], values: &[Value]) {
+    let _ = write!(out, "{{\"scan\":{},\"time\":\"", record.scan);
+    write_time(out, record.time);
+    out.push_str("\",\"active\":");
+    push_json_str_array(out, &record.active);
+    out.push_str(",\"fired\":");
+    push_json_str_array(out, &record.fired);
+    out.push_str(",\"vars\":{");
     for (i, ((name, ty), v)) in vars.iter().zip(values).enumerate() {
         if i > 0 {
             out.push(',');
         }
-        out.push_str(&json_string(name));
+        push_json_str(out, name);
         out.push(':');
-        out.push_str(&value_json(v, ty));
+        push_value_json(out, v, ty);
     }
     out.push_str("},\"events\":[");
     let mut events: Vec<&Event> = record.events.iter().collect();
@@ -268,7 +370,6 @@ pub fn json_row(record: &ScanRecord, vars: &[(String, Type)], values: &[Value]) 
         out.push_str(&event_json(e));
     }
     out.push_str("]}");
-    out
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -278,11 +379,13 @@ pub fn json_row(record: &ScanRecord, vars: &[(String, Type)], values: &[Value]) 
 pub struct JsonLinesWriter<W: Write> {
     out: W,
     vars: Vec<(String, Type)>,
+    /// The row being written, reused from scan to scan.
+    line: String,
 }
 
 impl<W: Write> JsonLinesWriter<W> {
     pub fn new(out: W) -> Self {
-        JsonLinesWriter { out, vars: Vec::new() }
+        JsonLinesWriter { out, vars: Vec::new(), line: String::new() }
     }
     pub fn into_inner(self) -> W {
         self.out
@@ -295,7 +398,10 @@ impl<W: Write> TraceSink for JsonLinesWriter<W> {
         Ok(())
     }
     fn scan(&mut self, record: &ScanRecord, values: &[Value]) -> io::Result<()> {
-        writeln!(self.out, "{}", json_row(record, &self.vars, values))
+        self.line.clear();
+        push_json_row(&mut self.line, record, &self.vars, values);
+        self.line.push('\n');
+        self.out.write_all(self.line.as_bytes())
     }
     fn finish(&mut self) -> io::Result<()> {
         self.out.flush()
@@ -314,15 +420,26 @@ pub fn csv_field(s: &str) -> String {
     }
 }
 
+/// Quotes the field `out[from..]` in place when it needs it.
+fn quote_csv_tail(out: &mut String, from: usize) {
+    if out[from..].contains([',', '"', '\r', '\n']) {
+        let quoted = csv_field(&out[from..]);
+        out.truncate(from);
+        out.push_str(&quoted);
+    }
+}
+
 /// Writes `scan,time,active,<variables…>`, one row per scan.
 pub struct CsvWriter<W: Write> {
     out: W,
     vars: Vec<(String, Type)>,
+    /// The row being written, reused from scan to scan.
+    line: String,
 }
 
 impl<W: Write> CsvWriter<W> {
     pub fn new(out: W) -> Self {
-        CsvWriter { out, vars: Vec::new() }
+        CsvWriter { out, vars: Vec::new(), line: String::new() }
     }
     pub fn into_inner(self) -> W {
         self.out
@@ -340,12 +457,27 @@ impl<W: Write> TraceSink for CsvWriter<W> {
         writeln!(self.out, "{line}")
     }
     fn scan(&mut self, record: &ScanRecord, values: &[Value]) -> io::Result<()> {
-        let mut line = format!("{},{},{}", record.scan, format_time(record.time), csv_field(&record.active.join(" ")));
+        let line = &mut self.line;
+        line.clear();
+        let _ = write!(line, "{},", record.scan);
+        write_time(line, record.time);
+        line.push(',');
+        let from = line.len();
+        for (i, a) in record.active.iter().enumerate() {
+            if i > 0 {
+                line.push(' ');
+            }
+            line.push_str(a);
+        }
+        quote_csv_tail(line, from);
         for ((_, ty), v) in self.vars.iter().zip(values) {
             line.push(',');
-            line.push_str(&csv_field(&value_text(v, ty)));
+            let from = line.len();
+            push_value_text(line, v, ty);
+            quote_csv_tail(line, from);
         }
-        writeln!(self.out, "{line}")
+        line.push('\n');
+        self.out.write_all(line.as_bytes())
     }
     fn finish(&mut self) -> io::Result<()> {
         self.out.flush()
@@ -662,6 +794,20 @@ mod tests {
             w.finish().unwrap();
         }
         String::from_utf8(buf).unwrap()
+    }
+
+    #[test]
+    fn json_strings_are_escaped_as_serde_json_escapes_them() {
+        let mut all: String = (0u8..128).map(char::from).collect();
+        all.push_str("Grüße ✓ \u{7f} \u{2028}");
+        let mut out = String::new();
+        push_json_str(&mut out, &all);
+        assert_eq!(out, serde_json::to_string(&all).unwrap());
+        for t in [0, 1, -1, 1_500_000, -200_000, 90_061_001_001, i64::MIN, i64::MAX] {
+            let mut w = String::new();
+            write_time(&mut w, t);
+            assert_eq!(w, format_time(t));
+        }
     }
 
     #[test]

@@ -54,10 +54,19 @@ impl Default for Value {
 /// Writes a TIME canonically: `T#` then the non-zero units `d h m s ms us`, largest first
 /// (`T#1s500ms`, `T#2ms500us`), zero as `T#0s`, negative as `T#-200ms`.
 pub fn format_time(us: i64) -> String {
+    let mut out = String::new();
+    write_time(&mut out, us);
+    out
+}
+
+/// [`format_time`] appended to `out` (no allocation when `out` has room).
+pub fn write_time(out: &mut String, us: i64) {
+    use std::fmt::Write as _;
     if us == 0 {
-        return "T#0s".to_string();
+        out.push_str("T#0s");
+        return;
     }
-    let mut out = String::from("T#");
+    out.push_str("T#");
     if us < 0 {
         out.push('-');
     }
@@ -68,11 +77,9 @@ pub fn format_time(us: i64) -> String {
         let n = rest / size;
         rest %= size;
         if n > 0 {
-            out.push_str(&n.to_string());
-            out.push_str(unit);
+            let _ = write!(out, "{n}{unit}");
         }
     }
-    out
 }
 
 /// Parses a TIME literal as written in scenarios and on the command line (`T#1s500ms`,

@@ -373,8 +373,10 @@ fn run_case(case: usize, seed: u64, max_steps: usize) -> Result<(), String> {
         }
         Err(_) => return Err(header("Simulation::from_source panicked")),
     };
+    sim.record_situations(true);
     let mut reference = Reference::new(&chart, PERIOD);
     let mut history = String::new();
+    let mut records: Vec<reference::RefRecord> = Vec::new();
     for (k, row) in inputs.iter().enumerate() {
         for (i, &v) in row.iter().enumerate() {
             if let Err(e) = sim.set(&format!("i{i}"), Value::Bool(v)) {
@@ -393,6 +395,7 @@ fn run_case(case: usize, seed: u64, max_steps: usize) -> Result<(), String> {
             }
         };
         let want = reference.scan();
+        records.push(want.clone());
         let diffs = compare(&chart, &sim, &rec, &want, &reference);
         writeln!(history, "{k:>4}  active {:?} fired {:?} events {:?}", want.active, want.fired, want.events).unwrap();
         if !diffs.is_empty() {
@@ -405,7 +408,94 @@ fn run_case(case: usize, seed: u64, max_steps: usize) -> Result<(), String> {
             ));
         }
     }
+    let diffs = compare_bookkeeping(&chart, &sim, &records);
+    if !diffs.is_empty() {
+        return Err(format!(
+            "{}\ninput schedule:\n{}\nreference trace:\n{history}\n  {}",
+            header("the run's bookkeeping (coverage, time analysis) differs from the reference"),
+            show_schedule(&inputs),
+            diffs.join("\n  ")
+        ));
+    }
     Ok(())
+}
+
+/// Coverage, activations, active times and the sequence of situations of a whole run, derived
+/// from the reference's records, against what the engine kept.
+fn compare_bookkeeping(chart: &Chart, sim: &Simulation, records: &[reference::RefRecord]) -> Vec<String> {
+    let mut diffs = Vec::new();
+    let step_index: HashMap<&str, usize> = chart.steps.iter().enumerate().map(|(i, s)| (s.name.as_str(), i)).collect();
+    let tr_index: HashMap<&str, usize> =
+        chart.transitions.iter().enumerate().map(|(i, t)| (t.name.as_str(), i)).collect();
+    let n = chart.steps.len();
+    let mut activations = vec![0u64; n];
+    let mut firings = vec![0u64; chart.transitions.len()];
+    let mut started: Vec<Option<u64>> = vec![None; n];
+    let mut durations: Vec<Vec<i64>> = vec![Vec::new(); n];
+    let mut sequence: Vec<(i64, Vec<String>)> = Vec::new();
+    for (k, rec) in records.iter().enumerate() {
+        let k = k as u64;
+        let mut entered = HashSet::new();
+        let mut left = HashSet::new();
+        if k == 0 {
+            entered.extend(rec.active.iter().map(|a| step_index[a.as_str()]));
+        }
+        for t in &rec.fired {
+            let t = tr_index[t.as_str()];
+            firings[t] += 1;
+            left.extend(chart.transitions[t].from.iter().copied());
+            entered.extend(chart.transitions[t].to.iter().copied());
+        }
+        for &s in &left {
+            if let Some(j) = started[s].take() {
+                durations[s].push((k - j) as i64 * PERIOD);
+            }
+        }
+        for &s in &entered {
+            activations[s] += 1;
+            started[s] = Some(k);
+        }
+        let mut now = rec.active.clone();
+        now.sort();
+        if sequence.last().map(|l| &l.1) != Some(&now) {
+            sequence.push((k as i64 * PERIOD, now));
+        }
+    }
+    let last = records.len() as u64 - 1;
+    for s in 0..n {
+        if let Some(j) = started[s] {
+            durations[s].push((last - j) as i64 * PERIOD);
+        }
+    }
+    let (step_hits, tr_hits) = sim.coverage_counts();
+    let ever: HashSet<&str> = records.iter().flat_map(|r| r.active.iter().map(String::as_str)).collect();
+    for (s, step) in chart.steps.iter().enumerate() {
+        let want = if activations[s] == 0 && ever.contains(step.name.as_str()) { 1 } else { activations[s] };
+        if step_hits[s] != want {
+            diffs.push(format!("coverage of step {}: engine {}, reference {want}", step.name, step_hits[s]));
+        }
+    }
+    if tr_hits != firings {
+        diffs.push(format!("firings per transition: engine {tr_hits:?}, reference {firings:?}"));
+    }
+    let stats = sim.stats();
+    for (s, st) in stats.steps.iter().enumerate() {
+        let d = &durations[s];
+        let want = (
+            activations[s],
+            d.iter().copied().min(),
+            d.iter().copied().max(),
+            (!d.is_empty()).then(|| d.iter().sum::<i64>() / d.len() as i64),
+        );
+        let got = (st.activations, st.min, st.max, st.mean);
+        if got != want {
+            diffs.push(format!("time analysis of {}: engine {got:?}, reference {want:?}", st.step));
+        }
+    }
+    if stats.sequence != sequence {
+        diffs.push(format!("situations: engine {:?}, reference {sequence:?}", stats.sequence));
+    }
+    diffs
 }
 
 fn parse_seed(s: &str) -> Option<u64> {

@@ -178,6 +178,22 @@ pub(super) struct Translator<'a, 'e> {
     pub scope: &'a Scope<'e>,
     pub expr_types: &'a HashMap<Span, Type>,
     pub tables: Tables,
+    /// The chart's steps (`true`) and actions (`false`) by upper-case name, so a name in a
+    /// guard is looked up in constant time (a chart may have ten thousand steps).
+    pub names: HashMap<String, (bool, usize)>,
+}
+
+/// The name index of [`Translator::names`].
+pub(super) fn chart_names(chart: &Chart) -> HashMap<String, (bool, usize)> {
+    let mut names = HashMap::with_capacity(chart.steps.len() + chart.actions.len());
+    for (i, a) in chart.actions.iter().enumerate().rev() {
+        names.insert(a.name.to_ascii_uppercase(), (false, i));
+    }
+    // Steps first, and the first declaration wins (as `Chart::step` finds it).
+    for (i, st) in chart.steps.iter().enumerate().rev() {
+        names.insert(st.name.to_ascii_uppercase(), (true, i));
+    }
+    names
 }
 
 impl Translator<'_, '_> {
@@ -203,7 +219,10 @@ impl Translator<'_, '_> {
     fn step_member(&self, e: &Expr) -> Option<(StepId, bool)> {
         let ExprKind::Member { base, member } = &e.kind else { return None };
         let ExprKind::Name(n) = &strip(base).kind else { return None };
-        let s = self.chart.step(&n.text)?;
+        let s = match self.names.get(&n.text.to_ascii_uppercase()) {
+            Some(&(true, s)) => s,
+            _ => return None,
+        };
         if member.is("X") {
             Some((s, true))
         } else if member.is("T") {
@@ -214,7 +233,7 @@ impl Translator<'_, '_> {
     }
 
     fn is_chart_name(&self, id: &Ident) -> bool {
-        self.chart.step(&id.text).is_some() || self.chart.action(&id.text).is_some()
+        self.names.contains_key(&id.text.to_ascii_uppercase())
     }
 
     /// The type of an expression: as the checker recorded it, else from the declarations.

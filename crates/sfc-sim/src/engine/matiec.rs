@@ -25,8 +25,15 @@
 //! Times are MatIEC's [`Timespec`]s (literal durations truncated as the C computes them); the
 //! `X`, `T`, `Q`, `A` slots are published for the compiled code (`Q = A = state`).
 
-use super::*;
+use super::evolve::{code_of, finish_scan, publish_initial, put_bool, read_bool, reset};
+use super::plan::ChartPlan;
+use super::state::ChartState;
+use crate::code::{ChartCode, Ctx, DurationCode, FastGuard, Fault, Place, Program};
 use crate::timespec::Timespec;
+use crate::value::Value;
+use crate::Event;
+use sfc_model::{ActionTarget, Qualifier};
+use std::sync::Arc;
 
 /// A duration of a timed association, as the generated C holds it.
 #[derive(Debug, Clone, Copy)]
@@ -190,6 +197,8 @@ pub(crate) fn run(ctx: &mut Ctx<'_>, chart: usize, code: &ChartCode) -> Result<(
             }
         }
         st.entered.clear();
+        ctx.sink.starts.push((ctx.sink.fired.len() as u32, chart as u32));
+        ctx.sink.moved |= !plan.initial.is_empty();
         publish_initial(ctx, chart);
     }
     let result = scan(ctx, chart, code, plan, &mut m, now);
@@ -217,7 +226,14 @@ fn scan(
     // 1. Elapsed time, previous states, step times.
     let elapsed = now.sub(m.lasttick);
     m.lasttick = now;
-    ctx.charts[chart].last_time = ctx.now;
+    {
+        // The engine's chart clock (step times of the time analysis) follows the same calls.
+        let st = &mut ctx.charts[chart];
+        if !paused {
+            st.clock += ctx.now - st.last_time;
+        }
+        st.last_time = ctx.now;
+    }
     for s in 0..m.x.len() {
         m.prev[s] = m.x[s];
         if m.x[s] && !paused {
@@ -335,9 +351,7 @@ fn scan(
         let st = &mut ctx.charts[chart];
         for t in 0..ntr as u32 {
             if m.tr[t as usize] {
-                if st.log.len() < LOG_LIMIT {
-                    st.log.push((ctx.now, t));
-                }
+                st.fired_count[t as usize] += 1;
                 ctx.sink.fired.push((chart as u32, t));
             }
         }
@@ -481,20 +495,25 @@ fn sync(ctx: &mut Ctx<'_>, chart: usize, plan: &ChartPlan, m: &State) {
             entered[s as usize] = true;
         }
     }
+    let mut moved = false;
     for s in 0..m.x.len() {
         let was = st.steps[s].x;
         let now = m.x[s];
         if was && !now {
-            st.deactivate(s as u32);
+            moved |= st.deactivate(s as u32);
         } else if now && entered[s] {
             if was {
                 st.complete(s as u32);
             }
-            st.activate(s as u32);
+            moved |= st.activate(s as u32);
         }
-        st.steps[s].t = if st.steps[s].x { m.t[s].to_us() } else { st.steps[s].t };
+        // An active step's record holds the clock at its activation (see `StepState::t`).
+        if st.steps[s].x {
+            st.steps[s].t = st.clock - m.t[s].to_us();
+        }
     }
     st.entered.clear();
+    ctx.sink.moved |= moved;
 }
 
 /// Gives every chart instance its MatIEC state, with association durations read from their

@@ -6,7 +6,7 @@
 //! runtime can keep a scan's state as plain numbers and name them only when it talks.
 
 use super::{code_of, fit, ScanSink, Simulation, StepStats, TimeStats};
-use crate::code::Ctx;
+use crate::code::{Ctx, FastGuard};
 use crate::value::{format_time, Value};
 use crate::Event;
 use sfc_st::Type;
@@ -110,20 +110,76 @@ impl Simulation {
 
     /// The active steps with their elapsed times (µs), in global numbers, ascending.
     pub fn active_times(&self, out: &mut Vec<(u32, i64)>) {
+        self.active_times_unsorted(out);
+        out.sort_unstable();
+    }
+
+    /// [`Simulation::active_times`] in no particular order: a copy of the engine's active lists,
+    /// so a runtime publishing every scan leaves the sorting to whoever reads it.
+    pub fn active_times_unsorted(&self, out: &mut Vec<(u32, i64)>) {
         out.clear();
         let mut base = 0u32;
         for c in &self.charts {
-            out.extend(c.active.iter().map(|&s| (base + s, c.steps[s as usize].t)));
+            out.extend(c.active.iter().map(|&s| (base + s, c.time(s))));
             base += c.plan.step_names.len() as u32;
         }
-        out.sort_unstable();
     }
 
     /// The transitions the last scan fired, in global numbers, in firing order.
     pub fn fired_ids(&self, out: &mut Vec<u32>) {
         out.clear();
-        let bases = self.transition_bases();
+        let bases = &self.transition_base;
         out.extend(self.sink.fired.iter().map(|&(c, t)| bases[c as usize] + t));
+    }
+
+    /// The value of the guard of every transition leaving an active step, as
+    /// [`Simulation::guard_values`] computes it (`None` for a guard that faults), in no
+    /// particular order and without repetition; guards that read one BOOL are read inline.
+    pub fn guard_states(&mut self, out: &mut Vec<(u32, Option<bool>)>) {
+        out.clear();
+        let mut sink = std::mem::take(&mut self.monitor_sink);
+        sink.clear();
+        let now = (self.next_time() - self.opts.period).max(0);
+        for c in 0..self.charts.len() {
+            let base = self.transition_base[c];
+            let (pou, frame) = (self.charts[c].pou, self.charts[c].frame);
+            let epoch = self.charts[c].next_epoch();
+            let plan = self.charts[c].plan.clone();
+            for k in 0..self.charts[c].active.len() {
+                let s = self.charts[c].active[k];
+                for &t in plan.outgoing.get(s) {
+                    // Each transition once (one leaving several active steps is met from each).
+                    if plan.pre.get(t).len() > 1 {
+                        let st = &mut self.charts[c];
+                        if st.stamp[t as usize] == epoch {
+                            continue;
+                        }
+                        st.stamp[t as usize] = epoch;
+                    }
+                    let v = match plan.tr[t as usize].guard {
+                        FastGuard::Local(o, neg) => Some(bool_at(&self.mem, frame + o as usize) != neg),
+                        FastGuard::Global(g, neg) => Some(bool_at(&self.mem, g as usize) != neg),
+                        FastGuard::Const(b) => Some(b),
+                        FastGuard::Code => {
+                            let mut ctx = Ctx {
+                                mem: &mut self.mem,
+                                prog: &self.prog,
+                                charts: &mut self.charts,
+                                sink: &mut sink,
+                                now,
+                                scan: self.next_scan.saturating_sub(1),
+                                profile: self.opts.profile,
+                                budget: crate::code::Budget::new(self.budget, self.interrupt.as_deref()),
+                            };
+                            let code = code_of(ctx.prog, pou);
+                            (code.guards[t as usize])(&mut ctx, frame).ok()
+                        }
+                    };
+                    out.push((base + t, v));
+                }
+            }
+        }
+        self.monitor_sink = sink;
     }
 
     /// The events of the last scan (conflict, unsafe, contention, error), unsorted.
@@ -169,14 +225,12 @@ impl Simulation {
     }
 
     fn transition_bases(&self) -> Vec<u32> {
-        let mut bases = Vec::with_capacity(self.charts.len());
-        let mut base = 0u32;
-        for c in &self.charts {
-            bases.push(base);
-            base += c.plan.transition_names.len() as u32;
-        }
-        bases
+        self.transition_base.clone()
     }
+}
+
+fn bool_at(mem: &[Value], slot: usize) -> bool {
+    matches!(mem.get(slot), Some(Value::Bool(true)))
 }
 
 impl StepStats {
@@ -198,8 +252,9 @@ impl StepStats {
 }
 
 impl TimeStats {
-    /// The time analysis as JSON: `{"steps":[StepStats::to_json…],"sequence":[{"time","active"}…]}`
-    /// (the form of `sfc sim --format json`, plus the microseconds).
+    /// The time analysis as JSON: `{"steps":[StepStats::to_json…],"sequence":[{"time","active"}…],
+    /// "dropped":N}` (the form of `sfc sim --format json`, plus the microseconds; `dropped`
+    /// counts the changes of situation after the recorded ones).
     pub fn to_json(&self) -> serde_json::Value {
         serde_json::json!({
             "steps": self.steps.iter().map(StepStats::to_json).collect::<Vec<_>>(),
@@ -208,6 +263,7 @@ impl TimeStats {
                 .iter()
                 .map(|(time, active)| serde_json::json!({"time": format_time(*time), "timeUs": time, "active": active}))
                 .collect::<Vec<_>>(),
+            "dropped": self.dropped,
         })
     }
 }

@@ -1,0 +1,162 @@
+//! `cargo bench -p sfc-cli --bench cli`: what users run, next to the engine. For the two charts
+//! of issue 16 (a ring of 1,000 steps with one token, and 1,000 two-step loops with every token
+//! moving every scan) it prints, per scan:
+//!
+//! * the engine: `Simulation::advance` in a loop (what `cargo bench -p sfc-sim --bench scan`
+//!   measures);
+//! * `sfc sim`, `sfc sim --stats` (time analysis and the sequence of situations) and
+//!   `sfc test --coverage` (a scenario, with coverage), each run as the `sfc` binary for N and
+//!   for 2N scans: the difference divided by N is the cost of a scan,
+//!   without the start-up (reading, checking and compiling the chart);
+//! * `sfc run`: the scan time p50 the runtime reports (`scan time p50 … µs`), at a 1 ms period.
+//!
+//! Under `cargo test` (no `--bench` argument) every case runs a few scans as a smoke test.
+
+use sfc_sim::{SimOptions, Simulation, Value};
+use std::fmt::Write as _;
+use std::path::{Path, PathBuf};
+use std::process::Command;
+use std::time::Instant;
+
+const SFC: &str = env!("CARGO_BIN_EXE_sfc");
+
+/// A ring of `n` steps; each transition is `Go`, so the token moves every scan.
+fn ring(n: usize) -> String {
+    let mut s = String::from("PROGRAM Ring\n    VAR\n        Go : BOOL := TRUE;\n    END_VAR\n");
+    for i in 0..n {
+        let kw = if i == 0 { "INITIAL_STEP" } else { "STEP" };
+        let _ = writeln!(s, "    {kw} S{i}: END_STEP");
+        let _ = writeln!(s, "    TRANSITION T{i} FROM S{i} TO S{} := Go; END_TRANSITION", (i + 1) % n);
+    }
+    s + "END_PROGRAM\n"
+}
+
+/// `k` independent two-step loops; every token moves every scan.
+fn loops(k: usize) -> String {
+    let mut s = String::from("PROGRAM Loops\n    VAR\n        Go : BOOL := TRUE;\n    END_VAR\n");
+    for i in 0..k {
+        let _ = writeln!(s, "    INITIAL_STEP A{i}: END_STEP\n    STEP B{i}: END_STEP");
+        let _ = writeln!(s, "    TRANSITION FROM A{i} TO B{i} := Go; END_TRANSITION");
+        let _ = writeln!(s, "    TRANSITION FROM B{i} TO A{i} := Go; END_TRANSITION");
+    }
+    s + "END_PROGRAM\n"
+}
+
+/// Median ns per scan of `Simulation::advance` over `rounds` rounds of `scans` scans.
+fn engine(name: &str, text: &str, scans: u64, rounds: usize) -> f64 {
+    let mut sim = match Simulation::from_source(name, text, None, SimOptions::default()) {
+        Ok(s) => s,
+        Err((_, d)) => panic!("{name}: {:?}", d.first().map(|d| &d.message)),
+    };
+    sim.set("Go", Value::Bool(true)).expect("Go");
+    let mut per = Vec::new();
+    for _ in 0..=rounds {
+        let t = Instant::now();
+        for _ in 0..scans {
+            if let Err(e) = sim.advance() {
+                panic!("{name}: {}", e.message);
+            }
+        }
+        per.push(t.elapsed().as_secs_f64() * 1e9 / scans as f64);
+    }
+    per.remove(0); // warm-up
+    median(per)
+}
+
+fn median(mut v: Vec<f64>) -> f64 {
+    v.sort_by(f64::total_cmp);
+    v.get(v.len() / 2).copied().unwrap_or(f64::NAN)
+}
+
+/// Wall time of `sfc args…` in seconds (output discarded); panics when it fails.
+fn wall(args: &[&str]) -> f64 {
+    let t = Instant::now();
+    let out = Command::new(SFC).args(args).output().expect("run sfc");
+    let s = t.elapsed().as_secs_f64();
+    assert!(out.status.success(), "sfc {}: {}", args.join(" "), String::from_utf8_lossy(&out.stderr));
+    s
+}
+
+/// ns per scan of a command that takes `--scans N`-like arguments: `(make(2n) − make(n)) / n`,
+/// median over `rounds`.
+fn per_scan(n: u64, rounds: usize, make: impl Fn(u64) -> Vec<String>) -> f64 {
+    let run = |k: u64| {
+        let args = make(k);
+        wall(&args.iter().map(String::as_str).collect::<Vec<_>>())
+    };
+    let _ = run(n); // warm the page cache
+    let per: Vec<f64> = (0..rounds).map(|_| (run(2 * n) - run(n)) * 1e9 / n as f64).collect();
+    median(per)
+}
+
+/// `sfc run --scans n --period T#1ms`: the scan time p50 it reports, in ns.
+fn run_p50(chart: &Path, n: u64) -> f64 {
+    let out = Command::new(SFC)
+        .args(["run", &chart.to_string_lossy(), "--period", "T#1ms", "--no-retain", "--scans", &n.to_string()])
+        .output()
+        .expect("run sfc");
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "sfc run: {err}");
+    // `… scan time p50 1.2 µs, p99 …`
+    err.lines()
+        .find_map(|l| l.split("scan time p50 ").nth(1))
+        .and_then(|rest| rest.split(' ').next())
+        .and_then(|v| v.parse::<f64>().ok())
+        .map_or(f64::NAN, |us| us * 1000.0)
+}
+
+fn scenario(dir: &Path, chart: &str, scans: u64) -> PathBuf {
+    let d = dir.join(format!("{chart}-{scans}"));
+    std::fs::create_dir_all(&d).expect("scenario dir");
+    std::fs::copy(dir.join(format!("{chart}.st")), d.join(format!("{chart}.st"))).expect("copy chart");
+    std::fs::write(
+        d.join(format!("{chart}.scenario.toml")),
+        format!("chart = \"{chart}.st\"\nperiod = \"T#10ms\"\nscans = {scans}\n"),
+    )
+    .expect("scenario");
+    d
+}
+
+fn main() {
+    let full = std::env::args().any(|a| a == "--bench");
+    let dir = std::env::temp_dir().join(format!("sfc-bench-cli-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).expect("temp dir");
+    let (size, n, rounds) = if full { (1000, 20_000u64, 5) } else { (20, 20, 1) };
+    println!("sfc CLI benchmark ({} build), ns per scan", if cfg!(debug_assertions) { "debug" } else { "release" });
+    println!(
+        "{:<40} {:>10} {:>12} {:>12} {:>14} {:>14}",
+        "chart", "engine", "sim", "sim --stats", "test --cov.", "run p50"
+    );
+    // The ring's scans are cheap: many more of them, so the difference dwarfs the start-up noise.
+    let charts = [
+        ("ring", format!("ring of {size} steps, one token"), ring(size), if full { 50 } else { 1 }),
+        ("loops", format!("{size} two-step loops, all moving"), loops(size), 1),
+    ];
+    for (name, title, text, more) in charts {
+        let n = n * more;
+        let chart = dir.join(format!("{name}.st"));
+        std::fs::write(&chart, &text).expect("chart");
+        let c = chart.to_string_lossy().to_string();
+        let eng = engine(name, &text, if full { n.max(200_000) } else { n }, rounds);
+        let stats =
+            per_scan(n, rounds, |k| ["sim", &c, "--stats", "--scans", &k.to_string()].map(String::from).to_vec());
+        let plain = per_scan(n, rounds, |k| ["sim", &c, "--scans", &k.to_string()].map(String::from).to_vec());
+        let (s1, s2) = (scenario(&dir, name, n), scenario(&dir, name, 2 * n));
+        let test = per_scan(n, rounds, |k| {
+            let d = if k == n { &s1 } else { &s2 };
+            ["test".to_string(), d.to_string_lossy().to_string(), "--coverage".to_string()].to_vec()
+        });
+        let run = run_p50(&chart, if full { 5_000 } else { 20 });
+        println!("{title:<40} {eng:>10.1} {plain:>12.1} {stats:>12.1} {test:>14.1} {run:>14.1}");
+        println!(
+            "{:<40} {:>10} {:>12.2} {:>12.2} {:>14.2} {:>14.2}",
+            "  ratio to the engine",
+            "1",
+            plain / eng,
+            stats / eng,
+            test / eng,
+            run / eng
+        );
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}

@@ -1,0 +1,308 @@
+//! The run-time state of one SFC instance: active steps, step records, action control blocks,
+//! the time analysis and coverage counters, and the scratch buffers of the evolution.
+
+use super::action::Control;
+use super::plan::ChartPlan;
+use crate::value::Value;
+use std::sync::Arc;
+
+/// Activations and active time of one step, for the time analysis. `min`/`max` start at the
+/// extremes, so completing an activation is branch-free.
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct StepTally {
+    pub(crate) activations: u64,
+    pub(crate) completed: u64,
+    pub(crate) min: i64,
+    pub(crate) max: i64,
+    pub(crate) sum: i64,
+}
+
+impl Default for StepTally {
+    fn default() -> Self {
+        StepTally { activations: 0, completed: 0, min: i64::MAX, max: i64::MIN, sum: 0 }
+    }
+}
+
+impl StepTally {
+    /// Ends an activation that lasted `d` µs.
+    #[inline(always)]
+    pub(crate) fn complete(&mut self, d: i64) {
+        self.completed += 1;
+        self.min = self.min.min(d);
+        self.max = self.max.max(d);
+        // A sum of active times of one step cannot exceed the run's virtual time.
+        self.sum = self.sum.wrapping_add(d);
+    }
+}
+
+/// What the evolution reads and writes of one step, with its time analysis: one cache line.
+#[derive(Debug, Clone, Copy, Default)]
+pub(crate) struct StepState {
+    /// While active: the chart clock when the step was activated (its elapsed time is
+    /// `clock − t`, so advancing the time of every active step costs nothing); while inactive:
+    /// the elapsed time it stopped at (a stopwatch frozen on deactivation).
+    pub(crate) t: i64,
+    /// Position in `ChartState::active` while active.
+    pub(crate) pos: u32,
+    /// Scratch: the evolution that activates it (member of `A`).
+    pub(crate) amark: u32,
+    pub(crate) x: bool,
+    /// `sfc.timeout` already reported for the current activation.
+    pub(crate) overdue: bool,
+    /// Keep the `X` / `T` slot up to date: only when some code of the file may read it
+    /// (otherwise [`crate::Simulation::get`] answers from the step state).
+    pub(crate) mirror_x: bool,
+    pub(crate) mirror_t: bool,
+    /// Time analysis: activations and active times.
+    pub(crate) tally: StepTally,
+}
+
+/// Scratch marks of the general evolution (conflicts, divergences, unsafe firings).
+#[derive(Debug, Clone, Copy, Default)]
+pub(crate) struct StepMarks {
+    /// The evolution in which a true transition leaving it was seen (conflict test).
+    pub(crate) seen: u32,
+    /// The evolution that deactivates it (member of `D`).
+    pub(crate) dmark: u32,
+    /// Accepted transitions activating it in this scan, or conflicting ones.
+    pub(crate) hits: u8,
+    /// Consumed by an accepted transition.
+    pub(crate) consumed: bool,
+}
+
+/// The run-time state of one SFC instance.
+#[derive(Debug, Clone)]
+pub struct ChartState {
+    /// Index of the POU in `Program::pous`.
+    pub pou: usize,
+    /// Absolute frame base.
+    pub frame: usize,
+    /// Instance path, `""` for the top POU.
+    pub path: String,
+    pub(crate) plan: Arc<ChartPlan>,
+    pub(crate) started: bool,
+    pub(crate) last_time: i64,
+    /// Chart time, µs: the sum of the time steps of the calls in which the chart was not paused.
+    pub(crate) clock: i64,
+    /// Active steps, in no particular order.
+    pub(crate) active: Vec<u32>,
+    pub(crate) steps: Vec<StepState>,
+    pub(crate) marks: Vec<StepMarks>,
+    /// Absolute memory slots of each step's `X` and `T`.
+    pub(crate) slots: Vec<(u32, u32)>,
+    /// Some step has a mirrored `X` or `T` slot / a mirrored `T` slot.
+    pub(crate) any_mirror: bool,
+    pub(crate) any_mirror_t: bool,
+    /// How often each transition fired (coverage).
+    pub(crate) fired_count: Vec<u64>,
+    /// SFCInit held the chart in its initial situation at some time (its initial steps were
+    /// active without an activation).
+    pub(crate) held: bool,
+    pub(crate) controls: Vec<Control>,
+    pub(crate) live: Vec<u32>,
+    /// Steps left by the last evolution (CODESYS body order), kept only under that profile.
+    pub(crate) left: Vec<u32>,
+    pub(crate) track_left: bool,
+    /// Steps activated since the last action phase.
+    pub(crate) entered: Vec<u32>,
+    /// The active set changed since the last `finish_scan`.
+    pub(crate) changed: bool,
+    /// Keep `SFCCurrentStep` up to date in memory: only when some code of the file reads it
+    /// (writing a STRING every scan costs more than the rest of a scan). Readers from outside
+    /// (`Simulation::get`) get it computed.
+    pub(crate) track_current: bool,
+    // Scratch buffers, kept to avoid allocation per scan.
+    pub(crate) stamp: Vec<u32>,
+    /// Number of evolutions so far, modulo 2^32: the epoch marking scratch fields.
+    pub(crate) evolutions: u32,
+    pub(crate) cand: Vec<u32>,
+    pub(crate) code_links: Vec<u32>,
+    pub(crate) fire: Vec<u32>,
+    pub(crate) accepted: Vec<u32>,
+    pub(crate) order: Vec<u32>,
+    pub(crate) run: Vec<u32>,
+    pub(crate) current: Option<u32>,
+    /// The `matiec` profile's own state (`engine/matiec.rs`).
+    pub(crate) matiec: Option<Box<super::matiec::State>>,
+}
+
+impl ChartState {
+    pub(crate) fn new(pou: usize, plan: Arc<ChartPlan>, frame: usize, path: String) -> ChartState {
+        let n = plan.step_names.len();
+        let m = plan.entities.len();
+        let nt = plan.transition_names.len();
+        let steps = vec![StepState { mirror_x: true, mirror_t: true, ..StepState::default() }; n];
+        let slots = (0..n)
+            .map(|s| ((frame + plan.x_slots[s] as usize) as u32, (frame + plan.t_slots[s] as usize) as u32))
+            .collect();
+        ChartState {
+            pou,
+            frame,
+            path,
+            started: false,
+            last_time: 0,
+            clock: 0,
+            active: Vec::new(),
+            steps,
+            marks: vec![StepMarks::default(); n],
+            slots,
+            any_mirror: true,
+            any_mirror_t: true,
+            fired_count: vec![0; nt],
+            held: false,
+            controls: vec![Control::default(); m],
+            live: Vec::new(),
+            left: Vec::new(),
+            track_left: true,
+            entered: Vec::new(),
+            changed: true,
+            track_current: true,
+            stamp: vec![0; nt],
+            evolutions: 0,
+            cand: Vec::new(),
+            code_links: Vec::new(),
+            fire: Vec::new(),
+            accepted: Vec::new(),
+            order: Vec::new(),
+            run: Vec::new(),
+            current: None,
+            matiec: None,
+            plan,
+        }
+    }
+
+    /// Takes over the coverage and time-analysis counters of `old` (a restart goes on
+    /// counting over the whole run).
+    pub(crate) fn carry_counts(&mut self, old: &ChartState) {
+        for (a, b) in self.steps.iter_mut().zip(&old.steps) {
+            a.tally = b.tally;
+        }
+        if self.fired_count.len() == old.fired_count.len() {
+            self.fired_count.clone_from(&old.fired_count);
+        }
+        self.held |= old.held;
+    }
+
+    /// Decides which step slots are kept up to date in memory (`flags(step)` is `(x, t)`).
+    pub(crate) fn set_mirrors(&mut self, mut flags: impl FnMut(u32) -> (bool, bool)) {
+        for (s, step) in self.steps.iter_mut().enumerate() {
+            (step.mirror_x, step.mirror_t) = flags(s as u32);
+        }
+        self.any_mirror = self.steps.iter().any(|s| s.mirror_x || s.mirror_t);
+        self.any_mirror_t = self.steps.iter().any(|s| s.mirror_t);
+    }
+
+    /// `Path.Name`, or `Name` for the top chart.
+    pub(crate) fn qualify(&self, name: &str) -> String {
+        if self.path.is_empty() {
+            name.to_string()
+        } else {
+            format!("{}.{name}", self.path)
+        }
+    }
+
+    /// Starts a new evolution and returns its epoch (never 0: 0 marks nothing). When the
+    /// counter wraps, every mark is cleared so an old mark cannot equal a new epoch.
+    pub(crate) fn next_epoch(&mut self) -> u32 {
+        self.evolutions = self.evolutions.wrapping_add(1);
+        if self.evolutions == 0 {
+            for step in &mut self.steps {
+                step.amark = 0;
+            }
+            for m in &mut self.marks {
+                m.seen = 0;
+                m.dmark = 0;
+            }
+            self.stamp.fill(0);
+            self.evolutions = 1;
+        }
+        self.evolutions
+    }
+
+    /// Whether step `s` is active.
+    pub(crate) fn is_active(&self, s: u32) -> bool {
+        self.steps[s as usize].x
+    }
+
+    /// Elapsed time of step `s`, µs (frozen since its deactivation when inactive).
+    #[inline]
+    pub(crate) fn time(&self, s: u32) -> i64 {
+        let step = &self.steps[s as usize];
+        if step.x {
+            self.clock - step.t
+        } else {
+            step.t
+        }
+    }
+
+    /// Whether step `s` was ever active after a call (coverage).
+    pub(crate) fn covered(&self, s: u32) -> bool {
+        self.steps[s as usize].tally.activations > 0
+            || self.steps[s as usize].x
+            || (self.held && self.plan.is_initial[s as usize])
+    }
+
+    /// Activates `s` (or restarts its time if it stays active). Returns whether the active set
+    /// changed.
+    pub(crate) fn activate(&mut self, s: u32) -> bool {
+        let clock = self.clock;
+        let st = &mut self.steps[s as usize];
+        let flipped = !st.x;
+        if flipped {
+            st.x = true;
+            st.pos = self.active.len() as u32;
+            self.active.push(s);
+        }
+        st.t = clock;
+        st.overdue = false;
+        if self.plan.has_entities[s as usize] {
+            self.entered.push(s);
+        }
+        self.steps[s as usize].tally.activations += 1;
+        self.changed = true;
+        flipped
+    }
+
+    /// Deactivates `s` (its time freezes). Returns whether it was active.
+    pub(crate) fn deactivate(&mut self, s: u32) -> bool {
+        let i = s as usize;
+        if !self.steps[i].x {
+            return false;
+        }
+        self.complete(s);
+        let st = &mut self.steps[i];
+        st.x = false;
+        let pos = st.pos as usize;
+        self.active.swap_remove(pos);
+        if let Some(&moved) = self.active.get(pos) {
+            self.steps[moved as usize].pos = pos as u32;
+        }
+        true
+    }
+
+    /// Ends the current activation of active step `s` in the time analysis (the step is left,
+    /// or left and re-entered); the step's record then holds the frozen time.
+    pub(crate) fn complete(&mut self, s: u32) {
+        let i = s as usize;
+        let d = self.clock - self.steps[i].t;
+        self.steps[i].t = d;
+        self.steps[i].tally.complete(d);
+        self.changed = true;
+    }
+
+    /// Writes the `X` slot of `s` when it is mirrored.
+    #[inline]
+    pub(crate) fn publish_x(&self, mem: &mut [Value], s: u32, x: bool) {
+        if self.steps[s as usize].mirror_x {
+            super::evolve::put_bool(mem, self.slots[s as usize].0 as usize, x);
+        }
+    }
+
+    /// Writes the `T` slot of `s` when it is mirrored.
+    #[inline]
+    pub(crate) fn publish_t(&self, mem: &mut [Value], s: u32) {
+        if self.steps[s as usize].mirror_t {
+            super::evolve::put_time(mem, self.slots[s as usize].1 as usize, self.time(s));
+        }
+    }
+}
