@@ -124,7 +124,7 @@ fn run_fixture(st: &Path, tally: &mut Tally) -> Vec<String> {
     let names: Vec<String> = report.properties.iter().map(|p| p.name.clone()).collect();
     let depth = 40;
     let found =
-        explore(&chart_name, &chart_text, &report.pou, report.period, &file, &report.inputs, &names, depth, 20_000);
+        explore(&chart_name, &chart_text, &report.pou, report.period, &file, &report.inputs, &names, depth, 8_000);
     for (p, f) in report.properties.iter().zip(&found) {
         if matches!(f, Found::Skipped | Found::TooBig) || p.verdict == Verdict::Unknown {
             tally.not_judged += 1;
