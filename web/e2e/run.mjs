@@ -48,7 +48,9 @@ function edit(args, cwd, { production = false, bin = sfcBin } = {}) {
           stderr: () => err,
           stop: () =>
             new Promise((r) => {
-              if (proc.exitCode !== null) return r();
+              // Stopped already (a test may stop its server itself): a process ended by a
+              // signal has a signalCode and no exitCode, and its 'exit' event is gone.
+              if (proc.exitCode !== null || proc.signalCode !== null) return r();
               proc.once('exit', () => r());
               proc.kill('SIGTERM');
               setTimeout(() => proc.kill('SIGKILL'), 3000);
