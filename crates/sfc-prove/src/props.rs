@@ -31,6 +31,7 @@
 //! never = "Press.X AND NOT GuardClosed"
 //! ```
 
+use sfc_sim::scenario::type_name;
 use sfc_syntax::ast::Expr;
 use std::fmt;
 use std::ops::Range;
@@ -135,23 +136,6 @@ const TOP_KEYS: [&str; 4] = ["pou", "period", "assume", "property"];
 const ASSUME_KEYS: [&str; 3] = ["always", "ranges", "inputs"];
 const PROPERTY_KEYS: [&str; 10] =
     ["name", "always", "never", "after", "expect", "within", "scans", "reachable", "from_initial", "description"];
-
-fn type_name(item: &Item) -> &'static str {
-    match item {
-        Item::None => "nothing",
-        Item::Value(v) => match v {
-            toml_edit::Value::String(_) => "a string",
-            toml_edit::Value::Integer(_) => "an integer",
-            toml_edit::Value::Float(_) => "a float",
-            toml_edit::Value::Boolean(_) => "a boolean",
-            toml_edit::Value::Datetime(_) => "a date-time",
-            toml_edit::Value::Array(_) => "an array",
-            toml_edit::Value::InlineTable(_) => "a table",
-        },
-        Item::Table(_) => "a table",
-        Item::ArrayOfTables(_) => "an array of tables",
-    }
-}
 
 fn did_you_mean<'a>(name: &str, candidates: impl IntoIterator<Item = &'a str>) -> String {
     match sfc_st::closest(name, candidates) {

@@ -426,7 +426,9 @@ impl Src<'_> {
     }
 }
 
-fn type_name(item: &Item) -> &'static str {
+/// What a TOML item is, in the words of an error message ("a string", "a table"…); the
+/// property files of `sfc prove` report with the same words.
+pub fn type_name(item: &Item) -> &'static str {
     match item {
         Item::None => "nothing",
         Item::Value(v) => match v {
