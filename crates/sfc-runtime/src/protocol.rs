@@ -553,8 +553,10 @@ impl Session<'_> {
             return true;
         }
         let last_scan = self.last.as_ref().map(|s| s.scan);
-        let (events, between, mut halts, halted, reason, state) = {
+        let (events, between, mut halts, halted, reason, state, first) = {
             let b = self.hub.lock();
+            // No state sent yet: the first one goes out as a full snapshot, with the run state.
+            let first = last_scan.is_none().then(|| (b.stats_json(), b.state, b.fault.clone()));
             let state = (b.state_seq != self.state_seq).then(|| {
                 self.state_seq = b.state_seq;
                 (b.state, b.fault.clone(), b.history.back().cloned())
@@ -567,7 +569,7 @@ impl Session<'_> {
                 Some(l) => b.history.iter().filter(|s| s.scan > l).cloned().collect(),
                 None => b.history.back().cloned().into_iter().collect(),
             };
-            (events, between, halts, b.halted, b.reason.clone(), state)
+            (events, between, halts, b.halted, b.reason.clone(), state, first)
         };
         // Older changes than the log holds: the state now is what counts.
         if halts.last().map(|h| h.0) != Some(halted) {
@@ -585,9 +587,8 @@ impl Session<'_> {
             let msg = match &self.last {
                 Some(old) => delta(&self.hub.info, old, new, &between),
                 None => {
-                    let mut j = state_json(&self.hub.info, new);
-                    crate::board::put(&mut j, "type", serde_json::json!("snapshot"));
-                    j
+                    let (stats, run, fault) = first.unwrap_or((serde_json::Value::Null, RunState::Run, None));
+                    snapshot(&self.hub.info, new, halted, (run, fault.as_ref()), &stats)
                 }
             };
             if !self.send(msg) {

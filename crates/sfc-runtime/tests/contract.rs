@@ -24,6 +24,28 @@ async fn messages_fit_the_contract_types() {
     let _ = rt.wait();
 }
 
+/// The first state a client sees is a full `snapshot` (with `halted`, `state`, `fault` and
+/// `stats`) even when no scan had been recorded when it connected: a client faster than the
+/// first scan once got a bare one. A runtime started halted has no state until `step`, so it
+/// shows that case every time.
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn the_first_snapshot_is_whole_however_early_the_client() {
+    for halted in [true, false] {
+        let rt = carwash(10_000, halted);
+        let mut c = Client::connect(rt.monitor_addr().unwrap(), Some(common::TOKEN)).await;
+        c.until_type("hello").await;
+        if halted {
+            assert_eq!(c.cmd(serde_json::json!({"cmd": "step"})).await["ok"], true);
+        }
+        let snap = c.until_type("snapshot").await;
+        let s: Snapshot = serde_json::from_value(snap.clone()).unwrap_or_else(|e| panic!("snapshot: {e}\n{snap:#}"));
+        assert_eq!(s.halted, halted, "{snap:#}");
+        drop(c);
+        rt.stop();
+        let _ = rt.wait();
+    }
+}
+
 /// A scan that runs away under the watchdog: the `state` message, the `hello` and the
 /// `snapshot` in FAULT, with the fault, fit the types too.
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
