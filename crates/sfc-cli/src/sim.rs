@@ -596,7 +596,7 @@ pub fn sim(r: SimRequest) -> u8 {
             }
             v["stats"] = j;
             v["mechanisms"] = sim.mechanisms().iter().map(MechanismView::to_json).collect::<Vec<_>>().into();
-            v["runs"] = sim.runs().iter().map(runs_json).collect::<Vec<_>>().into();
+            v["runs"] = sim.runs().iter().map(MechanismRuns::to_json).collect::<Vec<_>>().into();
         }
         if r.explain {
             v["explain"] = sim.explain().iter().map(|r| r.to_json()).collect::<Vec<_>>().into();
@@ -654,24 +654,4 @@ pub fn sim(r: SimRequest) -> u8 {
     } else {
         Status::Findings.code()
     }
-}
-
-/// The time analysis per run of one mechanism as JSON (`sfc sim --stats --format json`).
-pub fn runs_json(m: &MechanismRuns) -> serde_json::Value {
-    serde_json::json!({
-        "instance": m.instance,
-        "dropped": m.dropped,
-        "resets": m.resets,
-        "runs": m.runs.iter().map(|r| serde_json::json!({
-            "run": r.number,
-            "start": format_time(r.start),
-            "total": format_time(r.total),
-            "ended": r.end.as_ref().map(RunEnd::text),
-            "states": r.states.iter().map(|(s, t)| serde_json::json!({"state": s, "time": format_time(*t)})).collect::<Vec<_>>(),
-            "dropped_states": r.dropped_states,
-        })).collect::<Vec<_>>(),
-        "states": m.states.iter().map(|k| serde_json::json!({
-            "state": k.state, "count": k.count, "min": format_time(k.min), "mean": format_time(k.mean), "max": format_time(k.max),
-        })).collect::<Vec<_>>(),
-    })
 }

@@ -569,3 +569,29 @@ impl super::Simulation {
             .collect()
     }
 }
+
+impl super::MechanismRuns {
+    /// The time analysis per run as JSON (`sfc sim --stats --format json`, the monitor's
+    /// `timing`): times as TIME literals, and in µs where a client computes with them.
+    pub fn to_json(&self) -> serde_json::Value {
+        serde_json::json!({
+            "instance": self.instance,
+            "dropped": self.dropped,
+            "resets": self.resets,
+            "runs": self.runs.iter().map(|r| serde_json::json!({
+                "run": r.number,
+                "start": format_time(r.start),
+                "total": format_time(r.total),
+                "totalUs": r.total,
+                "ended": r.end.as_ref().map(RunEnd::text),
+                "states": r.states.iter().map(|(s, t)| serde_json::json!({"state": s, "time": format_time(*t), "timeUs": t})).collect::<Vec<_>>(),
+                "dropped_states": r.dropped_states,
+            })).collect::<Vec<_>>(),
+            "states": self.states.iter().map(|k| serde_json::json!({
+                "state": k.state, "count": k.count,
+                "min": format_time(k.min), "mean": format_time(k.mean), "max": format_time(k.max),
+                "minUs": k.min, "meanUs": k.mean, "maxUs": k.max,
+            })).collect::<Vec<_>>(),
+        })
+    }
+}
