@@ -297,6 +297,9 @@ pub fn mechanisms_text(mechs: &[MechanismView]) -> String {
     out
 }
 
+/// States of a run `--stats` lists (`--stats-full`: every state kept).
+const STATES_SHOWN: usize = 12;
+
 /// The time analysis per run: each run's states with their times and how it ended, then per
 /// state its count, min, mean and max over the runs.
 pub fn runs_text(all: &[MechanismRuns], full: bool) -> String {
@@ -328,10 +331,13 @@ pub fn runs_text(all: &[MechanismRuns], full: bool) -> String {
         let rows: Vec<Vec<String>> = m.runs[skip..]
             .iter()
             .map(|r| {
-                let states: Vec<String> = r.states.iter().map(|(s, t)| format!("{s} {}", format_time(*t))).collect();
+                let shown_states = if full { r.states.len() } else { r.states.len().min(STATES_SHOWN) };
+                let states: Vec<String> =
+                    r.states[..shown_states].iter().map(|(s, t)| format!("{s} {}", format_time(*t))).collect();
                 let mut states = states.join(" → ");
-                if r.dropped_states > 0 {
-                    let _ = write!(states, " … ({} more)", r.dropped_states);
+                let more = (r.states.len() - shown_states) as u64 + r.dropped_states;
+                if more > 0 {
+                    let _ = write!(states, " → … {more} more state{}", if more == 1 { "" } else { "s" });
                 }
                 vec![
                     r.number.to_string(),

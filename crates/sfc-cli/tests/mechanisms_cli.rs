@@ -204,3 +204,22 @@ fn run_logs_error_records_and_the_monitor_lists_mechanisms() {
     let (status, _) = run.finish(30);
     assert_eq!(status, Some(0));
 }
+
+/// A chart that supervises its wait with its own timer guard (`Closing.T > T#500ms` into an
+/// error step, no `sfc.timeout`) gets the same error record, naming that transition.
+#[test]
+fn a_timer_guard_into_an_error_step_makes_a_record() {
+    let dir = "crates/sfc-cli/tests/mechanisms";
+    let o = sfc(&["test", dir]);
+    assert_eq!(o.status.code(), Some(0), "{}", text(&o));
+    let o = sfc(&["sim", &format!("{dir}/clamp.st"), "--scenario", &format!("{dir}/clamp.scenario.toml"), "--stats"]);
+    let out = text(&o);
+    assert!(
+        out.contains(
+            "error record: Clamp: error 7 in step Closing after T#600ms (timer guard of TTooLong); \
+             waiting for TClosed: Closed (X3.1, %IX1.0) is FALSE; needs TRUE"
+        ),
+        "{out}"
+    );
+    assert!(out.contains("runs of Clamp: 1 (0 normal, 1 error, 0 reset)"), "{out}");
+}

@@ -275,7 +275,8 @@ impl Simulation {
         let transition_qnames =
             charts.iter().map(|c| c.plan.transition_names.iter().map(|t| c.qualify(t)).collect()).collect();
         let order = ActiveOrder::new(&charts);
-        let mech = mechanism::Mechanisms::new(&charts);
+        let mut mech = mechanism::Mechanisms::new(&charts);
+        mech.find_timer_guards(&prog, &charts);
         let transition_base = charts
             .iter()
             .scan(0u32, |base, c| {
@@ -284,7 +285,7 @@ impl Simulation {
                 Some(b)
             })
             .collect();
-        Simulation {
+        let mut sim = Simulation {
             prog,
             mem,
             top_frame,
@@ -307,7 +308,9 @@ impl Simulation {
             budget: crate::code::SCAN_BUDGET,
             interrupt: None,
             mech,
-        }
+        };
+        sim.find_code_slots();
+        sim
     }
 
     /// Starts the POU again from its declared initial values (a PLC's restart): memory, steps
@@ -316,7 +319,7 @@ impl Simulation {
     /// time analysis go on over the whole run.
     pub fn restart(&mut self) {
         let now = self.next_time();
-        self.mech.restart(&self.charts, now);
+        self.mech.restart(now);
         let Memory { mut mem, charts: instances, .. } = self.prog.instantiate(self.top);
         let mut charts = chart_states(&self.prog, instances, &mut mem);
         if self.opts.profile == Profile::Matiec {

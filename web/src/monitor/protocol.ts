@@ -87,7 +87,9 @@ export interface ErrorRecord {
   condition: string;
   conditions: { transition: string; condition: string }[];
   waited: string;
-  timeout: string;
+  /** The step's `sfc.timeout`; null when the chart's own timer guard (`by`) ended the wait. */
+  timeout: string | null;
+  by: string | null;
   scan: number;
   time: string;
   message: string;

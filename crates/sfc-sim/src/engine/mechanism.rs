@@ -38,8 +38,12 @@ pub struct ErrorRecord {
     pub conditions: Vec<(String, String)>,
     /// How long the step had been active when its supervision time expired, µs.
     pub waited: i64,
-    /// Its supervision time, µs.
-    pub timeout: i64,
+    /// Its supervision time (`sfc.timeout`), µs; `None` when the chart's own timer guard
+    /// (`by`) ended the wait.
+    pub timeout: Option<i64>,
+    /// The transition whose timer guard (`OpenKM1.T > T#1s …`) led out of the step, when the
+    /// chart supervises the wait itself.
+    pub by: Option<String>,
     /// The scan and virtual time (µs) of the timeout.
     pub scan: u64,
     pub time: i64,
@@ -63,12 +67,16 @@ impl ErrorRecord {
             Some(c) => format!("error {c}"),
             None => "supervision timeout".to_string(),
         };
+        let limit = match (&self.by, self.timeout) {
+            (Some(t), _) => format!("timer guard of {t}"),
+            (None, Some(t)) => format!("supervision time {}", format_time(t)),
+            (None, None) => "supervision time".to_string(),
+        };
         format!(
-            "{}: {what} in step {} after {} (supervision time {}); waiting for {}",
+            "{}: {what} in step {} after {} ({limit}); waiting for {}",
             self.instance,
             self.step,
             format_time(self.waited),
-            format_time(self.timeout),
             self.condition()
         )
     }
@@ -84,7 +92,8 @@ impl ErrorRecord {
             "condition": self.condition(),
             "conditions": self.conditions.iter().map(|(t, c)| serde_json::json!({"transition": t, "condition": c})).collect::<Vec<_>>(),
             "waited": format_time(self.waited),
-            "timeout": format_time(self.timeout),
+            "timeout": self.timeout.map(format_time),
+            "by": self.by,
             "scan": self.scan,
             "time": format_time(self.time),
             "message": self.message(),
@@ -182,7 +191,7 @@ impl MechanismView {
     }
 }
 
-#[derive(Debug, Clone, Default)]
+#[derive(Debug, Clone, Copy, Default)]
 struct Tally {
     count: u64,
     min: i64,
@@ -190,12 +199,27 @@ struct Tally {
     sum: i64,
 }
 
-/// The per-instance bookkeeping.
+/// A run as kept: states by number (see `Tracker::states`).
+#[derive(Debug, Clone, Default)]
+struct RunRec {
+    number: u64,
+    start: i64,
+    states: Vec<(u32, i64)>,
+    dropped_states: u64,
+    total: i64,
+    end: Option<RunEnd>,
+}
+
+/// The per-instance bookkeeping. Nothing here allocates in a scan once its lists have grown:
+/// states are numbered (a set of active steps is looked up by slice), and the run that falls
+/// out of the kept ones lends its list to the next run.
 #[derive(Debug, Clone, Default)]
 pub(crate) struct Tracker {
-    /// The run in progress and when its current state began.
-    current: Option<(Run, i64, Vec<u32>)>,
-    runs: std::collections::VecDeque<Run>,
+    /// The initial steps, sorted.
+    initial: Vec<u32>,
+    /// The run in progress, when its current state began, and that state's number.
+    current: Option<(RunRec, i64, u32)>,
+    runs: std::collections::VecDeque<RunRec>,
     pub(crate) started_runs: u64,
     resets: u64,
     /// The current run saw an error record (its code once known).
@@ -204,18 +228,31 @@ pub(crate) struct Tracker {
     pub(crate) record_count: u64,
     /// Records waiting for the chart's reaction: (record, step).
     pending: Vec<(ErrorRecord, u32)>,
-    /// State name → tally, in order of first appearance.
-    states: Vec<(String, Tally)>,
+    /// The states met, by number: the active steps (sorted) and their times over runs.
+    states: Vec<(Vec<u32>, Tally)>,
+    state_ids: std::collections::HashMap<Vec<u32>, u32>,
     /// The active set seen last (sorted).
     last: Vec<u32>,
+    /// A list to reuse for the next run.
+    spare: Vec<(u32, i64)>,
+    /// The instance's error code at the end of the last scan looked at.
+    code_before: Option<i64>,
 }
 
 /// The mechanisms of a simulation, one tracker per chart instance.
 #[derive(Debug, Clone, Default)]
 pub(crate) struct Mechanisms {
     pub(crate) trackers: Vec<Tracker>,
+    /// Per instance and transition: the step whose wait its timer guard supervises (a step
+    /// with several outgoing transitions and no `sfc.timeout`, left by a transition whose
+    /// guard reads the step's own `T`).
+    timer_guards: Vec<Vec<Option<u32>>>,
+    /// The memory slot of each instance's error-code variable (`sfc.error_code`).
+    pub(crate) code_slots: Vec<Option<usize>>,
     /// Records completed in the last scan.
     pub(crate) fresh: Vec<ErrorRecord>,
+    /// Scratch: an instance's active steps, sorted.
+    scratch: Vec<u32>,
 }
 
 /// The name of a state: the active steps (qualified, in step order) joined with ` + `.
@@ -227,15 +264,22 @@ fn state_name(st: &ChartState, steps: &[u32]) -> String {
     names.join(" + ")
 }
 
-fn sorted_active(st: &ChartState) -> Vec<u32> {
-    let mut a = st.active.clone();
-    a.sort_unstable();
-    a
-}
-
 impl Mechanisms {
     pub(crate) fn new(charts: &[ChartState]) -> Mechanisms {
-        Mechanisms { trackers: charts.iter().map(|_| Tracker::default()).collect(), fresh: Vec::new() }
+        Mechanisms {
+            trackers: charts
+                .iter()
+                .map(|c| {
+                    let mut initial = c.plan.initial.clone();
+                    initial.sort_unstable();
+                    Tracker { initial, ..Default::default() }
+                })
+                .collect(),
+            timer_guards: Vec::new(),
+            code_slots: Vec::new(),
+            fresh: Vec::new(),
+            scratch: Vec::new(),
+        }
     }
 
     /// Whether the last scan needs any work here.
@@ -244,74 +288,79 @@ impl Mechanisms {
         sink.moved || !sink.overdue.is_empty() || self.trackers.iter().any(|t| !t.pending.is_empty())
     }
 
-    /// New error records for the steps that overran in the last scan: `make(chart, step)`
-    /// builds each (it reads the condition analysis); `code(chart)` reads an instance's error
-    /// code variable.
+    /// New error records for the steps that overran in the last scan, or were left by a timer
+    /// guard into an error step (the instance's error code became non-zero in that scan):
+    /// `make(chart, step, transition)` builds each (it reads the condition analysis);
+    /// `code(chart)` names an instance's error code variable and reads it, `code_now(chart)`
+    /// only reads it. Then the runs.
     pub(crate) fn after_scan(
         &mut self,
         now: i64,
         sink: &ScanSink,
         charts: &[ChartState],
-        mut make: impl FnMut(usize, u32) -> ErrorRecord,
+        mut make: impl FnMut(usize, u32, Option<u32>) -> ErrorRecord,
         code: impl Fn(usize) -> (Option<String>, Option<i64>),
+        code_now: impl Fn(usize) -> Option<i64>,
     ) {
         self.fresh.clear();
         for &(c, s) in &sink.overdue {
-            let r = make(c as usize, s);
-            let t = &mut self.trackers[c as usize];
-            if t.current.is_some() {
-                t.run_error = Some(None);
-            }
-            t.pending.push((r, s));
+            let r = make(c as usize, s, None);
+            self.note_record(c as usize, r, s);
         }
-        // Runs: the instances that were reset or moved.
+        for &(c, t) in &sink.fired {
+            let Some(s) = self.timer_guards.get(c as usize).and_then(|g| g.get(t as usize)).copied().flatten() else {
+                continue;
+            };
+            let now_code = code_now(c as usize).filter(|&v| v != 0);
+            if now_code.is_none() || now_code == self.trackers[c as usize].code_before {
+                continue; // a timed step, not a supervised wait into an error step
+            }
+            let r = make(c as usize, s, Some(t));
+            self.note_record(c as usize, r, s);
+        }
         for (c, st) in charts.iter().enumerate() {
             let reset = sink.starts.iter().any(|&(_, sc)| sc as usize == c);
             let t = &mut self.trackers[c];
-            let now_active = if sink.moved { sorted_active(st) } else { t.last.clone() };
+            if sink.moved {
+                self.scratch.clear();
+                self.scratch.extend_from_slice(&st.active);
+                self.scratch.sort_unstable();
+            } else {
+                self.scratch.clone_from(&t.last);
+            }
             if reset {
                 if t.current.is_some() {
-                    t.end_run(st, now, RunEnd::Reset);
+                    t.end_run(now, RunEnd::Reset);
                     t.resets += 1;
                 }
-            } else if now_active != t.last {
-                let initial = {
-                    let mut i = st.plan.initial.clone();
-                    i.sort_unstable();
-                    i
-                };
-                match &mut t.current {
-                    None => {
-                        if now_active != initial {
-                            t.started_runs += 1;
-                            let run = Run {
-                                number: t.started_runs,
-                                start: now,
-                                states: Vec::new(),
-                                dropped_states: 0,
-                                total: 0,
-                                end: None,
-                            };
-                            t.current = Some((run, now, now_active.clone()));
-                            t.run_error = None;
-                        }
-                    }
-                    Some(_) => {
-                        t.close_state(st, now);
-                        if now_active == initial {
-                            let end = match t.run_error.take() {
-                                Some(code) => RunEnd::Error(code),
-                                None => RunEnd::Normal,
-                            };
-                            t.end_run(st, now, end);
-                        } else if let Some((_, since, set)) = &mut t.current {
+            } else if self.scratch != t.last {
+                if t.current.is_some() {
+                    t.close_state(now);
+                    if self.scratch == t.initial {
+                        let end = match t.run_error.take() {
+                            Some(code) => RunEnd::Error(code),
+                            None => RunEnd::Normal,
+                        };
+                        t.end_run(now, end);
+                    } else {
+                        let id = t.state_id(&self.scratch);
+                        if let Some((_, since, state)) = &mut t.current {
                             *since = now;
-                            set.clone_from(&now_active);
+                            *state = id;
                         }
                     }
+                } else if self.scratch != t.initial {
+                    t.started_runs += 1;
+                    let mut states = std::mem::take(&mut t.spare);
+                    states.clear();
+                    let run = RunRec { number: t.started_runs, start: now, states, ..Default::default() };
+                    let id = t.state_id(&self.scratch);
+                    t.current = Some((run, now, id));
+                    t.run_error = None;
                 }
             }
-            t.last = now_active;
+            t.last.clone_from(&self.scratch);
+            t.code_before = code_now(c);
             // Pending records: complete once the chart has left the step (its error step has
             // set the code), was reset, or names no error code.
             if !t.pending.is_empty() {
@@ -319,39 +368,46 @@ impl Mechanisms {
                 let mut k = 0;
                 while k < t.pending.len() {
                     let s = t.pending[k].1;
-                    let done = var.is_none() || reset || !st.steps[s as usize].x;
-                    if done {
-                        let (mut r, _) = t.pending.remove(k);
-                        r.code_variable.clone_from(&var);
-                        r.code = value.filter(|&v| v != 0);
-                        if let Some(e) = &mut t.run_error {
-                            *e = e.or(r.code);
-                        }
-                        // An error that ended its run already: the run's end carries the code.
-                        if let Some(last) = t.runs.back_mut() {
-                            if last.end == Some(RunEnd::Error(None)) && last.start <= r.time {
-                                last.end = Some(RunEnd::Error(r.code));
-                            }
-                        }
-                        t.record_count += 1;
-                        if t.records.len() == MAX_RECORDS {
-                            t.records.pop_front();
-                        }
-                        t.records.push_back(r.clone());
-                        self.fresh.push(r);
-                    } else {
+                    if var.is_some() && !reset && st.steps[s as usize].x {
                         k += 1;
+                        continue;
                     }
+                    let (mut r, _) = t.pending.remove(k);
+                    r.code_variable.clone_from(&var);
+                    r.code = value.filter(|&v| v != 0);
+                    if let Some(e) = &mut t.run_error {
+                        *e = e.or(r.code);
+                    }
+                    // An error that ended its run already: the run's end carries the code.
+                    if let Some(last) = t.runs.back_mut() {
+                        if last.end == Some(RunEnd::Error(None)) && last.start <= r.time {
+                            last.end = Some(RunEnd::Error(r.code));
+                        }
+                    }
+                    t.record_count += 1;
+                    if t.records.len() == MAX_RECORDS {
+                        t.records.pop_front();
+                    }
+                    t.records.push_back(r.clone());
+                    self.fresh.push(r);
                 }
             }
         }
     }
 
+    fn note_record(&mut self, c: usize, r: ErrorRecord, s: u32) {
+        let t = &mut self.trackers[c];
+        if t.current.is_some() {
+            t.run_error = Some(None);
+        }
+        t.pending.push((r, s));
+    }
+
     /// Ends every run in progress as reset (a restart of the program).
-    pub(crate) fn restart(&mut self, charts: &[ChartState], now: i64) {
-        for (t, st) in self.trackers.iter_mut().zip(charts) {
+    pub(crate) fn restart(&mut self, now: i64) {
+        for t in &mut self.trackers {
             if t.current.is_some() {
-                t.end_run(st, now, RunEnd::Reset);
+                t.end_run(now, RunEnd::Reset);
                 t.resets += 1;
             }
             t.pending.clear();
@@ -363,11 +419,20 @@ impl Mechanisms {
     /// the runs not kept, the per-state statistics, resets.
     pub(crate) fn runs(&self, c: usize, st: &ChartState, now: i64) -> (Vec<Run>, u64, Vec<StateStats>, u64) {
         let t = &self.trackers[c];
-        let mut runs: Vec<Run> = t.runs.iter().cloned().collect();
-        if let Some((run, since, set)) = &t.current {
-            let mut r = run.clone();
+        let names: Vec<String> = t.states.iter().map(|(steps, _)| state_name(st, steps)).collect();
+        let public = |r: &RunRec| Run {
+            number: r.number,
+            start: r.start,
+            states: r.states.iter().map(|&(id, d)| (names[id as usize].clone(), d)).collect(),
+            dropped_states: r.dropped_states,
+            total: r.total,
+            end: r.end.clone(),
+        };
+        let mut runs: Vec<Run> = t.runs.iter().map(public).collect();
+        if let Some((run, since, state)) = &t.current {
+            let mut r = public(run);
             if r.states.len() < MAX_STATES {
-                r.states.push((state_name(st, set), (now - since).max(0)));
+                r.states.push((names[*state as usize].clone(), (now - since).max(0)));
             }
             r.total = (now - r.start).max(0);
             runs.push(r);
@@ -376,12 +441,14 @@ impl Mechanisms {
         let stats = t
             .states
             .iter()
-            .map(|(name, k)| StateStats {
+            .zip(&names)
+            .filter(|((_, k), _)| k.count > 0)
+            .map(|((_, k), name)| StateStats {
                 state: name.clone(),
                 count: k.count,
                 min: k.min,
                 max: k.max,
-                mean: if k.count > 0 { k.sum / k.count as i64 } else { 0 },
+                mean: k.sum / k.count as i64,
             })
             .collect();
         (runs, t.started_runs.saturating_sub(done), stats, t.resets)
@@ -397,7 +464,7 @@ impl Mechanisms {
     ) -> MechanismView {
         let t = &self.trackers[c];
         let mut active: Vec<(String, i64)> =
-            sorted_active(st).into_iter().map(|s| (st.qualify(&st.plan.step_names[s as usize]), st.time(s))).collect();
+            st.active.iter().map(|&s| (st.qualify(&st.plan.step_names[s as usize]), st.time(s))).collect();
         active.sort();
         MechanismView {
             instance,
@@ -415,40 +482,48 @@ impl Mechanisms {
 }
 
 impl Tracker {
-    fn close_state(&mut self, st: &ChartState, now: i64) {
-        let Some((run, since, set)) = &mut self.current else { return };
+    /// The number of the state with these active steps (sorted), numbering it when new.
+    fn state_id(&mut self, steps: &[u32]) -> u32 {
+        if let Some(&id) = self.state_ids.get(steps) {
+            return id;
+        }
+        let id = self.states.len() as u32;
+        self.states.push((steps.to_vec(), Tally::default()));
+        self.state_ids.insert(steps.to_vec(), id);
+        id
+    }
+
+    fn close_state(&mut self, now: i64) {
+        let Some((run, since, state)) = &mut self.current else { return };
         let d = (now - *since).max(0);
-        let name = state_name(st, set);
-        match self.states.iter_mut().find(|(n, _)| *n == name) {
-            Some((_, k)) => {
-                k.count += 1;
-                k.min = k.min.min(d);
-                k.max = k.max.max(d);
-                k.sum = k.sum.saturating_add(d);
-            }
-            None => {
-                if self.states.len() < MAX_STATES {
-                    self.states.push((name.clone(), Tally { count: 1, min: d, max: d, sum: d }));
-                }
-            }
+        let k = &mut self.states[*state as usize].1;
+        if k.count == 0 {
+            *k = Tally { count: 1, min: d, max: d, sum: d };
+        } else {
+            k.count += 1;
+            k.min = k.min.min(d);
+            k.max = k.max.max(d);
+            k.sum = k.sum.saturating_add(d);
         }
         if run.states.len() < MAX_STATES {
-            run.states.push((name, d));
+            run.states.push((*state, d));
         } else {
             run.dropped_states += 1;
         }
     }
 
-    fn end_run(&mut self, st: &ChartState, now: i64, end: RunEnd) {
+    fn end_run(&mut self, now: i64, end: RunEnd) {
         if end == RunEnd::Reset {
-            self.close_state(st, now);
+            self.close_state(now);
             self.run_error = None;
         }
         let Some((mut run, _, _)) = self.current.take() else { return };
         run.total = (now - run.start).max(0);
         run.end = Some(end);
         if self.runs.len() == MAX_RUNS {
-            self.runs.pop_front();
+            if let Some(old) = self.runs.pop_front() {
+                self.spare = old.states;
+            }
         }
         self.runs.push_back(run);
     }
@@ -494,12 +569,31 @@ impl super::Simulation {
         (Some(q), v)
     }
 
+    /// Resolves each instance's error-code variable to its slot once.
+    pub(super) fn find_code_slots(&mut self) {
+        let slots = (0..self.charts.len())
+            .map(|c| {
+                let name = self.prog.pous[self.charts[c].pou].wiring.error_code.as_ref()?;
+                let q = self.instance_var(c, name);
+                self.prog.resolve(self.top, self.top_frame, &q).map(|(slot, _)| slot)
+            })
+            .collect();
+        self.mech.code_slots = slots;
+    }
+
+    fn mech_code_slot(&self, c: usize) -> Option<usize> {
+        self.code_slots_ref().get(c).copied().flatten()
+    }
+
     pub(super) fn track_mechanisms(&mut self, now: i64, scan: u64) {
         let mut mech = std::mem::take(&mut self.mech);
+        let slots = std::mem::take(&mut mech.code_slots);
+        self.mech.code_slots = slots;
         {
             let this = &*self;
-            let make = |c: usize, s: u32| {
+            let make = |c: usize, s: u32, by: Option<u32>| {
                 let report = crate::explain::report(this.explain_view_at(now), c, s);
+                let by = by.map(|t| this.charts[c].qualify(&this.charts[c].plan.transition_names[t as usize]));
                 ErrorRecord {
                     instance: this.instance_name(c),
                     step: report.step.clone(),
@@ -508,18 +602,28 @@ impl super::Simulation {
                     conditions: report
                         .transitions
                         .iter()
-                        .filter(|t| !t.value)
+                        .filter(|t| !t.value && Some(&t.transition) != by.as_ref())
                         .map(|t| (t.transition.clone(), t.condition_text()))
                         .collect(),
                     waited: report.elapsed,
-                    timeout: report.timeout.unwrap_or(0),
+                    timeout: report.timeout,
+                    by,
                     scan,
                     time: now,
                 }
             };
-            mech.after_scan(now, &this.sink, &this.charts, make, |c| this.error_code_of(c));
+            let code_now = |c: usize| {
+                let slot = this.mech_code_slot(c)?;
+                this.mem.get(slot).and_then(code_value)
+            };
+            mech.after_scan(now, &this.sink, &this.charts, make, |c| this.error_code_of(c), code_now);
         }
+        mech.code_slots = std::mem::take(&mut self.mech.code_slots);
         self.mech = mech;
+    }
+
+    fn code_slots_ref(&self) -> &[Option<usize>] {
+        &self.mech.code_slots
     }
 
     /// The error records completed in the last scan (see [`ErrorRecord`]).
@@ -593,5 +697,58 @@ impl super::MechanismRuns {
                 "minUs": k.min, "meanUs": k.mean, "maxUs": k.max,
             })).collect::<Vec<_>>(),
         })
+    }
+}
+
+/// Whether `e` reads `step.T` (case-insensitive).
+fn reads_step_time(e: &sfc_syntax::ast::Expr, step: &str, depth: u32) -> bool {
+    use sfc_syntax::ast::ExprKind;
+    if depth > 64 {
+        return false;
+    }
+    match &e.kind {
+        ExprKind::Member { base, member } => {
+            (member.text.eq_ignore_ascii_case("T")
+                && matches!(&base.kind, ExprKind::Name(n) if n.text.eq_ignore_ascii_case(step)))
+                || reads_step_time(base, step, depth + 1)
+        }
+        ExprKind::Paren(x) | ExprKind::Unary { operand: x, .. } => reads_step_time(x, step, depth + 1),
+        ExprKind::Binary { lhs, rhs, .. } => {
+            reads_step_time(lhs, step, depth + 1) || reads_step_time(rhs, step, depth + 1)
+        }
+        ExprKind::Index { base, indices } => {
+            reads_step_time(base, step, depth + 1) || indices.iter().any(|i| reads_step_time(i, step, depth + 1))
+        }
+        ExprKind::Call { args, .. } => {
+            args.iter().any(|a| a.value.as_ref().is_some_and(|v| reads_step_time(v, step, depth + 1)))
+        }
+        _ => false,
+    }
+}
+
+impl Mechanisms {
+    /// Finds the timer guards of every instance (see `timer_guards`).
+    pub(crate) fn find_timer_guards(&mut self, prog: &crate::code::Program, charts: &[ChartState]) {
+        self.timer_guards = charts
+            .iter()
+            .map(|st| {
+                let crate::code::PouBody::Chart(code) = &prog.pous[st.pou].body else { return Vec::new() };
+                let plan = &st.plan;
+                (0..plan.transition_names.len() as u32)
+                    .map(|t| {
+                        let pre = plan.pre.get(t);
+                        let &[s] = pre else { return None };
+                        if plan.outgoing.get(s).len() < 2 || plan.timeouts[s as usize].is_some() {
+                            return None;
+                        }
+                        let sfc_syntax::ast::Condition::St(e) = &code.chart.transitions.get(t as usize)?.condition
+                        else {
+                            return None;
+                        };
+                        reads_step_time(e, &plan.step_names[s as usize], 0).then_some(s)
+                    })
+                    .collect()
+            })
+            .collect();
     }
 }
