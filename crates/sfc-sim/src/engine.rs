@@ -122,7 +122,6 @@ pub struct Snapshot {
     error: Option<RuntimeError>,
     next_scan: u64,
     log: LogMark,
-    mech: mechanism::Mechanisms,
 }
 
 pub struct Simulation {
@@ -520,7 +519,8 @@ impl Simulation {
     }
 
     /// The whole run-time state (variables, steps, action control, time, last record), so a
-    /// search (the analyzer's witness replay) can try a scan and come back.
+    /// search (the analyzer's witness replay) can try a scan and come back. Without the
+    /// mechanisms' history (error records, runs), which goes on.
     pub fn snapshot(&self) -> Snapshot {
         Snapshot {
             mem: self.mem.clone(),
@@ -529,7 +529,6 @@ impl Simulation {
             error: self.error.clone(),
             next_scan: self.next_scan,
             log: self.log.mark(),
-            mech: self.mech.clone(),
         }
     }
 
@@ -566,7 +565,10 @@ impl Simulation {
         self.next_scan = snap.next_scan;
         self.sink.clear();
         self.log.rewind(snap.log);
-        self.mech.clone_from(&snap.mech);
+        // The mechanisms' history (error records, runs) is not part of a snapshot: a search
+        // that tries scans and comes back does not read it, and copying it at every node
+        // would make the search slower.
+        self.mech.fresh.clear();
         self.order.valid = None;
     }
 
