@@ -6,7 +6,10 @@ use crate::Status;
 use sfc_diagnostics::{render_human, RenderOptions};
 use sfc_sim::scenario::{self, Execution, Overrides, Recording, RunLength, Scenario, ScenarioError};
 use sfc_sim::trace::{TraceFormat, TraceSink};
-use sfc_sim::{format_time, Event, Profile, ScanRecord, Simulation, StepReport, TimeStats, TransitionReport};
+use sfc_sim::{
+    format_time, Event, MechanismRuns, MechanismView, Profile, RunEnd, ScanRecord, Simulation, StepReport, TimeStats,
+    TransitionReport,
+};
 use std::fmt::Write as _;
 use std::io::Write;
 use std::path::{Path, PathBuf};
@@ -85,11 +88,10 @@ pub fn report_load_error(e: &ScenarioError) -> u8 {
 fn transition_line(t: &TransitionReport) -> String {
     let mut line = format!("{} := {} is {}", t.transition, t.guard, if t.value { "TRUE" } else { "FALSE" });
     if !t.operands.is_empty() {
-        let ops: Vec<String> = t.operands.iter().map(|(n, v)| format!("{n} = {v}")).collect();
-        let _ = write!(line, " with {}", ops.join(", "));
+        let _ = write!(line, " with {}", t.operands_text());
     }
-    if !t.change.is_empty() {
-        let _ = write!(line, "; needs a change of {}", t.change.join(", "));
+    if !t.needs.is_empty() {
+        let _ = write!(line, ": {}", t.needs.join(" and "));
     }
     if !t.missing.is_empty() {
         let _ =
@@ -238,6 +240,139 @@ fn stats_text(stats: &TimeStats, full: bool, end: i64) -> String {
     out
 }
 
+/// A table with a header, left-aligned columns, two spaces apart.
+fn table(head: &[&str], rows: &[Vec<String>]) -> String {
+    let mut widths: Vec<usize> = head.iter().map(|h| h.chars().count()).collect();
+    for r in rows {
+        for (w, c) in widths.iter_mut().zip(r) {
+            *w = (*w).max(c.chars().count());
+        }
+    }
+    let line = |cells: Vec<String>| {
+        let mut l = String::from(" ");
+        for (c, w) in cells.iter().zip(&widths) {
+            let pad = w.saturating_sub(c.chars().count());
+            let _ = write!(l, " {c}{}", " ".repeat(pad + 1));
+        }
+        l.trim_end().to_string()
+    };
+    let mut out = line(head.iter().map(|h| h.to_string()).collect());
+    for r in rows {
+        out.push('\n');
+        out.push_str(&line(r.clone()));
+    }
+    out
+}
+
+/// Every SFC instance at a glance: activation bit, active steps with their times, runs,
+/// resets, error records and the last one.
+pub fn mechanisms_text(mechs: &[MechanismView]) -> String {
+    let rows: Vec<Vec<String>> = mechs
+        .iter()
+        .map(|m| {
+            let steps: Vec<String> = m.active.iter().map(|(s, t)| format!("{s} ({})", format_time(*t))).collect();
+            let activation = match (&m.activation_variable, m.activation) {
+                (Some(_), Some(v)) => if v { "TRUE" } else { "FALSE" }.to_string(),
+                _ => "-".to_string(),
+            };
+            vec![
+                m.instance.clone(),
+                m.pou.clone(),
+                activation,
+                if m.running { "running" } else { "idle" }.to_string(),
+                if steps.is_empty() { "(none)".to_string() } else { steps.join(", ") },
+                m.runs.to_string(),
+                m.resets.to_string(),
+                m.errors.to_string(),
+            ]
+        })
+        .collect();
+    let mut out = String::from("mechanisms:\n");
+    out.push_str(&table(&["instance", "of", "activation", "state", "active steps", "runs", "resets", "errors"], &rows));
+    for m in mechs {
+        if let Some(e) = &m.last_error {
+            let _ = write!(out, "\n  last error of {}: {}", m.instance, e.message());
+        }
+    }
+    out
+}
+
+/// States of a run `--stats` lists (`--stats-full`: every state kept).
+const STATES_SHOWN: usize = 12;
+
+/// The time analysis per run: each run's states with their times and how it ended, then per
+/// state its count, min, mean and max over the runs.
+pub fn runs_text(all: &[MechanismRuns], full: bool) -> String {
+    let mut out = String::new();
+    for m in all {
+        if !out.is_empty() {
+            out.push('\n');
+        }
+        let count = |f: &dyn Fn(&RunEnd) -> bool| m.runs.iter().filter(|r| r.end.as_ref().is_some_and(f)).count();
+        let normal = count(&|e| *e == RunEnd::Normal);
+        let error = count(&|e| matches!(e, RunEnd::Error(_)));
+        let reset = count(&|e| *e == RunEnd::Reset);
+        let open = m.runs.iter().filter(|r| r.end.is_none()).count();
+        let _ = write!(
+            out,
+            "runs of {}: {} ({normal} normal, {error} error, {reset} reset{})",
+            m.instance,
+            m.runs.len() as u64 + m.dropped,
+            if open > 0 { ", 1 in progress" } else { "" }
+        );
+        if m.dropped > 0 {
+            let _ = write!(out, "; the first {} not listed", m.dropped);
+        }
+        let shown = if full { m.runs.len() } else { 20 };
+        let skip = m.runs.len().saturating_sub(shown);
+        if skip > 0 {
+            let _ = write!(out, "\n  … {skip} earlier runs not shown (--stats-full lists them)");
+        }
+        let rows: Vec<Vec<String>> = m.runs[skip..]
+            .iter()
+            .map(|r| {
+                let shown_states = if full { r.states.len() } else { r.states.len().min(STATES_SHOWN) };
+                let states: Vec<String> =
+                    r.states[..shown_states].iter().map(|(s, t)| format!("{s} {}", format_time(*t))).collect();
+                let mut states = states.join(" → ");
+                let more = (r.states.len() - shown_states) as u64 + r.dropped_states;
+                if more > 0 {
+                    let _ = write!(states, " → … {more} more state{}", if more == 1 { "" } else { "s" });
+                }
+                vec![
+                    r.number.to_string(),
+                    format_time(r.start),
+                    format_time(r.total),
+                    r.end.as_ref().map_or_else(|| "in progress".to_string(), RunEnd::text),
+                    states,
+                ]
+            })
+            .collect();
+        if !rows.is_empty() {
+            out.push('\n');
+            out.push_str(&table(&["run", "start", "total", "ended", "states passed"], &rows));
+        }
+        if !m.states.is_empty() {
+            let _ = write!(out, "\nstates of {} over its runs:\n", m.instance);
+            let rows: Vec<Vec<String>> = m
+                .states
+                .iter()
+                .map(|k| {
+                    vec![
+                        k.state.clone(),
+                        k.count.to_string(),
+                        format_time(k.min),
+                        format_time(k.mean),
+                        format_time(k.max),
+                    ]
+                })
+                .collect();
+            out.push_str(&table(&["state", "count", "min", "mean", "max"], &rows));
+        }
+    }
+    out
+}
+
 /// Runtime events shown per kind before `sfc sim` only counts them.
 const EVENTS_SHOWN: usize = 10;
 
@@ -349,6 +484,7 @@ pub fn sim(r: SimRequest) -> u8 {
         }
     };
     let mut overdue_json: Vec<serde_json::Value> = Vec::new();
+    let mut records_json: Vec<serde_json::Value> = Vec::new();
     let json = r.json;
     let mut events = EventLog::default();
     let mut progress = Progress::new(scen.total_scans(), "scans");
@@ -379,6 +515,14 @@ pub fn sim(r: SimRequest) -> u8 {
                 } else {
                     report(&format!("scan {scan}, {}: {}: {}", format_time(time), e.kind(), e.describe()));
                 }
+            }
+        }
+        // Error records of supervision timeouts, as they are completed.
+        for rec in sim.fresh_error_records() {
+            if json {
+                records_json.push(rec.to_json());
+            } else {
+                report(&format!("scan {scan}, {}: error record: {}", format_time(time), rec.message()));
             }
         }
         // Reports are built only for steps that have just overrun (the engine notes each
@@ -430,6 +574,7 @@ pub fn sim(r: SimRequest) -> u8 {
                 "message": e.message, "line": e.line, "column": e.column, "scan": e.scan, "time": format_time(e.time)
             })),
             "overdue": overdue_json,
+            "error_records": records_json,
             "events": events.json,
             "event_counts": events.counts.iter().map(|(k, n)| ((*k).to_string(), serde_json::json!(n))).collect::<serde_json::Map<_, _>>(),
         });
@@ -456,6 +601,8 @@ pub fn sim(r: SimRequest) -> u8 {
                 }
             }
             v["stats"] = j;
+            v["mechanisms"] = sim.mechanisms().iter().map(MechanismView::to_json).collect::<Vec<_>>().into();
+            v["runs"] = sim.runs().iter().map(MechanismRuns::to_json).collect::<Vec<_>>().into();
         }
         if r.explain {
             v["explain"] = sim.explain().iter().map(|r| r.to_json()).collect::<Vec<_>>().into();
@@ -472,6 +619,8 @@ pub fn sim(r: SimRequest) -> u8 {
         }
         if r.stats {
             report(&stats_text(&sim.stats(), r.stats_full, last_time + scen.options.period));
+            report(&mechanisms_text(&sim.mechanisms()));
+            report(&runs_text(&sim.runs(), r.stats_full));
         }
         if r.explain {
             report(&explain_text(&sim.explain(), &sim));

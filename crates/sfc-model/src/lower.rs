@@ -41,6 +41,11 @@ const KNOWN_ATTRIBUTES: &[&str] = &[
     "sfc.final",
     // The safe value of an output (`sfc run`, docs/runtime.md): written on a fault or a stop.
     "sfc.safe",
+    // Diagnostics of a mechanism (docs/sim.md, "Error records"): a variable's terminal label,
+    // the instance's error-code variable and its activation bit.
+    "sfc.terminal",
+    "sfc.error_code",
+    "sfc.activation",
     "sfc.x",
     "sfc.y",
     "sfc.width",
@@ -99,7 +104,8 @@ pub fn check_attributes(attrs: &[ast::Attribute], allowed: &[&str], what: &str, 
         }
         let meaningful = match lname.as_str() {
             "sfc.build" => allowed.contains(&"sfc.target"),
-            "sfc.tag" | "sfc.timeout" | "sfc.target" | "sfc.final" | "sfc.safe" => allowed.contains(&lname.as_str()),
+            "sfc.tag" | "sfc.timeout" | "sfc.target" | "sfc.final" | "sfc.safe" | "sfc.terminal" | "sfc.error_code"
+            | "sfc.activation" => allowed.contains(&lname.as_str()),
             _ => true,
         };
         if !KNOWN_ATTRIBUTES.contains(&lname.as_str()) {
@@ -121,7 +127,12 @@ pub fn check_attributes(attrs: &[ast::Attribute], allowed: &[&str], what: &str, 
 /// whether it fits the variable's type is checked by `sfc run`, which uses it.
 pub fn check_variable_attributes(block: &ast::VarBlock, file_id: u32, diags: &mut Vec<Diagnostic>) {
     for d in &block.decls {
-        check_attributes(&d.attributes, &["sfc.safe"], "a variable", diags);
+        check_attributes(
+            &d.attributes,
+            &["sfc.safe", "sfc.terminal", "sfc.error_code", "sfc.activation"],
+            "a variable",
+            diags,
+        );
         let Some(a) = attr(&d.attributes, "sfc.safe") else { continue };
         let v = a.value.as_deref().unwrap_or("").trim();
         if !is_one_literal(file_id, v) {

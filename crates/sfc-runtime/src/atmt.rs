@@ -471,6 +471,9 @@ fn commands(rx: Receiver<Request>, hub: &Hub, shared: &Mutex<Observed>) {
             Command::Explain { step } => Err(format!(
                 "the ATMT adapter sees only the block's state and condition bits, not its guards: it cannot explain `{step}`"
             )),
+            Command::Mechanisms => Err(
+                "the ATMT adapter sees one block's state and condition bits: it has no mechanisms to list".into(),
+            ),
             Command::Timing => Err(
                 "the ATMT adapter keeps no time analysis: the block's own step times are not reported to it".into(),
             ),

@@ -273,8 +273,10 @@ pub enum Command {
     Explain {
         step: String,
     },
-    /// Time analysis per step.
+    /// Time analysis per step and per run of each mechanism.
     Timing,
+    /// Every SFC instance at a glance (activation bit, active steps, runs, last error record).
+    Mechanisms,
     /// Restarts the chart from its initial values (RETAIN kept when warm, PERSISTENT always),
     /// from any state; leaves FAULT.
     Reset {
@@ -289,7 +291,7 @@ pub enum Command {
 impl Command {
     /// Whether a client without the run's token may send it (it only reads the run).
     pub fn watches(&self) -> bool {
-        matches!(self, Command::Breakpoints | Command::Explain { .. } | Command::Timing)
+        matches!(self, Command::Breakpoints | Command::Explain { .. } | Command::Timing | Command::Mechanisms)
     }
 }
 

@@ -755,6 +755,7 @@ impl Session<'_> {
                 Command::Explain { step: info.step_name(s) }
             }
             "timing" => Command::Timing,
+            "mechanisms" => Command::Mechanisms,
             "reset" => match str_field("mode").unwrap_or("warm") {
                 "warm" => Command::Reset { cold: false },
                 "cold" => Command::Reset { cold: true },

@@ -524,6 +524,14 @@ impl ScanThread {
                 self.unpublished_events.push(j.into());
             }
         }
+        // Error records of supervision timeouts: an event for the monitor, a line in the log.
+        for r in self.sim.fresh_error_records() {
+            let mut j = r.to_json();
+            crate::board::put(&mut j, "timeoutScan", serde_json::json!(r.scan));
+            crate::board::put(&mut j, "scan", serde_json::json!(scan));
+            self.unpublished_events.push(j.into());
+            self.hub.notice(format!("sfc run: scan {scan}: error record: {}", r.message()));
+        }
         // Breakpoints: a step is hit when a fired transition enters it (or it starts the chart),
         // a transition when it fires.
         if !self.breakpoints.is_empty() {
@@ -775,7 +783,20 @@ impl ScanThread {
             Command::Timing => {
                 let stats = self.sim.stats();
                 let steps: Vec<serde_json::Value> = stats.steps.iter().map(|s| s.to_json()).collect();
-                Ok(serde_json::json!({"scan": self.sim.next_scan().saturating_sub(1), "steps": steps}))
+                let runs: Vec<serde_json::Value> = self.sim.runs().iter().map(|m| m.to_json()).collect();
+                Ok(
+                    serde_json::json!({"scan": self.sim.next_scan().saturating_sub(1), "steps": steps, "mechanisms": runs}),
+                )
+            }
+            Command::Mechanisms => {
+                let list: Vec<serde_json::Value> = self.sim.mechanisms().iter().map(|m| m.to_json()).collect();
+                let records: Vec<serde_json::Value> =
+                    self.sim.error_records().iter().map(sfc_sim::ErrorRecord::to_json).collect();
+                Ok(serde_json::json!({
+                    "scan": self.sim.next_scan().saturating_sub(1),
+                    "mechanisms": list,
+                    "errorRecords": records,
+                }))
             }
         };
         let line = match answer {

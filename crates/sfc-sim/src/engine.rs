@@ -23,6 +23,7 @@ use std::sync::Arc;
 mod action;
 mod evolve;
 mod matiec;
+mod mechanism;
 mod monitor;
 mod plan;
 mod situations;
@@ -30,6 +31,7 @@ mod state;
 
 use evolve::code_of;
 pub use evolve::run_chart;
+pub use mechanism::{ErrorRecord, MechanismView, Run, RunEnd, StateStats, MAX_RUNS};
 pub use plan::ChartPlan;
 pub use situations::MAX_SITUATIONS;
 use situations::{ActiveOrder, LogMark, SituationLog};
@@ -154,6 +156,23 @@ pub struct Simulation {
     budget: u64,
     /// Set from outside to stop the running scan ([`Simulation::interrupt_flag`]).
     interrupt: Option<Arc<std::sync::atomic::AtomicBool>>,
+    /// Error records and runs of every SFC instance (the mechanisms).
+    mech: mechanism::Mechanisms,
+}
+
+/// The time analysis per run of one mechanism ([`Simulation::runs`]).
+#[derive(Debug, Clone, PartialEq)]
+pub struct MechanismRuns {
+    /// Instance path, the POU's name for the top chart.
+    pub instance: String,
+    /// The runs kept (the last [`MAX_RUNS`] completed, then the one in progress).
+    pub runs: Vec<Run>,
+    /// Earlier runs not kept (they still count in `states`).
+    pub dropped: u64,
+    /// Per state: count, min, mean, max of its times over the runs.
+    pub states: Vec<StateStats>,
+    /// Runs ended by SFCInit.
+    pub resets: u64,
 }
 
 /// Where in the chart a runtime error happened ([`Simulation::fault_place`]); names carry the
@@ -255,6 +274,8 @@ impl Simulation {
         let transition_qnames =
             charts.iter().map(|c| c.plan.transition_names.iter().map(|t| c.qualify(t)).collect()).collect();
         let order = ActiveOrder::new(&charts);
+        let mut mech = mechanism::Mechanisms::new(&charts);
+        mech.find_timer_guards(&prog, &charts);
         let transition_base = charts
             .iter()
             .scan(0u32, |base, c| {
@@ -263,7 +284,7 @@ impl Simulation {
                 Some(b)
             })
             .collect();
-        Simulation {
+        let mut sim = Simulation {
             prog,
             mem,
             top_frame,
@@ -285,7 +306,10 @@ impl Simulation {
             monitor_sink: ScanSink::default(),
             budget: crate::code::SCAN_BUDGET,
             interrupt: None,
-        }
+            mech,
+        };
+        sim.find_code_slots();
+        sim
     }
 
     /// Starts the POU again from its declared initial values (a PLC's restart): memory, steps
@@ -293,6 +317,8 @@ impl Simulation {
     /// first scan after a restart is the chart's scan 0 at a later virtual time. Coverage and
     /// time analysis go on over the whole run.
     pub fn restart(&mut self) {
+        let now = self.next_time();
+        self.mech.restart(now);
         let Memory { mut mem, charts: instances, .. } = self.prog.instantiate(self.top);
         let mut charts = chart_states(&self.prog, instances, &mut mem);
         if self.opts.profile == Profile::Matiec {
@@ -420,6 +446,11 @@ impl Simulation {
         };
         self.next_scan += 1;
         self.log.record(now, &self.sink, &self.charts);
+        if self.mech.busy(&self.sink) {
+            self.track_mechanisms(now, scan);
+        } else if !self.mech.fresh.is_empty() {
+            self.mech.fresh.clear();
+        }
         if let Err(fault) = result {
             let lc = self.source.line_col(fault.span.start);
             let e = RuntimeError {
@@ -455,6 +486,9 @@ impl Simulation {
         self.record.scan = scan;
         self.record.time = time;
         std::mem::swap(&mut self.record.events, &mut self.sink.events);
+        if !self.mech.fresh.is_empty() || !self.record.errors.is_empty() {
+            self.record.errors.clone_from(&self.mech.fresh);
+        }
         self.sink.events.clear();
         self.record.events.sort_by_key(Event::rank);
         // Within one chart's evolution, `fired` is in declaration order.
@@ -485,7 +519,8 @@ impl Simulation {
     }
 
     /// The whole run-time state (variables, steps, action control, time, last record), so a
-    /// search (the analyzer's witness replay) can try a scan and come back.
+    /// search (the analyzer's witness replay) can try a scan and come back. Without the
+    /// mechanisms' history (error records, runs), which goes on.
     pub fn snapshot(&self) -> Snapshot {
         Snapshot {
             mem: self.mem.clone(),
@@ -530,6 +565,10 @@ impl Simulation {
         self.next_scan = snap.next_scan;
         self.sink.clear();
         self.log.rewind(snap.log);
+        // The mechanisms' history (error records, runs) is not part of a snapshot: a search
+        // that tries scans and comes back does not read it, and copying it at every node
+        // would make the search slower.
+        self.mech.fresh.clear();
         self.order.valid = None;
     }
 
@@ -776,6 +815,10 @@ impl Simulation {
     }
 
     fn explain_view(&self) -> crate::explain::View<'_> {
+        self.explain_view_at(self.next_time() - self.opts.period)
+    }
+
+    fn explain_view_at(&self, now: i64) -> crate::explain::View<'_> {
         crate::explain::View {
             prog: &self.prog,
             mem: &self.mem,
@@ -783,7 +826,7 @@ impl Simulation {
             source: &self.source,
             top: self.top,
             top_frame: self.top_frame,
-            now: self.next_time() - self.opts.period,
+            now,
             profile: self.opts.profile,
         }
     }

@@ -28,6 +28,43 @@ pub struct TransitionReport {
     /// A transition that takes precedence (higher priority or earlier declaration) and is
     /// enabled and true, so this one would not fire anyway.
     pub masked_by: Option<String>,
+    /// The terminal of each operand wired to the machine, `(operand, "X12.3, %IX0.5")`
+    /// (`sfc.terminal` label and AT address, an input of a block followed to its caller).
+    pub terminals: Vec<(String, String)>,
+    /// The condition in words, one entry per operand that must change, with its terminal and
+    /// its value now: `KM2Fb (X12.3, %IX0.5) is FALSE; needs TRUE` (empty when the guard is
+    /// true or no change of operands makes it true).
+    pub needs: Vec<String>,
+}
+
+impl TransitionReport {
+    /// An operand as a service technician reads it: `KM2Fb (X12.3, %IX0.5)`, or the operand
+    /// alone when it has no terminal.
+    pub fn operand_with_terminal(&self, operand: &str) -> String {
+        match self.terminals.iter().find(|(o, _)| o == operand) {
+            Some((_, t)) => format!("{operand} ({t})"),
+            None => operand.to_string(),
+        }
+    }
+
+    /// The continuation condition in words: the `needs` joined with ` and `, or, when none
+    /// can be named, the guard and its value (`Settle.T >= SettleDelay is FALSE`).
+    pub fn condition_text(&self) -> String {
+        if !self.needs.is_empty() {
+            return self.needs.join(" and ");
+        }
+        if self.guard.is_empty() {
+            return "no condition".to_string();
+        }
+        format!("{} is {}", self.guard, if self.value { "TRUE" } else { "FALSE" })
+    }
+
+    /// The operands with their terminals and values: `KM2Fb (%IX0.5) = FALSE, SFCError = TRUE`.
+    pub fn operands_text(&self) -> String {
+        let ops: Vec<String> =
+            self.operands.iter().map(|(o, v)| format!("{} = {v}", self.operand_with_terminal(o))).collect();
+        ops.join(", ")
+    }
 }
 
 /// Why one active step has not been left.
@@ -54,8 +91,10 @@ impl StepReport {
                 line.push_str(" is FALSE");
             }
             if !t.operands.is_empty() {
-                let ops: Vec<String> = t.operands.iter().map(|(o, v)| format!("{o} = {v}")).collect();
-                line.push_str(&format!(" [{}]", ops.join(", ")));
+                line.push_str(&format!(" [{}]", t.operands_text()));
+            }
+            if !t.needs.is_empty() {
+                line.push_str(&format!(": {}", t.needs.join(" and ")));
             }
             if !t.change.is_empty() {
                 line.push_str(&format!("; fires when {}", t.change.join(" and ")));
@@ -88,7 +127,12 @@ impl StepReport {
                 "transition": t.transition,
                 "guard": t.guard,
                 "value": t.value,
-                "operands": t.operands.iter().map(|(o, v)| serde_json::json!({"operand": o, "value": v})).collect::<Vec<_>>(),
+                "operands": t.operands.iter().map(|(o, v)| {
+                    let terminal = t.terminals.iter().find(|(n, _)| n == o).map(|(_, x)| x.clone());
+                    serde_json::json!({"operand": o, "value": v, "terminal": terminal})
+                }).collect::<Vec<_>>(),
+                "needs": t.needs,
+                "condition": t.condition_text(),
                 "change": t.change,
                 "missing": t.missing,
                 "masked_by": t.masked_by,
@@ -138,6 +182,7 @@ struct Atoms<'v, 'a> {
     texts: Vec<String>,
     values: Vec<Option<bool>>,
     operands: Vec<(String, String)>,
+    terminals: Vec<(String, String)>,
 }
 
 impl Atoms<'_, '_> {
@@ -222,6 +267,9 @@ impl Atoms<'_, '_> {
                     v => v.clone(),
                 };
                 if !self.operands.iter().any(|(o, _)| *o == text) {
+                    if let Some(t) = self.view.prog.terminal(self.view.top, &full).and_then(|t| t.text()) {
+                        self.terminals.push((text.clone(), t));
+                    }
                     self.operands.push((text, show(&v)));
                 }
                 return Some(v);
@@ -360,26 +408,43 @@ pub(crate) fn report(view: View<'_>, chart: usize, s: u32) -> StepReport {
     };
     for &t in outgoing {
         let tr = &code.chart.transitions[t as usize];
-        let (guard, value, operands, change) = match &tr.condition {
+        let (guard, value, operands, change, terminals, needs) = match &tr.condition {
             Condition::St(e) => {
-                let mut atoms =
-                    Atoms { view: &view, path: &st.path, texts: Vec::new(), values: Vec::new(), operands: Vec::new() };
+                let mut atoms = Atoms {
+                    view: &view,
+                    path: &st.path,
+                    texts: Vec::new(),
+                    values: Vec::new(),
+                    operands: Vec::new(),
+                    terminals: Vec::new(),
+                };
                 let f = atoms.formula(e, 0);
                 let value = value_of(t).unwrap_or(false);
-                let change = if value {
+                let flips: Vec<(usize, bool)> = if value {
                     Vec::new()
                 } else {
                     match smallest_change(&f, &atoms.values) {
                         Some(mask) => (0..atoms.texts.len())
                             .filter(|&i| mask >> i & 1 == 1)
-                            .map(|i| {
-                                let to = !atoms.values[i].unwrap_or(false);
-                                format!("{} → {}", atoms.texts[i], if to { "TRUE" } else { "FALSE" })
-                            })
+                            .map(|i| (i, !atoms.values[i].unwrap_or(false)))
                             .collect(),
                         None => Vec::new(),
                     }
                 };
+                let word = |b: bool| if b { "TRUE" } else { "FALSE" };
+                let change =
+                    flips.iter().map(|&(i, to)| format!("{} → {}", atoms.texts[i], word(to))).collect::<Vec<_>>();
+                let needs = flips
+                    .iter()
+                    .map(|&(i, to)| {
+                        let text = &atoms.texts[i];
+                        let named = match atoms.terminals.iter().find(|(o, _)| o == text) {
+                            Some((_, t)) => format!("{text} ({t})"),
+                            None => text.clone(),
+                        };
+                        format!("{named} is {}; needs {}", word(!to), word(to))
+                    })
+                    .collect::<Vec<_>>();
                 // Comparisons are operands too: show their values.
                 let mut operands = atoms.operands;
                 for (text, v) in atoms.texts.iter().zip(&atoms.values) {
@@ -387,13 +452,13 @@ pub(crate) fn report(view: View<'_>, chart: usize, s: u32) -> StepReport {
                         operands.push((text.clone(), v.map(|b| show(&Value::Bool(b))).unwrap_or_else(|| "?".into())));
                     }
                 }
-                (view.source.slice(e.span).to_string(), value, operands, change)
+                (view.source.slice(e.span).to_string(), value, operands, change, atoms.terminals, needs)
             }
             Condition::Il(il) => {
                 let value = value_of(t).unwrap_or(false);
-                (view.source.slice(il.span).trim().to_string(), value, Vec::new(), Vec::new())
+                (view.source.slice(il.span).trim().to_string(), value, Vec::new(), Vec::new(), Vec::new(), Vec::new())
             }
-            Condition::Missing => (String::new(), false, Vec::new(), Vec::new()),
+            Condition::Missing => (String::new(), false, Vec::new(), Vec::new(), Vec::new(), Vec::new()),
         };
         let missing: Vec<String> = plan
             .pre
@@ -415,6 +480,8 @@ pub(crate) fn report(view: View<'_>, chart: usize, s: u32) -> StepReport {
             change,
             missing,
             masked_by,
+            terminals,
+            needs,
         });
     }
     StepReport {

@@ -16,7 +16,10 @@ pub mod timespec;
 pub mod trace;
 pub mod value;
 
-pub use engine::{FaultPlace, ScanSink, Simulation, Snapshot, StepStats, TimeStats};
+pub use engine::{
+    ErrorRecord, FaultPlace, MechanismRuns, MechanismView, Run, RunEnd, ScanSink, Simulation, Snapshot, StateStats,
+    StepStats, TimeStats,
+};
 pub use explain::{StepReport, TransitionReport};
 pub use value::{format_time, parse_time, write_time, Value};
 
@@ -160,4 +163,7 @@ pub struct ScanRecord {
     pub fired: Vec<String>,
     /// Events in the order conflict, unsafe, contention, error.
     pub events: Vec<Event>,
+    /// Error records completed in this scan (supervision timeouts with their condition),
+    /// written after the events as `{"kind":"supervision",…}`.
+    pub errors: Vec<ErrorRecord>,
 }

@@ -130,6 +130,10 @@ pub enum Expectation {
     Value { key: String, value: Value, ty: Type },
     /// An ST BOOL expression that must be TRUE (`expect = "Level > 10 AND NOT Alarm"`).
     Holds(Condition),
+    /// `error_record = "text"` (or `"Rev.error_record"` for one instance): the latest error
+    /// record of a supervision timeout so far contains `text` (its message, as `sfc sim`
+    /// prints it).
+    ErrorRecord { instance: Option<String>, text: String },
 }
 
 /// A kind of runtime event a scenario can forbid (`forbid = ["unsafe", "conflict"]`).
@@ -955,6 +959,23 @@ impl<'a> Binder<'a> {
         Ok((a.key.clone(), self.value(a, &ty)?))
     }
     fn expect(&self, a: &RawAssign) -> Result<Expectation, ScenarioError> {
+        let record_key = a.key.eq_ignore_ascii_case("error_record")
+            || a.key.len() > 13 && a.key[a.key.len() - 13..].eq_ignore_ascii_case(".error_record");
+        if record_key && self.sim.type_of(&a.key).is_none() {
+            let Raw::Str(text) = &a.value else {
+                return Err(self.err(
+                    a,
+                    format!("`{}` must be a text the error record contains; found {}", a.key, a.value.describe()),
+                ));
+            };
+            let instance = a.key.rsplit_once('.').map(|(i, _)| i.to_string());
+            if let Some(i) = &instance {
+                if !self.sim.mechanisms().iter().any(|m| m.instance.eq_ignore_ascii_case(i)) {
+                    return Err(self.err(a, format!("`{i}` is not an SFC instance of {}", self.sim.pou_name())));
+                }
+            }
+            return Ok(Expectation::ErrorRecord { instance, text: text.clone() });
+        }
         if a.key == "active" {
             let Raw::List(items) = &a.value else {
                 return Err(self.err(
@@ -1293,6 +1314,28 @@ pub(crate) fn mismatch(sim: &Simulation, x: &Expectation) -> Option<String> {
             Ok(false) => Some(format!("`{}` is FALSE ({})", c.text, c.operands(sim))),
             Err(m) => Some(format!("`{}` cannot be evaluated: {m}", c.text)),
         },
+        Expectation::ErrorRecord { instance, text } => {
+            let key = record_key(instance);
+            let latest = sim
+                .error_records()
+                .into_iter()
+                .filter(|r| instance.as_ref().is_none_or(|i| r.instance.eq_ignore_ascii_case(i)))
+                .last();
+            match latest {
+                Some(r) if r.message().contains(text.as_str()) => None,
+                Some(r) => {
+                    Some(format!("`{key}`: expected a record containing \"{text}\", actual \"{}\"", r.message()))
+                }
+                None => Some(format!("`{key}`: expected a record containing \"{text}\", but no error record was made")),
+            }
+        }
+    }
+}
+
+fn record_key(instance: &Option<String>) -> String {
+    match instance {
+        Some(i) => format!("{i}.error_record"),
+        None => "error_record".to_string(),
     }
 }
 
@@ -1303,6 +1346,7 @@ pub(crate) fn holding(sim: &Simulation, xs: &[Expectation]) -> String {
             Expectation::Active(want) => format!("`active` = {}", show_steps(want)),
             Expectation::Value { key, value, ty } => format!("`{key}` = {}", show(value, ty)),
             Expectation::Holds(c) => format!("`{}` is TRUE ({})", c.text, c.operands(sim)),
+            Expectation::ErrorRecord { instance, text } => format!("`{}` contains \"{text}\"", record_key(instance)),
         })
         .collect::<Vec<_>>()
         .join(" and ")

@@ -296,6 +296,10 @@ fn describe(xs: &[Expectation]) -> String {
             Expectation::Active(steps) => format!("`active` = [{}]", steps.join(", ")),
             Expectation::Value { key, .. } => format!("`{key}`"),
             Expectation::Holds(c) => format!("`{}`", c.text),
+            Expectation::ErrorRecord { instance, .. } => match instance {
+                Some(i) => format!("`{i}.error_record`"),
+                None => "`error_record`".to_string(),
+            },
         })
         .collect::<Vec<_>>()
         .join(" and ")

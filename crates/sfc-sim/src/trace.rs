@@ -369,6 +369,13 @@ pub fn push_json_row(out: &mut String, record: &ScanRecord, vars: &[(String, Typ
         }
         out.push_str(&event_json(e));
     }
+    // Error records of supervision timeouts, after the events of the contract.
+    for (i, r) in record.errors.iter().enumerate() {
+        if i > 0 || !events.is_empty() {
+            out.push(',');
+        }
+        out.push_str(&r.to_json().to_string());
+    }
     out.push_str("]}");
 }
 
@@ -770,6 +777,7 @@ mod tests {
             active: active.iter().map(|s| s.to_string()).collect(),
             fired: if scan == 1 { vec!["T1".into()] } else { vec![] },
             events: vec![],
+            errors: vec![],
         };
         let values = vec![
             Value::Bool(start),

@@ -11,10 +11,10 @@ import { toasts } from '../app/toast';
 import { MonitorClient, type SocketFactory } from './client';
 import { MonitorIcon, type MonitorIconName } from './icons';
 import { shortDuration, type Hello, type ScanState, type StepReport } from './protocol';
-import { blocksOf, nameOfBlock, type MonitorTarget } from './session';
-import { ExplainPanel, TimingPanel, EventsPanel, VariablesPanel, BreakpointsPanel } from './panels';
+import { blocksOf, elementsByName, nameOfBlock, type MonitorTarget } from './session';
+import { ExplainPanel, TimingPanel, EventsPanel, VariablesPanel, BreakpointsPanel, MechanismsPanel } from './panels';
 
-type SideTab = 'variables' | 'breakpoints' | 'why' | 'timing' | 'events';
+type SideTab = 'variables' | 'breakpoints' | 'why' | 'timing' | 'events' | 'mechanisms';
 
 interface MenuAt {
   x: number;
@@ -33,11 +33,24 @@ function report(p: Promise<unknown>): void {
   p.catch((e: Error) => toasts.show('error', t('monitor.refused', { message: e.message })));
 }
 
-/** Runtime names spelled as the runtime spells them → blocks. */
-function resolveElements(info: Hello | null, elements: Record<string, string[]>): Record<string, string[]> {
+/**
+ * Runtime names spelled as the runtime spells them → blocks. With `instance` (an SFC instance
+ * of the running program chosen in the Mechanisms panel, whose function block is the chart
+ * shown), its steps and transitions (`Rev.OpenKM1`) are matched to the chart's by name.
+ */
+function resolveElements(info: Hello | null, elements: Record<string, string[]>, instance: string | null, byName: Record<string, string[]>): Record<string, string[]> {
   if (!info) return elements;
   const out: Record<string, string[]> = {};
+  const prefix = instance ? `${instance}.`.toUpperCase() : null;
   for (const n of [...info.steps.map((s) => s.name), ...info.transitions.map((x) => x.name)]) {
+    if (prefix) {
+      if (!n.toUpperCase().startsWith(prefix)) continue;
+      const rest = n.slice(prefix.length);
+      if (rest.includes('.')) continue;
+      const ids = blocksOf(byName, rest);
+      if (ids.length) out[n] = ids;
+      continue;
+    }
     const ids = blocksOf(elements, n);
     if (ids.length) out[n] = ids;
   }
@@ -73,6 +86,8 @@ export function MonitorView({ target, createCanvas, onLeave, socket }: MonitorVi
   const [menu, setMenu] = useState<MenuAt | null>(null);
   const [explained, setExplained] = useState<StepReport | null>(null);
   const [explainError, setExplainError] = useState('');
+  /** The SFC instance shown on the chart (Mechanisms panel); null: the chart's own names. */
+  const [instance, setInstance] = useState<string | null>(null);
   const [, setTick] = useState(0);
 
   // A witness to replay: once connected, set each scan's inputs and run that scan.
@@ -95,7 +110,17 @@ export function MonitorView({ target, createCanvas, onLeave, socket }: MonitorVi
   });
 
   const info = client.info;
-  const elements = useMemo(() => resolveElements(info, target.elements), [info, target.elements]);
+  const byName = useMemo(() => elementsByName(target.doc), [target.doc]);
+  const elements = useMemo(() => resolveElements(info, target.elements, instance, byName), [info, target.elements, instance, byName]);
+  const selectInstance = (name: string, pou: string) => {
+    if (pou.toUpperCase() !== target.doc.pou.toUpperCase()) {
+      toasts.show('info', t('monitor.mechanisms.otherChart', { instance: name, pou, shown: target.doc.pou }));
+      return;
+    }
+    // The top chart of a simulation is the chart itself: its names carry no instance path.
+    const isTop = info?.steps.some((s) => !s.name.includes('.')) && !info?.steps.some((s) => s.name.toUpperCase().startsWith(`${name.toUpperCase()}.`));
+    setInstance(isTop ? null : name);
+  };
   const kindOf = (id: string) => target.doc.elements.find((e) => e.id === id)?.kind;
   const selName = selected ? nameOfBlock(elements, selected) : undefined;
   const selKind = selected ? kindOf(selected) : undefined;
@@ -362,7 +387,7 @@ export function MonitorView({ target, createCanvas, onLeave, socket }: MonitorVi
         </div>
         <aside class="mon-side" aria-label={t('monitor.panel')}>
           <div class="panel-tabs mon-tabs" role="tablist">
-            {(['variables', 'breakpoints', 'why', 'timing', 'events'] as SideTab[]).map((k) => (
+            {(['variables', 'breakpoints', 'why', 'timing', 'mechanisms', 'events'] as SideTab[]).map((k) => (
               <button key={k} role="tab" aria-selected={side === k} class={`panel-tab ${side === k ? 'active' : ''}`} onClick={() => setSide(k)}>
                 {t(`monitor.tab.${k}`)}
                 {k === 'breakpoints' && client.breakpoints.length > 0 && <span class="mon-count">{client.breakpoints.length}</span>}
@@ -376,6 +401,7 @@ export function MonitorView({ target, createCanvas, onLeave, socket }: MonitorVi
               <ExplainPanel report={explained} error={explainError} selectedStep={selKind === 'step' ? selName ?? null : null} canExplain={activeSel} onExplain={() => selName && void explain(selName)} />
             )}
             {side === 'timing' && <TimingPanel client={client} />}
+            {side === 'mechanisms' && <MechanismsPanel client={client} shown={instance} onSelect={selectInstance} />}
             {side === 'events' && <EventsPanel client={client} />}
           </div>
         </aside>
@@ -461,6 +487,11 @@ function ExplainBubble(props: { report: StepReport; host: HTMLElement | null; id
               </span>
             ))}
           </div>
+          {(x.needs ?? []).map((n) => (
+            <div key={n} class="mon-needs">
+              {n}
+            </div>
+          ))}
           {x.change.length > 0 && <div class="mon-fires">{t('monitor.explain.firesWhen', { change: x.change.join(', ') })}</div>}
           {x.missing.length > 0 && <div class="mon-fires">{t('monitor.explain.waitsFor', { steps: x.missing.join(', ') })}</div>}
           {x.masked_by && <div class="mon-fires">{t('monitor.explain.masked', { by: x.masked_by })}</div>}

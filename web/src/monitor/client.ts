@@ -14,6 +14,7 @@ import {
   type RunState,
   type ScanState,
   type StepReport,
+  type Mechanisms,
   type Timing,
 } from './protocol';
 
@@ -357,6 +358,10 @@ export class MonitorClient {
   }
 
   /** The time analysis per step. */
+  mechanisms(): Promise<Mechanisms> {
+    return this.request<Mechanisms>('mechanisms');
+  }
+
   timing(): Promise<Timing> {
     return this.request<Timing>('timing');
   }

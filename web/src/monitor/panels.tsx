@@ -1,10 +1,11 @@
 // The monitor's side panels: variables (watch list, force, set), breakpoints, the condition
 // analysis of a stuck step, the time analysis per step, and the runtime's events.
+import { Fragment } from 'preact';
 import { useEffect, useState } from 'preact/hooks';
 import { t } from '../i18n';
 import { toasts } from '../app/toast';
 import type { MonitorClient } from './client';
-import { parseValue, showValue, type ScanState, type StepReport, type Timing, type VariableInfo } from './protocol';
+import { parseValue, showValue, type Mechanisms, type ScanState, type StepReport, type Timing, type VariableInfo } from './protocol';
 
 const WATCH_KEY = 'sfc.monitor.watch';
 
@@ -258,12 +259,112 @@ export function ExplainPanel(props: { report: StepReport | null; error: string; 
                   ))}
                 </tbody>
               </table>
+              {(x.needs ?? []).map((n) => (
+                <div key={n} class="mon-needs">
+                  {n}
+                </div>
+              ))}
               {x.change.length > 0 && <div class="mon-fires">{t('monitor.explain.firesWhen', { change: x.change.join(', ') })}</div>}
               {x.missing.length > 0 && <div class="mon-fires">{t('monitor.explain.waitsFor', { steps: x.missing.join(', ') })}</div>}
               {x.masked_by && <div class="mon-fires">{t('monitor.explain.masked', { by: x.masked_by })}</div>}
             </div>
           ))}
         </>
+      )}
+    </div>
+  );
+}
+
+/**
+ * Every SFC instance of the running program at a glance (seed 003's mechanisms): activation
+ * bit, state, active steps with their times, runs, resets, errors and the last error record.
+ * Selecting one shows it on the chart.
+ */
+export function MechanismsPanel(props: { client: MonitorClient; shown: string | null; onSelect: (instance: string, pou: string) => void }) {
+  const { client } = props;
+  const [list, setList] = useState<Mechanisms | null>(null);
+  const [error, setError] = useState('');
+  const load = () =>
+    client.mechanisms().then(
+      (x) => {
+        setList(x);
+        setError('');
+      },
+      (e: Error) => setError(e.message),
+    );
+  useEffect(() => {
+    void load();
+    const every = setInterval(() => {
+      if (!client.halted && client.status === 'open') void load();
+    }, 500);
+    return () => clearInterval(every);
+  }, [client]);
+  return (
+    <div class="mon-mechanisms">
+      <div class="mon-why-head">
+        <button class="button" onClick={() => void load()}>
+          {t('monitor.mechanisms.refresh')}
+        </button>
+        {list && <span class="muted">{t('monitor.mechanisms.at', { scan: list.scan })}</span>}
+      </div>
+      {error && <div class="field-error">{error}</div>}
+      {list && list.mechanisms.length === 0 && <div class="empty">{t('monitor.mechanisms.none')}</div>}
+      {list && list.mechanisms.length > 0 && (
+        <table class="mon-table">
+          <thead>
+            <tr>
+              <th>{t('monitor.mechanisms.instance')}</th>
+              <th>{t('monitor.mechanisms.state')}</th>
+              <th>{t('monitor.mechanisms.active')}</th>
+              <th>{t('monitor.mechanisms.runs')}</th>
+              <th>{t('monitor.mechanisms.errors')}</th>
+            </tr>
+          </thead>
+          <tbody>
+            {list.mechanisms.map((m) => (
+              <Fragment key={m.instance}>
+                <tr
+                  data-instance={m.instance}
+                  class={`mon-mech ${props.shown === m.instance ? 'selected' : ''} ${m.lastError ? 'has-error' : ''}`}
+                  title={t('monitor.mechanisms.select', { instance: m.instance })}
+                  onClick={() => props.onSelect(m.instance, m.pou)}
+                >
+                  <td>
+                    <b>{m.instance}</b>
+                    <div class="muted">{m.pou}</div>
+                  </td>
+                  <td>
+                    {m.activation !== null && (
+                      <span class={`mon-val ${m.activation ? 'on' : 'off'}`} title={`${t('monitor.mechanisms.activation')}: ${m.activationVariable ?? ''}`}>
+                        {m.activation ? 'TRUE' : 'FALSE'}
+                      </span>
+                    )}{' '}
+                    {m.running ? t('monitor.mechanisms.running') : t('monitor.mechanisms.idle')}
+                  </td>
+                  <td class="mon-mech-steps">
+                    {m.active.map((a) => (
+                      <div key={a.step}>
+                        {a.step} <span class="muted">{a.time}</span>
+                      </div>
+                    ))}
+                  </td>
+                  <td>
+                    {m.runs}
+                    {m.resets > 0 && <span class="muted"> ({t('monitor.mechanisms.resets')}: {m.resets})</span>}
+                  </td>
+                  <td>{m.errors}</td>
+                </tr>
+                {m.lastError && (
+                  <tr class="mon-mech-error" data-instance-error={m.instance}>
+                    <td colSpan={5}>
+                      <span class="muted">{t('monitor.mechanisms.lastError')}:</span> {m.lastError.message}
+                    </td>
+                  </tr>
+                )}
+              </Fragment>
+            ))}
+          </tbody>
+        </table>
       )}
     </div>
   );

@@ -42,8 +42,11 @@ export interface TransitionReport {
   transition: string;
   guard: string;
   value: boolean;
-  operands: { operand: string; value: string }[];
+  /** `terminal`: where the operand is wired (`X12.3, %IX0.5`), null when it is not. */
+  operands: { operand: string; value: string; terminal?: string | null }[];
   change: string[];
+  /** The operands that must change, in words with terminals and values: `KM2Fb (X12.3, %IX0.5) is FALSE; needs TRUE`. */
+  needs?: string[];
   missing: string[];
   masked_by: string | null;
 }
@@ -72,6 +75,44 @@ export interface StepTiming {
 export interface Timing {
   scan: number;
   steps: StepTiming[];
+}
+
+/** An error record of a supervision timeout (docs/sim.md, "Error records"). */
+export interface ErrorRecord {
+  kind: 'supervision';
+  instance: string;
+  step: string;
+  code: number | null;
+  code_variable: string | null;
+  condition: string;
+  conditions: { transition: string; condition: string }[];
+  waited: string;
+  /** The step's `sfc.timeout`; null when the chart's own timer guard (`by`) ended the wait. */
+  timeout: string | null;
+  by: string | null;
+  scan: number;
+  time: string;
+  message: string;
+}
+
+/** One SFC instance of the running program (`mechanisms`, docs/monitor.md). */
+export interface Mechanism {
+  instance: string;
+  pou: string;
+  activation: boolean | null;
+  activationVariable: string | null;
+  running: boolean;
+  active: { step: string; time: string; timeUs: number }[];
+  lastError: ErrorRecord | null;
+  runs: number;
+  resets: number;
+  errors: number;
+}
+
+export interface Mechanisms {
+  scan: number;
+  mechanisms: Mechanism[];
+  errorRecords: ErrorRecord[];
 }
 
 /** Merges a `delta` into the state it follows: a new object, the old one untouched. */

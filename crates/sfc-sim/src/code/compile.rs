@@ -213,12 +213,14 @@ impl Program {
             action_a: Vec<u32>,
             control: ControlSlots,
             chart_slot: u32,
+            wiring: super::wiring::Wiring,
         }
         let parts: Vec<Parts> = u
             .pous
             .into_iter()
             .map(|m| Parts {
                 name: m.ast.name.text.clone(),
+                wiring: super::wiring::Wiring::of(m.ast),
                 kind: m.ast.kind,
                 layout: m.layout,
                 chart: m.chart,
@@ -253,7 +255,7 @@ impl Program {
                     }))
                 }
             };
-            out.push(PouCode { name: meta.name, kind: meta.kind, layout: meta.layout, body });
+            out.push(PouCode { name: meta.name, kind: meta.kind, layout: meta.layout, body, wiring: meta.wiring });
         }
         Ok(Program {
             pous: out,

@@ -177,6 +177,8 @@ pub struct PouCode {
     pub kind: PouKind,
     pub layout: Layout,
     pub body: PouBody,
+    /// Terminal labels, the error-code variable and the inputs its calls pass.
+    pub wiring: wiring::Wiring,
 }
 
 pub enum PouBody {
@@ -355,3 +357,4 @@ mod stdfn;
 mod stmt;
 mod texpr;
 mod unit;
+pub mod wiring;
