@@ -357,6 +357,24 @@ Delay = "T#1s"
     }
 
     #[test]
+    fn an_opcua_section_with_users() {
+        let text = "[opcua]\nendpoint = \"opc.tcp://127.0.0.1:4840\"\npki_dir = \"pki\"\nanonymous_read = true\n\n\
+                    [[opcua.user]]\nname = \"scada\"\npassword_hash = \"$argon2id$v=19$m=19456,t=2,p=1$c2FsdA$aGFzaA\"\n";
+        let c = parse(text, Path::new("/etc/sfc/plant.toml")).unwrap();
+        assert_eq!(c.opcua.endpoint.as_deref(), Some("opc.tcp://127.0.0.1:4840"));
+        assert_eq!(c.opcua.pki_dir, Some(PathBuf::from("/etc/sfc/pki")));
+        assert_eq!(c.opcua.anonymous_read, Some(true));
+        assert_eq!(c.opcua.users.len(), 1);
+        assert_eq!(c.opcua.users[0].0, "scada");
+        // A password where its hash belongs is refused, located.
+        let e =
+            parse("[[opcua.user]]\nname = \"scada\"\npassword_hash = \"secret\"\n", Path::new("p.toml")).unwrap_err();
+        assert!(e.starts_with("p.toml:3:") && e.contains("argon2"), "{e}");
+        let e = parse("[[opcua.user]]\nname = \"scada\"\n", Path::new("p.toml")).unwrap_err();
+        assert!(e.contains("needs `name` and `password_hash`"), "{e}");
+    }
+
+    #[test]
     fn mistakes_are_located() {
         let e = parse("period = \"T#5ms\"\nperiode = 1\n", Path::new("p.toml")).unwrap_err();
         assert!(e.starts_with("p.toml:2:1: unknown key `periode`"), "{e}");

@@ -5,7 +5,7 @@
 
 mod common;
 
-use common::{command, root, scratch, Run};
+use common::{command, root, scratch, Run, Ws};
 use std::io::Write;
 use std::path::{Path, PathBuf};
 use std::process::Stdio;
@@ -83,11 +83,19 @@ fn an_asyncua_client_browses_reads_subscribes_and_writes() {
         "--opcua-allow-none",
         "--opcua-pki",
         s(&pki),
+        "--monitor",
+        "127.0.0.1:0",
         "--for",
         "T#120s",
     ]);
     let url = opcua_url(&mut run);
+    // A variable forced from the monitor reads its forced value over OPC UA.
+    let mon = run.monitor();
+    let mut ws = Ws::connect(&format!("ws://{mon}/?token=t0k3n"));
+    let f = ws.cmd(1, serde_json::json!({"cmd": "force", "name": "DryerSelect", "value": true}));
+    assert_eq!(f["ok"], true, "{f}");
     let r = client("open", &url, &[]);
+    assert_eq!(r["browse"]["variables"]["DryerSelect"]["value"], true, "the forced value");
     let vars = &r["browse"]["variables"];
     assert_eq!(vars.as_object().unwrap().len(), VARIABLES.len(), "{vars}");
     for (name, section, ty, at) in VARIABLES {
@@ -214,11 +222,12 @@ fn security_policy_none_only_on_loopback() {
 
 /// The start jitter p99 of one `sfc run` of `secs` seconds, with `clients` asyncua sessions
 /// subscribed to every variable and step at 100 ms.
-fn jitter_p99(dir: &Path, clients: usize, secs: u64) -> (u64, serde_json::Value) {
+fn jitter_p99(dir: &Path, clients: usize, secs: u64, realtime: bool) -> (u64, serde_json::Value) {
     let pki = dir.join("pki");
     let d = format!("T#{secs}s");
-    let mut run = Run::start(&[
-        s(&carwash()),
+    let chart = carwash();
+    let mut args = vec![
+        s(&chart),
         "--no-retain",
         "--opcua",
         "opc.tcp://127.0.0.1:0",
@@ -227,7 +236,11 @@ fn jitter_p99(dir: &Path, clients: usize, secs: u64) -> (u64, serde_json::Value)
         s(&pki),
         "--for",
         &d,
-    ]);
+    ];
+    if realtime {
+        args.push("--realtime");
+    }
+    let mut run = Run::start(&args);
     let url = opcua_url(&mut run);
     let load = if clients > 0 {
         client("load", &url, &[&clients.to_string(), &(secs.saturating_sub(2)).to_string()])
@@ -240,8 +253,9 @@ fn jitter_p99(dir: &Path, clients: usize, secs: u64) -> (u64, serde_json::Value)
     (p99, load)
 }
 
-/// The load test: 20 clients × every variable at 100 ms over 60 s with SFC_OPCUA_LOAD=1; in CI
-/// a bounded portion (4 clients, 6 s). Prints the jitter p99 with and without clients.
+/// The load test: 20 clients × every variable at 100 ms over 60 s with SFC_OPCUA_LOAD=1 (at
+/// normal and at real-time priority); in CI a bounded portion (4 clients, 6 s, normal
+/// priority). Prints the jitter p99 with and without clients.
 #[test]
 fn load_prints_the_jitter_with_and_without_clients() {
     if !asyncua() {
@@ -250,15 +264,19 @@ fn load_prints_the_jitter_with_and_without_clients() {
     let full = std::env::var_os("SFC_OPCUA_LOAD").is_some();
     let (clients, secs) = if full { (20, 60) } else { (4, 6) };
     let dir = scratch("opcua-load");
-    let (quiet, _) = jitter_p99(&dir, 0, secs);
-    let (loaded, load) = jitter_p99(&dir, clients, secs);
-    eprintln!(
-        "OPC UA load: {clients} clients × all variables at 100 ms for {secs} s: {} notifications; \
-         start jitter p99 {loaded} µs with clients, {quiet} µs without (ratio {:.2})",
-        load["notifications"],
-        loaded as f64 / quiet.max(1) as f64
-    );
-    assert_eq!(load["clients"], clients as u64, "{load}");
-    assert!(load["notifications"].as_u64().unwrap() > 0, "{load}");
+    let priorities: &[bool] = if full { &[false, true] } else { &[false] };
+    for &realtime in priorities {
+        let (quiet, _) = jitter_p99(&dir, 0, secs, realtime);
+        let (loaded, load) = jitter_p99(&dir, clients, secs, realtime);
+        eprintln!(
+            "OPC UA load ({} priority): {clients} clients × all variables at 100 ms for {secs} s: {} notifications; \
+             start jitter p99 {loaded} µs with clients, {quiet} µs without (ratio {:.2})",
+            if realtime { "real-time" } else { "normal" },
+            load["notifications"],
+            loaded as f64 / quiet.max(1) as f64
+        );
+        assert_eq!(load["clients"], clients as u64, "{load}");
+        assert!(load["notifications"].as_u64().unwrap() > 0, "{load}");
+    }
     let _ = std::fs::remove_dir_all(&dir);
 }
