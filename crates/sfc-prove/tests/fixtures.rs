@@ -45,6 +45,11 @@ fn expected(path: &Path) -> Vec<Expected> {
         .collect()
 }
 
+/// The prover's time budget per chart. The fixtures' verdicts must not depend on the speed of
+/// the machine: `st_loops` takes about 25 s in the unoptimised test build on a quiet machine and
+/// ran out of a 60 s budget on a loaded one. The budget only guards against a hang.
+const BUDGET_SECONDS: f64 = 900.0;
+
 /// How many verdicts the explorer confirmed, and how many it could not judge.
 #[derive(Default)]
 struct Tally {
@@ -61,11 +66,15 @@ fn run_fixture(st: &Path, tally: &mut Tally) -> Vec<String> {
     let file =
         sfc_prove::props::parse(&props_path.display().to_string(), &props_text).unwrap_or_else(|e| panic!("{e}"));
     let chart_name = st.display().to_string();
-    let report =
-        match sfc_prove::prove(&chart_name, &chart_text, &file, &Options { seconds: 60.0, ..Default::default() }) {
-            Ok(r) => r,
-            Err(e) => return vec![format!("{}: {e:?}", st.display())],
-        };
+    let report = match sfc_prove::prove(
+        &chart_name,
+        &chart_text,
+        &file,
+        &Options { seconds: BUDGET_SECONDS, ..Default::default() },
+    ) {
+        Ok(r) => r,
+        Err(e) => return vec![format!("{}: {e:?}", st.display())],
+    };
     let exp_path = st.with_extension("expected");
     if std::env::var_os("SFC_PROVE_BLESS").is_some() {
         // Writes the verdicts as they are (review them before committing).
@@ -161,14 +170,40 @@ fn fixture_verdicts_agree_with_the_explorer() {
     let all = fixtures();
     assert!(all.len() >= 30, "at least 30 fixture charts, found {}", all.len());
     let only = std::env::var("SFC_PROVE_FIXTURE").ok();
+    let chosen: Vec<&PathBuf> =
+        all.iter().filter(|st| only.as_ref().is_none_or(|o| st.display().to_string().contains(o.as_str()))).collect();
+    // The explorer takes seconds per chart in the unoptimised test build: the charts are shared
+    // out to one thread per core (the test binaries of the workspace run one after another, so
+    // the cores would otherwise idle).
+    let next = std::sync::atomic::AtomicUsize::new(0);
+    let threads = std::thread::available_parallelism().map_or(1, |n| n.get()).min(chosen.len().max(1));
+    let results: Vec<(Vec<String>, Tally)> = std::thread::scope(|scope| {
+        let workers: Vec<_> = (0..threads)
+            .map(|_| {
+                let worker = std::thread::Builder::new().stack_size(16 << 20);
+                worker
+                    .spawn_scoped(scope, || {
+                        let (mut fails, mut tally) = (Vec::new(), Tally::default());
+                        loop {
+                            let i = next.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+                            let Some(st) = chosen.get(i) else { break };
+                            fails.extend(run_fixture(st, &mut tally));
+                        }
+                        (fails, tally)
+                    })
+                    .expect("a fixture thread")
+            })
+            .collect();
+        workers.into_iter().map(|w| w.join().expect("a fixture thread panicked")).collect()
+    });
     let mut fails = Vec::new();
     let mut tally = Tally::default();
-    for st in &all {
-        if only.as_ref().is_some_and(|o| !st.display().to_string().contains(o.as_str())) {
-            continue;
-        }
-        fails.extend(run_fixture(st, &mut tally));
+    for (f, t) in results {
+        fails.extend(f);
+        tally.confirmed += t.confirmed;
+        tally.not_judged += t.not_judged;
     }
+    fails.sort();
     println!(
         "{} fixture charts: the explorer agreed with {} verdicts (up to 40 scans, or over the whole state space); {} were beyond it (too many states, or a kind it does not explore)",
         all.len(),
@@ -264,13 +299,14 @@ fn random_charts_agree_with_the_explorer() {
         let (chart, props) = random_chart(seed);
         let file = sfc_prove::props::parse("random.props.toml", &props).expect("props");
         let name = format!("random{seed}.st");
-        let report = match sfc_prove::prove(&name, &chart, &file, &Options { seconds: 30.0, ..Default::default() }) {
-            Ok(r) => r,
-            Err(e) => {
-                fails.push(format!("seed {seed}: {e:?}\n{chart}"));
-                continue;
-            }
-        };
+        let report =
+            match sfc_prove::prove(&name, &chart, &file, &Options { seconds: BUDGET_SECONDS, ..Default::default() }) {
+                Ok(r) => r,
+                Err(e) => {
+                    fails.push(format!("seed {seed}: {e:?}\n{chart}"));
+                    continue;
+                }
+            };
         let names: Vec<String> = report.properties.iter().map(|p| p.name.clone()).collect();
         let found = explore(&name, &chart, &report.pou, report.period, &file, &report.inputs, &names, 30, 20_000);
         for (p, f) in report.properties.iter().zip(&found) {
