@@ -15,6 +15,13 @@ mod prove;
 
 use sfc_cli::{run, sim, term, test, DenyArg, Status, VERSION};
 
+/// mimalloc instead of the system allocator: parsing and checking a large chart allocate and
+/// free millions of small nodes, often freed on another thread than the one that made them (the
+/// language server's workers). With glibc's allocator that cost a third of `sfc lsp`'s
+/// diagnostics after an edit on the 10,000-step ring (`crates/sfc-lsp/benches/ring.rs`).
+#[global_allocator]
+static ALLOCATOR: mimalloc::MiMalloc = mimalloc::MiMalloc;
+
 #[derive(Parser)]
 #[command(
     name = "sfc",

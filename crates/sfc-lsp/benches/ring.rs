@@ -6,6 +6,11 @@
 //! output (the same messages, without the pipe). Under `cargo test` (no `--bench` argument) it
 //! runs once on a 100-step ring as a smoke test. Figures are printed, never asserted.
 
+/// The allocator of the `sfc` binary (`crates/sfc-cli/src/main.rs`), so the figures are those
+/// of `sfc lsp`.
+#[global_allocator]
+static ALLOCATOR: mimalloc::MiMalloc = mimalloc::MiMalloc;
+
 use lsp_server::{Connection, Message, Notification, Request, RequestId};
 use lsp_types::notification::{self as note, Notification as _};
 use lsp_types::request as req;

@@ -47,7 +47,9 @@ impl DiagnosticsProvider for ChartDiagnostics {
     fn check(&self, path: &Path, text: &str, analysis: bool) -> (SourceFile, Vec<Diagnostic>) {
         let opts = CheckOptions { analysis, ..CheckOptions::default() };
         let kind = sfc_driver::FileKind::of(path, text);
-        let (file, _, diags) = sfc_driver::check_text(0, &path.display().to_string(), text, kind, &opts);
+        let (file, checked, diags) = sfc_driver::check_text(0, &path.display().to_string(), text, kind, &opts);
+        // The diagnostics go out without waiting for the tree and model to be freed.
+        crate::dispose::later(checked);
         (file, diags)
     }
 }

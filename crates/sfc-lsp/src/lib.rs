@@ -17,6 +17,7 @@
 pub mod actions;
 pub mod check;
 pub mod complete;
+pub mod dispose;
 pub mod format;
 pub mod hover;
 pub mod index;

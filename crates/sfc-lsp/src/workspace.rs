@@ -36,6 +36,14 @@ impl Analysis {
     }
 }
 
+impl Drop for Analysis {
+    /// The tree and the index are freed off the thread that let go of them (the reader,
+    /// mostly): see [`crate::dispose`].
+    fn drop(&mut self) {
+        crate::dispose::later((std::mem::take(&mut self.unit), std::mem::take(&mut self.index)));
+    }
+}
+
 /// Completion answers from an older analysis for at most this many edits (then it parses).
 const MAX_STALE_EDITS: usize = 200;
 

@@ -366,8 +366,11 @@ impl<'a> Parser<'a> {
         self.kind() == k
     }
     fn text_of(&self, t: Tok) -> &'a str {
-        if let Some(kw) = self.keyword_typos.get(&t.start) {
-            return kw;
+        // Hot (every token's text): the map of misspelt keywords is nearly always empty.
+        if !self.keyword_typos.is_empty() {
+            if let Some(kw) = self.keyword_typos.get(&t.start) {
+                return kw;
+            }
         }
         &self.text[t.start as usize..t.end as usize]
     }
@@ -472,7 +475,10 @@ impl<'a> Parser<'a> {
     /// where an identifier cannot stand, so a variable that looks like a keyword is left alone.
     fn fix_keyword_typo(&mut self, candidates: &[&str]) -> bool {
         let t = self.tok();
-        if t.kind != TokenKind::Ident || self.is_reserved(t) || self.keyword_typos.contains_key(&t.start) {
+        if t.kind != TokenKind::Ident
+            || self.is_reserved(t)
+            || (!self.keyword_typos.is_empty() && self.keyword_typos.contains_key(&t.start))
+        {
             return false;
         }
         let written = self.text_of(t).to_ascii_uppercase();
