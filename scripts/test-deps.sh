@@ -43,3 +43,5 @@ if [ ! -s "$schema" ]; then
         tar -xzf microsoft-jest-sarif-1.0.0-beta.0.tgz package/lib/schemas/sarif-2.1.0-rtm.5.json)
     cp "$tmp/package/lib/schemas/sarif-2.1.0-rtm.5.json" "$schema"
 fi
+# asyncua (PyPI): the independent OPC UA client of crates/sfc-cli/tests/opcua.rs.
+bash "$root/scripts/asyncua-deps.sh" || echo "test-deps: asyncua could not be installed: the OPC UA end-to-end test will skip" >&2

@@ -49,6 +49,20 @@ pub struct RunArgs {
     /// Serve the monitor protocol (WebSocket) at this address (e.g. 127.0.0.1:9002).
     #[arg(long, value_name = "ADDR")]
     pub monitor: Option<String>,
+    /// Serve OPC UA at this endpoint (e.g. opc.tcp://127.0.0.1:4840; port 0 picks a free one).
+    #[arg(long, value_name = "URL")]
+    pub opcua: Option<String>,
+    /// Also offer SecurityPolicy None, anonymous with read and write access (loopback only:
+    /// for local tools and tests).
+    #[arg(long)]
+    pub opcua_allow_none: bool,
+    /// The OPC UA PKI folder: the server's certificate (made on first start), trusted and
+    /// rejected client certificates (default: $XDG_DATA_HOME/sfc/opcua-pki).
+    #[arg(long, value_name = "DIR")]
+    pub opcua_pki: Option<PathBuf>,
+    /// Read a password on standard input, print its argon2 hash for `[[opcua.user]]`, and exit.
+    #[arg(long)]
+    pub hash_password: bool,
     /// A file holding the secret monitor clients need to change the run (default: the
     /// environment variable SFC_TOKEN, else a random one printed at start).
     #[arg(long, value_name = "FILE")]
@@ -119,6 +133,58 @@ fn addr_arg(flag: &str, s: &str) -> Result<SocketAddr, String> {
         .ok_or_else(|| format!("`{flag}`: `{s}` is not an address (write e.g. 127.0.0.1:1502)"))
 }
 
+/// `opc.tcp://host:port[/path]` (or `host:port`) as a socket address.
+fn opcua_arg(s: &str) -> Result<SocketAddr, String> {
+    let rest = s.strip_prefix("opc.tcp://").unwrap_or(s);
+    let hostport = rest.split('/').next().unwrap_or(rest);
+    addr_arg("--opcua", hostport)
+        .map_err(|_| format!("`--opcua`: `{s}` is not an OPC UA endpoint (write e.g. opc.tcp://127.0.0.1:4840)"))
+}
+
+/// The default PKI folder: `$XDG_DATA_HOME/sfc/opcua-pki` (or `~/.local/share/sfc/opcua-pki`).
+fn default_pki() -> PathBuf {
+    let data = std::env::var_os("XDG_DATA_HOME")
+        .filter(|d| !d.is_empty())
+        .map(PathBuf::from)
+        .or_else(|| std::env::var_os("HOME").map(|h| PathBuf::from(h).join(".local/share")))
+        .unwrap_or_else(|| PathBuf::from("."));
+    data.join("sfc").join("opcua-pki")
+}
+
+/// `sfc run --hash-password`: the password from standard input (never the command line).
+fn hash_password() -> u8 {
+    if !sfc_runtime::OPCUA {
+        eprintln!("error: this sfc was built without OPC UA (cargo feature `opcua`)");
+        return 2;
+    }
+    if std::io::stdin().is_terminal() {
+        eprintln!("sfc run: type the password and press Enter (it is echoed: pipe it in to hide it)");
+    }
+    let mut line = String::new();
+    if let Err(e) = std::io::stdin().read_line(&mut line) {
+        eprintln!("error: cannot read the password: {e}");
+        return 2;
+    }
+    let password = line.trim_end_matches(['\n', '\r']);
+    if password.is_empty() {
+        eprintln!("error: empty password on standard input");
+        return 2;
+    }
+    #[cfg(feature = "opcua")]
+    match sfc_runtime::opcua::hash_password(password) {
+        Ok(h) => {
+            println!("{h}");
+            return 0;
+        }
+        Err(e) => {
+            eprintln!("error: {e}");
+            return 2;
+        }
+    }
+    #[allow(unreachable_code)]
+    2
+}
+
 /// Where the monitor's token came from.
 enum TokenSource {
     Random,
@@ -159,6 +225,9 @@ fn token_of(a: &RunArgs, cfg: &RunConfig) -> Result<(Option<String>, TokenSource
 /// Runs `sfc run`; returns the exit status (0 done, 1 the run ended in FAULT, 2 bad arguments
 /// or input).
 pub fn run(a: RunArgs) -> u8 {
+    if a.hash_password {
+        return hash_password();
+    }
     match start(&a) {
         Ok((rt, source)) => supervise(rt, &a, &source),
         Err(e) if e.starts_with("error") => {
@@ -191,6 +260,28 @@ fn start(a: &RunArgs) -> Result<(Runtime, TokenSource), String> {
     let modbus = a.modbus.as_deref().or(cfg.modbus.address.as_deref()).map(|m| addr_arg("--modbus", m)).transpose()?;
     let monitor =
         a.monitor.as_deref().or(cfg.monitor.address.as_deref()).map(|m| addr_arg("--monitor", m)).transpose()?;
+    let opcua_at = a.opcua.as_deref().or(cfg.opcua.endpoint.as_deref());
+    let opcua = match opcua_at {
+        None => {
+            if a.opcua_allow_none {
+                return Err("`--opcua-allow-none` needs an OPC UA endpoint (`--opcua URL`)".into());
+            }
+            None
+        }
+        Some(url) => Some(sfc_runtime::OpcuaOptions {
+            addr: opcua_arg(url)?,
+            allow_none: a.opcua_allow_none || cfg.opcua.allow_none == Some(true),
+            anonymous_read: cfg.opcua.anonymous_read == Some(true),
+            pki_dir: a.opcua_pki.clone().or_else(|| cfg.opcua.pki_dir.clone()).unwrap_or_else(default_pki),
+            users: cfg
+                .opcua
+                .users
+                .iter()
+                .map(|(name, hash)| sfc_runtime::OpcuaUser { name: name.clone(), password_hash: hash.clone() })
+                .collect(),
+        }),
+    };
+    let pki = opcua.as_ref().map(|o| o.pki_dir.clone());
     let mut modbus_limits = ModbusLimits::default();
     if let Some(n) = a.modbus_max_clients.or(cfg.modbus.max_clients) {
         if n == 0 {
@@ -222,7 +313,7 @@ fn start(a: &RunArgs) -> Result<(Runtime, TokenSource), String> {
         Some("wait") => true,
         Some("exit") => false,
         Some(other) => return Err(format!("`--on-fault`: `{other}` is `wait` or `exit`")),
-        None => modbus.is_some() || monitor.is_some(),
+        None => modbus.is_some() || monitor.is_some() || opcua_at.is_some(),
     };
     let retain_enabled = !a.no_retain && cfg.retain.enabled != Some(false);
     let retain = retain_enabled.then(|| -> Result<RetainOptions, String> {
@@ -239,6 +330,7 @@ fn start(a: &RunArgs) -> Result<(Runtime, TokenSource), String> {
     let mut safe = cfg.safe.clone();
     safe.extend(a.safe.iter().cloned());
     let mut opts = RunOptions {
+        opcua,
         modbus,
         modbus_limits,
         word_order,
@@ -290,6 +382,9 @@ fn start(a: &RunArgs) -> Result<(Runtime, TokenSource), String> {
         }
         Runtime::start(sim, opts).map_err(|e| format!("error: {e}"))?
     };
+    if let (Some(addr), Some(pki)) = (rt.opcua_addr(), pki) {
+        eprintln!("sfc run: OPC UA on opc.tcp://{addr}/ (PKI in {})", pki.display());
+    }
     Ok((rt, source))
 }
 

@@ -39,6 +39,7 @@ pub struct RunConfig {
     pub modbus: ModbusSection,
     pub monitor: MonitorSection,
     pub retain: RetainSection,
+    pub opcua: OpcuaSection,
     /// `NAME = value` of `[safe]`, the value as IEC literal text.
     pub safe: Vec<(String, String)>,
 }
@@ -65,6 +66,17 @@ pub struct RetainSection {
     pub interval: Option<Duration>,
     /// `enabled = false` keeps no file.
     pub enabled: Option<bool>,
+}
+
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct OpcuaSection {
+    /// `opc.tcp://127.0.0.1:4840`
+    pub endpoint: Option<String>,
+    pub allow_none: Option<bool>,
+    pub anonymous_read: Option<bool>,
+    pub pki_dir: Option<PathBuf>,
+    /// `[[opcua.user]]`: name and argon2 password hash.
+    pub users: Vec<(String, String)>,
 }
 
 /// The file being read: its text (for positions), name and directory (for relative paths).
@@ -126,6 +138,7 @@ const SECTIONS: &[Section] = &[
     ("monitor", &["address", "token_file", "allow_origins", "allow_hosts"], monitor_section),
     ("retain", &["file", "interval", "enabled"], retain_section),
     ("safe", &[], safe_section),
+    ("opcua", &["endpoint", "allow_none", "anonymous_read", "pki_dir", "user"], opcua_section),
 ];
 
 const TOP_KEYS: &[&str] = &["chart", "pou", "period", "watchdog", "realtime", "on_fault"];
@@ -175,6 +188,49 @@ fn retain_section(src: &Src<'_>, t: &dyn TableLike, c: &mut RunConfig) -> R<()> 
             "interval" => c.retain.interval = Some(src.time(key, item)?),
             "enabled" => c.retain.enabled = Some(src.bool(key, item)?),
             _ => return Err(src.unknown(t, key, SECTIONS[2].1, "[retain]")),
+        }
+    }
+    Ok(())
+}
+
+/// `[opcua]` and its `[[opcua.user]]` entries (`name`, `password_hash`).
+fn opcua_section(src: &Src<'_>, t: &dyn TableLike, c: &mut RunConfig) -> R<()> {
+    for (key, item) in t.iter() {
+        match key {
+            "endpoint" => c.opcua.endpoint = Some(src.string(key, item)?),
+            "allow_none" => c.opcua.allow_none = Some(src.bool(key, item)?),
+            "anonymous_read" => c.opcua.anonymous_read = Some(src.bool(key, item)?),
+            "pki_dir" => c.opcua.pki_dir = Some(src.path(key, item)?),
+            "user" => {
+                let users = item.as_array_of_tables().ok_or_else(|| {
+                    src.err(item.span(), "users are `[[opcua.user]]` entries with `name` and `password_hash`")
+                })?;
+                for u in users.iter() {
+                    let (mut name, mut hash) = (None, None);
+                    for (k, v) in u.iter() {
+                        match k {
+                            "name" => name = Some(src.string(k, v)?),
+                            "password_hash" => {
+                                let h = src.string(k, v)?;
+                                if !h.starts_with("$argon2") {
+                                    return Err(src.err(
+                                        v.span(),
+                                        "`password_hash` must be an argon2 hash (make one with `sfc run --hash-password`), \
+                                         not a password",
+                                    ));
+                                }
+                                hash = Some(h);
+                            }
+                            _ => return Err(src.unknown(u, k, &["name", "password_hash"], "[[opcua.user]]")),
+                        }
+                    }
+                    match (name, hash) {
+                        (Some(n), Some(h)) => c.opcua.users.push((n, h)),
+                        _ => return Err(src.err(u.span(), "an `[[opcua.user]]` needs `name` and `password_hash`")),
+                    }
+                }
+            }
+            _ => return Err(src.unknown(t, key, SECTIONS[4].1, "[opcua]")),
         }
     }
     Ok(())
@@ -301,6 +357,24 @@ Delay = "T#1s"
     }
 
     #[test]
+    fn an_opcua_section_with_users() {
+        let text = "[opcua]\nendpoint = \"opc.tcp://127.0.0.1:4840\"\npki_dir = \"pki\"\nanonymous_read = true\n\n\
+                    [[opcua.user]]\nname = \"scada\"\npassword_hash = \"$argon2id$v=19$m=19456,t=2,p=1$c2FsdA$aGFzaA\"\n";
+        let c = parse(text, Path::new("/etc/sfc/plant.toml")).unwrap();
+        assert_eq!(c.opcua.endpoint.as_deref(), Some("opc.tcp://127.0.0.1:4840"));
+        assert_eq!(c.opcua.pki_dir, Some(PathBuf::from("/etc/sfc/pki")));
+        assert_eq!(c.opcua.anonymous_read, Some(true));
+        assert_eq!(c.opcua.users.len(), 1);
+        assert_eq!(c.opcua.users[0].0, "scada");
+        // A password where its hash belongs is refused, located.
+        let e =
+            parse("[[opcua.user]]\nname = \"scada\"\npassword_hash = \"secret\"\n", Path::new("p.toml")).unwrap_err();
+        assert!(e.starts_with("p.toml:3:") && e.contains("argon2"), "{e}");
+        let e = parse("[[opcua.user]]\nname = \"scada\"\n", Path::new("p.toml")).unwrap_err();
+        assert!(e.contains("needs `name` and `password_hash`"), "{e}");
+    }
+
+    #[test]
     fn mistakes_are_located() {
         let e = parse("period = \"T#5ms\"\nperiode = 1\n", Path::new("p.toml")).unwrap_err();
         assert!(e.starts_with("p.toml:2:1: unknown key `periode`"), "{e}");
@@ -309,7 +383,7 @@ Delay = "T#1s"
         let e = parse("watchdog = \"50ms\"\n", Path::new("p.toml")).unwrap_err();
         assert!(e.contains("not a TIME literal"), "{e}");
         let e = parse("[opcua]\nport = 4840\n", Path::new("p.toml")).unwrap_err();
-        assert!(e.contains("unknown key `opcua`"), "{e}");
+        assert!(e.starts_with("p.toml:2:1: unknown key `port` in [opcua]"), "{e}");
         let e = parse("[modbus\n", Path::new("p.toml")).unwrap_err();
         assert!(e.contains("TOML syntax error"), "{e}");
     }

@@ -153,12 +153,19 @@ impl AtmtModel {
     /// What the monitor's `hello` describes: steps, rules as transitions, and the variables
     /// `state` and `c<i>` for each input read.
     pub fn info(&self) -> ChartInfo {
-        let mut variables = vec![VarInfo { name: "state".into(), ty: "UDINT".into(), location: None, safe: None }];
+        let mut variables = vec![VarInfo {
+            name: "state".into(),
+            ty: "UDINT".into(),
+            location: None,
+            safe: None,
+            section: crate::board::Section::Local,
+        }];
         variables.extend(self.inputs().into_iter().map(|i| VarInfo {
             name: format!("c{i}"),
             ty: "BOOL".into(),
             location: None,
             safe: None,
+            section: crate::board::Section::Input,
         }));
         ChartInfo {
             runtime: "atmt",

@@ -49,6 +49,42 @@ pub struct VarInfo {
     pub location: Option<String>,
     /// The value it takes in STOP and FAULT (outputs, and variables given a safe value).
     pub safe: Option<Value>,
+    /// Where it belongs: inputs, outputs, locals or globals.
+    pub section: Section,
+}
+
+/// The section of a variable, from its declaration block and its address: `VAR_INPUT` or
+/// `AT %I…` is an input, `VAR_OUTPUT` or `AT %Q…` an output, `VAR_GLOBAL`/`VAR_EXTERNAL` a
+/// global, anything else (`VAR`, `AT %M…`, `VAR_IN_OUT`, `VAR_TEMP`) a local.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum Section {
+    Input,
+    Output,
+    #[default]
+    Local,
+    Global,
+}
+
+impl Section {
+    pub fn of(kind: Option<sfc_syntax::ast::VarKind>, location: Option<&str>) -> Section {
+        use sfc_syntax::ast::VarKind;
+        let loc = location.map(|l| l.trim_start_matches('%').to_ascii_uppercase());
+        match (kind, loc.as_deref().and_then(|l| l.chars().next())) {
+            (_, Some('I')) | (Some(VarKind::Input), _) => Section::Input,
+            (_, Some('Q')) | (Some(VarKind::Output), _) => Section::Output,
+            (Some(VarKind::Global | VarKind::External), _) => Section::Global,
+            _ => Section::Local,
+        }
+    }
+    /// The folder name in the OPC UA address space.
+    pub fn name(self) -> &'static str {
+        match self {
+            Section::Input => "Inputs",
+            Section::Output => "Outputs",
+            Section::Local => "Locals",
+            Section::Global => "Globals",
+        }
+    }
 }
 
 /// The static description of what a runtime runs (the `hello` message).
@@ -345,6 +381,9 @@ pub struct Hub {
     pub interrupt_flag: std::sync::OnceLock<Arc<AtomicBool>>,
     /// Failed tokens per client address (`access.rs`).
     pub guesses: Mutex<crate::access::Guesses>,
+    /// Evaluate the guards of enabled transitions in every scan, watched or not (an OPC UA
+    /// server publishes them).
+    pub guards_always: AtomicBool,
 }
 
 /// Notices kept when nobody reads them.
@@ -366,6 +405,7 @@ impl Hub {
             notices: Mutex::new(VecDeque::new()),
             interrupt_flag: std::sync::OnceLock::new(),
             guesses: Mutex::new(Default::default()),
+            guards_always: AtomicBool::new(false),
         };
         (Arc::new(hub), rx)
     }

@@ -14,6 +14,8 @@ pub mod contract;
 pub mod io;
 pub mod jitter;
 pub mod modbus;
+#[cfg(feature = "opcua")]
+pub mod opcua;
 pub mod protocol;
 pub mod retain;
 pub mod safe;
@@ -80,10 +82,38 @@ pub struct RunOptions {
     /// Run the scan thread with real-time priority (Linux `SCHED_FIFO` 50; needs root or
     /// CAP_SYS_NICE; [`RunReport::realtime`] says whether it was granted).
     pub realtime: bool,
+    /// Serve OPC UA (`docs/runtime.md`, "OPC UA"); needs the cargo feature `opcua`.
+    pub opcua: Option<OpcuaOptions>,
     /// End the run in order on Ctrl-C (SIGINT) and SIGTERM instead of letting them kill the
     /// process, so the outputs go to their safe values and the caller still gets the report.
     pub ctrl_c: bool,
 }
+
+/// The OPC UA server of a run.
+#[derive(Debug, Clone)]
+pub struct OpcuaOptions {
+    /// Where to listen (port 0 picks a free port).
+    pub addr: SocketAddr,
+    /// Offer SecurityPolicy None with anonymous read/write access (loopback only).
+    pub allow_none: bool,
+    /// Anonymous sessions may read (not write) on the secure endpoints.
+    pub anonymous_read: bool,
+    /// The PKI folder: `own/cert.der` and `private/private.pem` (made on first start),
+    /// `trusted/` and `rejected/` client certificates.
+    pub pki_dir: std::path::PathBuf,
+    pub users: Vec<OpcuaUser>,
+}
+
+/// A user of the OPC UA server (`[[opcua.user]]`).
+#[derive(Debug, Clone)]
+pub struct OpcuaUser {
+    pub name: String,
+    /// An argon2 PHC string (`sfc run --hash-password`).
+    pub password_hash: String,
+}
+
+/// Whether this build has the OPC UA server (cargo feature `opcua`).
+pub const OPCUA: bool = cfg!(feature = "opcua");
 
 /// How a run ended.
 #[derive(Debug, Clone)]
@@ -126,6 +156,7 @@ pub struct Runtime {
     supervisor: Option<JoinHandle<()>>,
     monitor: Option<SocketAddr>,
     modbus: Option<SocketAddr>,
+    opcua: Option<SocketAddr>,
     points: Arc<Vec<IoPoint>>,
     /// The simulation's interrupt flag: set on stop, so a scan that runs away still ends.
     interrupt: Option<Arc<std::sync::atomic::AtomicBool>>,
@@ -160,6 +191,30 @@ struct ModbusSide {
     counters: Arc<modbus::ModbusCounters>,
 }
 
+#[cfg(feature = "opcua")]
+type OpcuaSide = opcua::Side;
+#[cfg(not(feature = "opcua"))]
+type OpcuaSide = ();
+
+/// Checks the OPC UA options, binds the endpoint and builds the server (before any scan).
+fn opcua_side(hub: &Arc<Hub>, o: Option<&OpcuaOptions>) -> Result<(Option<OpcuaSide>, Option<SocketAddr>), String> {
+    let Some(o) = o else { return Ok((None, None)) };
+    #[cfg(feature = "opcua")]
+    {
+        opcua::check(o)?;
+        let l = bind("OPC UA", o.addr)?;
+        let addr = l.local_addr().ok();
+        let side = opcua::build(hub, o, l)?;
+        hub.guards_always.store(true, Ordering::Relaxed);
+        Ok((Some(side), addr))
+    }
+    #[cfg(not(feature = "opcua"))]
+    {
+        let _ = (hub, o);
+        Err("this sfc was built without OPC UA (cargo feature `opcua`)".into())
+    }
+}
+
 /// Ends the run when SIGINT or SIGTERM arrives (SIGTERM is what systemd and `kill` send).
 async fn stop_on_signals(hub: Arc<Hub>) {
     #[cfg(unix)]
@@ -186,18 +241,24 @@ async fn stop_on_signals(hub: Arc<Hub>) {
     hub.interrupt();
 }
 
-fn start_net(
-    hub: &Arc<Hub>,
-    modbus: Option<ModbusSide>,
-    monitor: Option<(std::net::TcpListener, MonitorAccess)>,
-    ctrl_c: bool,
-) -> Result<JoinHandle<()>, String> {
-    let net = tokio::runtime::Builder::new_multi_thread()
+/// The tokio runtime of the network side (two worker threads).
+fn net_runtime() -> Result<tokio::runtime::Runtime, String> {
+    tokio::runtime::Builder::new_multi_thread()
         .worker_threads(2)
         .thread_name("sfc-net")
         .enable_all()
         .build()
-        .map_err(|e| format!("cannot start the network threads: {e}"))?;
+        .map_err(|e| format!("cannot start the network threads: {e}"))
+}
+
+fn start_net(
+    net: tokio::runtime::Runtime,
+    hub: &Arc<Hub>,
+    modbus: Option<ModbusSide>,
+    monitor: Option<(std::net::TcpListener, MonitorAccess)>,
+    opcua: Option<OpcuaSide>,
+    ctrl_c: bool,
+) -> Result<JoinHandle<()>, String> {
     let hub = hub.clone();
     std::thread::Builder::new()
         .name("sfc-net-main".into())
@@ -209,6 +270,12 @@ fn start_net(
                 if let Some((l, access)) = monitor {
                     tokio::spawn(protocol::serve(l, hub.clone(), Arc::new(access)));
                 }
+                #[cfg(feature = "opcua")]
+                if let Some(side) = opcua {
+                    tokio::spawn(opcua::serve(side, hub.clone()));
+                }
+                #[cfg(not(feature = "opcua"))]
+                let _ = opcua;
                 if ctrl_c {
                     tokio::spawn(stop_on_signals(hub.clone()));
                 }
@@ -248,7 +315,8 @@ impl Runtime {
         for (name, ty) in names {
             let Some((index, t)) = sim.handle(&name) else { continue };
             let location = located.iter().find(|l| l.2 == index).map(|l| l.1.clone());
-            variables.push(VarInfo { name, ty, location, safe: safe.of_slot(index).cloned() });
+            let section = board::Section::of(sim.declared_kind(&name), location.as_deref());
+            variables.push(VarInfo { name, ty, location, safe: safe.of_slot(index).cloned(), section });
             vars.push(Slot { index, ty: t });
         }
         let var_point = vars.iter().map(|s| points.iter().position(|p| p.slot.index == s.index)).collect();
@@ -311,7 +379,20 @@ impl Runtime {
             }),
             _ => None,
         };
-        let net = start_net(&hub, modbus_side, monitor_l.map(|l| (l, opts.monitor_access.clone())), opts.ctrl_c)?;
+        let net_rt = net_runtime()?;
+        // The OPC UA server is built inside the network runtime (it starts tasks of its own).
+        let (opcua_side, opcua) = {
+            let _inside = net_rt.enter();
+            opcua_side(&hub, opts.opcua.as_ref())?
+        };
+        let net = start_net(
+            net_rt,
+            &hub,
+            modbus_side,
+            monitor_l.map(|l| (l, opts.monitor_access.clone())),
+            opcua_side,
+            opts.ctrl_c,
+        )?;
         let clock = Arc::new(watchdog::ScanClock::new());
         let supervisor = match opts.limits.watchdog {
             Some(w) => {
@@ -387,6 +468,7 @@ impl Runtime {
             supervisor,
             monitor,
             modbus,
+            opcua,
             points,
             interrupt: Some(interrupt),
             counters,
@@ -400,7 +482,17 @@ impl Runtime {
         let (hub, rx) = Hub::new(model.info(), token);
         let monitor_l = opts.monitor.map(|a| bind("the monitor", a)).transpose()?;
         let monitor = monitor_l.as_ref().and_then(|l| l.local_addr().ok());
-        let net = start_net(&hub, None, monitor_l.map(|l| (l, opts.monitor_access.clone())), opts.ctrl_c)?;
+        if opts.opcua.is_some() {
+            return Err("OPC UA is served by `sfc run` of a chart, not by the ATMT adapter".into());
+        }
+        let net = start_net(
+            net_runtime()?,
+            &hub,
+            None,
+            monitor_l.map(|l| (l, opts.monitor_access.clone())),
+            None,
+            opts.ctrl_c,
+        )?;
         let adapter = atmt::Adapter { model, hub: hub.clone(), source };
         let worker = std::thread::Builder::new()
             .name("sfc-atmt".into())
@@ -413,6 +505,7 @@ impl Runtime {
             supervisor: None,
             monitor,
             modbus: None,
+            opcua: None,
             points: Arc::new(Vec::new()),
             interrupt: None,
             counters: None,
@@ -427,6 +520,10 @@ impl Runtime {
     /// Where Modbus TCP is served.
     pub fn modbus_addr(&self) -> Option<SocketAddr> {
         self.modbus
+    }
+    /// Where OPC UA is served.
+    pub fn opcua_addr(&self) -> Option<SocketAddr> {
+        self.opcua
     }
     /// The secret that `force` and `set` need.
     pub fn token(&self) -> &str {

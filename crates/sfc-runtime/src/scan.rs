@@ -491,7 +491,9 @@ impl ScanThread {
         st.time = self.sim.next_time() - self.sim.options().period;
         self.sim.active_times_unsorted(&mut st.active);
         self.sim.fired_ids(&mut st.fired);
-        st.guards_known = self.hub.connected.load(Ordering::Relaxed) > 0 || self.halted;
+        st.guards_known = self.hub.connected.load(Ordering::Relaxed) > 0
+            || self.halted
+            || self.hub.guards_always.load(Ordering::Relaxed);
         if st.guards_known {
             self.sim.guard_states(&mut st.guards);
         } else {

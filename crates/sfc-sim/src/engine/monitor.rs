@@ -45,6 +45,21 @@ impl Simulation {
         fit(value, ty).map_err(|why| format!("{ty}: {why}"))
     }
 
+    /// The declaration block (`VAR_INPUT`, `VAR`, …) of a variable of the simulated POU, or
+    /// `VAR_GLOBAL` for a global one; `None` for a name it does not declare.
+    pub fn declared_kind(&self, name: &str) -> Option<sfc_syntax::ast::VarKind> {
+        let top = &self.prog.pous.get(self.top)?.layout.vars;
+        if let Some(v) = top.iter().find(|v| v.name.eq_ignore_ascii_case(name)) {
+            return Some(v.kind);
+        }
+        self.prog
+            .globals
+            .vars
+            .iter()
+            .any(|v| v.name.eq_ignore_ascii_case(name))
+            .then_some(sfc_syntax::ast::VarKind::Global)
+    }
+
     /// Reads the slot of a [`Simulation::handle`].
     pub fn read_slot(&self, slot: usize) -> Option<&Value> {
         self.mem.get(slot)

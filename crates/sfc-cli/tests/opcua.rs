@@ -1,0 +1,282 @@
+//! `sfc run --opcua` against an independent OPC UA client: Python `asyncua`
+//! (`tests/opcua/carwash_client.py`, installed by scripts/asyncua-deps.sh from the README's test
+//! command) on the real binary running the car wash. Figures are printed, never asserted.
+#![cfg(feature = "opcua")]
+
+mod common;
+
+use common::{command, root, scratch, Run, Ws};
+use std::io::Write;
+use std::path::{Path, PathBuf};
+use std::process::Stdio;
+
+fn s(p: &Path) -> &str {
+    p.to_str().unwrap()
+}
+
+fn carwash() -> PathBuf {
+    root().join("examples/carwash/carwash.st")
+}
+
+/// asyncua is there, or the test says loudly why it does not run.
+fn asyncua() -> bool {
+    let ok = std::process::Command::new("bash").arg(root().join("scripts/asyncua-deps.sh")).status();
+    if !ok.is_ok_and(|s| s.success()) {
+        eprintln!("\n\n*** SKIPPED: asyncua cannot be installed (scripts/asyncua-deps.sh failed) ***\n\n");
+        return false;
+    }
+    true
+}
+
+/// The client script in `mode` against `url`; its JSON report.
+fn client(mode: &str, url: &str, rest: &[&str]) -> serde_json::Value {
+    let script = root().join("crates/sfc-cli/tests/opcua/carwash_client.py");
+    let out =
+        std::process::Command::new("python3").arg(script).arg(mode).arg(url).args(rest).output().expect("python3 runs");
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(out.status.success(), "the asyncua client failed:\n{stdout}\n{}", String::from_utf8_lossy(&out.stderr));
+    serde_json::from_str(stdout.lines().last().unwrap_or("")).unwrap_or_else(|e| panic!("{e}: {stdout}"))
+}
+
+fn opcua_url(run: &mut Run) -> String {
+    let l = run.line("the OPC UA endpoint", 120, |l| l.starts_with("sfc run: OPC UA on "));
+    l["sfc run: OPC UA on ".len()..].split(' ').next().unwrap().to_string()
+}
+
+/// The car wash as the chart declares it: every variable in its section with its OPC UA type
+/// and address, every step.
+const VARIABLES: &[(&str, &str, &str, Option<&str>)] = &[
+    ("StartButton", "Inputs", "Boolean", Some("%IX0.0")),
+    ("CarAtBrush", "Inputs", "Boolean", Some("%IX0.1")),
+    ("CarLeft", "Inputs", "Boolean", Some("%IX0.2")),
+    ("StopButton", "Inputs", "Boolean", Some("%IX0.3")),
+    ("CarPresent", "Inputs", "Boolean", Some("%IX0.4")),
+    ("AtHome", "Inputs", "Boolean", Some("%IX0.5")),
+    ("DryerSelect", "Inputs", "Boolean", Some("%IX0.6")),
+    ("SprayValve", "Outputs", "Boolean", Some("%QX0.0")),
+    ("Travel", "Outputs", "Boolean", Some("%QX0.1")),
+    ("Brush", "Outputs", "Boolean", Some("%QX0.2")),
+    ("TravelBack", "Outputs", "Boolean", Some("%QX0.3")),
+    ("Blower", "Outputs", "Boolean", Some("%QX0.4")),
+    ("FaultLamp", "Outputs", "Boolean", Some("%QX0.5")),
+    ("MaxTravelTime", "Locals", "Duration", None),
+    ("MaxBrushTime", "Locals", "Duration", None),
+    ("BlowerSpinUp", "Locals", "Duration", None),
+    ("Washes", "Locals", "UInt32", None),
+];
+const STEPS: &[&str] = &["Idle", "Spraying", "Brushing", "Drying", "Returning", "Fault"];
+
+/// Browse, read, subscribe to Spraying.X, start the wash by writing inputs, and try to write
+/// an output — over SecurityPolicy None (`--opcua-allow-none`, loopback), anonymous.
+#[test]
+fn an_asyncua_client_browses_reads_subscribes_and_writes() {
+    if !asyncua() {
+        return;
+    }
+    let dir = scratch("opcua-open");
+    let pki = dir.join("pki");
+    let mut run = Run::start(&[
+        s(&carwash()),
+        "--no-retain",
+        "--opcua",
+        "opc.tcp://127.0.0.1:0",
+        "--opcua-allow-none",
+        "--opcua-pki",
+        s(&pki),
+        "--monitor",
+        "127.0.0.1:0",
+        "--for",
+        "T#120s",
+    ]);
+    let url = opcua_url(&mut run);
+    // A variable forced from the monitor reads its forced value over OPC UA.
+    let mon = run.monitor();
+    let mut ws = Ws::connect(&format!("ws://{mon}/?token=t0k3n"));
+    let f = ws.cmd(1, serde_json::json!({"cmd": "force", "name": "DryerSelect", "value": true}));
+    assert_eq!(f["ok"], true, "{f}");
+    let r = client("open", &url, &[]);
+    assert_eq!(r["browse"]["variables"]["DryerSelect"]["value"], true, "the forced value");
+    let vars = &r["browse"]["variables"];
+    assert_eq!(vars.as_object().unwrap().len(), VARIABLES.len(), "{vars}");
+    for (name, section, ty, at) in VARIABLES {
+        let v = &vars[name];
+        assert_eq!(v["section"], *section, "{name}: {v}");
+        assert_eq!(v["type"], *ty, "{name}: {v}");
+        assert_eq!(v["address"].as_str(), *at, "{name}: {v}");
+        assert_eq!(v["writable"], *section != "Outputs", "{name}: {v}");
+    }
+    // Declared values, as the chart holds them (TIME as a Duration in ms).
+    assert_eq!(vars["MaxTravelTime"]["value"], 60000.0);
+    assert_eq!(vars["BlowerSpinUp"]["value"], 3000.0);
+    assert_eq!(vars["Washes"]["value"], 0);
+    let steps = &r["browse"]["steps"];
+    assert_eq!(steps.as_object().unwrap().len(), STEPS.len(), "{steps}");
+    for st in STEPS {
+        assert_eq!(steps[st]["X"], *st == "Idle", "{st}: {steps}");
+    }
+    assert!(steps["Idle"]["T"].as_f64().unwrap() >= 0.0);
+    // TStart leaves the active Idle: its guard is evaluated (false, nothing pressed); the
+    // guards of transitions from inactive steps are not (GoodNoData).
+    assert_eq!(r["browse"]["transitions"]["TStart"]["guard"], false, "{}", r["browse"]["transitions"]);
+    assert_eq!(r["browse"]["transitions"]["TCarAtBrush"]["status"], "GoodNoData");
+    assert_eq!(r["browse"]["runtime"]["State"], "RUN");
+    assert!(r["browse"]["runtime"]["ScanCount"].as_u64().unwrap() > 0);
+    // Writes: inputs accepted (a wrong type refused), the output refused.
+    let w = &r["writes"];
+    assert_eq!((w["CarPresent"].as_str(), w["AtHome"].as_str()), (Some("Good"), Some("Good")), "{w}");
+    assert_eq!(w["StartButton as Int16"], "BadTypeMismatch", "{w}");
+    assert_eq!(w["StartButton"], "Good", "{w}");
+    assert_eq!(w["SprayValve"], "BadNotWritable", "{w}");
+    // The subscription saw Spraying.X go from FALSE to TRUE after the write of Start.
+    assert_eq!(r["spraying_changes"], serde_json::json!([false, true]), "{r}");
+    assert_eq!(r["StartButton"], true);
+    assert_eq!(r["SprayValve"], true, "the chart drives the spray valve in Spraying");
+    // Halt needs an authenticated user.
+    assert_eq!(r["anonymous_halt"], "BadUserAccessDenied", "{r}");
+    drop(run);
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// Basic256Sha256 SignAndEncrypt and Sign with a user from `[[opcua.user]]` (hash made by
+/// `sfc run --hash-password`): an untrusted client certificate is refused and filed under
+/// `rejected/`; trusted, the user halts and continues the run; a wrong password is refused.
+#[test]
+fn a_secure_session_with_a_user_and_an_untrusted_certificate() {
+    if !asyncua() {
+        return;
+    }
+    let dir = scratch("opcua-secure");
+    let mut hash = command(&["run", "--hash-password"])
+        .stdin(Stdio::piped())
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    hash.stdin.take().unwrap().write_all(b"op3rator\n").unwrap();
+    let out = hash.wait_with_output().unwrap();
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let h = String::from_utf8(out.stdout).unwrap().trim().to_string();
+    assert!(h.starts_with("$argon2id$"), "{h}");
+    assert!(!h.contains("op3rator"));
+    let config = dir.join("plant.toml");
+    std::fs::write(
+        &config,
+        format!(
+            "chart = \"{}\"\n[retain]\nenabled = false\n[opcua]\nendpoint = \"opc.tcp://127.0.0.1:0\"\npki_dir = \"pki\"\n\
+             [[opcua.user]]\nname = \"operator\"\npassword_hash = \"{h}\"\n",
+            s(&carwash())
+        ),
+    )
+    .unwrap();
+    let mut run = Run::start(&["--config", s(&config), "--for", "T#120s"]);
+    let url = opcua_url(&mut run);
+    let pki = dir.join("pki");
+    assert!(pki.join("own/cert.der").is_file() && pki.join("private/private.pem").is_file());
+    let r = client("secure", &url, &[s(&pki), "operator", "op3rator", s(&dir.join("client"))]);
+    assert_eq!(r["untrusted"], "BadCertificateUntrusted", "{r}");
+    assert_eq!(r["rejected_files"], 1, "{r}");
+    assert_eq!(r["state"], "RUN", "{r}");
+    assert_eq!(
+        (r["halted_after_halt"].as_bool(), r["halted_after_continue"].as_bool()),
+        (Some(true), Some(false)),
+        "{r}"
+    );
+    assert_eq!(r["user_write"], "Good", "{r}");
+    assert_eq!(r["sign_state"], "RUN", "{r}");
+    assert_eq!(r["wrong_password"], "BadUserAccessDenied", "{r}");
+    drop(run);
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// SecurityPolicy None is for loopback only; a server with no way in is refused too.
+#[test]
+fn security_policy_none_only_on_loopback() {
+    let dir = scratch("opcua-refuse");
+    let out = command(&[
+        "run",
+        s(&carwash()),
+        "--no-retain",
+        "--opcua",
+        "opc.tcp://0.0.0.0:0",
+        "--opcua-allow-none",
+        "--opcua-pki",
+        s(&dir.join("pki")),
+        "--scans",
+        "1",
+    ])
+    .output()
+    .unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "{err}");
+    assert!(err.contains("--opcua-allow-none") && err.contains("loopback"), "{err}");
+    let out = command(&["run", s(&carwash()), "--no-retain", "--opcua", "opc.tcp://127.0.0.1:0", "--scans", "1"])
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "{err}");
+    assert!(err.contains("no way in"), "{err}");
+    let out = command(&["run", "--hash-password"]).stdin(Stdio::null()).output().unwrap();
+    assert_eq!(out.status.code(), Some(2), "an empty password is refused");
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// The start jitter p99 of one `sfc run` of `secs` seconds, with `clients` asyncua sessions
+/// subscribed to every variable and step at 100 ms.
+fn jitter_p99(dir: &Path, clients: usize, secs: u64, realtime: bool) -> (u64, serde_json::Value) {
+    let pki = dir.join("pki");
+    let d = format!("T#{secs}s");
+    let chart = carwash();
+    let mut args = vec![
+        s(&chart),
+        "--no-retain",
+        "--opcua",
+        "opc.tcp://127.0.0.1:0",
+        "--opcua-allow-none",
+        "--opcua-pki",
+        s(&pki),
+        "--for",
+        &d,
+    ];
+    if realtime {
+        args.push("--realtime");
+    }
+    let mut run = Run::start(&args);
+    let url = opcua_url(&mut run);
+    let load = if clients > 0 {
+        client("load", &url, &[&clients.to_string(), &(secs.saturating_sub(2)).to_string()])
+    } else {
+        serde_json::Value::Null
+    };
+    let (_, lines) = run.finish(secs + 60);
+    let summary = lines.iter().find(|l| l.contains("start jitter p50")).expect("the summary line").clone();
+    let p99 = summary.split("p99 ").nth(1).and_then(|t| t.split(' ').next()).and_then(|n| n.parse().ok()).unwrap();
+    (p99, load)
+}
+
+/// The load test: 20 clients × every variable at 100 ms over 60 s with SFC_OPCUA_LOAD=1 (at
+/// normal and at real-time priority); in CI a bounded portion (4 clients, 6 s, normal
+/// priority). Prints the jitter p99 with and without clients.
+#[test]
+fn load_prints_the_jitter_with_and_without_clients() {
+    if !asyncua() {
+        return;
+    }
+    let full = std::env::var_os("SFC_OPCUA_LOAD").is_some();
+    let (clients, secs) = if full { (20, 60) } else { (4, 6) };
+    let dir = scratch("opcua-load");
+    let priorities: &[bool] = if full { &[false, true] } else { &[false] };
+    for &realtime in priorities {
+        let (quiet, _) = jitter_p99(&dir, 0, secs, realtime);
+        let (loaded, load) = jitter_p99(&dir, clients, secs, realtime);
+        eprintln!(
+            "OPC UA load ({} priority): {clients} clients × all variables at 100 ms for {secs} s: {} notifications; \
+             start jitter p99 {loaded} µs with clients, {quiet} µs without (ratio {:.2})",
+            if realtime { "real-time" } else { "normal" },
+            load["notifications"],
+            loaded as f64 / quiet.max(1) as f64
+        );
+        assert_eq!(load["clients"], clients as u64, "{load}");
+        assert!(load["notifications"].as_u64().unwrap() > 0, "{load}");
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}
