@@ -5,7 +5,7 @@ import { useEffect, useState } from 'preact/hooks';
 import { t } from '../i18n';
 import { toasts } from '../app/toast';
 import type { MonitorClient } from './client';
-import { parseValue, showValue, type Mechanisms, type ScanState, type StepReport, type Timing, type VariableInfo } from './protocol';
+import { parseValue, showValue, type ScanState, type StepReport, type VariableInfo } from './protocol';
 
 const WATCH_KEY = 'sfc.monitor.watch';
 
@@ -282,27 +282,11 @@ export function ExplainPanel(props: { report: StepReport | null; error: string; 
  */
 export function MechanismsPanel(props: { client: MonitorClient; shown: string | null; onSelect: (instance: string, pou: string) => void }) {
   const { client } = props;
-  const [list, setList] = useState<Mechanisms | null>(null);
-  const [error, setError] = useState('');
-  const load = () =>
-    client.mechanisms().then(
-      (x) => {
-        setList(x);
-        setError('');
-      },
-      (e: Error) => setError(e.message),
-    );
-  useEffect(() => {
-    void load();
-    const every = setInterval(() => {
-      if (!client.halted && client.status === 'open') void load();
-    }, 500);
-    return () => clearInterval(every);
-  }, [client]);
+  const [list, error, load] = usePolled(client, () => client.mechanisms(), 500);
   return (
     <div class="mon-mechanisms">
       <div class="mon-why-head">
-        <button class="button" onClick={() => void load()}>
+        <button class="button" onClick={load}>
           {t('monitor.mechanisms.refresh')}
         </button>
         {list && <span class="muted">{t('monitor.mechanisms.at', { scan: list.scan })}</span>}
@@ -370,29 +354,38 @@ export function MechanismsPanel(props: { client: MonitorClient; shown: string | 
   );
 }
 
-export function TimingPanel({ client }: { client: MonitorClient }) {
-  const [timing, setTiming] = useState<Timing | null>(null);
+/**
+ * An answer of the runtime that a panel shows while it is open: asked for at once, then every
+ * `periodMs` while the run moves (not while halted or disconnected); `load` asks again now.
+ */
+function usePolled<T>(client: MonitorClient, ask: () => Promise<T>, periodMs: number): [T | null, string, () => void] {
+  const [value, setValue] = useState<T | null>(null);
   const [error, setError] = useState('');
-  const load = () =>
-    client.timing().then(
+  const load = () => {
+    ask().then(
       (x) => {
-        setTiming(x);
+        setValue(x);
         setError('');
       },
       (e: Error) => setError(e.message),
     );
+  };
   useEffect(() => {
-    void load();
-    // While the panel is open and the run moves, the figures follow once a second.
+    load();
     const every = setInterval(() => {
-      if (!client.halted && client.status === 'open') void load();
-    }, 1000);
+      if (!client.halted && client.status === 'open') load();
+    }, periodMs);
     return () => clearInterval(every);
   }, [client]);
+  return [value, error, load];
+}
+
+export function TimingPanel({ client }: { client: MonitorClient }) {
+  const [timing, error, load] = usePolled(client, () => client.timing(), 1000);
   return (
     <div class="mon-timing">
       <div class="mon-why-head">
-        <button class="button" onClick={() => void load()}>
+        <button class="button" onClick={load}>
           {t('monitor.timing.refresh')}
         </button>
         {timing && <span class="muted">{t('monitor.timing.at', { scan: timing.scan })}</span>}
