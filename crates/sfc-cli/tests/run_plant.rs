@@ -622,7 +622,10 @@ Level = -1
     let mut run = Run::start(&["--config", s(&config), "--for", "T#60s"]);
     let (mb, mon) = (run.modbus(), run.monitor());
     let mut m = Modbus::connect(mb);
-    eventually("the first scan", 20, || m.read_holding(1000, 1) == [100]);
+    // `Limit` (register 1000) holds its declared value before any scan; `Count` is written by
+    // the first scan, so waiting for it is waiting for that scan (a loaded machine once read
+    // the registers between the two).
+    eventually("the first scan", 20, || m.read_holding(1000, 1) == [100] && m.read_holding(2, 2) != [0, 0]);
     // Little word order: the low word first.
     assert_eq!(m.read_holding(2, 2), [0x2800, 0xEE6B]);
     let mut ws = Ws::connect(&format!("ws://{mon}/?token=cfg-token"));
