@@ -38,9 +38,20 @@ impl Default for Options {
 /// `opts.analysis` is set and the file has no errors (an erroneous chart has no meaning to
 /// prove things about; its errors come first).
 pub fn check_source(file_id: u32, name: &str, text: &str, opts: &CheckOptions) -> Checked {
+    check_parsed(file_id, name, text, sfc_syntax::parse(file_id, text), opts)
+}
+
+/// [`check_source`] of a text already parsed (`parsed` is `sfc_syntax::parse(file_id, text)`).
+pub fn check_parsed(
+    file_id: u32,
+    name: &str,
+    text: &str,
+    parsed: (sfc_syntax::ast::SourceUnit, Vec<sfc_diagnostics::Diagnostic>),
+    opts: &CheckOptions,
+) -> Checked {
     let analysis = opts.analysis;
     let model_opts = CheckOptions { keep_types: opts.keep_types || analysis, ..opts.clone() };
-    let mut checked = sfc_model::check_source(file_id, name, text, &model_opts);
+    let mut checked = sfc_model::check_parsed(file_id, name, text, parsed, &model_opts);
     if analysis && !checked.has_errors() {
         let mut found = Vec::new();
         for chart in &checked.charts {

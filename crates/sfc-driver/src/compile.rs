@@ -99,6 +99,20 @@ pub fn check_text(
     }
 }
 
+/// [`check_text`] of IEC text already parsed: `parsed` is `sfc_syntax::parse(file_id, text)`
+/// (the language server parses each version once, for its index and for this check).
+pub fn check_parsed_text(
+    file_id: u32,
+    name: &str,
+    text: &str,
+    parsed: (sfc_syntax::ast::SourceUnit, Vec<Diagnostic>),
+    opts: &CheckOptions,
+) -> (SourceFile, Checked, Vec<Diagnostic>) {
+    let checked = sfc_analysis::check_parsed(file_id, name, text, parsed, opts);
+    let diags = checked.diagnostics.clone();
+    (checked.file.clone(), checked, diags)
+}
+
 /// The options of the check that validates a chart before it is built: the target rules of
 /// ATMT/EATMT are part of it (a table target overrides `sfc.target`); the analysis is not (that
 /// is `sfc check`'s job).

@@ -13,6 +13,7 @@ use crossbeam_channel::{Receiver, RecvTimeoutError, Sender};
 use lsp_types::{CodeDescription, DiagnosticRelatedInformation, DiagnosticSeverity, Location, NumberOrString, Uri};
 use sfc_diagnostics::{Diagnostic, Severity, SourceFile, Witness};
 use sfc_model::CheckOptions;
+use sfc_syntax::ast::SourceUnit;
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
@@ -28,6 +29,21 @@ pub trait DiagnosticsProvider: Send + Sync {
     /// The diagnostics of `text`, located in `file` (whose text is what the user edits).
     /// `analysis` asks for the slow checks too (on save or after idle).
     fn check(&self, path: &Path, text: &str, analysis: bool) -> (SourceFile, Vec<Diagnostic>);
+    /// The quick check (no analysis) of IEC text already parsed (`parsed` is
+    /// `sfc_syntax::parse(0, text)`), so one parse serves the check and the index; `None` when
+    /// this provider does not check from a syntax tree (then [`Self::check`] is called).
+    fn check_parsed(
+        &self,
+        _path: &Path,
+        _text: &str,
+        _parsed: (SourceUnit, Vec<Diagnostic>),
+    ) -> Option<(SourceFile, Vec<Diagnostic>)> {
+        None
+    }
+    /// Whether [`Self::check_parsed`] checks IEC text from a syntax tree.
+    fn checks_parsed(&self) -> bool {
+        false
+    }
 }
 
 /// `sfc check` for IEC text and PLCopen XML (through the driver, as the CLI does).
@@ -51,6 +67,22 @@ impl DiagnosticsProvider for ChartDiagnostics {
         // The diagnostics go out without waiting for the tree and model to be freed.
         crate::dispose::later(checked);
         (file, diags)
+    }
+
+    fn check_parsed(
+        &self,
+        path: &Path,
+        text: &str,
+        parsed: (SourceUnit, Vec<Diagnostic>),
+    ) -> Option<(SourceFile, Vec<Diagnostic>)> {
+        let opts = CheckOptions { analysis: false, ..CheckOptions::default() };
+        let (file, checked, diags) = sfc_driver::check_parsed_text(0, &path.display().to_string(), text, parsed, &opts);
+        crate::dispose::later(checked);
+        Some((file, diags))
+    }
+
+    fn checks_parsed(&self) -> bool {
+        true
     }
 }
 
@@ -144,6 +176,12 @@ pub struct Job {
     pub analysis: bool,
     /// Wait this long without a newer job for the same document before checking.
     pub delay: Duration,
+    /// A quick check of IEC text that also gives this version's index: the check worker parses
+    /// once and hands a copy of the tree to the index worker (which would otherwise parse the
+    /// same text again, on the other core, at the same moment).
+    pub index: bool,
+    /// For the index worker: the tree of `text`, parsed by the check worker.
+    pub parsed: Option<Box<SourceUnit>>,
 }
 
 /// The diagnostics of one version of a document.
@@ -165,13 +203,15 @@ pub struct Outcome {
 
 /// Starts a worker thread: it takes jobs from `jobs`, keeps only the newest per document, waits
 /// for each job's delay, checks and sends the outcome to `out`. It ends when `jobs` closes.
+/// `index` takes the index jobs of the jobs marked [`Job::index`].
 pub fn spawn_worker(
     name: &str,
     jobs: Receiver<Job>,
     out: Sender<Outcome>,
     providers: Arc<Vec<Box<dyn DiagnosticsProvider>>>,
+    index: Option<Sender<Job>>,
 ) -> std::io::Result<std::thread::JoinHandle<()>> {
-    spawn(name, jobs, out, providers, run)
+    spawn(name, jobs, out, providers, index, run)
 }
 
 /// Starts the index worker: as [`spawn_worker`], but it parses and indexes each job's text
@@ -182,29 +222,36 @@ pub fn spawn_index_worker(
     jobs: Receiver<Job>,
     out: Sender<Outcome>,
 ) -> std::io::Result<std::thread::JoinHandle<()>> {
-    spawn(name, jobs, out, Arc::new(Vec::new()), index)
+    spawn(name, jobs, out, Arc::new(Vec::new()), None, index)
 }
 
-type Runner = fn(&Job, &[Box<dyn DiagnosticsProvider>]) -> Outcome;
+type Runner = fn(Job, &[Box<dyn DiagnosticsProvider>], Option<&Sender<Job>>) -> Outcome;
 
 fn spawn(
     name: &str,
     jobs: Receiver<Job>,
     out: Sender<Outcome>,
     providers: Arc<Vec<Box<dyn DiagnosticsProvider>>>,
+    index: Option<Sender<Job>>,
     runner: Runner,
 ) -> std::io::Result<std::thread::JoinHandle<()>> {
     std::thread::Builder::new()
         .name(name.to_string())
         // Parsing and checking recurse along the (depth-capped) tree, as in the CLI.
         .stack_size(64 << 20)
-        .spawn(move || worker(jobs, out, providers, runner))
+        .spawn(move || worker(jobs, out, providers, index, runner))
 }
 
 /// The parse and index of one job's text (a panic inside becomes a failure for the log).
-fn index(job: &Job, _: &[Box<dyn DiagnosticsProvider>]) -> Outcome {
+fn index(mut job: Job, _: &[Box<dyn DiagnosticsProvider>], _: Option<&Sender<Job>>) -> Outcome {
     let start = Instant::now();
-    let made = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| Arc::new(Analysis::new(job.text.clone()))));
+    let parsed = job.parsed.take();
+    let made = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+        Arc::new(match parsed {
+            Some(unit) => Analysis::from_parsed(job.text.clone(), *unit),
+            None => Analysis::new(job.text.clone()),
+        })
+    }));
     let (indexed, failure) = match made {
         Ok(a) => (Some(a), None),
         Err(_) => (None, Some(format!("indexing `{}` failed inside sfc", job.path.display()))),
@@ -225,6 +272,7 @@ fn worker(
     jobs: Receiver<Job>,
     out: Sender<Outcome>,
     providers: Arc<Vec<Box<dyn DiagnosticsProvider>>>,
+    index: Option<Sender<Job>>,
     runner: Runner,
 ) {
     // Pending jobs by URI with the time each becomes due.
@@ -248,15 +296,17 @@ fn worker(
         let due: Vec<String> = pending.iter().filter(|(_, (d, _))| *d <= now).map(|(k, _)| k.clone()).collect();
         for key in due {
             let Some((_, job)) = pending.remove(&key) else { continue };
-            if out.send(runner(&job, &providers)).is_err() {
+            if out.send(runner(job, &providers, index.as_ref())).is_err() {
                 return;
             }
         }
     }
 }
 
-/// Checks one job (a panic inside a check becomes a failure, the worker goes on).
-pub fn run(job: &Job, providers: &[Box<dyn DiagnosticsProvider>]) -> Outcome {
+/// Checks one job (a panic inside a check becomes a failure, the worker goes on). A job marked
+/// [`Job::index`] also goes to `index`, with the tree of its text when the provider checks
+/// from one (parsed here once for both).
+pub fn run(job: Job, providers: &[Box<dyn DiagnosticsProvider>], index: Option<&Sender<Job>>) -> Outcome {
     let start = Instant::now();
     let mut outcome = Outcome {
         uri: job.uri.clone(),
@@ -268,11 +318,32 @@ pub fn run(job: &Job, providers: &[Box<dyn DiagnosticsProvider>]) -> Outcome {
         from_index: false,
         indexed: None,
     };
-    let Some(provider) = providers.iter().find(|p| p.handles(&job.path, &job.language, &job.text)) else {
+    let provider = providers.iter().find(|p| p.handles(&job.path, &job.language, &job.text));
+    let index = index.filter(|_| job.index);
+    let from_tree = !job.analysis && index.is_some() && provider.is_some_and(|p| p.checks_parsed());
+    let Some(provider) = provider else {
+        if let Some(index) = index {
+            let _ = index.send(Job { delay: Duration::ZERO, index: false, ..job.clone() });
+        }
         return outcome;
     };
-    let checked =
-        std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| provider.check(&job.path, &job.text, job.analysis)));
+    let checked = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+        if from_tree {
+            // One parse for both: the index worker gets a copy of the tree (a copy costs about
+            // a third of a parse) and builds the index while this thread checks.
+            let parsed = sfc_syntax::parse(0, &job.text);
+            if let Some(index) = index {
+                let copy = Some(Box::new(parsed.0.clone()));
+                let _ = index.send(Job { delay: Duration::ZERO, index: false, parsed: copy, ..job.clone() });
+            }
+            if let Some(found) = provider.check_parsed(&job.path, &job.text, parsed) {
+                return found;
+            }
+        } else if let Some(index) = index {
+            let _ = index.send(Job { delay: Duration::ZERO, index: false, ..job.clone() });
+        }
+        provider.check(&job.path, &job.text, job.analysis)
+    }));
     match checked {
         Ok((file, diags)) => {
             let lines = LineIndex::new(&file.text);

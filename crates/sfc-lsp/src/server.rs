@@ -135,8 +135,8 @@ pub fn serve(connection: Connection, mut options: ServerOptions) -> Result<(), S
     let (index_tx, index_rx) = crossbeam_channel::unbounded();
     let (out_tx, out_rx) = crossbeam_channel::unbounded();
     let workers = [
-        check::spawn_worker("sfc-lsp-check", check_rx, out_tx.clone(), providers.clone()),
-        check::spawn_worker("sfc-lsp-analysis", analysis_rx, out_tx.clone(), providers),
+        check::spawn_worker("sfc-lsp-check", check_rx, out_tx.clone(), providers.clone(), Some(index_tx.clone())),
+        check::spawn_worker("sfc-lsp-analysis", analysis_rx, out_tx.clone(), providers, None),
         check::spawn_index_worker("sfc-lsp-index", index_rx, out_tx),
     ];
     let mut server = Server {
@@ -258,9 +258,11 @@ impl Server<'_> {
         )));
     }
 
-    /// Sends the document's jobs to the workers; true when the index worker got one.
+    /// Sends the document's jobs to the workers; true when the index worker gets one (from the
+    /// quick check, which parses once for both, or directly).
     fn schedule(&self, doc: &Document, quick: Option<Duration>, analysis: Option<Duration>) -> bool {
-        let job = |analysis: bool, delay: Duration| Job {
+        let wants_index = doc.kind == DocKind::Iec && !doc.analysed();
+        let job = |analysis: bool, delay: Duration, index: bool| Job {
             uri: doc.uri.clone(),
             version: doc.version,
             path: doc.path.clone(),
@@ -268,16 +270,16 @@ impl Server<'_> {
             text: doc.text.clone(),
             analysis,
             delay,
+            index,
+            parsed: None,
         };
-        if let Some(d) = quick {
-            let _ = self.check_tx.send(job(false, d));
-        }
         if let Some(d) = analysis {
-            let _ = self.analysis_tx.send(job(true, d));
+            let _ = self.analysis_tx.send(job(true, d, false));
         }
-        doc.kind == DocKind::Iec
-            && !doc.analysed()
-            && self.index_tx.send(job(false, quick.unwrap_or(Duration::ZERO))).is_ok()
+        match quick {
+            Some(d) => self.check_tx.send(job(false, d, wants_index)).is_ok() && wants_index,
+            None => wants_index && self.index_tx.send(job(false, Duration::ZERO, false)).is_ok(),
+        }
     }
 
     fn notification(&mut self, n: Notification) {

@@ -23,6 +23,11 @@ pub struct Analysis {
 impl Analysis {
     pub fn new(text: Arc<String>) -> Analysis {
         let (unit, _) = sfc_syntax::parse(0, &text);
+        Analysis::from_parsed(text, unit)
+    }
+
+    /// The analysis of `text` from its syntax tree (`sfc_syntax::parse(0, &text)`).
+    pub fn from_parsed(text: Arc<String>, unit: sfc_syntax::ast::SourceUnit) -> Analysis {
         let index = FileIndex::new(&unit, &text);
         Analysis { lines: LineIndex::new(&text), text, unit, index }
     }

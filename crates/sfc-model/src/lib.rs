@@ -63,7 +63,19 @@ impl Checked {
 
 /// Parses, lowers and validates one file. `file_id` goes into every span.
 pub fn check_source(file_id: u32, name: &str, text: &str, opts: &CheckOptions) -> Checked {
-    let (mut unit, mut diags) = sfc_syntax::parse(file_id, text);
+    check_parsed(file_id, name, text, sfc_syntax::parse(file_id, text), opts)
+}
+
+/// [`check_source`] of a text already parsed: `parsed` is what `sfc_syntax::parse(file_id,
+/// text)` returned (the language server parses a version once for its index and its check).
+pub fn check_parsed(
+    file_id: u32,
+    name: &str,
+    text: &str,
+    parsed: (ast::SourceUnit, Vec<Diagnostic>),
+    opts: &CheckOptions,
+) -> Checked {
+    let (mut unit, mut diags) = parsed;
     let (type_diags, expr_types) = code::check_unit(&unit, opts.keep_types);
     let mut charts = Vec::new();
     for (i, item) in unit.items.iter_mut().enumerate() {

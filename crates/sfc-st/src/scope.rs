@@ -233,8 +233,18 @@ impl<'e> Scope<'e> {
     /// Resolves a name: POU variables, steps and actions first, then the function's result
     /// variable, then globals.
     pub(crate) fn resolve(&self, name: &str) -> Option<Sym> {
-        let key = name.to_ascii_uppercase();
-        if let Some(s) = self.index.get(&key) {
+        // Every name of every expression comes here: short names are folded on the stack.
+        let mut buf = [0u8; 64];
+        let found = match buf.get_mut(..name.len()) {
+            Some(upper) => {
+                upper.copy_from_slice(name.as_bytes());
+                upper.make_ascii_uppercase();
+                // ASCII upper-casing keeps UTF-8 valid.
+                std::str::from_utf8(upper).ok().and_then(|key| self.index.get(key))
+            }
+            None => self.index.get(&name.to_ascii_uppercase()),
+        };
+        if let Some(s) = found {
             return Some(*s);
         }
         if self.return_type.is_some() && self.pou_name.as_deref().is_some_and(|p| p.eq_ignore_ascii_case(name)) {

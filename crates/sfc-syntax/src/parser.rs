@@ -252,6 +252,83 @@ struct Tok {
     end: u32,
     /// A line break lies between the previous significant token and this one.
     nl_before: bool,
+    /// An identifier that is a reserved keyword (or a misspelling read as one): decided once
+    /// per token, since the parser asks for most identifiers several times.
+    reserved: bool,
+}
+
+/// Whether `s` is one of [`RESERVED`], case-insensitively: one `match` on the upper-case
+/// bytes per identifier token (the parser then asks the token, not the keyword list). A test
+/// keeps the arms equal to [`RESERVED`].
+fn reserved_word(s: &str) -> bool {
+    const LONGEST: usize = 18;
+    if s.len() > LONGEST || s.len() < 2 {
+        return false;
+    }
+    let mut buf = [0u8; LONGEST];
+    let Some(upper) = buf.get_mut(..s.len()) else { return false };
+    upper.copy_from_slice(s.as_bytes());
+    upper.make_ascii_uppercase();
+    matches!(
+        &*upper,
+        b"END_IF"
+            | b"END_CASE"
+            | b"END_FOR"
+            | b"END_WHILE"
+            | b"END_REPEAT"
+            | b"END_VAR"
+            | b"END_STEP"
+            | b"END_TRANSITION"
+            | b"END_ACTION"
+            | b"END_PROGRAM"
+            | b"END_FUNCTION"
+            | b"END_FUNCTION_BLOCK"
+            | b"END_TYPE"
+            | b"END_STRUCT"
+            | b"END_CONFIGURATION"
+            | b"END_RESOURCE"
+            | b"IF"
+            | b"THEN"
+            | b"ELSIF"
+            | b"ELSE"
+            | b"CASE"
+            | b"OF"
+            | b"FOR"
+            | b"DO"
+            | b"BY"
+            | b"WHILE"
+            | b"REPEAT"
+            | b"UNTIL"
+            | b"EXIT"
+            | b"RETURN"
+            | b"VAR"
+            | b"VAR_INPUT"
+            | b"VAR_OUTPUT"
+            | b"VAR_IN_OUT"
+            | b"VAR_GLOBAL"
+            | b"VAR_EXTERNAL"
+            | b"VAR_ACCESS"
+            | b"VAR_TEMP"
+            | b"STEP"
+            | b"INITIAL_STEP"
+            | b"TRANSITION"
+            | b"ACTION"
+            | b"PROGRAM"
+            | b"FUNCTION"
+            | b"FUNCTION_BLOCK"
+            | b"TYPE"
+            | b"STRUCT"
+            | b"ARRAY"
+            | b"AND"
+            | b"OR"
+            | b"XOR"
+            | b"NOT"
+            | b"MOD"
+            | b"AND_THEN"
+            | b"OR_ELSE"
+            | b"CONFIGURATION"
+            | b"RESOURCE"
+    )
 }
 
 struct Parser<'a> {
@@ -290,10 +367,11 @@ impl<'a> Parser<'a> {
             let s = &text[t.start as usize..t.end as usize];
             match t.kind {
                 TokenKind::Whitespace => {
-                    if s.matches('\n').nth(1).is_some() {
+                    let breaks = s.bytes().filter(|&b| b == b'\n').take(2).count();
+                    if breaks > 1 {
                         blank_lines.push(t.start);
                     }
-                    if s.contains('\n') {
+                    if breaks > 0 {
                         nl = true;
                         line_blank = true;
                     }
@@ -319,7 +397,8 @@ impl<'a> Parser<'a> {
                     line_blank = kind == TriviaKind::LineComment;
                 }
                 _ => {
-                    toks.push(Tok { kind: t.kind, start: t.start, end: t.end, nl_before: nl });
+                    let reserved = t.kind == TokenKind::Ident && reserved_word(s);
+                    toks.push(Tok { kind: t.kind, start: t.start, end: t.end, nl_before: nl, reserved });
                     nl = false;
                     line_blank = false;
                 }
@@ -357,6 +436,7 @@ impl<'a> Parser<'a> {
             start: self.text.len() as u32,
             end: self.text.len() as u32,
             nl_before: false,
+            reserved: false,
         })
     }
     fn kind(&self) -> TokenKind {
@@ -423,7 +503,7 @@ impl<'a> Parser<'a> {
         }
     }
     fn is_reserved(&self, t: Tok) -> bool {
-        t.kind == TokenKind::Ident && RESERVED.iter().any(|k| self.text_of(t).eq_ignore_ascii_case(k))
+        t.kind == TokenKind::Ident && t.reserved
     }
 
     fn describe(&self, t: Tok) -> String {
@@ -501,6 +581,9 @@ impl<'a> Parser<'a> {
             );
         }
         self.keyword_typos.insert(t.start, kw);
+        if let Some(tok) = self.toks.get_mut(self.pos) {
+            tok.reserved = true;
+        }
         true
     }
 
@@ -2060,4 +2143,21 @@ fn quoted(s: &str) -> Option<(String, &str)> {
     let s = s.strip_prefix('\'')?;
     let end = s.find('\'')?;
     Some((s[..end].to_string(), &s[end + 1..]))
+}
+
+#[cfg(test)]
+mod reserved_tests {
+    use super::{reserved_word, RESERVED};
+
+    #[test]
+    fn the_keyword_match_is_the_keyword_list() {
+        for k in RESERVED {
+            assert!(reserved_word(k), "{k}");
+            assert!(reserved_word(&k.to_ascii_lowercase()), "{k}");
+            assert!(!reserved_word(&format!("{k}X")), "{k}X");
+        }
+        for name in ["S1", "Go", "Count", "END_", "Step1", "I", "", "END_FUNCTION_BLOCKS", "ÉTAPE"] {
+            assert!(!reserved_word(name), "{name}");
+        }
+    }
 }
