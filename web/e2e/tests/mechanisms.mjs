@@ -3,7 +3,8 @@
 // with the mechanism's chart open, attaches to it. The inputs start a reversal with the CW
 // contactor's feedback stuck: after its supervision time, error 4.04. The Mechanisms tab lists
 // Rev with its state, runs and the error record naming the feedback contact with its terminal;
-// selecting Rev shows that instance on the chart. Screenshots in e2e/out/mechanisms-*.png.
+// selecting Rev shows that instance on the chart; the Time analysis tab shows Rev's runs with
+// the states passed. Screenshots in e2e/out/mechanisms-*.png.
 import { spawn } from 'node:child_process';
 import path from 'node:path';
 
@@ -123,6 +124,22 @@ export const tests = [
         await page.locator('.mon-mechanisms tr[data-instance="Rev"]').click();
         await until(page, 'Err404 framed green', async () => JSON.stringify(await active(page)) === '["Err404"]');
         await page.screenshot({ path: OUT('2-chart') });
+
+        // The time analysis per run: Rev's run with the states passed in order, and the
+        // statistics per state over runs.
+        await page.getByRole('tab', { name: 'Time analysis' }).click();
+        const runs = page.locator('.mon-runs[data-mechanism="Rev"]');
+        await runs.waitFor();
+        const run = runs.locator('.mon-run-table tr[data-run="1"]');
+        const passed = await until(page, 'run 1 through OpenKM1 into Err404', async () => {
+          if (!(await run.count())) return '';
+          const x = await run.textContent();
+          return /Rev\.OpenKM1 T#1s\d*ms → Rev\.Err404/.test(x) ? x : '';
+        });
+        if (!passed.includes('in progress')) throw new Error(`run 1 waits in its error step, in progress: ${passed}`);
+        const stats = await runs.locator('.mon-state-stats').textContent();
+        if (!/Rev\.OpenKM1\s*1/.test(stats)) throw new Error(`OpenKM1 counted once over runs: ${stats}`);
+        await page.screenshot({ path: OUT('3-runs') });
         if (!rt.log().includes('error record: Rev: error 404')) throw new Error(`the runtime's log lacks the record: ${rt.log()}`);
         if (errors.length) throw new Error(`page errors: ${errors.join('; ')}`);
       } finally {

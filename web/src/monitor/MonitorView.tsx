@@ -400,7 +400,7 @@ export function MonitorView({ target, createCanvas, onLeave, socket }: MonitorVi
             {side === 'why' && (
               <ExplainPanel report={explained} error={explainError} selectedStep={selKind === 'step' ? selName ?? null : null} canExplain={activeSel} onExplain={() => selName && void explain(selName)} />
             )}
-            {side === 'timing' && <TimingPanel client={client} />}
+            {side === 'timing' && <TimingPanel client={client} shown={instance} />}
             {side === 'mechanisms' && <MechanismsPanel client={client} shown={instance} onSelect={selectInstance} />}
             {side === 'events' && <EventsPanel client={client} />}
           </div>
