@@ -446,6 +446,10 @@ pub fn sim(r: SimRequest) -> u8 {
         Ok(s) => s,
         Err(e) => return report_load_error(&e),
     };
+    // A PLCopen chart: what its import said (notes, warnings), as `check` shows it.
+    if let Some(import) = &scen.import {
+        term::print_diagnostics(&import.1, std::slice::from_ref(&import.0));
+    }
     // A chart that is not UTF-8 was read as Latin-1 / Windows-1252: said, as `check` says it.
     if let Ok(decoded) = sfc_driver::read_source(&scen.chart) {
         if let Some(w) = sfc_syntax::encoding::warning(0, &decoded) {
