@@ -105,7 +105,9 @@ fn transition_line(t: &TransitionReport) -> String {
 
 fn timeout_text(r: &StepReport) -> String {
     match r.timeout {
-        Some(t) => format!(", timeout {}", format_time(t)),
+        // How long the step may still wait before its supervision time expires.
+        Some(t) if t > r.elapsed => format!(", timeout {} ({} left)", format_time(t), format_time(t - r.elapsed)),
+        Some(t) => format!(", timeout {} (expired)", format_time(t)),
         None => String::new(),
     }
 }

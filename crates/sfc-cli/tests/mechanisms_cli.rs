@@ -51,7 +51,7 @@ fn sim_prints_error_records_with_terminals() {
 fn explain_names_terminals() {
     let o = sfc(&["sim", CHART, "--scenario", SCENARIO, "--until", "T#8s", "--explain"]);
     let out = text(&o);
-    assert!(out.contains("step Rev.CloseKM2 active for T#700ms, timeout T#1s"), "{out}");
+    assert!(out.contains("step Rev.CloseKM2 active for T#700ms, timeout T#1s (T#300ms left)"), "{out}");
     assert!(out.contains("KM2Fb (X12.3, %IX0.5) is FALSE; needs TRUE"), "{out}");
     let o = sfc(&["sim", CHART, "--scenario", SCENARIO, "--until", "T#8s", "--explain", "--format", "json"]);
     let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap_or_else(|e| panic!("{e}: {}", text(&o)));
