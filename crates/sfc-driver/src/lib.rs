@@ -18,7 +18,7 @@ mod disk;
 pub mod load;
 
 pub use compile::{
-    check_any, check_parsed_text, check_text, is_xml, BuildTarget, CompileError, CompileOptions, Compiled,
+    check_any, check_parsed_text, check_text, is_xml, BuildTarget, CompileError, CompileOptions, Compiled, IecText,
 };
 pub use disk::{same_file, write_atomically};
 pub use load::{read_source, FileKind, LoadError};

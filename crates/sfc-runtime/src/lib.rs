@@ -454,6 +454,8 @@ impl Runtime {
             halt_change: Vec::new(),
             last_state: None,
             steps_requested: Vec::new(),
+            records: 0,
+            unwritten_record: None,
         };
         // The simulator may recurse deeply in user code: the same stack as the CLI's.
         let worker = std::thread::Builder::new()
