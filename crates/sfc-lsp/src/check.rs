@@ -350,6 +350,13 @@ pub fn run(job: Job, providers: &[Box<dyn DiagnosticsProvider>], index: Option<&
             outcome.diagnostics = diags.iter().map(|d| to_lsp(d, &file, &lines, &job.uri)).collect();
         }
         Err(e) => {
+            if from_tree {
+                // The tree may not have reached the index worker: it parses for itself (a
+                // second index job of one version only replaces the first).
+                if let Some(index) = index {
+                    let _ = index.send(Job { delay: Duration::ZERO, index: false, ..job.clone() });
+                }
+            }
             let msg = e
                 .downcast_ref::<String>()
                 .cloned()
