@@ -332,6 +332,8 @@ impl Runtime {
             transitions,
             variables,
             control: true,
+            charts: sim.chart_outline(),
+            actions: sim.action_outline(),
         };
         let token = opts.token.clone().unwrap_or_else(random_token);
         let (hub, rx) = Hub::new(info, token);
@@ -453,6 +455,7 @@ impl Runtime {
             unpublished_events: Vec::new(),
             halt_change: Vec::new(),
             last_state: None,
+            unpublished_errors: None,
             steps_requested: Vec::new(),
         };
         // The simulator may recurse deeply in user code: the same stack as the CLI's.
