@@ -777,6 +777,65 @@ fn send(hub: &Hub, command: Command) -> StatusCode {
     }
 }
 
+/// How much lower than the scan thread the OPC UA threads run (nice value, Linux).
+pub const NICE: i32 = 10;
+
+/// Runs the server on a thread of its own, with its own single-threaded tokio runtime, at a
+/// lower scheduling priority (nice [`NICE`]) than the scan thread: sampling and encoding for
+/// many subscriptions then take at most one core, and only what the scan leaves of it, so the
+/// scan's start jitter does not follow the OPC UA load at normal priority. (The monitor and
+/// Modbus keep the network threads at normal priority: Modbus carries the plant's inputs.)
+pub fn spawn(side: Side, hub: Arc<Hub>) -> Result<std::thread::JoinHandle<()>, String> {
+    std::thread::Builder::new()
+        .name("sfc-opcua".into())
+        .spawn(move || {
+            lower_priority(&hub);
+            let rt = tokio::runtime::Builder::new_current_thread()
+                .thread_name("sfc-opcua-blocking")
+                .max_blocking_threads(2)
+                .on_thread_start(|| {
+                    let _ = nice_this_thread();
+                })
+                .enable_all()
+                .build();
+            match rt {
+                Ok(rt) => {
+                    rt.block_on(serve(side, hub));
+                    rt.shutdown_timeout(std::time::Duration::from_secs(1));
+                }
+                Err(e) => hub.notice(format!("sfc run: OPC UA cannot start its thread: {e}")),
+            }
+        })
+        .map_err(|e| format!("cannot start the OPC UA thread: {e}"))
+}
+
+/// Lowers the calling thread's priority, saying so once when it cannot.
+fn lower_priority(hub: &Hub) {
+    if let Err(e) = nice_this_thread() {
+        hub.notice(format!("sfc run: OPC UA runs at the scan thread's priority: {e}"));
+    }
+}
+
+/// Sets the calling thread's nice value to [`NICE`] (Linux: nice values are per thread).
+#[cfg(target_os = "linux")]
+fn nice_this_thread() -> Result<(), String> {
+    // SAFETY: plain system calls on the calling thread; gettid has no arguments.
+    let r = unsafe {
+        let tid = libc::syscall(libc::SYS_gettid) as libc::id_t;
+        libc::setpriority(libc::PRIO_PROCESS, tid, NICE)
+    };
+    if r == 0 {
+        Ok(())
+    } else {
+        Err(format!("cannot lower its priority: {}", std::io::Error::last_os_error()))
+    }
+}
+
+#[cfg(not(target_os = "linux"))]
+fn nice_this_thread() -> Result<(), String> {
+    Err("lowering a thread's priority is implemented for Linux only".into())
+}
+
 /// Serves until the run closes.
 pub async fn serve(side: Side, hub: Arc<Hub>) {
     let listener = match tokio::net::TcpListener::from_std(side.listener) {
