@@ -377,7 +377,7 @@ fn define_types(space: &mut async_opcua::server::address_space::AddressSpace, ns
                   parent: &NodeId,
                   name: &str,
                   data: Option<DataTypeId>| {
-        let id = nid(ns, &format!("{}.{name}", parent.identifier));
+        let id = nid(ns, &format!("{}/{name}", parent.identifier));
         match data {
             Some(d) => {
                 VariableBuilder::new(&id, QualifiedName::new(ns, name), name)
@@ -435,7 +435,10 @@ fn define_types(space: &mut async_opcua::server::address_space::AddressSpace, ns
 }
 
 /// The node layout (`docs/runtime.md`, "OPC UA"): `Objects/<POU>/{Inputs,Outputs,Locals,
-/// Globals}/<variable>`, `Objects/<POU>/Chart/{Steps,Transitions}`, `Objects/<POU>/Runtime`.
+/// Globals}/<variable>`, `Objects/<POU>/Chart/{Steps,Transitions,Actions}` and a chart per
+/// SFC function block instance under `Chart`, `Objects/<POU>/Runtime`. A variable's node id is
+/// its engineering name (`CarWash.StartButton`); the other nodes' ids join their levels with
+/// `/`, which no IEC identifier holds (a variable named `Chart` or `Runtime` meets no other node).
 fn populate(hub: &Arc<Hub>, manager: &Arc<SimpleNodeManager>, ns: u16) {
     let info: &ChartInfo = &hub.info;
     let pou = info.pou.clone();
@@ -460,7 +463,7 @@ fn populate(hub: &Arc<Hub>, manager: &Arc<SimpleNodeManager>, ns: u16) {
                     name: &str,
                     value: Variant,
                     ty: DataTypeId| {
-        let id = NodeId::new(ns, format!("{}.{name}", parent.identifier));
+        let id = NodeId::new(ns, format!("{}/{name}", parent.identifier));
         VariableBuilder::new(&id, QualifiedName::new(ns, name), name)
             .property_of(parent.clone())
             .has_type_definition(VariableTypeId::PropertyType)
@@ -476,7 +479,7 @@ fn populate(hub: &Arc<Hub>, manager: &Arc<SimpleNodeManager>, ns: u16) {
         if members.is_empty() {
             continue;
         }
-        let fid = nid(ns, &format!("{pou}.{}", section.name()));
+        let fid = nid(ns, &format!("{pou}/{}", section.name()));
         folder(&mut space, &fid, section.name(), &root);
         for i in members {
             let Some(var) = info.variables.get(i) else { continue };
@@ -545,7 +548,7 @@ fn populate(hub: &Arc<Hub>, manager: &Arc<SimpleNodeManager>, ns: u16) {
     } else {
         info.charts.clone()
     };
-    let chart = nid(ns, &format!("{pou}.Chart"));
+    let chart = nid(ns, &format!("{pou}/Chart"));
     let top = charts.iter().position(|c| c.path.is_empty());
     let chart_object = |id: &NodeId, name: &str| {
         ObjectBuilder::new(id, QualifiedName::new(ns, name), name).has_type_definition(types.sfc.clone())
@@ -563,7 +566,7 @@ fn populate(hub: &Arc<Hub>, manager: &Arc<SimpleNodeManager>, ns: u16) {
         let cid = if outline.path.is_empty() {
             chart.clone()
         } else {
-            let id = nid(ns, &format!("{pou}.Chart.{}", outline.path));
+            let id = nid(ns, &format!("{pou}/Chart/{}", outline.path));
             chart_object(&id, &outline.path).organized_by(chart.clone()).insert(&mut *space);
             property(&mut space, &id, "FunctionBlock", Variant::from(outline.pou.as_str()), DataTypeId::String);
             id
@@ -591,19 +594,19 @@ fn populate(hub: &Arc<Hub>, manager: &Arc<SimpleNodeManager>, ns: u16) {
                 .minimum_sampling_interval(0.0)
                 .insert(space);
         };
-        let steps = nid(ns, &format!("{}.Steps", cid.identifier));
+        let steps = nid(ns, &format!("{}/Steps", cid.identifier));
         folder(&mut space, &steps, "Steps", &cid);
         for s in outline.steps.clone() {
             let Some((name, initial)) = info.steps.get(s as usize) else { continue };
             let bn = local(name);
-            let sid = nid(ns, &format!("{pou}.Steps.{name}"));
+            let sid = nid(ns, &format!("{pou}/Steps/{name}"));
             ObjectBuilder::new(&sid, QualifiedName::new(ns, bn.as_str()), bn.as_str())
                 .organized_by(steps.clone())
                 .has_type_definition(types.step.clone())
                 .insert(&mut *space);
             property(&mut space, &sid, "Initial", Variant::Boolean(*initial), DataTypeId::Boolean);
-            let x = nid(ns, &format!("{pou}.Steps.{name}.X"));
-            let t = nid(ns, &format!("{pou}.Steps.{name}.T"));
+            let x = nid(ns, &format!("{pou}/Steps/{name}/X"));
+            let t = nid(ns, &format!("{pou}/Steps/{name}/T"));
             variable(&mut space, &x, &sid, "X", DataTypeId::Boolean, Variant::Boolean(false));
             variable(&mut space, &t, &sid, "T", DataTypeId::Duration, Variant::Double(0.0));
             let h = hub.clone();
@@ -622,12 +625,12 @@ fn populate(hub: &Arc<Hub>, manager: &Arc<SimpleNodeManager>, ns: u16) {
                 good(Variant::Double(us as f64 / 1000.0))
             });
         }
-        let transitions = nid(ns, &format!("{}.Transitions", cid.identifier));
+        let transitions = nid(ns, &format!("{}/Transitions", cid.identifier));
         folder(&mut space, &transitions, "Transitions", &cid);
         for t in outline.transitions.clone() {
             let Some((name, from, to)) = info.transitions.get(t as usize) else { continue };
             let bn = local(name);
-            let tid = nid(ns, &format!("{pou}.Transitions.{name}"));
+            let tid = nid(ns, &format!("{pou}/Transitions/{name}"));
             ObjectBuilder::new(&tid, QualifiedName::new(ns, bn.as_str()), bn.as_str())
                 .organized_by(transitions.clone())
                 .has_type_definition(types.transition.clone())
@@ -636,7 +639,7 @@ fn populate(hub: &Arc<Hub>, manager: &Arc<SimpleNodeManager>, ns: u16) {
                 |l: &[u32]| -> Vec<UAString> { l.iter().map(|s| UAString::from(local(&info.step_name(*s)))).collect() };
             property(&mut space, &tid, "From", Variant::from(names(from)), DataTypeId::String);
             property(&mut space, &tid, "To", Variant::from(names(to)), DataTypeId::String);
-            let g = nid(ns, &format!("{pou}.Transitions.{name}.Guard"));
+            let g = nid(ns, &format!("{pou}/Transitions/{name}/Guard"));
             variable(&mut space, &g, &tid, "Guard", DataTypeId::Boolean, Variant::Boolean(false));
             let h = hub.clone();
             cbs.add_read_callback(g, move |_, _, _| {
@@ -652,12 +655,12 @@ fn populate(hub: &Arc<Hub>, manager: &Arc<SimpleNodeManager>, ns: u16) {
                 }
             });
         }
-        let actions = nid(ns, &format!("{}.Actions", cid.identifier));
+        let actions = nid(ns, &format!("{}/Actions", cid.identifier));
         folder(&mut space, &actions, "Actions", &cid);
         for a in outline.actions.clone() {
             let Some((name, is_variable)) = info.actions.get(a as usize) else { continue };
             let bn = local(name);
-            let aid = nid(ns, &format!("{pou}.Actions.{name}"));
+            let aid = nid(ns, &format!("{pou}/Actions/{name}"));
             ObjectBuilder::new(&aid, QualifiedName::new(ns, bn.as_str()), bn.as_str())
                 .organized_by(actions.clone())
                 .has_type_definition(types.action.clone())
@@ -665,7 +668,7 @@ fn populate(hub: &Arc<Hub>, manager: &Arc<SimpleNodeManager>, ns: u16) {
             let kind = if *is_variable { "variable" } else { "action" };
             property(&mut space, &aid, "Kind", Variant::from(kind), DataTypeId::String);
             for (flag, bn) in [(0usize, "Q"), (1, "A")] {
-                let id = nid(ns, &format!("{pou}.Actions.{name}.{bn}"));
+                let id = nid(ns, &format!("{pou}/Actions/{name}/{bn}"));
                 variable(&mut space, &id, &aid, bn, DataTypeId::Boolean, Variant::Boolean(false));
                 let h = hub.clone();
                 cbs.add_read_callback(id, move |_, _, _| {
@@ -692,7 +695,7 @@ fn populate(hub: &Arc<Hub>, manager: &Arc<SimpleNodeManager>, ns: u16) {
             ("ErrorCount", DataTypeId::UInt64, Variant::UInt64(0), |e| Variant::UInt64(e.count)),
         ];
         for (bn, ty, init, read) in error_nodes {
-            let id = nid(ns, &format!("{}.{bn}", cid.identifier));
+            let id = nid(ns, &format!("{}/{bn}", cid.identifier));
             variable(&mut space, &id, &cid, bn, ty, init);
             let h = hub.clone();
             cbs.add_read_callback(id, move |_, _, _| {
@@ -704,7 +707,7 @@ fn populate(hub: &Arc<Hub>, manager: &Arc<SimpleNodeManager>, ns: u16) {
         }
     }
     // The runtime: state, scan count, jitter, and the methods.
-    let rt = nid(ns, &format!("{pou}.Runtime"));
+    let rt = nid(ns, &format!("{pou}/Runtime"));
     ObjectBuilder::new(&rt, QualifiedName::new(ns, "Runtime"), "Runtime")
         .component_of(root.clone())
         .has_type_definition(ObjectTypeId::BaseObjectType)
@@ -725,7 +728,7 @@ fn populate(hub: &Arc<Hub>, manager: &Arc<SimpleNodeManager>, ns: u16) {
         ("Overruns", DataTypeId::UInt64, Box::new(|h: &Hub| Variant::UInt64(digest(h, |d| d.overruns)))),
     ];
     for (name, ty, read) in figures {
-        let id = nid(ns, &format!("{pou}.Runtime.{name}"));
+        let id = nid(ns, &format!("{pou}/Runtime/{name}"));
         VariableBuilder::new(&id, QualifiedName::new(ns, name), name)
             .component_of(rt.clone())
             .has_type_definition(VariableTypeId::BaseDataVariableType)
@@ -739,7 +742,7 @@ fn populate(hub: &Arc<Hub>, manager: &Arc<SimpleNodeManager>, ns: u16) {
     }
     if info.control {
         for name in ["Halt", "Continue", "Reset"] {
-            let id = nid(ns, &format!("{pou}.Runtime.{name}"));
+            let id = nid(ns, &format!("{pou}/Runtime/{name}"));
             MethodBuilder::new(&id, QualifiedName::new(ns, name), name)
                 .component_of(rt.clone())
                 .executable(true)
