@@ -345,18 +345,38 @@ fn start(a: &RunArgs) -> Result<(Runtime, TokenSource), String> {
         ctrl_c: true,
         realtime: a.realtime || cfg.realtime == Some(true),
     };
-    let bytes = std::fs::read(&file).map_err(|e| format!("error: cannot read `{}`: {e}", file.display()))?;
-    let text = String::from_utf8(bytes).map_err(|_| format!("error: `{}` is not UTF-8 text", file.display()))?;
+    let decoded = sfc_driver::read_source(&file).map_err(|e| format!("error: {e}"))?;
+    let raw = decoded.text;
     let name = file.display().to_string();
+    // PLCopen XML runs as the IEC text it imports to; what the import says is shown, and an
+    // import error stops the run as a check error would.
+    let iec = sfc_driver::IecText::of(&file, &raw);
+    let render = |file: &sfc_diagnostics::SourceFile, diags: &[sfc_diagnostics::Diagnostic]| -> Vec<String> {
+        let color = std::io::stderr().is_terminal();
+        diags.iter().map(|d| render_human(d, std::slice::from_ref(file), RenderOptions { color })).collect()
+    };
+    if let Some(imported) = &iec.imported {
+        let diags = iec.import_diagnostics();
+        let errors = diags.iter().filter(|d| d.is_error()).count();
+        let mut out = render(&imported.xml, diags);
+        if errors > 0 {
+            out.push(format!("{errors} error{} emitted", if errors == 1 { "" } else { "s" }));
+            return Err(out.join("\n"));
+        }
+        for line in out {
+            eprintln!("{line}");
+        }
+    }
+    let text = iec.text.as_str();
     let pou = a.pou.as_deref().or(cfg.pou.as_deref());
     let rt = if a.atmt {
         if opts.monitor.is_none() {
             return Err("error: `--atmt` serves the monitor protocol: give `--monitor ADDR`".into());
         }
         let model = if sfc_codegen::atmt::parse_table(text.trim()).is_some() {
-            AtmtModel::from_table(&text)
+            AtmtModel::from_table(text)
         } else {
-            AtmtModel::from_chart(&name, &text, pou)
+            AtmtModel::from_chart(&name, text, pou)
         }
         .map_err(|e| format!("error: {e}"))?;
         let source = if a.atmt_input == "-" {
@@ -369,10 +389,9 @@ fn start(a: &RunArgs) -> Result<(Runtime, TokenSource), String> {
         Runtime::start_atmt(model, source, opts)?
     } else {
         let sim_opts = SimOptions { period: period.as_micros() as i64, profile: Profile::Iec };
-        let sim = Simulation::from_source(&name, &text, pou, sim_opts).map_err(|(file, diags)| {
-            let color = std::io::stderr().is_terminal();
-            let mut out: Vec<String> =
-                diags.iter().map(|d| render_human(d, std::slice::from_ref(&file), RenderOptions { color })).collect();
+        let sim = Simulation::from_source(&name, text, pou, sim_opts).map_err(|(file, diags)| {
+            let (file, diags) = iec.locate(file, diags);
+            let mut out = render(&file, &diags);
             out.push(format!("{} error{} emitted", diags.len(), if diags.len() == 1 { "" } else { "s" }));
             out.join("\n")
         })?;

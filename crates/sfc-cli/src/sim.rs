@@ -105,7 +105,9 @@ fn transition_line(t: &TransitionReport) -> String {
 
 fn timeout_text(r: &StepReport) -> String {
     match r.timeout {
-        Some(t) => format!(", timeout {}", format_time(t)),
+        // How long the step may still wait before its supervision time expires.
+        Some(t) if t > r.elapsed => format!(", timeout {} ({} left)", format_time(t), format_time(t - r.elapsed)),
+        Some(t) => format!(", timeout {} (expired)", format_time(t)),
         None => String::new(),
     }
 }
@@ -446,6 +448,10 @@ pub fn sim(r: SimRequest) -> u8 {
         Ok(s) => s,
         Err(e) => return report_load_error(&e),
     };
+    // A PLCopen chart: what its import said (notes, warnings), as `check` shows it.
+    if let Some(import) = &scen.import {
+        term::print_diagnostics(&import.1, std::slice::from_ref(&import.0));
+    }
     // A chart that is not UTF-8 was read as Latin-1 / Windows-1252: said, as `check` says it.
     if let Ok(decoded) = sfc_driver::read_source(&scen.chart) {
         if let Some(w) = sfc_syntax::encoding::warning(0, &decoded) {

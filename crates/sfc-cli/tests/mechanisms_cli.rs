@@ -7,7 +7,7 @@
 
 mod common;
 
-use common::{command, root, scratch, Run, Ws};
+use common::{command, root, scratch, Modbus, Run, Ws};
 
 fn sfc(args: &[&str]) -> std::process::Output {
     command(args).output().expect("sfc runs")
@@ -51,7 +51,7 @@ fn sim_prints_error_records_with_terminals() {
 fn explain_names_terminals() {
     let o = sfc(&["sim", CHART, "--scenario", SCENARIO, "--until", "T#8s", "--explain"]);
     let out = text(&o);
-    assert!(out.contains("step Rev.CloseKM2 active for T#700ms, timeout T#1s"), "{out}");
+    assert!(out.contains("step Rev.CloseKM2 active for T#700ms, timeout T#1s (T#300ms left)"), "{out}");
     assert!(out.contains("KM2Fb (X12.3, %IX0.5) is FALSE; needs TRUE"), "{out}");
     let o = sfc(&["sim", CHART, "--scenario", SCENARIO, "--until", "T#8s", "--explain", "--format", "json"]);
     let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap_or_else(|e| panic!("{e}: {}", text(&o)));
@@ -155,13 +155,26 @@ fn stats_show_runs_and_mechanisms() {
     assert_eq!(v["error_records"].as_array().map(Vec::len), Some(2), "{v}");
 }
 
-/// `sfc run`: the error record in the log on standard error and as a monitor event; the
-/// monitor's `explain` names terminals, `mechanisms` lists the instance with its last error,
-/// `timing` gives the runs.
+/// `sfc run`: the error record in the log on standard error, as a monitor event and in the
+/// Modbus error record block; the monitor's `explain` names terminals, `mechanisms` lists the
+/// instance with its last error, `timing` gives the runs.
 #[test]
 fn run_logs_error_records_and_the_monitor_lists_mechanisms() {
-    let mut run =
-        Run::start(&[CHART, "--period", "T#10ms", "--monitor", "127.0.0.1:0", "--no-retain", "--scans", "600"]);
+    let mut run = Run::start(&[
+        CHART,
+        "--period",
+        "T#10ms",
+        "--monitor",
+        "127.0.0.1:0",
+        "--modbus",
+        "127.0.0.1:0",
+        "--no-retain",
+        "--scans",
+        "600",
+    ]);
+    let mut mb = Modbus::connect(run.modbus());
+    // No record yet: the block reads zeros.
+    assert_eq!(mb.read_input_registers(40000, 8), vec![0; 8]);
     let line = run.line("the monitor URL", 20, |l| l.starts_with("sfc run: monitor on "));
     let url = line.strip_prefix("sfc run: monitor on ").unwrap().split(' ').next().unwrap().to_string();
     let mut ws = Ws::connect(&format!("{url}?token=t0k3n"));
@@ -200,6 +213,32 @@ fn run_logs_error_records_and_the_monitor_lists_mechanisms() {
     assert_eq!(first["states"][0]["state"], "Rev.OpenKM1", "{t}");
     let logged = run.line("the error record in the log", 20, |l| l.contains("error record: Rev: error 404"));
     assert!(logged.contains("KM1Fb (X12.2, %IX0.4) is TRUE; needs FALSE"), "{logged}");
+    // Modbus: input registers 40000… hold the record for an HMI (docs/runtime.md).
+    let mut head = mb.read_input_registers(40000, 8);
+    for _ in 0..50 {
+        if head[0] != 0 {
+            break;
+        }
+        std::thread::sleep(std::time::Duration::from_millis(20));
+        head = mb.read_input_registers(40000, 8);
+    }
+    assert_eq!(head[0], 1, "one record: {head:?}");
+    assert_eq!((head[1], head[2]), (0, 404), "the error code, DINT high word first: {head:?}");
+    let waited = u32::from(head[3]) << 16 | u32::from(head[4]);
+    assert!((1000..1200).contains(&waited), "time waited in ms: {head:?}");
+    assert_eq!((head[5], head[6]), (0, 1000), "supervision time T#1s in ms: {head:?}");
+    let len = usize::from(head[7]);
+    let mut regs = mb.read_input_registers(40008, 125);
+    regs.extend(mb.read_input_registers(40133, 75));
+    let bytes: Vec<u8> = regs.iter().flat_map(|r| r.to_be_bytes()).take(len).collect();
+    let shown = String::from_utf8(bytes).expect("UTF-8 text");
+    assert!(shown.starts_with("Rev: error 404 in step Rev.OpenKM1"), "{shown}");
+    assert!(shown.contains("KM1Fb (X12.2, %IX0.4) is TRUE; needs FALSE"), "{shown}");
+    // The block ends at 40207: a read past it is refused (exception 2).
+    let mut pdu = vec![4];
+    pdu.extend_from_slice(&40200u16.to_be_bytes());
+    pdu.extend_from_slice(&9u16.to_be_bytes());
+    assert_eq!(mb.request(&pdu), vec![0x84, 2]);
     drop(ws);
     let (status, _) = run.finish(30);
     assert_eq!(status, Some(0));

@@ -4,7 +4,7 @@
 
 mod common;
 
-use common::{root, Run, Ws};
+use common::{command, root, scratch, Run, Ws};
 use std::process::Command;
 
 /// The car wash, halted until the client continues, then 50 scans: hello, snapshot, a
@@ -114,4 +114,28 @@ fn a_runtime_error_exits_1() {
     assert_eq!(out.status.code(), Some(1), "{err}");
     assert!(err.contains("error: 7:") && err.contains("(scan 0)"), "{err}");
     let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// A PLCopen XML chart runs as the IEC text it imports to, as `sfc sim` runs it: Beremiz's
+/// traffic light with its svghmi buttons (HMI_BOOL, declared as the svghmi library does, said
+/// in a note). A chart error is located in the XML.
+#[test]
+fn a_plcopen_chart_runs() {
+    let corpus = root().join("../shared/corpus/beremiz/svghmi_traffic_light.plc.xml");
+    let out = command(&["run", corpus.to_str().unwrap(), "--scans", "3", "--no-retain"]).output().unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(0), "{err}");
+    assert!(err.contains("note[SFC0714]: type `HMI_BOOL` is not declared in the file: declared as BOOL"), "{err}");
+    assert!(err.contains("sfc run: 3 scans"), "{err}");
+    let dir = scratch("run-plcopen-error");
+    let bad = dir.join("bad.xml");
+    let xml = std::fs::read_to_string(&corpus)
+        .unwrap()
+        .replace("<expression>SwitchButton</expression>", "<expression>NoSuchButton</expression>");
+    std::fs::write(&bad, xml).unwrap();
+    let out = command(&["run", bad.to_str().unwrap(), "--scans", "3", "--no-retain"]).output().unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "{err}");
+    assert!(err.contains("bad.xml:1348:"), "the error at its XML line: {err}");
+    assert!(err.contains("NoSuchButton"), "{err}");
 }

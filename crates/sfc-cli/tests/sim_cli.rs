@@ -571,3 +571,24 @@ fn a_runaway_nested_loop_is_a_located_error() {
     );
     assert!(err.contains("--> crates/sfc-cli/tests/run/runaway.st:43:13") && err.contains("at scan 1"), "{err}");
 }
+
+/// A PLCopen chart simulates as the text it imports to; what the import says is shown, and a
+/// chart error is located in the XML the user has, not in the imported text.
+#[test]
+fn a_plcopen_chart_shows_its_import_notes_and_errors_in_the_xml() {
+    let corpus = root().join("../shared/corpus/beremiz/svghmi_traffic_light.plc.xml");
+    let out = sfc(&["sim", corpus.to_str().unwrap(), "--scans", "3"]);
+    assert_eq!(out.status.code(), Some(0), "{}", both(&out));
+    assert!(stderr(&out).contains("note[SFC0714]: type `HMI_BOOL` is not declared in the file"), "{}", both(&out));
+    assert!(stdout(&out).contains("active steps: trafic_light_sequence0.Standstill"), "{}", both(&out));
+    let dir = temp_dir("plcopen-error");
+    let bad = dir.join("bad.xml");
+    let xml = std::fs::read_to_string(&corpus)
+        .unwrap()
+        .replace("<expression>SwitchButton</expression>", "<expression>NoSuchButton</expression>");
+    std::fs::write(&bad, xml).unwrap();
+    let out = sfc(&["sim", bad.to_str().unwrap(), "--scans", "3"]);
+    assert_eq!(out.status.code(), Some(1), "{}", both(&out));
+    assert!(stderr(&out).contains("bad.xml:1348:27"), "the error at its XML line: {}", both(&out));
+    assert!(stderr(&out).contains("<expression>NoSuchButton</expression>"), "{}", both(&out));
+}

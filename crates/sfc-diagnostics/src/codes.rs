@@ -377,6 +377,13 @@ svgui `Button`, `Led`). It is imported as an opaque function block: its instance
 written back on export, everything done with them is accepted, and nothing about them is analysed \
 or simulated.";
 
+    "SFC0714" Note "library data type declared"
+        "The file uses a data type of Beremiz's svghmi library without declaring it, as Beremiz \
+projects with an SVG HMI do. The library declares each as an elementary type (`HMI_BOOL`, \
+`HMI_CLASS` and `HMI_LABEL` as BOOL, `HMI_INT` as INT, `HMI_REAL` as REAL, `HMI_STRING` as \
+STRING), and the import adds that declaration, so the HMI variables are checked and simulated as \
+the values they are.";
+
     "SFC0801" Error "chart cannot be translated to ST"
         "The Structured Text target (`--target st`) replaces the chart's POU by a plain ST POU of \
 the same kind and name. It needs an error-free file, a PROGRAM or FUNCTION_BLOCK (a FUNCTION \

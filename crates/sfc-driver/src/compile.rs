@@ -65,6 +65,40 @@ pub fn is_xml(path: &Path, text: &str) -> bool {
         || text.trim_start_matches('\u{feff}').trim_start().starts_with('<')
 }
 
+/// A chart file as the IEC text that runs it (`sfc run`): the text itself, or for PLCopen XML
+/// the text it imports to, with what the import said and the map that locates the later
+/// diagnostics in the XML the user wrote.
+pub struct IecText {
+    pub text: String,
+    /// The import, for a PLCopen XML file.
+    pub imported: Option<sfc_plcopen::Imported>,
+}
+
+impl IecText {
+    /// Reads `text` (named `path`) as IEC text, importing it when it is PLCopen XML.
+    pub fn of(path: &Path, text: &str) -> IecText {
+        if !is_xml(path, text) {
+            return IecText { text: text.to_string(), imported: None };
+        }
+        let imported = sfc_plcopen::import(0, &path.display().to_string(), text);
+        IecText { text: imported.text.clone(), imported: Some(imported) }
+    }
+
+    /// The import's own diagnostics (located in the XML); none for IEC text.
+    pub fn import_diagnostics(&self) -> &[Diagnostic] {
+        self.imported.as_ref().map_or(&[], |i| i.diagnostics.as_slice())
+    }
+
+    /// Diagnostics of the IEC text (file id 0, in `file`) located in the file the user wrote,
+    /// with that file to render them.
+    pub fn locate(&self, file: SourceFile, diags: Vec<Diagnostic>) -> (SourceFile, Vec<Diagnostic>) {
+        match &self.imported {
+            None => (file, diags),
+            Some(i) => (i.xml.clone(), diags.iter().map(|d| sfc_plcopen::relocate(d, &i.map, 0)).collect()),
+        }
+    }
+}
+
 /// Checks a file of either kind: the diagnostics are located in the file the user wrote (for
 /// XML, the importer maps them back to XML lines and columns); `Checked` is the IEC text.
 pub fn check_any(file_id: u32, path: &Path, text: &str, opts: &CheckOptions) -> (SourceFile, Checked, Vec<Diagnostic>) {

@@ -17,7 +17,7 @@ pub mod compile;
 mod disk;
 pub mod load;
 
-pub use compile::{check_any, check_text, is_xml, BuildTarget, CompileError, CompileOptions, Compiled};
+pub use compile::{check_any, check_text, is_xml, BuildTarget, CompileError, CompileOptions, Compiled, IecText};
 pub use disk::{same_file, write_atomically};
 pub use load::{read_source, FileKind, LoadError};
 

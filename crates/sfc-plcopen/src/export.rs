@@ -570,6 +570,9 @@ pub fn export(checked: &Checked) -> Result<String, Vec<Diagnostic>> {
     for item in &unit.items {
         if let ast::Item::Types(tb) = item {
             for d in &tb.decls {
+                if is_library_alias(d) {
+                    continue;
+                }
                 x.open("dataType", &[("name", d.name.text.clone())]);
                 x.open("baseType", &[]);
                 write_type(&mut x, src, &d.spec);
@@ -692,6 +695,18 @@ fn date_time(d: &str) -> String {
 /// written, rather than writing a broken file).
 fn well_formed(fragment: &str) -> bool {
     roxmltree::Document::parse(&format!("<r>{fragment}</r>")).is_ok()
+}
+
+/// A declaration of a Beremiz svghmi library type as the library has it (`HMI_BOOL : BOOL`, which
+/// the import adds when a file uses it undeclared): not written, since the library declares it
+/// and Beremiz would refuse a second declaration.
+fn is_library_alias(d: &ast::TypeDecl) -> bool {
+    let base = match &d.spec.kind {
+        ast::TypeSpecKind::Named(b) => b.text.to_ascii_uppercase(),
+        ast::TypeSpecKind::String { wide: false, length: None } => "STRING".to_string(),
+        _ => return false,
+    };
+    d.init.is_none() && crate::import::library_alias(&d.name.text) == Some(base.as_str())
 }
 
 /// A POU kept as written: the XML it was imported from, as it was (`sfc.pouxml`); one written

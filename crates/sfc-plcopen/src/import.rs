@@ -568,6 +568,19 @@ fn is_standard_type(name: &str) -> bool {
     sfc_st::stdlib::std_function_block(name).is_some() || sfc_st::stdlib::std_function(name).is_some()
 }
 
+/// The data types of Beremiz's svghmi library (its `pous.xml`: each an alias of an elementary
+/// type), which a Beremiz project with an SVG HMI uses without declaring: its HMI variables are
+/// plain values the program reads and writes. (`HMI_NODE` is a block, not among them.)
+pub(crate) fn library_alias(name: &str) -> Option<&'static str> {
+    Some(match name.to_ascii_uppercase().as_str() {
+        "HMI_BOOL" | "HMI_CLASS" | "HMI_LABEL" => "BOOL",
+        "HMI_INT" => "INT",
+        "HMI_REAL" => "REAL",
+        "HMI_STRING" => "STRING",
+        _ => return None,
+    })
+}
+
 /// Declares every derived type the file uses but does not declare as an opaque function block
 /// (a POU kept as written: not analysed, and everything done with its instances accepted), so
 /// one unknown library block does not fail every POU that uses it.
@@ -612,6 +625,19 @@ fn opaque_types(cx: &mut Ctx, root: Node, pous: &[(Node, Option<usize>)]) {
         }
     }
     for (name, at, what) in missing {
+        if let Some(base) = library_alias(&name) {
+            cx.diag(
+                "SFC0714",
+                at.clone(),
+                format!(
+                    "type `{name}` is not declared in the file: declared as {base}, as Beremiz's svghmi library does"
+                ),
+            );
+            cx.em.open(at);
+            cx.em.str(&format!("TYPE\n    {name} : {base};\nEND_TYPE\n\n"));
+            cx.em.close();
+            continue;
+        }
         cx.diag(
             "SFC0713",
             at.clone(),

@@ -27,6 +27,52 @@ use sfc_st::Type;
 pub const INPUT_WINDOW: u16 = 32768;
 /// `%MWn` is holding register `MEMORY_BASE + n`.
 pub const MEMORY_BASE: u16 = 1000;
+/// The last error record is input register block `RECORD_BASE …` (read-only, FC 4;
+/// `docs/runtime.md`, "Error records on Modbus").
+pub const RECORD_BASE: u16 = 40000;
+/// Registers of the record's text: two bytes of UTF-8 each, the first in the high byte.
+pub const RECORD_TEXT_REGISTERS: usize = 200;
+/// Registers before the text: count, code (2), time waited (2), supervision time (2), length.
+const RECORD_HEAD: usize = 8;
+/// The whole block.
+pub const RECORD_REGISTERS: usize = RECORD_HEAD + RECORD_TEXT_REGISTERS;
+
+/// The error record block's registers for the `count`-th record of the run (`count` wraps at
+/// 65,536): count, error code (DINT, 0 when none), time waited and supervision time (UDINT,
+/// ms; 0 when the chart's own timer guard ended the wait), the text's length in bytes, then the
+/// text ([`sfc_sim::ErrorRecord::message`]) in UTF-8. A text longer than the block is cut at a
+/// character boundary and ends with `...`, so a cut is never silent.
+pub fn record_registers(count: u64, r: &sfc_sim::ErrorRecord, order: WordOrder) -> Vec<u16> {
+    let mut regs = vec![0u16; RECORD_REGISTERS];
+    regs[0] = count as u16;
+    let mut wide = |at: usize, v: i64, ty: &Type| {
+        let mut w = [0u16; 4];
+        to_words(&Value::Int(v), ty, 2, order, &mut w);
+        regs[at..at + 2].copy_from_slice(&w[..2]);
+    };
+    wide(1, r.code.unwrap_or(0).clamp(i64::from(i32::MIN), i64::from(i32::MAX)), &Type::DInt);
+    let ms = |us: i64| (us / 1000).clamp(0, i64::from(u32::MAX));
+    wide(3, ms(r.waited), &Type::UDInt);
+    wide(5, ms(r.timeout.unwrap_or(0)), &Type::UDInt);
+    let text = r.message();
+    let room = 2 * RECORD_TEXT_REGISTERS;
+    let bytes: Vec<u8> = if text.len() <= room {
+        text.into_bytes()
+    } else {
+        let mut end = room - 3;
+        while !text.is_char_boundary(end) {
+            end -= 1;
+        }
+        let mut b = text.as_bytes()[..end].to_vec();
+        b.extend_from_slice(b"...");
+        b
+    };
+    regs[7] = bytes.len() as u16;
+    for (k, pair) in bytes.chunks(2).enumerate() {
+        regs[RECORD_HEAD + k] = u16::from(pair[0]) << 8 | pair.get(1).copied().map_or(0, u16::from);
+    }
+    regs
+}
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Table {
@@ -269,6 +315,8 @@ pub struct Image {
     pub client: Vec<Value>,
     /// Per point: the forced value, while forced from the monitor.
     pub forced: Vec<Option<Value>>,
+    /// The last error record (input registers `RECORD_BASE …`): zeros until the first.
+    pub record: Vec<u16>,
     /// For each table, the point (index + 1) that owns each bit or register (0: none).
     owners: [Vec<u32>; 4],
     pub order: WordOrder,
@@ -312,6 +360,7 @@ impl Image {
             memory_writes: Vec::new(),
             client: points.iter().map(|p| p.slot.default_value()).collect(),
             forced: vec![None; points.len()],
+            record: vec![0; RECORD_REGISTERS],
             owners,
             order,
         }
@@ -402,6 +451,45 @@ mod tests {
         assert!(address_of("%MX0.0", &b).is_err());
         assert!(address_of("%IX0.8", &b).is_err());
         assert!(address_of("%IX0.0", &i).is_err());
+    }
+
+    fn record(condition: &str) -> sfc_sim::ErrorRecord {
+        sfc_sim::ErrorRecord {
+            instance: "Rev".into(),
+            step: "Rev.OpenKM2".into(),
+            code: Some(-405),
+            code_variable: Some("Rev.ErrorCode".into()),
+            conditions: vec![("Rev.TKM2Closed".into(), condition.into())],
+            waited: 1_100_000,
+            timeout: Some(1_000_000),
+            by: None,
+            scan: 7,
+            time: 0,
+        }
+    }
+
+    #[test]
+    fn an_error_record_fills_its_register_block() {
+        let r = record("KM2Fb (X12.3, %IX0.5) is FALSE; needs TRUE");
+        let regs = record_registers(65537, &r, WordOrder::Little);
+        assert_eq!(regs.len(), RECORD_REGISTERS);
+        // Count wraps; code −405 as DINT, little word order; 1100 ms; 1000 ms.
+        assert_eq!(&regs[..7], &[1, 0xFE6B, 0xFFFF, 1100, 0, 1000, 0]);
+        let text = r.message();
+        assert_eq!(usize::from(regs[7]), text.len());
+        let bytes: Vec<u8> = regs[8..].iter().flat_map(|w| w.to_be_bytes()).take(text.len()).collect();
+        assert_eq!(String::from_utf8(bytes).unwrap(), text);
+    }
+
+    #[test]
+    fn a_long_record_text_is_cut_on_a_character_and_says_so() {
+        let r = record(&"ä".repeat(400));
+        let regs = record_registers(1, &r, WordOrder::Big);
+        let len = usize::from(regs[7]);
+        assert!(len <= 2 * RECORD_TEXT_REGISTERS);
+        let bytes: Vec<u8> = regs[8..].iter().flat_map(|w| w.to_be_bytes()).take(len).collect();
+        let text = String::from_utf8(bytes).expect("cut at a character boundary");
+        assert!(text.starts_with("Rev: error -405") && text.ends_with("ä..."), "{text}");
     }
 
     #[test]

@@ -463,6 +463,8 @@ impl Runtime {
             last_state: None,
             unpublished_errors: None,
             steps_requested: Vec::new(),
+            records: 0,
+            unwritten_record: None,
         };
         // The simulator may recurse deeply in user code: the same stack as the CLI's.
         let worker = std::thread::Builder::new()

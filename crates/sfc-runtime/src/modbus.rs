@@ -17,7 +17,7 @@
 //!   parts before it writes anything.
 
 use crate::board::Hub;
-use crate::io::{Image, IoPoint, Role, Table, INPUT_WINDOW};
+use crate::io::{Image, IoPoint, Role, Table, INPUT_WINDOW, RECORD_BASE};
 use std::sync::atomic::{AtomicU64, AtomicUsize, Ordering};
 use std::sync::{Arc, Mutex};
 use std::time::Duration;
@@ -150,7 +150,13 @@ impl Service {
                     return Err(ILLEGAL_DATA_VALUE);
                 }
                 let img = self.lock();
-                let regs = if fc == 3 { self.holding_view(&img, a, n)? } else { read_range(&img.input_regs, a, n)? };
+                let regs = if fc == 3 {
+                    self.holding_view(&img, a, n)?
+                } else if a >= RECORD_BASE as usize {
+                    read_range(&img.record, a - RECORD_BASE as usize, n)?
+                } else {
+                    read_range(&img.input_regs, a, n)?
+                };
                 Ok(registers_reply(fc, regs))
             }
             5 => {

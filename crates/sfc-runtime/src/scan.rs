@@ -112,6 +112,10 @@ pub(crate) struct ScanThread {
     pub steps_requested: Vec<Request>,
     /// The mechanisms' error records not yet published ([`crate::board::Board::errors`]).
     pub unpublished_errors: Option<Vec<crate::board::MechanismErrors>>,
+    /// Error records made since the process started (the Modbus block's count).
+    pub records: u64,
+    /// The newest error record with its count, until the Modbus image takes it.
+    pub unwritten_record: Option<(u64, sfc_sim::ErrorRecord)>,
 }
 
 impl ScanThread {
@@ -550,6 +554,16 @@ impl ScanThread {
             crate::board::put(&mut j, "scan", serde_json::json!(scan));
             self.unpublished_events.push(j.into());
             self.hub.notice(format!("sfc run: scan {scan}: error record: {}", r.message()));
+            self.records += 1;
+            self.unwritten_record = Some((self.records, r.clone()));
+        }
+        // The newest record into the Modbus block, when the image is free (else after a later scan).
+        if self.unwritten_record.is_some() {
+            if let Ok(mut img) = self.image.try_lock() {
+                if let Some((count, r)) = self.unwritten_record.take() {
+                    img.record = crate::io::record_registers(count, &r, img.order);
+                }
+            }
         }
         if !self.sim.fresh_error_records().is_empty() {
             self.note_errors();

@@ -223,6 +223,9 @@ pub struct Scenario {
     /// Line of the top-level `forbid` (0 when there is none).
     pub forbid_line: u32,
     chart_text: String,
+    /// For a PLCopen XML chart: the XML and what its import said (notes and warnings; an
+    /// import error stops the load), for the command to show.
+    pub import: Option<Box<(SourceFile, Vec<Diagnostic>)>>,
 }
 
 /// Settings that take precedence over the scenario file (`sfc sim` options).
@@ -740,28 +743,42 @@ fn parse_forbid(src: &Src<'_>, table: &dyn TableLike, item: &Item) -> Result<Vec
 // Binding names and values to the chart
 
 fn compile(chart_name: &str, text: &str, pou: Option<&str>, opts: SimOptions) -> Result<Simulation, ScenarioError> {
+    compile_located(chart_name, text, None, pou, opts)
+}
+
+/// [`compile`], with the errors of a PLCopen chart located in its XML.
+fn compile_located(
+    chart_name: &str,
+    text: &str,
+    imported: Option<&sfc_plcopen::Imported>,
+    pou: Option<&str>,
+    opts: SimOptions,
+) -> Result<Simulation, ScenarioError> {
     Simulation::from_source(chart_name, text, pou, opts).map_err(|(file, diags)| {
         let mut errors: Vec<Diagnostic> = diags.iter().filter(|d| d.is_error()).cloned().collect();
         if errors.is_empty() {
             errors = diags;
         }
-        let rendered: Vec<String> = errors
-            .iter()
-            .map(|d| {
-                render_human(d, std::slice::from_ref(&file), RenderOptions { color: false }).trim_end().to_string()
-            })
-            .collect();
-        let n = errors.len();
-        let message = format!(
-            "the chart `{chart_name}` has {n} error{}:\n{}",
-            if n == 1 { "" } else { "s" },
-            rendered.join("\n")
-        );
-        ScenarioError {
-            diagnostics: Some(Box::new((file, errors))),
-            ..ScenarioError::new(ErrorKind::Chart, None, message)
+        match imported {
+            Some(i) => {
+                let errors = errors.iter().map(|d| sfc_plcopen::relocate(d, &i.map, 0)).collect();
+                chart_errors(chart_name, i.xml.clone(), errors)
+            }
+            None => chart_errors(chart_name, file, errors),
         }
     })
+}
+
+/// The chart's errors as a [`ErrorKind::Chart`] error.
+fn chart_errors(chart_name: &str, file: SourceFile, errors: Vec<Diagnostic>) -> ScenarioError {
+    let rendered: Vec<String> = errors
+        .iter()
+        .map(|d| render_human(d, std::slice::from_ref(&file), RenderOptions { color: false }).trim_end().to_string())
+        .collect();
+    let n = errors.len();
+    let message =
+        format!("the chart `{chart_name}` has {n} error{}:\n{}", if n == 1 { "" } else { "s" }, rendered.join("\n"));
+    ScenarioError { diagnostics: Some(Box::new((file, errors))), ..ScenarioError::new(ErrorKind::Chart, None, message) }
 }
 
 /// What a value of `ty` is written as, for error messages.
@@ -1050,13 +1067,29 @@ fn read_text(path: &Path, what: &str) -> Result<String, (ErrorKind, String)> {
     let bytes =
         std::fs::read(path).map_err(|e| (ErrorKind::Io, format!("cannot read {what} `{}`: {e}", path.display())))?;
     // UTF-8 with or without a byte order mark, or Latin-1 / Windows-1252.
-    let text = sfc_syntax::encoding::decode(&bytes).text;
-    // A PLCopen XML chart is simulated as the IEC text it imports to.
-    let xml = path.extension().is_some_and(|e| e.eq_ignore_ascii_case("xml")) || text.trim_start().starts_with('<');
-    if xml && what == "the chart" {
-        return Ok(sfc_plcopen::import(0, &path.display().to_string(), &text).text);
+    Ok(sfc_syntax::encoding::decode(&bytes).text)
+}
+
+/// A chart file as the IEC text to simulate: a PLCopen XML chart is simulated as the text it
+/// imports to, with the import kept to locate diagnostics in the XML.
+fn read_chart(path: &Path) -> Result<(String, Option<sfc_plcopen::Imported>), ScenarioError> {
+    let text = read_text(path, "the chart").map_err(|(k, m)| ScenarioError::new(k, None, m))?;
+    let xml = path.extension().is_some_and(|e| e.eq_ignore_ascii_case("xml"))
+        || text.trim_start_matches('\u{feff}').trim_start().starts_with('<');
+    if !xml {
+        return Ok((text, None));
     }
-    Ok(text)
+    let imported = sfc_plcopen::import(0, &path.display().to_string(), &text);
+    let errors: Vec<Diagnostic> = imported.diagnostics.iter().filter(|d| d.is_error()).cloned().collect();
+    if !errors.is_empty() {
+        return Err(chart_errors(&path.display().to_string(), imported.xml.clone(), errors));
+    }
+    Ok((imported.text.clone(), Some(imported)))
+}
+
+/// What the import of a PLCopen chart said, for [`Scenario::import`].
+fn import_notes(imported: &Option<sfc_plcopen::Imported>) -> Option<Box<(SourceFile, Vec<Diagnostic>)>> {
+    imported.as_ref().filter(|i| !i.diagnostics.is_empty()).map(|i| Box::new((i.xml.clone(), i.diagnostics.clone())))
 }
 
 /// A POU that does not exist or cannot be chosen (SFC0321) is a usage error when the command
@@ -1105,11 +1138,11 @@ fn load_parts(path: &Path, text: &str, o: &Overrides, given_chart: Option<&str>)
         None => ScenarioError { file: Some(name.clone()), ..e },
     };
     let chart_key = if o.chart.is_none() { parsed.chart.as_ref() } else { None };
-    let chart_text = match given_chart {
-        Some(t) => t.to_string(),
-        None => read_text(&chart, "the chart").map_err(|(k, m)| match chart_key {
-            Some(_) => locate(chart_key, ScenarioError::new(k, None, m)),
-            None => ScenarioError::new(k, None, m),
+    let (chart_text, imported) = match given_chart {
+        Some(t) => (t.to_string(), None),
+        None => read_chart(&chart).map_err(|e| match (chart_key, &e.kind) {
+            (Some(_), ErrorKind::Io) => locate(chart_key, e),
+            _ => e,
         })?,
     };
     let options = SimOptions {
@@ -1118,7 +1151,7 @@ fn load_parts(path: &Path, text: &str, o: &Overrides, given_chart: Option<&str>)
     };
     let pou = o.pou.clone().or_else(|| parsed.pou.as_ref().map(|p| p.0.clone()));
     let chart_name = chart.display().to_string();
-    let sim = compile(&chart_name, &chart_text, pou.as_deref(), options).map_err(|e| {
+    let sim = compile_located(&chart_name, &chart_text, imported.as_ref(), pou.as_deref(), options).map_err(|e| {
         let pou_key = if o.pou.is_none() { parsed.pou.as_ref() } else { None };
         let e = if o.pou.is_some() { pou_choice_is_usage(e) } else { e };
         locate(pou_key.or(chart_key), e)
@@ -1150,6 +1183,7 @@ fn load_parts(path: &Path, text: &str, o: &Overrides, given_chart: Option<&str>)
         forbid: parsed.forbid.iter().filter_map(|(n, _, _)| EventKind::from_name(n)).collect(),
         forbid_line: parsed.forbid_line,
         chart_text,
+        import: import_notes(&imported),
     })
 }
 
@@ -1185,9 +1219,10 @@ fn command_line_sets(sim: &Simulation, o: &Overrides) -> Result<Option<Entry>, S
 pub fn for_chart(chart: &Path, o: &Overrides) -> Result<Scenario, ScenarioError> {
     let chart = clean(chart);
     let chart_name = chart.display().to_string();
-    let chart_text = read_text(&chart, "the chart").map_err(|(k, m)| ScenarioError::new(k, None, m))?;
+    let (chart_text, imported) = read_chart(&chart)?;
     let options = SimOptions { period: o.period.unwrap_or(DEFAULT_PERIOD), profile: o.profile.unwrap_or_default() };
-    let sim = compile(&chart_name, &chart_text, o.pou.as_deref(), options).map_err(pou_choice_is_usage)?;
+    let sim = compile_located(&chart_name, &chart_text, imported.as_ref(), o.pou.as_deref(), options)
+        .map_err(pou_choice_is_usage)?;
     let entries = command_line_sets(&sim, o)?.into_iter().collect();
     Ok(Scenario {
         path: chart.clone(),
@@ -1201,6 +1236,7 @@ pub fn for_chart(chart: &Path, o: &Overrides) -> Result<Scenario, ScenarioError>
         forbid: Vec::new(),
         forbid_line: 0,
         chart_text,
+        import: import_notes(&imported),
     })
 }
 

@@ -3,8 +3,10 @@
 // with the mechanism's chart open, attaches to it. The inputs start a reversal with the CW
 // contactor's feedback stuck: after its supervision time, error 4.04. The Mechanisms tab lists
 // Rev with its state, runs and the error record naming the feedback contact with its terminal;
-// selecting Rev shows that instance on the chart. Screenshots in e2e/out/mechanisms-*.png.
+// selecting Rev shows that instance on the chart; the Time analysis tab shows Rev's runs with
+// the states passed. Screenshots in e2e/out/mechanisms-*.png.
 import { spawn } from 'node:child_process';
+import fs from 'node:fs';
 import path from 'node:path';
 
 const OUT = (name) => path.join(path.dirname(new URL(import.meta.url).pathname), '..', 'out', `mechanisms-${name}.png`);
@@ -123,8 +125,66 @@ export const tests = [
         await page.locator('.mon-mechanisms tr[data-instance="Rev"]').click();
         await until(page, 'Err404 framed green', async () => JSON.stringify(await active(page)) === '["Err404"]');
         await page.screenshot({ path: OUT('2-chart') });
+
+        // The time analysis per run: Rev's run with the states passed in order, and the
+        // statistics per state over runs.
+        await page.getByRole('tab', { name: 'Time analysis' }).click();
+        const runs = page.locator('.mon-runs[data-mechanism="Rev"]');
+        await runs.waitFor();
+        const run = runs.locator('.mon-run-table tr[data-run="1"]');
+        const passed = await until(page, 'run 1 through OpenKM1 into Err404', async () => {
+          if (!(await run.count())) return '';
+          const x = await run.textContent();
+          return /Rev\.OpenKM1 T#1s\d*ms → Rev\.Err404/.test(x) ? x : '';
+        });
+        if (!passed.includes('in progress')) throw new Error(`run 1 waits in its error step, in progress: ${passed}`);
+        const stats = await runs.locator('.mon-state-stats').textContent();
+        if (!/Rev\.OpenKM1\s*1/.test(stats)) throw new Error(`OpenKM1 counted once over runs: ${stats}`);
+        await page.screenshot({ path: OUT('3-runs') });
         if (!rt.log().includes('error record: Rev: error 404')) throw new Error(`the runtime's log lacks the record: ${rt.log()}`);
         if (errors.length) throw new Error(`page errors: ${errors.join('; ')}`);
+      } finally {
+        await rt.stop();
+      }
+    },
+  },
+  {
+    name: "selecting a mechanism of another chart moves the monitor to that chart's tab",
+    run: async (t) => {
+      const { page } = t;
+      const errors = [];
+      page.on('pageerror', (e) => errors.push(e.message));
+      const chart = path.join(t.scratch, 'two_mechanisms.st');
+      fs.copyFileSync(path.join(path.dirname(new URL(import.meta.url).pathname), '..', 'fixtures', 'two_mechanisms.st'), chart);
+      const rt = await runtime(t, chart, 'e2e-two');
+      try {
+        const s = await t.edit([chart]);
+        await page.goto(s.url);
+        await page.locator('.canvas-pane.active .djs-container').waitFor();
+        await page.locator('.tab', { hasText: 'Drill' }).waitFor();
+        await page.locator('.tab', { hasText: 'Clamp' }).click();
+        await page.getByRole('menuitem', { name: 'Monitor' }).or(page.locator('.menubar button', { hasText: 'Monitor' })).first().click();
+        await page.getByRole('menuitem', { name: 'Attach to runtime…' }).or(page.getByText('Attach to runtime…')).first().click();
+        await page.locator('.modal input').fill(`${rt.url}?token=e2e-two`);
+        await page.locator('.modal .button.primary').click();
+        await until(page, 'the running badge', async () => (await page.getByTestId('monitor-state').textContent()) === 'Running');
+
+        await writeBool(page, 'Start');
+        await page.getByRole('tab', { name: 'Mechanisms', exact: true }).click();
+        const spindle = page.locator('.mon-mechanisms tr[data-instance="Spindle"]');
+        await until(page, 'Spindle boring', async () => /Spindle\.Boring/.test(await spindle.textContent()));
+        // Holder is the clamp's own instance: shown on this chart.
+        await page.locator('.mon-mechanisms tr[data-instance="Holder"]').click();
+        await until(page, 'Holding framed green', async () => JSON.stringify(await active(page)) === '["Holding"]');
+        // Spindle is a Drill: the monitor moves to the Drill tab, on the same runtime.
+        await spindle.click();
+        await until(page, 'Boring framed green on the drill', async () => JSON.stringify(await active(page)) === '["Boring"]');
+        await page.locator('.mon-mechanisms tr[data-instance="Spindle"].selected').waitFor();
+        await page.locator('.tab.active', { hasText: 'Drill' }).waitFor({ state: 'attached' });
+        await page.screenshot({ path: OUT('4-other-chart') });
+        if (errors.length) throw new Error(`page errors: ${errors.join('; ')}`);
+      } catch (e) {
+        throw new Error(`${e.message}\nruntime log:\n${rt.log()}`);
       } finally {
         await rt.stop();
       }

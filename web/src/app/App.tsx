@@ -100,6 +100,14 @@ export function App({ api, createCanvas }: AppProps) {
     createCanvas,
     current: () => (canvas && tab ? { doc: canvas.getDoc(), title: tabTitle(tab).replace(/\*$/, '') } : null),
     hasChart: !!canvas && !!tab,
+    // A mechanism of another chart: its open tab becomes the one shown (and monitored).
+    chartOf: (pou) => {
+      const x = store.tabs.find((y) => y.pou.toUpperCase() === pou.toUpperCase());
+      const c = x ? canvases.current.get(x.id) : undefined;
+      if (!x || !c) return null;
+      store.activate(x.id);
+      return { doc: c.getDoc(), title: tabTitle(x).replace(/\*$/, '') };
+    },
   });
 
   // Language: every string is re-read on render; the canvases re-translate their palettes.

@@ -73,21 +73,23 @@ export interface MonitorViewProps {
   onLeave: () => void;
   /** For tests: the WebSocket to use. */
   socket?: SocketFactory;
+  /** Moves the monitor to the chart of `pou` showing `instance`; false when no tab shows it. */
+  onOpenChart?: (instance: string, pou: string) => boolean;
 }
 
-export function MonitorView({ target, createCanvas, onLeave, socket }: MonitorViewProps) {
+export function MonitorView({ target, createCanvas, onLeave, socket, onOpenChart }: MonitorViewProps) {
   const client = useMemo(() => new MonitorClient(target.url, socket), [target.url]);
   useClient(client);
   useEffect(() => () => client.close(), [client]);
   const canvasHost = useRef<HTMLDivElement>(null);
   const [canvas, setCanvas] = useState<CanvasHandle | null>(null);
   const [selected, setSelected] = useState<string | null>(null);
-  const [side, setSide] = useState<SideTab>('variables');
+  const [side, setSide] = useState<SideTab>(target.instance ? 'mechanisms' : 'variables');
   const [menu, setMenu] = useState<MenuAt | null>(null);
   const [explained, setExplained] = useState<StepReport | null>(null);
   const [explainError, setExplainError] = useState('');
   /** The SFC instance shown on the chart (Mechanisms panel); null: the chart's own names. */
-  const [instance, setInstance] = useState<string | null>(null);
+  const [instance, setInstance] = useState<string | null>(target.instance ?? null);
   const [, setTick] = useState(0);
 
   // A witness to replay: once connected, set each scan's inputs and run that scan.
@@ -114,6 +116,8 @@ export function MonitorView({ target, createCanvas, onLeave, socket }: MonitorVi
   const elements = useMemo(() => resolveElements(info, target.elements, instance, byName), [info, target.elements, instance, byName]);
   const selectInstance = (name: string, pou: string) => {
     if (pou.toUpperCase() !== target.doc.pou.toUpperCase()) {
+      // Its chart, when a tab shows it: the monitor moves there, on the same runtime.
+      if (onOpenChart?.(name, pou)) return;
       toasts.show('info', t('monitor.mechanisms.otherChart', { instance: name, pou, shown: target.doc.pou }));
       return;
     }
@@ -400,7 +404,7 @@ export function MonitorView({ target, createCanvas, onLeave, socket }: MonitorVi
             {side === 'why' && (
               <ExplainPanel report={explained} error={explainError} selectedStep={selKind === 'step' ? selName ?? null : null} canExplain={activeSel} onExplain={() => selName && void explain(selName)} />
             )}
-            {side === 'timing' && <TimingPanel client={client} />}
+            {side === 'timing' && <TimingPanel client={client} shown={instance} />}
             {side === 'mechanisms' && <MechanismsPanel client={client} shown={instance} onSelect={selectInstance} />}
             {side === 'events' && <EventsPanel client={client} />}
           </div>

@@ -25,6 +25,8 @@ export interface UseMonitorOptions {
   current: () => { doc: EditorDoc; title: string } | null;
   /** A chart is open (read on every render, so cheap). */
   hasChart: boolean;
+  /** The open chart of POU `pou`, made the active tab; null when no tab shows it. */
+  chartOf?: (pou: string) => { doc: EditorDoc; title: string } | null;
 }
 
 export interface MonitorUi {
@@ -109,6 +111,16 @@ export function useMonitor(opts: UseMonitorOptions): MonitorUi {
     }
   }
 
+  /** Monitors the same runtime on the chart of `pou` (an open tab), showing `instance` on it. */
+  function openChart(instance: string, pou: string): boolean {
+    const was = current.current;
+    const c = opts.chartOf?.(pou);
+    if (!was || !c) return false;
+    const doc = structuredClone(c.doc);
+    setTarget({ url: was.url, doc, elements: elementsByName(doc), simId: was.simId, title: c.title, instance });
+    return true;
+  }
+
   async function attach(url: string): Promise<void> {
     const open = opts.current();
     if (!open) return;
@@ -151,7 +163,9 @@ export function useMonitor(opts: UseMonitorOptions): MonitorUi {
   const overlay =
     target || attaching ? (
       <>
-        {target && <MonitorView key={target.url} target={target} createCanvas={opts.createCanvas} onLeave={() => void leave()} />}
+        {target && (
+          <MonitorView key={`${target.url}#${target.doc.pou}`} target={target} createCanvas={opts.createCanvas} onLeave={() => void leave()} onOpenChart={openChart} />
+        )}
         {attaching && <AttachDialog onAttach={(u) => void attach(u)} onClose={() => setAttaching(false)} />}
       </>
     ) : null;

@@ -5,7 +5,7 @@ import { useEffect, useState } from 'preact/hooks';
 import { t } from '../i18n';
 import { toasts } from '../app/toast';
 import type { MonitorClient } from './client';
-import { parseValue, showValue, type ScanState, type StepReport, type VariableInfo } from './protocol';
+import { parseValue, showValue, type MechanismRuns, type ScanState, type StepReport, type VariableInfo } from './protocol';
 
 const WATCH_KEY = 'sfc.monitor.watch';
 
@@ -380,7 +380,7 @@ function usePolled<T>(client: MonitorClient, ask: () => Promise<T>, periodMs: nu
   return [value, error, load];
 }
 
-export function TimingPanel({ client }: { client: MonitorClient }) {
+export function TimingPanel({ client, shown }: { client: MonitorClient; shown: string | null }) {
   const [timing, error, load] = usePolled(client, () => client.timing(), 1000);
   return (
     <div class="mon-timing">
@@ -391,25 +391,127 @@ export function TimingPanel({ client }: { client: MonitorClient }) {
         {timing && <span class="muted">{t('monitor.timing.at', { scan: timing.scan })}</span>}
       </div>
       {error && <div class="field-error">{error}</div>}
+      {timing && (timing.mechanisms ?? []).length > 0 && <RunsOfMechanisms list={timing.mechanisms} shown={shown} />}
       {timing && (
-        <table class="mon-table mon-numbers">
+        <>
+          <h4 class="mon-sub">{t('monitor.timing.perStep')}</h4>
+          <table class="mon-table mon-numbers mon-steps-timing">
+            <thead>
+              <tr>
+                <th>{t('monitor.timing.step')}</th>
+                <th>{t('monitor.timing.activations')}</th>
+                <th>{t('monitor.timing.min')}</th>
+                <th>{t('monitor.timing.mean')}</th>
+                <th>{t('monitor.timing.max')}</th>
+              </tr>
+            </thead>
+            <tbody>
+              {timing.steps.map((s) => (
+                <tr key={s.step} class={s.activations === 0 ? 'never' : ''}>
+                  <td>{s.step}</td>
+                  <td>{s.activations}</td>
+                  <td>{s.min ?? '–'}</td>
+                  <td>{s.mean ?? '–'}</td>
+                  <td>{s.max ?? '–'}</td>
+                </tr>
+              ))}
+            </tbody>
+          </table>
+        </>
+      )}
+    </div>
+  );
+}
+
+/** How a run ended, in the user's language (`error 404` keeps its number). */
+function endText(ended: string | null): string {
+  if (ended === null) return t('monitor.timing.inProgress');
+  if (ended === 'normal') return t('monitor.timing.endNormal');
+  if (ended === 'reset') return t('monitor.timing.endReset');
+  if (ended.startsWith('error')) return t('monitor.timing.endError', { code: ended.slice(5).trim() });
+  return ended;
+}
+
+/**
+ * Seed 003's time analysis per run: for the chosen mechanism (the one shown on the chart, else
+ * the first), each run with the states passed in order and the time in each, its total and how
+ * it ended (newest first), then each state's count, min, mean and max over the runs.
+ */
+function RunsOfMechanisms({ list, shown }: { list: MechanismRuns[]; shown: string | null }) {
+  const [chosen, setChosen] = useState<string | null>(null);
+  const name = chosen ?? (list.some((m) => m.instance === shown) ? shown : list[0].instance);
+  const m = list.find((x) => x.instance === name) ?? list[0];
+  const runs = [...m.runs].reverse();
+  return (
+    <div class="mon-runs" data-mechanism={m.instance}>
+      <div class="mon-why-head">
+        <h4 class="mon-sub">{t('monitor.timing.runsOf')}</h4>
+        <select aria-label={t('monitor.timing.mechanism')} value={m.instance} onChange={(e) => setChosen((e.target as HTMLSelectElement).value)}>
+          {list.map((x) => (
+            <option key={x.instance} value={x.instance}>
+              {x.instance}
+            </option>
+          ))}
+        </select>
+        <span class="muted">
+          {t('monitor.timing.runCount', { runs: m.runs.length + m.dropped, resets: m.resets })}
+          {m.dropped > 0 && ` · ${t('monitor.timing.dropped', { n: m.dropped })}`}
+        </span>
+      </div>
+      {runs.length === 0 && <div class="empty">{t('monitor.timing.noRuns')}</div>}
+      {runs.length > 0 && (
+        <table class="mon-table mon-run-table">
           <thead>
             <tr>
-              <th>{t('monitor.timing.step')}</th>
-              <th>{t('monitor.timing.activations')}</th>
+              <th>{t('monitor.timing.run')}</th>
+              <th>{t('monitor.timing.start')}</th>
+              <th>{t('monitor.timing.states')}</th>
+              <th>{t('monitor.timing.total')}</th>
+              <th>{t('monitor.timing.ended')}</th>
+            </tr>
+          </thead>
+          <tbody>
+            {runs.map((r) => (
+              <tr key={r.run} data-run={r.run} class={`${r.ended === null ? 'in-progress' : ''} ${r.ended?.startsWith('error') ? 'has-error' : ''}`}>
+                <td>{r.run}</td>
+                <td>{r.start}</td>
+                <td class="mon-run-states">
+                  {r.dropped_states > 0 && <span class="muted">{t('monitor.timing.droppedStates', { n: r.dropped_states })} </span>}
+                  {r.states.map((x, i) => (
+                    <Fragment key={i}>
+                      {i > 0 && ' → '}
+                      <span class="mon-run-state">
+                        {x.state} <span class="muted">{x.time}</span>
+                      </span>
+                    </Fragment>
+                  ))}
+                </td>
+                <td>{r.total}</td>
+                <td>{endText(r.ended)}</td>
+              </tr>
+            ))}
+          </tbody>
+        </table>
+      )}
+      {m.states.length > 0 && (
+        <table class="mon-table mon-numbers mon-state-stats">
+          <thead>
+            <tr>
+              <th>{t('monitor.timing.state')}</th>
+              <th>{t('monitor.timing.count')}</th>
               <th>{t('monitor.timing.min')}</th>
               <th>{t('monitor.timing.mean')}</th>
               <th>{t('monitor.timing.max')}</th>
             </tr>
           </thead>
           <tbody>
-            {timing.steps.map((s) => (
-              <tr key={s.step} class={s.activations === 0 ? 'never' : ''}>
-                <td>{s.step}</td>
-                <td>{s.activations}</td>
-                <td>{s.min ?? '–'}</td>
-                <td>{s.mean ?? '–'}</td>
-                <td>{s.max ?? '–'}</td>
+            {m.states.map((x) => (
+              <tr key={x.state}>
+                <td>{x.state}</td>
+                <td>{x.count}</td>
+                <td>{x.min}</td>
+                <td>{x.mean}</td>
+                <td>{x.max}</td>
               </tr>
             ))}
           </tbody>

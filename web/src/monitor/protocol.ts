@@ -72,9 +72,52 @@ export interface StepTiming {
   maxUs: number | null;
 }
 
+/** One state of a run: the step passed and how long it was active. */
+export interface RunPassage {
+  state: string;
+  time: string;
+  timeUs: number;
+}
+
+/** One run of a mechanism: an activation from its start to its end (docs/sim.md, "Runs"). */
+export interface MechanismRun {
+  run: number;
+  start: string;
+  total: string;
+  totalUs: number;
+  /** `normal`, `error 404`, `reset`, or null for the run in progress. */
+  ended: string | null;
+  states: RunPassage[];
+  /** States of a long run not kept (the first ones). */
+  dropped_states: number;
+}
+
+/** A state's statistics over the runs. */
+export interface StateOverRuns {
+  state: string;
+  count: number;
+  min: string;
+  mean: string;
+  max: string;
+  minUs: number;
+  meanUs: number;
+  maxUs: number;
+}
+
+/** The time analysis per run of one SFC instance. */
+export interface MechanismRuns {
+  instance: string;
+  /** Earlier runs not kept (still counted in `states`). */
+  dropped: number;
+  resets: number;
+  runs: MechanismRun[];
+  states: StateOverRuns[];
+}
+
 export interface Timing {
   scan: number;
   steps: StepTiming[];
+  mechanisms: MechanismRuns[];
 }
 
 /** An error record of a supervision timeout (docs/sim.md, "Error records"). */

@@ -18,6 +18,8 @@ export interface MonitorTarget {
   title: string;
   /** A witness of `sfc prove` to replay once connected (the simulation starts halted). */
   replay?: Replay;
+  /** The SFC instance to show at once (a mechanism selected on another chart's monitor). */
+  instance?: string;
 }
 
 /** An answer of the server that is not 2xx: its message and, for 422, the diagnostics. */

@@ -292,11 +292,17 @@ impl Modbus {
         (0..n as usize).map(|i| r[2 + i / 8] >> (i % 8) & 1 == 1).collect()
     }
     pub fn read_holding(&mut self, a: u16, n: u16) -> Vec<u16> {
-        let mut pdu = vec![3];
+        self.read_registers(3, a, n)
+    }
+    pub fn read_input_registers(&mut self, a: u16, n: u16) -> Vec<u16> {
+        self.read_registers(4, a, n)
+    }
+    fn read_registers(&mut self, fc: u8, a: u16, n: u16) -> Vec<u16> {
+        let mut pdu = vec![fc];
         pdu.extend_from_slice(&a.to_be_bytes());
         pdu.extend_from_slice(&n.to_be_bytes());
         let r = self.request(&pdu);
-        assert_eq!(r[0], 3, "FC3 {a} {n}: {r:?}");
+        assert_eq!(r[0], fc, "FC{fc} {a} {n}: {r:?}");
         (0..n as usize).map(|i| u16::from_be_bytes([r[2 + 2 * i], r[3 + 2 * i]])).collect()
     }
     pub fn write_coil(&mut self, a: u16, v: bool) {
