@@ -236,7 +236,8 @@ pub fn prove(chart_name: &str, chart_text: &str, file: &PropertyFile, opts: &Opt
         eprintln!("[prove] encoded in {:?}: {} AIG nodes", started.elapsed(), m.g.num_nodes());
     }
     let full = system::System::from_model(&m, m.constraint);
-    let strengthen = net_invariants(&checked, &m);
+    let mut strengthen = pre_start_invariants(&m);
+    strengthen.extend(net_invariants(&checked, &m));
     if std::env::var_os("SFC_PROVE_TRACE").is_some() {
         eprintln!("[prove] net invariants in {:?}: {} clauses", started.elapsed(), strengthen.len());
     }
@@ -298,6 +299,36 @@ pub fn prove(chart_name: &str, chart_text: &str, file: &PropertyFile, opts: &Opt
         time: started.elapsed(),
         debug,
     })
+}
+
+/// Before scan 0 the state is the initial one: for every state bit, `(scan 0 done) ∨ bit = its
+/// initial value`. Inductive on its own (every scan sets the flag), it keeps 1-induction from
+/// starting in a state that no run has: variables off their initial values while scan 0 has
+/// not run, from which scan 0 would go on with those values (a counter at −9 that no run
+/// reaches made `Rejects <= Parts` fail induction).
+fn pre_start_invariants(m: &model::Model) -> Vec<Vec<Lit>> {
+    let Some(&done) = m.latch.get(m.scanned).and_then(|l| l.first()) else {
+        return Vec::new();
+    };
+    if done.as_const().is_some() {
+        return Vec::new();
+    }
+    let mut out = Vec::new();
+    for (r, lits) in m.latch.iter().enumerate() {
+        if r == m.scanned {
+            continue;
+        }
+        let Some(reg) = m.regs.get(r) else { continue };
+        for (b, &l) in lits.iter().enumerate() {
+            if l.as_const().is_some() {
+                continue;
+            }
+            // The same initial value as `System::from_model` gives the bit.
+            let init = b < 127 && (reg.init >> b) & 1 == 1;
+            out.push(vec![done, if init { l } else { l.not() }]);
+        }
+    }
+    out
 }
 
 /// The net analysis' invariants over the step flags of every chart instance: steps that are

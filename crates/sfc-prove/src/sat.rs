@@ -221,7 +221,8 @@ pub fn inductive(sys: &System, inv: &[Vec<Lit>], bad: Lit) -> bool {
 
 /// The independent check of an inductive invariant (a conjunction of clauses over state
 /// literals): the initial state satisfies every clause (evaluated directly), and for every
-/// clause a separate SAT call shows that `inv ∧ C ∧ T` cannot falsify it in the next state.
+/// clause a SAT call (on one encoding, under assumptions) shows that `inv ∧ C ∧ T` cannot
+/// falsify it in the next state.
 /// Returns the number of clauses checked, or the first clause that fails.
 pub fn check_invariant(sys: &System, inv: &[Vec<Lit>]) -> Result<usize, usize> {
     // Initial state: evaluate the AIG with the state variables at their initial values.
@@ -237,17 +238,32 @@ pub fn check_invariant(sys: &System, inv: &[Vec<Lit>]) -> Result<usize, usize> {
             return Err(k);
         }
     }
+    // A literal whose next-state function is the constant that makes it true holds after
+    // every scan (the "scan 0 done" flag): its clause needs no search.
+    let next_of: std::collections::HashMap<u32, Lit> =
+        sys.state.iter().filter_map(|sv| sys.g.var_of(sv.lit).map(|v| (v, sv.next))).collect();
+    let true_next = |l: Lit| {
+        sys.g
+            .var_of(l)
+            .and_then(|v| next_of.get(&v))
+            .is_some_and(|&n| n == if l.is_neg() { Lit::FALSE } else { Lit::TRUE })
+    };
+    // One encoding of `inv ∧ C ∧ T`; each clause is then refuted under assumptions (the
+    // negation of its literals in the next state), which the solver answers incrementally.
+    let mut u = Unroller::new(sys);
+    u.add_frame(None);
+    for c in inv {
+        let lits: Vec<SLit> = c.iter().map(|&l| u.lit(0, l)).collect();
+        let _ = u.solver.add_clause(Clause::from_iter(lits));
+    }
+    let c = u.lit(0, sys.constraint);
+    u.add_unit(c);
+    let next = u.next_state(0);
+    u.add_frame(Some(next));
     for (k, cl) in inv.iter().enumerate() {
-        let mut u = Unroller::new(sys);
-        u.add_frame(None);
-        for c in inv {
-            let lits: Vec<SLit> = c.iter().map(|&l| u.lit(0, l)).collect();
-            let _ = u.solver.add_clause(Clause::from_iter(lits));
+        if cl.iter().any(|&l| true_next(l)) {
+            continue;
         }
-        let c = u.lit(0, sys.constraint);
-        u.add_unit(c);
-        let next = u.next_state(0);
-        u.add_frame(Some(next));
         let negated: Vec<SLit> = cl.iter().map(|&l| !u.lit(1, l)).collect();
         if u.solve(&negated) != SolverResult::Unsat {
             return Err(k);
