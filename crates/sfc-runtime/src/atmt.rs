@@ -175,6 +175,8 @@ impl AtmtModel {
             transitions: self.rules.iter().map(|r| (r.name.clone(), vec![r.state], vec![r.next])).collect(),
             variables,
             control: false,
+            charts: Vec::new(),
+            actions: Vec::new(),
         }
     }
 }
@@ -414,6 +416,9 @@ impl Observer<'_> {
             guards_known: true,
             values,
             forced: Vec::new(),
+            // The adapter knows neither actions nor the times of steps left.
+            actions: Vec::new(),
+            times: Vec::new(),
         };
         {
             let obs = self.shared.lock().unwrap_or_else(|e| e.into_inner());

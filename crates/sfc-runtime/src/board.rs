@@ -35,6 +35,12 @@ pub struct ScanState {
     pub guards_known: bool,
     /// Values of [`ChartInfo::variables`], same order.
     pub values: Vec<Value>,
+    /// The actions (numbers of [`ChartInfo::actions`]) whose action control has `Q` or `A`
+    /// TRUE: `(action, Q, A)`, in no particular order.
+    pub actions: Vec<(u32, bool, bool)>,
+    /// The elapsed time (µs) of every step, same order as [`ChartInfo::steps`]: an inactive
+    /// step keeps the duration of its last activation (IEC 61131-3 `S.T`).
+    pub times: Vec<i64>,
     /// Forced variables (indices into [`ChartInfo::variables`]).
     pub forced: Vec<u32>,
 }
@@ -102,6 +108,13 @@ pub struct ChartInfo {
     pub variables: Vec<VarInfo>,
     /// The runtime can halt, single-step, force and write (`false` for the ATMT adapter).
     pub control: bool,
+    /// The chart instances (the top POU's chart and each SFC function block instance, the
+    /// mechanisms) with the numbers of their steps, transitions and actions; empty for a
+    /// runtime that has no such structure (the ATMT adapter: one chart of all steps).
+    pub charts: Vec<sfc_sim::ChartOutline>,
+    /// Every action (and BOOL variable used as an action) of every chart instance, qualified,
+    /// with whether it is a variable.
+    pub actions: Vec<(String, bool)>,
 }
 
 impl ChartInfo {
@@ -231,6 +244,16 @@ pub struct Board {
     pub stats: serde_json::Value,
     /// The scan thread's statistics as figures (their JSON is made by whoever reads them).
     pub digest: Option<StatsDigest>,
+    /// Per chart instance ([`ChartInfo::charts`]): its last completed error record and how many
+    /// were made, as the monitor's `mechanisms` and the run log tell them.
+    pub errors: Vec<MechanismErrors>,
+}
+
+/// The error records of one mechanism (`docs/runtime.md`, "OPC UA").
+#[derive(Debug, Clone, Default)]
+pub struct MechanismErrors {
+    pub last: Option<sfc_sim::ErrorRecord>,
+    pub count: u64,
 }
 
 impl Board {

@@ -260,6 +260,11 @@ fn start_net(
     ctrl_c: bool,
 ) -> Result<JoinHandle<()>, String> {
     let hub = hub.clone();
+    #[cfg(feature = "opcua")]
+    let opcua = match opcua {
+        Some(side) => Some(opcua::spawn(side, hub.clone())?),
+        None => None,
+    };
     std::thread::Builder::new()
         .name("sfc-net-main".into())
         .spawn(move || {
@@ -270,12 +275,6 @@ fn start_net(
                 if let Some((l, access)) = monitor {
                     tokio::spawn(protocol::serve(l, hub.clone(), Arc::new(access)));
                 }
-                #[cfg(feature = "opcua")]
-                if let Some(side) = opcua {
-                    tokio::spawn(opcua::serve(side, hub.clone()));
-                }
-                #[cfg(not(feature = "opcua"))]
-                let _ = opcua;
                 if ctrl_c {
                     tokio::spawn(stop_on_signals(hub.clone()));
                 }
@@ -291,6 +290,13 @@ fn start_net(
                 }
             });
             net.shutdown_timeout(std::time::Duration::from_secs(1));
+            // The OPC UA thread ends once the run closes (its server is cancelled then).
+            #[cfg(feature = "opcua")]
+            if let Some(t) = opcua {
+                let _ = t.join();
+            }
+            #[cfg(not(feature = "opcua"))]
+            let _ = opcua;
         })
         .map_err(|e| format!("cannot start the network threads: {e}"))
 }
@@ -332,6 +338,8 @@ impl Runtime {
             transitions,
             variables,
             control: true,
+            charts: sim.chart_outline(),
+            actions: sim.action_outline(),
         };
         let token = opts.token.clone().unwrap_or_else(random_token);
         let (hub, rx) = Hub::new(info, token);
@@ -453,6 +461,7 @@ impl Runtime {
             unpublished_events: Vec::new(),
             halt_change: Vec::new(),
             last_state: None,
+            unpublished_errors: None,
             steps_requested: Vec::new(),
             records: 0,
             unwritten_record: None,

@@ -348,8 +348,97 @@ pub fn build(hub: &Arc<Hub>, o: &OpcuaOptions, listener: std::net::TcpListener) 
     Ok(Side { server, handle, listener })
 }
 
+/// The ObjectTypes of the run's namespace (async-opcua has no PLCopen nodeset).
+struct Types {
+    sfc: NodeId,
+    step: NodeId,
+    transition: NodeId,
+    action: NodeId,
+}
+
+/// Defines the ObjectTypes the instance nodes point to with HasTypeDefinition, mirroring OPC
+/// 30000 (PLCopen, `http://PLCopen.org/OpcUa/IEC61131-3/`): `SfcProgramType` stands for
+/// `CtrlProgramType` (i=1004) and `SfcType` for `SFCType` (i=1007); OPC 30000 leaves the inside
+/// of an SFC unmodelled, so `SfcStepType`, `SfcTransitionType` and `SfcActionType` are ours.
+/// Each type declares its mandatory components (`docs/runtime.md`, "OPC UA").
+fn define_types(space: &mut async_opcua::server::address_space::AddressSpace, ns: u16) -> Types {
+    use async_opcua::server::address_space::ObjectTypeBuilder;
+    use async_opcua::server::address_space::ReferenceDirection;
+    use async_opcua::types::ReferenceTypeId;
+    let ty = |space: &mut async_opcua::server::address_space::AddressSpace, name: &str, about: &str| {
+        let id = nid(ns, &format!("type:{name}"));
+        ObjectTypeBuilder::new(&id, QualifiedName::new(ns, name), name)
+            .description(about)
+            .subtype_of(ObjectTypeId::BaseObjectType)
+            .insert(space);
+        id
+    };
+    let member = |space: &mut async_opcua::server::address_space::AddressSpace,
+                  parent: &NodeId,
+                  name: &str,
+                  data: Option<DataTypeId>| {
+        let id = nid(ns, &format!("{}/{name}", parent.identifier));
+        match data {
+            Some(d) => {
+                VariableBuilder::new(&id, QualifiedName::new(ns, name), name)
+                    .component_of(parent.clone())
+                    .has_type_definition(VariableTypeId::BaseDataVariableType)
+                    .has_modelling_rule(ObjectId::ModellingRule_Mandatory)
+                    .data_type(d)
+                    .access_level(AccessLevel::CURRENT_READ)
+                    .user_access_level(AccessLevel::CURRENT_READ)
+                    .insert(space);
+            }
+            None => {
+                ObjectBuilder::new(&id, QualifiedName::new(ns, name), name)
+                    .component_of(parent.clone())
+                    .has_type_definition(ObjectTypeId::FolderType)
+                    .reference(
+                        ObjectId::ModellingRule_Mandatory,
+                        ReferenceTypeId::HasModellingRule,
+                        ReferenceDirection::Forward,
+                    )
+                    .insert(space);
+            }
+        }
+    };
+    ty(
+        space,
+        "SfcProgramType",
+        "A program run by sfc run: its variables by section, its Chart and its Runtime (as OPC 30000 CtrlProgramType)",
+    );
+    let sfc = ty(
+        space,
+        "SfcType",
+        "A chart instance: the program's own SFC or an SFC function block instance (as OPC 30000 SFCType)",
+    );
+    for f in ["Steps", "Transitions", "Actions"] {
+        member(space, &sfc, f, None);
+    }
+    for (n, d) in [
+        ("LastError", DataTypeId::String),
+        ("LastErrorCode", DataTypeId::Int32),
+        ("LastErrorStep", DataTypeId::String),
+        ("ErrorCount", DataTypeId::UInt64),
+    ] {
+        member(space, &sfc, n, Some(d));
+    }
+    let step = ty(space, "SfcStepType", "An SFC step: X (active) and T (elapsed time)");
+    member(space, &step, "X", Some(DataTypeId::Boolean));
+    member(space, &step, "T", Some(DataTypeId::Duration));
+    let transition = ty(space, "SfcTransitionType", "An SFC transition: the value of its guard");
+    member(space, &transition, "Guard", Some(DataTypeId::Boolean));
+    let action = ty(space, "SfcActionType", "An SFC action: the outputs Q and A of its action control (IEC 61131-3)");
+    member(space, &action, "Q", Some(DataTypeId::Boolean));
+    member(space, &action, "A", Some(DataTypeId::Boolean));
+    Types { sfc, step, transition, action }
+}
+
 /// The node layout (`docs/runtime.md`, "OPC UA"): `Objects/<POU>/{Inputs,Outputs,Locals,
-/// Globals}/<variable>`, `Objects/<POU>/Chart/{Steps,Transitions}`, `Objects/<POU>/Runtime`.
+/// Globals}/<variable>`, `Objects/<POU>/Chart/{Steps,Transitions,Actions}` and a chart per
+/// SFC function block instance under `Chart`, `Objects/<POU>/Runtime`. A variable's node id is
+/// its engineering name (`CarWash.StartButton`); the other nodes' ids join their levels with
+/// `/`, which no IEC identifier holds (a variable named `Chart` or `Runtime` meets no other node).
 fn populate(hub: &Arc<Hub>, manager: &Arc<SimpleNodeManager>, ns: u16) {
     let info: &ChartInfo = &hub.info;
     let pou = info.pou.clone();
@@ -357,9 +446,10 @@ fn populate(hub: &Arc<Hub>, manager: &Arc<SimpleNodeManager>, ns: u16) {
     let cbs = manager.inner();
     let space = manager.address_space();
     let mut space = space.write();
+    let program_type = nid(ns, "type:SfcProgramType");
     ObjectBuilder::new(&root, QualifiedName::new(ns, pou.as_str()), pou.as_str())
         .organized_by(ObjectId::ObjectsFolder)
-        .has_type_definition(ObjectTypeId::BaseObjectType)
+        .has_type_definition(program_type)
         .insert(&mut *space);
     let folder =
         |space: &mut async_opcua::server::address_space::AddressSpace, id: &NodeId, name: &str, parent: &NodeId| {
@@ -373,7 +463,7 @@ fn populate(hub: &Arc<Hub>, manager: &Arc<SimpleNodeManager>, ns: u16) {
                     name: &str,
                     value: Variant,
                     ty: DataTypeId| {
-        let id = NodeId::new(ns, format!("{}.{name}", parent.identifier));
+        let id = NodeId::new(ns, format!("{}/{name}", parent.identifier));
         VariableBuilder::new(&id, QualifiedName::new(ns, name), name)
             .property_of(parent.clone())
             .has_type_definition(VariableTypeId::PropertyType)
@@ -389,7 +479,7 @@ fn populate(hub: &Arc<Hub>, manager: &Arc<SimpleNodeManager>, ns: u16) {
         if members.is_empty() {
             continue;
         }
-        let fid = nid(ns, &format!("{pou}.{}", section.name()));
+        let fid = nid(ns, &format!("{pou}/{}", section.name()));
         folder(&mut space, &fid, section.name(), &root);
         for i in members {
             let Some(var) = info.variables.get(i) else { continue };
@@ -442,88 +532,182 @@ fn populate(hub: &Arc<Hub>, manager: &Arc<SimpleNodeManager>, ns: u16) {
             });
         }
     }
-    // The chart: steps with X and T, transitions with their guard.
-    let chart = nid(ns, &format!("{pou}.Chart"));
-    ObjectBuilder::new(&chart, QualifiedName::new(ns, "Chart"), "Chart")
-        .component_of(root.clone())
-        .has_type_definition(ObjectTypeId::BaseObjectType)
-        .insert(&mut *space);
-    let steps = nid(ns, &format!("{pou}.Chart.Steps"));
-    folder(&mut space, &steps, "Steps", &chart);
-    for (s, (name, initial)) in info.steps.iter().enumerate() {
-        let sid = nid(ns, &format!("{pou}.Steps.{name}"));
-        ObjectBuilder::new(&sid, QualifiedName::new(ns, name.as_str()), name.as_str())
-            .organized_by(steps.clone())
-            .has_type_definition(ObjectTypeId::BaseObjectType)
+    // The chart of the POU and one chart per SFC function block instance (the mechanisms),
+    // each with its steps (X, T), transitions (guard) and actions (Q, A), and its error records.
+    let types = define_types(&mut space, ns);
+    let charts: Vec<sfc_sim::ChartOutline> = if info.charts.is_empty() {
+        // A runtime without instances (the ATMT adapter): one chart of every step.
+        vec![sfc_sim::ChartOutline {
+            instance: pou.clone(),
+            path: String::new(),
+            pou: pou.clone(),
+            steps: 0..info.steps.len() as u32,
+            transitions: 0..info.transitions.len() as u32,
+            actions: 0..info.actions.len() as u32,
+        }]
+    } else {
+        info.charts.clone()
+    };
+    let chart = nid(ns, &format!("{pou}/Chart"));
+    let top = charts.iter().position(|c| c.path.is_empty());
+    let chart_object = |id: &NodeId, name: &str| {
+        ObjectBuilder::new(id, QualifiedName::new(ns, name), name).has_type_definition(types.sfc.clone())
+    };
+    if top.is_some() {
+        chart_object(&chart, "Chart").component_of(root.clone()).insert(&mut *space);
+    } else {
+        // The program itself is no chart: a folder of its mechanisms.
+        ObjectBuilder::new(&chart, QualifiedName::new(ns, "Chart"), "Chart")
+            .is_folder()
+            .component_of(root.clone())
             .insert(&mut *space);
-        property(&mut space, &sid, "Initial", Variant::Boolean(*initial), DataTypeId::Boolean);
-        let x = nid(ns, &format!("{pou}.Steps.{name}.X"));
-        let t = nid(ns, &format!("{pou}.Steps.{name}.T"));
-        for (id, bn, ty, init) in [
-            (&x, "X", DataTypeId::Boolean, Variant::Boolean(false)),
-            (&t, "T", DataTypeId::Duration, Variant::Double(0.0)),
-        ] {
-            VariableBuilder::new(id, QualifiedName::new(ns, bn), bn)
-                .component_of(sid.clone())
+    }
+    for (c, outline) in charts.iter().enumerate() {
+        let cid = if outline.path.is_empty() {
+            chart.clone()
+        } else {
+            let id = nid(ns, &format!("{pou}/Chart/{}", outline.path));
+            chart_object(&id, &outline.path).organized_by(chart.clone()).insert(&mut *space);
+            property(&mut space, &id, "FunctionBlock", Variant::from(outline.pou.as_str()), DataTypeId::String);
+            id
+        };
+        // Names inside an instance's chart without its path (`Idle`, not `Rev.Idle`).
+        let local = |q: &str| -> String {
+            match q.strip_prefix(outline.path.as_str()).and_then(|r| r.strip_prefix('.')) {
+                Some(r) if !outline.path.is_empty() => r.to_string(),
+                _ => q.to_string(),
+            }
+        };
+        let variable = |space: &mut async_opcua::server::address_space::AddressSpace,
+                        id: &NodeId,
+                        parent: &NodeId,
+                        name: &str,
+                        ty: DataTypeId,
+                        init: Variant| {
+            VariableBuilder::new(id, QualifiedName::new(ns, name), name)
+                .component_of(parent.clone())
                 .has_type_definition(VariableTypeId::BaseDataVariableType)
                 .data_type(ty)
                 .value(init)
                 .access_level(AccessLevel::CURRENT_READ)
                 .user_access_level(AccessLevel::CURRENT_READ)
                 .minimum_sampling_interval(0.0)
+                .insert(space);
+        };
+        let steps = nid(ns, &format!("{}/Steps", cid.identifier));
+        folder(&mut space, &steps, "Steps", &cid);
+        for s in outline.steps.clone() {
+            let Some((name, initial)) = info.steps.get(s as usize) else { continue };
+            let bn = local(name);
+            let sid = nid(ns, &format!("{pou}/Steps/{name}"));
+            ObjectBuilder::new(&sid, QualifiedName::new(ns, bn.as_str()), bn.as_str())
+                .organized_by(steps.clone())
+                .has_type_definition(types.step.clone())
                 .insert(&mut *space);
+            property(&mut space, &sid, "Initial", Variant::Boolean(*initial), DataTypeId::Boolean);
+            let x = nid(ns, &format!("{pou}/Steps/{name}/X"));
+            let t = nid(ns, &format!("{pou}/Steps/{name}/T"));
+            variable(&mut space, &x, &sid, "X", DataTypeId::Boolean, Variant::Boolean(false));
+            variable(&mut space, &t, &sid, "T", DataTypeId::Duration, Variant::Double(0.0));
+            let h = hub.clone();
+            cbs.add_read_callback(x, move |_, _, _| {
+                let st = latest(&h).ok_or(StatusCode::BadWaitingForInitialData)?;
+                good(st.active.iter().any(|a| a.0 == s))
+            });
+            let h = hub.clone();
+            cbs.add_read_callback(t, move |_, _, _| {
+                let st = latest(&h).ok_or(StatusCode::BadWaitingForInitialData)?;
+                // An inactive step keeps the duration of its last activation (IEC 61131-3).
+                let us = match st.times.get(s as usize) {
+                    Some(us) => *us,
+                    None => st.active.iter().find(|a| a.0 == s).map_or(0, |a| a.1),
+                };
+                good(Variant::Double(us as f64 / 1000.0))
+            });
         }
-        let s = s as u32;
-        let h = hub.clone();
-        cbs.add_read_callback(x, move |_, _, _| {
-            let st = latest(&h).ok_or(StatusCode::BadWaitingForInitialData)?;
-            good(st.active.iter().any(|a| a.0 == s))
-        });
-        let h = hub.clone();
-        cbs.add_read_callback(t, move |_, _, _| {
-            let st = latest(&h).ok_or(StatusCode::BadWaitingForInitialData)?;
-            // T of an inactive step is 0 (IEC 61131-3 keeps the last value; the runtime does
-            // not publish it).
-            let us = st.active.iter().find(|a| a.0 == s).map_or(0, |a| a.1);
-            good(Variant::Double(us as f64 / 1000.0))
-        });
-    }
-    let transitions = nid(ns, &format!("{pou}.Chart.Transitions"));
-    folder(&mut space, &transitions, "Transitions", &chart);
-    for (t, (name, from, to)) in info.transitions.iter().enumerate() {
-        let tid = nid(ns, &format!("{pou}.Transitions.{name}"));
-        ObjectBuilder::new(&tid, QualifiedName::new(ns, name.as_str()), name.as_str())
-            .organized_by(transitions.clone())
-            .has_type_definition(ObjectTypeId::BaseObjectType)
-            .insert(&mut *space);
-        let names = |l: &[u32]| -> Vec<UAString> { l.iter().map(|s| UAString::from(info.step_name(*s))).collect() };
-        property(&mut space, &tid, "From", Variant::from(names(from)), DataTypeId::String);
-        property(&mut space, &tid, "To", Variant::from(names(to)), DataTypeId::String);
-        let g = nid(ns, &format!("{pou}.Transitions.{name}.Guard"));
-        VariableBuilder::new(&g, QualifiedName::new(ns, "Guard"), "Guard")
-            .component_of(tid.clone())
-            .has_type_definition(VariableTypeId::BaseDataVariableType)
-            .data_type(DataTypeId::Boolean)
-            .value(false)
-            .access_level(AccessLevel::CURRENT_READ)
-            .user_access_level(AccessLevel::CURRENT_READ)
-            .minimum_sampling_interval(0.0)
-            .insert(&mut *space);
-        let t = t as u32;
-        let h = hub.clone();
-        cbs.add_read_callback(g, move |_, _, _| {
-            let st = latest(&h).ok_or(StatusCode::BadWaitingForInitialData)?;
-            match st.guards.iter().find(|g| g.0 == t) {
-                Some((_, Some(b))) => good(*b),
-                // The guard faulted in this scan.
-                Some((_, None)) => Err(StatusCode::BadInternalError),
-                // Only the guards of enabled transitions (their steps active) are evaluated.
-                None => Ok(DataValue { status: Some(StatusCode::GoodNoData), ..DataValue::new_now(Variant::Empty) }),
+        let transitions = nid(ns, &format!("{}/Transitions", cid.identifier));
+        folder(&mut space, &transitions, "Transitions", &cid);
+        for t in outline.transitions.clone() {
+            let Some((name, from, to)) = info.transitions.get(t as usize) else { continue };
+            let bn = local(name);
+            let tid = nid(ns, &format!("{pou}/Transitions/{name}"));
+            ObjectBuilder::new(&tid, QualifiedName::new(ns, bn.as_str()), bn.as_str())
+                .organized_by(transitions.clone())
+                .has_type_definition(types.transition.clone())
+                .insert(&mut *space);
+            let names =
+                |l: &[u32]| -> Vec<UAString> { l.iter().map(|s| UAString::from(local(&info.step_name(*s)))).collect() };
+            property(&mut space, &tid, "From", Variant::from(names(from)), DataTypeId::String);
+            property(&mut space, &tid, "To", Variant::from(names(to)), DataTypeId::String);
+            let g = nid(ns, &format!("{pou}/Transitions/{name}/Guard"));
+            variable(&mut space, &g, &tid, "Guard", DataTypeId::Boolean, Variant::Boolean(false));
+            let h = hub.clone();
+            cbs.add_read_callback(g, move |_, _, _| {
+                let st = latest(&h).ok_or(StatusCode::BadWaitingForInitialData)?;
+                match st.guards.iter().find(|g| g.0 == t) {
+                    Some((_, Some(b))) => good(*b),
+                    // The guard faulted in this scan.
+                    Some((_, None)) => Err(StatusCode::BadInternalError),
+                    // Only the guards of enabled transitions (their steps active) are evaluated.
+                    None => {
+                        Ok(DataValue { status: Some(StatusCode::GoodNoData), ..DataValue::new_now(Variant::Empty) })
+                    }
+                }
+            });
+        }
+        let actions = nid(ns, &format!("{}/Actions", cid.identifier));
+        folder(&mut space, &actions, "Actions", &cid);
+        for a in outline.actions.clone() {
+            let Some((name, is_variable)) = info.actions.get(a as usize) else { continue };
+            let bn = local(name);
+            let aid = nid(ns, &format!("{pou}/Actions/{name}"));
+            ObjectBuilder::new(&aid, QualifiedName::new(ns, bn.as_str()), bn.as_str())
+                .organized_by(actions.clone())
+                .has_type_definition(types.action.clone())
+                .insert(&mut *space);
+            let kind = if *is_variable { "variable" } else { "action" };
+            property(&mut space, &aid, "Kind", Variant::from(kind), DataTypeId::String);
+            for (flag, bn) in [(0usize, "Q"), (1, "A")] {
+                let id = nid(ns, &format!("{pou}/Actions/{name}/{bn}"));
+                variable(&mut space, &id, &aid, bn, DataTypeId::Boolean, Variant::Boolean(false));
+                let h = hub.clone();
+                cbs.add_read_callback(id, move |_, _, _| {
+                    let st = latest(&h).ok_or(StatusCode::BadWaitingForInitialData)?;
+                    let on = st.actions.iter().find(|x| x.0 == a).is_some_and(|x| if flag == 0 { x.1 } else { x.2 });
+                    good(on)
+                });
             }
-        });
+        }
+        // Error records of supervision timeouts (issue 23): the last one's text, code and step,
+        // and how many were made.
+        type ErrorReader = fn(&crate::board::MechanismErrors) -> Variant;
+        let error_nodes: [(&str, DataTypeId, Variant, ErrorReader); 4] = [
+            ("LastError", DataTypeId::String, Variant::from(""), |e| {
+                Variant::from(e.last.as_ref().map(sfc_sim::ErrorRecord::message).unwrap_or_default())
+            }),
+            ("LastErrorCode", DataTypeId::Int32, Variant::Int32(0), |e| {
+                let code = e.last.as_ref().and_then(|r| r.code).unwrap_or(0);
+                Variant::Int32(code.clamp(i32::MIN.into(), i32::MAX.into()) as i32)
+            }),
+            ("LastErrorStep", DataTypeId::String, Variant::from(""), |e| {
+                Variant::from(e.last.as_ref().map(|r| r.step.clone()).unwrap_or_default())
+            }),
+            ("ErrorCount", DataTypeId::UInt64, Variant::UInt64(0), |e| Variant::UInt64(e.count)),
+        ];
+        for (bn, ty, init, read) in error_nodes {
+            let id = nid(ns, &format!("{}/{bn}", cid.identifier));
+            variable(&mut space, &id, &cid, bn, ty, init);
+            let h = hub.clone();
+            cbs.add_read_callback(id, move |_, _, _| {
+                let b = h.lock();
+                let e = b.errors.get(c).cloned().unwrap_or_default();
+                drop(b);
+                good(read(&e))
+            });
+        }
     }
     // The runtime: state, scan count, jitter, and the methods.
-    let rt = nid(ns, &format!("{pou}.Runtime"));
+    let rt = nid(ns, &format!("{pou}/Runtime"));
     ObjectBuilder::new(&rt, QualifiedName::new(ns, "Runtime"), "Runtime")
         .component_of(root.clone())
         .has_type_definition(ObjectTypeId::BaseObjectType)
@@ -544,7 +728,7 @@ fn populate(hub: &Arc<Hub>, manager: &Arc<SimpleNodeManager>, ns: u16) {
         ("Overruns", DataTypeId::UInt64, Box::new(|h: &Hub| Variant::UInt64(digest(h, |d| d.overruns)))),
     ];
     for (name, ty, read) in figures {
-        let id = nid(ns, &format!("{pou}.Runtime.{name}"));
+        let id = nid(ns, &format!("{pou}/Runtime/{name}"));
         VariableBuilder::new(&id, QualifiedName::new(ns, name), name)
             .component_of(rt.clone())
             .has_type_definition(VariableTypeId::BaseDataVariableType)
@@ -558,7 +742,7 @@ fn populate(hub: &Arc<Hub>, manager: &Arc<SimpleNodeManager>, ns: u16) {
     }
     if info.control {
         for name in ["Halt", "Continue", "Reset"] {
-            let id = nid(ns, &format!("{pou}.Runtime.{name}"));
+            let id = nid(ns, &format!("{pou}/Runtime/{name}"));
             MethodBuilder::new(&id, QualifiedName::new(ns, name), name)
                 .component_of(rt.clone())
                 .executable(true)
@@ -594,6 +778,65 @@ fn send(hub: &Hub, command: Command) -> StatusCode {
     } else {
         StatusCode::BadShutdown
     }
+}
+
+/// How much lower than the scan thread the OPC UA threads run (nice value, Linux).
+pub const NICE: i32 = 10;
+
+/// Runs the server on a thread of its own, with its own single-threaded tokio runtime, at a
+/// lower scheduling priority (nice [`NICE`]) than the scan thread: sampling and encoding for
+/// many subscriptions then take at most one core, and only what the scan leaves of it, so the
+/// scan's start jitter does not follow the OPC UA load at normal priority. (The monitor and
+/// Modbus keep the network threads at normal priority: Modbus carries the plant's inputs.)
+pub fn spawn(side: Side, hub: Arc<Hub>) -> Result<std::thread::JoinHandle<()>, String> {
+    std::thread::Builder::new()
+        .name("sfc-opcua".into())
+        .spawn(move || {
+            lower_priority(&hub);
+            let rt = tokio::runtime::Builder::new_current_thread()
+                .thread_name("sfc-opcua-blocking")
+                .max_blocking_threads(2)
+                .on_thread_start(|| {
+                    let _ = nice_this_thread();
+                })
+                .enable_all()
+                .build();
+            match rt {
+                Ok(rt) => {
+                    rt.block_on(serve(side, hub));
+                    rt.shutdown_timeout(std::time::Duration::from_secs(1));
+                }
+                Err(e) => hub.notice(format!("sfc run: OPC UA cannot start its thread: {e}")),
+            }
+        })
+        .map_err(|e| format!("cannot start the OPC UA thread: {e}"))
+}
+
+/// Lowers the calling thread's priority, saying so once when it cannot.
+fn lower_priority(hub: &Hub) {
+    if let Err(e) = nice_this_thread() {
+        hub.notice(format!("sfc run: OPC UA runs at the scan thread's priority: {e}"));
+    }
+}
+
+/// Sets the calling thread's nice value to [`NICE`] (Linux: nice values are per thread).
+#[cfg(target_os = "linux")]
+fn nice_this_thread() -> Result<(), String> {
+    // SAFETY: plain system calls on the calling thread; gettid has no arguments.
+    let r = unsafe {
+        let tid = libc::syscall(libc::SYS_gettid) as libc::id_t;
+        libc::setpriority(libc::PRIO_PROCESS, tid, NICE)
+    };
+    if r == 0 {
+        Ok(())
+    } else {
+        Err(format!("cannot lower its priority: {}", std::io::Error::last_os_error()))
+    }
+}
+
+#[cfg(not(target_os = "linux"))]
+fn nice_this_thread() -> Result<(), String> {
+    Err("lowering a thread's priority is implemented for Linux only".into())
 }
 
 /// Serves until the run closes.

@@ -110,6 +110,8 @@ pub(crate) struct ScanThread {
     /// connects while the run is halted).
     pub last_state: Option<Arc<ScanState>>,
     pub steps_requested: Vec<Request>,
+    /// The mechanisms' error records not yet published ([`crate::board::Board::errors`]).
+    pub unpublished_errors: Option<Vec<crate::board::MechanismErrors>>,
     /// Error records made since the process started (the Modbus block's count).
     pub records: u64,
     /// The newest error record with its count, until the Modbus image takes it.
@@ -420,11 +422,24 @@ impl ScanThread {
             self.halted = false;
             self.halt_change.push((false, String::new()));
         }
+        self.note_errors();
         let mode = if cold { "cold" } else { "warm" };
         let scan = self.sim.next_scan();
         self.unpublished_events.push(serde_json::json!({"kind": "reset", "mode": mode, "scan": scan}).into());
         self.hub.notice(format!("sfc run: {mode} restart from {}: RUN again at scan {scan}", was.name()));
         serde_json::json!({"state": "RUN", "mode": mode, "scan": scan})
+    }
+
+    /// The last error record and count of each mechanism, for the board (rare: after a scan
+    /// that completed a record, and after a restart).
+    fn note_errors(&mut self) {
+        let list = self
+            .sim
+            .mechanisms()
+            .into_iter()
+            .map(|m| crate::board::MechanismErrors { last: m.last_error, count: m.errors })
+            .collect();
+        self.unpublished_errors = Some(list);
     }
 
     /// Handles every waiting command without blocking.
@@ -514,6 +529,8 @@ impl ScanThread {
         }
         st.forced.clear();
         st.forced.extend(self.forced.iter().map(|f| f.0));
+        self.sim.action_states(&mut st.actions);
+        self.sim.step_times(&mut st.times);
         let scan = st.scan;
         if !self.sim.last_events().is_empty() {
             let mut events: Vec<&sfc_sim::Event> = self
@@ -547,6 +564,9 @@ impl ScanThread {
                     img.record = crate::io::record_registers(count, &r, img.order);
                 }
             }
+        }
+        if !self.sim.fresh_error_records().is_empty() {
+            self.note_errors();
         }
         // Breakpoints: a step is hit when a fired transition enters it (or it starts the chart),
         // a transition when it fires.
@@ -857,6 +877,9 @@ impl ScanThread {
         }
         for (halted, reason) in self.halt_change.drain(..) {
             b.push_halt(halted, reason);
+        }
+        if let Some(errors) = self.unpublished_errors.take() {
+            b.errors = errors;
         }
         if self.stats.scans.is_multiple_of(50) || b.halted {
             b.digest = Some(self.stats.digest());

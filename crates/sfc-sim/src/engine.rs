@@ -25,6 +25,7 @@ mod evolve;
 mod matiec;
 mod mechanism;
 mod monitor;
+pub use monitor::ChartOutline;
 mod plan;
 mod situations;
 mod state;

@@ -17,8 +17,8 @@ pub mod trace;
 pub mod value;
 
 pub use engine::{
-    ErrorRecord, FaultPlace, MechanismRuns, MechanismView, Run, RunEnd, ScanSink, Simulation, Snapshot, StateStats,
-    StepStats, TimeStats,
+    ChartOutline, ErrorRecord, FaultPlace, MechanismRuns, MechanismView, Run, RunEnd, ScanSink, Simulation, Snapshot,
+    StateStats, StepStats, TimeStats,
 };
 pub use explain::{StepReport, TransitionReport};
 pub use value::{format_time, parse_time, write_time, Value};

@@ -165,3 +165,83 @@ END_PROGRAM
         assert_eq!(s.handle(&r.name).map(|h| h.0), Some(r.slot), "{}", r.name);
     }
 }
+
+/// A program with a chart of its own and an SFC function block instance (a mechanism).
+const MECHANISM: &str = "FUNCTION_BLOCK Mover
+VAR_INPUT Go : BOOL; END_VAR
+VAR_OUTPUT Busy : BOOL; n : INT; END_VAR
+INITIAL_STEP Rest: END_STEP
+TRANSITION TGo FROM Rest TO Move := Go; END_TRANSITION
+STEP Move:
+    Busy(N);
+    Count(P1);
+END_STEP
+TRANSITION TBack FROM Move TO Rest := NOT Go; END_TRANSITION
+ACTION Count:
+    n := n + 1;
+END_ACTION
+END_FUNCTION_BLOCK
+PROGRAM Line
+VAR Start : BOOL; M : Mover; END_VAR
+INITIAL_STEP Wait: END_STEP
+TRANSITION TStart FROM Wait TO Run := Start; END_TRANSITION
+STEP Run:
+    Drive(N);
+END_STEP
+TRANSITION TStop FROM Run TO Wait := FALSE; END_TRANSITION
+ACTION Drive:
+    M(Go := TRUE);
+END_ACTION
+END_PROGRAM
+";
+
+/// `chart_outline` numbers each instance's steps, transitions and actions globally;
+/// `action_states` gives Q and A of the action control (P1: A for one scan, Q never);
+/// `step_times` keeps the T of a step left (IEC 61131-3) and 0 for one never active.
+#[test]
+fn chart_outline_action_states_and_step_times() {
+    let opts = SimOptions { period: 100_000, ..SimOptions::default() };
+    let mut s =
+        Simulation::from_source("line.st", MECHANISM, Some("Line"), opts).unwrap_or_else(|(_, d)| panic!("{d:?}"));
+    let charts = s.chart_outline();
+    let shape: Vec<(&str, &str, &str, std::ops::Range<u32>, std::ops::Range<u32>, std::ops::Range<u32>)> = charts
+        .iter()
+        .map(|c| {
+            (
+                c.instance.as_str(),
+                c.path.as_str(),
+                c.pou.as_str(),
+                c.steps.clone(),
+                c.transitions.clone(),
+                c.actions.clone(),
+            )
+        })
+        .collect();
+    assert_eq!(shape, vec![("Line", "", "Line", 0..2, 0..2, 0..1), ("M", "M", "Mover", 2..4, 2..4, 1..3)]);
+    let actions = s.action_outline();
+    let names: Vec<(&str, bool)> = actions.iter().map(|(n, v)| (n.as_str(), *v)).collect();
+    assert_eq!(names, vec![("Drive", false), ("M.Count", false), ("M.Busy", true)], "action blocks, then variables");
+    let (steps, _) = s.outline();
+    let step = |n: &str| steps.iter().position(|s| s.0 == n).unwrap();
+    let mut qa = Vec::new();
+    let mut times = Vec::new();
+    s.scan();
+    s.set("Start", Value::Bool(true)).unwrap();
+    s.scan(); // Wait -> Run: Drive calls M, whose chart starts in Rest
+    s.scan(); // M: Rest -> Move
+    s.action_states(&mut qa);
+    qa.sort_unstable();
+    assert_eq!(qa, vec![(0, true, true), (1, false, true), (2, true, true)], "Drive, M.Count (P1), M.Busy (N)");
+    s.scan();
+    s.action_states(&mut qa);
+    qa.sort_unstable();
+    assert_eq!(qa, vec![(0, true, true), (2, true, true)], "P1's A lasted one scan");
+    s.step_times(&mut times);
+    assert_eq!(times.len(), 4);
+    assert_eq!(times[step("Wait")], 100_000, "Wait was active for one period and keeps it");
+    assert_eq!(times[step("M.Move")], 100_000, "M.Move active since the last scan");
+    s.scan();
+    s.step_times(&mut times);
+    assert_eq!(times[step("Wait")], 100_000, "still the duration of its last activation");
+    assert_eq!(times[step("M.Move")], 200_000);
+}

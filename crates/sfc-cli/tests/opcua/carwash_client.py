@@ -19,6 +19,11 @@ from asyncua import Client, ua
 NS = "urn:sfc:run"
 
 
+async def type_name(c, node):
+    """The browse name of a node's HasTypeDefinition."""
+    return (await c.get_node(await node.read_type_definition()).read_browse_name()).Name
+
+
 async def browse(c):
     """Every variable under Inputs/Outputs/Locals/Globals with type, value and address; every
     step with X and T; every transition with its guard."""
@@ -45,7 +50,13 @@ async def browse(c):
                     "writable": bool((await v.read_attribute(ua.AttributeIds.AccessLevel)).Value.Value & 2),
                 }
     chart = await root.get_child([f"{ns}:Chart"])
+    out["types"] = {"Chart": await type_name(c, chart)}
+    out["actions"] = {}
+    for a in await (await chart.get_child([f"{ns}:Actions"])).get_children():
+        name = (await a.read_browse_name()).Name
+        out["actions"][name] = {"type": await type_name(c, a)}
     for s in await (await chart.get_child([f"{ns}:Steps"])).get_children():
+        out["types"]["step"] = await type_name(c, s)
         name = (await s.read_browse_name()).Name
         x = await (await s.get_child([f"{ns}:X"])).read_value()
         t = await (await s.get_child([f"{ns}:T"])).read_value()
@@ -99,6 +110,16 @@ async def open_session(url):
         while time.monotonic() < deadline and True not in changes.values:
             await asyncio.sleep(0.05)
         report["spraying_changes"] = changes.values
+        # Spraying's actions: their action control's Q and A; Idle, left, keeps its last T.
+        acts = lambda n, f: root.get_child([f"{ns}:Chart", f"{ns}:Actions", f"{ns}:{n}", f"{ns}:{f}"])
+        report["actions_in_spraying"] = {
+            n: [await (await acts(n, "Q")).read_value(), await (await acts(n, "A")).read_value()]
+            for n in ("SprayValve", "Travel", "Brush", "FaultLamp")
+        }
+        idle = lambda f: root.get_child([f"{ns}:Chart", f"{ns}:Steps", f"{ns}:Idle", f"{ns}:{f}"])
+        t1 = await (await idle("T")).read_value()
+        await asyncio.sleep(0.3)
+        report["idle_left"] = {"X": await (await idle("X")).read_value(), "T": t1, "T later": await (await idle("T")).read_value()}
         report["StartButton"] = await (await inp("StartButton")).read_value()
         out = await root.get_child([f"{ns}:Outputs", f"{ns}:SprayValve"])
         report["SprayValve"] = await out.read_value()

@@ -127,6 +127,11 @@ fn duration_text(assoc: &str) -> Option<String> {
 }
 
 impl State {
+    /// The state (Q) of each action, in the order of the chart's entities.
+    pub(crate) fn action_flags(&self) -> impl Iterator<Item = bool> + '_ {
+        self.actions.iter().map(|a| a.state)
+    }
+
     pub(crate) fn new(code: &ChartCode, durations: Arc<Vec<Vec<Option<Dur>>>>, order: Arc<Vec<u32>>) -> State {
         let chart = &code.chart;
         let n = chart.steps.len();

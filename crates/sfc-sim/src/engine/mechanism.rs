@@ -541,7 +541,7 @@ pub(crate) fn code_value(v: &Value) -> Option<i64> {
 
 impl super::Simulation {
     /// The instance's name as the mechanisms view shows it.
-    fn instance_name(&self, c: usize) -> String {
+    pub(crate) fn instance_name(&self, c: usize) -> String {
         let st = &self.charts[c];
         if st.path.is_empty() {
             self.prog.pous[st.pou].name.clone()

@@ -13,6 +13,20 @@ use sfc_st::Type;
 
 /// The steps (qualified name, initial) and transitions (qualified name, preceding steps,
 /// following steps) of [`Simulation::outline`], in global numbers.
+/// One chart instance of [`Simulation::chart_outline`]: the ranges are global numbers.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct ChartOutline {
+    /// Instance path (`Rev`), the POU's name for the top chart.
+    pub instance: String,
+    /// Instance path, `""` for the top chart.
+    pub path: String,
+    /// The program or function block it is an instance of.
+    pub pou: String,
+    pub steps: std::ops::Range<u32>,
+    pub transitions: std::ops::Range<u32>,
+    pub actions: std::ops::Range<u32>,
+}
+
 pub type OutlineParts = (Vec<(String, bool)>, Vec<(String, Vec<u32>, Vec<u32>)>);
 
 // The module is private to `engine`, so its API uses only types the crate already exports:
@@ -121,6 +135,79 @@ impl Simulation {
             base += plan.step_names.len() as u32;
         }
         out
+    }
+
+    /// Every chart instance (the top POU's chart first when it has one, then the SFC function
+    /// block instances in the order of [`Simulation::outline`]) with the global numbers of its
+    /// steps, transitions and actions.
+    pub fn chart_outline(&self) -> Vec<ChartOutline> {
+        let (mut s, mut t, mut a) = (0u32, 0u32, 0u32);
+        self.charts
+            .iter()
+            .enumerate()
+            .map(|(c, st)| {
+                let plan = &st.plan;
+                let (ns, nt, na) =
+                    (plan.step_names.len() as u32, plan.transition_names.len() as u32, plan.entities.len() as u32);
+                let out = ChartOutline {
+                    instance: self.instance_name(c),
+                    path: st.path.clone(),
+                    pou: self.prog.pous.get(st.pou).map(|p| p.name.clone()).unwrap_or_default(),
+                    steps: s..s + ns,
+                    transitions: t..t + nt,
+                    actions: a..a + na,
+                };
+                (s, t, a) = (s + ns, t + nt, a + na);
+                out
+            })
+            .collect()
+    }
+
+    /// Every action of every chart instance in global numbers (see [`Simulation::chart_outline`]):
+    /// its qualified name and whether it is a BOOL variable used as an action (IEC 61131-3
+    /// allows one in an action association) rather than an action block.
+    pub fn action_outline(&self) -> Vec<(String, bool)> {
+        self.charts
+            .iter()
+            .flat_map(|c| c.plan.entities.iter().map(|e| (c.qualify(&e.name), e.action.is_none())))
+            .collect()
+    }
+
+    /// The outputs of the action control of every action whose `Q` or `A` is TRUE (IEC
+    /// 61131-3: `Q` the qualifier logic's output, `A` it or its final scan, which runs the
+    /// body), in global numbers, in no particular order: `(action, Q, A)`.
+    pub fn action_states(&self, out: &mut Vec<(u32, bool, bool)>) {
+        out.clear();
+        let mut base = 0u32;
+        for c in &self.charts {
+            match &c.matiec {
+                Some(m) => {
+                    for (e, q) in m.action_flags().enumerate() {
+                        if q {
+                            out.push((base + e as u32, true, true));
+                        }
+                    }
+                }
+                None => {
+                    for (e, k) in c.controls.iter().enumerate() {
+                        if k.q || k.a {
+                            out.push((base + e as u32, k.q, k.a));
+                        }
+                    }
+                }
+            }
+            base += c.plan.entities.len() as u32;
+        }
+    }
+
+    /// The elapsed time (µs) of every step in global numbers: of an active step since its
+    /// activation, of an inactive one the duration of its last activation (IEC 61131-3: `S.T`
+    /// keeps it until the step is activated again; `T#0s` for a step never active).
+    pub fn step_times(&self, out: &mut Vec<i64>) {
+        out.clear();
+        for c in &self.charts {
+            out.extend((0..c.plan.step_names.len() as u32).map(|s| c.time(s)));
+        }
     }
 
     /// The active steps with their elapsed times (µs), in global numbers, ascending.
