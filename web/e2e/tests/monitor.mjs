@@ -159,7 +159,7 @@ export const tests = [
       if ((await shown(page, 'CarLeft')) !== 'TRUE') throw new Error('the forced CarLeft is not TRUE');
       if (JSON.stringify(await hit(page)) !== '[]') throw new Error('the hit frame stayed after Continue');
       await page.getByRole('tab', { name: 'Time analysis' }).click();
-      const row = page.locator('.mon-timing tr', { hasText: 'Brushing' });
+      const row = page.locator('.mon-steps-timing tr', { hasText: 'Brushing' });
       await until(page, 'Brushing timed once', async () => (await row.locator('td').nth(1).textContent()) === '1');
       await page.screenshot({ path: OUT(t, '5-continued') });
 
