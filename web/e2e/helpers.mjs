@@ -135,3 +135,15 @@ function firstDifference(a, b, at) {
   }
   return null;
 }
+
+/** Polls `check` every 50 ms until it returns something truthy (returned), or fails after `ms`. */
+export async function until(page, what, check, ms = 15_000) {
+  const end = Date.now() + ms;
+  let last;
+  while (Date.now() < end) {
+    last = await check();
+    if (last) return last;
+    await page.waitForTimeout(50);
+  }
+  throw new Error(`timed out waiting for ${what} (last: ${JSON.stringify(last)})`);
+}

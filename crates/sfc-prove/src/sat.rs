@@ -205,6 +205,14 @@ pub fn bmc(sys: &System, target: Lit, max_depth: usize, deadline: Instant) -> Bm
 /// 1-induction: `inv ∧ C ∧ T ⇒ ¬bad'` where `inv` is a list of clauses over state literals
 /// (the property itself and its strengthening). Returns true when it holds.
 pub fn inductive(sys: &System, inv: &[Vec<Lit>], bad: Lit) -> bool {
+    let mut u = one_scan_from(sys, inv);
+    let b = u.lit(1, bad);
+    u.solve(&[b]) == SolverResult::Unsat
+}
+
+/// One scan from any state that satisfies `inv` (clauses over state literals) and the input
+/// constraint: frame 0 is that state, frame 1 the state after the scan.
+fn one_scan_from<'s>(sys: &'s System, inv: &[Vec<Lit>]) -> Unroller<'s> {
     let mut u = Unroller::new(sys);
     u.add_frame(None);
     for cl in inv {
@@ -215,8 +223,7 @@ pub fn inductive(sys: &System, inv: &[Vec<Lit>], bad: Lit) -> bool {
     u.add_unit(c);
     let next = u.next_state(0);
     u.add_frame(Some(next));
-    let b = u.lit(1, bad);
-    u.solve(&[b]) == SolverResult::Unsat
+    u
 }
 
 /// The independent check of an inductive invariant (a conjunction of clauses over state
@@ -250,16 +257,7 @@ pub fn check_invariant(sys: &System, inv: &[Vec<Lit>]) -> Result<usize, usize> {
     };
     // One encoding of `inv ∧ C ∧ T`; each clause is then refuted under assumptions (the
     // negation of its literals in the next state), which the solver answers incrementally.
-    let mut u = Unroller::new(sys);
-    u.add_frame(None);
-    for c in inv {
-        let lits: Vec<SLit> = c.iter().map(|&l| u.lit(0, l)).collect();
-        let _ = u.solver.add_clause(Clause::from_iter(lits));
-    }
-    let c = u.lit(0, sys.constraint);
-    u.add_unit(c);
-    let next = u.next_state(0);
-    u.add_frame(Some(next));
+    let mut u = one_scan_from(sys, inv);
     for (k, cl) in inv.iter().enumerate() {
         if cl.iter().any(|&l| true_next(l)) {
             continue;

@@ -8,19 +8,9 @@
 import { spawn } from 'node:child_process';
 import fs from 'node:fs';
 import path from 'node:path';
+import { until } from '../helpers.mjs';
 
 const OUT = (name) => path.join(path.dirname(new URL(import.meta.url).pathname), '..', 'out', `mechanisms-${name}.png`);
-
-async function until(page, what, check, ms = 15_000) {
-  const end = Date.now() + ms;
-  let last;
-  while (Date.now() < end) {
-    last = await check();
-    if (last) return last;
-    await page.waitForTimeout(50);
-  }
-  throw new Error(`timed out waiting for ${what} (last: ${JSON.stringify(last)})`);
-}
 
 /** The names of the steps framed green (active) on the monitor's canvas. */
 function active(page) {

@@ -4,21 +4,13 @@
 // through the buffered states, an input forced, Continue, and the chart moving on. Real mouse and
 // keyboard; screenshots of each state in e2e/out/monitor-*.png.
 import path from 'node:path';
+import { until as untilWithin } from '../helpers.mjs';
+
+const until = (page, what, check, ms = 10_000) => untilWithin(page, what, check, ms);
 
 const OUT = (t, name) => path.join(path.dirname(new URL(import.meta.url).pathname), '..', 'out', `monitor-${name}.png`);
 
 /** Fails with `what` unless `check()` becomes truthy within `ms`. */
-async function until(page, what, check, ms = 10_000) {
-  const end = Date.now() + ms;
-  let last;
-  while (Date.now() < end) {
-    last = await check();
-    if (last) return last;
-    await page.waitForTimeout(50);
-  }
-  throw new Error(`timed out waiting for ${what} (last: ${JSON.stringify(last)})`);
-}
-
 /** The steps of the monitor's canvas framed in `colour` (green: active, orange: hit). */
 function framed(page, colour) {
   return page.evaluate((c) => {

@@ -3,19 +3,11 @@
 // the witness (the simulator halted, the witness's inputs set scan by scan).
 import fs from 'node:fs';
 import path from 'node:path';
+import { until as untilWithin } from '../helpers.mjs';
+
+const until = (page, what, check, ms = 20_000) => untilWithin(page, what, check, ms);
 
 const OUT = (name) => path.join(path.dirname(new URL(import.meta.url).pathname), '..', 'out', `prove-${name}.png`);
-
-async function until(page, what, check, ms = 20_000) {
-  const end = Date.now() + ms;
-  let last;
-  while (Date.now() < end) {
-    last = await check();
-    if (last) return last;
-    await page.waitForTimeout(50);
-  }
-  throw new Error(`timed out waiting for ${what} (last: ${JSON.stringify(last)})`);
-}
 
 const PROPS = `[[property]]
 name = "never forward and back"

@@ -395,31 +395,43 @@ export function TimingPanel({ client, shown }: { client: MonitorClient; shown: s
       {timing && (
         <>
           <h4 class="mon-sub">{t('monitor.timing.perStep')}</h4>
-          <table class="mon-table mon-numbers mon-steps-timing">
-            <thead>
-              <tr>
-                <th>{t('monitor.timing.step')}</th>
-                <th>{t('monitor.timing.activations')}</th>
-                <th>{t('monitor.timing.min')}</th>
-                <th>{t('monitor.timing.mean')}</th>
-                <th>{t('monitor.timing.max')}</th>
-              </tr>
-            </thead>
-            <tbody>
-              {timing.steps.map((s) => (
-                <tr key={s.step} class={s.activations === 0 ? 'never' : ''}>
-                  <td>{s.step}</td>
-                  <td>{s.activations}</td>
-                  <td>{s.min ?? '–'}</td>
-                  <td>{s.mean ?? '–'}</td>
-                  <td>{s.max ?? '–'}</td>
-                </tr>
-              ))}
-            </tbody>
-          </table>
+          <StatsTable
+            class="mon-steps-timing"
+            name={t('monitor.timing.step')}
+            count={t('monitor.timing.activations')}
+            rows={timing.steps.map((x) => ({ name: x.step, count: x.activations, min: x.min, mean: x.mean, max: x.max }))}
+          />
         </>
       )}
     </div>
+  );
+}
+
+/** Durations per step or state: how often, and the shortest, mean and longest time (– for none). */
+function StatsTable(props: { class: string; name: string; count: string; rows: { name: string; count: number; min: string | null; mean: string | null; max: string | null }[] }) {
+  return (
+    <table class={`mon-table mon-numbers ${props.class}`}>
+      <thead>
+        <tr>
+          <th>{props.name}</th>
+          <th>{props.count}</th>
+          <th>{t('monitor.timing.min')}</th>
+          <th>{t('monitor.timing.mean')}</th>
+          <th>{t('monitor.timing.max')}</th>
+        </tr>
+      </thead>
+      <tbody>
+        {props.rows.map((r) => (
+          <tr key={r.name} class={r.count === 0 ? 'never' : ''}>
+            <td>{r.name}</td>
+            <td>{r.count}</td>
+            <td>{r.min ?? '–'}</td>
+            <td>{r.mean ?? '–'}</td>
+            <td>{r.max ?? '–'}</td>
+          </tr>
+        ))}
+      </tbody>
+    </table>
   );
 }
 
@@ -494,28 +506,12 @@ function RunsOfMechanisms({ list, shown }: { list: MechanismRuns[]; shown: strin
         </table>
       )}
       {m.states.length > 0 && (
-        <table class="mon-table mon-numbers mon-state-stats">
-          <thead>
-            <tr>
-              <th>{t('monitor.timing.state')}</th>
-              <th>{t('monitor.timing.count')}</th>
-              <th>{t('monitor.timing.min')}</th>
-              <th>{t('monitor.timing.mean')}</th>
-              <th>{t('monitor.timing.max')}</th>
-            </tr>
-          </thead>
-          <tbody>
-            {m.states.map((x) => (
-              <tr key={x.state}>
-                <td>{x.state}</td>
-                <td>{x.count}</td>
-                <td>{x.min}</td>
-                <td>{x.mean}</td>
-                <td>{x.max}</td>
-              </tr>
-            ))}
-          </tbody>
-        </table>
+        <StatsTable
+          class="mon-state-stats"
+          name={t('monitor.timing.state')}
+          count={t('monitor.timing.count')}
+          rows={m.states.map((x) => ({ name: x.state, count: x.count, min: x.min, mean: x.mean, max: x.max }))}
+        />
       )}
     </div>
   );
