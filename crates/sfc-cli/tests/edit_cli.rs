@@ -204,6 +204,55 @@ fn a_named_file_is_served_alone() {
     assert_eq!(open(&d.join(".hidden/secret.st")).0, 403);
 }
 
+/// The server opens the named chart ahead of the page's request; the page gets the file as it
+/// is when it asks, also when it changed in between.
+#[test]
+fn the_named_chart_opened_ahead_is_the_file_as_it_is_when_asked() {
+    let d = temp_dir("ahead");
+    let chart = d.join("chart.st");
+    let text = |step: &str| {
+        format!(
+            "PROGRAM P\n    VAR Go : BOOL; END_VAR\n    INITIAL_STEP Start: END_STEP\n    STEP {step}: END_STEP\n    \
+             TRANSITION FROM Start TO {step} := Go; END_TRANSITION\n    TRANSITION FROM {step} TO Start := NOT Go; END_TRANSITION\nEND_PROGRAM\n"
+        )
+    };
+    let steps = |body: &str| -> Vec<String> {
+        let v: serde_json::Value = serde_json::from_str(body).unwrap();
+        let mut names: Vec<String> = v["charts"][0]["elements"]
+            .as_array()
+            .expect("elements")
+            .iter()
+            .filter(|e| e["kind"] == "step")
+            .map(|e| e["name"].as_str().unwrap().to_string())
+            .collect();
+        names.sort();
+        names
+    };
+    std::fs::write(&chart, text("Fill")).unwrap();
+    let (_server, port, token) = start(&["--no-open".as_ref(), chart.as_os_str()], &[]);
+    let auth = [format!("X-Sfc-Token: {token}")];
+    let open = || http(port, "POST", "/api/open", &auth, &serde_json::json!({ "path": chart }).to_string());
+    // Changed on disk (same length) before the page asked: the new text is opened.
+    std::fs::write(&chart, text("Wash")).unwrap();
+    let (status, _, changed) = open();
+    assert_eq!(status, 200, "{changed}");
+    assert_eq!(steps(&changed), ["Start", "Wash"], "{changed}");
+    // Asked again, unchanged: the same answer as a fresh start gives.
+    let (status, _, again) = open();
+    assert_eq!(status, 200);
+    assert_eq!(again, changed);
+    let (_fresh, port2, token2) = start(&["--no-open".as_ref(), chart.as_os_str()], &[]);
+    let (status, _, fresh) = http(
+        port2,
+        "POST",
+        "/api/open",
+        &[format!("X-Sfc-Token: {token2}")],
+        &serde_json::json!({ "path": chart }).to_string(),
+    );
+    assert_eq!(status, 200);
+    assert_eq!(fresh, changed);
+}
+
 /// The browser is started on a private file that forwards to the URL: the token is in no
 /// process's arguments.
 #[cfg(unix)]

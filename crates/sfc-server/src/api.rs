@@ -312,17 +312,56 @@ pub async fn open(State(s): State<AppState>, body: Result<Bytes, BytesRejection>
         Ok(r) => r,
         Err(e) => return e.into_response(),
     };
-    blocking(move || open_file(&s, &req.path)).await
+    // The first named file's answer, when the server made it ahead (see `prepare_first`):
+    // waited for if still being made, and used only if the file still has the bytes it was
+    // made from.
+    let prepared = {
+        let mut slot = s.0.prepared.lock().await;
+        if slot.as_ref().is_some_and(|p| p.raw == req.path) {
+            slot.take()
+        } else {
+            None
+        }
+    };
+    blocking(move || open_file(&s, &req.path, prepared)).await
 }
 
-fn open_file(s: &AppState, raw: &str) -> Answer {
+/// The answer to `POST /api/open` for a chart file, made before the page asked for it.
+#[derive(Debug)]
+pub(crate) struct Prepared {
+    /// The path as the session lists it (what the page sends).
+    raw: String,
+    bytes: Vec<u8>,
+    answer: Value,
+}
+
+/// Opens the first file named on the command line the way `POST /api/open` will, so reading,
+/// checking and laying it out overlap with the browser loading the app. `None` when it cannot
+/// be opened: the request then reports why, as it would have.
+pub(crate) fn prepare_first(s: &AppState) -> Option<Prepared> {
+    let raw = path_string(s.0.open.first()?);
+    let path = chart_path(s, &raw).ok()?;
+    let bytes = read_existing(&path).ok()??;
+    let answer = open_bytes(&path, bytes.clone()).ok()?;
+    Some(Prepared { raw, bytes, answer })
+}
+
+fn open_file(s: &AppState, raw: &str, prepared: Option<Prepared>) -> Answer {
     let path = chart_path(s, raw)?;
     let bytes = read_existing(&path)?
         .ok_or_else(|| ApiError::new(StatusCode::NOT_FOUND, format!("`{}` does not exist", path.display())))?;
+    match prepared {
+        Some(p) if p.bytes == bytes => Ok(p.answer),
+        _ => open_bytes(&path, bytes),
+    }
+}
+
+/// The chart of a file's bytes, laid out, with its diagnostics and content hash.
+fn open_bytes(path: &Path, bytes: Vec<u8>) -> Answer {
     let hash = content_hash(&bytes);
-    let text = utf8(&path, bytes)?;
+    let text = utf8(path, bytes)?;
     let name = path.display().to_string();
-    let xml = compile::is_xml(&path, &text);
+    let xml = compile::is_xml(path, &text);
     let (charts, diagnostics) = if xml {
         let imported = sfc_plcopen::import(0, &name, &text);
         let opened = sfc_doc::open(0, &format!("{name} (imported)"), &imported.text);
@@ -334,7 +373,7 @@ fn open_file(s: &AppState, raw: &str) -> Answer {
         (opened.charts, d)
     };
     Ok(json!({
-        "path": path_string(&path),
+        "path": path_string(path),
         "format": if xml { "xml" } else { "st" },
         "charts": charts,
         "diagnostics": diagnostics,
