@@ -173,6 +173,14 @@ impl Progress {
         }
     }
 
+    /// Runs `f` (which writes to standard error) with the bar, if drawn, hidden meanwhile.
+    pub fn suspend<R>(&self, f: impl FnOnce() -> R) -> R {
+        match &self.bar {
+            Some(bar) => bar.suspend(f),
+            None => f(),
+        }
+    }
+
     /// Removes the bar (the final report follows on a clean line).
     pub fn finish(self) {
         if let Some(bar) = self.bar {

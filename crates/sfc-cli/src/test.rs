@@ -133,6 +133,7 @@ pub fn test(a: TestArgs) -> u8 {
     let mut cov = CoverageSet::new();
     let mut cases: Vec<TestCase> = Vec::new();
     let mut warnings_cache = HashMap::new();
+    let mut imports_shown = std::collections::HashSet::new();
     let started = Instant::now();
     let mut progress = Progress::new(files.len() as u64, "scenarios");
     let mut out = std::io::stdout().lock();
@@ -159,6 +160,13 @@ pub fn test(a: TestArgs) -> u8 {
                 continue;
             }
         };
+        // A PLCopen chart: what its import said (notes, warnings) on standard error, as `check`
+        // and `sim` show it, once per chart file.
+        if let Some(import) = &s.import {
+            if imports_shown.insert(std::fs::canonicalize(&s.chart).unwrap_or_else(|_| s.chart.clone())) {
+                progress.suspend(|| term::print_diagnostics(&import.1, std::slice::from_ref(&import.0)));
+            }
+        }
         let mut runtime_events: Vec<String> = Vec::new();
         let total = s.total_scans();
         let period = s.options.period;

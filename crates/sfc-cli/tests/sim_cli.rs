@@ -581,6 +581,21 @@ fn a_plcopen_chart_shows_its_import_notes_and_errors_in_the_xml() {
     assert_eq!(out.status.code(), Some(0), "{}", both(&out));
     assert!(stderr(&out).contains("note[SFC0714]: type `HMI_BOOL` is not declared in the file"), "{}", both(&out));
     assert!(stdout(&out).contains("active steps: trafic_light_sequence0.Standstill"), "{}", both(&out));
+    // `sfc test` of a scenario on it shows the notes too, once for the chart.
+    let dir = temp_dir("plcopen-test");
+    std::fs::copy(&corpus, dir.join("light.xml")).unwrap();
+    for n in ["a", "b"] {
+        std::fs::write(dir.join(format!("{n}.scenario.toml")), "chart = \"light.xml\"\nscans = 3\n").unwrap();
+    }
+    let out = sfc_in(&dir, &["test", "."]);
+    assert_eq!(out.status.code(), Some(0), "{}", both(&out));
+    assert_eq!(
+        stderr(&out).matches("note[SFC0714]: type `HMI_BOOL` is not declared in the file").count(),
+        1,
+        "{}",
+        both(&out)
+    );
+    assert!(stdout(&out).contains("2 passed"), "{}", both(&out));
     let dir = temp_dir("plcopen-error");
     let bad = dir.join("bad.xml");
     let xml = std::fs::read_to_string(&corpus)
