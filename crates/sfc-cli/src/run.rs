@@ -389,12 +389,16 @@ fn start(a: &RunArgs) -> Result<(Runtime, TokenSource), String> {
         Runtime::start_atmt(model, source, opts)?
     } else {
         let sim_opts = SimOptions { period: period.as_micros() as i64, profile: Profile::Iec };
-        let sim = Simulation::from_source(&name, text, pou, sim_opts).map_err(|(file, diags)| {
+        let mut sim = Simulation::from_source(&name, text, pou, sim_opts).map_err(|(file, diags)| {
             let (file, diags) = iec.locate(file, diags);
             let mut out = render(&file, &diags);
             out.push(format!("{} error{} emitted", diags.len(), if diags.len() == 1 { "" } else { "s" }));
             out.join("\n")
         })?;
+        // A PLCopen chart's runtime errors (faults) are located in its XML.
+        if let Some(i) = &iec.imported {
+            sim.locate_faults_in(std::sync::Arc::new((i.xml.clone(), i.map.clone())));
+        }
         // A chart without retentive values needs no file.
         if !sim.retained().is_empty() {
             opts.retain = retain;

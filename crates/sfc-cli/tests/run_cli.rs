@@ -139,3 +139,22 @@ fn a_plcopen_chart_runs() {
     assert!(err.contains("bad.xml:1348:"), "the error at its XML line: {err}");
     assert!(err.contains("NoSuchButton"), "{err}");
 }
+
+/// A runtime fault of a PLCopen chart is located in its XML (line and column of the body's
+/// text there), not in the IEC text it was imported to.
+#[test]
+fn a_plcopen_charts_fault_is_located_in_its_xml() {
+    let dir = scratch("run-plcopen-fault");
+    let xml = dir.join("dz.xml");
+    let st = root().join("crates/sfc-cli/tests/run/divide_by_zero.st");
+    let out =
+        command(&["build", st.to_str().unwrap(), "--target", "plcopen", "-o", xml.to_str().unwrap()]).output().unwrap();
+    assert_eq!(out.status.code(), Some(0), "{}", String::from_utf8_lossy(&out.stderr));
+    let text = std::fs::read_to_string(&xml).unwrap();
+    let (n, line) = text.lines().enumerate().find(|(_, l)| l.contains("Q := 10 / Zero;")).expect("the body in the XML");
+    let column = line.find("10 / Zero").unwrap() + 1;
+    let out = command(&["run", xml.to_str().unwrap(), "--scans", "5", "--no-retain"]).output().unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    let at = format!("error: {}:{column}: division by zero (scan 1) in action A1 of step S1", n + 1);
+    assert!(err.contains(&at), "expected `{at}` in: {err}");
+}

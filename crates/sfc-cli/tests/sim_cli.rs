@@ -581,6 +581,18 @@ fn a_plcopen_chart_shows_its_import_notes_and_errors_in_the_xml() {
     assert_eq!(out.status.code(), Some(0), "{}", both(&out));
     assert!(stderr(&out).contains("note[SFC0714]: type `HMI_BOOL` is not declared in the file"), "{}", both(&out));
     assert!(stdout(&out).contains("active steps: trafic_light_sequence0.Standstill"), "{}", both(&out));
+    // A runtime error is located in the XML: the line of the action's body there.
+    let dir = temp_dir("plcopen-fault");
+    let xml = dir.join("dz.xml");
+    let st = root().join("crates/sfc-cli/tests/run/divide_by_zero.st");
+    let out = sfc(&["build", st.to_str().unwrap(), "--target", "plcopen", "-o", xml.to_str().unwrap()]);
+    assert_eq!(out.status.code(), Some(0), "{}", both(&out));
+    let text = std::fs::read_to_string(&xml).unwrap();
+    let (n, line) = text.lines().enumerate().find(|(_, l)| l.contains("Q := 10 / Zero;")).expect("the body in the XML");
+    let column = line.find("10 / Zero").unwrap() + 1;
+    let out = sfc(&["sim", xml.to_str().unwrap(), "--scans", "3"]);
+    assert!(stderr(&out).contains(&format!("dz.xml:{}:{column}\n", n + 1)), "{}", both(&out));
+    assert!(stderr(&out).contains(line.trim_end()), "the XML line shown: {}", both(&out));
     // `sfc test` of a scenario on it shows the notes too, once for the chart.
     let dir = temp_dir("plcopen-test");
     std::fs::copy(&corpus, dir.join("light.xml")).unwrap();

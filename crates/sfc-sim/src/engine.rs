@@ -132,6 +132,9 @@ pub struct Simulation {
     charts: Vec<ChartState>,
     opts: SimOptions,
     source: SourceFile,
+    /// For a chart imported from PLCopen XML: the XML and where each part of `source` came
+    /// from in it, so runtime errors are located in the file the user has.
+    located: Option<Arc<(SourceFile, sfc_plcopen::SourceMap)>>,
     top: usize,
     record: ScanRecord,
     sink: ScanSink,
@@ -292,6 +295,7 @@ impl Simulation {
             charts,
             opts,
             source,
+            located: None,
             top,
             record: ScanRecord::default(),
             sink: ScanSink::default(),
@@ -394,9 +398,21 @@ impl Simulation {
         self.log.enabled = on;
     }
 
-    /// The checked source (to render runtime errors and diagnostics).
+    /// The checked source (the IEC text; to render diagnostics).
     pub fn source(&self) -> &SourceFile {
         &self.source
+    }
+
+    /// Locates runtime errors in the XML of the pair, the PLCopen file the checked source was
+    /// imported from (the map says where each part of the text came from).
+    pub fn locate_faults_in(&mut self, xml_and_map: Arc<(SourceFile, sfc_plcopen::SourceMap)>) {
+        self.located = Some(xml_and_map);
+    }
+
+    /// The file runtime errors are located in (their span, line and column), to render them:
+    /// the PLCopen XML for an imported chart, else the checked source.
+    pub fn fault_source(&self) -> &SourceFile {
+        self.located.as_ref().map_or(&self.source, |l| &l.0)
     }
     /// The declared name of the simulated POU.
     pub fn pou_name(&self) -> &str {
@@ -453,15 +469,15 @@ impl Simulation {
             self.mech.fresh.clear();
         }
         if let Err(fault) = result {
-            let lc = self.source.line_col(fault.span.start);
-            let e = RuntimeError {
-                message: fault.message,
-                span: fault.span,
-                line: lc.line,
-                column: lc.column,
-                scan,
-                time: now,
+            let span = match &self.located {
+                Some(l) => {
+                    let r = l.1.to_xml(fault.span);
+                    Span::new(fault.span.file, r.start, r.end)
+                }
+                None => fault.span,
             };
+            let lc = self.fault_source().line_col(span.start);
+            let e = RuntimeError { message: fault.message, span, line: lc.line, column: lc.column, scan, time: now };
             self.sink.events.push(Event::Error(e.clone()));
             self.error = Some(e);
             return Err(self.error.as_ref().unwrap());

@@ -32,6 +32,7 @@ use std::fmt;
 use std::io;
 use std::ops::Range;
 use std::path::{Component, Path, PathBuf};
+use std::sync::Arc;
 use toml_edit::{Item, TableLike};
 
 /// The default scan period, `T#10ms`.
@@ -226,6 +227,9 @@ pub struct Scenario {
     /// For a PLCopen XML chart: the XML and what its import said (notes and warnings; an
     /// import error stops the load), for the command to show.
     pub import: Option<Box<(SourceFile, Vec<Diagnostic>)>>,
+    /// For a PLCopen XML chart: the XML and where the chart text came from in it (runtime
+    /// errors are located there).
+    located: Option<Arc<(SourceFile, sfc_plcopen::SourceMap)>>,
 }
 
 /// Settings that take precedence over the scenario file (`sfc sim` options).
@@ -294,8 +298,12 @@ impl Scenario {
     }
     /// Creates a new simulation of the scenario's chart.
     pub fn simulation(&self) -> Result<Simulation, ScenarioError> {
-        compile(&self.chart_name(), &self.chart_text, Some(&self.pou), self.options)
-            .map_err(|e| ScenarioError { file: Some(self.name.clone()), ..e })
+        let mut sim = compile(&self.chart_name(), &self.chart_text, Some(&self.pou), self.options)
+            .map_err(|e| ScenarioError { file: Some(self.name.clone()), ..e })?;
+        if let Some(l) = &self.located {
+            sim.locate_faults_in(l.clone());
+        }
+        Ok(sim)
     }
     /// The key under which runs of this chart and POU merge their coverage.
     pub fn coverage_key(&self) -> String {
@@ -1092,6 +1100,11 @@ fn import_notes(imported: &Option<sfc_plcopen::Imported>) -> Option<Box<(SourceF
     imported.as_ref().filter(|i| !i.diagnostics.is_empty()).map(|i| Box::new((i.xml.clone(), i.diagnostics.clone())))
 }
 
+/// Where runtime errors of an imported chart are located: its XML and the import's map.
+fn located(imported: &Option<sfc_plcopen::Imported>) -> Option<Arc<(SourceFile, sfc_plcopen::SourceMap)>> {
+    imported.as_ref().map(|i| Arc::new((i.xml.clone(), i.map.clone())))
+}
+
 /// A POU that does not exist or cannot be chosen (SFC0321) is a usage error when the command
 /// line chose it (`--pou`, or a chart given without scenario), not a problem of the chart.
 fn pou_choice_is_usage(mut e: ScenarioError) -> ScenarioError {
@@ -1184,6 +1197,7 @@ fn load_parts(path: &Path, text: &str, o: &Overrides, given_chart: Option<&str>)
         forbid_line: parsed.forbid_line,
         chart_text,
         import: import_notes(&imported),
+        located: located(&imported),
     })
 }
 
@@ -1237,6 +1251,7 @@ pub fn for_chart(chart: &Path, o: &Overrides) -> Result<Scenario, ScenarioError>
         forbid_line: 0,
         chart_text,
         import: import_notes(&imported),
+        located: located(&imported),
     })
 }
 
@@ -1493,7 +1508,7 @@ pub fn execute(
             watch.after_scan(&sim, sim.record());
         }
         if let Some(err) = sim.error() {
-            outcome.error = Some(render_runtime_error(err, sim.source()));
+            outcome.error = Some(render_runtime_error(err, sim.fault_source()));
             break;
         }
     }
