@@ -231,6 +231,9 @@ pub(crate) struct Tracker {
     /// The states met, by number: the active steps (sorted) and their times over runs.
     states: Vec<(Vec<u32>, Tally)>,
     state_ids: std::collections::HashMap<Vec<u32>, u32>,
+    /// The last two states entered (ids into `states`; compared by content, so the initial
+    /// zeros are harmless).
+    recent: [u32; 2],
     /// The active set seen last (sorted).
     last: Vec<u32>,
     /// A list to reuse for the next run.
@@ -247,6 +250,8 @@ pub(crate) struct Mechanisms {
     /// with several outgoing transitions and no `sfc.timeout`, left by a transition whose
     /// guard reads the step's own `T`).
     timer_guards: Vec<Vec<Option<u32>>>,
+    /// Whether any instance has a timer guard.
+    any_timer_guard: bool,
     /// The memory slot of each instance's error-code variable (`sfc.error_code`).
     pub(crate) code_slots: Vec<Option<usize>>,
     /// Records completed in the last scan.
@@ -276,6 +281,7 @@ impl Mechanisms {
                 })
                 .collect(),
             timer_guards: Vec::new(),
+            any_timer_guard: false,
             code_slots: Vec::new(),
             fresh: Vec::new(),
             scratch: Vec::new(),
@@ -307,7 +313,7 @@ impl Mechanisms {
             let r = make(c as usize, s, None);
             self.note_record(c as usize, r, s);
         }
-        for &(c, t) in &sink.fired {
+        for &(c, t) in if self.any_timer_guard { &sink.fired[..] } else { &[] } {
             let Some(s) = self.timer_guards.get(c as usize).and_then(|g| g.get(t as usize)).copied().flatten() else {
                 continue;
             };
@@ -321,45 +327,54 @@ impl Mechanisms {
         for (c, st) in charts.iter().enumerate() {
             let reset = sink.starts.iter().any(|&(_, sc)| sc as usize == c);
             let t = &mut self.trackers[c];
-            if sink.moved {
-                self.scratch.clear();
-                self.scratch.extend_from_slice(&st.active);
-                self.scratch.sort_unstable();
-            } else {
-                self.scratch.clone_from(&t.last);
+            if reset && t.current.is_some() {
+                t.end_run(now, RunEnd::Reset);
+                t.resets += 1;
             }
-            if reset {
-                if t.current.is_some() {
-                    t.end_run(now, RunEnd::Reset);
-                    t.resets += 1;
-                }
-            } else if self.scratch != t.last {
-                if t.current.is_some() {
-                    t.close_state(now);
-                    if self.scratch == t.initial {
-                        let end = match t.run_error.take() {
-                            Some(code) => RunEnd::Error(code),
-                            None => RunEnd::Normal,
-                        };
-                        t.end_run(now, end);
-                    } else {
-                        let id = t.state_id(&self.scratch);
-                        if let Some((_, since, state)) = &mut t.current {
-                            *since = now;
-                            *state = id;
+            // Nothing moved: every instance's active set is the one seen last.
+            if sink.moved {
+                // The active steps, sorted: the engine's list itself when it is in order (a step
+                // entered takes the left one's place, so it often is), else a sorted copy.
+                let cur: &[u32] = if st.active.is_sorted() {
+                    &st.active
+                } else {
+                    self.scratch.clear();
+                    self.scratch.extend_from_slice(&st.active);
+                    self.scratch.sort_unstable();
+                    &self.scratch
+                };
+                if cur != t.last.as_slice() {
+                    // (A reset ended the run above; the new active set is only noted.)
+                    if !reset {
+                        if t.current.is_some() {
+                            t.close_state(now);
+                            if cur == t.initial.as_slice() {
+                                let end = match t.run_error.take() {
+                                    Some(code) => RunEnd::Error(code),
+                                    None => RunEnd::Normal,
+                                };
+                                t.end_run(now, end);
+                            } else {
+                                let id = t.state_id(cur);
+                                if let Some((_, since, state)) = &mut t.current {
+                                    *since = now;
+                                    *state = id;
+                                }
+                            }
+                        } else if cur != t.initial.as_slice() {
+                            t.started_runs += 1;
+                            let mut states = std::mem::take(&mut t.spare);
+                            states.clear();
+                            let run = RunRec { number: t.started_runs, start: now, states, ..Default::default() };
+                            let id = t.state_id(cur);
+                            t.current = Some((run, now, id));
+                            t.run_error = None;
                         }
                     }
-                } else if self.scratch != t.initial {
-                    t.started_runs += 1;
-                    let mut states = std::mem::take(&mut t.spare);
-                    states.clear();
-                    let run = RunRec { number: t.started_runs, start: now, states, ..Default::default() };
-                    let id = t.state_id(&self.scratch);
-                    t.current = Some((run, now, id));
-                    t.run_error = None;
+                    t.last.clear();
+                    t.last.extend_from_slice(cur);
                 }
             }
-            t.last.clone_from(&self.scratch);
             t.code_before = code_now(c);
             // Pending records: complete once the chart has left the step (its error step has
             // set the code), was reset, or names no error code.
@@ -484,12 +499,24 @@ impl Mechanisms {
 impl Tracker {
     /// The number of the state with these active steps (sorted), numbering it when new.
     fn state_id(&mut self, steps: &[u32]) -> u32 {
-        if let Some(&id) = self.state_ids.get(steps) {
-            return id;
+        // A chart often goes back to the state it was in before the last one (a loop, a
+        // waiting step): compared first, which costs less than hashing a big active set.
+        for &id in &self.recent {
+            if self.states.get(id as usize).is_some_and(|(s, _)| s.as_slice() == steps) {
+                self.recent = [id, self.recent[0]];
+                return id;
+            }
         }
-        let id = self.states.len() as u32;
-        self.states.push((steps.to_vec(), Tally::default()));
-        self.state_ids.insert(steps.to_vec(), id);
+        let id = match self.state_ids.get(steps) {
+            Some(&id) => id,
+            None => {
+                let id = self.states.len() as u32;
+                self.states.push((steps.to_vec(), Tally::default()));
+                self.state_ids.insert(steps.to_vec(), id);
+                id
+            }
+        };
+        self.recent = [id, self.recent[0]];
         id
     }
 
@@ -747,8 +774,12 @@ impl Mechanisms {
                         };
                         reads_step_time(e, &plan.step_names[s as usize], 0).then_some(s)
                     })
-                    .collect()
+                    .collect::<Vec<_>>()
             })
+            // An instance without timer guard keeps no list: its fired transitions are not
+            // looked at after each scan.
+            .map(|g| if g.iter().all(Option::is_none) { Vec::new() } else { g })
             .collect();
+        self.any_timer_guard = self.timer_guards.iter().any(|g| !g.is_empty());
     }
 }
