@@ -39,7 +39,8 @@ pub struct ScanState {
     /// TRUE: `(action, Q, A)`, in no particular order.
     pub actions: Vec<(u32, bool, bool)>,
     /// The elapsed time (µs) of every step, same order as [`ChartInfo::steps`]: an inactive
-    /// step keeps the duration of its last activation (IEC 61131-3 `S.T`).
+    /// step keeps the duration of its last activation (IEC 61131-3 `S.T`). Empty unless
+    /// [`Hub::step_times`] asks for it (the active steps' times are in `active`).
     pub times: Vec<i64>,
     /// Forced variables (indices into [`ChartInfo::variables`]).
     pub forced: Vec<u32>,
@@ -407,6 +408,9 @@ pub struct Hub {
     /// Evaluate the guards of enabled transitions in every scan, watched or not (an OPC UA
     /// server publishes them).
     pub guards_always: AtomicBool,
+    /// Copy every step's time into each state (an OPC UA server publishes the `T` of
+    /// inactive steps; nothing else reads it, so without one the scan leaves it empty).
+    pub step_times: AtomicBool,
 }
 
 /// Notices kept when nobody reads them.
@@ -429,6 +433,7 @@ impl Hub {
             interrupt_flag: std::sync::OnceLock::new(),
             guesses: Mutex::new(Default::default()),
             guards_always: AtomicBool::new(false),
+            step_times: AtomicBool::new(false),
         };
         (Arc::new(hub), rx)
     }

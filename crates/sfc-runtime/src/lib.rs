@@ -206,6 +206,7 @@ fn opcua_side(hub: &Arc<Hub>, o: Option<&OpcuaOptions>) -> Result<(Option<OpcuaS
         let addr = l.local_addr().ok();
         let side = opcua::build(hub, o, l)?;
         hub.guards_always.store(true, Ordering::Relaxed);
+        hub.step_times.store(true, Ordering::Relaxed);
         Ok((Some(side), addr))
     }
     #[cfg(not(feature = "opcua"))]

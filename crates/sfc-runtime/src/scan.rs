@@ -530,7 +530,11 @@ impl ScanThread {
         st.forced.clear();
         st.forced.extend(self.forced.iter().map(|f| f.0));
         self.sim.action_states(&mut st.actions);
-        self.sim.step_times(&mut st.times);
+        if self.hub.step_times.load(Ordering::Relaxed) {
+            self.sim.step_times(&mut st.times);
+        } else {
+            st.times.clear();
+        }
         let scan = st.scan;
         if !self.sim.last_events().is_empty() {
             let mut events: Vec<&sfc_sim::Event> = self
