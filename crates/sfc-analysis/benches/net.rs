@@ -9,11 +9,17 @@
 //! * `loops-unsafe`: the irregular loops with one jump from the last loop into the first (unsafe:
 //!   symbolic search with a witness);
 //! * `branches`: a 2,000-step chart with 200 alternative branches (certificate), and the same
-//!   chart searched explicitly.
+//!   chart searched explicitly;
+//! * `linear`: a ring and a set of 10 state machines of 1,000, 10,000 and 100,000 steps: the
+//!   time per step stays flat (the analysis of such charts is linear).
 //!
 //! `cargo bench -p sfc-analysis --bench net -- loops` runs only the cases whose name contains the
 //! argument. Under `cargo test --benches` (no `--bench` argument) every case runs once on smaller
 //! charts as a smoke test. Peak memory is read from `/proc/self/status` (VmHWM).
+
+/// The allocator of the `sfc` binary, so the figures are those `sfc check` sees.
+#[global_allocator]
+static ALLOCATOR: mimalloc::MiMalloc = mimalloc::MiMalloc;
 
 use sfc_analysis::net::{analyze_net, analyze_net_with, Method, NetOptions, NetReport, Strategy};
 use std::fmt::Write;
@@ -55,6 +61,31 @@ fn loops(k: usize, len: usize, converge: bool, unsafe_jump: bool) -> String {
     }
     if unsafe_jump {
         trans(&mut s, &[n(k - 1, len - 1)], &[n(0, 0)]);
+    }
+    s.push_str("END_PROGRAM\n");
+    s
+}
+
+/// `k` rings of `len` steps entered together from the initial step (for `k` = 1, the ring is
+/// the initial step's own): each a state machine with one token.
+fn rings(k: usize, len: usize) -> String {
+    let mut s = String::from(HEADER);
+    if k == 1 {
+        let n = |j: usize| format!("R{j}");
+        for j in 0..len {
+            step(&mut s, &n(j), j == 0);
+            trans(&mut s, &[n(j)], &[n((j + 1) % len)]);
+        }
+    } else {
+        let n = |i: usize, j: usize| format!("R{i}_{j}");
+        step(&mut s, "Init", true);
+        trans(&mut s, &["Init".into()], &(0..k).map(|i| n(i, 0)).collect::<Vec<_>>());
+        for i in 0..k {
+            for j in 0..len {
+                step(&mut s, &n(i, j), false);
+                trans(&mut s, &[n(i, j)], &[n(i, (j + 1) % len)]);
+            }
+        }
     }
     s.push_str("END_PROGRAM\n");
     s
@@ -196,6 +227,18 @@ fn main() {
             }
         }
         let _ = case(&format!("{b} alternative branches (explicit)"), &text, Strategy::Explicit, runs);
+    }
+    if wanted("linear") {
+        // A ring, and a set of state machines (one divergence into 10 rings that never meet
+        // again), at growing sizes: proved by structure, in time proportional to the steps.
+        let sizes: &[usize] = if full { &[1_000, 10_000, 100_000] } else { &[100, 1_000] };
+        for &n in sizes {
+            for (what, text) in [("ring", rings(1, n)), ("10 state machines", rings(10, n / 10))] {
+                if let Some((ms, _)) = case(&format!("linear: {what} of {n} steps"), &text, Strategy::Auto, runs) {
+                    println!("  {:.3} µs per step", ms * 1e3 / n as f64);
+                }
+            }
+        }
     }
     if let Some(kib) = peak_rss_kib() {
         println!("peak memory (VmHWM): {:.1} MiB", kib as f64 / 1024.0);
