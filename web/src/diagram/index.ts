@@ -241,6 +241,10 @@ export const createCanvas: CreateCanvas = (container: HTMLElement, opts: CanvasO
     },
     destroy() {
       listeners.clear();
+      // With `deferUpdate`, diagram-js reports a view change 300 ms later from a timer that its
+      // own destroy leaves running; it would then measure the removed container (a page error
+      // when a tab closes or the monitor moves to another chart right after a zoom or scroll).
+      canvas._viewboxChanged?.cancel?.();
       diagram.destroy();
       host.remove();
     },
