@@ -317,10 +317,10 @@ pub fn lower(
                     steps.push(node);
                 } else if s.name.text.is_empty() {
                     // A step whose name failed to parse: nothing to refer to.
-                } else if !step_index.contains_key(&s.name.key()) {
+                } else if let std::collections::hash_map::Entry::Vacant(e) = step_index.entry(s.name.key()) {
                     // Clashes with a variable or an action: keep it so its transitions resolve,
                     // the duplicate-name error has been reported.
-                    step_index.insert(s.name.key(), steps.len());
+                    e.insert(steps.len());
                     steps.push(node);
                 }
             }
