@@ -41,12 +41,13 @@ pub fn check_source(file_id: u32, name: &str, text: &str, opts: &CheckOptions) -
     check_parsed(file_id, name, text, sfc_syntax::parse(file_id, text), opts)
 }
 
-/// [`check_source`] of a text already parsed (`parsed` is `sfc_syntax::parse(file_id, text)`).
+/// [`check_source`] of a text already parsed (`parsed` is `sfc_syntax::parse(file_id, text)`,
+/// the tree owned or shared: [`sfc_model::Tree`]).
 pub fn check_parsed(
     file_id: u32,
     name: &str,
     text: &str,
-    parsed: (sfc_syntax::ast::SourceUnit, Vec<sfc_diagnostics::Diagnostic>),
+    parsed: (impl Into<sfc_model::Tree>, Vec<sfc_diagnostics::Diagnostic>),
     opts: &CheckOptions,
 ) -> Checked {
     let analysis = opts.analysis;

@@ -134,12 +134,13 @@ pub fn check_text(
 }
 
 /// [`check_text`] of IEC text already parsed: `parsed` is `sfc_syntax::parse(file_id, text)`
-/// (the language server parses each version once, for its index and for this check).
+/// (the language server parses each version once, for its index and for this check), the tree
+/// owned or shared with the index ([`sfc_model::Tree`]).
 pub fn check_parsed_text(
     file_id: u32,
     name: &str,
     text: &str,
-    parsed: (sfc_syntax::ast::SourceUnit, Vec<Diagnostic>),
+    parsed: (impl Into<sfc_model::Tree>, Vec<Diagnostic>),
     opts: &CheckOptions,
 ) -> (SourceFile, Checked, Vec<Diagnostic>) {
     let checked = sfc_analysis::check_parsed(file_id, name, text, parsed, opts);

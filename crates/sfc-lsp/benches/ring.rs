@@ -6,6 +6,9 @@
 //! output (the same messages, without the pipe). Under `cargo test` (no `--bench` argument) it
 //! runs once on a 100-step ring as a smoke test. Figures are printed, never asserted.
 
+// A benchmark, not input-facing code: a panic here is a failed run (as in a test).
+#![allow(clippy::unwrap_used, clippy::expect_used, clippy::indexing_slicing)]
+
 /// The allocator of the `sfc` binary (`crates/sfc-cli/src/main.rs`), so the figures are those
 /// of `sfc lsp`.
 #[global_allocator]

@@ -30,13 +30,14 @@ pub trait DiagnosticsProvider: Send + Sync {
     /// `analysis` asks for the slow checks too (on save or after idle).
     fn check(&self, path: &Path, text: &str, analysis: bool) -> (SourceFile, Vec<Diagnostic>);
     /// The quick check (no analysis) of IEC text already parsed (`parsed` is
-    /// `sfc_syntax::parse(0, text)`), so one parse serves the check and the index; `None` when
-    /// this provider does not check from a syntax tree (then [`Self::check`] is called).
+    /// `sfc_syntax::parse(0, text)`, its tree shared with the index worker), so one parse serves
+    /// the check and the index; `None` when this provider does not check from a syntax tree
+    /// (then [`Self::check`] is called).
     fn check_parsed(
         &self,
         _path: &Path,
         _text: &str,
-        _parsed: (SourceUnit, Vec<Diagnostic>),
+        _parsed: (Arc<SourceUnit>, Vec<Diagnostic>),
     ) -> Option<(SourceFile, Vec<Diagnostic>)> {
         None
     }
@@ -73,7 +74,7 @@ impl DiagnosticsProvider for ChartDiagnostics {
         &self,
         path: &Path,
         text: &str,
-        parsed: (SourceUnit, Vec<Diagnostic>),
+        parsed: (Arc<SourceUnit>, Vec<Diagnostic>),
     ) -> Option<(SourceFile, Vec<Diagnostic>)> {
         let opts = CheckOptions { analysis: false, ..CheckOptions::default() };
         let (file, checked, diags) = sfc_driver::check_parsed_text(0, &path.display().to_string(), text, parsed, &opts);
@@ -177,11 +178,14 @@ pub struct Job {
     /// Wait this long without a newer job for the same document before checking.
     pub delay: Duration,
     /// A quick check of IEC text that also gives this version's index: the check worker parses
-    /// once and hands a copy of the tree to the index worker (which would otherwise parse the
-    /// same text again, on the other core, at the same moment).
+    /// once and shares the tree with the index worker (which would otherwise parse the same
+    /// text again, on the other core, at the same moment).
     pub index: bool,
-    /// For the index worker: the tree of `text`, parsed by the check worker.
-    pub parsed: Option<Box<SourceUnit>>,
+    /// For the index worker: the tree of `text`, parsed by the check worker and shared with
+    /// it. The index worker copies it for itself at once (the copy costs about a third of a
+    /// parse) while the check worker type-checks the shared tree; lowering then takes the tree
+    /// over, so the copy is off the path to the diagnostics.
+    pub parsed: Option<Arc<SourceUnit>>,
 }
 
 /// The diagnostics of one version of a document.
@@ -248,7 +252,9 @@ fn index(mut job: Job, _: &[Box<dyn DiagnosticsProvider>], _: Option<&Sender<Job
     let parsed = job.parsed.take();
     let made = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
         Arc::new(match parsed {
-            Some(unit) => Analysis::from_parsed(job.text.clone(), *unit),
+            // The check worker takes the shared tree over once its type check is done: copy it
+            // and let go of it first.
+            Some(unit) => Analysis::from_parsed(job.text.clone(), Arc::unwrap_or_clone(unit)),
             None => Analysis::new(job.text.clone()),
         })
     }));
@@ -329,13 +335,15 @@ pub fn run(job: Job, providers: &[Box<dyn DiagnosticsProvider>], index: Option<&
     };
     let checked = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
         if from_tree {
-            // One parse for both: the index worker gets a copy of the tree (a copy costs about
-            // a third of a parse) and builds the index while this thread checks.
-            let parsed = sfc_syntax::parse(0, &job.text);
+            // One parse for both: the index worker gets the tree (it copies it for itself
+            // while this thread type-checks) and builds the index while this thread checks.
+            let (unit, parse_diags) = sfc_syntax::parse(0, &job.text);
+            let unit = Arc::new(unit);
             if let Some(index) = index {
-                let copy = Some(Box::new(parsed.0.clone()));
-                let _ = index.send(Job { delay: Duration::ZERO, index: false, parsed: copy, ..job.clone() });
+                let _ =
+                    index.send(Job { delay: Duration::ZERO, index: false, parsed: Some(unit.clone()), ..job.clone() });
             }
+            let parsed = (unit, parse_diags);
             if let Some(found) = provider.check_parsed(&job.path, &job.text, parsed) {
                 return found;
             }

@@ -66,17 +66,58 @@ pub fn check_source(file_id: u32, name: &str, text: &str, opts: &CheckOptions) -
     check_parsed(file_id, name, text, sfc_syntax::parse(file_id, text), opts)
 }
 
+/// A parsed file to check: owned, or shared with another thread that reads the same parse (the
+/// language server's index worker). The type check reads a shared tree where it is; lowering
+/// moves conditions and action bodies out of it, so it then takes the tree over, or a copy when
+/// the other reader still holds it.
+#[derive(Debug, Clone)]
+pub enum Tree {
+    Owned(ast::SourceUnit),
+    Shared(std::sync::Arc<ast::SourceUnit>),
+}
+
+impl From<ast::SourceUnit> for Tree {
+    fn from(unit: ast::SourceUnit) -> Self {
+        Tree::Owned(unit)
+    }
+}
+
+impl From<std::sync::Arc<ast::SourceUnit>> for Tree {
+    fn from(unit: std::sync::Arc<ast::SourceUnit>) -> Self {
+        Tree::Shared(unit)
+    }
+}
+
+impl Tree {
+    fn unit(&self) -> &ast::SourceUnit {
+        match self {
+            Tree::Owned(u) => u,
+            Tree::Shared(u) => u,
+        }
+    }
+
+    fn into_owned(self) -> ast::SourceUnit {
+        match self {
+            Tree::Owned(u) => u,
+            Tree::Shared(u) => std::sync::Arc::try_unwrap(u).unwrap_or_else(|u| (*u).clone()),
+        }
+    }
+}
+
 /// [`check_source`] of a text already parsed: `parsed` is what `sfc_syntax::parse(file_id,
-/// text)` returned (the language server parses a version once for its index and its check).
+/// text)` returned (the language server parses a version once for its index and its check),
+/// the tree owned or shared ([`Tree`]).
 pub fn check_parsed(
     file_id: u32,
     name: &str,
     text: &str,
-    parsed: (ast::SourceUnit, Vec<Diagnostic>),
+    parsed: (impl Into<Tree>, Vec<Diagnostic>),
     opts: &CheckOptions,
 ) -> Checked {
-    let (mut unit, mut diags) = parsed;
-    let (type_diags, expr_types) = code::check_unit(&unit, opts.keep_types);
+    let tree: Tree = parsed.0.into();
+    let mut diags = parsed.1;
+    let (type_diags, expr_types) = code::check_unit(tree.unit(), opts.keep_types);
+    let mut unit = tree.into_owned();
     let mut charts = Vec::new();
     for (i, item) in unit.items.iter_mut().enumerate() {
         if let ast::Item::Globals(block) = item {
@@ -237,4 +278,35 @@ fn errors_for_span(unit: &ast::SourceUnit, span: Span) -> bool {
         .items
         .iter()
         .any(|i| matches!(i, ast::Item::Verbatim(v) if v.span.start <= span.start && span.start < v.span.end))
+}
+
+#[cfg(test)]
+mod tree_tests {
+    use super::*;
+    use std::sync::Arc;
+
+    /// A shared tree checks as an owned one does, whether the other reader still holds it (the
+    /// checker copies it) or has let go (the checker takes it over); the other reader's tree is
+    /// left whole.
+    #[test]
+    fn a_shared_tree_checks_as_an_owned_one() {
+        let text = "PROGRAM P\nVAR x : BOOL; i : INT; END_VAR\nINITIAL_STEP S1: A(N); END_STEP\nSTEP S2: B(Q); END_STEP\n\
+                    TRANSITION FROM S1 TO S2 := x AND i; END_TRANSITION\nTRANSITION FROM S2 TO S3 := TRUE; END_TRANSITION\n\
+                    ACTION A: i := i + 1; y := 2; END_ACTION\nEND_PROGRAM\n";
+        let opts = CheckOptions { keep_types: true, ..CheckOptions::default() };
+        let owned = check_parsed(0, "t.st", text, sfc_syntax::parse(0, text), &opts);
+        assert!(owned.has_errors());
+        let (unit, parse_diags) = sfc_syntax::parse(0, text);
+        let whole = unit.clone();
+        let held = Arc::new(unit);
+        let shared = check_parsed(0, "t.st", text, (held.clone(), parse_diags.clone()), &opts);
+        assert_eq!(*held, whole);
+        let alone = check_parsed(0, "t.st", text, (Arc::new(whole), parse_diags), &opts);
+        for c in [&shared, &alone] {
+            assert_eq!(c.diagnostics, owned.diagnostics);
+            assert_eq!(c.unit, owned.unit);
+            assert_eq!(c.charts, owned.charts);
+            assert_eq!(c.expr_types, owned.expr_types);
+        }
+    }
 }

@@ -2,9 +2,9 @@
 //! names: one namespace, declared steps and actions, qualifiers and durations, attributes.
 
 use crate::chart::*;
+use rustc_hash::{FxHashMap as HashMap, FxHashSet};
 use sfc_diagnostics::{Diagnostic, Span};
 use sfc_syntax::ast::{self, ExprKind, LiteralKind};
-use std::collections::HashMap;
 
 /// What the lowering needs to know about the POU's variables.
 pub struct VarInfo {
@@ -260,7 +260,7 @@ pub fn lower(
     diags: &mut Vec<Diagnostic>,
 ) -> Chart {
     let vars = pou_variables(pou);
-    let mut names: HashMap<String, Declared> = HashMap::new();
+    let mut names: HashMap<String, Declared> = HashMap::default();
     // Clashes between two variables are the type checker's (it checks every POU's
     // declarations); here variables only seed the namespace that chart names must not reuse.
     for v in &vars {
@@ -294,8 +294,8 @@ pub fn lower(
     // Steps and actions first (transitions and associations refer to them in any order).
     let mut steps: Vec<StepNode> = Vec::new();
     let mut actions: Vec<ActionNode> = Vec::new();
-    let mut step_index: HashMap<String, StepId> = HashMap::new();
-    let mut action_index: HashMap<String, ActionId> = HashMap::new();
+    let mut step_index: HashMap<String, StepId> = HashMap::default();
+    let mut action_index: HashMap<String, ActionId> = HashMap::default();
     for el in elements.iter_mut() {
         match el {
             ast::SfcElement::Step(s) => {
@@ -317,10 +317,10 @@ pub fn lower(
                     steps.push(node);
                 } else if s.name.text.is_empty() {
                     // A step whose name failed to parse: nothing to refer to.
-                } else if !step_index.contains_key(&s.name.key()) {
+                } else if let std::collections::hash_map::Entry::Vacant(e) = step_index.entry(s.name.key()) {
                     // Clashes with a variable or an action: keep it so its transitions resolve,
                     // the duplicate-name error has been reported.
-                    step_index.insert(s.name.key(), steps.len());
+                    e.insert(steps.len());
                     steps.push(node);
                 }
             }
@@ -360,7 +360,7 @@ pub fn lower(
     // Unused actions: judged on the associations as written, so an association rejected for
     // another reason (say an unknown qualifier) does not also make its action "unused".
     if !matches!(target, Target::Atmt | Target::Eatmt) {
-        let mentioned: std::collections::HashSet<String> = elements
+        let mentioned: FxHashSet<String> = elements
             .iter()
             .filter_map(|e| match e {
                 ast::SfcElement::Step(s) => Some(s.associations.iter().map(|a| a.action.key())),

@@ -5,6 +5,7 @@ use crate::resolve::{resolve_spec, Named, TypeNames};
 use crate::stdlib::{std_function, std_function_block, STD_FUNCTION_BLOCK_NAMES};
 use crate::types::Type;
 use crate::value::{const_eval, ConstLookup, Value};
+use rustc_hash::FxHashMap;
 use sfc_diagnostics::{Diagnostic, Span};
 use sfc_syntax::ast::{
     Body, DirectAddress, Ident, Initializer, Item, Pou, PouKind, Retain, SourceUnit, TypeDecl, TypeSpecKind, VarBlock,
@@ -188,17 +189,17 @@ impl PouInterface {
 /// Everything declared at file level, resolved, plus the standard function blocks.
 #[derive(Debug, Clone, Default)]
 pub struct TypeEnv {
-    types: HashMap<String, TypeDef>,
+    types: FxHashMap<String, TypeDef>,
     /// User POUs in source order (duplicates included, so each has its interface).
     pous: Vec<PouInterface>,
     /// Upper-case name → index into `pous`; the first declaration wins.
-    pou_index: HashMap<String, usize>,
-    std_fbs: HashMap<String, PouInterface>,
+    pou_index: FxHashMap<String, usize>,
+    std_fbs: FxHashMap<String, PouInterface>,
     globals: Vec<VarInfo>,
-    global_index: HashMap<String, usize>,
+    global_index: FxHashMap<String, usize>,
     /// Upper-case enumerated value → the enumerated types (named or inline in a global) that
     /// declare it.
-    enum_values: HashMap<String, Vec<Type>>,
+    enum_values: FxHashMap<String, Vec<Type>>,
     /// Upper-case names of the POUs kept as written (`sfc.verbatim`): opaque, so a variable of
     /// such a type, a call of such a function, and everything done with them is accepted
     /// without analysis (their type is [`Type::Error`]).
@@ -344,8 +345,8 @@ impl TypeEnv {
             }
         }
 
-        env.types = b.resolved;
-        let mut index: HashMap<String, Vec<Type>> = HashMap::new();
+        env.types = b.resolved.into_iter().collect();
+        let mut index: FxHashMap<String, Vec<Type>> = FxHashMap::default();
         let mut named: Vec<&TypeDef> = env.types.values().collect();
         named.sort_by_key(|d| d.span);
         let enum_types = named.iter().map(|d| &d.ty).chain(env.globals.iter().map(|v| &v.ty));

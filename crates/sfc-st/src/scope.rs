@@ -4,6 +4,7 @@
 use crate::env::{add_sfc_control_variables, block_constants, is_sfc_control_variable, PouInterface, TypeEnv, VarInfo};
 use crate::types::Type;
 use crate::value::{ConstLookup, Value};
+use rustc_hash::FxHashMap;
 use sfc_diagnostics::{Diagnostic, Span};
 use sfc_syntax::ast::{Ident, Pou, PouKind, VarKind};
 use std::collections::HashMap;
@@ -75,7 +76,7 @@ pub struct Scope<'e> {
     steps: Vec<ChartName>,
     actions: Vec<ChartName>,
     /// Upper-case name → local variable, step or action (they share one namespace).
-    index: HashMap<String, Sym>,
+    index: FxHashMap<String, Sym>,
     /// Type problems found while resolving a POU that is not part of the environment's file;
     /// the checker reports them.
     pub(crate) pending: Vec<Diagnostic>,
@@ -96,7 +97,7 @@ impl<'e> Scope<'e> {
             return_usage: Usage::default(),
             steps: Vec::new(),
             actions: Vec::new(),
-            index: HashMap::new(),
+            index: FxHashMap::default(),
             pending: Vec::new(),
         }
     }
