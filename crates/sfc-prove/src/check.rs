@@ -266,8 +266,11 @@ pub fn safety(full: &System, bad: Lit, strengthen: &Invariant, budget: &Budget, 
         }
     }
     // 4. Symbolic reachability (the engine and a complete reachable set are shared by the
-    // properties with the same cone).
-    let reason = match cache.engine(&sys, budget) {
+    // properties with the same cone), with two thirds of the time left: the deeper bounded
+    // search after it gets the rest (a diagram that grows too slowly would take it all).
+    let left = budget.deadline.saturating_duration_since(Instant::now());
+    let symbolic = Budget { deadline: Instant::now() + left * 2 / 3, ..*budget };
+    let reason = match cache.engine(&sys, &symbolic) {
         Ok(eng) => {
             trace(&format!("BDD engine ready (relation {})", eng.relation_size()), t0);
             let known = cache.reach.clone();

@@ -275,9 +275,14 @@ pub fn bmc(sys: &System, target: Lit, max_depth: usize, deadline: Instant) -> Bm
     let mut depth = 0;
     loop {
         let t = u.lit(depth, target);
-        if u.solve(&[t]) == SolverResult::Sat {
-            let trace = (0..depth).map(|f| u.frame_inputs(f)).collect();
-            return Bmc::Found(trace);
+        match u.solve(&[t]) {
+            SolverResult::Sat => {
+                let trace = (0..depth).map(|f| u.frame_inputs(f)).collect();
+                return Bmc::Found(trace);
+            }
+            // Stopped by the deadline: this depth is not searched.
+            SolverResult::Interrupted => return Bmc::None { depth: depth.saturating_sub(1) },
+            SolverResult::Unsat => {}
         }
         if depth >= max_depth || Instant::now() >= deadline {
             return Bmc::None { depth };
