@@ -1,13 +1,14 @@
-//! The engines, in the order that settles most properties fastest: a short bounded search
-//! (quick refutations, shortest first), 1-induction strengthened with the net analysis'
-//! invariants (its invariant re-checked clause by clause), BDD reachability (exact: the
-//! reachable set, shortest witnesses), and a longer bounded search when the diagrams grow too
-//! large. What none of them settles within the budget is `unknown`, with how far it got.
+//! The engines, in the order that settles most properties fastest: 1-induction strengthened
+//! with the net analysis' invariants and the initial state's (its invariant re-checked
+//! constraint by constraint), a short bounded search (refutations, shortest first),
+//! 1-induction with less of the strengthening, BDD reachability (exact: the reachable set,
+//! shortest witnesses), and a longer bounded search when the diagrams grow too large. What
+//! none of them settles within the budget is `unknown`, with how far it got.
 
 use crate::aig::Lit;
 use crate::bdd::{BddEngine, GiveUp};
 use crate::compile::Signal;
-use crate::sat;
+use crate::sat::{self, Invariant};
 use crate::system::System;
 use std::time::{Duration, Instant};
 
@@ -45,8 +46,11 @@ pub struct Finding {
     pub method: &'static str,
     /// Reachable states counted by the symbolic search.
     pub states: Option<f64>,
-    /// The inductive invariant's size in clauses, and whether the independent check passed.
+    /// The inductive invariant's size (clauses and at-most-one constraints, or diagram nodes of
+    /// a reachable set), and whether the independent check passed.
     pub invariant: Option<(usize, bool)>,
+    /// How many of the invariant's constraints are at-most-one constraints.
+    pub at_most_one: usize,
     /// For violations (and reachable goals): the inputs of every scan from the initial state.
     pub trace: Option<Vec<Vec<(u32, bool)>>>,
     /// Scans searched without a violation (bounded searches).
@@ -56,7 +60,16 @@ pub struct Finding {
 
 impl Finding {
     fn new(verdict: Verdict, method: &'static str, message: impl Into<String>) -> Finding {
-        Finding { verdict, method, states: None, invariant: None, trace: None, depth: None, message: message.into() }
+        Finding {
+            verdict,
+            method,
+            states: None,
+            invariant: None,
+            at_most_one: 0,
+            trace: None,
+            depth: None,
+            message: message.into(),
+        }
     }
 }
 
@@ -82,9 +95,19 @@ pub struct Cache {
     key: Option<(Vec<u32>, usize)>,
     pub eng: Option<BddEngine>,
     pub reach: Option<crate::bdd::Reach>,
+    /// The whole system with its constant state bits folded, and the map into it.
+    simple: Option<(System, Vec<Lit>)>,
 }
 
 impl Cache {
+    /// The cone of `roots` in the simplified system ([`System::simplify`], done once), and
+    /// `roots` in it.
+    fn reduce(&mut self, full: &System, roots: &[Lit]) -> (System, Vec<Lit>) {
+        let (simple, map) = self.simple.get_or_insert_with(|| full.simplify());
+        let roots: Vec<Lit> = roots.iter().map(|&r| crate::aig::Aig::map_lit(map, r)).collect();
+        (simple.cone(&roots), roots)
+    }
+
     /// The engine for `sys`: the cached one when the cone is the same, else a new one.
     fn engine(&mut self, sys: &System, budget: &Budget) -> Result<&mut BddEngine, GiveUp> {
         let key = (sys.state_vars(), sys.g.num_nodes());
@@ -103,11 +126,76 @@ impl Cache {
     }
 }
 
+/// The strengthening `strengthen` (over the full system's state variables) restricted to the
+/// state bits of `sys`: clauses over other bits are left out, at-most-one constraints keep
+/// their members in `sys` (and are left out below two).
+fn restrict(full: &System, sys: &System, strengthen: &Invariant) -> Invariant {
+    let vars: std::collections::HashSet<u32> = sys.state_vars().into_iter().collect();
+    // The same variable numbers stand in the reduced graph.
+    let map = |l: Lit| -> Option<Lit> {
+        let v = full.g.var_of(l)?;
+        vars.contains(&v).then(|| if l.is_neg() { sys.g.var_lit(v).not() } else { sys.g.var_lit(v) })
+    };
+    let clauses = strengthen.clauses.iter().filter_map(|cl| cl.iter().map(|&l| map(l)).collect()).collect();
+    let at_most_one = strengthen
+        .at_most_one
+        .iter()
+        .map(|g| g.iter().filter_map(|&l| map(l)).collect::<Vec<Lit>>())
+        .filter(|g| g.len() >= 2)
+        .collect();
+    Invariant { clauses, at_most_one }
+}
+
+/// Why 1-induction gave no proof.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum NoProof {
+    /// A scan from a state of the invariant reaches `bad`: with fewer clauses it would too.
+    NotInductive,
+    /// The invariant failed its independent check (a part of the strengthening is not
+    /// inductive): a smaller one may pass.
+    CheckFailed,
+    /// The deadline stopped the solver.
+    Undecided,
+}
+
+/// 1-induction with `inv`, and the independent check of the invariant: the finding when both
+/// pass. The check runs until `deadline` (the property's), whatever the deadline of the
+/// induction.
+fn induction(sys: &System, inv: &Invariant, bad: Lit, t0: Instant, deadline: Instant) -> Result<Finding, NoProof> {
+    let ind = sat::inductive(sys, inv, bad);
+    trace(&format!("1-induction ({} clauses, {} at-most-one): {ind:?}", inv.clauses.len(), inv.at_most_one.len()), t0);
+    match ind {
+        Some(true) => {}
+        Some(false) => return Err(NoProof::NotInductive),
+        None => return Err(NoProof::Undecided),
+    }
+    // Only a certificate that passes the independent check is a proof; otherwise the next
+    // engine decides.
+    sat::set_deadline(Some(deadline));
+    let checked = sat::check_invariant(sys, inv);
+    trace(&format!("independent check: {checked:?}"), t0);
+    if checked.is_err() {
+        return Err(NoProof::CheckFailed);
+    }
+    let mut f = Finding::new(
+        Verdict::Holds,
+        "1-induction",
+        if inv.len() == 1 {
+            "the property is inductive".to_string()
+        } else {
+            "the property is inductive together with the net invariants".to_string()
+        },
+    );
+    f.invariant = Some((inv.len(), true));
+    f.at_most_one = inv.at_most_one.len();
+    Ok(f)
+}
+
 /// Checks a safety property: `bad` never holds in a reachable state.
-pub fn safety(full: &System, bad: Lit, strengthen: &[Vec<Lit>], budget: &Budget, cache: &mut Cache) -> Finding {
+pub fn safety(full: &System, bad: Lit, strengthen: &Invariant, budget: &Budget, cache: &mut Cache) -> Finding {
     let t0 = Instant::now();
     sat::set_deadline(Some(budget.deadline));
-    let (sys, roots) = full.reduce(&[bad]);
+    let (sys, roots) = cache.reduce(full, &[bad]);
     let bad = roots[0];
     trace(&format!("cone of {} state bits, {} nodes", sys.state.len(), sys.g.num_nodes()), t0);
     if bad == Lit::FALSE {
@@ -115,7 +203,27 @@ pub fn safety(full: &System, bad: Lit, strengthen: &[Vec<Lit>], budget: &Budget,
         f.invariant = Some((0, true));
         return f;
     }
-    // 1. A short bounded search: most violations are shallow.
+    let extra = restrict(full, &sys, strengthen);
+    let property = Invariant::of(bad);
+    let mut all = property.clone();
+    all.extend(&extra);
+    let all_fits = extra.clauses.len() <= 5000;
+    // 1. 1-induction with every invariant the net analysis and the initial state give, before
+    // any search: a property that holds is usually proved here, and a state machine's
+    // "at most one step" makes the induction step one small problem per step. A quarter of the
+    // budget at most: a violated property goes on to the bounded search.
+    let mut first = None;
+    if all_fits && !extra.is_empty() {
+        let quarter = budget.deadline.saturating_duration_since(Instant::now()) / 4;
+        sat::set_deadline(Some(Instant::now() + quarter));
+        let got = induction(&sys, &all, bad, t0, budget.deadline);
+        sat::set_deadline(Some(budget.deadline));
+        match got {
+            Ok(f) => return f,
+            Err(why) => first = Some(why),
+        }
+    }
+    // 2. A short bounded search: most violations are shallow.
     let quick =
         Instant::now() + Duration::from_millis(150).min(budget.deadline.saturating_duration_since(Instant::now()) / 4);
     let mut searched = 0;
@@ -128,71 +236,41 @@ pub fn safety(full: &System, bad: Lit, strengthen: &[Vec<Lit>], budget: &Budget,
         sat::Bmc::None { depth } => searched = searched.max(depth),
     }
     trace(&format!("bmc to depth {searched}"), t0);
-    // 2. 1-induction with the net invariants of the steps the property depends on.
-    let vars: std::collections::HashSet<u32> = sys.state_vars().into_iter().collect();
-    let mut inv: Vec<Vec<Lit>> = vec![vec![bad.not()]];
-    let mut extra: Vec<Vec<Lit>> = Vec::new();
-    for cl in strengthen {
-        // The clauses are over the full graph's state variables; the same variable numbers
-        // stand in the reduced graph.
-        let mapped: Option<Vec<Lit>> = cl
-            .iter()
-            .map(|&l| {
-                let v = full.g.var_of(l)?;
-                vars.contains(&v).then(|| if l.is_neg() { sys.g.var_lit(v).not() } else { sys.g.var_lit(v) })
-            })
-            .collect();
-        if let Some(c) = mapped {
-            extra.push(c);
-        }
-    }
-    // First the property alone, then with the net invariants near the steps it names, then
-    // with all of them (each costs more).
+    // 3. 1-induction with less: the property alone, then with the invariants near the steps
+    // it names, then (when the first try ran out of time) with all of them. None of them can
+    // succeed when the first try found a scan from its invariant to `bad`.
     let near: std::collections::HashSet<u32> = sys.g.support(&[bad]).into_iter().collect();
-    let close: Vec<Vec<Lit>> = extra
-        .iter()
-        .filter(|c| c.iter().any(|l| sys.g.var_of(*l).is_some_and(|v| near.contains(&v))))
-        .cloned()
-        .collect();
-    let mut ind = sat::inductive(&sys, &inv, bad);
-    if !ind && !close.is_empty() && Instant::now() < budget.deadline {
-        let mut with = inv.clone();
-        with.extend(close.iter().cloned());
-        if sat::inductive(&sys, &with, bad) {
-            inv = with;
-            ind = true;
+    let is_near = |l: &Lit| sys.g.var_of(*l).is_some_and(|v| near.contains(&v));
+    let close = Invariant {
+        clauses: extra.clauses.iter().filter(|c| c.iter().any(is_near)).cloned().collect(),
+        at_most_one: extra.at_most_one.iter().filter(|g| g.iter().any(is_near)).cloned().collect(),
+    };
+    let mut tries = Vec::new();
+    if first != Some(NoProof::NotInductive) {
+        tries.push(property);
+        if !close.is_empty() {
+            let mut with = Invariant::of(bad);
+            with.extend(&close);
+            tries.push(with);
+        }
+        if first == Some(NoProof::Undecided) {
+            tries.push(all);
         }
     }
-    if !ind && extra.len() > close.len() && extra.len() <= 5000 && Instant::now() < budget.deadline {
-        let mut with = inv.clone();
-        with.extend(extra.iter().cloned());
-        if sat::inductive(&sys, &with, bad) {
-            inv = with;
-            ind = true;
+    for inv in &tries {
+        if Instant::now() >= budget.deadline {
+            break;
         }
-    }
-    trace(&format!("1-induction ({} clauses): {ind}", inv.len()), t0);
-    if ind {
-        // Only a certificate that passes the independent check is a proof; otherwise the
-        // symbolic search decides.
-        if sat::check_invariant(&sys, &inv).is_ok() {
-            let mut f = Finding::new(
-                Verdict::Holds,
-                "1-induction",
-                if inv.len() == 1 {
-                    "the property is inductive".to_string()
-                } else {
-                    "the property is inductive together with the net invariants".to_string()
-                },
-            );
-            f.invariant = Some((inv.len(), true));
+        if let Ok(f) = induction(&sys, inv, bad, t0, budget.deadline) {
             return f;
         }
-        trace("the invariant failed its independent check", t0);
     }
-    // 3. Symbolic reachability (the engine and a complete reachable set are shared by the
-    // properties with the same cone).
-    let reason = match cache.engine(&sys, budget) {
+    // 4. Symbolic reachability (the engine and a complete reachable set are shared by the
+    // properties with the same cone), with two thirds of the time left: the deeper bounded
+    // search after it gets the rest (a diagram that grows too slowly would take it all).
+    let left = budget.deadline.saturating_duration_since(Instant::now());
+    let symbolic = Budget { deadline: Instant::now() + left * 2 / 3, ..*budget };
+    let reason = match cache.engine(&sys, &symbolic) {
         Ok(eng) => {
             trace(&format!("BDD engine ready (relation {})", eng.relation_size()), t0);
             let known = cache.reach.clone();
@@ -238,7 +316,7 @@ pub fn safety(full: &System, bad: Lit, strengthen: &[Vec<Lit>], budget: &Budget,
         }
         Err(g) => give_up_text(&g),
     };
-    // 4. What time is left: a deeper bounded search.
+    // 5. What time is left: a deeper bounded search.
     match sat::bmc(&sys, bad, usize::MAX, budget.deadline) {
         sat::Bmc::Found(trace) => {
             let mut f = Finding::new(Verdict::Violated, "bounded model checking", "");
@@ -260,7 +338,7 @@ pub fn safety(full: &System, bad: Lit, strengthen: &[Vec<Lit>], budget: &Budget,
 /// Checks a reachability property.
 pub fn reach(full: &System, goal: Lit, from_initial: bool, budget: &Budget, cache: &mut Cache) -> Finding {
     sat::set_deadline(Some(budget.deadline));
-    let (sys, roots) = full.reduce(&[goal]);
+    let (sys, roots) = cache.reduce(full, &[goal]);
     let goal = roots[0];
     if from_initial {
         // EF goal: a path reaching it is a witness that it holds.
@@ -431,7 +509,7 @@ pub fn fmt_states(s: f64) -> String {
 }
 
 /// Checks one compiled property.
-pub fn check(full: &System, signal: &Signal, strengthen: &[Vec<Lit>], budget: &Budget, cache: &mut Cache) -> Finding {
+pub fn check(full: &System, signal: &Signal, strengthen: &Invariant, budget: &Budget, cache: &mut Cache) -> Finding {
     match signal {
         Signal::Safety { bad } => safety(full, *bad, strengthen, budget, cache),
         Signal::Reach { goal, from_initial } => reach(full, *goal, *from_initial, budget, cache),

@@ -236,10 +236,15 @@ pub fn prove(chart_name: &str, chart_text: &str, file: &PropertyFile, opts: &Opt
         eprintln!("[prove] encoded in {:?}: {} AIG nodes", started.elapsed(), m.g.num_nodes());
     }
     let full = system::System::from_model(&m, m.constraint);
-    let mut strengthen = pre_start_invariants(&m);
-    strengthen.extend(net_invariants(&checked, &m));
+    let mut strengthen = sat::Invariant { clauses: pre_start_invariants(&m), at_most_one: Vec::new() };
+    strengthen.extend(&net_invariants(&checked, &m));
     if std::env::var_os("SFC_PROVE_TRACE").is_some() {
-        eprintln!("[prove] net invariants in {:?}: {} clauses", started.elapsed(), strengthen.len());
+        eprintln!(
+            "[prove] net invariants in {:?}: {} clauses, at most one of {:?}",
+            started.elapsed(),
+            strengthen.clauses.len(),
+            strengthen.at_most_one.iter().map(Vec::len).collect::<Vec<_>>()
+        );
     }
     let total = Duration::from_secs_f64(opts.seconds.max(0.01));
     let mut reports = Vec::new();
@@ -331,10 +336,15 @@ fn pre_start_invariants(m: &model::Model) -> Vec<Vec<Lit>> {
     out
 }
 
-/// The net analysis' invariants over the step flags of every chart instance: steps that are
-/// never active together, steps never active.
-fn net_invariants(checked: &sfc_model::Checked, m: &model::Model) -> Vec<Vec<Lit>> {
-    let mut out = Vec::new();
+/// The net analysis' invariants over the step flags of every chart instance: steps never
+/// active, and steps never active together — said as at-most-one constraints over groups of
+/// steps that are pairwise never together (the states of a state machine: a greedy cover of
+/// the "never together" pairs by such groups), and as pairwise clauses for the pairs no group
+/// covers. Together they say exactly what the pairwise clauses would say (a group is the same
+/// as the clauses of its pairs), so their inductiveness is that of the whole set; a subset
+/// could lose it.
+fn net_invariants(checked: &sfc_model::Checked, m: &model::Model) -> sat::Invariant {
+    let mut out = sat::Invariant::default();
     for c in &m.charts {
         let chart = &checked.charts[c.chart];
         if chart.steps.len() > 400 {
@@ -346,29 +356,89 @@ fn net_invariants(checked: &sfc_model::Checked, m: &model::Model) -> Vec<Vec<Lit
         }
         let x: Vec<Lit> = c.x.iter().map(|&r| m.latch[r][0]).collect();
         let started = m.latch[c.started][0];
-        let n = chart.steps.len();
         // Before its first call (or after SFCInit) a chart has at most its initial steps active.
         for (s, step) in chart.steps.iter().enumerate() {
             if !step.initial {
-                out.push(vec![started, x[s].not()]);
+                out.clauses.push(vec![started, x[s].not()]);
             }
         }
-        if n > 400 {
-            continue;
+        let mut live = Vec::new();
+        for (a, &xa) in x.iter().enumerate() {
+            if report.concurrency.together(a, a) {
+                live.push(a);
+            } else {
+                out.clauses.push(vec![xa.not()]);
+            }
         }
-        for a in 0..n {
-            if !report.concurrency.together(a, a) {
-                out.push(vec![x[a].not()]);
-                continue;
-            }
-            for b in a + 1..n {
-                if !report.concurrency.together(a, b) {
-                    out.push(vec![x[a].not(), x[b].not()]);
-                }
-            }
+        let exclusive = |a: usize, b: usize| !report.concurrency.together(a, b);
+        for group in exclusive_groups(&live, exclusive, &mut out.clauses, &x) {
+            out.at_most_one.push(group.iter().map(|&s| x[s]).collect());
         }
     }
     out
+}
+
+/// Covers the pairs of `steps` that `exclusive` says are never active together with groups
+/// of pairwise exclusive steps (greedily: from the step with the most uncovered pairs, adding
+/// the step exclusive with the whole group that covers the most new pairs), while a group
+/// has at least three steps; the pairs left become clauses `¬x_a ∨ ¬x_b` in `clauses`.
+fn exclusive_groups(
+    steps: &[usize],
+    exclusive: impl Fn(usize, usize) -> bool,
+    clauses: &mut Vec<Vec<Lit>>,
+    x: &[Lit],
+) -> Vec<Vec<usize>> {
+    let k = steps.len();
+    // `uncovered[i][j]`: steps i and j (indices into `steps`) are exclusive and no group says so.
+    let mut uncovered = vec![vec![false; k]; k];
+    let mut degree = vec![0usize; k];
+    for i in 0..k {
+        for j in 0..k {
+            if i != j && exclusive(steps[i], steps[j]) {
+                uncovered[i][j] = true;
+                degree[i] += 1;
+            }
+        }
+    }
+    let mut groups = Vec::new();
+    while let Some((v, d)) = degree.iter().copied().enumerate().max_by_key(|&(i, d)| (d, std::cmp::Reverse(i))) {
+        if d == 0 {
+            break;
+        }
+        let mut group = vec![v];
+        let mut cand: Vec<usize> = (0..k).filter(|&j| j != v && exclusive(steps[v], steps[j])).collect();
+        // `gain[j]`: the uncovered pairs between step j and the group.
+        let mut gain: Vec<usize> = (0..k).map(|j| usize::from(uncovered[v][j])).collect();
+        while let Some(best) = cand.iter().copied().max_by_key(|&j| (gain[j], std::cmp::Reverse(j))) {
+            group.push(best);
+            cand.retain(|&j| j != best && exclusive(steps[best], steps[j]));
+            for &j in &cand {
+                gain[j] += usize::from(uncovered[best][j]);
+            }
+        }
+        if group.len() < 3 {
+            break;
+        }
+        for (a, &i) in group.iter().enumerate() {
+            for &j in &group[a + 1..] {
+                for (p, q) in [(i, j), (j, i)] {
+                    if uncovered[p][q] {
+                        uncovered[p][q] = false;
+                        degree[p] -= 1;
+                    }
+                }
+            }
+        }
+        groups.push(group.iter().map(|&i| steps[i]).collect());
+    }
+    for i in 0..k {
+        for j in i + 1..k {
+            if uncovered[i][j] {
+                clauses.push(vec![x[steps[i]].not(), x[steps[j]].not()]);
+            }
+        }
+    }
+    groups
 }
 
 /// The origin of a compiled property, for reports.

@@ -42,6 +42,8 @@ pub struct PropertyReport {
     /// Size of the inductive invariant (clauses, or diagram nodes of a reachable set) and
     /// whether its independent check passed.
     pub invariant: Option<(usize, bool)>,
+    /// How many of the inductive invariant's constraints are at-most-one constraints.
+    pub at_most_one: usize,
     pub message: String,
     pub depth: Option<usize>,
     pub witness: Option<WitnessInfo>,
@@ -58,6 +60,7 @@ impl PropertyReport {
             method: f.method,
             states: f.states,
             invariant: f.invariant,
+            at_most_one: f.at_most_one,
             message: f.message.clone(),
             depth: f.depth,
             witness: None,
@@ -155,7 +158,18 @@ impl Report {
                 if p.method.starts_with("BDD") {
                     how.push_str(&format!(", reachable set of {n} diagram nodes"));
                 } else if n > 0 {
-                    how.push_str(&format!(", inductive invariant of {n} clause{}", if n == 1 { "" } else { "s" }));
+                    let clauses = n - p.at_most_one.min(n);
+                    how.push_str(&format!(
+                        ", inductive invariant of {clauses} clause{}",
+                        if clauses == 1 { "" } else { "s" }
+                    ));
+                    if p.at_most_one > 0 {
+                        how.push_str(&format!(
+                            " and {} at-most-one constraint{}",
+                            p.at_most_one,
+                            if p.at_most_one == 1 { "" } else { "s" }
+                        ));
+                    }
                 }
                 if p.verdict == Verdict::Holds {
                     how.push_str(if ok { ", invariant re-checked" } else { ", invariant check FAILED" });

@@ -1,6 +1,9 @@
 //! SAT-based checking of the one-scan relation with `rustsat` (BatSat backend): bounded model
 //! checking from the initial state (shortest counterexamples first), 1-induction strengthened
-//! by the net analysis' invariants, and the clause-by-clause check of an inductive invariant.
+//! by the net analysis' invariants (clauses and at-most-one constraints, the queries split
+//! into one case per active step), and the constraint-by-constraint check of an inductive
+//! invariant. The encoding is lazy (a frame's next state only as far as a query reads it) and
+//! folds constants (the initial state, a case's step flags).
 
 use crate::aig::{Aig, Lit, Node};
 use crate::system::System;
@@ -39,10 +42,18 @@ pub struct Unroller<'s> {
     next_var: u32,
     /// The literal standing for TRUE.
     tru: SLit,
-    /// Per frame: AIG node → SAT literal (positive node).
+    /// Per frame: AIG node → SAT literal (positive node). Frames beyond `nframes` are kept
+    /// (cleared) for reuse after [`Unroller::reset`].
     frames: Vec<Vec<Option<SLit>>>,
+    /// Per frame: the nodes set in it (to clear them on reset).
+    touched: Vec<Vec<u32>>,
+    nframes: usize,
     /// Per frame: SAT literal of each AIG variable that is an input.
     pub input_lits: Vec<Vec<(u32, SLit)>>,
+    /// Per frame: whether its state is the previous frame's next state, encoded on demand.
+    linked: Vec<bool>,
+    /// AIG node → index in `sys.state`, for the state variables.
+    state_of: Vec<Option<u32>>,
 }
 
 impl<'s> Unroller<'s> {
@@ -53,12 +64,37 @@ impl<'s> Unroller<'s> {
             next_var: 0,
             tru: SLit::positive(0),
             frames: Vec::new(),
+            touched: Vec::new(),
+            nframes: 0,
             input_lits: Vec::new(),
+            linked: Vec::new(),
+            state_of: vec![None; sys.g.num_nodes()],
         };
+        for (k, sv) in sys.state.iter().enumerate() {
+            u.state_of[sv.lit.node()] = Some(k as u32);
+        }
         u.tru = u.fresh();
         let t = u.tru;
         let _ = u.solver.add_unit(t);
         u
+    }
+
+    /// Starts over with a new solver and no frames, keeping the allocations.
+    pub fn reset(&mut self) {
+        for f in 0..self.nframes {
+            for &n in &self.touched[f] {
+                self.frames[f][n as usize] = None;
+            }
+            self.touched[f].clear();
+        }
+        self.nframes = 0;
+        self.input_lits.clear();
+        self.linked.clear();
+        self.solver = BasicSolver::default();
+        self.next_var = 0;
+        self.tru = self.fresh();
+        let t = self.tru;
+        let _ = self.solver.add_unit(t);
     }
 
     pub fn fresh(&mut self) -> SLit {
@@ -67,21 +103,43 @@ impl<'s> Unroller<'s> {
         SLit::positive(v)
     }
 
+    fn set(&mut self, f: usize, n: usize, x: SLit) {
+        self.frames[f][n] = Some(x);
+        self.touched[f].push(n as u32);
+    }
+
+    /// A new, empty frame.
+    fn push_frame(&mut self, linked: bool) -> usize {
+        if self.frames.len() <= self.nframes {
+            self.frames.push(vec![None; self.sys.g.num_nodes()]);
+            self.touched.push(Vec::new());
+        }
+        self.nframes += 1;
+        self.input_lits.push(Vec::new());
+        self.linked.push(linked);
+        self.nframes - 1
+    }
+
     /// Adds a frame whose state variables are `state` (SAT literals per system state var, in
     /// `sys.state` order), or fresh variables when `None`.
     pub fn add_frame(&mut self, state: Option<Vec<SLit>>) -> usize {
-        let n = self.sys.g.num_nodes();
-        let mut map = vec![None; n];
+        let f = self.push_frame(false);
         let st = match state {
             Some(s) => s,
             None => (0..self.sys.state.len()).map(|_| self.fresh()).collect(),
         };
-        for (k, sv) in self.sys.state.iter().enumerate() {
-            map[sv.lit.node()] = Some(st[k]);
+        let sys: &'s System = self.sys;
+        for (k, sv) in sys.state.iter().enumerate() {
+            self.set(f, sv.lit.node(), st[k]);
         }
-        self.frames.push(map);
-        self.input_lits.push(Vec::new());
-        self.frames.len() - 1
+        f
+    }
+
+    /// Adds a frame whose state is the next state of the last frame. Only what is asked of it
+    /// is encoded (the next-state functions of the state bits its literals depend on), so a
+    /// query about a few registers does not carry the whole scan.
+    pub fn add_next_frame(&mut self) -> usize {
+        self.push_frame(true)
     }
 
     /// The initial state's literals (constants).
@@ -91,44 +149,81 @@ impl<'s> Unroller<'s> {
 
     /// The SAT literal of AIG literal `l` in frame `f` (encoding its cone on demand).
     pub fn lit(&mut self, f: usize, l: Lit) -> SLit {
-        let g: &Aig = &self.sys.g;
+        let sys: &'s System = self.sys;
+        let g: &Aig = &sys.g;
         if l.node() == 0 {
             return if l.is_neg() { self.tru } else { !self.tru };
         }
         if self.frames[f][l.node()].is_none() {
-            // Iterative post-order over the cone.
-            let mut stack = vec![(l.node(), false)];
-            while let Some((n, expanded)) = stack.pop() {
+            // Iterative post-order over the cone, folding constants: a conjunction whose first
+            // child (the older node, usually the condition) is FALSE is FALSE without its
+            // other child, so what a scan does under a condition known to be false is never
+            // encoded.
+            let mut stack = vec![(l.node(), 0u8)];
+            while let Some((n, stage)) = stack.pop() {
                 if self.frames[f][n].is_some() {
                     continue;
                 }
                 match g.node(n) {
                     Node::False => {
-                        self.frames[f][n] = Some(!self.tru);
+                        let x = !self.tru;
+                        self.set(f, n, x);
                     }
-                    Node::Var(v) => {
+                    Node::Var(v) => match self.state_of[n] {
+                        // A state bit of a linked frame: the previous frame's next state.
+                        Some(k) if f > 0 && self.linked[f] => {
+                            let next = sys.state[k as usize].next;
+                            let x = self.lit(f - 1, next);
+                            self.set(f, n, x);
+                        }
                         // A variable that is not a state variable: an input of this frame.
-                        let x = self.fresh();
-                        self.frames[f][n] = Some(x);
-                        self.input_lits[f].push((v, x));
-                    }
+                        _ => {
+                            let x = self.fresh();
+                            self.set(f, n, x);
+                            self.input_lits[f].push((v, x));
+                        }
+                    },
                     Node::And(a, b) => {
-                        if !expanded {
-                            stack.push((n, true));
-                            for c in [a.node(), b.node()] {
-                                if self.frames[f][c].is_none() {
-                                    stack.push((c, false));
+                        let (first, second) = if a.node() <= b.node() { (a, b) } else { (b, a) };
+                        match stage {
+                            0 => {
+                                stack.push((n, 1));
+                                if self.frames[f][first.node()].is_none() {
+                                    stack.push((first.node(), 0));
                                 }
                             }
-                            continue;
+                            1 => {
+                                if self.get(f, first) == !self.tru {
+                                    {
+                                        let x = !self.tru;
+                                        self.set(f, n, x);
+                                    }
+                                    continue;
+                                }
+                                stack.push((n, 2));
+                                if self.frames[f][second.node()].is_none() {
+                                    stack.push((second.node(), 0));
+                                }
+                            }
+                            _ => {
+                                let (la, lb) = (self.get(f, first), self.get(f, second));
+                                let (t, x) = (self.tru, !self.tru);
+                                let out = if lb == x || la == !lb {
+                                    x
+                                } else if la == t || la == lb {
+                                    lb
+                                } else if lb == t {
+                                    la
+                                } else {
+                                    let y = self.fresh();
+                                    let _ = self.solver.add_binary(!y, la);
+                                    let _ = self.solver.add_binary(!y, lb);
+                                    let _ = self.solver.add_ternary(y, !la, !lb);
+                                    y
+                                };
+                                self.set(f, n, out);
+                            }
                         }
-                        let la = self.get(f, a);
-                        let lb = self.get(f, b);
-                        let x = self.fresh();
-                        let _ = self.solver.add_binary(!x, la);
-                        let _ = self.solver.add_binary(!x, lb);
-                        let _ = self.solver.add_ternary(x, !la, !lb);
-                        self.frames[f][n] = Some(x);
                     }
                 }
             }
@@ -143,12 +238,6 @@ impl<'s> Unroller<'s> {
         } else {
             x
         }
-    }
-
-    /// The next-state literals of frame `f` (the state of frame `f + 1`).
-    pub fn next_state(&mut self, f: usize) -> Vec<SLit> {
-        let nexts: Vec<Lit> = self.sys.state.iter().map(|s| s.next).collect();
-        nexts.into_iter().map(|l| self.lit(f, l)).collect()
     }
 
     pub fn add_unit(&mut self, l: SLit) {
@@ -186,9 +275,14 @@ pub fn bmc(sys: &System, target: Lit, max_depth: usize, deadline: Instant) -> Bm
     let mut depth = 0;
     loop {
         let t = u.lit(depth, target);
-        if u.solve(&[t]) == SolverResult::Sat {
-            let trace = (0..depth).map(|f| u.frame_inputs(f)).collect();
-            return Bmc::Found(trace);
+        match u.solve(&[t]) {
+            SolverResult::Sat => {
+                let trace = (0..depth).map(|f| u.frame_inputs(f)).collect();
+                return Bmc::Found(trace);
+            }
+            // Stopped by the deadline: this depth is not searched.
+            SolverResult::Interrupted => return Bmc::None { depth: depth.saturating_sub(1) },
+            SolverResult::Unsat => {}
         }
         if depth >= max_depth || Instant::now() >= deadline {
             return Bmc::None { depth };
@@ -196,42 +290,200 @@ pub fn bmc(sys: &System, target: Lit, max_depth: usize, deadline: Instant) -> Bm
         // Extend by one scan: the constraint of this frame, then the next frame.
         let c = u.lit(depth, sys.constraint);
         u.add_unit(c);
-        let next = u.next_state(depth);
-        u.add_frame(Some(next));
+        u.add_next_frame();
         depth += 1;
     }
 }
 
-/// 1-induction: `inv ∧ C ∧ T ⇒ ¬bad'` where `inv` is a list of clauses over state literals
-/// (the property itself and its strengthening). Returns true when it holds.
-pub fn inductive(sys: &System, inv: &[Vec<Lit>], bad: Lit) -> bool {
-    let mut u = one_scan_from(sys, inv);
-    let b = u.lit(1, bad);
-    u.solve(&[b]) == SolverResult::Unsat
+/// A candidate inductive invariant over state literals: clauses, and at-most-one constraints
+/// (each says that at most one of its literals is true: the same as the pairwise clauses
+/// `¬a ∨ ¬b` of its literals, in linear size — the net analysis' "never active together" over
+/// the steps of a state machine).
+#[derive(Debug, Clone, Default)]
+pub struct Invariant {
+    pub clauses: Vec<Vec<Lit>>,
+    pub at_most_one: Vec<Vec<Lit>>,
 }
 
-/// One scan from any state that satisfies `inv` (clauses over state literals) and the input
-/// constraint: frame 0 is that state, frame 1 the state after the scan.
-fn one_scan_from<'s>(sys: &'s System, inv: &[Vec<Lit>]) -> Unroller<'s> {
+impl Invariant {
+    /// The invariant of the property alone (`¬bad`).
+    pub fn of(bad: Lit) -> Invariant {
+        Invariant { clauses: vec![vec![bad.not()]], at_most_one: Vec::new() }
+    }
+
+    /// Its size: clauses and at-most-one constraints.
+    pub fn len(&self) -> usize {
+        self.clauses.len() + self.at_most_one.len()
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+
+    pub fn extend(&mut self, other: &Invariant) {
+        self.clauses.extend(other.clauses.iter().cloned());
+        self.at_most_one.extend(other.at_most_one.iter().cloned());
+    }
+}
+
+/// 1-induction: `inv ∧ C ∧ T ⇒ ¬bad'` where `inv` holds the property itself and its
+/// strengthening, case by case (see [`cases`]). `Some(true)` when it holds, `Some(false)` when
+/// a scan from a state of `inv` reaches `bad`, `None` when the deadline stopped the solver.
+pub fn inductive(sys: &System, inv: &Invariant, bad: Lit) -> Option<bool> {
     let mut u = Unroller::new(sys);
-    u.add_frame(None);
-    for cl in inv {
+    for case in cases(sys, inv) {
+        one_scan_from(&mut u, inv, &case);
+        let b = u.lit(1, bad);
+        if b == !u.tru {
+            continue;
+        }
+        match u.solve(&[b]) {
+            SolverResult::Unsat => {}
+            SolverResult::Sat => return Some(false),
+            SolverResult::Interrupted => return None,
+        }
+    }
+    Some(true)
+}
+
+/// A case of a query: values of some state variables (AIG variable numbers) in frame 0.
+type Case = Vec<(u32, bool)>;
+
+/// The cases a query about one scan from a state of `inv` is split into: over the largest
+/// at-most-one constraint (of three literals or more), none of its literals true, or exactly
+/// one of them — the step of the state machine that is active. Under the constraint these
+/// cases are every state. Each case is encoded on its own with those state bits as constants,
+/// which [`Unroller::lit`] folds away: the scan becomes what the one active step does, instead
+/// of a scan in which any set of steps may be active and every action may run after every
+/// other (the chained arithmetic that makes the whole query hard). Without such a constraint,
+/// one case that fixes nothing.
+fn cases(sys: &System, inv: &Invariant) -> Vec<Case> {
+    let Some(group) = inv.at_most_one.iter().filter(|g| g.len() >= 3).max_by_key(|g| g.len()) else {
+        return vec![Vec::new()];
+    };
+    // The value of a member's variable that makes the member (a literal) true or false.
+    let vars: Vec<(u32, bool)> = group.iter().filter_map(|&l| sys.g.var_of(l).map(|v| (v, !l.is_neg()))).collect();
+    let distinct: std::collections::HashSet<u32> = vars.iter().map(|&(v, _)| v).collect();
+    if vars.len() != group.len() || distinct.len() != vars.len() {
+        return vec![Vec::new()];
+    }
+    let none: Case = vars.iter().map(|&(v, pos)| (v, !pos)).collect();
+    let mut out = vec![none];
+    for k in 0..vars.len() {
+        out.push(vars.iter().enumerate().map(|(i, &(v, pos))| (v, if i == k { pos } else { !pos })).collect());
+    }
+    out
+}
+
+impl Unroller<'_> {
+    /// Asserts that at most one of `lits` (frame 0) is true: a sequential ladder, `s_i` for
+    /// "one of the first i is true" (3 clauses per literal, arc-consistent under propagation),
+    /// over the literals that are not constants (a case's step flags are).
+    fn at_most_one(&mut self, lits: &[Lit]) {
+        let no = !self.tru;
+        let xs: Vec<SLit> = lits.iter().map(|&l| self.lit(0, l)).filter(|&x| x != no).collect();
+        let trues = xs.iter().filter(|&&x| x == self.tru).count();
+        if trues > 1 {
+            let f = !self.tru;
+            self.add_unit(f);
+            return;
+        }
+        if trues == 1 {
+            for &x in &xs {
+                if x != self.tru {
+                    let _ = self.solver.add_unit(!x);
+                }
+            }
+            return;
+        }
+        let mut prev: Option<SLit> = None;
+        for x in xs {
+            let s = self.fresh();
+            let _ = self.solver.add_binary(!x, s);
+            if let Some(p) = prev {
+                let _ = self.solver.add_binary(!p, s);
+                let _ = self.solver.add_binary(!p, !x);
+            }
+            prev = Some(s);
+        }
+    }
+
+    /// A literal that, assumed, says at least two of `lits` are true in frame 1 (the constant
+    /// TRUE or FALSE when the folded literals decide it).
+    fn two_of(&mut self, lits: &[Lit]) -> SLit {
+        let no = !self.tru;
+        let ys: Vec<SLit> = lits.iter().map(|&l| self.lit(1, l)).filter(|&y| y != no).collect();
+        let trues = ys.iter().filter(|&&y| y == self.tru).count();
+        if trues > 1 {
+            return self.tru;
+        }
+        if ys.len() < 2 {
+            return !self.tru;
+        }
+        // p_i → (one of the first i is true); t_i → p_{i-1} ∧ lit_i; act → some t_i.
+        let act = self.fresh();
+        let mut goal = vec![!act];
+        let mut prev: Option<SLit> = None;
+        for y in ys {
+            let p = self.fresh();
+            match prev {
+                None => {
+                    let _ = self.solver.add_binary(!p, y);
+                }
+                Some(q) => {
+                    let _ = self.solver.add_ternary(!p, q, y);
+                    let t = self.fresh();
+                    let _ = self.solver.add_binary(!t, q);
+                    let _ = self.solver.add_binary(!t, y);
+                    goal.push(t);
+                }
+            }
+            prev = Some(p);
+        }
+        let _ = self.solver.add_clause(Clause::from_iter(goal));
+        act
+    }
+}
+
+/// One scan from any state that satisfies `inv`, the input constraint and `case`: frame 0
+/// is that state (the case's bits constants), frame 1 the state after the scan.
+fn one_scan_from(u: &mut Unroller<'_>, inv: &Invariant, case: &[(u32, bool)]) {
+    let sys = u.sys;
+    u.reset();
+    let mut fixed: Vec<Option<bool>> = vec![None; sys.g.num_vars()];
+    for &(v, b) in case {
+        fixed[v as usize] = Some(b);
+    }
+    let state: Vec<SLit> = sys
+        .state
+        .iter()
+        .map(|sv| match sys.g.var_of(sv.lit).and_then(|v| fixed[v as usize]) {
+            Some(true) => u.tru,
+            Some(false) => !u.tru,
+            None => u.fresh(),
+        })
+        .collect();
+    u.add_frame(Some(state));
+    for cl in &inv.clauses {
         let c: Vec<SLit> = cl.iter().map(|&l| u.lit(0, l)).collect();
         let _ = u.solver.add_clause(Clause::from_iter(c));
     }
+    for g in &inv.at_most_one {
+        u.at_most_one(g);
+    }
     let c = u.lit(0, sys.constraint);
     u.add_unit(c);
-    let next = u.next_state(0);
-    u.add_frame(Some(next));
-    u
+    u.add_next_frame();
 }
 
-/// The independent check of an inductive invariant (a conjunction of clauses over state
-/// literals): the initial state satisfies every clause (evaluated directly), and for every
-/// clause a SAT call (on one encoding, under assumptions) shows that `inv ∧ C ∧ T` cannot
-/// falsify it in the next state.
-/// Returns the number of clauses checked, or the first clause that fails.
-pub fn check_invariant(sys: &System, inv: &[Vec<Lit>]) -> Result<usize, usize> {
+/// The independent check of an inductive invariant: the initial state satisfies every clause
+/// and every at-most-one constraint (evaluated directly), and for each of them SAT calls show
+/// that no scan from a state of `inv ∧ C` falsifies it: for a clause, the negation of its
+/// literals in the next state; for an at-most-one constraint, two of its literals true in the
+/// next state. The calls are made case by case ([`cases`]: together, every state), on one
+/// encoding per case, under assumptions.
+/// Returns the number of constraints checked, or the first one that fails (clauses first).
+pub fn check_invariant(sys: &System, inv: &Invariant) -> Result<usize, usize> {
     // Initial state: evaluate the AIG with the state variables at their initial values.
     let mut vals = vec![false; sys.g.num_vars()];
     for sv in &sys.state {
@@ -240,9 +492,14 @@ pub fn check_invariant(sys: &System, inv: &[Vec<Lit>]) -> Result<usize, usize> {
         }
     }
     let table = sys.g.eval_all(&vals);
-    for (k, cl) in inv.iter().enumerate() {
+    for (k, cl) in inv.clauses.iter().enumerate() {
         if !cl.iter().any(|&l| Aig::value(&table, l)) {
             return Err(k);
+        }
+    }
+    for (k, g) in inv.at_most_one.iter().enumerate() {
+        if g.iter().filter(|&&l| Aig::value(&table, l)).count() > 1 {
+            return Err(inv.clauses.len() + k);
         }
     }
     // A literal whose next-state function is the constant that makes it true holds after
@@ -255,19 +512,44 @@ pub fn check_invariant(sys: &System, inv: &[Vec<Lit>]) -> Result<usize, usize> {
             .and_then(|v| next_of.get(&v))
             .is_some_and(|&n| n == if l.is_neg() { Lit::FALSE } else { Lit::TRUE })
     };
-    // One encoding of `inv ∧ C ∧ T`; each clause is then refuted under assumptions (the
-    // negation of its literals in the next state), which the solver answers incrementally.
-    let mut u = one_scan_from(sys, inv);
-    for (k, cl) in inv.iter().enumerate() {
-        if cl.iter().any(|&l| true_next(l)) {
-            continue;
+    let mut failed: Option<usize> = None;
+    let mut u = Unroller::new(sys);
+    for case in cases(sys, inv) {
+        one_scan_from(&mut u, inv, &case);
+        for (k, cl) in inv.clauses.iter().enumerate() {
+            if cl.iter().any(|&l| true_next(l)) {
+                continue;
+            }
+            let negated: Vec<SLit> = cl.iter().map(|&l| !u.lit(1, l)).collect();
+            if negated.contains(&!u.tru) {
+                continue;
+            }
+            if u.solve(&negated) != SolverResult::Unsat {
+                failed = Some(failed.map_or(k, |f| f.min(k)));
+                break;
+            }
         }
-        let negated: Vec<SLit> = cl.iter().map(|&l| !u.lit(1, l)).collect();
-        if u.solve(&negated) != SolverResult::Unsat {
-            return Err(k);
+        if failed.is_some() {
+            break;
+        }
+        for (k, g) in inv.at_most_one.iter().enumerate() {
+            let two = u.two_of(g);
+            if two == !u.tru {
+                continue;
+            }
+            if u.solve(&[two]) != SolverResult::Unsat {
+                failed = Some(inv.clauses.len() + k);
+                break;
+            }
+        }
+        if failed.is_some() {
+            break;
         }
     }
-    Ok(inv.len())
+    match failed {
+        Some(k) => Err(k),
+        None => Ok(inv.len()),
+    }
 }
 
 /// Completes a trace of one scan: values for every input variable such that the constraint

@@ -1,6 +1,7 @@
 //! The transition system the engines check: state bits with their next-state functions and
 //! initial values, the free inputs, and the constraint (assumptions) — all literals of one AIG.
-//! [`System::cone`] keeps only what a property depends on (cone of influence).
+//! [`System::cone`] keeps only what a property depends on (cone of influence);
+//! [`System::simplify`] folds the state bits that never change.
 
 use crate::aig::{Aig, Lit};
 use crate::model::Model;
@@ -71,22 +72,24 @@ impl System {
         }
     }
 
-    /// The cone of `roots`, with the state bits that never leave their initial value (found
-    /// by three-valued simulation from the initial state) replaced by constants; also returns
-    /// `roots` in the simplified graph. Variable numbers are kept, so traces carry over.
-    pub fn reduce(&self, roots: &[Lit]) -> (System, Vec<Lit>) {
-        let cone = self.cone(roots);
-        let mut vals: Vec<Option<bool>> = vec![None; cone.g.num_vars()];
-        for s in &cone.state {
-            if let Some(v) = cone.g.var_of(s.lit) {
+    /// The system with the state bits that never leave their initial value (found by
+    /// three-valued simulation from the initial state) replaced by constants, and the map of
+    /// this graph's literals into the new one ([`Aig::map_lit`]). Variable numbers are kept,
+    /// so traces carry over. Computed once for all properties: a bit the simulation finds
+    /// constant is constant whatever the property, and the cone of a property (closed under
+    /// dependency) gets the same constants as when simulated alone.
+    pub fn simplify(&self) -> (System, Vec<Lit>) {
+        let mut vals: Vec<Option<bool>> = vec![None; self.g.num_vars()];
+        for s in &self.state {
+            if let Some(v) = self.g.var_of(s.lit) {
                 vals[v as usize] = Some(s.init);
             }
         }
         loop {
-            let t = cone.g.eval_ternary(&vals);
+            let t = self.g.eval_ternary(&vals);
             let mut changed = false;
-            for s in &cone.state {
-                let Some(v) = cone.g.var_of(s.lit) else { continue };
+            for s in &self.state {
+                let Some(v) = self.g.var_of(s.lit) else { continue };
                 if vals[v as usize].is_none() {
                     continue;
                 }
@@ -100,30 +103,23 @@ impl System {
                 break;
             }
         }
-        let subst: std::collections::HashMap<u32, Lit> = cone
+        let subst: std::collections::HashMap<u32, Lit> = self
             .state
             .iter()
             .filter_map(|s| {
-                let v = cone.g.var_of(s.lit)?;
+                let v = self.g.var_of(s.lit)?;
                 vals[v as usize].map(|b| (v, Lit::from_bool(b)))
             })
             .collect();
-        if subst.is_empty() {
-            return (cone, roots.to_vec());
-        }
-        let (g, map) = cone.g.rebuild(&subst);
-        let state: Vec<StateVar> = cone
+        let (g, map) = self.g.rebuild(&subst);
+        let state: Vec<StateVar> = self
             .state
             .iter()
-            .filter(|s| cone.g.var_of(s.lit).is_some_and(|v| !subst.contains_key(&v)))
+            .filter(|s| self.g.var_of(s.lit).is_some_and(|v| !subst.contains_key(&v)))
             .map(|s| StateVar { lit: Aig::map_lit(&map, s.lit), next: Aig::map_lit(&map, s.next), ..*s })
             .collect();
-        let constraint = Aig::map_lit(&map, cone.constraint);
-        let roots: Vec<Lit> = roots.iter().map(|&r| Aig::map_lit(&map, r)).collect();
-        let reduced = System { g, state, constraint };
-        // Constants may cut dependencies: take the cone again.
-        let again = reduced.cone(&roots);
-        (again, roots)
+        let constraint = Aig::map_lit(&map, self.constraint);
+        (System { g, state, constraint }, map)
     }
 
     /// AIG variables of the state bits.
