@@ -44,14 +44,9 @@ fn trans(s: &mut String, from: &[String], to: &[String]) {
 fn loops(k: usize, len: usize, converge: bool, unsafe_jump: bool) -> String {
     let mut s = String::from(HEADER);
     let n = |i: usize, j: usize| format!("L{i}_{j}");
-    step(&mut s, "Init", true);
-    trans(&mut s, &["Init".into()], &(0..k).map(|i| n(i, 0)).collect::<Vec<_>>());
-    for i in 0..k {
-        for j in 0..len {
-            step(&mut s, &n(i, j), false);
-            trans(&mut s, &[n(i, j)], &[n(i, (j + 1) % len)]);
-        }
-        if !converge && i + 1 < k {
+    rings_from_init(&mut s, k, len);
+    if !converge {
+        for i in 0..k.saturating_sub(1) {
             let (a, b) = (len / 2, 1);
             trans(&mut s, &[n(i, a), n(i + 1, b)], &[n(i, a + 1), n(i + 1, b + 1)]);
         }
@@ -77,18 +72,23 @@ fn rings(k: usize, len: usize) -> String {
             trans(&mut s, &[n(j)], &[n((j + 1) % len)]);
         }
     } else {
-        let n = |i: usize, j: usize| format!("R{i}_{j}");
-        step(&mut s, "Init", true);
-        trans(&mut s, &["Init".into()], &(0..k).map(|i| n(i, 0)).collect::<Vec<_>>());
-        for i in 0..k {
-            for j in 0..len {
-                step(&mut s, &n(i, j), false);
-                trans(&mut s, &[n(i, j)], &[n(i, (j + 1) % len)]);
-            }
-        }
+        rings_from_init(&mut s, k, len);
     }
     s.push_str("END_PROGRAM\n");
     s
+}
+
+/// The initial step `Init` and `k` rings of `len` steps `L{i}_{j}` it enters together.
+fn rings_from_init(s: &mut String, k: usize, len: usize) {
+    let n = |i: usize, j: usize| format!("L{i}_{j}");
+    step(s, "Init", true);
+    trans(s, &["Init".into()], &(0..k).map(|i| n(i, 0)).collect::<Vec<_>>());
+    for i in 0..k {
+        for j in 0..len {
+            step(s, &n(i, j), false);
+            trans(s, &[n(i, j)], &[n(i, (j + 1) % len)]);
+        }
+    }
 }
 
 /// A chart of `branches` alternative branches of `len` steps between Choose and Merge.
