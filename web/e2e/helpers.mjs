@@ -75,7 +75,7 @@ export async function wire(page, from, to, outPin = 0, inPin = 0) {
   const b = await pin(page, to, 'in', inPin);
   await drag(page, a, { x: b.x, y: b.y + 2 }, 8);
   return page
-    .waitForFunction((k) => window.__sfc.doc().connections.length > k, n, { timeout: 2000 })
+    .waitForFunction((k) => window.__sfc.doc().connections.length > k, n, { timeout: 5000 })
     .then(() => true)
     .catch(() => false);
 }
@@ -89,6 +89,13 @@ export async function select(page, id) {
     const sel = window.__sfc.selection();
     return sel.length === 1 && sel[0] === i;
   }, id, { timeout: 3000 });
+  await panelShows(page, id);
+}
+
+/** Waits until the Properties panel shows block `id` (it renders after the selection changes:
+ *  typing before that would go into the previous block's fields). */
+export async function panelShows(page, id) {
+  await page.locator(`.side-panel .prop-heading span[title="${id}"]`).waitFor({ timeout: 5000 });
 }
 
 /** Types into a Properties input and commits it (Enter). */

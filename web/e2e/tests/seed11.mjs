@@ -27,7 +27,7 @@
 // conditions and jump targets in the Properties panel.
 import fs from 'node:fs';
 import path from 'node:path';
-import { assert, box, doc, drag, dropFromPalette, openEditor, setCondition, setField, sfc, shotPath, waitChart, wire } from '../helpers.mjs';
+import { assert, box, doc, drag, dropFromPalette, openEditor, panelShows, setCondition, setField, sfc, shotPath, waitChart, wire } from '../helpers.mjs';
 
 const here = path.dirname(new URL(import.meta.url).pathname);
 const EXPECTED = fs.readFileSync(path.join(here, '..', 'fixtures', 'seed11.expected'), 'utf8').trim();
@@ -188,6 +188,7 @@ export const tests = [
           await page.mouse.click(b.x + b.width / 2, b.y + b.height / 2);
           await page.waitForFunction((i) => window.__sfc.selection().join() === i, id);
         }
+        await panelShows(page, id);
         for (const [sel2, value] of fields) await setField(page, sel2, value);
       };
       for (const s of [...plan.steps].sort((a, b) => a.state - b.state)) {
@@ -215,10 +216,12 @@ export const tests = [
       // The transitions in table order (which is their priority), then the jumps.
       for (const tr of plan.transitions) {
         ids[tr.key] = await dropFromPalette(page, 'transition', at(tr.cx, tr.y, 20));
+        await panelShows(page, ids[tr.key]);
         await setCondition(page, ids[tr.key], tr.condition);
       }
       for (const j of plan.jumps) {
         ids[j.key] = await dropFromPalette(page, 'jump', at(j.cx, j.y, 20));
+        await panelShows(page, ids[j.key]);
         await page.locator('.side-panel #p-jump').selectOption(stepName(j.target));
         await page.waitForFunction(([i, s]) => window.__sfc.doc().elements.find((e) => e.id === i)?.target === s, [ids[j.key], stepName(j.target)]);
       }
