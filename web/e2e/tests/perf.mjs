@@ -2,8 +2,9 @@
 // frame times while a step is dragged by mouse for about 60 frames (target: p95 under 50 ms).
 // The figures are printed, with the machine's load; only a generous sanity bound is asserted
 // (the machine running the tests may be busy). It runs the release binary when there is one
-// (SFC_RELEASE_BIN, default target/release/sfc), which serves the production build of the app
-// (no test hook), so it reads only the page's DOM.
+// (SFC_RELEASE_BIN, default target/release/sfc, which is skipped when it is older than the
+// binary the other tests run), which serves the production build of the app (no test hook), so
+// it reads only the page's DOM.
 //
 // The chart is IEC text without any layout (no sfc.* positions), as another tool would write
 // it, so the server lays it out on opening: a sequence of 125 sections, each a step with a
@@ -45,8 +46,13 @@ export const tests = [
       const { page } = t;
       const file = path.join(t.scratch, 'big.st');
       fs.writeFileSync(file, bigChartText());
+      // The release binary, unless it is older than the binary the other tests run (then it
+      // was built from older sources, and its figures would not be this code's).
       const release = process.env.SFC_RELEASE_BIN ?? path.join(t.root, 'target', 'release', 'sfc');
-      const useRelease = fs.existsSync(release);
+      const mtime = (p) => (fs.existsSync(p) ? fs.statSync(p).mtimeMs : -1);
+      const stale = !process.env.SFC_RELEASE_BIN && mtime(release) >= 0 && mtime(release) < mtime(t.sfcBin);
+      if (stale) t.log(`${release} is older than ${t.sfcBin}: measuring the debug binary instead`);
+      const useRelease = mtime(release) >= 0 && !stale;
       const server = await t.edit([file], t.scratch, useRelease ? { bin: release, production: true } : {});
       await page.addInitScript(() => localStorage.setItem('sfc.language', 'en'));
       // 11 blocks and 12 wires per section, and the jump back.
