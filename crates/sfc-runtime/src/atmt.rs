@@ -410,6 +410,9 @@ impl Observer<'_> {
         let st = ScanState {
             scan: self.scan,
             time: now,
+            key: true,
+            base: 0,
+            clocks: Vec::new(),
             active: vec![(state, now - self.entered_at)],
             fired: fired.clone(),
             guards,
@@ -440,7 +443,7 @@ impl Observer<'_> {
         for e in events {
             b.push_event(e);
         }
-        b.push_state(Arc::new(st));
+        b.push_state(Arc::new(st), drop);
         b.stats = serde_json::json!({"scans": self.stats.scans, "lines": self.line});
     }
 }

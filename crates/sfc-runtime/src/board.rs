@@ -11,6 +11,8 @@ use std::sync::{mpsc, Arc, Mutex};
 
 /// How many scan states the runtime keeps for `history`.
 pub const HISTORY: usize = 100;
+/// At most this many states from one that lists the active steps in full to the next.
+pub const KEY_EVERY: u64 = 32;
 /// How many events the runtime keeps for clients that paused or lag.
 pub const EVENT_LOG: usize = 1000;
 
@@ -18,12 +20,27 @@ pub const EVENT_LOG: usize = 1000;
 ///
 /// The scan thread fills states in recycled buffers (the board hands back the states that fall
 /// out of the history) and in the engine's own order: whoever reads a state sorts what it shows.
+///
+/// The active steps are published as a change where the scan only fired transitions: such a
+/// state (`key` false) lists no active steps, and whoever reads it takes them from the state
+/// before it and its fired transitions ([`Board::tail`], [`Tail::full`]). Every
+/// [`KEY_EVERY`]th state, and any state after a start, SFCInit, restart or fault, lists them in
+/// full (`key` true). A scan of a dense chart then costs the runtime a copy of what fired, not
+/// of every active step.
 #[derive(Debug, Clone, Default)]
 pub struct ScanState {
     pub scan: u64,
     /// Virtual time, µs.
     pub time: i64,
-    /// Active steps with elapsed time (µs), in no particular order.
+    /// `active` lists every active step; otherwise it is empty and the active steps are those
+    /// of the state of scan `base` changed by `fired`.
+    pub key: bool,
+    /// The scan of the state this one changes (when not `key`).
+    pub base: u64,
+    /// Each chart instance's clock (µs) after the scan ([`ChartInfo::charts`] order): a step
+    /// that stays active gains what its chart's clock gained.
+    pub clocks: Vec<i64>,
+    /// Active steps with elapsed time (µs), in no particular order (when `key`; see [`Tail`]).
     pub active: Vec<(u32, i64)>,
     /// Transitions fired in this scan.
     pub fired: Vec<u32>,
@@ -266,20 +283,53 @@ impl Board {
             self.state_seq += 1;
         }
     }
-    /// Adds a state to the history; returns the state that fell out of it, for reuse.
-    pub fn push_state(&mut self, s: Arc<ScanState>) -> Option<Arc<ScanState>> {
-        let old = if self.history.len() == HISTORY { self.history.pop_front() } else { None };
+    /// Adds a state to the history and hands the states that fell out of it to `gone`, for
+    /// reuse. The history keeps at least [`HISTORY`] states and always starts with a key state
+    /// (so each of its states can be shown in full): the oldest states leave it a key state's
+    /// run at a time.
+    pub fn push_state(&mut self, s: Arc<ScanState>, mut gone: impl FnMut(Arc<ScanState>)) {
+        if !s.key && self.history.is_empty() {
+            // Nothing to change: a state that cannot be shown is not kept.
+            gone(s);
+            return;
+        }
         self.history.push_back(s);
-        old
+        while self.history.len() > HISTORY {
+            let next_key = self.history.iter().skip(1).position(|s| s.key).map_or(self.history.len(), |i| i + 1);
+            if self.history.len() - next_key < HISTORY {
+                break;
+            }
+            for _ in 0..next_key {
+                if let Some(old) = self.history.pop_front() {
+                    gone(old);
+                }
+            }
+        }
     }
     /// Replaces the newest state by a fuller copy of it (its guards evaluated).
     pub fn replace_latest(&mut self, s: Arc<ScanState>) {
         match self.history.back_mut() {
             Some(last) if last.scan == s.scan => *last = s,
-            _ => {
-                let _ = self.push_state(s);
-            }
+            _ => self.push_state(s, drop),
         }
+    }
+    /// The states of the history from position `i` (all of them for 0), with the states before
+    /// them back to a key state: to be shown in full with [`Tail::full`], outside the lock.
+    pub fn tail(&self, i: usize) -> Tail {
+        let i = i.min(self.history.len());
+        let mut from = i;
+        while from > 0 && self.history.get(from).is_none_or(|s| !s.key) {
+            from -= 1;
+        }
+        Tail { states: self.history.range(from..).cloned().collect(), skip: i - from }
+    }
+    /// The newest state (see [`Board::tail`]).
+    pub fn tail_latest(&self) -> Tail {
+        self.tail(self.history.len().saturating_sub(1))
+    }
+    /// The states newer than scan `after` (see [`Board::tail`]).
+    pub fn tail_after(&self, after: u64) -> Tail {
+        self.tail(self.history.partition_point(|s| s.scan <= after))
     }
     /// The latest statistics as JSON (`docs/monitor.md`, "stats").
     pub fn stats_json(&self) -> serde_json::Value {
@@ -304,6 +354,108 @@ impl Board {
         }
         self.events.push_back(LoggedEvent { seq: self.next_event, event: event.into() });
         self.next_event += 1;
+    }
+}
+
+/// States of the history with what is needed to show them in full ([`Board::tail`]).
+#[derive(Debug, Default)]
+pub struct Tail {
+    states: Vec<Arc<ScanState>>,
+    /// The first `skip` states are only there to show the others.
+    skip: usize,
+}
+
+impl Tail {
+    /// The states with their active steps in full (a key state as it is, the others computed
+    /// from the one before them).
+    pub fn full(self, info: &ChartInfo) -> Vec<Arc<ScanState>> {
+        let mut out = Vec::with_capacity(self.states.len().saturating_sub(self.skip));
+        let mut prev: Option<Arc<ScanState>> = None;
+        for (k, st) in self.states.into_iter().enumerate() {
+            let st = match &prev {
+                _ if st.key => st,
+                // A copy of the state before it (its guards or safe values filled in).
+                Some(p) if p.scan == st.scan => {
+                    let mut c = (*st).clone();
+                    c.key = true;
+                    c.active.clone_from(&p.active);
+                    Arc::new(c)
+                }
+                Some(p) => {
+                    debug_assert_eq!(p.scan, st.base, "a change is read after the state it changes");
+                    let mut c = (*st).clone();
+                    apply_fired(info, p, &mut c);
+                    Arc::new(c)
+                }
+                None => st,
+            };
+            if k >= self.skip {
+                out.push(st.clone());
+            }
+            prev = Some(st);
+        }
+        out
+    }
+    /// The newest state in full.
+    pub fn last(self, info: &ChartInfo) -> Option<Arc<ScanState>> {
+        let skip = self.states.len().checked_sub(1)?;
+        Tail { skip, ..self }.full(info).pop()
+    }
+}
+
+/// Fills the active steps of `st` (a change) from those of `prev` (the state before it):
+/// the steps before its fired transitions leave, those after them enter with elapsed time 0,
+/// and every other step's time advances by its chart's clock.
+pub fn apply_fired(info: &ChartInfo, prev: &ScanState, st: &mut ScanState) {
+    let mut active = Vec::new();
+    Change::default().apply(info, (&prev.active, &prev.clocks, prev.time), st, &mut active);
+    st.active = active;
+    st.key = true;
+}
+
+/// The lists [`apply_fired`] works with, kept to be used again.
+#[derive(Debug, Default)]
+pub struct Change {
+    gone: Vec<u32>,
+    entered: Vec<u32>,
+}
+
+impl Change {
+    /// [`apply_fired`] from the state before `st` given as its active steps, chart clocks and
+    /// time, into `out`.
+    pub fn apply(
+        &mut self,
+        info: &ChartInfo,
+        (prev_active, prev_clocks, prev_time): (&[(u32, i64)], &[i64], i64),
+        st: &ScanState,
+        out: &mut Vec<(u32, i64)>,
+    ) {
+        let Change { gone, entered } = self;
+        gone.clear();
+        entered.clear();
+        for &t in &st.fired {
+            if let Some((_, pre, post)) = info.transitions.get(t as usize) {
+                gone.extend_from_slice(pre);
+                entered.extend_from_slice(post);
+            }
+        }
+        gone.extend_from_slice(entered);
+        gone.sort_unstable();
+        gone.dedup();
+        entered.sort_unstable();
+        entered.dedup();
+        let advance = |s: u32| {
+            let c = info.charts.partition_point(|c| c.steps.end <= s);
+            match (st.clocks.get(c), prev_clocks.get(c)) {
+                (Some(now), Some(then)) => now - then,
+                _ => st.time - prev_time,
+            }
+        };
+        out.clear();
+        out.extend(
+            prev_active.iter().filter(|(s, _)| gone.binary_search(s).is_err()).map(|&(s, t)| (s, t + advance(s))),
+        );
+        out.extend(entered.iter().map(|&s| (s, 0)));
     }
 }
 
@@ -488,4 +640,124 @@ pub fn reply_ok(id: &serde_json::Value, result: serde_json::Value) -> String {
 /// Makes an error reply line `{"type":"reply","re":id,"ok":false,"error":…}`.
 pub fn reply_err(id: &serde_json::Value, error: impl Into<String>) -> String {
     serde_json::json!({"type": "reply", "re": id, "ok": false, "error": error.into()}).to_string()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Two charts: `A0 ⇄ B0` (steps 0, 1; transitions 0, 1) and `A1 → {B1, C1} → A1` (a
+    /// simultaneous divergence: steps 2, 3, 4; transitions 2, 3).
+    fn info() -> ChartInfo {
+        let outline = |instance: &str, steps: std::ops::Range<u32>, transitions: std::ops::Range<u32>| {
+            sfc_sim::ChartOutline {
+                instance: instance.into(),
+                path: String::new(),
+                pou: instance.into(),
+                steps,
+                transitions,
+                actions: 0..0,
+            }
+        };
+        ChartInfo {
+            runtime: "sfc run",
+            pou: "P".into(),
+            period: 10_000,
+            steps: ["A0", "B0", "A1", "B1", "C1"].iter().map(|s| (s.to_string(), s.starts_with('A'))).collect(),
+            transitions: vec![
+                ("T0".into(), vec![0], vec![1]),
+                ("T1".into(), vec![1], vec![0]),
+                ("T2".into(), vec![2], vec![3, 4]),
+                ("T3".into(), vec![3, 4], vec![2]),
+            ],
+            variables: Vec::new(),
+            control: true,
+            charts: vec![outline("P", 0..2, 0..2), outline("Fb", 2..5, 2..4)],
+            actions: Vec::new(),
+        }
+    }
+
+    fn state(scan: u64, key: bool, fired: &[u32], clocks: [i64; 2], active: &[(u32, i64)]) -> Arc<ScanState> {
+        Arc::new(ScanState {
+            scan,
+            time: scan as i64 * 10_000,
+            key,
+            base: scan.saturating_sub(1),
+            clocks: clocks.to_vec(),
+            active: if key { active.to_vec() } else { Vec::new() },
+            fired: fired.to_vec(),
+            ..Default::default()
+        })
+    }
+
+    fn sorted(st: &ScanState) -> Vec<(u32, i64)> {
+        let mut a = st.active.clone();
+        a.sort_unstable();
+        a
+    }
+
+    #[test]
+    fn changes_are_shown_in_full_from_the_key_state_before_them() {
+        let info = info();
+        let mut b = Board::default();
+        // Scan 1 fires T0 and T2; the function block's chart is not called in scan 2 (its clock
+        // stands still); scan 3 fires T1 and T3, and is then published again with its guards.
+        let states = [
+            state(0, true, &[], [0, 0], &[(0, 0), (2, 0)]),
+            state(1, false, &[0, 2], [10_000, 10_000], &[]),
+            state(2, false, &[], [20_000, 10_000], &[]),
+            state(3, false, &[1, 3], [30_000, 20_000], &[]),
+        ];
+        for s in &states {
+            b.push_state(s.clone(), |_| panic!("nothing leaves a short history"));
+        }
+        let mut again = (*states[3]).clone();
+        again.guards_known = true;
+        b.replace_latest(Arc::new(again));
+        let full = b.tail(0).full(&info);
+        let got: Vec<Vec<(u32, i64)>> = full.iter().map(|s| sorted(s)).collect();
+        assert_eq!(
+            got,
+            vec![
+                vec![(0, 0), (2, 0)],
+                vec![(1, 0), (3, 0), (4, 0)],
+                vec![(1, 10_000), (3, 0), (4, 0)],
+                vec![(0, 0), (2, 0)],
+            ]
+        );
+        assert!(full.iter().all(|s| s.key));
+        assert!(full[3].guards_known, "the copy with its guards is the one shown");
+        // Any part of the history, and the newest state alone.
+        assert_eq!(sorted(&b.tail(2).full(&info)[0]), vec![(1, 10_000), (3, 0), (4, 0)]);
+        assert_eq!(b.tail_after(1).full(&info).len(), 2);
+        assert_eq!(sorted(&b.tail_latest().last(&info).expect("a state")), vec![(0, 0), (2, 0)]);
+        assert!(Board::default().tail_latest().last(&info).is_none());
+    }
+
+    #[test]
+    fn the_history_keeps_its_length_and_starts_with_a_state_in_full() {
+        let info = info();
+        let mut b = Board::default();
+        let mut gone = Vec::new();
+        // A change that cannot be shown (no state before it) is not kept.
+        b.push_state(state(0, false, &[0], [0, 0], &[]), |s| gone.push(s.scan));
+        assert!(b.history.is_empty() && gone == [0]);
+        gone.clear();
+        for k in 1..=400u64 {
+            let key = k % KEY_EVERY == 1;
+            // The key states (odd scans) have B0 active: T1 leaves it in even scans, T0 in odd ones.
+            let fired: &[u32] = if k % 2 == 0 { &[1] } else { &[0] };
+            b.push_state(state(k, key, if key { &[] } else { fired }, [k as i64, 0], &[(k as u32 % 2, 0)]), |s| {
+                gone.push(s.scan)
+            });
+            assert!(b.history.len() >= HISTORY.min(k as usize), "scan {k}: {} states", b.history.len());
+            assert!(b.history.len() < HISTORY + KEY_EVERY as usize, "scan {k}: {} states", b.history.len());
+            assert!(b.history[0].key, "scan {k}: the history starts with a change");
+        }
+        // The states that left are the oldest, in order, each once.
+        assert_eq!(gone, (1..=gone.len() as u64).collect::<Vec<_>>());
+        let full = b.tail(0).full(&info);
+        assert_eq!(full.len(), b.history.len());
+        assert!(full.iter().all(|s| s.active == [(s.scan as u32 % 2, 0)]), "B0 in odd scans, A0 in even ones");
+    }
 }

@@ -452,6 +452,8 @@ impl Runtime {
             fault: None,
             reanchor: false,
             restarted: true,
+            since_key: u64::MAX,
+            check: Default::default(),
             inputs: Vec::new(),
             forced: Vec::new(),
             pending_sets: Vec::new(),
@@ -593,9 +595,13 @@ impl Runtime {
         let mut report = if self.hub.stopping() && !worker.is_finished() {
             RunReport::default()
         } else {
-            worker
-                .join()
-                .unwrap_or_else(|_| RunReport { error: Some("the run's thread panicked".into()), ..Default::default() })
+            // A panic of the scan thread is a fault of the runtime itself: said, and the run
+            // ends as FAULT (not as an orderly stop).
+            worker.join().unwrap_or_else(|_| {
+                let msg = "the scan thread panicked (a defect of sfc: please report it with the chart)";
+                self.hub.notice(format!("sfc run: FAULT: {msg}"));
+                RunReport { error: Some(msg.into()), state: RunState::Fault, ..Default::default() }
+            })
         };
         // The sessions send what the end of the run published once they see `closing`, and
         // the network thread waits for them (`start_net`).

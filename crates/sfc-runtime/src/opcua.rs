@@ -281,7 +281,8 @@ fn nid(ns: u16, path: &str) -> NodeId {
 
 /// The latest published state (`None` before the first scan).
 fn latest(hub: &Hub) -> Option<Arc<ScanState>> {
-    hub.lock().history.back().cloned()
+    let tail = hub.lock().tail_latest();
+    tail.last(&hub.info)
 }
 
 fn good(v: impl Into<Variant>) -> Result<DataValue, StatusCode> {

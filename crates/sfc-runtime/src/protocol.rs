@@ -534,8 +534,9 @@ impl Session<'_> {
             let b = self.hub.lock();
             self.next_halt = b.next_halt;
             self.state_seq = b.state_seq;
-            (b.history.back().cloned(), b.halted, b.stats_json(), b.state, b.fault.clone())
+            (b.tail_latest(), b.halted, b.stats_json(), b.state, b.fault.clone())
         };
+        let latest = latest.last(&self.hub.info);
         self.halted = Some(halted);
         match latest {
             Some(st) => {
@@ -559,18 +560,21 @@ impl Session<'_> {
             let first = last_scan.is_none().then(|| (b.stats_json(), b.state, b.fault.clone()));
             let state = (b.state_seq != self.state_seq).then(|| {
                 self.state_seq = b.state_seq;
-                (b.state, b.fault.clone(), b.history.back().cloned())
+                (b.state, b.fault.clone(), b.tail_latest())
             });
             let halts: Vec<(bool, String)> =
                 b.halts.iter().filter(|h| h.seq >= self.next_halt).map(|h| (h.halted, h.reason.clone())).collect();
             self.next_halt = b.next_halt;
             let events: Vec<_> = b.events.iter().filter(|e| e.seq >= self.next_event).cloned().collect();
-            let between: Vec<Arc<ScanState>> = match last_scan {
-                Some(l) => b.history.iter().filter(|s| s.scan > l).cloned().collect(),
-                None => b.history.back().cloned().into_iter().collect(),
+            let between = match last_scan {
+                Some(l) => b.tail_after(l),
+                None => b.tail_latest(),
             };
             (events, between, halts, b.halted, b.reason.clone(), state, first)
         };
+        // The active steps in full, outside the lock.
+        let between = between.full(&self.hub.info);
+        let state = state.map(|(run, fault, latest)| (run, fault, latest.last(&self.hub.info)));
         // Older changes than the log holds: the state now is what counts.
         if halts.last().map(|h| h.0) != Some(halted) {
             halts.push((halted, reason));
@@ -739,11 +743,11 @@ impl Session<'_> {
                     None => crate::board::HISTORY,
                     Some(c) => c.as_u64().ok_or("`count` is a number")?.min(crate::board::HISTORY as u64) as usize,
                 };
-                let states: Vec<Arc<ScanState>> = {
+                let tail = {
                     let b = self.hub.lock();
-                    let skip = b.history.len().saturating_sub(n);
-                    b.history.iter().skip(skip).cloned().collect()
+                    b.tail(b.history.len().saturating_sub(n))
                 };
+                let states = tail.full(info);
                 let list: Vec<serde_json::Value> = states.iter().map(|s| state_json(info, s)).collect();
                 let mut j = serde_json::json!({"type": "history", "re": id, "states": list});
                 crate::board::put(&mut j, "ok", serde_json::json!(true));

@@ -94,6 +94,11 @@ pub(crate) struct ScanThread {
     pub reanchor: bool,
     /// The next scan is the chart's first (start, reset): its initial steps count as entered.
     pub restarted: bool,
+    /// States published since the last that lists the active steps in full (`u64::MAX`: the
+    /// next must list them, as the states before it were dropped).
+    pub since_key: u64,
+    /// Debug builds: each change checked against the engine.
+    pub check: ChangeCheck,
     pub inputs: Vec<Value>,
     pub forced: Vec<(u32, Value)>,
     pub pending_sets: Vec<(u32, Value)>,
@@ -508,8 +513,26 @@ impl ScanThread {
         };
         st.scan = self.sim.next_scan() - 1;
         st.time = self.sim.next_time() - self.sim.options().period;
-        self.sim.active_times_unsorted(&mut st.active);
         self.sim.fired_ids(&mut st.fired);
+        self.sim.chart_clocks(&mut st.clocks);
+        // The active steps: in full now and then, or after anything but firing transitions
+        // changed them; otherwise as the change the fired transitions made.
+        let base = self.last_state.as_ref().map(|s| s.scan);
+        st.key = first
+            || base.is_none()
+            || self.since_key >= crate::board::KEY_EVERY
+            || !self.sim.situation_follows_fired();
+        st.base = base.unwrap_or(0);
+        if st.key {
+            self.sim.active_times_unsorted(&mut st.active);
+            self.since_key = 1;
+        } else {
+            st.active.clear();
+            self.since_key += 1;
+        }
+        if cfg!(debug_assertions) {
+            self.check.check(&self.hub.info, &self.sim, st);
+        }
         st.guards_known = self.hub.connected.load(Ordering::Relaxed) > 0
             || self.halted
             || self.hub.guards_always.load(Ordering::Relaxed);
@@ -609,8 +632,18 @@ impl ScanThread {
         self.last_state = Some(arc.clone());
         self.unpublished_states.push_back(arc);
         if self.unpublished_states.len() > crate::board::HISTORY {
+            // The oldest go, up to the next state in full (the changes after a dropped state
+            // could not be shown).
             if let Some(old) = self.unpublished_states.pop_front() {
                 self.recycle(old);
+            }
+            while self.unpublished_states.front().is_some_and(|s| !s.key) {
+                if let Some(old) = self.unpublished_states.pop_front() {
+                    self.recycle(old);
+                }
+            }
+            if self.unpublished_states.is_empty() {
+                self.since_key = u64::MAX;
             }
         }
         result
@@ -872,9 +905,7 @@ impl ScanThread {
 
     fn flush(&mut self, b: &mut crate::board::Board) {
         while let Some(s) = self.unpublished_states.pop_front() {
-            if let Some(old) = b.push_state(s) {
-                self.recycle(old);
-            }
+            b.push_state(s, |old| self.recycle(old));
         }
         for e in self.unpublished_events.drain(..) {
             b.push_event(e);
@@ -888,6 +919,34 @@ impl ScanThread {
         if self.stats.scans.is_multiple_of(50) || b.halted {
             b.digest = Some(self.stats.digest());
         }
+    }
+}
+
+/// Debug builds: checks each change the scan thread publishes against the engine (the change
+/// applied to the state before it gives the engine's active steps and times). Its lists are
+/// kept from scan to scan, so the check allocates nothing per scan either.
+#[derive(Debug, Default)]
+pub struct ChangeCheck {
+    change: crate::board::Change,
+    /// The engine's active steps, chart clocks and time after the previous scan.
+    prev: Option<(Vec<(u32, i64)>, Vec<i64>, i64, u64)>,
+    truth: Vec<(u32, i64)>,
+    got: Vec<(u32, i64)>,
+}
+
+impl ChangeCheck {
+    fn check(&mut self, info: &crate::board::ChartInfo, sim: &sfc_sim::Simulation, st: &ScanState) {
+        sim.active_times_unsorted(&mut self.truth);
+        self.truth.sort_unstable();
+        if let (false, Some((active, clocks, time, scan))) = (st.key, self.prev.as_ref()) {
+            self.change.apply(info, (active, clocks, *time), st, &mut self.got);
+            self.got.sort_unstable();
+            assert_eq!(self.got, self.truth, "scan {}: the change from scan {scan} is not the engine's situation", st.scan);
+        }
+        let prev = self.prev.get_or_insert_with(Default::default);
+        prev.0.clone_from(&self.truth);
+        prev.1.clone_from(&st.clocks);
+        (prev.2, prev.3) = (st.time, st.scan);
     }
 }
 

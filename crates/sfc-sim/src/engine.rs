@@ -462,6 +462,7 @@ impl Simulation {
             }
         };
         self.next_scan += 1;
+        debug_assert!(self.charts.iter().all(|c| c.consistent()), "active list and activation times disagree");
         self.log.record(now, &self.sink, &self.charts);
         if self.mech.busy(&self.sink) {
             self.track_mechanisms(now, scan);

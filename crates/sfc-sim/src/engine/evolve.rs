@@ -181,6 +181,7 @@ pub(crate) fn reset(ctx: &mut Ctx<'_>, chart: usize, code: &ChartCode) {
         step.t = clock;
         step.pos = st.active.len() as u32;
         st.active.push(s);
+        st.since.push(clock);
     }
     st.changed = true;
     ctx.sink.starts.push((ctx.sink.fired.len() as u32, chart as u32));
@@ -485,9 +486,11 @@ fn fire_simple<const SLOW: bool>(
     fired.resize(base + fire.len(), (0, 0));
     {
         let links = &plan.link[..];
-        let ChartState { active, steps, fired_count, .. } = &mut *st;
-        let (active, steps, fired_count) = (&mut active[..], &mut steps[..], &mut fired_count[..]);
+        let ChartState { active, since, steps, fired_count, .. } = &mut *st;
+        let (active, since, steps, fired_count) =
+            (&mut active[..], &mut since[..], &mut steps[..], &mut fired_count[..]);
         assert!(links.len() == steps.len() && fire.len() <= active.len(), "one link record per step");
+        assert!(since.len() == active.len(), "one activation time per active step");
         for (&i, out) in fire.iter().zip(&mut fired[base..]) {
             // SAFETY: `i` is a position in `active` found by pass 1, which nothing has changed
             // since; `from` and `to` are steps and `l.t` a transition of this chart (checked
@@ -497,6 +500,7 @@ fn fire_simple<const SLOW: bool>(
                 let from = *slot;
                 let l = *at(links, from);
                 *slot = l.to;
+                *at_mut(since, i) = clock;
                 let f = at_mut(steps, from);
                 let d = clock - f.t;
                 f.x = false;

@@ -514,7 +514,7 @@ fn sync(ctx: &mut Ctx<'_>, chart: usize, plan: &ChartPlan, m: &State) {
         }
         // An active step's record holds the clock at its activation (see `StepState::t`).
         if st.steps[s].x {
-            st.steps[s].t = st.clock - m.t[s].to_us();
+            st.set_since(s as u32, st.clock - m.t[s].to_us());
         }
     }
     st.entered.clear();

@@ -8,7 +8,7 @@
 use super::{code_of, fit, ScanSink, Simulation, StepStats, TimeStats};
 use crate::code::{Ctx, FastGuard};
 use crate::value::{format_time, Value};
-use crate::Event;
+use crate::{Event, Profile};
 use sfc_st::Type;
 
 /// The steps (qualified name, initial) and transitions (qualified name, preceding steps,
@@ -222,9 +222,27 @@ impl Simulation {
         out.clear();
         let mut base = 0u32;
         for c in &self.charts {
-            out.extend(c.active.iter().map(|&s| (base + s, c.time(s))));
+            let clock = c.clock;
+            out.extend(c.active.iter().zip(&c.since).map(|(&s, &t)| (base + s, clock - t)));
             base += c.plan.step_names.len() as u32;
         }
+    }
+
+    /// Whether the last scan changed the active steps only by firing the transitions
+    /// [`Simulation::fired_ids`] lists: the steps before them left, the steps after them
+    /// entered (elapsed time 0), every other active step's time advanced by its chart's clock
+    /// ([`Simulation::chart_clocks`]). Not so when a chart started or was reset (SFCInit), under
+    /// the `matiec` profile (which keeps its own step times), or when the scan faulted. A
+    /// runtime then publishes the active steps in full rather than as a change.
+    pub fn situation_follows_fired(&self) -> bool {
+        self.sink.starts.is_empty() && self.error.is_none() && self.opts.profile != Profile::Matiec
+    }
+
+    /// Each chart instance's clock (µs, the time its active steps' elapsed times run on), in the
+    /// order of [`Simulation::chart_outline`].
+    pub fn chart_clocks(&self, out: &mut Vec<i64>) {
+        out.clear();
+        out.extend(self.charts.iter().map(|c| c.clock));
     }
 
     /// The transitions the last scan fired, in global numbers, in firing order.
