@@ -3,6 +3,8 @@
 mod common;
 
 use common::{active, carwash, Client, TOKEN};
+use sfc_runtime::{Limits, RunOptions, Runtime};
+use sfc_sim::{SimOptions, Simulation};
 use serde_json::json;
 
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
@@ -240,4 +242,86 @@ async fn explain_and_timing_answer_watchers() {
     assert_eq!(of("Brushing")["min"], serde_json::Value::Null, "{r}");
     rt.stop();
     assert_eq!(rt.wait().error, None);
+}
+
+/// A top chart whose two tokens move every scan (one through a simultaneous divergence), and a
+/// function block's chart that is called only while `A` is active and waits on its own step
+/// time: the runtime publishes most states as changes (fired transitions), and the monitor's
+/// `history` shows them in full. Each state it shows is the one a simulation of the same chart
+/// reaches at that scan.
+const MOVING: &str = "FUNCTION_BLOCK Blink
+    INITIAL_STEP Off: END_STEP
+    STEP On: END_STEP
+    TRANSITION FROM Off TO On := Off.T >= T#6ms; END_TRANSITION
+    TRANSITION FROM On TO Off := On.T >= T#4ms; END_TRANSITION
+END_FUNCTION_BLOCK
+PROGRAM Moving
+    VAR
+        Fb : Blink;
+    END_VAR
+    INITIAL_STEP A: Call(N); END_STEP
+    ACTION Call: Fb(); END_ACTION
+    STEP B: END_STEP
+    STEP C: END_STEP
+    STEP D: END_STEP
+    TRANSITION FROM A TO (B, C) := TRUE; END_TRANSITION
+    TRANSITION FROM (B, C) TO D := TRUE; END_TRANSITION
+    TRANSITION FROM D TO A := TRUE; END_TRANSITION
+    INITIAL_STEP Y: END_STEP
+    STEP Z: END_STEP
+    TRANSITION FROM Y TO Z := TRUE; END_TRANSITION
+    TRANSITION FROM Z TO Y := TRUE; END_TRANSITION
+END_PROGRAM
+";
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn history_of_a_moving_chart_is_the_simulation_s() {
+    let opts = SimOptions { period: 1_000, ..Default::default() };
+    let sim = Simulation::from_source("moving.st", MOVING, None, opts.clone()).unwrap_or_else(|(_, d)| panic!("{d:?}"));
+    let rt = Runtime::start(
+        sim,
+        RunOptions {
+            monitor: Some("127.0.0.1:0".parse().unwrap()),
+            token: Some(TOKEN.into()),
+            limits: Limits { scans: Some(300), ..Default::default() },
+            ..Default::default()
+        },
+    )
+    .unwrap();
+    let mut c = Client::connect(rt.monitor_addr().unwrap(), None).await;
+    let hello = c.until_type("hello").await;
+    let names: Vec<String> =
+        hello["steps"].as_array().unwrap().iter().map(|s| s["name"].as_str().unwrap().to_string()).collect();
+    // The run ends after 300 scans and keeps its history for the clients still connected.
+    c.until("the end of the run", |m| m["type"] == "state" && m["state"] == "STOP").await;
+    let h = c.cmd(json!({"cmd": "history"})).await;
+    let states = h["states"].as_array().unwrap();
+    assert_eq!(states.len(), 100);
+    // The same chart, simulated.
+    let mut sim = Simulation::from_source("moving.st", MOVING, None, opts).unwrap();
+    let mut expected = std::collections::BTreeMap::new();
+    let mut at = Vec::new();
+    for scan in 0..300u64 {
+        sim.advance().unwrap();
+        sim.active_times(&mut at);
+        let mut shown: Vec<(String, i64)> = at.iter().map(|&(s, t)| (names[s as usize].clone(), t)).collect();
+        shown.sort();
+        expected.insert(scan, shown);
+    }
+    let mut fb_moved = false;
+    for st in states {
+        let scan = st["scan"].as_u64().unwrap();
+        let mut got: Vec<(String, i64)> = st["active"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|a| (a["step"].as_str().unwrap().to_string(), a["elapsedUs"].as_i64().unwrap()))
+            .collect();
+        got.sort();
+        assert_eq!(got, expected[&scan], "scan {scan}");
+        fb_moved |= got.iter().any(|(s, _)| s.ends_with("On"));
+    }
+    assert!(fb_moved, "the function block's chart moved within the history");
+    rt.stop();
+    rt.wait();
 }
