@@ -396,6 +396,10 @@ impl Tail {
         }
         out
     }
+    /// The newest state as published (a change or in full).
+    pub fn newest(&self) -> Option<&Arc<ScanState>> {
+        self.states.last()
+    }
     /// The newest state in full.
     pub fn last(self, info: &ChartInfo) -> Option<Arc<ScanState>> {
         let skip = self.states.len().checked_sub(1)?;
@@ -563,6 +567,8 @@ pub struct Hub {
     /// Copy every step's time into each state (an OPC UA server publishes the `T` of
     /// inactive steps; nothing else reads it, so without one the scan leaves it empty).
     pub step_times: AtomicBool,
+    /// The newest state as published and in full, as [`Hub::latest`] rebuilt it last.
+    latest_full: Mutex<Option<(Arc<ScanState>, Arc<ScanState>)>>,
 }
 
 /// Notices kept when nobody reads them.
@@ -586,8 +592,27 @@ impl Hub {
             guesses: Mutex::new(Default::default()),
             guards_always: AtomicBool::new(false),
             step_times: AtomicBool::new(false),
+            latest_full: Mutex::new(None),
         };
         (Arc::new(hub), rx)
+    }
+
+    /// The newest state in full (`None` before the first scan). The one rebuilt last is kept
+    /// until a newer state is published: the OPC UA server asks once per node it reads.
+    pub fn latest(&self) -> Option<Arc<ScanState>> {
+        let tail = self.lock().tail_latest();
+        let newest = tail.newest()?.clone();
+        {
+            let cached = self.latest_full.lock().unwrap_or_else(|e| e.into_inner());
+            if let Some((src, full)) = cached.as_ref() {
+                if Arc::ptr_eq(src, &newest) {
+                    return Some(full.clone());
+                }
+            }
+        }
+        let full = tail.last(&self.info)?;
+        *self.latest_full.lock().unwrap_or_else(|e| e.into_inner()) = Some((newest, full.clone()));
+        Some(full)
     }
 
     /// Sends a command to the runtime side; `false` when the run has ended.

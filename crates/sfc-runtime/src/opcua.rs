@@ -281,8 +281,7 @@ fn nid(ns: u16, path: &str) -> NodeId {
 
 /// The latest published state (`None` before the first scan).
 fn latest(hub: &Hub) -> Option<Arc<ScanState>> {
-    let tail = hub.lock().tail_latest();
-    tail.last(&hub.info)
+    hub.latest()
 }
 
 fn good(v: impl Into<Variant>) -> Result<DataValue, StatusCode> {
