@@ -286,15 +286,17 @@ impl Board {
     /// Adds a state to the history and hands the states that fell out of it to `gone`, for
     /// reuse. The history keeps at least [`HISTORY`] states and always starts with a key state
     /// (so each of its states can be shown in full): the oldest states leave it a key state's
-    /// run at a time.
+    /// run at a time, when the next key state comes (so at most about `HISTORY + 2·KEY_EVERY`
+    /// states are kept).
     pub fn push_state(&mut self, s: Arc<ScanState>, mut gone: impl FnMut(Arc<ScanState>)) {
         if !s.key && self.history.is_empty() {
             // Nothing to change: a state that cannot be shown is not kept.
             gone(s);
             return;
         }
+        let key = s.key;
         self.history.push_back(s);
-        while self.history.len() > HISTORY {
+        while key && self.history.len() > HISTORY {
             let next_key = self.history.iter().skip(1).position(|s| s.key).map_or(self.history.len(), |i| i + 1);
             if self.history.len() - next_key < HISTORY {
                 break;
@@ -776,7 +778,7 @@ mod tests {
                 gone.push(s.scan)
             });
             assert!(b.history.len() >= HISTORY.min(k as usize), "scan {k}: {} states", b.history.len());
-            assert!(b.history.len() < HISTORY + KEY_EVERY as usize, "scan {k}: {} states", b.history.len());
+            assert!(b.history.len() < HISTORY + 2 * KEY_EVERY as usize, "scan {k}: {} states", b.history.len());
             assert!(b.history[0].key, "scan {k}: the history starts with a change");
         }
         // The states that left are the oldest, in order, each once.
