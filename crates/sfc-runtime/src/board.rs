@@ -676,16 +676,15 @@ mod tests {
     /// Two charts: `A0 ⇄ B0` (steps 0, 1; transitions 0, 1) and `A1 → {B1, C1} → A1` (a
     /// simultaneous divergence: steps 2, 3, 4; transitions 2, 3).
     fn info() -> ChartInfo {
-        let outline = |instance: &str, steps: std::ops::Range<u32>, transitions: std::ops::Range<u32>| {
-            sfc_sim::ChartOutline {
+        let outline =
+            |instance: &str, steps: std::ops::Range<u32>, transitions: std::ops::Range<u32>| sfc_sim::ChartOutline {
                 instance: instance.into(),
                 path: String::new(),
                 pou: instance.into(),
                 steps,
                 transitions,
                 actions: 0..0,
-            }
-        };
+            };
         ChartInfo {
             runtime: "sfc run",
             pou: "P".into(),

@@ -518,10 +518,8 @@ impl ScanThread {
         // The active steps: in full now and then, or after anything but firing transitions
         // changed them; otherwise as the change the fired transitions made.
         let base = self.last_state.as_ref().map(|s| s.scan);
-        st.key = first
-            || base.is_none()
-            || self.since_key >= crate::board::KEY_EVERY
-            || !self.sim.situation_follows_fired();
+        st.key =
+            first || base.is_none() || self.since_key >= crate::board::KEY_EVERY || !self.sim.situation_follows_fired();
         st.base = base.unwrap_or(0);
         if st.key {
             self.sim.active_times_unsorted(&mut st.active);
@@ -928,25 +926,38 @@ impl ScanThread {
 #[derive(Debug, Default)]
 pub struct ChangeCheck {
     change: crate::board::Change,
-    /// The engine's active steps, chart clocks and time after the previous scan.
-    prev: Option<(Vec<(u32, i64)>, Vec<i64>, i64, u64)>,
+    /// The engine's situation after the previous scan (`None` before the first).
+    prev: Option<Situation>,
     truth: Vec<(u32, i64)>,
     got: Vec<(u32, i64)>,
+}
+
+/// The engine's active steps, chart clocks, time and scan after a scan.
+#[derive(Debug, Default)]
+struct Situation {
+    active: Vec<(u32, i64)>,
+    clocks: Vec<i64>,
+    time: i64,
+    scan: u64,
 }
 
 impl ChangeCheck {
     fn check(&mut self, info: &crate::board::ChartInfo, sim: &sfc_sim::Simulation, st: &ScanState) {
         sim.active_times_unsorted(&mut self.truth);
         self.truth.sort_unstable();
-        if let (false, Some((active, clocks, time, scan))) = (st.key, self.prev.as_ref()) {
-            self.change.apply(info, (active, clocks, *time), st, &mut self.got);
+        if let (false, Some(p)) = (st.key, self.prev.as_ref()) {
+            self.change.apply(info, (&p.active, &p.clocks, p.time), st, &mut self.got);
             self.got.sort_unstable();
-            assert_eq!(self.got, self.truth, "scan {}: the change from scan {scan} is not the engine's situation", st.scan);
+            assert_eq!(
+                self.got, self.truth,
+                "scan {}: the change from scan {} is not the engine's situation",
+                st.scan, p.scan
+            );
         }
         let prev = self.prev.get_or_insert_with(Default::default);
-        prev.0.clone_from(&self.truth);
-        prev.1.clone_from(&st.clocks);
-        (prev.2, prev.3) = (st.time, st.scan);
+        prev.active.clone_from(&self.truth);
+        prev.clocks.clone_from(&st.clocks);
+        (prev.time, prev.scan) = (st.time, st.scan);
     }
 }
 

@@ -3,9 +3,9 @@
 mod common;
 
 use common::{active, carwash, Client, TOKEN};
+use serde_json::json;
 use sfc_runtime::{Limits, RunOptions, Runtime};
 use sfc_sim::{SimOptions, Simulation};
-use serde_json::json;
 
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn hello_then_snapshot_describe_the_chart() {
