@@ -369,30 +369,31 @@ pub struct Tail {
 
 impl Tail {
     /// The states with their active steps in full (a key state as it is, the others computed
-    /// from the one before them).
+    /// from the one before them, with one running list: only the states asked for are copied).
     pub fn full(self, info: &ChartInfo) -> Vec<Arc<ScanState>> {
         let mut out = Vec::with_capacity(self.states.len().saturating_sub(self.skip));
-        let mut prev: Option<Arc<ScanState>> = None;
-        for (k, st) in self.states.into_iter().enumerate() {
-            let st = match &prev {
-                _ if st.key => st,
-                // A copy of the state before it (its guards or safe values filled in).
-                Some(p) if p.scan == st.scan => {
-                    let mut c = (*st).clone();
-                    c.key = true;
-                    c.active.clone_from(&p.active);
-                    Arc::new(c)
-                }
-                Some(p) => {
-                    debug_assert_eq!(p.scan, st.base, "a change is read after the state it changes");
-                    let mut c = (*st).clone();
-                    apply_fired(info, p, &mut c);
-                    Arc::new(c)
-                }
-                None => st,
-            };
+        let mut change = Change::default();
+        let (mut cur, mut next) = (Vec::new(), Vec::new());
+        let mut prev: Option<&Arc<ScanState>> = None;
+        for (k, st) in self.states.iter().enumerate() {
+            if st.key {
+                cur.clone_from(&st.active);
+            } else if let Some(p) = prev.filter(|p| p.scan != st.scan) {
+                // (A state of the same scan as the one before it is a copy of it, with its
+                // guards or safe values filled in: the same active steps.)
+                debug_assert_eq!(p.scan, st.base, "a change is read after the state it changes");
+                change.apply(info, (&cur, &p.clocks, p.time), st, &mut next);
+                std::mem::swap(&mut cur, &mut next);
+            }
             if k >= self.skip {
-                out.push(st.clone());
+                out.push(if st.key {
+                    st.clone()
+                } else {
+                    let mut c = (**st).clone();
+                    c.active.clone_from(&cur);
+                    c.key = true;
+                    Arc::new(c)
+                });
             }
             prev = Some(st);
         }
@@ -402,6 +403,10 @@ impl Tail {
     pub fn newest(&self) -> Option<&Arc<ScanState>> {
         self.states.last()
     }
+    /// The states asked for as published (a change lists no active steps, but what it fired).
+    pub fn published(&self) -> &[Arc<ScanState>] {
+        self.states.get(self.skip..).unwrap_or_default()
+    }
     /// The newest state in full.
     pub fn last(self, info: &ChartInfo) -> Option<Arc<ScanState>> {
         let skip = self.states.len().checked_sub(1)?;
@@ -409,17 +414,7 @@ impl Tail {
     }
 }
 
-/// Fills the active steps of `st` (a change) from those of `prev` (the state before it):
-/// the steps before its fired transitions leave, those after them enter with elapsed time 0,
-/// and every other step's time advances by its chart's clock.
-pub fn apply_fired(info: &ChartInfo, prev: &ScanState, st: &mut ScanState) {
-    let mut active = Vec::new();
-    Change::default().apply(info, (&prev.active, &prev.clocks, prev.time), st, &mut active);
-    st.active = active;
-    st.key = true;
-}
-
-/// The lists [`apply_fired`] works with, kept to be used again.
+/// The lists [`Change::apply`] works with, kept to be used again.
 #[derive(Debug, Default)]
 pub struct Change {
     gone: Vec<u32>,
@@ -427,8 +422,10 @@ pub struct Change {
 }
 
 impl Change {
-    /// [`apply_fired`] from the state before `st` given as its active steps, chart clocks and
-    /// time, into `out`.
+    /// The active steps after `st` (a change) into `out`, from the state before it given as its
+    /// active steps, chart clocks and time: the steps before its fired transitions leave, those
+    /// after them enter with elapsed time 0, and every other step's time advances by its
+    /// chart's clock.
     pub fn apply(
         &mut self,
         info: &ChartInfo,

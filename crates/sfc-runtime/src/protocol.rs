@@ -572,8 +572,10 @@ impl Session<'_> {
             };
             (events, between, halts, b.halted, b.reason.clone(), state, first)
         };
-        // The active steps in full, outside the lock.
-        let between = between.full(&self.hub.info);
+        // What fired since the last tick, and the newest state with its active steps in full
+        // (rebuilt outside the lock).
+        let fired_between: Vec<Arc<ScanState>> = between.published().to_vec();
+        let newest = between.last(&self.hub.info);
         let state = state.map(|(run, fault, latest)| (run, fault, latest.last(&self.hub.info)));
         // Older changes than the log holds: the state now is what counts.
         if halts.last().map(|h| h.0) != Some(halted) {
@@ -587,9 +589,9 @@ impl Session<'_> {
                 return false;
             }
         }
-        if let Some(new) = between.last() {
+        if let Some(new) = &newest {
             let msg = match &self.last {
-                Some(old) => delta(&self.hub.info, old, new, &between),
+                Some(old) => delta(&self.hub.info, old, new, &fired_between),
                 None => {
                     let (stats, run, fault) = first.unwrap_or((serde_json::Value::Null, RunState::Run, None));
                     snapshot(&self.hub.info, new, halted, (run, fault.as_ref()), &stats)

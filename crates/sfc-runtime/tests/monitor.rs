@@ -295,8 +295,13 @@ async fn history_of_a_moving_chart_is_the_simulation_s() {
     // The run ends after 300 scans and keeps its history for the clients still connected.
     c.until("the end of the run", |m| m["type"] == "state" && m["state"] == "STOP").await;
     let h = c.cmd(json!({"cmd": "history"})).await;
-    let states = h["states"].as_array().unwrap();
+    let mut states = h["states"].as_array().unwrap().clone();
     assert_eq!(states.len(), 100);
+    // The snapshot and the deltas sent while it ran show their scans in full too.
+    let live: Vec<serde_json::Value> =
+        c.seen.iter().filter(|m| m["type"] == "snapshot" || m["type"] == "delta").cloned().collect();
+    assert!(live.len() >= 3, "{} states sent while running", live.len());
+    states.extend(live);
     // The same chart, simulated.
     let mut sim = Simulation::from_source("moving.st", MOVING, None, opts).unwrap();
     let mut expected = std::collections::BTreeMap::new();
