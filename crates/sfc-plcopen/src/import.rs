@@ -195,8 +195,9 @@ impl<'i> Ctx<'i> {
     }
 
     pub fn diag(&mut self, code: &'static str, at: Range<u32>, msg: impl Into<String>) -> &mut Diagnostic {
-        let d = Diagnostic::new(code, Span::new(self.file, at.start, at.end), msg);
-        self.diags.push_mut(d)
+        self.diags.push(Diagnostic::new(code, Span::new(self.file, at.start, at.end), msg));
+        // (`Vec::push_mut` would say it in one call, but needs Rust 1.95.)
+        self.diags.last_mut().unwrap_or_else(|| unreachable!("a diagnostic was just pushed"))
     }
 
     /// A name from attribute `name` of `n` as a located fragment; reports and repairs a name
