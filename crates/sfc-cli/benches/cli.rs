@@ -46,13 +46,19 @@ fn loops(k: usize) -> String {
     s + "END_PROGRAM\n"
 }
 
-/// Median ns per scan of `Simulation::advance` over `rounds` rounds of `scans` scans.
-fn engine(name: &str, text: &str, scans: u64, rounds: usize) -> f64 {
+/// The chart compiled for the engine, with `Go` TRUE.
+fn simulation(name: &str, text: &str) -> Simulation {
     let mut sim = match Simulation::from_source(name, text, None, SimOptions::default()) {
         Ok(s) => s,
         Err((_, d)) => panic!("{name}: {:?}", d.first().map(|d| &d.message)),
     };
     sim.set("Go", Value::Bool(true)).expect("Go");
+    sim
+}
+
+/// Median ns per scan of `Simulation::advance` over `rounds` rounds of `scans` scans.
+fn engine(name: &str, text: &str, scans: u64, rounds: usize) -> f64 {
+    let mut sim = simulation(name, text);
     let mut per = Vec::new();
     for _ in 0..=rounds {
         let t = Instant::now();
@@ -96,11 +102,7 @@ fn per_scan(n: u64, rounds: usize, make: impl Fn(u64) -> Vec<String>) -> f64 {
 /// p50 in ns of `Simulation::advance` called once per `period_us` deadline (asleep between
 /// scans, as the runtime's scan thread is), over `scans` scans.
 fn engine_paced(name: &str, text: &str, period_us: u64, scans: u64) -> f64 {
-    let mut sim = match Simulation::from_source(name, text, None, SimOptions::default()) {
-        Ok(s) => s,
-        Err((_, d)) => panic!("{name}: {:?}", d.first().map(|d| &d.message)),
-    };
-    sim.set("Go", Value::Bool(true)).expect("Go");
+    let mut sim = simulation(name, text);
     let period = std::time::Duration::from_micros(period_us);
     let mut next = Instant::now() + period;
     let mut took = Vec::with_capacity(scans as usize);
