@@ -155,8 +155,10 @@ export function PropertiesPanel(props: PanelProps) {
   const connections = doc.connections.filter((c) => selection.includes(c.id));
   if (elements.length === 0 && connections.length === 0) return <ChartProperties {...props} />;
   if (elements.length + connections.length > 1) return <MultiProperties {...props} elements={elements} />;
-  if (connections.length === 1) return <ConnectionProperties canvas={props.canvas} connection={connections[0]} />;
-  return <ElementProperties {...props} element={elements[0]} />;
+  // Keyed by the block: another block's fields start from its own values in the render that
+  // shows it (a draft reset by an effect comes a frame later and would wipe what was typed first).
+  if (connections.length === 1) return <ConnectionProperties key={connections[0].id} canvas={props.canvas} connection={connections[0]} />;
+  return <ElementProperties key={elements[0].id} {...props} element={elements[0]} />;
 }
 
 function MultiProperties(props: PanelProps & { elements: Element[] }) {
