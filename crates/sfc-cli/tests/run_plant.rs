@@ -786,3 +786,30 @@ fn a_runtime_error_faults_to_the_safe_state_and_a_cold_reset_keeps_only_persiste
     assert_eq!((retained(&file, "Lifts"), retained(&file, "Attempts")), (json!(0), json!(1)));
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// A client's write to `%M` memory is never lost, even when it arrives while the chart runs:
+/// the scan's copy of memory back to the image must not overwrite a write it has not applied.
+/// (The chart takes milliseconds a scan, so nearly every write lands in that window.)
+#[test]
+fn a_memory_write_during_a_scan_is_not_lost() {
+    let mut run = Run::start(&[
+        s(&chart("slow_memory.st")),
+        "--modbus",
+        "127.0.0.1:0",
+        "--period",
+        "T#1ms",
+        "--no-retain",
+        "--for",
+        "T#120s",
+    ]);
+    let mut m = Modbus::connect(run.modbus());
+    eventually("the first scan", 20, || m.read_holding(0, 1) == [2]);
+    for v in 2..=40u16 {
+        assert_eq!(m.write_registers(1000, &[v]), pdu(16, &[1000, 1], &[]));
+        eventually(&format!("Twice = {}", 2 * v), 20, || m.read_holding(0, 1) == [2 * v]);
+        assert_eq!(m.read_holding(1000, 1), [v], "Gain keeps the client's value");
+    }
+    run.signal(libc::SIGTERM);
+    let (status, lines) = run.finish(30);
+    assert_eq!(status, Some(0), "{lines:?}");
+}

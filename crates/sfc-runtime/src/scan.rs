@@ -498,7 +498,12 @@ impl ScanThread {
         self.apply_forces();
         if !self.points.is_empty() {
             if let Ok(mut img) = self.image.try_lock() {
-                for p in self.points.iter().filter(|p| p.role != Role::Input) {
+                for (i, p) in self.points.iter().enumerate().filter(|(_, p)| p.role != Role::Input) {
+                    // A client's write to memory that arrived while the chart ran is applied
+                    // before the next scan; copying the chart's value over it would lose it.
+                    if p.role == Role::Memory && img.memory_writes.contains(&i) {
+                        continue;
+                    }
                     if let Some(v) = self.sim.read_slot(p.slot.index) {
                         img.put(p, v);
                     }
