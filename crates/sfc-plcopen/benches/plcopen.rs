@@ -2,6 +2,7 @@
 //! 500-step chart (the target is under 200 ms each). Under `cargo test` (no `--bench`
 //! argument) it runs once on a small chart, as a smoke test. `N=2000 cargo bench …` changes
 //! the number of steps.
+#![allow(clippy::unwrap_used, clippy::expect_used, clippy::indexing_slicing)] // test code: a panic is a failed test
 
 use std::fmt::Write;
 use std::time::Instant;

@@ -3,6 +3,7 @@
 //! imports without errors also passes the schema after export and round-trips. Targeted tests
 //! pin down the namespaces, CODESYS-style files, FBD/LD conditions, macro steps, malformed XML
 //! and the location of diagnostics.
+#![allow(clippy::unwrap_used, clippy::expect_used, clippy::indexing_slicing)] // test code: a panic is a failed test
 
 mod common;
 use common::*;

@@ -8,6 +8,7 @@
 //! (kept as a regression test: every file there is run by `crash_corpus_stays_fixed`) and fails
 //! the test. The CI portion is bounded (`SFC_FUZZ_CASES`, default 64 per front end, a few
 //! seconds); set `SFC_FUZZ_CASES=100000` for a full run.
+#![allow(clippy::unwrap_used, clippy::expect_used, clippy::indexing_slicing)] // test code: a panic is a failed test
 
 use proptest::prelude::*;
 use std::alloc::{GlobalAlloc, Layout, System};

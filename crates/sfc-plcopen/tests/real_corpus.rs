@@ -8,6 +8,7 @@
 //!   chart, and exporting that again gives the same XML.
 //!
 //! The test prints a conformance summary (`Passed: N/N`).
+#![allow(clippy::unwrap_used, clippy::expect_used, clippy::indexing_slicing)] // test code: a panic is a failed test
 
 mod common;
 use common::*;

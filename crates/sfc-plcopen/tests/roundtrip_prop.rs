@@ -2,6 +2,7 @@
 //! ST conditions, named and prioritised transitions, actions and Boolean variables with every
 //! qualifier, attributes, with or without stored positions) export to XML that passes the
 //! schema and import back to the same model; exporting the import again gives the same XML.
+#![allow(clippy::unwrap_used, clippy::expect_used, clippy::indexing_slicing)] // test code: a panic is a failed test
 
 mod common;
 use common::*;

@@ -1,6 +1,7 @@
 //! Scan start jitter of `sfc run` at 1 ms, without and with 50 monitor clients on loopback
 //! (`cargo bench -p sfc-runtime --bench jitter`; `SFC_JITTER_SECS` sets the seconds per run,
 //! default 5). The figures go to docs/runtime.md.
+#![allow(clippy::unwrap_used, clippy::expect_used, clippy::indexing_slicing)] // test code: a panic is a failed test
 
 use futures_util::StreamExt;
 use sfc_runtime::{Limits, RunOptions, RunReport, Runtime};

@@ -1,6 +1,7 @@
 //! The ATMT adapter: a transition table (or its chart) and a stream of `state condition_bits`
 //! lines served as the monitor protocol. Fixture: `fixtures/press.st`, its table
 //! `press.atmt`, the line stream `press.lines` and what a client must see, `press.expected.json`.
+#![allow(clippy::unwrap_used, clippy::expect_used, clippy::indexing_slicing)] // test code: a panic is a failed test
 
 mod common;
 

@@ -1,4 +1,5 @@
 //! The monitor protocol against the car wash running in `sfc run` (docs/monitor.md).
+#![allow(clippy::unwrap_used, clippy::expect_used, clippy::indexing_slicing)] // test code: a panic is a failed test
 
 mod common;
 

@@ -1,6 +1,7 @@
 //! The calls that convert documents (`sfc_doc`): open, save (text and PLCopen XML, atomic,
 //! other POUs kept), check (with element and witness ids), build for every target, layout,
 //! new, and host mode writing the one-line table for the host.
+#![allow(clippy::unwrap_used, clippy::expect_used, clippy::indexing_slicing)] // test code: a panic is a failed test
 
 mod common;
 

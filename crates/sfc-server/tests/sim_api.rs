@@ -1,5 +1,6 @@
 //! The built-in simulator of monitor mode: `POST /api/sim/start` and `/api/sim/stop` through
 //! the in-process router, and the runtime it starts, over a real WebSocket.
+#![allow(clippy::unwrap_used, clippy::expect_used, clippy::indexing_slicing)] // test code: a panic is a failed test
 
 mod common;
 

@@ -1,6 +1,7 @@
 //! Helpers shared by the integration tests: paths, snapshots, the schema check with `xmllint`,
 //! and the comparison of two checked files' models.
 #![allow(dead_code)]
+#![allow(clippy::unwrap_used, clippy::expect_used, clippy::indexing_slicing)] // test code: a panic is a failed test
 
 use sfc_diagnostics::{render_human, Diagnostic, RenderOptions, SourceFile};
 use sfc_model::{check_source, ActionTarget, CheckOptions, Checked, Duration};

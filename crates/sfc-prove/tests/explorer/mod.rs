@@ -2,6 +2,7 @@
 //! every input combination, breadth first, keeping each distinct state once (the
 //! simulator's own state key), and evaluates the properties with the scenario conditions. It
 //! decides, up to a depth, whether and after which scan each property is first violated.
+#![allow(clippy::unwrap_used, clippy::expect_used, clippy::indexing_slicing)] // test code: a panic is a failed test
 
 use sfc_prove::props::{Bound, Kind, PropertyFile};
 use sfc_sim::condition::Condition;

@@ -1,5 +1,8 @@
 //! A monitor client for the tests (tokio-tungstenite), and runtimes to talk to.
 #![allow(dead_code)]
+// Test helpers, like the tests themselves, may panic: a panic is a failed test (clippy.toml
+// allows it in `#[test]` functions only, not in the helpers they share).
+#![allow(clippy::unwrap_used, clippy::expect_used, clippy::indexing_slicing)]
 
 use futures_util::{SinkExt, StreamExt};
 use serde_json::{json, Value};

@@ -2,6 +2,9 @@
 //! a browser page would send.
 
 #![allow(dead_code)] // each test file uses a part
+// Test helpers, like the tests themselves, may panic: a panic is a failed test (clippy.toml
+// allows it in `#[test]` functions only, not in the helpers they share).
+#![allow(clippy::unwrap_used, clippy::expect_used, clippy::indexing_slicing)]
 
 use axum::body::Body;
 use axum::http::{Request, StatusCode};
