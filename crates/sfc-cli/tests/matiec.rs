@@ -527,13 +527,13 @@ fn cause(text: &str, error: &str) -> String {
     {
         causes.push("`Action.Q` / `Action.A`");
     }
-    if lower.contains("us)") || lower.contains("us;") || lower.contains("us ") && lower.contains("t#") {
-        if lower.split("t#").skip(1).any(|t| {
+    if (lower.contains("us)") || lower.contains("us;") || lower.contains("us ") && lower.contains("t#"))
+        && lower.split("t#").skip(1).any(|t| {
             t.trim_start_matches(|c: char| c.is_ascii_digit() || c == '.' || c.is_ascii_alphabetic() && c != 'u')
                 .starts_with("us")
-        }) {
-            causes.push("a duration in `us`");
-        }
+        })
+    {
+        causes.push("a duration in `us`");
     }
     if lower.contains(" at %") && lower.matches("var").count() > 2 {
         causes.push("located variables in a VAR block MatIEC does not take them in");

@@ -202,7 +202,7 @@ fn guess_type(a: &Analysis, start: u32, end: u32) -> &'static str {
     let line_start = a.text.get(..start as usize).and_then(|t| t.rfind('\n')).map_or(0, |i| i + 1);
     let after = a.text.get(end as usize..line_end).unwrap_or("").trim_start();
     let before = a.text.get(line_start..start as usize).unwrap_or("").trim_end();
-    let near = format!("{} {}", before.rsplit(|c: char| c == '(' || c == ';').next().unwrap_or(""), after);
+    let near = format!("{} {}", before.rsplit(['(', ';']).next().unwrap_or(""), after);
     let upper = near.to_ascii_uppercase();
     if upper.contains("T#") || upper.contains("TIME#") {
         "TIME"

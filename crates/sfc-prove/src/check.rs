@@ -367,7 +367,7 @@ pub fn reach(full: &System, goal: Lit, from_initial: bool, budget: &Budget, cach
             let init = eng.init();
             if !init.and_not(&can).is_false() {
                 // Even the initial state cannot reach the goal.
-                return trapped_path(&eng, &can, &init, budget);
+                return trapped_path(eng, &can, &init, budget);
             }
             if let Ok(true) = eng.closed(&can) {
                 let mut f = Finding::new(
@@ -491,7 +491,7 @@ pub fn group(n: usize) -> String {
     let s = n.to_string();
     let mut out = String::new();
     for (i, c) in s.chars().enumerate() {
-        if i > 0 && (s.len() - i) % 3 == 0 {
+        if i > 0 && (s.len() - i).is_multiple_of(3) {
             out.push(',');
         }
         out.push(c);

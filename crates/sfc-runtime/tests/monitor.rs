@@ -278,7 +278,7 @@ END_PROGRAM
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn history_of_a_moving_chart_is_the_simulation_s() {
     let opts = SimOptions { period: 1_000, ..Default::default() };
-    let sim = Simulation::from_source("moving.st", MOVING, None, opts.clone()).unwrap_or_else(|(_, d)| panic!("{d:?}"));
+    let sim = Simulation::from_source("moving.st", MOVING, None, opts).unwrap_or_else(|(_, d)| panic!("{d:?}"));
     let rt = Runtime::start(
         sim,
         RunOptions {

@@ -37,7 +37,7 @@ impl Bits {
     }
     /// Appends one bit.
     pub fn push(&mut self, b: bool) {
-        if self.len % 64 == 0 {
+        if self.len.is_multiple_of(64) {
             self.words.push(0);
         }
         self.len += 1;

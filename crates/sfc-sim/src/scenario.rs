@@ -1370,8 +1370,7 @@ pub(crate) fn mismatch(sim: &Simulation, x: &Expectation) -> Option<String> {
             let latest = sim
                 .error_records()
                 .into_iter()
-                .filter(|r| instance.as_ref().is_none_or(|i| r.instance.eq_ignore_ascii_case(i)))
-                .last();
+                .rfind(|r| instance.as_ref().is_none_or(|i| r.instance.eq_ignore_ascii_case(i)));
             match latest {
                 Some(r) if r.message().contains(text.as_str()) => None,
                 Some(r) => {

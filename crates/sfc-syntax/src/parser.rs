@@ -2120,7 +2120,7 @@ split it with intermediate variables"
 
 /// Reports identifiers with a leading double, doubled or trailing underscore (seed 000).
 fn check_identifier(text: &str, span: Span, diags: &mut Vec<Diagnostic>) {
-    if text.contains("__") || (text.ends_with('_') && text.len() > 0) {
+    if text.contains("__") || (text.ends_with('_') && !text.is_empty()) {
         diags.push(Diagnostic::error(
             "SFC0006",
             span,

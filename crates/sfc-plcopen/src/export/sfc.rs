@@ -606,7 +606,7 @@ fn build(chart: &Chart, pou_attrs: &[ast::Attribute]) -> Vec<El> {
     }
     // Transitions left unconnected while drawing, wired to the steps they were wired to.
     let right = els.iter().map(|e| e.geo.x + e.geo.w).fold(0.0, f64::max);
-    for (k, v) in attrs::all(pou_attrs, attrs::LOOSE).into_iter().enumerate() {
+    for (k, v) in attrs::all(pou_attrs, attrs::LOOSE).enumerate() {
         let Some(l) = attrs::Loose::read(&attrs::unescape(v)) else { continue };
         let [x, y, w, h] = l.rect.unwrap_or([round(right + 60.0), 40.0 + 60.0 * k as f64, TRANS_W, TRANS_H]);
         let geo = Geo { x, y, w, h };

@@ -573,7 +573,7 @@ impl<'a> Enc<'a> {
     /// Whether a variable of the top POU is a free input of every scan.
     fn is_free_input(&self, v: &VarInfo, path: &str) -> bool {
         let key = path.to_ascii_uppercase();
-        if self.setup.extra_inputs.iter().any(|n| *n == key) {
+        if self.setup.extra_inputs.contains(&key) {
             return true;
         }
         if v.implicit || sfc_st::is_sfc_control_variable(&v.name) {

@@ -230,7 +230,7 @@ impl<'a> Enc<'a> {
     /// Whether a loop cannot run iteration `n` (its condition `go` is unsatisfiable), asked of
     /// the SAT solver every few iterations once the loop runs longer than constants decide.
     fn cannot_iterate(&mut self, go: Lit, n: usize) -> bool {
-        (n >= 4 && (n.is_power_of_two() || n % 16 == 0)) && !crate::sat::satisfiable(&self.g, go)
+        (n >= 4 && (n.is_power_of_two() || n.is_multiple_of(16))) && !crate::sat::satisfiable(&self.g, go)
     }
 
     /// `pc ∧ cond` for the loop test (the statement-level active condition).

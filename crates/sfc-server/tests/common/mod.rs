@@ -1,7 +1,8 @@
 //! In-process calls of the editor's router (tower `oneshot`), with the Host and token headers
 //! a browser page would send.
 
-#![allow(dead_code)] // each test file uses a part
+#![allow(dead_code)]
+// each test file uses a part
 // Test helpers, like the tests themselves, may panic: a panic is a failed test (clippy.toml
 // allows it in `#[test]` functions only, not in the helpers they share).
 #![allow(clippy::unwrap_used, clippy::expect_used, clippy::indexing_slicing)]
