@@ -276,3 +276,25 @@ fn check_reports_a_runaway_witness_replay_at_its_loop() {
     assert!(err.contains(&format!("= note: possible: the replay stopped trying to fire `T1` (step 1 of the witness): a scan ran away at line {line}, column 9")), "{err}");
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// A vendor's own XML (a TwinCAT `.TcPOU`) is not PLCopen: one located error that names the
+/// export to use, and no second finding about an "empty" file (the import said why).
+#[test]
+fn a_twincat_source_file_is_refused_with_the_export_to_use() {
+    let dir = temp_dir("tcpou");
+    let path = dir.join("FB_Fill.TcPOU");
+    std::fs::write(
+        &path,
+        "<?xml version=\"1.0\" encoding=\"utf-8\"?>\n<TcPlcObject Version=\"1.1.0.1\">\n  <POU Name=\"FB_Fill\">\n    <Implementation><SFC /></Implementation>\n  </POU>\n</TcPlcObject>\n",
+    )
+    .unwrap();
+    for cmd in ["check", "sim"] {
+        let out = sfc(&[cmd, path.to_str().unwrap()]);
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(1), "{cmd}: {err}");
+        assert!(err.contains("error[SFC0702]") && err.contains("FB_Fill.TcPOU:2:1"), "{cmd}: {err}");
+        assert!(err.contains("`Export PLCopenXML...`"), "{cmd}: {err}");
+        assert!(!err.contains("nothing to check"), "{cmd}: {err}");
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}

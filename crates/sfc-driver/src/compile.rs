@@ -119,10 +119,7 @@ pub fn check_text(
         FileKind::PlcOpen => {
             let imported = sfc_plcopen::import(file_id, name, text);
             let checked = sfc_analysis::check_source(file_id, &format!("{name} (imported)"), &imported.text, opts);
-            let mut diags = imported.diagnostics.clone();
-            diags.extend(checked.diagnostics.iter().map(|d| sfc_plcopen::relocate(d, &imported.map, file_id)));
-            sfc_diagnostics::sort(&mut diags);
-            diags.dedup();
+            let diags = sfc_plcopen::with_check(&imported, &checked.diagnostics, file_id);
             (imported.xml, checked, diags)
         }
         FileKind::Iec => {

@@ -1334,11 +1334,14 @@ pub(crate) fn run(file: u32, xml_text: &str) -> (String, SourceMap, Vec<Diagnost
         condition_functions: 0,
     };
     if root.tag_name().name() != "project" {
+        let note = not_a_project_note(root);
         cx.diag(
             "SFC0702",
             anchor(root),
             format!("the document element is `{}`, not a PLCopen `project`", root.tag_name().name()),
-        );
+        )
+        .notes
+        .push(note);
     } else {
         match root.tag_name().namespace() {
             Some(ns) if NAMESPACES.contains(&ns) => {}
@@ -1356,4 +1359,26 @@ pub(crate) fn run(file: u32, xml_text: &str) -> (String, SourceMap, Vec<Diagnost
     }
     let (text, map) = cx.em.finish();
     (text, map, cx.diags)
+}
+
+/// What to do with an XML file that is not a PLCopen project: the vendor formats users bring
+/// by mistake are named, with the export that gives PLCopen XML.
+fn not_a_project_note(root: Node) -> String {
+    let name = root.tag_name().name();
+    let child = |n: &str| root.children().any(|c| c.is_element() && c.tag_name().name() == n);
+    if name == "TcPlcObject" {
+        "this is a TwinCAT 3 source file (.TcPOU, .TcGVL, .TcDUT), not PLCopen XML; in TwinCAT, \
+         right-click the POU or its folder, choose `Export PLCopenXML...`, and give sfc that file"
+            .to_string()
+    } else if name == "Document" && (child("Engineering") || child("DocumentInfo")) {
+        "this is a TIA Portal (Openness) export; S7-GRAPH sequences are not PLCopen XML, and sfc \
+         cannot read them: write the chart in IEC 61131-3 text or export PLCopen XML from a tool \
+         that has it"
+            .to_string()
+    } else {
+        "sfc reads PLCopen TC6 XML, whose document element is `<project \
+         xmlns=\"http://www.plcopen.org/xml/tc6_0201\">` (or tc6_0200, tc6_0100); export the POU \
+         as PLCopen XML from the tool that made this file"
+            .to_string()
+    }
 }

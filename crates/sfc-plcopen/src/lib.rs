@@ -62,9 +62,16 @@ pub fn import(file_id: u32, name: &str, xml: &str) -> Imported {
 pub fn check_xml(file_id: u32, name: &str, xml: &str, opts: &CheckOptions) -> (SourceFile, Checked, Vec<Diagnostic>) {
     let imported = import(file_id, name, xml);
     let checked = check_source(file_id, &format!("{name} (imported)"), &imported.text, opts);
+    let diags = with_check(&imported, &checked.diagnostics, file_id);
+    (imported.xml, checked, diags)
+}
+
+/// The import's diagnostics with those of a check of the generated text (`checked`, in file
+/// `file_id`), moved to the XML, sorted and without repeats.
+pub fn with_check(imported: &Imported, checked: &[Diagnostic], file_id: u32) -> Vec<Diagnostic> {
     let mut diags = imported.diagnostics.clone();
     let import_failed = imported.diagnostics.iter().any(Diagnostic::is_error);
-    for d in &checked.diagnostics {
+    for d in checked {
         // "Nothing to check" (SFC0106) is about the generated text: when the import failed, its
         // error says why; otherwise the project holds no POU, which is what is said.
         if d.code == "SFC0106" {
@@ -80,7 +87,7 @@ pub fn check_xml(file_id: u32, name: &str, xml: &str, opts: &CheckOptions) -> (S
     }
     sfc_diagnostics::sort(&mut diags);
     diags.dedup();
-    (imported.xml, checked, diags)
+    diags
 }
 
 /// A diagnostic of the generated text, moved to the XML through the source map.
