@@ -197,6 +197,10 @@ fn exit_codes_of_every_command() {
     let mut latin1 = b"(* Ventil ge\xf6ffnet *)\n".to_vec();
     latin1.extend_from_slice(CLEAN.as_bytes());
     std::fs::write(d.join("latin1.st"), &latin1).unwrap();
+    // UTF-16 (Notepad's "Unicode"): read as text, no warning.
+    std::fs::write(d.join("utf16.st"), utf16le(CLEAN)).unwrap();
+    // A vendor's binary project: one error (SFC0012), the input is wrong.
+    std::fs::write(d.join("binary.project"), b"\x50\x4b\x03\x04\x14\x00\x00\x00PROGRAM\x00\x01\x02").unwrap();
     std::fs::write(
         d.join("ok.scenario.toml"),
         "chart = \"clean.st\"\n[[at]]\ntime = \"T#0s\"\nexpect = { active = [\"S1\"] }\n",
@@ -213,6 +217,13 @@ fn exit_codes_of_every_command() {
         (&["check", "missing.st"], 2),
         (&["check", "latin1.st"], 0),
         (&["check", "--deny", "warnings", "latin1.st"], 1),
+        (&["check", "--deny", "warnings", "utf16.st"], 0),
+        (&["check", "binary.project"], 1),
+        (&["fmt", "--check", "binary.project"], 1),
+        (&["build", "binary.project", "--target", "st"], 1),
+        (&["sim", "binary.project"], 1),
+        (&["sim", "utf16.st", "--scans", "3"], 0),
+        (&["build", "utf16.st", "--target", "st"], 0),
         (&["check", "--format", "yaml", "clean.st"], 2),
         (&["check", "--explain", "SFC9999"], 2),
         (&["fmt", "--check", "formatted.st"], 0),
@@ -258,6 +269,41 @@ fn exit_codes_of_every_command() {
         }
     }
     assert!(wrong.is_empty(), "{}", wrong.join("\n"));
+}
+
+/// `text` as UTF-16 little-endian with its byte order mark, as Notepad's "Unicode" saves it.
+fn utf16le(text: &str) -> Vec<u8> {
+    let mut out = vec![0xFF, 0xFE];
+    out.extend(text.encode_utf16().flat_map(u16::to_le_bytes));
+    out
+}
+
+/// A UTF-16 chart reads as text in every command, and `fmt` writes it back in UTF-16 with its
+/// byte order mark; a binary file gets one error that says so, not one per stray byte.
+#[test]
+fn utf16_charts_are_text_and_binary_files_are_one_error() {
+    let d = temp_dir("utf16");
+    let chart = format!("(* Ventil öffnen, žluťoučký kůň *)\r\n{}", CLEAN.replace('\n', "\r\n"));
+    std::fs::write(d.join("u.st"), utf16le(&chart)).unwrap();
+    let out = sfc_in(&d, &["check", "u.st"]);
+    assert_eq!(out.status.code(), Some(0), "{}", text(&out.stderr));
+    assert!(out.stderr.is_empty(), "{}", text(&out.stderr));
+    let out = sfc_in(&d, &["fmt", "u.st"]);
+    assert_eq!(out.status.code(), Some(0), "{}", text(&out.stderr));
+    let written = std::fs::read(d.join("u.st")).unwrap();
+    let formatted = text(&sfc_stdin(&["fmt", "-"], &chart).stdout);
+    assert_eq!(written, utf16le(&formatted), "written back as UTF-16 LE with its BOM and CRLF");
+    assert!(formatted.contains("žluťoučký kůň *)\r\n"), "{formatted}");
+
+    let mut bytes = b"\xd0\xcf\x11\xe0\xa1\xb1\x1a\xe1".to_vec();
+    bytes.extend((0..4000u32).map(|i| (i.wrapping_mul(2_654_435_761) >> 24) as u8));
+    std::fs::write(d.join("Untitled.project"), &bytes).unwrap();
+    let out = sfc_in(&d, &["check", "Untitled.project"]);
+    let err = text(&out.stderr);
+    assert_eq!(out.status.code(), Some(1), "{err}");
+    assert!(err.contains("error[SFC0012]: the file is binary"), "{err}");
+    assert!(err.contains("Export PLCopenXML"), "{err}");
+    assert!(err.contains("1 error emitted") && !err.contains("SFC0003") && !err.contains("SFC0011"), "{err}");
 }
 
 #[test]

@@ -59,6 +59,11 @@ separated by dots: `%IX2.4`, `%QW29`, `%MW6`.";
 editors and many PLC tools write). The warning names the first line that is not UTF-8. `sfc fmt` \
 and the editor write the file back in the same encoding, with its byte order mark and line \
 endings; converting it to UTF-8 silences the warning.";
+    "SFC0012" Error "binary file"
+        "The file holds a NUL byte near its start: it is not text, and no other diagnostic is given \
+for it. sfc reads IEC 61131-3 text (UTF-8, UTF-16 or Latin-1) and PLCopen XML. A vendor's project \
+file is binary (a CODESYS `.project`, a TwinCAT archive); export the POU as PLCopen XML from that \
+tool and give sfc that file.";
     "SFC0101" Error "syntax error"
         "The parser expected something else here. It recovers at the next keyword, so later \
 errors are usually real.";

@@ -155,7 +155,8 @@ pub fn check_parsed(
 
 /// `!c5` is the EATMT spelling of a negated input; anywhere else it is not IEC 61131-3.
 fn bang_outside_eatmt(file_id: u32, text: &str, charts: &[Chart], diags: &mut Vec<Diagnostic>) {
-    if !text.contains('!') {
+    // A binary file (SFC0012) has no tokens worth reporting.
+    if !text.contains('!') || diags.iter().any(|d| d.code == "SFC0012") {
         return;
     }
     let (tokens, _) = sfc_syntax::lexer::lex(file_id, text);

@@ -1,5 +1,6 @@
 //! Text files as people have them: a UTF-8 byte order mark (Windows editors, vendor exports),
-//! Latin-1 / Windows-1252 instead of UTF-8 (older tools, German and Czech comments), CRLF line
+//! Latin-1 / Windows-1252 instead of UTF-8 (older tools, German and Czech comments), UTF-16
+//! (Notepad's "Unicode", Windows PowerShell's `>`, XML declared `encoding="utf-16"`), CRLF line
 //! endings. [`decode`] reads any byte sequence into text and remembers how it was written;
 //! [`encode`] writes text back the same way, so `sfc fmt` and the editor's save keep a file's
 //! BOM, encoding and line endings.
@@ -16,6 +17,11 @@ pub enum Encoding {
     Utf8,
     /// Windows-1252, a superset of the printable Latin-1 (ISO 8859-1).
     Windows1252,
+    /// UTF-16 little-endian: a file that starts with the BOM `FF FE`, or without a BOM whose
+    /// first two characters are ASCII (`P\0R\0`). An unpaired surrogate reads as U+FFFD.
+    Utf16Le,
+    /// UTF-16 big-endian (`FE FF`, or `\0P\0R`).
+    Utf16Be,
 }
 
 /// A file's text and how it was written.
@@ -24,7 +30,7 @@ pub struct Decoded {
     /// The text, without the byte order mark.
     pub text: String,
     pub encoding: Encoding,
-    /// The file started with a UTF-8 byte order mark.
+    /// The file started with a byte order mark (UTF-8's, or UTF-16's for the UTF-16 encodings).
     pub bom: bool,
     /// The file's line breaks are CRLF (its first line break is).
     pub crlf: bool,
@@ -67,8 +73,12 @@ fn cp1252_byte(c: char) -> Option<u8> {
     None
 }
 
-/// Reads a text file's bytes: UTF-8 (with or without a BOM), else Windows-1252.
+/// Reads a text file's bytes: UTF-16 when it says so (a BOM) or looks so (ASCII with every
+/// other byte 0), else UTF-8 (with or without a BOM), else Windows-1252.
 pub fn decode(bytes: &[u8]) -> Decoded {
+    if let Some(d) = decode_utf16(bytes) {
+        return d;
+    }
     let (bom, body) = match bytes.strip_prefix(BOM) {
         Some(rest) => (true, rest),
         None => (false, bytes),
@@ -92,11 +102,20 @@ pub fn decode(bytes: &[u8]) -> Decoded {
 pub fn encode(text: &str, like: &Decoded) -> (Vec<u8>, usize) {
     let text = if like.crlf { to_crlf(text) } else { text.to_string() };
     let mut out = Vec::with_capacity(text.len() + 3);
-    if like.bom {
+    if like.bom && matches!(like.encoding, Encoding::Utf8 | Encoding::Windows1252) {
         out.extend_from_slice(BOM);
     }
     let mut lost = 0;
     match like.encoding {
+        Encoding::Utf16Le | Encoding::Utf16Be => {
+            let le = like.encoding == Encoding::Utf16Le;
+            if like.bom {
+                out.extend_from_slice(if le { b"\xFF\xFE" } else { b"\xFE\xFF" });
+            }
+            for u in text.encode_utf16() {
+                out.extend_from_slice(&if le { u.to_le_bytes() } else { u.to_be_bytes() });
+            }
+        }
         Encoding::Utf8 => out.extend_from_slice(text.as_bytes()),
         Encoding::Windows1252 => {
             for c in text.chars() {
@@ -113,6 +132,28 @@ pub fn encode(text: &str, like: &Decoded) -> (Vec<u8>, usize) {
     (out, lost)
 }
 
+/// UTF-16, by its BOM or by ASCII characters with every other byte 0 at the start.
+fn decode_utf16(bytes: &[u8]) -> Option<Decoded> {
+    let (encoding, bom, body) = match bytes {
+        [0xFF, 0xFE, rest @ ..] => (Encoding::Utf16Le, true, rest),
+        [0xFE, 0xFF, rest @ ..] => (Encoding::Utf16Be, true, rest),
+        [a, 0, b, 0, ..] if a.is_ascii() && *a != 0 && b.is_ascii() && *b != 0 => (Encoding::Utf16Le, false, bytes),
+        [0, a, 0, b, ..] if a.is_ascii() && *a != 0 && b.is_ascii() && *b != 0 => (Encoding::Utf16Be, false, bytes),
+        _ => return None,
+    };
+    let units = body.chunks_exact(2).map(|p| match (encoding, p) {
+        (Encoding::Utf16Le, [lo, hi]) => u16::from_le_bytes([*lo, *hi]),
+        (_, [hi, lo]) => u16::from_be_bytes([*hi, *lo]),
+        _ => 0xFFFD,
+    });
+    let mut text: String = char::decode_utf16(units).map(|c| c.unwrap_or(char::REPLACEMENT_CHARACTER)).collect();
+    if body.len() % 2 == 1 {
+        text.push(char::REPLACEMENT_CHARACTER);
+    }
+    let crlf = text.find('\n').is_some_and(|i| i > 0 && text.as_bytes().get(i - 1) == Some(&b'\r'));
+    Some(Decoded { text, encoding, bom, crlf, first_non_utf8: None })
+}
+
 /// `\n` line breaks as `\r\n` (those already `\r\n` kept).
 pub fn to_crlf(text: &str) -> String {
     let mut out = String::with_capacity(text.len() + text.len() / 32);
@@ -127,8 +168,29 @@ pub fn to_crlf(text: &str) -> String {
     out
 }
 
+/// How far into a text [`binary_error`] looks for a NUL (as git does to tell binary files).
+const BINARY_PROBE: usize = 8000;
+
+/// The error for a file that is not text at all (SFC0012): a NUL character near its start, as
+/// a vendor's binary project file has. `None` for text.
+pub fn binary_error(file: u32, text: &str) -> Option<Diagnostic> {
+    let at = text.bytes().take(BINARY_PROBE).position(|b| b == 0)? as u32;
+    Some(
+        Diagnostic::error("SFC0012", Span::new(file, at, at + 1), "the file is binary, not text: it holds a NUL byte")
+            .with_note("sfc reads IEC 61131-3 text and PLCopen XML")
+            .with_note(
+                "a vendor's project file (a CODESYS `.project`, for one) is binary: export the POU as PLCopen \
+                 XML from that tool (in CODESYS: Project > Export PLCopenXML...) and give sfc that file",
+            ),
+    )
+}
+
 /// The warning for a file read as Windows-1252 (SFC0011), naming its first non-UTF-8 line.
+/// None for a binary file: [`binary_error`] says what is wrong with it.
 pub fn warning(file: u32, d: &Decoded) -> Option<Diagnostic> {
+    if d.text.bytes().take(BINARY_PROBE).any(|b| b == 0) {
+        return None;
+    }
     let (line, offset) = d.first_non_utf8?;
     let end =
         d.text.get(offset as usize..).and_then(|t| t.chars().next()).map_or(offset, |c| offset + c.len_utf8() as u32);
@@ -169,6 +231,27 @@ mod tests {
         assert_eq!(&d.text[w.span.start as usize..w.span.end as usize], "ö");
         assert_eq!(encode(&d.text, &d), (bytes.to_vec(), 0));
         assert_eq!(encode("ř", &d), (b"?".to_vec(), 1));
+    }
+
+    #[test]
+    fn utf16_with_and_without_bom_round_trips() {
+        let text = "PROGRAM P (* Ventil öffnen, žluťoučký 🚰 *)\r\nEND_PROGRAM\r\n";
+        for (encoding, bom) in
+            [(Encoding::Utf16Le, true), (Encoding::Utf16Be, true), (Encoding::Utf16Le, false), (Encoding::Utf16Be, false)]
+        {
+            let like = Decoded { encoding, bom, crlf: true, ..Decoded::default() };
+            let (bytes, lost) = encode(text, &like);
+            assert_eq!(lost, 0);
+            let d = decode(&bytes);
+            assert_eq!((d.encoding, d.bom, d.crlf), (encoding, bom, true), "{encoding:?} {bom}");
+            assert_eq!(d.text, text);
+            assert_eq!(d.first_non_utf8, None);
+            assert_eq!(encode(&d.text, &d).0, bytes);
+        }
+        // Notepad's "Unicode": the BOM FF FE.
+        assert_eq!(decode(b"\xFF\xFEP\0\n\0").text, "P\n");
+        // A broken surrogate and an odd last byte read as U+FFFD, never a panic.
+        assert_eq!(decode(b"\xFF\xFE\x00\xD8P\0\x01").text, "\u{FFFD}P\u{FFFD}");
     }
 
     #[test]

@@ -197,6 +197,10 @@ const VAR_KEYWORDS: &[(&str, VarKind)] = &[
 
 /// Parses a whole file. `file` is the id put into every span.
 pub fn parse(file: u32, text: &str) -> (SourceUnit, Vec<Diagnostic>) {
+    if let Some(d) = crate::encoding::binary_error(file, text) {
+        // One error, not one per stray byte of a file that was never text.
+        return (SourceUnit::default(), vec![d]);
+    }
     let (all, mut diags) = lex(file, text);
     let mut p = Parser::new(file, text, &all);
     drop(all); // the parser keeps only significant tokens; free the rest before building the tree
