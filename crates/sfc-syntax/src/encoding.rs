@@ -236,9 +236,12 @@ mod tests {
     #[test]
     fn utf16_with_and_without_bom_round_trips() {
         let text = "PROGRAM P (* Ventil öffnen, žluťoučký 🚰 *)\r\nEND_PROGRAM\r\n";
-        for (encoding, bom) in
-            [(Encoding::Utf16Le, true), (Encoding::Utf16Be, true), (Encoding::Utf16Le, false), (Encoding::Utf16Be, false)]
-        {
+        for (encoding, bom) in [
+            (Encoding::Utf16Le, true),
+            (Encoding::Utf16Be, true),
+            (Encoding::Utf16Le, false),
+            (Encoding::Utf16Be, false),
+        ] {
             let like = Decoded { encoding, bom, crlf: true, ..Decoded::default() };
             let (bytes, lost) = encode(text, &like);
             assert_eq!(lost, 0);
