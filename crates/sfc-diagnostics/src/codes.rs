@@ -58,7 +58,8 @@ separated by dots: `%IX2.4`, `%QW29`, `%MW6`.";
         "The file is not valid UTF-8, so it was read as Latin-1 / Windows-1252 (what older Windows \
 editors and many PLC tools write). The warning names the first line that is not UTF-8. `sfc fmt` \
 and the editor write the file back in the same encoding, with its byte order mark and line \
-endings; converting it to UTF-8 silences the warning.";
+endings; converting it to UTF-8 silences the warning. A UTF-16 file with a broken character (an \
+unpaired surrogate, an odd last byte) gets this warning too: the character reads as U+FFFD.";
     "SFC0012" Error "binary file"
         "The file holds a NUL byte near its start: it is not text, and no other diagnostic is given \
 for it. sfc reads IEC 61131-3 text (UTF-8, UTF-16 or Latin-1) and PLCopen XML. A vendor's project \

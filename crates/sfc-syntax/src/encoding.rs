@@ -35,7 +35,8 @@ pub struct Decoded {
     /// The file's line breaks are CRLF (its first line break is).
     pub crlf: bool,
     /// For [`Encoding::Windows1252`]: the 1-based line of the first byte that is not UTF-8, and
-    /// that byte's offset in `text`.
+    /// that byte's offset in `text`. For UTF-16: the same of the first broken character (an
+    /// unpaired surrogate, an odd last byte), read as U+FFFD.
     pub first_non_utf8: Option<(u32, u32)>,
 }
 
@@ -146,12 +147,27 @@ fn decode_utf16(bytes: &[u8]) -> Option<Decoded> {
         (_, [hi, lo]) => u16::from_be_bytes([*hi, *lo]),
         _ => 0xFFFD,
     });
-    let mut text: String = char::decode_utf16(units).map(|c| c.unwrap_or(char::REPLACEMENT_CHARACTER)).collect();
-    if body.len() % 2 == 1 {
+    let mut text = String::with_capacity(body.len() / 2);
+    let mut broken = None;
+    let mut line = 1;
+    let mut replace = |text: &mut String, line: u32| {
+        broken.get_or_insert((line, text.len() as u32));
         text.push(char::REPLACEMENT_CHARACTER);
+    };
+    for c in char::decode_utf16(units) {
+        match c {
+            Ok(c) => {
+                line += u32::from(c == '\n');
+                text.push(c);
+            }
+            Err(_) => replace(&mut text, line),
+        }
+    }
+    if !body.len().is_multiple_of(2) {
+        replace(&mut text, line);
     }
     let crlf = text.find('\n').is_some_and(|i| i > 0 && text.as_bytes().get(i - 1) == Some(&b'\r'));
-    Some(Decoded { text, encoding, bom, crlf, first_non_utf8: None })
+    Some(Decoded { text, encoding, bom, crlf, first_non_utf8: broken })
 }
 
 /// `\n` line breaks as `\r\n` (those already `\r\n` kept).
@@ -192,6 +208,16 @@ pub fn warning(file: u32, d: &Decoded) -> Option<Diagnostic> {
         return None;
     }
     let (line, offset) = d.first_non_utf8?;
+    if matches!(d.encoding, Encoding::Utf16Le | Encoding::Utf16Be) {
+        return Some(
+            Diagnostic::warning(
+                "SFC0011",
+                Span::new(file, offset, offset + char::REPLACEMENT_CHARACTER.len_utf8() as u32),
+                format!("the file is UTF-16 with a broken character on line {line}: read as U+FFFD"),
+            )
+            .with_note("`sfc fmt` and the editor would write U+FFFD back in its place"),
+        );
+    }
     let end =
         d.text.get(offset as usize..).and_then(|t| t.chars().next()).map_or(offset, |c| offset + c.len_utf8() as u32);
     Some(
@@ -253,8 +279,13 @@ mod tests {
         }
         // Notepad's "Unicode": the BOM FF FE.
         assert_eq!(decode(b"\xFF\xFEP\0\n\0").text, "P\n");
-        // A broken surrogate and an odd last byte read as U+FFFD, never a panic.
-        assert_eq!(decode(b"\xFF\xFE\x00\xD8P\0\x01").text, "\u{FFFD}P\u{FFFD}");
+        // A broken surrogate and an odd last byte read as U+FFFD, never a panic, and are said.
+        let d = decode(b"\xFF\xFEA\0\n\0\x00\xD8P\0\x01");
+        assert_eq!(d.text, "A\n\u{FFFD}P\u{FFFD}");
+        assert_eq!(d.first_non_utf8, Some((2, 2)));
+        let w = warning(0, &d).expect("a warning");
+        assert!(w.message.contains("UTF-16 with a broken character on line 2"), "{}", w.message);
+        assert_eq!(&d.text[w.span.start as usize..w.span.end as usize], "\u{FFFD}");
     }
 
     #[test]
