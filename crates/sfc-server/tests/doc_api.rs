@@ -325,3 +325,42 @@ async fn typed_text_that_does_not_parse_is_never_replaced() {
     assert_eq!(p["element"], "T1");
     assert!(p["line"].as_u64().unwrap() > 1, "{p}");
 }
+
+/// A chart saved as UTF-16 (Notepad's "Unicode") opens as text, and a save writes it back as
+/// UTF-16 with its byte order mark and CRLF: the engineer's editor still reads it.
+#[tokio::test]
+async fn a_utf16_file_is_saved_as_utf16() {
+    let d = scratch_with("utf16", &["two_pous.st"]);
+    let path = d.join("two_pous.st");
+    let original = fixture_text("two_pous.st").replace('\n', "\r\n");
+    let utf16 =
+        |t: &str| -> Vec<u8> { [0xFF, 0xFE].into_iter().chain(t.encode_utf16().flat_map(u16::to_le_bytes)).collect() };
+    std::fs::write(&path, utf16(&original)).unwrap();
+    let s = state(&[&d], None);
+    let opened = open_ok(&s, &path).await;
+    assert_eq!(
+        opened["diagnostics"].as_array().unwrap().len(),
+        1,
+        "the fixture's one finding: {}",
+        opened["diagnostics"]
+    );
+    let mut first = chart(&opened, "First");
+    for e in first["elements"].as_array_mut().unwrap() {
+        if e["name"] == "B" {
+            e["description"] = json!("Ventil öffnen");
+        }
+    }
+    let a = post(
+        &s,
+        "/api/save",
+        &json!({ "path": path_str(&path), "format": "st", "doc": first, "hash": opened["hash"] }),
+    )
+    .await;
+    assert_eq!(a.status, 200, "{}", a.text);
+    let written = std::fs::read(&path).unwrap();
+    let decoded = sfc_syntax::encoding::decode(&written);
+    assert_eq!(decoded.encoding, sfc_syntax::encoding::Encoding::Utf16Le);
+    assert!(decoded.bom && decoded.crlf, "BOM and CRLF kept");
+    assert!(decoded.text.contains("Ventil öffnen"), "{}", decoded.text);
+    assert_eq!(written, utf16(&decoded.text), "every character written as UTF-16");
+}
