@@ -308,7 +308,8 @@ impl Service {
                 if let Some(c) = img.client.get_mut(i) {
                     *c = v;
                 }
-            } else {
+            } else if !img.memory_writes.contains(&i) {
+                // Once per point: in STOP no scan takes them, and a client may write for hours.
                 img.memory_writes.push(i);
             }
         }
