@@ -841,7 +841,11 @@ impl ScanThread {
                             img.write_input(i, &self.points[i], v.clone());
                         }
                     }
-                    _ => self.pending_sets.push((var, v.clone())),
+                    // The last value per variable: while halted or in STOP no scan takes them.
+                    _ => match self.pending_sets.iter_mut().find(|(w, _)| *w == var) {
+                        Some(pending) => pending.1 = v.clone(),
+                        None => self.pending_sets.push((var, v.clone())),
+                    },
                 }
                 value_json(&v)
             }),
