@@ -63,7 +63,7 @@ pub fn render_human(diag: &Diagnostic, files: &[SourceFile], opts: RenderOptions
         "{}{} {}",
         st.severity(diag.severity, &format!("{sev}[{}]", diag.code)),
         st.bold(":"),
-        st.bold(&diag.message)
+        st.bold(&visible(&diag.message))
     );
     // Width of the line-number gutter: the largest line number shown.
     let mut max_line = 1;
@@ -120,7 +120,7 @@ pub fn render_human(diag: &Diagnostic, files: &[SourceFile], opts: RenderOptions
     }
     if let Some(element) = &diag.element {
         if !diag.message.contains(element.as_str()) {
-            let _ = writeln!(out, "{pad} {} {}: {element}", st.blue("="), st.bold("element"));
+            let _ = writeln!(out, "{pad} {} {}: {}", st.blue("="), st.bold("element"), visible(element));
         }
     }
     for note in &diag.notes {
@@ -129,7 +129,7 @@ pub fn render_human(diag: &Diagnostic, files: &[SourceFile], opts: RenderOptions
             Some(help) => ("help", help),
             None => ("note", note.as_str()),
         };
-        let _ = writeln!(out, "{pad} {} {}: {text}", st.blue("="), st.bold(kind));
+        let _ = writeln!(out, "{pad} {} {}: {}", st.blue("="), st.bold(kind), visible(text));
     }
     if let Some(w) = &diag.witness {
         let text = match w {
@@ -140,6 +140,25 @@ pub fn render_human(diag: &Diagnostic, files: &[SourceFile], opts: RenderOptions
         let _ = writeln!(out, "{pad} {} {}: {text}", st.blue("="), st.bold("witness"));
     }
     out
+}
+
+/// `text` safe to print on a terminal: control characters (a binary file's bytes, an escape
+/// sequence in a comment) shown as their Unicode control pictures (`␛`, `␀`), one cell each as
+/// the character they replace, so the carets stay under their columns.
+fn visible(text: &str) -> std::borrow::Cow<'_, str> {
+    let hidden = |c: char| c.is_control() && c != '\t';
+    if !text.chars().any(hidden) {
+        return std::borrow::Cow::Borrowed(text);
+    }
+    text.chars()
+        .map(|c| match c as u32 {
+            n @ 0..=0x1F if c != '\t' => char::from_u32(0x2400 + n).unwrap_or('\u{FFFD}'),
+            0x7F => '\u{2421}',
+            _ if hidden(c) => '\u{FFFD}',
+            _ => c,
+        })
+        .collect::<String>()
+        .into()
 }
 
 /// One underline under a source line: the primary span (`^`) or a label (`-`).
@@ -155,7 +174,7 @@ struct Mark<'a> {
 fn snippet(out: &mut String, st: &Style, file: &SourceFile, line: u32, marks: &[Mark<'_>], width: usize) {
     let pad = " ".repeat(width);
     let line_text = file.line_text(line);
-    let shown = line_text.replace('\t', "    ");
+    let shown = visible(&line_text.replace('\t', "    ")).into_owned();
     let _ = writeln!(out, "{} {} {}", st.blue(&format!("{line:>width$}")), st.blue("|"), shown);
     // Columns account for tabs expanded to four spaces.
     let cells = |span: Span| -> (usize, usize) {
@@ -211,7 +230,7 @@ fn snippet(out: &mut String, st: &Style, file: &SourceFile, line: u32, marks: &[
             continue;
         }
         if i + l == rightmost && inline.is_empty() {
-            inline = format!(" {}", m.label);
+            inline = format!(" {}", visible(m.label));
         } else {
             hanging.push((*i, m));
         }
@@ -236,7 +255,7 @@ fn snippet(out: &mut String, st: &Style, file: &SourceFile, line: u32, marks: &[
         let Some((i, m)) = hanging.get(k) else { continue };
         let (line, width) = connectors(k);
         let gap = " ".repeat(i.saturating_sub(width));
-        let _ = writeln!(out, "{pad} {} {line}{gap}{}", st.blue("|"), paint(m, m.label));
+        let _ = writeln!(out, "{pad} {} {line}{gap}{}", st.blue("|"), paint(m, &visible(m.label)));
     }
 }
 
@@ -311,6 +330,17 @@ mod tests {
         let s = render_human(&d, &[f], RenderOptions::default());
         assert!(s.ends_with("1 | ab cd\n  | ^^ -- first here\n"), "{s}");
         assert_eq!(s.matches("ab cd").count(), 1);
+    }
+
+    #[test]
+    fn control_characters_never_reach_the_terminal() {
+        // An escape sequence that would turn the terminal red, and a NUL, in the line shown.
+        let f = SourceFile::new("a.st", "  x \u{1b}[31mRED\0 := 1;\n");
+        let d = Diagnostic::error("SFC0101", Span::new(0, 14, 16), "found `\u{1b}[`").with_note("a\u{7}b");
+        let s = render_human(&d, &[f], RenderOptions::default());
+        assert!(!s.chars().any(|c| c.is_control() && c != '\n'), "{s:?}");
+        assert!(s.contains("1 |   x ␛[31mRED␀ := 1;\n  |               ^^\n"), "{s}");
+        assert!(s.contains("found `␛[`") && s.contains("note: a␇b"), "{s}");
     }
 
     #[test]
