@@ -76,7 +76,7 @@ pub fn render_human(diag: &Diagnostic, files: &[SourceFile], opts: RenderOptions
     let pad = " ".repeat(width);
     if let Some(file) = file_of(files, diag.span) {
         let lc = file.line_col(diag.span.start);
-        let _ = writeln!(out, "{pad}{} {}:{}:{}", st.blue("-->"), file.name, lc.line, lc.column);
+        let _ = writeln!(out, "{pad}{} {}:{}:{}", st.blue("-->"), visible(&file.name), lc.line, lc.column);
         let _ = writeln!(out, "{pad} {}", st.blue("|"));
         // Snippets of this file in source order (like rustc), with `...` between distant lines;
         // labels in other files follow, each under its own `:::` header.
@@ -111,7 +111,7 @@ pub fn render_human(diag: &Diagnostic, files: &[SourceFile], opts: RenderOptions
         for label in diag.labels.iter().filter(|l| l.span.file != diag.span.file) {
             if let Some(lf) = file_of(files, label.span) {
                 let lc = lf.line_col(label.span.start);
-                let _ = writeln!(out, "{pad}{} {}:{}:{}", st.blue(":::"), lf.name, lc.line, lc.column);
+                let _ = writeln!(out, "{pad}{} {}:{}:{}", st.blue(":::"), visible(&lf.name), lc.line, lc.column);
                 let line = lf.line_col(label.span.start).line;
                 let mark = Mark { span: label.span, mark: '-', sev: Severity::Note, label: &label.message };
                 snippet(&mut out, &st, lf, line, &[mark], width);
