@@ -187,10 +187,15 @@ pub fn to_crlf(text: &str) -> String {
 /// How far into a text [`binary_error`] looks for a NUL (as git does to tell binary files).
 const BINARY_PROBE: usize = 8000;
 
+/// The offset of a NUL within the first [`BINARY_PROBE`] bytes: the text is a binary file's.
+fn first_nul(text: &str) -> Option<usize> {
+    text.bytes().take(BINARY_PROBE).position(|b| b == 0)
+}
+
 /// The error for a file that is not text at all (SFC0012): a NUL character near its start, as
 /// a vendor's binary project file has. `None` for text.
 pub fn binary_error(file: u32, text: &str) -> Option<Diagnostic> {
-    let at = text.bytes().take(BINARY_PROBE).position(|b| b == 0)? as u32;
+    let at = first_nul(text)? as u32;
     Some(
         Diagnostic::error("SFC0012", Span::new(file, at, at + 1), "the file is binary, not text: it holds a NUL byte")
             .with_note("sfc reads IEC 61131-3 text and PLCopen XML")
@@ -204,7 +209,7 @@ pub fn binary_error(file: u32, text: &str) -> Option<Diagnostic> {
 /// The warning for a file read as Windows-1252 (SFC0011), naming its first non-UTF-8 line.
 /// None for a binary file: [`binary_error`] says what is wrong with it.
 pub fn warning(file: u32, d: &Decoded) -> Option<Diagnostic> {
-    if d.text.bytes().take(BINARY_PROBE).any(|b| b == 0) {
+    if first_nul(&d.text).is_some() {
         return None;
     }
     let (line, offset) = d.first_non_utf8?;
