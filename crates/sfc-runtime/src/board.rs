@@ -757,6 +757,26 @@ mod tests {
         assert!(Board::default().tail_latest().last(&info).is_none());
     }
 
+    /// An overrun skips periods: the scan numbers leave a gap, and a change is read after the
+    /// state of the scan it changes (its `base`), not of the scan number before it.
+    #[test]
+    fn a_change_after_skipped_periods_is_read_from_the_scan_before_the_gap() {
+        let info = info();
+        let mut b = Board::default();
+        let mut after_gap = (*state(3, false, &[0], [30_000, 30_000], &[])).clone();
+        after_gap.base = 0;
+        for s in [
+            state(0, true, &[], [0, 0], &[(0, 0), (2, 0)]),
+            Arc::new(after_gap),
+            state(4, false, &[], [40_000, 40_000], &[]),
+        ] {
+            b.push_state(s, |_| panic!("nothing leaves a short history"));
+        }
+        let got: Vec<(u64, Vec<(u32, i64)>)> =
+            b.tail_after(1).full(&info).iter().map(|s| (s.scan, sorted(s))).collect();
+        assert_eq!(got, vec![(3, vec![(1, 0), (2, 30_000)]), (4, vec![(1, 10_000), (2, 40_000)])]);
+    }
+
     #[test]
     fn the_history_keeps_its_length_and_starts_with_a_state_in_full() {
         let info = info();
