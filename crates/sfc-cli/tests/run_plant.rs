@@ -434,6 +434,21 @@ fn modbus_reads_declared_values_before_the_first_scan() {
     assert_eq!(status, Some(0), "{lines:?}");
 }
 
+/// SIGTERM the moment the run says where it listens (systemd stopping a unit just started):
+/// the handler is already installed, so the run still stops in order and exits 0. It was
+/// installed by the network side's first poll, and a signal before that killed the process.
+#[test]
+fn sigterm_right_after_start_stops_in_order() {
+    for round in 0..10 {
+        let mut run = Run::start(&[s(&chart("io.st")), "--modbus", "127.0.0.1:0", "--no-retain", "--for", "T#60s"]);
+        run.modbus();
+        run.signal(libc::SIGTERM);
+        let (status, lines) = run.finish(30);
+        assert_eq!(status, Some(0), "round {round}: {lines:?}");
+        assert!(lines.iter().any(|l| l == "sfc run: SIGTERM: stopping in order"), "round {round}: {lines:?}");
+    }
+}
+
 /// A Modbus connection idle longer than the timeout is closed; the server counts it.
 #[test]
 fn idle_modbus_connections_are_closed() {

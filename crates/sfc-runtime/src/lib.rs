@@ -216,15 +216,46 @@ fn opcua_side(hub: &Arc<Hub>, o: Option<&OpcuaOptions>) -> Result<(Option<OpcuaS
     }
 }
 
+/// The handlers of SIGINT and SIGTERM, installed before the run says it is ready: a signal
+/// that comes right after start (systemd stopping a unit at once, a test) still stops the run
+/// in order instead of killing the process with its outputs as they were.
+struct Signals {
+    #[cfg(unix)]
+    int: tokio::signal::unix::Signal,
+    #[cfg(unix)]
+    term: tokio::signal::unix::Signal,
+}
+
+impl Signals {
+    /// Installs the handlers (inside the network runtime's context).
+    fn install(net: &tokio::runtime::Runtime, hub: &Hub) -> Option<Signals> {
+        let _context = net.enter();
+        #[cfg(unix)]
+        {
+            use tokio::signal::unix::{signal, SignalKind};
+            match (signal(SignalKind::interrupt()), signal(SignalKind::terminate())) {
+                (Ok(int), Ok(term)) => Some(Signals { int, term }),
+                _ => {
+                    hub.notice(
+                        "warning: cannot catch SIGINT and SIGTERM: they end the process without an orderly stop",
+                    );
+                    None
+                }
+            }
+        }
+        #[cfg(not(unix))]
+        {
+            let _ = hub;
+            Some(Signals {})
+        }
+    }
+}
+
 /// Ends the run when SIGINT or SIGTERM arrives (SIGTERM is what systemd and `kill` send).
-async fn stop_on_signals(hub: Arc<Hub>) {
+async fn stop_on_signals(signals: Signals, hub: Arc<Hub>) {
     #[cfg(unix)]
     {
-        use tokio::signal::unix::{signal, SignalKind};
-        let (Ok(mut int), Ok(mut term)) = (signal(SignalKind::interrupt()), signal(SignalKind::terminate())) else {
-            hub.notice("warning: cannot catch SIGINT and SIGTERM: they end the process without an orderly stop");
-            return;
-        };
+        let Signals { mut int, mut term } = signals;
         let name = tokio::select! {
             _ = int.recv() => "SIGINT",
             _ = term.recv() => "SIGTERM",
@@ -233,6 +264,7 @@ async fn stop_on_signals(hub: Arc<Hub>) {
     }
     #[cfg(not(unix))]
     {
+        let Signals {} = signals;
         if tokio::signal::ctrl_c().await.is_err() {
             return;
         }
@@ -261,6 +293,7 @@ fn start_net(
     ctrl_c: bool,
 ) -> Result<JoinHandle<()>, String> {
     let hub = hub.clone();
+    let signals = if ctrl_c { Signals::install(&net, &hub) } else { None };
     #[cfg(feature = "opcua")]
     let opcua = match opcua {
         Some(side) => Some(opcua::spawn(side, hub.clone())?),
@@ -276,8 +309,8 @@ fn start_net(
                 if let Some((l, access)) = monitor {
                     tokio::spawn(protocol::serve(l, hub.clone(), Arc::new(access)));
                 }
-                if ctrl_c {
-                    tokio::spawn(stop_on_signals(hub.clone()));
+                if let Some(signals) = signals {
+                    tokio::spawn(stop_on_signals(signals, hub.clone()));
                 }
                 while !hub.closing() {
                     tokio::time::sleep(std::time::Duration::from_millis(20)).await;
