@@ -434,6 +434,26 @@ fn modbus_reads_declared_values_before_the_first_scan() {
     assert_eq!(status, Some(0), "{lines:?}");
 }
 
+/// A retain file that cannot be written (its directory does not exist) is said at the start,
+/// once, and the run goes on; when the directory appears, the file is written and that is said.
+#[test]
+fn a_retain_file_that_cannot_be_written_is_said_at_the_start() {
+    let dir = scratch("retain-dir");
+    let missing = dir.join("later");
+    let retain = missing.join("carwash.retain");
+    let mut run = Run::start(&["examples/carwash/carwash.st", "--retain", s(&retain), "--for", "T#60s"]);
+    let warning = run.line("the retain warning", 30, |l| l.starts_with("warning: retain: cannot write "));
+    assert!(warning.contains("will not survive a restart"), "{warning}");
+    std::fs::create_dir_all(&missing).unwrap();
+    run.signal(libc::SIGTERM);
+    let (status, lines) = run.finish(30);
+    assert_eq!(status, Some(0), "{lines:?}");
+    assert_eq!(lines.iter().filter(|l| l.contains("cannot write")).count(), 1, "said once: {lines:?}");
+    assert!(lines.iter().any(|l| l == &format!("retain: {} written", retain.display())), "{lines:?}");
+    assert_eq!(retained(&read_retain(&retain), "Washes"), json!(0));
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
 /// SIGTERM the moment the run says where it listens (systemd stopping a unit just started):
 /// the handler is already installed, so the run still stops in order and exits 0. It was
 /// installed by the network side's first poll, and a signal before that killed the process.

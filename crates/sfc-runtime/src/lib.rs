@@ -338,8 +338,9 @@ fn start_net(
 impl Runtime {
     /// Starts scanning `sim` (its period is the scan period) with the I/O and monitor of `opts`.
     /// Errors: a located variable the Modbus map does not cover (with `modbus`), a safe value
-    /// that does not fit its variable, a retain file that cannot be written, or an address that
-    /// cannot be bound.
+    /// that does not fit its variable, a thread that cannot be started, or an address that
+    /// cannot be bound. A retain file that cannot be written is a warning among the notices (the
+    /// run still starts).
     pub fn start(mut sim: Simulation, opts: RunOptions) -> Result<Runtime, String> {
         let points = Arc::new(if opts.modbus.is_some() { io::map_located(&sim)? } else { Vec::new() });
         let safe = Arc::new(safe::safe_state(&sim, &points, &opts.safe)?);

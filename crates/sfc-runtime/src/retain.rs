@@ -259,9 +259,31 @@ pub fn remove_stale_temporaries(path: &Path) {
     }
 }
 
-/// Reads the file at `path` and restores from it. Returns the lines to tell the operator.
+/// Reads the file at `path` and restores from it, and tries whether it can be written. Returns
+/// the lines to tell the operator: a file that cannot be written (no such directory, no
+/// permission) is said at the start, not only at the first write a second or a stop later. The
+/// run still starts: a PLC whose retain memory fails keeps controlling the machine.
 pub fn start(sim: &mut Simulation, leaves: &[Retained], opts: &RetainOptions) -> Vec<String> {
     remove_stale_temporaries(&opts.path);
+    let mut lines = restore_from_file(sim, leaves, opts);
+    if let Err(e) = try_writing(&opts.path) {
+        lines.push(format!(
+            "warning: retain: cannot write {}: {e}: the retentive values will not survive a restart \
+             (`--retain PATH` names a writable file, `--no-retain` keeps none)",
+            opts.path.display()
+        ));
+    }
+    lines
+}
+
+/// Creates and removes the temporary file a write of `path` uses.
+fn try_writing(path: &Path) -> std::io::Result<()> {
+    let tmp = temp_path(path);
+    std::fs::OpenOptions::new().write(true).create(true).truncate(true).open(&tmp)?;
+    std::fs::remove_file(&tmp)
+}
+
+fn restore_from_file(sim: &mut Simulation, leaves: &[Retained], opts: &RetainOptions) -> Vec<String> {
     let shown = opts.path.display();
     let start = if opts.cold { "cold start" } else { "warm start" };
     let text = match std::fs::read(&opts.path) {
@@ -339,8 +361,11 @@ impl Writer {
         notice: impl Fn(String) + Send + 'static,
     ) -> std::io::Result<Writer> {
         let (tx, rx) = mpsc::channel::<Job>();
+        // A file that cannot be written was said at the start ([`start`]): not again at the
+        // first write, but when it can be written after all.
+        let mut failing = try_writing(&path).is_err();
         let thread = std::thread::Builder::new().name("sfc-retain".into()).spawn(move || {
-            let mut failing = false;
+            let mut written = false;
             while let Ok(mut job) = rx.recv() {
                 // Only the newest values matter.
                 let mut last = false;
@@ -361,9 +386,10 @@ impl Writer {
                 match write_durably(&path, text.as_bytes()) {
                     Ok(()) if failing => {
                         failing = false;
-                        notice(format!("retain: {} written again", path.display()));
+                        notice(format!("retain: {} written{}", path.display(), if written { " again" } else { "" }));
+                        written = true;
                     }
-                    Ok(()) => {}
+                    Ok(()) => written = true,
                     Err(e) if !failing => {
                         failing = true;
                         notice(format!("warning: retain: cannot write {}: {e}", path.display()));
