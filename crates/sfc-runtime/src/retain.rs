@@ -278,6 +278,9 @@ pub fn start(sim: &mut Simulation, leaves: &[Retained], opts: &RetainOptions) ->
 
 /// Creates and removes the temporary file a write of `path` uses.
 fn try_writing(path: &Path) -> std::io::Result<()> {
+    if path.is_dir() {
+        return Err(std::io::Error::other("it is a directory"));
+    }
     let tmp = temp_path(path);
     std::fs::OpenOptions::new().write(true).create(true).truncate(true).open(&tmp)?;
     std::fs::remove_file(&tmp)
