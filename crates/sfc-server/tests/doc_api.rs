@@ -20,6 +20,11 @@ async fn open_ok(s: &sfc_server::AppState, path: &Path) -> Value {
     a.body
 }
 
+/// Saves `doc` over `path` in `format`, with the hash it was opened with (`null`: a new file).
+async fn save(s: &sfc_server::AppState, path: &Path, format: &str, doc: &Value, hash: &Value) -> Answer {
+    post(s, "/api/save", &json!({ "path": path_str(path), "format": format, "doc": doc, "hash": hash })).await
+}
+
 /// The chart of `opened` named `pou`.
 fn chart(opened: &Value, pou: &str) -> Value {
     opened["charts"].as_array().unwrap().iter().find(|c| c["pou"] == pou).cloned().expect("the chart is there")
@@ -81,12 +86,7 @@ async fn save_splices_atomically_and_detects_changes() {
     }
     let doc: sfc_doc::EditorDoc = serde_json::from_value(first.clone()).unwrap();
     let expected = sfc_doc::splice(&original, &doc);
-    let a = post(
-        &s,
-        "/api/save",
-        &json!({ "path": path_str(&path), "format": "st", "doc": first, "hash": opened["hash"] }),
-    )
-    .await;
+    let a = save(&s, &path, "st", &first, &opened["hash"]).await;
     assert_eq!(a.status, 200, "{}", a.text);
     let written = std::fs::read_to_string(&path).unwrap();
     assert_eq!(written, expected);
@@ -143,8 +143,7 @@ async fn save_new_text_and_xml_files() {
     let seed = chart(&open_ok(&s, &d.join("seed.st")).await, "Seed");
     // A new text file holds just this POU.
     let fresh = d.join("fresh.st");
-    let a =
-        post(&s, "/api/save", &json!({ "path": path_str(&fresh), "format": "st", "doc": seed, "hash": null })).await;
+    let a = save(&s, &fresh, "st", &seed, &json!(null)).await;
     assert_eq!(a.status, 200, "{}", a.text);
     assert_eq!(chart(&open_ok(&s, &fresh).await, "Seed"), seed);
     // PLCopen XML: spliced into the imported project, exported, and it builds the same table.
@@ -152,12 +151,7 @@ async fn save_new_text_and_xml_files() {
     let opened = open_ok(&s, &xml_path).await;
     let mut doc = chart(&opened, "Seed");
     doc["description"] = json!("edited in the test");
-    let a = post(
-        &s,
-        "/api/save",
-        &json!({ "path": path_str(&xml_path), "format": "xml", "doc": doc, "hash": opened["hash"] }),
-    )
-    .await;
+    let a = save(&s, &xml_path, "xml", &doc, &opened["hash"]).await;
     assert_eq!(a.status, 200, "{}", a.text);
     let xml = std::fs::read_to_string(&xml_path).unwrap();
     assert!(xml.starts_with("<?xml"), "{}", &xml[..60.min(xml.len())]);
@@ -311,9 +305,7 @@ async fn typed_text_that_does_not_parse_is_never_replaced() {
     let doc = chart(&opened, "Lose");
     let t1 = doc["elements"].as_array().unwrap().iter().find(|e| e["id"] == "transition:T1").unwrap();
     assert_eq!(t1["condition"], "a AND ;", "kept as typed");
-    let a =
-        post(&s, "/api/save", &json!({ "path": path_str(&path), "format": "st", "doc": doc, "hash": opened["hash"] }))
-            .await;
+    let a = save(&s, &path, "st", &doc, &opened["hash"]).await;
     assert_eq!(a.status, 422, "{}", a.text);
     let msg = a.body["error"].as_str().unwrap();
     assert!(msg.contains("not saved") && msg.contains("T1"), "{msg}");
@@ -350,12 +342,7 @@ async fn a_utf16_file_is_saved_as_utf16() {
             e["description"] = json!("Ventil öffnen");
         }
     }
-    let a = post(
-        &s,
-        "/api/save",
-        &json!({ "path": path_str(&path), "format": "st", "doc": first, "hash": opened["hash"] }),
-    )
-    .await;
+    let a = save(&s, &path, "st", &first, &opened["hash"]).await;
     assert_eq!(a.status, 200, "{}", a.text);
     let written = std::fs::read(&path).unwrap();
     let decoded = sfc_syntax::encoding::decode(&written);
