@@ -386,13 +386,15 @@ impl Runtime {
         let leaves = sim.retained();
         let writer = match &opts.retain {
             Some(r) => {
-                for line in retain::start(&mut sim, &leaves, r) {
+                let (lines, writable) = retain::start(&mut sim, &leaves, r);
+                for line in lines {
                     hub.notice(line);
                 }
                 let pou = sim.pou_name().to_string();
                 let h = hub.clone();
-                let w = retain::Writer::start(r.path.clone(), pou, leaves.clone(), move |line| h.notice(line))
-                    .map_err(|e| format!("cannot start the retain writer: {e}"))?;
+                let w =
+                    retain::Writer::start(r.path.clone(), pou, leaves.clone(), writable, move |line| h.notice(line))
+                        .map_err(|e| format!("cannot start the retain writer: {e}"))?;
                 Some(w)
             }
             None => None,

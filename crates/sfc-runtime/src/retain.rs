@@ -260,20 +260,22 @@ pub fn remove_stale_temporaries(path: &Path) {
 }
 
 /// Reads the file at `path` and restores from it, and tries whether it can be written. Returns
-/// the lines to tell the operator: a file that cannot be written (no such directory, no
-/// permission) is said at the start, not only at the first write a second or a stop later. The
-/// run still starts: a PLC whose retain memory fails keeps controlling the machine.
-pub fn start(sim: &mut Simulation, leaves: &[Retained], opts: &RetainOptions) -> Vec<String> {
+/// the lines to tell the operator, and whether the file can be written (for
+/// [`Writer::start`]): a file that cannot be written (no such directory, no permission) is said
+/// at the start, not only at the first write a second or a stop later. The run still starts: a
+/// PLC whose retain memory fails keeps controlling the machine.
+pub fn start(sim: &mut Simulation, leaves: &[Retained], opts: &RetainOptions) -> (Vec<String>, bool) {
     remove_stale_temporaries(&opts.path);
     let mut lines = restore_from_file(sim, leaves, opts);
-    if let Err(e) = try_writing(&opts.path) {
+    let writable = try_writing(&opts.path);
+    if let Err(e) = &writable {
         lines.push(format!(
             "warning: retain: cannot write {}: {e}: the retentive values will not survive a restart \
              (`--retain PATH` names a writable file, `--no-retain` keeps none)",
             opts.path.display()
         ));
     }
-    lines
+    (lines, writable.is_ok())
 }
 
 /// Creates and removes the temporary file a write of `path` uses.
@@ -357,16 +359,17 @@ pub struct Writer {
 
 impl Writer {
     /// Starts the writer of `path` for `leaves` of POU `pou`; errors are told through `notice`.
+    /// A file that was not `writable` at the start ([`start`] said so) is not said again at the
+    /// first write, but when it can be written after all.
     pub fn start(
         path: PathBuf,
         pou: String,
         leaves: Vec<Retained>,
+        writable: bool,
         notice: impl Fn(String) + Send + 'static,
     ) -> std::io::Result<Writer> {
         let (tx, rx) = mpsc::channel::<Job>();
-        // A file that cannot be written was said at the start ([`start`]): not again at the
-        // first write, but when it can be written after all.
-        let mut failing = try_writing(&path).is_err();
+        let mut failing = !writable;
         let thread = std::thread::Builder::new().name("sfc-retain".into()).spawn(move || {
             let mut written = false;
             while let Ok(mut job) = rx.recv() {
