@@ -399,9 +399,14 @@ fn start(a: &RunArgs) -> Result<(Runtime, TokenSource), String> {
         if let Some(i) = &iec.imported {
             sim.locate_faults_in(std::sync::Arc::new((i.xml.clone(), i.map.clone())));
         }
-        // A chart without retentive values needs no file.
+        // A chart without retentive values needs no file; one the user named is said unused.
         if !sim.retained().is_empty() {
             opts.retain = retain;
+        } else if let Some(r) = retain.filter(|_| a.retain.is_some() || cfg.retain.file.is_some()) {
+            eprintln!(
+                "retain: the chart has no RETAIN or PERSISTENT variables: {} is neither read nor written",
+                r.path.display()
+            );
         }
         Runtime::start(sim, opts).map_err(|e| format!("error: {e}"))?
     };

@@ -454,6 +454,26 @@ fn a_retain_file_that_cannot_be_written_is_said_at_the_start() {
     let _ = std::fs::remove_dir_all(&dir);
 }
 
+/// A retain file named for a chart without RETAIN or PERSISTENT variables is said unused, not
+/// silently ignored; without `--retain` nothing is said.
+#[test]
+fn a_retain_file_named_for_a_chart_without_retentive_values_is_said_unused() {
+    let dir = scratch("retain-unused");
+    let retain = dir.join("io.retain");
+    let o = command(&["run", s(&chart("io.st")), "--retain", s(&retain), "--scans", "3"]).output().unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(0), "{err}");
+    let unused = format!(
+        "retain: the chart has no RETAIN or PERSISTENT variables: {} is neither read nor written",
+        retain.display()
+    );
+    assert!(err.lines().any(|l| l == unused), "{err}");
+    assert!(!retain.exists());
+    let o = command(&["run", s(&chart("io.st")), "--scans", "3"]).output().unwrap();
+    assert!(!String::from_utf8_lossy(&o.stderr).contains("retain"), "{}", String::from_utf8_lossy(&o.stderr));
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
 /// SIGTERM the moment the run says where it listens (systemd stopping a unit just started):
 /// the handler is already installed, so the run still stops in order and exits 0. It was
 /// installed by the network side's first poll, and a signal before that killed the process.
