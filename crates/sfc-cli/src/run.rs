@@ -46,6 +46,10 @@ pub struct RunArgs {
     /// little.
     #[arg(long, value_name = "ORDER")]
     pub word_order: Option<String>,
+    /// Let Modbus clients restart the chart: holding register 40000 := 1 (warm) or 2 (cold),
+    /// coil 40000 := TRUE (warm). Off by default: Modbus has no authentication.
+    #[arg(long)]
+    pub modbus_reset: bool,
     /// Serve the monitor protocol (WebSocket) at this address (e.g. 127.0.0.1:9002).
     #[arg(long, value_name = "ADDR")]
     pub monitor: Option<String>,
@@ -60,6 +64,10 @@ pub struct RunArgs {
     /// rejected client certificates (default: $XDG_DATA_HOME/sfc/opcua-pki).
     #[arg(long, value_name = "DIR")]
     pub opcua_pki: Option<PathBuf>,
+    /// The shortest OPC UA publishing and sampling interval granted (a TIME literal; default
+    /// T#10ms): a client asking for less gets this.
+    #[arg(long, value_name = "TIME")]
+    pub opcua_min_publish: Option<String>,
     /// Read a password on standard input, print its argon2 hash for `[[opcua.user]]`, and exit.
     #[arg(long)]
     pub hash_password: bool,
@@ -106,9 +114,14 @@ pub struct RunArgs {
     /// Run the scan thread with real-time priority (Linux SCHED_FIFO; needs root or CAP_SYS_NICE).
     #[arg(long)]
     pub realtime: bool,
-    /// Print the scan statistics at this interval (a TIME literal) while running.
+    /// Print the state, the outputs and the scan statistics at this interval (a TIME literal)
+    /// while running.
     #[arg(long, value_name = "TIME")]
     pub report: Option<String>,
+    /// How `--report` prints: `text` (one line for the operator, default) or `json` (one JSON
+    /// object per line, for a log collector).
+    #[arg(long, value_name = "FORMAT", requires = "report")]
+    pub report_format: Option<String>,
     /// Monitor a REX ATMT/EATMT block: FILE is its table (`N[…][…]`) or its chart, and the block's
     /// `state condition_bits` lines come from `--atmt-input`.
     #[arg(long)]
@@ -277,10 +290,36 @@ fn start(a: &RunArgs) -> Result<(Runtime, TokenSource), String> {
                 .opcua
                 .users
                 .iter()
-                .map(|(name, hash)| sfc_runtime::OpcuaUser { name: name.clone(), password_hash: hash.clone() })
+                .map(|u| sfc_runtime::OpcuaUser {
+                    name: u.name.clone(),
+                    password_hash: u.password_hash.clone(),
+                    role: u.role.unwrap_or_else(|| {
+                        // What every user could do before roles existed, said so it is a choice.
+                        eprintln!(
+                            "warning: {}: [[opcua.user]] `{}` has no `role`: admin (writes inputs, calls Halt, \
+                             Continue and Reset), as before roles existed; give role = \"read\", \"operate\" or \"admin\"",
+                            cfg.file.display(),
+                            u.name
+                        );
+                        sfc_runtime::OpcuaRole::Admin
+                    }),
+                })
                 .collect(),
+            min_publish: match &a.opcua_min_publish {
+                Some(t) => time_arg("--opcua-min-publish", t)?,
+                None => cfg.opcua.min_publish.unwrap_or(Duration::from_millis(10)),
+            },
         }),
     };
+    if opcua.is_none() && a.opcua_min_publish.is_some() {
+        return Err("`--opcua-min-publish` needs an OPC UA endpoint (`--opcua URL`)".into());
+    }
+    if modbus.is_none() && (a.modbus_reset || cfg.modbus.reset == Some(true)) {
+        return Err("`--modbus-reset` needs Modbus (`--modbus ADDR`)".into());
+    }
+    if let Some(f) = a.report_format.as_deref().filter(|f| *f != "text" && *f != "json") {
+        return Err(format!("`--report-format`: `{f}` is `text` or `json`"));
+    }
     let pki = opcua.as_ref().map(|o| o.pki_dir.clone());
     let mut modbus_limits = ModbusLimits::default();
     if let Some(n) = a.modbus_max_clients.or(cfg.modbus.max_clients) {
@@ -334,6 +373,7 @@ fn start(a: &RunArgs) -> Result<(Runtime, TokenSource), String> {
         modbus,
         modbus_limits,
         word_order,
+        modbus_reset: a.modbus_reset || cfg.modbus.reset == Some(true),
         monitor,
         monitor_access,
         token,
@@ -444,7 +484,12 @@ fn supervise(rt: Runtime, a: &RunArgs, source: &TokenSource) -> u8 {
         if let Some(e) = every {
             if last.elapsed() >= e {
                 last = std::time::Instant::now();
-                eprintln!("sfc run: {}", rt.stats_json());
+                let image = rt.image();
+                if a.report_format.as_deref() == Some("json") {
+                    eprintln!("{}", image.report_json(rt.info()));
+                } else {
+                    eprintln!("sfc run: report: {}", image.report_text(rt.info()));
+                }
             }
         }
     }

@@ -50,6 +50,8 @@ pub struct ModbusSection {
     pub max_clients: Option<usize>,
     pub idle_timeout: Option<Duration>,
     pub word_order: Option<String>,
+    /// `reset = true`: holding register and coil 40000 reset the chart.
+    pub reset: Option<bool>,
 }
 
 #[derive(Debug, Clone, Default, PartialEq)]
@@ -75,8 +77,19 @@ pub struct OpcuaSection {
     pub allow_none: Option<bool>,
     pub anonymous_read: Option<bool>,
     pub pki_dir: Option<PathBuf>,
-    /// `[[opcua.user]]`: name and argon2 password hash.
-    pub users: Vec<(String, String)>,
+    /// `min_publish = "T#10ms"`: the shortest publishing and sampling interval granted.
+    pub min_publish: Option<Duration>,
+    /// `[[opcua.user]]`: name, argon2 password hash, role (`None` when not given).
+    pub users: Vec<OpcuaUserEntry>,
+}
+
+/// One `[[opcua.user]]`.
+#[derive(Debug, Clone, PartialEq)]
+pub struct OpcuaUserEntry {
+    pub name: String,
+    pub password_hash: String,
+    /// `read`, `operate` or `admin`; `None` when the entry has no `role`.
+    pub role: Option<sfc_runtime::OpcuaRole>,
 }
 
 /// The file being read: its text (for positions), name and directory (for relative paths).
@@ -134,11 +147,11 @@ type Section = (&'static str, &'static [&'static str], fn(&Src<'_>, &dyn TableLi
 
 /// The sections a run configuration may have. A new server of `sfc run` adds its own here.
 const SECTIONS: &[Section] = &[
-    ("modbus", &["address", "max_clients", "idle_timeout", "word_order"], modbus_section),
+    ("modbus", &["address", "max_clients", "idle_timeout", "word_order", "reset"], modbus_section),
     ("monitor", &["address", "token_file", "allow_origins", "allow_hosts"], monitor_section),
     ("retain", &["file", "interval", "enabled"], retain_section),
     ("safe", &[], safe_section),
-    ("opcua", &["endpoint", "allow_none", "anonymous_read", "pki_dir", "user"], opcua_section),
+    ("opcua", &["endpoint", "allow_none", "anonymous_read", "pki_dir", "min_publish", "user"], opcua_section),
 ];
 
 const TOP_KEYS: &[&str] = &["chart", "pou", "period", "watchdog", "realtime", "on_fault"];
@@ -162,6 +175,7 @@ fn modbus_section(src: &Src<'_>, t: &dyn TableLike, c: &mut RunConfig) -> R<()> 
                 }
                 c.modbus.word_order = Some(s);
             }
+            "reset" => c.modbus.reset = Some(src.bool(key, item)?),
             _ => return Err(src.unknown(t, key, SECTIONS[0].1, "[modbus]")),
         }
     }
@@ -201,12 +215,13 @@ fn opcua_section(src: &Src<'_>, t: &dyn TableLike, c: &mut RunConfig) -> R<()> {
             "allow_none" => c.opcua.allow_none = Some(src.bool(key, item)?),
             "anonymous_read" => c.opcua.anonymous_read = Some(src.bool(key, item)?),
             "pki_dir" => c.opcua.pki_dir = Some(src.path(key, item)?),
+            "min_publish" => c.opcua.min_publish = Some(src.time(key, item)?),
             "user" => {
                 let users = item.as_array_of_tables().ok_or_else(|| {
                     src.err(item.span(), "users are `[[opcua.user]]` entries with `name` and `password_hash`")
                 })?;
                 for u in users.iter() {
-                    let (mut name, mut hash) = (None, None);
+                    let (mut name, mut hash, mut role) = (None, None, None);
                     for (k, v) in u.iter() {
                         match k {
                             "name" => name = Some(src.string(k, v)?),
@@ -221,11 +236,25 @@ fn opcua_section(src: &Src<'_>, t: &dyn TableLike, c: &mut RunConfig) -> R<()> {
                                 }
                                 hash = Some(h);
                             }
-                            _ => return Err(src.unknown(u, k, &["name", "password_hash"], "[[opcua.user]]")),
+                            "role" => {
+                                let r = src.string(k, v)?;
+                                role = Some(sfc_runtime::OpcuaRole::from_name(&r).ok_or_else(|| {
+                                    src.err(
+                                        v.span(),
+                                        format!(
+                                            "`role` is \"read\" (read and subscribe), \"operate\" (also write \
+                                             inputs and memory) or \"admin\" (also Halt, Continue, Reset), found \"{r}\""
+                                        ),
+                                    )
+                                })?);
+                            }
+                            _ => return Err(src.unknown(u, k, &["name", "password_hash", "role"], "[[opcua.user]]")),
                         }
                     }
                     match (name, hash) {
-                        (Some(n), Some(h)) => c.opcua.users.push((n, h)),
+                        (Some(name), Some(password_hash)) => {
+                            c.opcua.users.push(OpcuaUserEntry { name, password_hash, role })
+                        }
                         _ => return Err(src.err(u.span(), "an `[[opcua.user]]` needs `name` and `password_hash`")),
                     }
                 }
@@ -359,13 +388,27 @@ Delay = "T#1s"
     #[test]
     fn an_opcua_section_with_users() {
         let text = "[opcua]\nendpoint = \"opc.tcp://127.0.0.1:4840\"\npki_dir = \"pki\"\nanonymous_read = true\n\n\
-                    [[opcua.user]]\nname = \"scada\"\npassword_hash = \"$argon2id$v=19$m=19456,t=2,p=1$c2FsdA$aGFzaA\"\n";
+                    min_publish = \"T#20ms\"\n\
+                    [[opcua.user]]\nname = \"scada\"\npassword_hash = \"$argon2id$v=19$m=19456,t=2,p=1$c2FsdA$aGFzaA\"\n\
+                    [[opcua.user]]\nname = \"hmi\"\npassword_hash = \"$argon2id$v=19$m=19456,t=2,p=1$c2FsdA$aGFzaA\"\n\
+                    role = \"read\"\n";
         let c = parse(text, Path::new("/etc/sfc/plant.toml")).unwrap();
         assert_eq!(c.opcua.endpoint.as_deref(), Some("opc.tcp://127.0.0.1:4840"));
         assert_eq!(c.opcua.pki_dir, Some(PathBuf::from("/etc/sfc/pki")));
         assert_eq!(c.opcua.anonymous_read, Some(true));
-        assert_eq!(c.opcua.users.len(), 1);
-        assert_eq!(c.opcua.users[0].0, "scada");
+        assert_eq!(c.opcua.min_publish, Some(Duration::from_millis(20)));
+        assert_eq!(c.opcua.users.len(), 2);
+        assert_eq!((c.opcua.users[0].name.as_str(), c.opcua.users[0].role), ("scada", None));
+        assert_eq!(
+            (c.opcua.users[1].name.as_str(), c.opcua.users[1].role),
+            ("hmi", Some(sfc_runtime::OpcuaRole::Read))
+        );
+        let e = parse(
+            "[[opcua.user]]\nname = \"s\"\npassword_hash = \"$argon2id$x\"\nrole = \"root\"\n",
+            Path::new("p.toml"),
+        )
+        .unwrap_err();
+        assert!(e.starts_with("p.toml:4:8:") && e.contains("\"operate\""), "{e}");
         // A password where its hash belongs is refused, located.
         let e =
             parse("[[opcua.user]]\nname = \"scada\"\npassword_hash = \"secret\"\n", Path::new("p.toml")).unwrap_err();

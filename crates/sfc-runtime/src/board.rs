@@ -156,6 +156,100 @@ impl ChartInfo {
     }
 }
 
+/// Puts the safe values in place of the chart's when `state` is STOP or FAULT: the one rule
+/// every view of the process image follows (`docs/runtime.md`, "Safe state"). A forced output
+/// shows its safe value too.
+pub fn shown_values(info: &ChartInfo, state: RunState, values: &mut [Value]) {
+    if state == RunState::Run {
+        return;
+    }
+    for (v, slot) in info.variables.iter().zip(values.iter_mut()) {
+        if let Some(s) = &v.safe {
+            slot.clone_from(s);
+        }
+    }
+}
+
+/// What [`Hub::image`] returns: one consistent reading of the run.
+#[derive(Debug, Clone)]
+pub struct ImageView {
+    pub state: RunState,
+    /// Counts changes of `state` (and of its fault).
+    pub state_seq: u64,
+    pub halted: bool,
+    /// The fault, in FAULT.
+    pub fault: Option<serde_json::Value>,
+    /// The newest scan in full, with the safe values in place in STOP and FAULT (`None` before
+    /// the first state is published).
+    pub scan: Option<Arc<ScanState>>,
+    /// Error records per chart instance.
+    pub errors: Vec<MechanismErrors>,
+    /// The scan thread's statistics.
+    pub digest: Option<StatsDigest>,
+}
+
+impl ImageView {
+    /// The scan number of the values (0 before the first).
+    pub fn scan_number(&self) -> u64 {
+        self.scan.as_ref().map_or(0, |s| s.scan)
+    }
+
+    /// The outputs (`VAR_OUTPUT` and `%Q…`) with the values this reading shows.
+    pub fn outputs<'a>(&'a self, info: &'a ChartInfo) -> impl Iterator<Item = (&'a VarInfo, Option<&'a Value>)> {
+        info.variables
+            .iter()
+            .enumerate()
+            .filter(|(_, v)| v.section == Section::Output)
+            .map(|(i, v)| (v, self.scan.as_ref().and_then(|s| s.values.get(i))))
+    }
+
+    /// `sfc run --report`'s line: state, scan, the outputs, the statistics.
+    pub fn report_text(&self, info: &ChartInfo) -> String {
+        let mut out = self.state.name().to_string();
+        if self.halted && self.state == RunState::Run {
+            out.push_str(" (halted)");
+        }
+        match &self.scan {
+            Some(s) => out.push_str(&format!(", scan {}", s.scan)),
+            None => out.push_str(", before the first scan"),
+        }
+        let outputs: Vec<String> = self
+            .outputs(info)
+            .map(|(v, x)| format!("{}={}", v.name, x.map_or("?".to_string(), crate::safe::literal)))
+            .collect();
+        if !outputs.is_empty() {
+            const SHOWN: usize = 12;
+            let more = outputs.len().saturating_sub(SHOWN);
+            out.push_str("; outputs ");
+            out.push_str(&outputs.iter().take(SHOWN).cloned().collect::<Vec<_>>().join(", "));
+            if more > 0 {
+                out.push_str(&format!(" and {more} more (--report-format json lists them all)"));
+            }
+        }
+        if let Some(d) = &self.digest {
+            out.push_str("; ");
+            out.push_str(&d.summary());
+        }
+        out
+    }
+
+    /// `sfc run --report --report-format json`'s object.
+    pub fn report_json(&self, info: &ChartInfo) -> serde_json::Value {
+        let outputs: serde_json::Map<String, serde_json::Value> = self
+            .outputs(info)
+            .map(|(v, x)| (v.name.clone(), x.map_or(serde_json::Value::Null, crate::protocol::value_json)))
+            .collect();
+        serde_json::json!({
+            "state": self.state.name(),
+            "halted": self.halted,
+            "scan": self.scan.as_ref().map(|s| s.scan),
+            "fault": self.fault,
+            "outputs": outputs,
+            "stats": self.digest.as_ref().map(StatsDigest::to_json),
+        })
+    }
+}
+
 /// Sets `key` of a JSON object (`j` is always one where this is used; anything else is left as
 /// it is rather than panicking).
 pub fn put(j: &mut serde_json::Value, key: &str, value: serde_json::Value) {
@@ -566,9 +660,12 @@ pub struct Hub {
     /// Copy every step's time into each state (an OPC UA server publishes the `T` of
     /// inactive steps; nothing else reads it, so without one the scan leaves it empty).
     pub step_times: AtomicBool,
-    /// The newest state as published and in full, as [`Hub::latest`] rebuilt it last.
-    latest_full: Mutex<Option<(Arc<ScanState>, Arc<ScanState>)>>,
+    /// The newest state in full, as [`Hub::latest`] or [`Hub::image`] rebuilt it last.
+    latest_full: Mutex<Option<FullState>>,
 }
+
+/// The newest state as published, whether the safe values were put in, the state in full.
+type FullState = (Arc<ScanState>, bool, Arc<ScanState>);
 
 /// Notices kept when nobody reads them.
 const NOTICES: usize = 256;
@@ -596,28 +693,61 @@ impl Hub {
         (Arc::new(hub), rx)
     }
 
-    /// The newest state in full (`None` before the first scan). The one rebuilt last is kept
-    /// until a newer state is published: the OPC UA server asks once per node it reads.
+    /// The newest state in full (`None` before the first scan), as the scan published it. The
+    /// one rebuilt last is kept until a newer state is published.
     pub fn latest(&self) -> Option<Arc<ScanState>> {
         let tail = self.lock().tail_latest();
+        self.full_of(tail, None)
+    }
+
+    /// The newest state of `tail` in full, with the safe values in place when `safe` (the
+    /// cache holds the last one built).
+    fn full_of(&self, tail: Tail, safe: Option<RunState>) -> Option<Arc<ScanState>> {
         let newest = tail.newest()?.clone();
+        let overlay = safe.is_some_and(|s| s != RunState::Run);
         {
             let cached = self.latest_full.lock().unwrap_or_else(|e| e.into_inner());
-            if let Some((src, full)) = cached.as_ref() {
-                if Arc::ptr_eq(src, &newest) {
+            if let Some((src, with_safe, full)) = cached.as_ref() {
+                if Arc::ptr_eq(src, &newest) && *with_safe == overlay {
                     return Some(full.clone());
                 }
             }
         }
-        let full = tail.last(&self.info)?;
-        *self.latest_full.lock().unwrap_or_else(|e| e.into_inner()) = Some((newest, full.clone()));
+        let mut full = tail.last(&self.info)?;
+        if overlay {
+            let mut st = (*full).clone();
+            shown_values(&self.info, RunState::Stop, &mut st.values);
+            full = Arc::new(st);
+        }
+        *self.latest_full.lock().unwrap_or_else(|e| e.into_inner()) = Some((newest, overlay, full.clone()));
         Some(full)
+    }
+
+    /// The process image as every view shows it (Modbus's status block, OPC UA, the monitor's
+    /// snapshot, `--report`): the run's state and the newest scan's values, the safe values in
+    /// place of the chart's in STOP and FAULT (`docs/runtime.md`, "One process image"). The
+    /// state and the scan are read under one lock, so a view never pairs FAULT with the values
+    /// of a scan that ran before it without its safe values.
+    pub fn image(&self) -> ImageView {
+        let (tail, state, state_seq, halted, fault, errors, digest) = {
+            let b = self.lock();
+            (b.tail_latest(), b.state, b.state_seq, b.halted, b.fault.clone(), b.errors.clone(), b.digest)
+        };
+        let scan = self.full_of(tail, Some(state));
+        ImageView { state, state_seq, halted, fault, scan, errors, digest }
     }
 
     /// Sends a command to the runtime side; `false` when the run has ended.
     pub fn send(&self, r: Request) -> bool {
         let tx = self.commands.lock().unwrap_or_else(|e| e.into_inner()).clone();
         tx.is_some_and(|tx| tx.send(r).is_ok())
+    }
+
+    /// Hands a command to the runtime side without waiting for its reply (OPC UA methods and
+    /// writes, the Modbus reset); `false` when the run has ended.
+    pub fn command(&self, command: Command) -> bool {
+        let (reply, _) = tokio::sync::mpsc::channel(1);
+        self.send(Request { id: serde_json::Value::Null, command, reply })
     }
 
     /// Adds a line for the operator.

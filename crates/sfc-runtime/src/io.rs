@@ -36,6 +36,50 @@ pub const RECORD_TEXT_REGISTERS: usize = 200;
 const RECORD_HEAD: usize = 8;
 /// The whole block.
 pub const RECORD_REGISTERS: usize = RECORD_HEAD + RECORD_TEXT_REGISTERS;
+/// The run's status block is input register block `STATUS_BASE …` (read-only, FC 4;
+/// `docs/runtime.md`, "Status on Modbus"): state, halted, scan number, last fault.
+pub const STATUS_BASE: u16 = 40300;
+/// State (0 RUN, 1 STOP, 2 FAULT), halted, scan number (4), last fault code, faults.
+pub const STATUS_REGISTERS: usize = 8;
+/// The run's own input registers from [`RECORD_BASE`]: the error record, then (after a gap that
+/// reads zeros) the status block.
+const SYSTEM_REGISTERS: usize = (STATUS_BASE - RECORD_BASE) as usize + STATUS_REGISTERS;
+/// With `--modbus-reset`, holding register `RESET_ADDRESS` (write 1: warm reset, 2: cold
+/// reset) and coil `RESET_ADDRESS` (write TRUE: warm reset) restart the chart.
+pub const RESET_ADDRESS: u16 = 40000;
+
+/// A fault's code in the status block.
+pub const FAULT_WATCHDOG: u16 = 1;
+pub const FAULT_ERROR: u16 = 2;
+
+/// What the status block says (`docs/runtime.md`, "Status on Modbus").
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub struct Status {
+    /// 0 RUN, 1 STOP, 2 FAULT.
+    pub state: u16,
+    pub halted: bool,
+    /// The scan whose values the image holds.
+    pub scan: u64,
+    /// The last fault: 0 none, [`FAULT_WATCHDOG`], [`FAULT_ERROR`] (kept after a reset).
+    pub fault: u16,
+    /// Faults since the start (wraps at 65,536).
+    pub faults: u64,
+}
+
+impl Status {
+    /// The block's registers (the scan number in the run's word order).
+    pub fn registers(&self, order: WordOrder) -> [u16; STATUS_REGISTERS] {
+        let mut regs = [0u16; STATUS_REGISTERS];
+        regs[0] = self.state;
+        regs[1] = u16::from(self.halted);
+        let mut w = [0u16; 4];
+        to_words(&Value::Int(self.scan as i64), &Type::ULInt, 4, order, &mut w);
+        regs[2..6].copy_from_slice(&w);
+        regs[6] = self.fault;
+        regs[7] = self.faults as u16;
+        regs
+    }
+}
 
 /// The error record block's registers for the `count`-th record of the run (`count` wraps at
 /// 65,536): count, error code (DINT, 0 when none), time waited and supervision time (UDINT,
@@ -315,8 +359,9 @@ pub struct Image {
     pub client: Vec<Value>,
     /// Per point: the forced value, while forced from the monitor.
     pub forced: Vec<Option<Value>>,
-    /// The last error record (input registers `RECORD_BASE …`): zeros until the first.
-    pub record: Vec<u16>,
+    /// The run's own input registers from `RECORD_BASE`: the last error record (zeros until
+    /// the first) and the status block at `STATUS_BASE`.
+    pub system: Vec<u16>,
     /// For each table, the point (index + 1) that owns each bit or register (0: none).
     owners: [Vec<u32>; 4],
     pub order: WordOrder,
@@ -360,9 +405,35 @@ impl Image {
             memory_writes: Vec::new(),
             client: points.iter().map(|p| p.slot.default_value()).collect(),
             forced: vec![None; points.len()],
-            record: vec![0; RECORD_REGISTERS],
+            system: vec![0; SYSTEM_REGISTERS],
             owners,
             order,
+        }
+    }
+
+    /// Stores the newest error record's registers ([`record_registers`]).
+    pub fn set_record(&mut self, regs: &[u16]) {
+        if let Some(block) = self.system.get_mut(..regs.len()) {
+            block.copy_from_slice(regs);
+        }
+    }
+
+    /// Stores the run's status ([`Status`]).
+    pub fn set_status(&mut self, s: &Status) {
+        let at = (STATUS_BASE - RECORD_BASE) as usize;
+        let regs = s.registers(self.order);
+        if let Some(block) = self.system.get_mut(at..at + STATUS_REGISTERS) {
+            block.copy_from_slice(&regs);
+        }
+    }
+
+    /// Marks the status block FAULT with `code`, the rest as it was (the watchdog, while the
+    /// scan thread is still stopping the scan).
+    pub fn set_fault(&mut self, code: u16) {
+        let at = (STATUS_BASE - RECORD_BASE) as usize;
+        if let Some(block) = self.system.get_mut(at..at + STATUS_REGISTERS) {
+            block[0] = 2;
+            block[6] = code;
         }
     }
 

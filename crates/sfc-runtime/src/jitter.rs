@@ -233,6 +233,23 @@ pub struct StatsDigest {
 }
 
 impl StatsDigest {
+    /// The line [`ScanStats::summary`] prints, from the figures.
+    pub fn summary(&self) -> String {
+        let us = |ns: u64| format!("{:.1}", ns as f64 / 1000.0);
+        format!(
+            "{} scans; start jitter p50 {} µs, p99 {} µs, max {} µs; scan time p50 {} µs, p99 {} µs, max {} µs; {} overruns, {} periods skipped",
+            self.scans,
+            self.jitter[0],
+            self.jitter[1],
+            self.jitter[2],
+            us(self.duration_ns[0]),
+            us(self.duration_ns[1]),
+            us(self.duration_ns[2]),
+            self.overruns,
+            self.skipped
+        )
+    }
+
     /// The same JSON as [`ScanStats::to_json`].
     pub fn to_json(&self) -> serde_json::Value {
         let q = |v: &[u64; 4]| serde_json::json!({"p50": v[0], "p99": v[1], "max": v[2], "mean": v[3]});

@@ -64,6 +64,9 @@ pub struct RunOptions {
     pub modbus_limits: ModbusLimits,
     /// Register order of 32- and 64-bit values on Modbus.
     pub word_order: WordOrder,
+    /// Holding register and coil 40000 reset the chart (`--modbus-reset`; off by default:
+    /// Modbus has no authentication).
+    pub modbus_reset: bool,
     /// Serve the monitor protocol here.
     pub monitor: Option<SocketAddr>,
     /// Which web pages (`Origin`) and host names (`Host`) the monitor accepts.
@@ -102,6 +105,9 @@ pub struct OpcuaOptions {
     /// `trusted/` and `rejected/` client certificates.
     pub pki_dir: std::path::PathBuf,
     pub users: Vec<OpcuaUser>,
+    /// The shortest publishing and sampling interval granted (`--opcua-min-publish`, default
+    /// 10 ms): a client asking for less gets this.
+    pub min_publish: std::time::Duration,
 }
 
 /// A user of the OPC UA server (`[[opcua.user]]`).
@@ -110,6 +116,82 @@ pub struct OpcuaUser {
     pub name: String,
     /// An argon2 PHC string (`sfc run --hash-password`).
     pub password_hash: String,
+    pub role: OpcuaRole,
+}
+
+/// What an OPC UA user may do (`role` of `[[opcua.user]]`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord)]
+pub enum OpcuaRole {
+    /// Read and subscribe.
+    Read,
+    /// Also write inputs and memory.
+    Operate,
+    /// Also call Halt, Continue and Reset.
+    Admin,
+}
+
+impl OpcuaRole {
+    pub fn from_name(s: &str) -> Option<OpcuaRole> {
+        match s {
+            "read" => Some(OpcuaRole::Read),
+            "operate" => Some(OpcuaRole::Operate),
+            "admin" => Some(OpcuaRole::Admin),
+            _ => None,
+        }
+    }
+    pub fn name(self) -> &'static str {
+        match self {
+            OpcuaRole::Read => "read",
+            OpcuaRole::Operate => "operate",
+            OpcuaRole::Admin => "admin",
+        }
+    }
+}
+
+impl OpcuaOptions {
+    /// Whether some OPC UA user may call Halt, Continue and Reset.
+    pub fn can_control(&self) -> bool {
+        self.users.iter().any(|u| u.role == OpcuaRole::Admin)
+    }
+}
+
+/// What keeps serving in FAULT and the ways this run has to restart the chart (the end of the
+/// FAULT line; `docs/runtime.md`, "Ways out of FAULT").
+fn fault_ways(opts: &RunOptions, pou: &str) -> String {
+    let mut serving = Vec::new();
+    let mut ways = Vec::new();
+    if opts.modbus.is_some() {
+        serving.push("Modbus");
+    }
+    if opts.opcua.is_some() {
+        serving.push("OPC UA");
+    }
+    if opts.monitor.is_some() {
+        serving.push("the monitor");
+        ways.push("a monitor `reset`".to_string());
+    }
+    if opts.opcua.as_ref().is_some_and(OpcuaOptions::can_control) {
+        ways.push(format!("the OPC UA method {pou}/Runtime/Reset (a user of role admin)"));
+    }
+    if opts.modbus.is_some() && opts.modbus_reset {
+        ways.push(format!(
+            "Modbus holding register {a} := 1 (warm) or 2 (cold), or coil {a} := TRUE",
+            a = io::RESET_ADDRESS
+        ));
+    }
+    let serving = match serving.as_slice() {
+        [] => String::new(),
+        [one] => format!("{one} keeps serving; "),
+        [init @ .., last] => format!("{} and {last} keep serving; ", init.join(", ")),
+    };
+    let ways = match ways.as_slice() {
+        [] => "nothing in this run can restart the chart (no monitor, no OPC UA user of role admin, no \
+               --modbus-reset): stop sfc run and start it again"
+            .to_string(),
+        [one] => format!("to restart the chart: {one}"),
+        [init @ .., last] => format!("to restart the chart: {} or {last}", init.join(", ")),
+    };
+    format!("{serving}{ways}")
 }
 
 /// Whether this build has the OPC UA server (cargo feature `opcua`).
@@ -343,6 +425,25 @@ impl Runtime {
     /// run still starts).
     pub fn start(mut sim: Simulation, opts: RunOptions) -> Result<Runtime, String> {
         let points = Arc::new(if opts.modbus.is_some() { io::map_located(&sim)? } else { Vec::new() });
+        if opts.modbus_reset {
+            // The reset register and coil lie in the inputs' window: an input there would be
+            // unreachable.
+            let at = io::RESET_ADDRESS - io::INPUT_WINDOW;
+            if let Some(p) = points.iter().find(|p| {
+                matches!(p.table, io::Table::DiscreteInput | io::Table::InputRegister)
+                    && p.address <= at
+                    && at < p.address + p.words.max(1)
+            }) {
+                return Err(format!(
+                    "`{}` {} is written through {} {}, which --modbus-reset takes for the reset \
+                     (docs/runtime.md, \"Ways out of FAULT\")",
+                    p.name,
+                    p.location,
+                    if p.table == io::Table::DiscreteInput { "coil" } else { "holding register" },
+                    io::RESET_ADDRESS
+                ));
+            }
+        }
         let safe = Arc::new(safe::safe_state(&sim, &points, &opts.safe)?);
         let located = sim.located_vars();
         let mut variables = Vec::new();
@@ -361,7 +462,6 @@ impl Runtime {
             vars.push(Slot { index, ty: t });
         }
         let var_point = vars.iter().map(|s| points.iter().position(|p| p.slot.index == s.index)).collect();
-        let var_safe = vars.iter().map(|s| safe.of_slot(s.index).cloned()).collect();
         let (steps, transitions) = sim.outline();
         let post = transitions.iter().map(|t| t.2.clone()).collect();
         let initial = steps.iter().enumerate().filter(|s| s.1 .1).map(|s| s.0 as u32).collect();
@@ -376,6 +476,12 @@ impl Runtime {
             charts: sim.chart_outline(),
             actions: sim.action_outline(),
         };
+        let fault_ways = fault_ways(&opts, &info.pou);
+        if opts.halted && opts.monitor.is_none() && !opts.opcua.as_ref().is_some_and(OpcuaOptions::can_control) {
+            return Err("--halted waits for a `continue`, and nothing in this run can send one: serve the monitor \
+                        (--monitor ADDR) or OPC UA with a user of role admin ([[opcua.user]] role = \"admin\")"
+                .into());
+        }
         let token = opts.token.clone().unwrap_or_else(random_token);
         let (hub, rx) = Hub::new(info, token);
         if opts.halted {
@@ -418,7 +524,11 @@ impl Runtime {
         let modbus_side = match (modbus_l, &counters) {
             (Some(listener), Some(c)) => Some(ModbusSide {
                 listener,
-                service: Arc::new(modbus::Service { points: points.clone(), image: image.clone() }),
+                service: Arc::new(modbus::Service {
+                    points: points.clone(),
+                    image: image.clone(),
+                    reset: opts.modbus_reset.then(|| hub.clone()),
+                }),
                 limits: opts.modbus_limits,
                 counters: c.clone(),
             }),
@@ -468,7 +578,6 @@ impl Runtime {
             image,
             vars,
             var_point,
-            var_safe,
             post,
             initial,
             limits: opts.limits,
@@ -504,6 +613,10 @@ impl Runtime {
             steps_requested: Vec::new(),
             records: 0,
             unwritten_record: None,
+            fault_code: 0,
+            faults: 0,
+            fault_ways,
+            status_written: None,
         };
         // The simulator may recurse deeply in user code: the same stack as the CLI's.
         let worker = std::thread::Builder::new()
@@ -586,6 +699,14 @@ impl Runtime {
     /// The latest published scan statistics (`{"scans":…,"jitterUs":{…},…}`).
     pub fn stats_json(&self) -> serde_json::Value {
         self.hub.lock().stats_json()
+    }
+    /// One reading of the process image ([`Hub::image`]): what Modbus, OPC UA and the monitor show.
+    pub fn image(&self) -> board::ImageView {
+        self.hub.image()
+    }
+    /// What the run runs: its POU, steps, variables.
+    pub fn info(&self) -> &ChartInfo {
+        &self.hub.info
     }
     /// Asks the run to end in order: the scan thread stops before its next scan, and a scan
     /// running away is interrupted.

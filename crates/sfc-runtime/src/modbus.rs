@@ -16,8 +16,9 @@
 //!   frame) exception 3, an address outside the map exception 2. A read/write (FC 23) checks both
 //!   parts before it writes anything.
 
+use crate::board::Command;
 use crate::board::Hub;
-use crate::io::{Image, IoPoint, Role, Table, INPUT_WINDOW, RECORD_BASE};
+use crate::io::{Image, IoPoint, Role, Table, INPUT_WINDOW, RECORD_BASE, RESET_ADDRESS};
 use std::sync::atomic::{AtomicU64, AtomicUsize, Ordering};
 use std::sync::{Arc, Mutex};
 use std::time::Duration;
@@ -74,6 +75,8 @@ impl ModbusCounters {
 pub const ILLEGAL_FUNCTION: u8 = 1;
 pub const ILLEGAL_DATA_ADDRESS: u8 = 2;
 pub const ILLEGAL_DATA_VALUE: u8 = 3;
+/// The run has ended: a reset can no longer be taken.
+pub const SERVER_DEVICE_FAILURE: u8 = 4;
 
 /// Largest PDU (the MBAP length counts the unit identifier too: at most 254).
 const MAX_PDU: usize = 253;
@@ -82,6 +85,8 @@ const MAX_PDU: usize = 253;
 pub struct Service {
     pub points: Arc<Vec<IoPoint>>,
     pub image: Arc<Mutex<Image>>,
+    /// With `--modbus-reset`: where a write of the reset register or coil goes.
+    pub reset: Option<Arc<Hub>>,
 }
 
 fn u16_at(pdu: &[u8], i: usize) -> u16 {
@@ -117,7 +122,58 @@ impl Service {
         }
     }
 
+    /// A request for the reset register or coil ([`RESET_ADDRESS`], with `--modbus-reset`):
+    /// `None` when `pdu` is about something else. Holding register 40000 takes 1 (warm reset),
+    /// 2 (cold reset) or 0 (nothing, as an HMI clears its command); coil 40000 takes TRUE (warm
+    /// reset) or FALSE (nothing); both read 0.
+    fn reset_request(&self, pdu: &[u8]) -> Option<Reply> {
+        let hub = self.reset.as_ref()?;
+        let fc = *pdu.first()?;
+        let (a, n) = (u16_at(pdu, 1), u16_at(pdu, 3));
+        if a != RESET_ADDRESS {
+            return None;
+        }
+        // The value written, for a write of exactly the one register or coil.
+        let value = match fc {
+            1 | 3 if pdu.len() == 5 && n == 1 => {
+                return Some(Ok(if fc == 1 { vec![1, 1, 0] } else { vec![3, 2, 0, 0] }));
+            }
+            5 if pdu.len() == 5 => match n {
+                0xFF00 => 1,
+                0x0000 => 0,
+                _ => return Some(Err(ILLEGAL_DATA_VALUE)),
+            },
+            6 if pdu.len() == 5 => n,
+            15 if pdu.len() == 7 && n == 1 && pdu.get(5) == Some(&1) => u16::from(pdu.get(6)? & 1),
+            16 if pdu.len() == 8 && n == 1 && pdu.get(5) == Some(&2) => u16_at(pdu, 6),
+            _ => return None,
+        };
+        let cold = match value {
+            0 => None,
+            1 => Some(false),
+            2 if fc != 5 && fc != 15 => Some(true),
+            _ => return Some(Err(ILLEGAL_DATA_VALUE)),
+        };
+        if let Some(cold) = cold {
+            hub.notice(format!(
+                "sfc run: Modbus: {} reset requested ({} {RESET_ADDRESS})",
+                if cold { "cold" } else { "warm" },
+                if fc == 5 || fc == 15 { "coil" } else { "holding register" }
+            ));
+            if !hub.command(Command::Reset { cold }) {
+                return Some(Err(SERVER_DEVICE_FAILURE));
+            }
+        }
+        Some(Ok(match fc {
+            15 | 16 => pdu.get(..5).unwrap_or(pdu).to_vec(),
+            _ => pdu.to_vec(),
+        }))
+    }
+
     fn reply(&self, pdu: &[u8]) -> Reply {
+        if let Some(r) = self.reset_request(pdu) {
+            return r;
+        }
         let fc = pdu.first().copied().unwrap_or(0);
         let byte = |k: usize| pdu.get(k).copied().unwrap_or(0);
         let head = || pdu.get(..5).unwrap_or(pdu).to_vec();
@@ -153,7 +209,7 @@ impl Service {
                 let regs = if fc == 3 {
                     self.holding_view(&img, a, n)?
                 } else if a >= RECORD_BASE as usize {
-                    read_range(&img.record, a - RECORD_BASE as usize, n)?
+                    read_range(&img.system, a - RECORD_BASE as usize, n)?
                 } else {
                     read_range(&img.input_regs, a, n)?
                 };

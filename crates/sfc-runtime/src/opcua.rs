@@ -1,25 +1,31 @@
 //! The OPC UA server of `sfc run` (cargo feature `opcua`), built on `async-opcua`.
 //!
-//! Values are read from the scan's published snapshots (the [`Hub`]'s board, locked only to
-//! copy an `Arc` out: the scan thread publishes with `try_lock` and never waits on a client);
-//! subscriptions sample those reads at each monitored item's sampling interval. Writes go to
-//! the scan thread as the monitor's `set` does and are applied at the next scan; halt,
-//! continue and reset are methods that only an authenticated user may call. The node layout,
-//! the type mapping and the security model are in `docs/runtime.md`, "OPC UA".
+//! Values follow the scan's published states: a task reads the board ([`Hub::image`], the one
+//! reading every view of the process image shares) a few times per shortest publishing
+//! interval and sets the nodes whose value changed in one batch, which notifies their
+//! subscribers; reads answer from the same nodes. The scan thread publishes with `try_lock` and
+//! never waits on a client. Writes go to the scan thread as the monitor's `set` does and are
+//! applied at the next scan; halt, continue and reset are methods. Who may write and call is
+//! decided per session, from its user's role and (for anonymous sessions) its endpoint. The
+//! node layout, the type mapping and the security model are in `docs/runtime.md`, "OPC UA".
 
-use crate::board::{ChartInfo, Command, Hub, RunState, ScanState, Section};
-use crate::{OpcuaOptions, OpcuaUser};
+use crate::board::{ChartInfo, Command, Hub, ImageView, RunState, Section};
+use crate::{OpcuaOptions, OpcuaRole, OpcuaUser};
 use async_opcua::crypto::SecurityPolicy;
-use async_opcua::server::address_space::{AccessLevel, MethodBuilder, ObjectBuilder, VariableBuilder};
+use async_opcua::server::address_space::{AccessLevel, AddressSpace, MethodBuilder, ObjectBuilder, VariableBuilder};
 use async_opcua::server::authenticator::{
     user_pass_security_policy_id, user_pass_security_policy_uri, AuthManager, Password, UserToken,
 };
 use async_opcua::server::diagnostics::NamespaceMetadata;
-use async_opcua::server::node_manager::memory::{simple_node_manager, SimpleNodeManager};
-use async_opcua::server::{ServerBuilder, ServerEndpoint, ServerHandle, ANONYMOUS_USER_TOKEN_ID};
+use async_opcua::server::node_manager::memory::{
+    InMemoryNodeManager, InMemoryNodeManagerBuilder, InMemoryNodeManagerImpl,
+};
+use async_opcua::server::node_manager::{MethodCall, RequestContext, ServerContext, WriteNode};
+use async_opcua::server::{ServerBuilder, ServerEndpoint, ServerHandle, SubscriptionCache, ANONYMOUS_USER_TOKEN_ID};
+use async_opcua::sync::RwLock;
 use async_opcua::types::{
-    DataTypeId, DataValue, Error, MessageSecurityMode, NodeId, ObjectId, ObjectTypeId, QualifiedName, StatusCode,
-    UAString, UserTokenPolicy, UserTokenType, VariableTypeId, Variant,
+    AttributeId, DataTypeId, DataValue, Error, MessageSecurityMode, NodeId, ObjectId, ObjectTypeId, QualifiedName,
+    StatusCode, UAString, UserTokenPolicy, UserTokenType, VariableTypeId, Variant,
 };
 use sfc_sim::Value;
 use std::sync::Arc;
@@ -193,11 +199,33 @@ fn verify(hash: &str, password: &str) -> bool {
         .is_ok_and(|h| argon2::Argon2::default().verify_password(password.as_bytes(), &h).is_ok())
 }
 
-/// Users and who may do what.
+/// Who a session is and what it may do (`docs/runtime.md`, "Security").
 struct Access {
     users: Vec<OpcuaUser>,
     allow_none: bool,
     anonymous_read: bool,
+}
+
+impl Access {
+    /// The role of an authenticated user's token (`None` for anonymous).
+    fn role_of(&self, token: &UserToken) -> Option<OpcuaRole> {
+        let name = token.0.strip_prefix("user:")?;
+        self.users.iter().find(|u| u.name == name).map(|u| u.role)
+    }
+
+    /// What the session of `context` may do: a user's role; an anonymous session writes
+    /// only on the None endpoint (`--opcua-allow-none`, loopback), and only reads elsewhere.
+    fn role(&self, context: &RequestContext) -> OpcuaRole {
+        if let Some(role) = self.role_of(&context.token) {
+            return role;
+        }
+        let mode = context.session().read().message_security_mode();
+        if self.allow_none && mode == MessageSecurityMode::None {
+            OpcuaRole::Operate
+        } else {
+            OpcuaRole::Read
+        }
+    }
 }
 
 #[async_trait::async_trait]
@@ -230,17 +258,25 @@ impl AuthManager for Access {
         }
     }
 
+    /// The UserAccessLevel clients read: no write bit for a user of role `read`, nor for an
+    /// anonymous session, except when only the None endpoint admits anonymous sessions (which
+    /// may write there). async-opcua does not tell this function the session's endpoint: with
+    /// both `allow_none` and `anonymous_read`, anonymous sessions read no write bit, and on the
+    /// None endpoint their writes still succeed ([`SfcNodes::write_value`] decides per session).
     fn effective_user_access_level(&self, token: &UserToken, level: AccessLevel, _node: &NodeId) -> AccessLevel {
-        // Anonymous writes only in the local-tool mode (--opcua-allow-none, loopback).
-        if token.is_anonymous() && !self.allow_none {
-            level - AccessLevel::CURRENT_WRITE
-        } else {
+        let writes = match self.role_of(token) {
+            Some(role) => role >= OpcuaRole::Operate,
+            None => token.is_anonymous() && self.allow_none && !self.anonymous_read,
+        };
+        if writes {
             level
+        } else {
+            level - AccessLevel::CURRENT_WRITE
         }
     }
 
     fn is_user_executable(&self, token: &UserToken, _method: &NodeId) -> bool {
-        !token.is_anonymous()
+        self.role_of(token) == Some(OpcuaRole::Admin)
     }
 
     fn user_token_policies(&self, endpoint: &ServerEndpoint) -> Vec<UserTokenPolicy> {
@@ -263,8 +299,173 @@ impl AuthManager for Access {
                 security_policy_uri: user_pass_security_policy_uri(endpoint),
             });
         }
-        let _ = self.anonymous_read;
         out
+    }
+}
+
+/// A node id of the run's namespace.
+fn nid(ns: u16, path: &str) -> NodeId {
+    NodeId::new(ns, path.to_string())
+}
+
+/// Where a published node's value comes from.
+#[derive(Debug, Clone, Copy)]
+enum Source {
+    /// Variable `i` of [`ChartInfo::variables`].
+    Var(usize, UaType),
+    StepX(u32),
+    StepT(u32),
+    Guard(u32),
+    ActionQ(u32),
+    ActionA(u32),
+    /// An error record node of chart instance `c`.
+    Error(usize, ErrorNode),
+    Runtime(RuntimeNode),
+}
+
+#[derive(Debug, Clone, Copy)]
+enum ErrorNode {
+    Text,
+    Code,
+    Step,
+    Count,
+}
+
+#[derive(Debug, Clone, Copy)]
+enum RuntimeNode {
+    State,
+    Halted,
+    ScanCount,
+    PeriodMs,
+    JitterP50,
+    JitterP99,
+    JitterMax,
+    Overruns,
+}
+
+/// A variable a client may write: `(variable, its type, its section)`.
+type Writable = (usize, UaType, Section);
+
+/// The run's nodes: values pushed from the board, writes and method calls checked against
+/// the session's role and handed to the scan thread.
+pub struct SfcNodes {
+    namespace: NamespaceMetadata,
+    hub: Arc<Hub>,
+    access: Arc<Access>,
+    /// The nodes whose values follow the run, and the writable variables and methods (filled
+    /// by [`populate`]).
+    table: std::sync::RwLock<Table>,
+}
+
+#[derive(Default)]
+struct Table {
+    published: Vec<(NodeId, Source)>,
+    writable: std::collections::HashMap<NodeId, Writable>,
+    methods: std::collections::HashMap<NodeId, &'static str>,
+}
+
+#[async_trait::async_trait]
+impl InMemoryNodeManagerImpl for SfcNodes {
+    async fn init(&self, _space: &mut AddressSpace, _context: ServerContext) {}
+
+    fn name(&self) -> &str {
+        "sfc"
+    }
+
+    fn namespaces(&self) -> Vec<NamespaceMetadata> {
+        vec![self.namespace.clone()]
+    }
+
+    async fn write(
+        &self,
+        context: &RequestContext,
+        _space: &RwLock<AddressSpace>,
+        nodes_to_write: &mut [&mut WriteNode],
+    ) -> Result<(), StatusCode> {
+        for w in nodes_to_write {
+            let status = self.write_value(context, w.value());
+            w.set_status(status);
+        }
+        Ok(())
+    }
+
+    async fn call(
+        &self,
+        context: &RequestContext,
+        _space: &RwLock<AddressSpace>,
+        methods_to_call: &mut [&mut &mut MethodCall],
+    ) -> Result<(), StatusCode> {
+        for m in methods_to_call {
+            let name = self.table.read().unwrap_or_else(|e| e.into_inner()).methods.get(m.method_id()).copied();
+            let status = match name {
+                None => StatusCode::BadMethodInvalid,
+                Some(_) if self.access.role(context) < OpcuaRole::Admin => StatusCode::BadUserAccessDenied,
+                Some(name) => self.method(name),
+            };
+            if status.is_good() {
+                m.set_outputs(Vec::new());
+            }
+            m.set_status(status);
+        }
+        Ok(())
+    }
+}
+
+impl SfcNodes {
+    /// A client's write of a variable's value: outputs are the chart's (`BadNotWritable`), a
+    /// session that may not write gets `BadUserAccessDenied`, a variant of another type
+    /// `BadTypeMismatch`; a good write goes to the scan thread like the monitor's `set`.
+    fn write_value(
+        &self,
+        context: &RequestContext,
+        w: &async_opcua::server::node_manager::ParsedWriteValue,
+    ) -> StatusCode {
+        let target = self.table.read().unwrap_or_else(|e| e.into_inner()).writable.get(&w.node_id).copied();
+        let Some((var, ty, section)) = target else { return StatusCode::BadNotWritable };
+        if w.attribute_id != AttributeId::Value || section == Section::Output || !self.hub.info.control {
+            return StatusCode::BadNotWritable;
+        }
+        if self.access.role(context) < OpcuaRole::Operate {
+            return StatusCode::BadUserAccessDenied;
+        }
+        if !matches!(w.index_range, async_opcua::types::NumericRange::None) {
+            return StatusCode::BadIndexRangeInvalid;
+        }
+        let Some(v) = w.value.value.as_ref() else { return StatusCode::BadNothingToDo };
+        match ty.written(v) {
+            Ok(value) => send(&self.hub, Command::Set { var: var as u32, value }),
+            Err(s) => s,
+        }
+    }
+
+    fn method(&self, name: &str) -> StatusCode {
+        let state = self.hub.lock().state;
+        let command = match name {
+            "Halt" => Command::Halt,
+            "Continue" if state != RunState::Run => return StatusCode::BadInvalidState,
+            "Continue" => Command::Continue,
+            _ => Command::Reset { cold: false },
+        };
+        send(&self.hub, command)
+    }
+}
+
+/// A variable whose value the run publishes reads BadWaitingForInitialData until it does.
+fn set_waiting(space: &mut AddressSpace, id: &NodeId) {
+    if let Some(async_opcua::server::address_space::NodeType::Variable(v)) = space.find_mut(id) {
+        v.set_data_value(DataValue {
+            status: Some(StatusCode::BadWaitingForInitialData),
+            ..DataValue::new_now(Variant::Empty)
+        });
+    }
+}
+
+/// Hands a command to the scan thread (applied at the next scan); the reply is not awaited.
+fn send(hub: &Hub, command: Command) -> StatusCode {
+    if hub.command(command) {
+        StatusCode::Good
+    } else {
+        StatusCode::BadShutdown
     }
 }
 
@@ -273,19 +474,62 @@ pub struct Side {
     server: async_opcua::server::Server,
     handle: ServerHandle,
     listener: std::net::TcpListener,
+    nodes: Arc<InMemoryNodeManager<SfcNodes>>,
+    /// How often the values are brought up to date from the board.
+    tick: std::time::Duration,
 }
 
-fn nid(ns: u16, path: &str) -> NodeId {
-    NodeId::new(ns, path.to_string())
+/// Makes the PKI folder private: created with mode 0700 (and its `private/` too), or refused
+/// when it exists and others may read it; the private key, once made, gets 0600 (it is written
+/// inside the private folder, so no other user can reach it in between). `after`: the key has
+/// been made.
+#[cfg(unix)]
+fn private_pki(dir: &std::path::Path, after: bool) -> Result<(), String> {
+    use std::os::unix::fs::{DirBuilderExt, PermissionsExt};
+    let key = dir.join("private/private.pem");
+    if after {
+        if key.is_file() {
+            std::fs::set_permissions(&key, std::fs::Permissions::from_mode(0o600))
+                .map_err(|e| format!("cannot make the OPC UA private key {} private: {e}", key.display()))?;
+        }
+        return Ok(());
+    }
+    for d in [dir.to_path_buf(), dir.join("private")] {
+        match std::fs::metadata(&d) {
+            Ok(m) if !m.is_dir() => return Err(format!("the OPC UA PKI folder {} is not a folder", d.display())),
+            Ok(m) if m.permissions().mode() & 0o077 != 0 => {
+                return Err(format!(
+                    "the OPC UA PKI folder {} can be read by other users (mode {:o}): it holds the server's \
+                     private key; `chmod 700 {}` it, or name another with --opcua-pki",
+                    d.display(),
+                    m.permissions().mode() & 0o777,
+                    d.display()
+                ))
+            }
+            Ok(_) => {}
+            Err(_) => std::fs::DirBuilder::new()
+                .recursive(true)
+                .mode(0o700)
+                .create(&d)
+                .map_err(|e| format!("cannot create the OPC UA PKI folder {}: {e}", d.display()))?,
+        }
+    }
+    if let Ok(m) = std::fs::metadata(&key) {
+        if m.permissions().mode() & 0o077 != 0 {
+            return Err(format!(
+                "the OPC UA private key {} can be read by other users (mode {:o}): `chmod 600 {}` it",
+                key.display(),
+                m.permissions().mode() & 0o777,
+                key.display()
+            ));
+        }
+    }
+    Ok(())
 }
 
-/// The latest published state (`None` before the first scan).
-fn latest(hub: &Hub) -> Option<Arc<ScanState>> {
-    hub.latest()
-}
-
-fn good(v: impl Into<Variant>) -> Result<DataValue, StatusCode> {
-    Ok(DataValue::new_now(v.into()))
+#[cfg(not(unix))]
+fn private_pki(_dir: &std::path::Path, _after: bool) -> Result<(), String> {
+    Ok(())
 }
 
 /// Builds the server and its address space for the run of `hub`.
@@ -293,10 +537,25 @@ pub fn build(hub: &Arc<Hub>, o: &OpcuaOptions, listener: std::net::TcpListener) 
     let port = listener.local_addr().map_err(|e| e.to_string())?.port();
     let host = o.addr.ip().to_string();
     let url = format!("opc.tcp://{host}:{port}/");
-    let mut anonymous_ids = Vec::new();
-    if o.allow_none || o.anonymous_read {
-        anonymous_ids.push(ANONYMOUS_USER_TOKEN_ID.to_string());
-    }
+    private_pki(&o.pki_dir, false)?;
+    // Anonymous sessions: on the secure endpoints only to read (`anonymous_read`); on the None
+    // endpoint (`allow_none`, loopback) to read and write.
+    let secure_ids = if o.anonymous_read { vec![ANONYMOUS_USER_TOKEN_ID.to_string()] } else { Vec::new() };
+    let access =
+        Arc::new(Access { users: o.users.clone(), allow_none: o.allow_none, anonymous_read: o.anonymous_read });
+    let namespace = NamespaceMetadata { namespace_uri: NAMESPACE.to_owned(), ..Default::default() };
+    let (h, a) = (hub.clone(), access.clone());
+    let nodes = InMemoryNodeManagerBuilder::new(move |ctx: ServerContext, space: &mut AddressSpace| {
+        let mut namespace = namespace;
+        namespace.namespace_index = ctx.type_tree.write().namespaces_mut().add_namespace(&namespace.namespace_uri);
+        space.add_namespace(&namespace.namespace_uri, namespace.namespace_index);
+        SfcNodes { namespace, hub: h, access: a, table: Default::default() }
+    });
+    let min_ms = o.min_publish.as_secs_f64() * 1000.0;
+    // Subscriptions are looked at, and the values brought up to date, a few times per shortest
+    // publishing interval: a change reaches a subscriber within its publishing interval of the
+    // state that made it (plus this tick).
+    let tick = (o.min_publish / 4).clamp(std::time::Duration::from_millis(1), std::time::Duration::from_millis(25));
     let mut builder = ServerBuilder::new()
         .application_name(format!("sfc run {}", hub.info.pou))
         .application_uri(format!("urn:sfc:run:{}", hub.info.pou))
@@ -310,28 +569,22 @@ pub fn build(hub: &Arc<Hub>, o: &OpcuaOptions, listener: std::net::TcpListener) 
         .private_key_path("private/private.pem")
         .trust_client_certs(false)
         .check_cert_time(true)
-        .with_authenticator(Arc::new(Access {
-            users: o.users.clone(),
-            allow_none: o.allow_none,
-            anonymous_read: o.anonymous_read,
-        }))
-        .with_node_manager(simple_node_manager(
-            NamespaceMetadata { namespace_uri: NAMESPACE.to_owned(), ..Default::default() },
-            "sfc",
-        ))
+        .subscription_poll_interval_ms(tick.as_millis().max(1) as u64)
+        .with_authenticator(access.clone())
+        .with_node_manager(nodes)
         .add_endpoint(
             "basic256sha256_sign",
-            ServerEndpoint::new("/", SecurityPolicy::Basic256Sha256, MessageSecurityMode::Sign, &anonymous_ids),
+            ServerEndpoint::new("/", SecurityPolicy::Basic256Sha256, MessageSecurityMode::Sign, &secure_ids),
         )
         .add_endpoint(
             "basic256sha256_sign_encrypt",
-            ServerEndpoint::new(
-                "/",
-                SecurityPolicy::Basic256Sha256,
-                MessageSecurityMode::SignAndEncrypt,
-                &anonymous_ids,
-            ),
+            ServerEndpoint::new("/", SecurityPolicy::Basic256Sha256, MessageSecurityMode::SignAndEncrypt, &secure_ids),
         );
+    let limits = builder.limits_mut();
+    limits.subscriptions.min_publishing_interval_ms = min_ms;
+    limits.subscriptions.min_sampling_interval_ms = min_ms;
+    // open62541 clients keep up to 10 publish requests outstanding per subscription.
+    limits.subscriptions.max_publish_requests_per_subscription = 10;
     if o.allow_none {
         let mut none = ServerEndpoint::new_none("/", &[ANONYMOUS_USER_TOKEN_ID.to_string()]);
         // A password sent over the None endpoint is still encrypted with the server's key.
@@ -339,18 +592,18 @@ pub fn build(hub: &Arc<Hub>, o: &OpcuaOptions, listener: std::net::TcpListener) 
         builder = builder.add_endpoint("none", none);
     }
     let (server, handle) = builder.build().map_err(|e| format!("cannot start the OPC UA server: {e}"))?;
-    let manager = handle
+    private_pki(&o.pki_dir, true)?;
+    let nodes = handle
         .node_managers()
-        .get_of_type::<SimpleNodeManager>()
+        .get_of_type::<InMemoryNodeManager<SfcNodes>>()
         .ok_or("cannot start the OPC UA server: its node manager is missing")?;
     let ns = handle.get_namespace_index(NAMESPACE).ok_or("cannot start the OPC UA server: no namespace")?;
-    populate(hub, &manager, ns);
-    Ok(Side { server, handle, listener })
+    populate(hub, &nodes, ns);
+    Ok(Side { server, handle, listener, nodes, tick })
 }
 
 /// The ObjectTypes of the run's namespace (async-opcua has no PLCopen nodeset).
 struct Types {
-    sfc: NodeId,
     step: NodeId,
     transition: NodeId,
     action: NodeId,
@@ -360,24 +613,22 @@ struct Types {
 /// 30000 (PLCopen, `http://PLCopen.org/OpcUa/IEC61131-3/`): `SfcProgramType` stands for
 /// `CtrlProgramType` (i=1004) and `SfcType` for `SFCType` (i=1007); OPC 30000 leaves the inside
 /// of an SFC unmodelled, so `SfcStepType`, `SfcTransitionType` and `SfcActionType` are ours.
-/// Each type declares its mandatory components (`docs/runtime.md`, "OPC UA").
-fn define_types(space: &mut async_opcua::server::address_space::AddressSpace, ns: u16) -> Types {
+/// Each type declares its mandatory components (`docs/runtime.md`, "OPC UA"). A type's node id
+/// is `type:<name>`, a component's `type:<name>/<component>`.
+fn define_types(space: &mut AddressSpace, ns: u16) -> Types {
     use async_opcua::server::address_space::ObjectTypeBuilder;
     use async_opcua::server::address_space::ReferenceDirection;
     use async_opcua::types::ReferenceTypeId;
-    let ty = |space: &mut async_opcua::server::address_space::AddressSpace, name: &str, about: &str| {
+    let ty = |space: &mut AddressSpace, name: &str, about: &str| {
         let id = nid(ns, &format!("type:{name}"));
         ObjectTypeBuilder::new(&id, QualifiedName::new(ns, name), name)
             .description(about)
             .subtype_of(ObjectTypeId::BaseObjectType)
             .insert(space);
-        id
+        (id, format!("type:{name}"))
     };
-    let member = |space: &mut async_opcua::server::address_space::AddressSpace,
-                  parent: &NodeId,
-                  name: &str,
-                  data: Option<DataTypeId>| {
-        let id = nid(ns, &format!("{}/{name}", parent.identifier));
+    let member = |space: &mut AddressSpace, (parent, path): &(NodeId, String), name: &str, data: Option<DataTypeId>| {
+        let id = nid(ns, &format!("{path}/{name}"));
         match data {
             Some(d) => {
                 VariableBuilder::new(&id, QualifiedName::new(ns, name), name)
@@ -431,48 +682,48 @@ fn define_types(space: &mut async_opcua::server::address_space::AddressSpace, ns
     let action = ty(space, "SfcActionType", "An SFC action: the outputs Q and A of its action control (IEC 61131-3)");
     member(space, &action, "Q", Some(DataTypeId::Boolean));
     member(space, &action, "A", Some(DataTypeId::Boolean));
-    Types { sfc, step, transition, action }
+    Types { step: step.0, transition: transition.0, action: action.0 }
 }
 
 /// The node layout (`docs/runtime.md`, "OPC UA"): `Objects/<POU>/{Inputs,Outputs,Locals,
 /// Globals}/<variable>`, `Objects/<POU>/Chart/{Steps,Transitions,Actions}` and a chart per
 /// SFC function block instance under `Chart`, `Objects/<POU>/Runtime`. A variable's node id is
-/// its engineering name (`CarWash.StartButton`); the other nodes' ids join their levels with
-/// `/`, which no IEC identifier holds (a variable named `Chart` or `Runtime` meets no other node).
-fn populate(hub: &Arc<Hub>, manager: &Arc<SimpleNodeManager>, ns: u16) {
+/// its engineering name (`CarWash.StartButton`); every other node's id is its parent's id, `/`
+/// and its browse name (`CarWash.StartButton/IecType`, `CarWash/Chart/Steps`), except the
+/// steps, transitions and actions, which are `<POU>/Steps/<qualified name>` (and so on) wherever
+/// their chart sits, and the charts of function block instances, `<POU>/Chart/<instance path>`.
+/// `/` is in no IEC identifier, so no variable meets a node of the layout.
+fn populate(hub: &Arc<Hub>, nodes: &Arc<InMemoryNodeManager<SfcNodes>>, ns: u16) {
     let info: &ChartInfo = &hub.info;
     let pou = info.pou.clone();
     let root = nid(ns, &pou);
-    let cbs = manager.inner();
-    let space = manager.address_space();
+    let mut table = Table::default();
+    let space = nodes.address_space();
     let mut space = space.write();
     let program_type = nid(ns, "type:SfcProgramType");
     ObjectBuilder::new(&root, QualifiedName::new(ns, pou.as_str()), pou.as_str())
         .organized_by(ObjectId::ObjectsFolder)
         .has_type_definition(program_type)
         .insert(&mut *space);
-    let folder =
-        |space: &mut async_opcua::server::address_space::AddressSpace, id: &NodeId, name: &str, parent: &NodeId| {
-            ObjectBuilder::new(id, QualifiedName::new(ns, name), name)
-                .is_folder()
-                .organized_by(parent.clone())
-                .insert(space);
-        };
-    let property = |space: &mut async_opcua::server::address_space::AddressSpace,
-                    parent: &NodeId,
-                    name: &str,
-                    value: Variant,
-                    ty: DataTypeId| {
-        let id = NodeId::new(ns, format!("{}/{name}", parent.identifier));
-        VariableBuilder::new(&id, QualifiedName::new(ns, name), name)
-            .property_of(parent.clone())
-            .has_type_definition(VariableTypeId::PropertyType)
-            .data_type(ty)
-            .value(value)
-            .access_level(AccessLevel::CURRENT_READ)
-            .user_access_level(AccessLevel::CURRENT_READ)
+    let folder = |space: &mut AddressSpace, id: &NodeId, name: &str, parent: &NodeId| {
+        ObjectBuilder::new(id, QualifiedName::new(ns, name), name)
+            .is_folder()
+            .organized_by(parent.clone())
             .insert(space);
     };
+    // A property of the node whose id is `parent` (the string `path`).
+    let property =
+        |space: &mut AddressSpace, (parent, path): (&NodeId, &str), name: &str, value: Variant, ty: DataTypeId| {
+            let id = nid(ns, &format!("{path}/{name}"));
+            VariableBuilder::new(&id, QualifiedName::new(ns, name), name)
+                .property_of(parent.clone())
+                .has_type_definition(VariableTypeId::PropertyType)
+                .data_type(ty)
+                .value(value)
+                .access_level(AccessLevel::CURRENT_READ)
+                .user_access_level(AccessLevel::CURRENT_READ)
+                .insert(space);
+        };
     for section in [Section::Input, Section::Output, Section::Local, Section::Global] {
         let members: Vec<usize> =
             info.variables.iter().enumerate().filter(|(_, v)| v.section == section).map(|(i, _)| i).collect();
@@ -484,7 +735,8 @@ fn populate(hub: &Arc<Hub>, manager: &Arc<SimpleNodeManager>, ns: u16) {
         for i in members {
             let Some(var) = info.variables.get(i) else { continue };
             let ty = UaType::of(&var.ty);
-            let id = nid(ns, &format!("{pou}.{}", var.name));
+            let path = format!("{pou}.{}", var.name);
+            let id = nid(ns, &path);
             let level = if section == Section::Output || !info.control {
                 AccessLevel::CURRENT_READ
             } else {
@@ -494,42 +746,17 @@ fn populate(hub: &Arc<Hub>, manager: &Arc<SimpleNodeManager>, ns: u16) {
                 .organized_by(fid.clone())
                 .has_type_definition(VariableTypeId::BaseDataVariableType)
                 .data_type(ty.data_type())
-                .value(ty.variant(&Value::Int(0)))
                 .access_level(level)
-                // An output's user level lets the write reach the callback, which answers
-                // BadNotWritable (the stack itself would answer BadUserAccessDenied).
-                .user_access_level(if info.control {
-                    AccessLevel::CURRENT_READ | AccessLevel::CURRENT_WRITE
-                } else {
-                    level
-                })
+                .user_access_level(level)
                 .minimum_sampling_interval(0.0)
                 .insert(&mut *space);
-            property(&mut space, &id, "IecType", Variant::from(var.ty.as_str()), DataTypeId::String);
+            set_waiting(&mut space, &id);
+            property(&mut space, (&id, &path), "IecType", Variant::from(var.ty.as_str()), DataTypeId::String);
             if let Some(at) = &var.location {
-                property(&mut space, &id, "Address", Variant::from(at.as_str()), DataTypeId::String);
+                property(&mut space, (&id, &path), "Address", Variant::from(at.as_str()), DataTypeId::String);
             }
-            let h = hub.clone();
-            cbs.add_read_callback(id.clone(), move |_, _, _| {
-                let st = latest(&h).ok_or(StatusCode::BadWaitingForInitialData)?;
-                let v = st.values.get(i).ok_or(StatusCode::BadWaitingForInitialData)?;
-                good(ty.variant(v))
-            });
-            let h = hub.clone();
-            cbs.add_write_callback(id, move |dv, range| {
-                if section == Section::Output {
-                    return StatusCode::BadNotWritable;
-                }
-                if !matches!(range, async_opcua::types::NumericRange::None) {
-                    return StatusCode::BadIndexRangeInvalid;
-                }
-                let Some(v) = dv.value.as_ref() else { return StatusCode::BadNothingToDo };
-                let value = match ty.written(v) {
-                    Ok(j) => j,
-                    Err(s) => return s,
-                };
-                send(&h, Command::Set { var: i as u32, value })
-            });
+            table.published.push((id.clone(), Source::Var(i, ty)));
+            table.writable.insert(id, (i, ty, section));
         }
     }
     // The chart of the POU and one chart per SFC function block instance (the mechanisms),
@@ -548,187 +775,134 @@ fn populate(hub: &Arc<Hub>, manager: &Arc<SimpleNodeManager>, ns: u16) {
     } else {
         info.charts.clone()
     };
-    let chart = nid(ns, &format!("{pou}/Chart"));
-    let top = charts.iter().position(|c| c.path.is_empty());
-    let chart_object = |id: &NodeId, name: &str| {
-        ObjectBuilder::new(id, QualifiedName::new(ns, name), name).has_type_definition(types.sfc.clone())
-    };
-    if top.is_some() {
-        chart_object(&chart, "Chart").component_of(root.clone()).insert(&mut *space);
-    } else {
-        // The program itself is no chart: a folder of its mechanisms.
-        ObjectBuilder::new(&chart, QualifiedName::new(ns, "Chart"), "Chart")
-            .is_folder()
-            .component_of(root.clone())
-            .insert(&mut *space);
-    }
+    let chart_path = format!("{pou}/Chart");
+    let chart = nid(ns, &chart_path);
+    let own = charts.iter().any(|c| c.path.is_empty());
+    let sfc_type = nid(ns, "type:SfcType");
+    ObjectBuilder::new(&chart, QualifiedName::new(ns, "Chart"), "Chart")
+        .component_of(root.clone())
+        .has_type_definition(if own { sfc_type.clone() } else { ObjectTypeId::FolderType.into() })
+        .insert(&mut *space);
     for (c, outline) in charts.iter().enumerate() {
-        let cid = if outline.path.is_empty() {
-            chart.clone()
+        // The program's own chart is `Chart`; a function block instance's is `Chart/<path>`.
+        let (cid, cpath) = if outline.path.is_empty() {
+            (chart.clone(), chart_path.clone())
         } else {
-            let id = nid(ns, &format!("{pou}/Chart/{}", outline.path));
-            chart_object(&id, &outline.path).organized_by(chart.clone()).insert(&mut *space);
-            property(&mut space, &id, "FunctionBlock", Variant::from(outline.pou.as_str()), DataTypeId::String);
-            id
+            let p = format!("{chart_path}/{}", outline.path);
+            let cid = nid(ns, &p);
+            ObjectBuilder::new(&cid, QualifiedName::new(ns, outline.path.as_str()), outline.path.as_str())
+                .organized_by(chart.clone())
+                .has_type_definition(sfc_type.clone())
+                .insert(&mut *space);
+            property(&mut space, (&cid, &p), "FunctionBlock", Variant::from(outline.pou.as_str()), DataTypeId::String);
+            (cid, p)
         };
-        // Names inside an instance's chart without its path (`Idle`, not `Rev.Idle`).
+        // Names inside a function block lose the instance prefix in browse names.
         let local = |q: &str| -> String {
-            match q.strip_prefix(outline.path.as_str()).and_then(|r| r.strip_prefix('.')) {
+            match q.strip_prefix(&outline.path).and_then(|r| r.strip_prefix('.')) {
                 Some(r) if !outline.path.is_empty() => r.to_string(),
                 _ => q.to_string(),
             }
         };
-        let variable = |space: &mut async_opcua::server::address_space::AddressSpace,
-                        id: &NodeId,
-                        parent: &NodeId,
-                        name: &str,
-                        ty: DataTypeId,
-                        init: Variant| {
+        let variable = |space: &mut AddressSpace, id: &NodeId, parent: &NodeId, name: &str, ty: DataTypeId| {
             VariableBuilder::new(id, QualifiedName::new(ns, name), name)
                 .component_of(parent.clone())
                 .has_type_definition(VariableTypeId::BaseDataVariableType)
                 .data_type(ty)
-                .value(init)
                 .access_level(AccessLevel::CURRENT_READ)
                 .user_access_level(AccessLevel::CURRENT_READ)
                 .minimum_sampling_interval(0.0)
                 .insert(space);
+            set_waiting(space, id);
         };
-        let steps = nid(ns, &format!("{}/Steps", cid.identifier));
+        let steps = nid(ns, &format!("{cpath}/Steps"));
         folder(&mut space, &steps, "Steps", &cid);
         for s in outline.steps.clone() {
             let Some((name, initial)) = info.steps.get(s as usize) else { continue };
             let bn = local(name);
-            let sid = nid(ns, &format!("{pou}/Steps/{name}"));
+            let spath = format!("{pou}/Steps/{name}");
+            let sid = nid(ns, &spath);
             ObjectBuilder::new(&sid, QualifiedName::new(ns, bn.as_str()), bn.as_str())
                 .organized_by(steps.clone())
                 .has_type_definition(types.step.clone())
                 .insert(&mut *space);
-            property(&mut space, &sid, "Initial", Variant::Boolean(*initial), DataTypeId::Boolean);
-            let x = nid(ns, &format!("{pou}/Steps/{name}/X"));
-            let t = nid(ns, &format!("{pou}/Steps/{name}/T"));
-            variable(&mut space, &x, &sid, "X", DataTypeId::Boolean, Variant::Boolean(false));
-            variable(&mut space, &t, &sid, "T", DataTypeId::Duration, Variant::Double(0.0));
-            let h = hub.clone();
-            cbs.add_read_callback(x, move |_, _, _| {
-                let st = latest(&h).ok_or(StatusCode::BadWaitingForInitialData)?;
-                good(st.active.iter().any(|a| a.0 == s))
-            });
-            let h = hub.clone();
-            cbs.add_read_callback(t, move |_, _, _| {
-                let st = latest(&h).ok_or(StatusCode::BadWaitingForInitialData)?;
-                // An inactive step keeps the duration of its last activation (IEC 61131-3).
-                let us = match st.times.get(s as usize) {
-                    Some(us) => *us,
-                    None => st.active.iter().find(|a| a.0 == s).map_or(0, |a| a.1),
-                };
-                good(Variant::Double(us as f64 / 1000.0))
-            });
+            property(&mut space, (&sid, &spath), "Initial", Variant::Boolean(*initial), DataTypeId::Boolean);
+            let x = nid(ns, &format!("{spath}/X"));
+            let t = nid(ns, &format!("{spath}/T"));
+            variable(&mut space, &x, &sid, "X", DataTypeId::Boolean);
+            variable(&mut space, &t, &sid, "T", DataTypeId::Duration);
+            table.published.push((x, Source::StepX(s)));
+            table.published.push((t, Source::StepT(s)));
         }
-        let transitions = nid(ns, &format!("{}/Transitions", cid.identifier));
+        let transitions = nid(ns, &format!("{cpath}/Transitions"));
         folder(&mut space, &transitions, "Transitions", &cid);
         for t in outline.transitions.clone() {
             let Some((name, from, to)) = info.transitions.get(t as usize) else { continue };
             let bn = local(name);
-            let tid = nid(ns, &format!("{pou}/Transitions/{name}"));
+            let tpath = format!("{pou}/Transitions/{name}");
+            let tid = nid(ns, &tpath);
             ObjectBuilder::new(&tid, QualifiedName::new(ns, bn.as_str()), bn.as_str())
                 .organized_by(transitions.clone())
                 .has_type_definition(types.transition.clone())
                 .insert(&mut *space);
             let names =
                 |l: &[u32]| -> Vec<UAString> { l.iter().map(|s| UAString::from(local(&info.step_name(*s)))).collect() };
-            property(&mut space, &tid, "From", Variant::from(names(from)), DataTypeId::String);
-            property(&mut space, &tid, "To", Variant::from(names(to)), DataTypeId::String);
-            let g = nid(ns, &format!("{pou}/Transitions/{name}/Guard"));
-            variable(&mut space, &g, &tid, "Guard", DataTypeId::Boolean, Variant::Boolean(false));
-            let h = hub.clone();
-            cbs.add_read_callback(g, move |_, _, _| {
-                let st = latest(&h).ok_or(StatusCode::BadWaitingForInitialData)?;
-                match st.guards.iter().find(|g| g.0 == t) {
-                    Some((_, Some(b))) => good(*b),
-                    // The guard faulted in this scan.
-                    Some((_, None)) => Err(StatusCode::BadInternalError),
-                    // Only the guards of enabled transitions (their steps active) are evaluated.
-                    None => {
-                        Ok(DataValue { status: Some(StatusCode::GoodNoData), ..DataValue::new_now(Variant::Empty) })
-                    }
-                }
-            });
+            property(&mut space, (&tid, &tpath), "From", Variant::from(names(from)), DataTypeId::String);
+            property(&mut space, (&tid, &tpath), "To", Variant::from(names(to)), DataTypeId::String);
+            let g = nid(ns, &format!("{tpath}/Guard"));
+            variable(&mut space, &g, &tid, "Guard", DataTypeId::Boolean);
+            table.published.push((g, Source::Guard(t)));
         }
-        let actions = nid(ns, &format!("{}/Actions", cid.identifier));
+        let actions = nid(ns, &format!("{cpath}/Actions"));
         folder(&mut space, &actions, "Actions", &cid);
         for a in outline.actions.clone() {
             let Some((name, is_variable)) = info.actions.get(a as usize) else { continue };
             let bn = local(name);
-            let aid = nid(ns, &format!("{pou}/Actions/{name}"));
+            let apath = format!("{pou}/Actions/{name}");
+            let aid = nid(ns, &apath);
             ObjectBuilder::new(&aid, QualifiedName::new(ns, bn.as_str()), bn.as_str())
                 .organized_by(actions.clone())
                 .has_type_definition(types.action.clone())
                 .insert(&mut *space);
             let kind = if *is_variable { "variable" } else { "action" };
-            property(&mut space, &aid, "Kind", Variant::from(kind), DataTypeId::String);
-            for (flag, bn) in [(0usize, "Q"), (1, "A")] {
-                let id = nid(ns, &format!("{pou}/Actions/{name}/{bn}"));
-                variable(&mut space, &id, &aid, bn, DataTypeId::Boolean, Variant::Boolean(false));
-                let h = hub.clone();
-                cbs.add_read_callback(id, move |_, _, _| {
-                    let st = latest(&h).ok_or(StatusCode::BadWaitingForInitialData)?;
-                    let on = st.actions.iter().find(|x| x.0 == a).is_some_and(|x| if flag == 0 { x.1 } else { x.2 });
-                    good(on)
-                });
+            property(&mut space, (&aid, &apath), "Kind", Variant::from(kind), DataTypeId::String);
+            for (source, bn) in [(Source::ActionQ(a), "Q"), (Source::ActionA(a), "A")] {
+                let id = nid(ns, &format!("{apath}/{bn}"));
+                variable(&mut space, &id, &aid, bn, DataTypeId::Boolean);
+                table.published.push((id, source));
             }
         }
         // Error records of supervision timeouts (issue 23): the last one's text, code and step,
         // and how many were made.
-        type ErrorReader = fn(&crate::board::MechanismErrors) -> Variant;
-        let error_nodes: [(&str, DataTypeId, Variant, ErrorReader); 4] = [
-            ("LastError", DataTypeId::String, Variant::from(""), |e| {
-                Variant::from(e.last.as_ref().map(sfc_sim::ErrorRecord::message).unwrap_or_default())
-            }),
-            ("LastErrorCode", DataTypeId::Int32, Variant::Int32(0), |e| {
-                let code = e.last.as_ref().and_then(|r| r.code).unwrap_or(0);
-                Variant::Int32(code.clamp(i32::MIN.into(), i32::MAX.into()) as i32)
-            }),
-            ("LastErrorStep", DataTypeId::String, Variant::from(""), |e| {
-                Variant::from(e.last.as_ref().map(|r| r.step.clone()).unwrap_or_default())
-            }),
-            ("ErrorCount", DataTypeId::UInt64, Variant::UInt64(0), |e| Variant::UInt64(e.count)),
-        ];
-        for (bn, ty, init, read) in error_nodes {
-            let id = nid(ns, &format!("{}/{bn}", cid.identifier));
-            variable(&mut space, &id, &cid, bn, ty, init);
-            let h = hub.clone();
-            cbs.add_read_callback(id, move |_, _, _| {
-                let b = h.lock();
-                let e = b.errors.get(c).cloned().unwrap_or_default();
-                drop(b);
-                good(read(&e))
-            });
+        for (bn, ty, node) in [
+            ("LastError", DataTypeId::String, ErrorNode::Text),
+            ("LastErrorCode", DataTypeId::Int32, ErrorNode::Code),
+            ("LastErrorStep", DataTypeId::String, ErrorNode::Step),
+            ("ErrorCount", DataTypeId::UInt64, ErrorNode::Count),
+        ] {
+            let id = nid(ns, &format!("{cpath}/{bn}"));
+            variable(&mut space, &id, &cid, bn, ty);
+            table.published.push((id, Source::Error(c, node)));
         }
     }
     // The runtime: state, scan count, jitter, and the methods.
-    let rt = nid(ns, &format!("{pou}/Runtime"));
+    let rt_path = format!("{pou}/Runtime");
+    let rt = nid(ns, &rt_path);
     ObjectBuilder::new(&rt, QualifiedName::new(ns, "Runtime"), "Runtime")
         .component_of(root.clone())
         .has_type_definition(ObjectTypeId::BaseObjectType)
         .insert(&mut *space);
-    type Reader = Box<dyn Fn(&Hub) -> Variant + Send + Sync>;
-    let figures: Vec<(&str, DataTypeId, Reader)> = vec![
-        ("State", DataTypeId::String, Box::new(|h: &Hub| Variant::from(h.lock().state.name()))),
-        ("Halted", DataTypeId::Boolean, Box::new(|h: &Hub| Variant::Boolean(h.lock().halted))),
-        (
-            "ScanCount",
-            DataTypeId::UInt64,
-            Box::new(|h: &Hub| Variant::UInt64(h.lock().history.back().map_or(0, |s| s.scan))),
-        ),
-        ("PeriodMs", DataTypeId::Duration, Box::new(|h: &Hub| Variant::Double(h.info.period as f64 / 1000.0))),
-        ("JitterP50Us", DataTypeId::UInt64, Box::new(|h: &Hub| Variant::UInt64(digest(h, |d| d.jitter[0])))),
-        ("JitterP99Us", DataTypeId::UInt64, Box::new(|h: &Hub| Variant::UInt64(digest(h, |d| d.jitter[1])))),
-        ("JitterMaxUs", DataTypeId::UInt64, Box::new(|h: &Hub| Variant::UInt64(digest(h, |d| d.jitter[2])))),
-        ("Overruns", DataTypeId::UInt64, Box::new(|h: &Hub| Variant::UInt64(digest(h, |d| d.overruns)))),
-    ];
-    for (name, ty, read) in figures {
-        let id = nid(ns, &format!("{pou}/Runtime/{name}"));
+    for (name, ty, node) in [
+        ("State", DataTypeId::String, RuntimeNode::State),
+        ("Halted", DataTypeId::Boolean, RuntimeNode::Halted),
+        ("ScanCount", DataTypeId::UInt64, RuntimeNode::ScanCount),
+        ("PeriodMs", DataTypeId::Duration, RuntimeNode::PeriodMs),
+        ("JitterP50Us", DataTypeId::UInt64, RuntimeNode::JitterP50),
+        ("JitterP99Us", DataTypeId::UInt64, RuntimeNode::JitterP99),
+        ("JitterMaxUs", DataTypeId::UInt64, RuntimeNode::JitterMax),
+        ("Overruns", DataTypeId::UInt64, RuntimeNode::Overruns),
+    ] {
+        let id = nid(ns, &format!("{rt_path}/{name}"));
         VariableBuilder::new(&id, QualifiedName::new(ns, name), name)
             .component_of(rt.clone())
             .has_type_definition(VariableTypeId::BaseDataVariableType)
@@ -737,46 +911,146 @@ fn populate(hub: &Arc<Hub>, manager: &Arc<SimpleNodeManager>, ns: u16) {
             .user_access_level(AccessLevel::CURRENT_READ)
             .minimum_sampling_interval(0.0)
             .insert(&mut *space);
-        let h = hub.clone();
-        cbs.add_read_callback(id, move |_, _, _| good(read(&h)));
+        set_waiting(&mut space, &id);
+        table.published.push((id, Source::Runtime(node)));
     }
     if info.control {
         for name in ["Halt", "Continue", "Reset"] {
-            let id = nid(ns, &format!("{pou}/Runtime/{name}"));
+            let id = nid(ns, &format!("{rt_path}/{name}"));
             MethodBuilder::new(&id, QualifiedName::new(ns, name), name)
                 .component_of(rt.clone())
                 .executable(true)
                 .user_executable(true)
                 .insert(&mut *space);
-            let h = hub.clone();
-            cbs.add_method_callback(id, move |_| {
-                let state = h.lock().state;
-                let command = match name {
-                    "Halt" => Command::Halt,
-                    "Continue" if state != RunState::Run => return Err(StatusCode::BadInvalidState),
-                    "Continue" => Command::Continue,
-                    _ => Command::Reset { cold: false },
-                };
-                match send(&h, command) {
-                    s if s.is_good() => Ok(Vec::new()),
-                    s => Err(s),
-                }
-            });
+            table.methods.insert(id, name);
         }
+    }
+    drop(space);
+    *nodes.inner().table.write().unwrap_or_else(|e| e.into_inner()) = table;
+}
+
+/// The value of a published node in one reading of the run (`None`: not published yet).
+fn value_of(info: &ChartInfo, image: &ImageView, source: Source) -> Option<DataValue> {
+    let digest = |f: fn(&crate::jitter::StatsDigest) -> u64| Variant::UInt64(image.digest.as_ref().map_or(0, f));
+    let v = match source {
+        Source::Runtime(node) => match node {
+            RuntimeNode::State => Variant::from(image.state.name()),
+            RuntimeNode::Halted => Variant::Boolean(image.halted),
+            RuntimeNode::ScanCount => Variant::UInt64(image.scan_number()),
+            RuntimeNode::PeriodMs => Variant::Double(info.period as f64 / 1000.0),
+            RuntimeNode::JitterP50 => digest(|d| d.jitter[0]),
+            RuntimeNode::JitterP99 => digest(|d| d.jitter[1]),
+            RuntimeNode::JitterMax => digest(|d| d.jitter[2]),
+            RuntimeNode::Overruns => digest(|d| d.overruns),
+        },
+        Source::Error(c, node) => {
+            let e = image.errors.get(c).cloned().unwrap_or_default();
+            let last = e.last.as_ref();
+            match node {
+                ErrorNode::Text => Variant::from(last.map(sfc_sim::ErrorRecord::message).unwrap_or_default()),
+                ErrorNode::Code => {
+                    let code = last.and_then(|r| r.code).unwrap_or(0);
+                    Variant::Int32(code.clamp(i32::MIN.into(), i32::MAX.into()) as i32)
+                }
+                ErrorNode::Step => Variant::from(last.map(|r| r.step.clone()).unwrap_or_default()),
+                ErrorNode::Count => Variant::UInt64(e.count),
+            }
+        }
+        _ => {
+            let st = image.scan.as_ref()?;
+            match source {
+                Source::Var(i, ty) => ty.variant(st.values.get(i)?),
+                Source::StepX(s) => Variant::Boolean(st.active.iter().any(|a| a.0 == s)),
+                Source::StepT(s) => {
+                    // An inactive step keeps the duration of its last activation (IEC 61131-3).
+                    let us = match st.active.iter().find(|a| a.0 == s) {
+                        Some(a) => a.1,
+                        None => st.times.get(s as usize).copied().unwrap_or(0),
+                    };
+                    Variant::Double(us as f64 / 1000.0)
+                }
+                Source::Guard(t) => match st.guards.iter().find(|g| g.0 == t) {
+                    Some((_, Some(b))) => Variant::Boolean(*b),
+                    // The guard faulted in this scan.
+                    Some((_, None)) => {
+                        return Some(DataValue {
+                            status: Some(StatusCode::BadInternalError),
+                            ..published(Variant::Empty)
+                        })
+                    }
+                    // Only the guards of enabled transitions (their steps active) are evaluated.
+                    None => {
+                        return Some(DataValue { status: Some(StatusCode::GoodNoData), ..published(Variant::Empty) })
+                    }
+                },
+                Source::ActionQ(a) => Variant::Boolean(st.actions.iter().any(|x| x.0 == a && x.1)),
+                Source::ActionA(a) => Variant::Boolean(st.actions.iter().any(|x| x.0 == a && x.2)),
+                Source::Runtime(_) | Source::Error(..) => return None,
+            }
+        }
+    };
+    Some(published(v))
+}
+
+/// A published value: with a server timestamp and no source timestamp. async-opcua 0.19 holds
+/// back a change that comes sooner than a monitored item's sampling interval after the one
+/// before it (by their source timestamps) and releases it only with the item's next change, so
+/// a subscriber would keep showing the first of two quick changes (an output that went TRUE and
+/// back to FALSE would read TRUE until it changed again). A value without a source timestamp is
+/// never held back: every change is reported, and the newest is always delivered.
+fn published(v: Variant) -> DataValue {
+    DataValue {
+        value: Some(v),
+        status: None,
+        server_timestamp: Some(async_opcua::types::DateTime::now()),
+        ..Default::default()
     }
 }
 
-fn digest(h: &Hub, f: impl Fn(&crate::jitter::StatsDigest) -> u64) -> u64 {
-    h.lock().digest.as_ref().map_or(0, f)
-}
-
-/// Hands a command to the scan thread (applied at the next scan); the reply is not awaited.
-fn send(hub: &Hub, command: Command) -> StatusCode {
-    let (reply, _) = tokio::sync::mpsc::channel(1);
-    if hub.send(crate::board::Request { id: serde_json::Value::Null, command, reply }) {
-        StatusCode::Good
-    } else {
-        StatusCode::BadShutdown
+/// Brings the published nodes up to date with the board every `tick`: each reading of the run
+/// ([`Hub::image`]) is set in one batch under the address space's lock, so a read or a
+/// subscription never mixes two scans, and only the nodes whose value changed notify their
+/// subscribers.
+async fn follow(
+    hub: Arc<Hub>,
+    nodes: Arc<InMemoryNodeManager<SfcNodes>>,
+    subscriptions: Arc<SubscriptionCache>,
+    tick: std::time::Duration,
+) {
+    let published = std::mem::take(&mut nodes.inner().table.write().unwrap_or_else(|e| e.into_inner()).published);
+    let mut last: Vec<Option<DataValue>> = vec![None; published.len()];
+    // What the last values were made from: the newest state, the run's state, halted, the
+    // statistics and the error records' counts.
+    type Seen = (Option<usize>, u64, bool, Option<crate::jitter::StatsDigest>, Vec<u64>);
+    let mut seen: Option<Seen> = None;
+    let mut every = tokio::time::interval(tick);
+    every.set_missed_tick_behavior(tokio::time::MissedTickBehavior::Delay);
+    while !hub.closing() {
+        every.tick().await;
+        let image = hub.image();
+        let key = (
+            image.scan.as_ref().map(|s| Arc::as_ptr(s) as usize),
+            image.state_seq,
+            image.halted,
+            image.digest,
+            image.errors.iter().map(|e| e.count).collect::<Vec<_>>(),
+        );
+        if seen.as_ref() == Some(&key) {
+            continue;
+        }
+        seen = Some(key);
+        let mut changed: Vec<(&NodeId, Option<&async_opcua::types::NumericRange>, DataValue)> = Vec::new();
+        for ((id, source), was) in published.iter().zip(last.iter_mut()) {
+            let Some(dv) = value_of(&hub.info, &image, *source) else { continue };
+            if was.as_ref().is_some_and(|w| w.value == dv.value && w.status == dv.status) {
+                continue;
+            }
+            *was = Some(dv.clone());
+            changed.push((id, None, dv));
+        }
+        if !changed.is_empty() {
+            let _ = nodes.set_values(&subscriptions, changed.into_iter());
+        }
     }
 }
 
@@ -848,6 +1122,7 @@ pub async fn serve(side: Side, hub: Arc<Hub>) {
             return;
         }
     };
+    tokio::spawn(follow(hub.clone(), side.nodes.clone(), side.handle.subscriptions().clone(), side.tick));
     let handle = side.handle.clone();
     let h = hub.clone();
     tokio::spawn(async move {

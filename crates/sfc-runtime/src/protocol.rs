@@ -196,11 +196,12 @@ pub fn snapshot(
 ) -> serde_json::Value {
     let mut j = state_json(info, st);
     if run.0 != RunState::Run {
-        // The outputs are at their safe values, whatever the last scan left.
-        for v in &info.variables {
-            if let Some(s) = &v.safe {
-                j["vars"][&v.name] = value_json(s);
-            }
+        // The outputs are at their safe values, whatever the last scan left (the rule of every
+        // view, `board::shown_values`).
+        let mut values = st.values.clone();
+        crate::board::shown_values(info, run.0, &mut values);
+        for (v, x) in info.variables.iter().zip(&values) {
+            j["vars"][&v.name] = value_json(x);
         }
     }
     j["type"] = serde_json::json!("snapshot");
@@ -398,6 +399,12 @@ async fn session(
     #[allow(clippy::result_large_err)]
     let callback = move |req: &HttpRequest, resp: HttpResponse| -> Result<HttpResponse, ErrorResponse> {
         let header = |name: &str| req.headers().get(name).and_then(|v| v.to_str().ok());
+        // Two Host (or Origin) headers: which one a proxy or a check reads differs; refused.
+        for name in ["host", "origin"] {
+            if req.headers().get_all(name).iter().count() > 1 {
+                return Err(refusal(400, format!("the request has more than one {name} header")));
+            }
+        }
         crate::access::check_host(header("host"), local, access).map_err(|why| refusal(403, why))?;
         crate::access::check_origin(header("origin"), access).map_err(|why| refusal(403, why))?;
         if let Some(t) = query_token(&req.uri().to_string()) {
@@ -607,20 +614,16 @@ impl Session<'_> {
             let mut j = state_message(state, fault.as_ref(), scan);
             // The outputs as they are now (safe values in STOP and FAULT).
             if let Some(st) = latest {
+                let mut values = st.values.clone();
+                crate::board::shown_values(&self.hub.info, state, &mut values);
                 let vars: serde_json::Map<String, serde_json::Value> = self
                     .hub
                     .info
                     .variables
                     .iter()
-                    .zip(&st.values)
+                    .zip(&values)
                     .filter(|(v, _)| v.safe.is_some())
-                    .map(|(v, x)| {
-                        let shown = match (&v.safe, state) {
-                            (Some(s), RunState::Stop | RunState::Fault) => s,
-                            _ => x,
-                        };
-                        (v.name.clone(), value_json(shown))
-                    })
+                    .map(|(v, x)| (v.name.clone(), value_json(x)))
                     .collect();
                 j["outputs"] = serde_json::Value::Object(vars);
             }

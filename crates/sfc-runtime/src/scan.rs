@@ -71,8 +71,6 @@ pub(crate) struct ScanThread {
     pub vars: Vec<Slot>,
     /// For each monitor variable, its I/O point when it has one.
     pub var_point: Vec<Option<usize>>,
-    /// For each monitor variable, its safe value when it has one.
-    pub var_safe: Vec<Option<Value>>,
     /// Following steps of each transition, initial steps.
     pub post: Vec<Vec<u32>>,
     pub initial: Vec<u32>,
@@ -121,6 +119,13 @@ pub(crate) struct ScanThread {
     pub records: u64,
     /// The newest error record with its count, until the Modbus image takes it.
     pub unwritten_record: Option<(u64, sfc_sim::ErrorRecord)>,
+    /// The last fault's code and the faults since the start (the Modbus status block).
+    pub fault_code: u16,
+    pub faults: u64,
+    /// What serves in FAULT and how this run can leave it, for the FAULT line.
+    pub fault_ways: String,
+    /// The status block as the image holds it (`None`: not written yet).
+    pub status_written: Option<crate::io::Status>,
 }
 
 impl ScanThread {
@@ -320,6 +325,7 @@ impl ScanThread {
         }
         j["message"] = serde_json::json!(text);
         self.unpublished_events.push(j.clone().into());
+        self.fault_code = crate::io::FAULT_WATCHDOG;
         self.enter_fault(j, text);
     }
 
@@ -331,12 +337,14 @@ impl ScanThread {
         j["line"] = serde_json::json!(e.line);
         j["column"] = serde_json::json!(e.column);
         text.push_str(&place);
+        self.fault_code = crate::io::FAULT_ERROR;
         self.enter_fault(j, text);
     }
 
     /// Enters FAULT: safe outputs, retentive values written, the fault on the board and for the
     /// operator.
     fn enter_fault(&mut self, fault: serde_json::Value, text: String) {
+        self.faults += 1;
         self.hub.notice(text.clone());
         self.fault = Some(text);
         let values = crate::retain::capture(&self.sim, &self.retain.leaves);
@@ -346,8 +354,9 @@ impl ScanThread {
         self.enter_safe_state(RunState::Fault, Some(fault), "fault");
         if self.wait_in_fault {
             self.hub.notice(format!(
-                "sfc run: FAULT: outputs at their safe values ({}); Modbus and the monitor keep serving; a monitor `reset` restarts the chart",
-                self.safe.summary(8)
+                "sfc run: FAULT: outputs at their safe values ({}); {}",
+                self.safe.summary(8),
+                self.fault_ways
             ));
         }
     }
@@ -355,36 +364,43 @@ impl ScanThread {
     /// Puts the outputs to their safe values (process image, and the state the monitor shows)
     /// and the board into `state`.
     fn enter_safe_state(&mut self, state: RunState, fault: Option<serde_json::Value>, reason: &str) {
+        self.state = state;
         {
             let mut img = self.image.lock().unwrap_or_else(|e| e.into_inner());
             for (i, v) in &self.safe.points {
                 img.put(&self.points[*i], v);
             }
+            let scan = self.unpublished_states.back().or(self.last_state.as_ref()).map_or(0, |s| s.scan);
+            let status = self.status(scan);
+            write_status(&mut self.status_written, &mut img, status);
         }
-        let last = self.unpublished_states.pop_back().or_else(|| self.last_state.clone());
+        // The newest state with the safe values in place of the chart's: the state not yet
+        // published (the scan that faulted), or the one on the board.
+        let pending = self.unpublished_states.pop_back();
+        let last = pending.clone().or_else(|| self.last_state.clone());
+        let mut b = self.hub.lock();
         if let Some(last) = last {
             let mut st = (*last).clone();
-            for (i, safe) in self.var_safe.iter().enumerate() {
-                if let (Some(v), Some(slot)) = (safe, st.values.get_mut(i)) {
-                    *slot = v.clone();
-                }
-            }
+            crate::board::shown_values(&self.hub.info, state, &mut st.values);
             let st = Arc::new(st);
-            if self.unpublished_states.is_empty() && self.last_state.as_ref().is_some_and(|l| Arc::ptr_eq(l, &last)) {
-                // Already on the board: replace it there.
-                let mut b = self.hub.lock();
-                if let Some(back) = b.history.back_mut() {
-                    if back.scan == st.scan {
-                        *back = st.clone();
-                    }
-                }
-            } else {
+            if pending.is_some() {
                 self.unpublished_states.push_back(st.clone());
+            } else {
+                b.replace_latest(st.clone());
             }
             self.last_state = Some(st);
         }
-        self.state = state;
-        self.hub.lock().set_state(state, fault);
+        // The state changes with the values, under one lock: no view pairs the new state with
+        // the chart's values.
+        while let Some(s) = self.unpublished_states.pop_front() {
+            b.push_state(s, |old| {
+                if Arc::strong_count(&old) == 1 && self.spare_states.len() < SPARE_STATES {
+                    self.spare_states.push(old);
+                }
+            });
+        }
+        b.set_state(state, fault);
+        drop(b);
         self.halt_change.push((true, reason.to_string()));
     }
 
@@ -508,6 +524,9 @@ impl ScanThread {
                         img.put(p, v);
                     }
                 }
+                // The status names the scan whose outputs the image now holds.
+                let status = self.status(self.sim.next_scan().saturating_sub(1));
+                write_status(&mut self.status_written, &mut img, status);
             }
         }
         self.stats.scans += 1;
@@ -591,7 +610,8 @@ impl ScanThread {
         if self.unwritten_record.is_some() {
             if let Ok(mut img) = self.image.try_lock() {
                 if let Some((count, r)) = self.unwritten_record.take() {
-                    img.record = crate::io::record_registers(count, &r, img.order);
+                    let regs = crate::io::record_registers(count, &r, img.order);
+                    img.set_record(&regs);
                 }
             }
         }
@@ -896,7 +916,40 @@ impl ScanThread {
     }
 
     /// Publishes what is waiting, without waiting for the lock.
+    /// The status block for the values of scan `scan`.
+    fn status(&self, scan: u64) -> crate::io::Status {
+        crate::io::Status {
+            state: match self.state {
+                RunState::Run => 0,
+                RunState::Stop => 1,
+                RunState::Fault => 2,
+            },
+            halted: self.halted,
+            scan,
+            fault: self.fault_code,
+            faults: self.faults,
+        }
+    }
+
+    /// The status block after a change that no scan wrote (halt, continue, stop, start, reset),
+    /// when the image is free (else at the next try).
+    fn sync_status(&mut self) {
+        if self.points.is_empty() {
+            return;
+        }
+        let scan = self.last_state.as_ref().map_or(0, |s| s.scan);
+        let status = self.status(scan);
+        if self.status_written == Some(status) {
+            return;
+        }
+        let image = self.image.clone();
+        if let Ok(mut img) = image.try_lock() {
+            write_status(&mut self.status_written, &mut img, status);
+        };
+    }
+
     fn publish(&mut self) {
+        self.sync_status();
         let hub = self.hub.clone();
         let locked = hub.board.try_lock();
         if let Ok(mut b) = locked {
@@ -905,6 +958,7 @@ impl ScanThread {
     }
 
     fn publish_blocking(&mut self) {
+        self.sync_status();
         let hub = self.hub.clone();
         let mut b = hub.lock();
         self.flush(&mut b);
@@ -926,6 +980,15 @@ impl ScanThread {
         if self.stats.scans.is_multiple_of(50) || b.halted {
             b.digest = Some(self.stats.digest());
         }
+    }
+}
+
+/// Writes the status block into the image when it differs from what `written` says the image
+/// holds.
+fn write_status(written: &mut Option<crate::io::Status>, img: &mut Image, status: crate::io::Status) {
+    if *written != Some(status) {
+        img.set_status(&status);
+        *written = Some(status);
     }
 }
 

@@ -127,6 +127,7 @@ impl Supervisor {
             for (i, v) in &self.safe.points {
                 img.put(&self.points[*i], v);
             }
+            img.set_fault(crate::io::FAULT_WATCHDOG);
         }
         let mut b = self.hub.lock();
         if b.state != RunState::Fault {

@@ -93,9 +93,10 @@ fn exchange(token_given: &str, state: &AppState) -> Response {
 /// server's own; `/api/` also needs the token. Adds the headers every answer carries.
 pub async fn guard(State(state): State<AppState>, req: Request, next: Next) -> Response {
     let port = state.port();
-    let host_ok =
-        req.headers().get(header::HOST).and_then(|h| h.to_str().ok()).is_some_and(|h| is_own_authority(h, port))
-            && req.uri().authority().is_none_or(|a| is_own_authority(a.as_str(), port));
+    // Exactly one Host header: with two, which one a check or a proxy reads differs.
+    let host_ok = req.headers().get_all(header::HOST).iter().count() == 1
+        && req.headers().get(header::HOST).and_then(|h| h.to_str().ok()).is_some_and(|h| is_own_authority(h, port))
+        && req.uri().authority().is_none_or(|a| is_own_authority(a.as_str(), port));
     let api = req.uri().path().starts_with("/api/") || req.uri().path() == "/api";
     let page = matches!(req.uri().path(), "/" | "/index.html");
     let mut response = if !host_ok {
