@@ -45,3 +45,6 @@ if [ ! -s "$schema" ]; then
 fi
 # asyncua (PyPI): the independent OPC UA client of crates/sfc-cli/tests/opcua.rs.
 bash "$root/scripts/asyncua-deps.sh" || echo "test-deps: asyncua could not be installed: the OPC UA end-to-end test will skip" >&2
+# pymodbus and o6 (PyPI): a Modbus client, and the OPC UA client on open62541 (the second stack).
+bash "$root/scripts/pymodbus-deps.sh" || echo "test-deps: pymodbus could not be installed: the Modbus client tests will skip" >&2
+bash "$root/scripts/o6-deps.sh" || echo "test-deps: o6 could not be installed: the open62541 OPC UA tests will skip" >&2

@@ -616,6 +616,11 @@ fn the_monitor_refuses_foreign_pages_and_slows_down_guessing() {
         let (_, head) = handshake(mon, "/?token=from-a-file", headers);
         assert!(head.starts_with(&format!("HTTP/1.1 {want}")), "{headers:?}: {head}");
     }
+    // Two Host headers (the first loopback, the second not): which one a check reads would
+    // differ between a proxy and the server, so neither is trusted.
+    let own = mon.to_string();
+    let (_, head) = handshake(mon, "/?token=from-a-file", &[("Host", own.as_str()), ("Host", "evil.example")]);
+    assert!(head.starts_with("HTTP/1.1 400"), "two Host headers: {head}");
     // Wrong tokens: each makes the client wait longer before the next try.
     let (_, head) = handshake(mon, "/?token=guess1", &[]);
     assert!(head.starts_with("HTTP/1.1 101"), "a wrong token still watches: {head}");
@@ -867,4 +872,173 @@ fn a_memory_write_during_a_scan_is_not_lost() {
     run.signal(libc::SIGTERM);
     let (status, lines) = run.finish(30);
     assert_eq!(status, Some(0), "{lines:?}");
+}
+
+/// The status block (input registers 40300…): state, halted, scan, last fault, faults.
+fn status(m: &mut Modbus) -> (u16, u16, u64, u16, u16) {
+    let r = m.read_input_registers(40300, 8);
+    let scan = r[2..6].iter().fold(0u64, |a, w| a << 16 | u64::from(*w));
+    (r[0], r[1], scan, r[6], r[7])
+}
+
+/// Issue 30, items 6 and 8: with `--modbus-reset`, a Modbus client (an HMI without the monitor)
+/// restarts the chart out of FAULT through holding register 40000 (1 warm, 2 cold) or coil
+/// 40000; the status block tells RUN/STOP/FAULT, the scan and the last fault; the FAULT line
+/// names the way out.
+#[test]
+fn a_modbus_client_reads_the_status_and_resets_a_fault() {
+    let mut run = Run::start(&[
+        s(&chart("runaway.st")),
+        "--watchdog",
+        "T#50ms",
+        "--modbus",
+        "127.0.0.1:0",
+        "--modbus-reset",
+        "--no-retain",
+        "--for",
+        "T#120s",
+    ]);
+    let mut m = Modbus::connect(run.modbus());
+    eventually("RUN in the status block, scanning", 20, || {
+        let st = status(&mut m);
+        st.0 == 0 && st.2 > 2
+    });
+    let (_, halted, scan, fault, faults) = status(&mut m);
+    assert_eq!((halted, fault, faults), (0, 0, 0));
+    eventually("the scan number moves", 20, || status(&mut m).2 > scan);
+    assert_eq!(m.read_holding(40000, 1), [0], "the reset register reads 0");
+    assert_eq!(m.read_coils(40000, 1), [false], "the reset coil reads FALSE");
+    // Go: the watchdog stops Filling's loop.
+    m.write_coil(32768, true);
+    let line = run.line("the FAULT line", 30, |l| l.starts_with("sfc run: FAULT:"));
+    assert!(
+        line.ends_with(
+            "Modbus keeps serving; to restart the chart: Modbus holding register 40000 := 1 (warm) or 2 \
+             (cold), or coil 40000 := TRUE"
+        ),
+        "{line}"
+    );
+    eventually("FAULT in the status block", 20, || status(&mut m).0 == 2);
+    let (_, _, at, fault, faults) = status(&mut m);
+    assert_eq!((fault, faults), (1, 1), "the watchdog's fault (1), the first");
+    assert_eq!(m.read_coils(0, 2), [false, true], "the safe outputs");
+    // Nothing but 0, 1, 2 on the register, TRUE or FALSE on the coil.
+    assert_eq!(m.request(&[6, 0x9C, 0x40, 0, 3]), [0x86, 3], "3 is no reset mode");
+    assert_eq!(status(&mut m).0, 2, "still in FAULT");
+    m.write_coil(32768, false);
+    // A warm reset through the register: RUN again from Ready (Prime drives the outputs).
+    assert_eq!(m.request(&[6, 0x9C, 0x40, 0, 1]), [6, 0x9C, 0x40, 0, 1]);
+    eventually("RUN after the reset", 20, || status(&mut m).0 == 0);
+    eventually("Prime runs again", 20, || m.read_coils(0, 2) == [true, false]);
+    let (_, _, after, fault, faults) = status(&mut m);
+    assert!(after > at, "scan numbers go on counting: {after} after {at}");
+    assert_eq!((fault, faults), (1, 1), "the last fault is kept after a reset");
+    // Again, and out through the coil.
+    m.write_coil(32768, true);
+    eventually("the second FAULT", 30, || status(&mut m).0 == 2);
+    m.write_coil(32768, false);
+    m.write_coil(40000, true);
+    eventually("RUN after the coil's reset", 20, || status(&mut m).0 == 0);
+    assert_eq!(status(&mut m).4, 2, "two faults so far");
+    run.signal(libc::SIGTERM);
+    let (code, lines) = run.finish(30);
+    assert_eq!(code, Some(0), "{lines:?}");
+    assert!(lines.iter().any(|l| l == "sfc run: Modbus: warm reset requested (holding register 40000)"), "{lines:?}");
+    assert!(lines.iter().any(|l| l == "sfc run: Modbus: warm reset requested (coil 40000)"), "{lines:?}");
+}
+
+/// Issue 30, item 6: a run with no way out of FAULT says so in its FAULT line; `--halted` with
+/// nothing that could send `continue` is refused at start; the reset register refuses to hide
+/// an input, and needs Modbus.
+#[test]
+fn a_run_without_a_way_out_says_so() {
+    let mut run = Run::start(&[
+        s(&chart("runaway.st")),
+        "--watchdog",
+        "T#50ms",
+        "--modbus",
+        "127.0.0.1:0",
+        "--no-retain",
+        "--for",
+        "T#120s",
+    ]);
+    let mut m = Modbus::connect(run.modbus());
+    eventually("the first scans", 20, || m.read_coils(0, 2) == [true, false]);
+    // Without --modbus-reset, 40000 is only the (unmapped) inputs' window.
+    assert_eq!(m.request(&[6, 0x9C, 0x40, 0, 1]), [0x86, 2]);
+    m.write_coil(32768, true);
+    let line = run.line("the FAULT line", 30, |l| l.starts_with("sfc run: FAULT:"));
+    assert!(
+        line.ends_with(
+            "Modbus keeps serving; nothing in this run can restart the chart (no monitor, no OPC UA user of \
+             role admin, no --modbus-reset): stop sfc run and start it again"
+        ),
+        "{line}"
+    );
+    drop(run);
+    let refused = |args: &[&str], why: &str| {
+        let mut full = vec!["run"];
+        full.extend_from_slice(args);
+        let out = command(&full).output().unwrap();
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(2), "{args:?}: {err}");
+        assert!(err.contains(why), "{args:?}: {err}");
+    };
+    refused(
+        &["examples/carwash/carwash.st", "--halted", "--modbus", "127.0.0.1:0", "--no-retain"],
+        "--halted waits for a `continue`, and nothing in this run can send one",
+    );
+    refused(&["examples/carwash/carwash.st", "--modbus-reset", "--no-retain"], "`--modbus-reset` needs Modbus");
+    let dir = scratch("reset-overlap");
+    let overlap = dir.join("far.st");
+    std::fs::write(
+        &overlap,
+        "PROGRAM Far\n  VAR\n    Far AT %IX904.0 : BOOL;\n    Lamp AT %QX0.0 : BOOL;\n  END_VAR\n  \
+         INITIAL_STEP S: Lamp(N); END_STEP\nEND_PROGRAM\n",
+    )
+    .unwrap();
+    refused(
+        &[s(&overlap), "--modbus", "127.0.0.1:0", "--modbus-reset", "--no-retain"],
+        "`Far` %IX904.0 is written through coil 40000, which --modbus-reset takes for the reset",
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// Issue 30, item 7: `--report` prints the state, the scan, the outputs and the statistics as a
+/// line for the operator; `--report-format json` as one JSON object per line.
+#[test]
+fn report_lines_for_the_operator_and_for_a_log_collector() {
+    let mut run = Run::start(&["examples/carwash/carwash.st", "--no-retain", "--report", "T#100ms", "--for", "T#60s"]);
+    let line = run.line("a report", 20, |l| l.starts_with("sfc run: report: "));
+    assert!(line.starts_with("sfc run: report: RUN, scan "), "{line}");
+    assert!(
+        line.contains(
+            "; outputs SprayValve=FALSE, Travel=FALSE, Brush=FALSE, TravelBack=FALSE, Blower=FALSE, FaultLamp=FALSE; "
+        ),
+        "{line}"
+    );
+    assert!(line.contains(" scans; start jitter p50 ") && line.ends_with(" periods skipped"), "{line}");
+    assert!(!line.contains('{'), "no raw JSON: {line}");
+    drop(run);
+    let mut run = Run::start(&[
+        "examples/carwash/carwash.st",
+        "--no-retain",
+        "--report",
+        "T#100ms",
+        "--report-format",
+        "json",
+        "--for",
+        "T#60s",
+    ]);
+    let line = run.line("a JSON report", 20, |l| l.starts_with('{'));
+    let j: serde_json::Value = serde_json::from_str(&line).unwrap();
+    assert_eq!((j["state"].as_str(), j["halted"].as_bool()), (Some("RUN"), Some(false)), "{j}");
+    assert!(j["scan"].as_u64().is_some() && j["stats"]["scans"].as_u64().is_some(), "{j}");
+    assert_eq!(j["outputs"]["SprayValve"], false, "{j}");
+    drop(run);
+    let out = command(&["run", "examples/carwash/carwash.st", "--report", "T#1s", "--report-format", "xml"])
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("`--report-format`: `xml` is `text` or `json`"));
 }

@@ -60,6 +60,10 @@ async fn foreign_hosts_are_refused() {
     )
     .await;
     assert_eq!(a.status, 403);
+    // Two Host headers, the first the server's own: refused (which one a check reads differs
+    // between a proxy and the server).
+    assert_eq!(status_with_two_hosts(&s, "/api/session", &host, &rebound).await, 403);
+    assert_eq!(status_with_two_hosts(&s, "/api/session", &host, &host).await, 403);
     let localhost = format!("LOCALHOST:{PORT}");
     let a = send(
         &s,

@@ -337,3 +337,23 @@ pub fn eventually(what: &str, secs: u64, mut f: impl FnMut() -> bool) {
 pub fn chart(name: &str) -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/run").join(name)
 }
+
+/// `scripts/NAME-deps.sh` made the Python package there, or the test says loudly why it skips.
+fn python_deps(name: &str) -> bool {
+    let ok = Command::new("bash").arg(root().join(format!("scripts/{name}-deps.sh"))).status();
+    if !ok.is_ok_and(|s| s.success()) {
+        eprintln!("\n\n*** SKIPPED: {name} cannot be installed (scripts/{name}-deps.sh failed) ***\n\n");
+        return false;
+    }
+    true
+}
+
+/// pymodbus (a Modbus client) is there.
+pub fn pymodbus() -> bool {
+    python_deps("pymodbus")
+}
+
+/// o6 (an OPC UA client on open62541) is there.
+pub fn o6() -> bool {
+    python_deps("o6")
+}

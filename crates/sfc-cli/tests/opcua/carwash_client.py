@@ -2,6 +2,7 @@
 
 Usage: carwash_client.py open URL            (SecurityPolicy None, anonymous)
        carwash_client.py secure URL PKI USER PASSWORD CLIENT_DIR
+       carwash_client.py roles URL PKI CLIENT_DIR  (users reader, operator, boss: password pw-NAME)
        carwash_client.py load URL CLIENTS SECONDS
 
 Prints one JSON object on standard output with what it saw; the Rust test judges it.
@@ -207,6 +208,74 @@ async def secure_session(url, pki, user, password, client_dir):
     return report
 
 
+async def roles(url, pki, client_dir):
+    """What each kind of session may do: anonymous on the None endpoint and on
+    Basic256Sha256 SignAndEncrypt, and the users `reader` (role read), `operator` (operate) and
+    `boss` (admin): read, write an input, read the input's UserAccessLevel, call Halt."""
+    from asyncua.crypto.cert_gen import setup_self_signed_certificate
+    from asyncua.crypto.security_policies import SecurityPolicyBasic256Sha256
+    from cryptography.x509.oid import ExtendedKeyUsageOID
+
+    client_dir = Path(client_dir)
+    client_dir.mkdir(parents=True, exist_ok=True)
+    key, cert = client_dir / "key.pem", client_dir / "cert.der"
+    app_uri = "urn:sfc:test:client"
+    await setup_self_signed_certificate(
+        key, cert, app_uri, "localhost", [ExtendedKeyUsageOID.CLIENT_AUTH], {"commonName": "sfc test client"}
+    )
+
+    async def client(user, secure):
+        c = Client(url=url, timeout=10)
+        c.application_uri = app_uri
+        if user:
+            c.set_user(user)
+            c.set_password(f"pw-{user}")
+        if secure:
+            await c.set_security(SecurityPolicyBasic256Sha256, str(cert), str(key),
+                                 mode=ua.MessageSecurityMode.SignAndEncrypt)
+        return c
+
+    # Trust the client's certificate first (the operator's move from rejected/ to trusted/).
+    try:
+        c = await client("boss", True)
+        await c.connect()
+        await c.disconnect()
+    except Exception:
+        pass
+    for f in sorted((Path(pki) / "rejected").glob("*.der")):
+        shutil.move(str(f), str(Path(pki) / "trusted" / f.name))
+
+    async def session(user, secure):
+        out = {}
+        try:
+            c = await client(user, secure)
+            await c.connect()
+        except Exception as e:
+            return {"connect": type(e).__name__}
+        try:
+            ns = await c.get_namespace_index(NS)
+            node = c.get_node(f"ns={ns};s=CarWash.DryerSelect")
+            out["read"] = await (c.get_node(f"ns={ns};s=CarWash/Runtime/State")).read_value()
+            out["write"] = await write(node, True, ua.VariantType.Boolean)
+            level = (await node.read_attribute(ua.AttributeIds.UserAccessLevel)).Value.Value
+            out["user_writable"] = bool(level & 2)
+            try:
+                await c.get_node(f"ns={ns};s=CarWash/Runtime").call_method(f"{ns}:Halt")
+                out["halt"] = "Good"
+                await c.get_node(f"ns={ns};s=CarWash/Runtime").call_method(f"{ns}:Continue")
+            except ua.UaStatusCodeError as e:
+                out["halt"] = type(e).__name__
+        finally:
+            await c.disconnect()
+        return out
+
+    report = {}
+    for user in (None, "reader", "operator", "boss"):
+        for secure in (False, True):
+            report[f"{user or 'anonymous'} {'secure' if secure else 'none'}"] = await session(user, secure)
+    return report
+
+
 async def load(url, clients, seconds):
     """`clients` sessions, each subscribed to every variable at 100 ms, for `seconds`."""
     counts = []
@@ -240,6 +309,8 @@ def main():
         report = asyncio.run(open_session(url))
     elif mode == "secure":
         report = asyncio.run(secure_session(url, *sys.argv[3:7]))
+    elif mode == "roles":
+        report = asyncio.run(roles(url, *sys.argv[3:5]))
     else:
         report = asyncio.run(load(url, int(sys.argv[3]), float(sys.argv[4])))
     print(json.dumps(report, default=str))

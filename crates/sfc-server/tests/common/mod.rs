@@ -129,3 +129,16 @@ pub fn small_doc(pou: &str) -> Value {
         "actions": [], "elements": [], "connections": []
     })
 }
+
+/// The status of a GET of `uri` with two `Host` headers, `first` then `second`.
+pub async fn status_with_two_hosts(state: &AppState, uri: &str, first: &str, second: &str) -> StatusCode {
+    let req = Request::builder()
+        .method("GET")
+        .uri(uri)
+        .header("host", first)
+        .header("host", second)
+        .header("x-sfc-token", state.token())
+        .body(Body::empty())
+        .unwrap();
+    app(state.clone()).oneshot(req).await.expect("the router answers").status()
+}
