@@ -240,10 +240,20 @@ impl AuthManager for Access {
 
     async fn authenticate_username_identity_token(
         &self,
-        _endpoint: &ServerEndpoint,
+        endpoint: &ServerEndpoint,
         username: &str,
         password: &Password,
     ) -> Result<UserToken, Error> {
+        // async-opcua takes a password in clear when the client sends it so, and does not say
+        // which it was: over the None endpoint a password could travel unencrypted, so user
+        // names are taken on the secure endpoints only.
+        if endpoint.security_policy() == SecurityPolicy::None {
+            return Err(Error::new(
+                StatusCode::BadIdentityTokenRejected,
+                "user names are refused on the None endpoint (a password could travel in clear): \
+                 use Basic256Sha256 Sign or SignAndEncrypt",
+            ));
+        }
         let hash = self.users.iter().find(|u| u.name == username).map(|u| u.password_hash.clone());
         let password = password.get().to_string();
         // argon2 is slow on purpose: off the network threads.
@@ -290,7 +300,7 @@ impl AuthManager for Access {
                 security_policy_uri: UAString::null(),
             });
         }
-        if !self.users.is_empty() {
+        if !self.users.is_empty() && endpoint.security_policy() != SecurityPolicy::None {
             out.push(UserTokenPolicy {
                 policy_id: user_pass_security_policy_id(endpoint),
                 token_type: UserTokenType::UserName,
@@ -586,9 +596,8 @@ pub fn build(hub: &Arc<Hub>, o: &OpcuaOptions, listener: std::net::TcpListener) 
     // open62541 clients keep up to 10 publish requests outstanding per subscription.
     limits.subscriptions.max_publish_requests_per_subscription = 10;
     if o.allow_none {
-        let mut none = ServerEndpoint::new_none("/", &[ANONYMOUS_USER_TOKEN_ID.to_string()]);
-        // A password sent over the None endpoint is still encrypted with the server's key.
-        none.password_security_policy = Some(SecurityPolicy::Basic256Sha256.to_str().to_string());
+        // Anonymous only: user names are taken on the secure endpoints (see Access).
+        let none = ServerEndpoint::new_none("/", &[ANONYMOUS_USER_TOKEN_ID.to_string()]);
         builder = builder.add_endpoint("none", none);
     }
     let (server, handle) = builder.build().map_err(|e| format!("cannot start the OPC UA server: {e}"))?;
@@ -929,8 +938,47 @@ fn populate(hub: &Arc<Hub>, nodes: &Arc<InMemoryNodeManager<SfcNodes>>, ns: u16)
     *nodes.inner().table.write().unwrap_or_else(|e| e.into_inner()) = table;
 }
 
-/// The value of a published node in one reading of the run (`None`: not published yet).
-fn value_of(info: &ChartInfo, image: &ImageView, source: Source) -> Option<DataValue> {
+/// One reading of the run indexed by step, transition and action, so each node's value is one
+/// lookup: a chart of thousands of steps costs its node count per state, not steps × active.
+#[derive(Default)]
+struct Lookup {
+    /// Per step: its elapsed time when active.
+    active: Vec<Option<i64>>,
+    /// Per transition: its guard when evaluated (`Some(None)`: it faulted).
+    guards: Vec<Option<Option<bool>>>,
+    /// Per action: Q and A.
+    actions: Vec<(bool, bool)>,
+}
+
+impl Lookup {
+    fn fill(&mut self, info: &ChartInfo, st: &crate::board::ScanState) {
+        self.active.clear();
+        self.active.resize(info.steps.len(), None);
+        for &(s, t) in &st.active {
+            if let Some(slot) = self.active.get_mut(s as usize) {
+                *slot = Some(t);
+            }
+        }
+        self.guards.clear();
+        self.guards.resize(info.transitions.len(), None);
+        for &(t, g) in &st.guards {
+            if let Some(slot) = self.guards.get_mut(t as usize) {
+                *slot = Some(g);
+            }
+        }
+        self.actions.clear();
+        self.actions.resize(info.actions.len(), (false, false));
+        for &(a, q, on) in &st.actions {
+            if let Some(slot) = self.actions.get_mut(a as usize) {
+                *slot = (q, on);
+            }
+        }
+    }
+}
+
+/// The value (and a status other than Good) of a published node in one reading of the run
+/// (`None`: not published yet).
+fn value_of(info: &ChartInfo, image: &ImageView, at: &Lookup, source: Source) -> Option<(Variant, Option<StatusCode>)> {
     let digest = |f: fn(&crate::jitter::StatsDigest) -> u64| Variant::UInt64(image.digest.as_ref().map_or(0, f));
     let v = match source {
         Source::Runtime(node) => match node {
@@ -944,8 +992,8 @@ fn value_of(info: &ChartInfo, image: &ImageView, source: Source) -> Option<DataV
             RuntimeNode::Overruns => digest(|d| d.overruns),
         },
         Source::Error(c, node) => {
-            let e = image.errors.get(c).cloned().unwrap_or_default();
-            let last = e.last.as_ref();
+            let e = image.errors.get(c);
+            let last = e.and_then(|e| e.last.as_ref());
             match node {
                 ErrorNode::Text => Variant::from(last.map(sfc_sim::ErrorRecord::message).unwrap_or_default()),
                 ErrorNode::Code => {
@@ -953,58 +1001,46 @@ fn value_of(info: &ChartInfo, image: &ImageView, source: Source) -> Option<DataV
                     Variant::Int32(code.clamp(i32::MIN.into(), i32::MAX.into()) as i32)
                 }
                 ErrorNode::Step => Variant::from(last.map(|r| r.step.clone()).unwrap_or_default()),
-                ErrorNode::Count => Variant::UInt64(e.count),
+                ErrorNode::Count => Variant::UInt64(e.map_or(0, |e| e.count)),
             }
         }
         _ => {
             let st = image.scan.as_ref()?;
             match source {
                 Source::Var(i, ty) => ty.variant(st.values.get(i)?),
-                Source::StepX(s) => Variant::Boolean(st.active.iter().any(|a| a.0 == s)),
+                Source::StepX(s) => Variant::Boolean(at.active.get(s as usize).copied().flatten().is_some()),
                 Source::StepT(s) => {
                     // An inactive step keeps the duration of its last activation (IEC 61131-3).
-                    let us = match st.active.iter().find(|a| a.0 == s) {
-                        Some(a) => a.1,
+                    let us = match at.active.get(s as usize).copied().flatten() {
+                        Some(t) => t,
                         None => st.times.get(s as usize).copied().unwrap_or(0),
                     };
                     Variant::Double(us as f64 / 1000.0)
                 }
-                Source::Guard(t) => match st.guards.iter().find(|g| g.0 == t) {
-                    Some((_, Some(b))) => Variant::Boolean(*b),
+                Source::Guard(t) => match at.guards.get(t as usize).copied().flatten() {
+                    Some(Some(b)) => Variant::Boolean(b),
                     // The guard faulted in this scan.
-                    Some((_, None)) => {
-                        return Some(DataValue {
-                            status: Some(StatusCode::BadInternalError),
-                            ..published(Variant::Empty)
-                        })
-                    }
+                    Some(None) => return Some((Variant::Empty, Some(StatusCode::BadInternalError))),
                     // Only the guards of enabled transitions (their steps active) are evaluated.
-                    None => {
-                        return Some(DataValue { status: Some(StatusCode::GoodNoData), ..published(Variant::Empty) })
-                    }
+                    None => return Some((Variant::Empty, Some(StatusCode::GoodNoData))),
                 },
-                Source::ActionQ(a) => Variant::Boolean(st.actions.iter().any(|x| x.0 == a && x.1)),
-                Source::ActionA(a) => Variant::Boolean(st.actions.iter().any(|x| x.0 == a && x.2)),
+                Source::ActionQ(a) => Variant::Boolean(at.actions.get(a as usize).is_some_and(|x| x.0)),
+                Source::ActionA(a) => Variant::Boolean(at.actions.get(a as usize).is_some_and(|x| x.1)),
                 Source::Runtime(_) | Source::Error(..) => return None,
             }
         }
     };
-    Some(published(v))
+    Some((v, None))
 }
 
-/// A published value: with a server timestamp and no source timestamp. async-opcua 0.19 holds
-/// back a change that comes sooner than a monitored item's sampling interval after the one
-/// before it (by their source timestamps) and releases it only with the item's next change, so
-/// a subscriber would keep showing the first of two quick changes (an output that went TRUE and
-/// back to FALSE would read TRUE until it changed again). A value without a source timestamp is
-/// never held back: every change is reported, and the newest is always delivered.
-fn published(v: Variant) -> DataValue {
-    DataValue {
-        value: Some(v),
-        status: None,
-        server_timestamp: Some(async_opcua::types::DateTime::now()),
-        ..Default::default()
-    }
+/// Values carry a server timestamp and no source timestamp. async-opcua 0.19 holds back a
+/// change that comes sooner than a monitored item's sampling interval after the one before it
+/// (by their source timestamps) and releases it only with the item's next change, so a
+/// subscriber would keep showing the first of two quick changes (an output that went TRUE and
+/// back to FALSE would read TRUE until it changed again). A value without a source timestamp
+/// is never held back: every change is reported, and the newest is always delivered.
+fn published(v: Variant, status: Option<StatusCode>, now: async_opcua::types::DateTime) -> DataValue {
+    DataValue { value: Some(v), status, server_timestamp: Some(now), ..Default::default() }
 }
 
 /// Brings the published nodes up to date with the board every `tick`: each reading of the run
@@ -1017,12 +1053,13 @@ async fn follow(
     subscriptions: Arc<SubscriptionCache>,
     tick: std::time::Duration,
 ) {
-    let published = std::mem::take(&mut nodes.inner().table.write().unwrap_or_else(|e| e.into_inner()).published);
-    let mut last: Vec<Option<DataValue>> = vec![None; published.len()];
+    let published_nodes = std::mem::take(&mut nodes.inner().table.write().unwrap_or_else(|e| e.into_inner()).published);
+    let mut last: Vec<Option<(Variant, Option<StatusCode>)>> = vec![None; published_nodes.len()];
     // What the last values were made from: the newest state, the run's state, halted, the
     // statistics and the error records' counts.
     type Seen = (Option<usize>, u64, bool, Option<crate::jitter::StatsDigest>, Vec<u64>);
     let mut seen: Option<Seen> = None;
+    let mut lookup = Lookup::default();
     let mut every = tokio::time::interval(tick);
     every.set_missed_tick_behavior(tokio::time::MissedTickBehavior::Delay);
     while !hub.closing() {
@@ -1039,14 +1076,18 @@ async fn follow(
             continue;
         }
         seen = Some(key);
+        if let Some(st) = &image.scan {
+            lookup.fill(&hub.info, st);
+        }
+        let now = async_opcua::types::DateTime::now();
         let mut changed: Vec<(&NodeId, Option<&async_opcua::types::NumericRange>, DataValue)> = Vec::new();
-        for ((id, source), was) in published.iter().zip(last.iter_mut()) {
-            let Some(dv) = value_of(&hub.info, &image, *source) else { continue };
-            if was.as_ref().is_some_and(|w| w.value == dv.value && w.status == dv.status) {
+        for ((id, source), was) in published_nodes.iter().zip(last.iter_mut()) {
+            let Some(value) = value_of(&hub.info, &image, &lookup, *source) else { continue };
+            if was.as_ref() == Some(&value) {
                 continue;
             }
-            *was = Some(dv.clone());
-            changed.push((id, None, dv));
+            changed.push((id, None, published(value.0.clone(), value.1, now)));
+            *was = Some(value);
         }
         if !changed.is_empty() {
             let _ = nodes.set_values(&subscriptions, changed.into_iter());
