@@ -879,7 +879,7 @@ fn soak_with_modbus_both_opcua_stacks_and_monitor_clients() {
     assert!(monitor_errors.is_empty(), "{monitor_errors:#?}");
     assert!(r["modbus"]["requests"].as_u64().unwrap() > 100 * secs, "{r:#}");
     assert!(r["asyncua"]["notifications"].as_u64().unwrap() > 0 && r["o6"]["notifications"].as_u64().unwrap() > 0);
-    assert!(snapshots >= 3 * (secs - 5), "{snapshots} snapshots");
+    assert!(snapshots >= secs, "the monitor clients were answered: {snapshots} snapshots in {secs} s");
     assert!(late <= early + 8 * 1024, "memory grew: {early} KiB → {late} KiB ({samples:?})");
     run.signal(libc::SIGTERM);
     let (code, lines) = run.finish(60);
