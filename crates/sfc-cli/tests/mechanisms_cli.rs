@@ -234,9 +234,12 @@ fn run_logs_error_records_and_the_monitor_lists_mechanisms() {
     let shown = String::from_utf8(bytes).expect("UTF-8 text");
     assert!(shown.starts_with("Rev: error 404 in step Rev.OpenKM1"), "{shown}");
     assert!(shown.contains("KM1Fb (X12.2, %IX0.4) is TRUE; needs FALSE"), "{shown}");
-    // The block ends at 40207: a read past it is refused (exception 2).
+    // The record ends at 40207; the run's status block follows at 40300–40307 (the registers
+    // between read 0), and a read past 40307 is refused (exception 2).
+    assert_eq!(mb.read_input_registers(40208, 92), vec![0; 92]);
+    assert_eq!(mb.read_input_registers(40300, 1), [0], "RUN in the status block");
     let mut pdu = vec![4];
-    pdu.extend_from_slice(&40200u16.to_be_bytes());
+    pdu.extend_from_slice(&40300u16.to_be_bytes());
     pdu.extend_from_slice(&9u16.to_be_bytes());
     assert_eq!(mb.request(&pdu), vec![0x84, 2]);
     drop(ws);

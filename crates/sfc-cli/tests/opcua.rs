@@ -6,6 +6,7 @@
 mod common;
 
 use common::{command, root, scratch, Run, Ws};
+use serde_json::json;
 use std::io::Write;
 use std::path::{Path, PathBuf};
 use std::process::Stdio;
@@ -490,6 +491,8 @@ fn every_view_shows_the_same_outputs_in_run_stop_and_fault() {
             assert_eq!(&v["modbus"][name], value, "{state}: Modbus {name}: {v}");
         }
         assert_eq!(v["opcua_read"]["ScanCount"], scan, "{state}: OPC UA's scan is the status block's: {v}");
+        // Nothing scans: halted in RUN (the debugger), and in STOP and FAULT, for both.
+        assert_eq!((v["opcua_read"]["Halted"].clone(), v["status"]["halted"].clone()), (json!(true), json!(1)), "{v}");
         assert_eq!(v["status"]["state"], code, "{state}: {v}");
         // The monitor's snapshot.
         assert_eq!(ws.cmd(id, serde_json::json!({"cmd": "snapshot"}))["ok"], true);

@@ -924,7 +924,8 @@ impl ScanThread {
                 RunState::Stop => 1,
                 RunState::Fault => 2,
             },
-            halted: self.halted,
+            // As the board says (OPC UA's Halted, the monitor): nothing scans in STOP and FAULT either.
+            halted: self.halted || self.state != RunState::Run,
             scan,
             fault: self.fault_code,
             faults: self.faults,

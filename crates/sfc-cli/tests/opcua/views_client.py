@@ -60,6 +60,7 @@ async def main(url, port):
         nodes = {n: c.get_node(f"ns={ns};s=Filler.{n}") for n in OUTPUTS}
         nodes["State"] = c.get_node(f"ns={ns};s=Filler/Runtime/State")
         nodes["ScanCount"] = c.get_node(f"ns={ns};s=Filler/Runtime/ScanCount")
+        nodes["Halted"] = c.get_node(f"ns={ns};s=Filler/Runtime/Halted")
         latest = Latest({n.nodeid.to_string(): name for name, n in nodes.items()})
         sub = await c.create_subscription(20, latest)
         await sub.subscribe_data_change(list(nodes.values()))
