@@ -424,8 +424,18 @@ fn modbus_answers_every_exception_and_keeps_the_connection() {
 /// values of outputs and `%M`, not zeros: Limit := 100, Gain := 2.5 (0x40200000).
 #[test]
 fn modbus_reads_declared_values_before_the_first_scan() {
-    let mut run =
-        Run::start(&[s(&chart("io.st")), "--modbus", "127.0.0.1:0", "--halted", "--no-retain", "--for", "T#60s"]);
+    // Halted before the first scan (the monitor is there to let it go on: `--halted` needs one).
+    let mut run = Run::start(&[
+        s(&chart("io.st")),
+        "--modbus",
+        "127.0.0.1:0",
+        "--monitor",
+        "127.0.0.1:0",
+        "--halted",
+        "--no-retain",
+        "--for",
+        "T#60s",
+    ]);
     let mut m = Modbus::connect(run.modbus());
     assert_eq!(m.read_holding(1000, 4), [100, 0, 0x4020, 0x0000]);
     assert_eq!(m.read_holding(2, 2), [0, 0], "Count is assigned by the chart's first scan, not declared");
