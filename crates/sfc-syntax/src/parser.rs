@@ -2006,6 +2006,17 @@ split it with intermediate variables"
                 let lit = Literal { kind: LiteralKind::Bool(v), type_prefix: None, text: self.text_of(t).into() };
                 return Expr { kind: ExprKind::Literal(lit), span: self.span_of(t) };
             }
+            // The function-call form of the extensible operators whose names are reserved words
+            // (`AND(a, b, c)`, `OR`, `XOR`, `MOD(a, b)`: IEC 61131-3's standard functions, as
+            // Beremiz and OpenPLC write them): a call of the standard function.
+            TokenKind::Ident
+                if self.at_any_kw(&["AND", "OR", "XOR", "MOD"]) && self.nth(1).kind == TokenKind::LParen =>
+            {
+                self.bump();
+                let id = self.ident_of(t);
+                let args = self.call_args();
+                Expr { kind: ExprKind::Call { callee: id, args }, span: self.span_from(start) }
+            }
             TokenKind::Ident if !self.is_reserved(t) => {
                 self.bump();
                 let id = self.ident_of(t);
