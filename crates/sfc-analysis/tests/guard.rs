@@ -196,7 +196,8 @@ fn show(e: &Expr) -> String {
             format!("{} {} {}", wrap(lhs, p), op.symbol(), wrap(rhs, p + 1))
         }
         ExprKind::Paren(i) => show(i),
-        ExprKind::Error => "?".into(),
+        // Not a condition: an action call (a statement).
+        ExprKind::MemberCall { .. } | ExprKind::Error => "?".into(),
     }
 }
 

@@ -410,6 +410,12 @@ again, or store it in a variable and load that.";
 a transition condition or a parenthesised operand, an operator without the operand it needs, or \
 a jump to a label that does not exist.";
 
+    "SFC0805" Warning "actions outside a chart kept as CODESYS writes them"
+        "The file has actions of a function block or program that is no chart (`ACTION … \
+END_ACTION` after the POU's statements, called `inst.Act();`), as CODESYS, TwinCAT and \
+e!COCKPIT write them. The Structured Text target copies them as they are: CODESYS and its family \
+compile the result, IEC 61131-3 compilers that know actions only inside a chart (MatIEC, which \
+Beremiz and OpenPLC v3 use) do not.";
     "SFC0810" Error "not expressible in the S7-200 program"
         "The S7-200 statement-list target (`--target stl`) turns conditions into bit logic over \
 inputs, outputs, memory, step, timer and counter bits, and into compare contacts (`LDW>=`, \

@@ -205,6 +205,31 @@ pub enum CompileError {
     Diagnostics(Vec<Diagnostic>),
 }
 
+/// SFC0805 for each POU with actions outside a chart, which the ST target copies as CODESYS
+/// writes them.
+fn codesys_actions(checked: &Checked) -> Vec<Diagnostic> {
+    checked
+        .unit
+        .items
+        .iter()
+        .filter_map(|i| match i {
+            sfc_syntax::ast::Item::Pou(p) => p.actions.first().map(|a| (p, a)),
+            _ => None,
+        })
+        .map(|(p, a)| {
+            Diagnostic::warning(
+                "SFC0805",
+                a.name.span,
+                format!(
+                    "`{}` has actions outside a chart: the ST output keeps them as CODESYS writes them, which \
+                     MatIEC (Beremiz, OpenPLC v3) does not compile",
+                    p.name.text
+                ),
+            )
+        })
+        .collect()
+}
+
 /// Compiles a checked file (without errors) for `target`.
 pub fn compile(checked: &Checked, target: BuildTarget, opts: &CompileOptions) -> Result<Compiled, CompileError> {
     let plain = |text: String| Compiled { text, notes: Vec::new(), flattened: None, symbols: None };
@@ -229,7 +254,12 @@ pub fn compile(checked: &Checked, target: BuildTarget, opts: &CompileOptions) ->
                 symbols: None,
             })
         }
-        (BuildTarget::St, _) => sfc_codegen::st::build_st(checked, chart).map(plain),
+        (BuildTarget::St, _) => sfc_codegen::st::build_st(checked, chart).map(|text| Compiled {
+            text,
+            notes: codesys_actions(checked),
+            flattened: None,
+            symbols: None,
+        }),
         (BuildTarget::Stl, _) => {
             let opts = sfc_codegen::stl::StlOptions { method: opts.stl_method };
             sfc_codegen::stl::build_stl(checked, chart, opts).map(|p| Compiled {

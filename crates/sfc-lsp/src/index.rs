@@ -683,6 +683,13 @@ impl Builder<'_> {
                 self.occ(callee, Role::Code, None);
                 self.args(args);
             }
+            ExprKind::MemberCall { base, member, args } => {
+                match &base.kind {
+                    ExprKind::Name(n) => self.occ(n, Role::Code, Some(member)),
+                    _ => self.expr(base),
+                }
+                self.args(args);
+            }
             ExprKind::Unary { operand, .. } => self.expr(operand),
             ExprKind::Binary { lhs, rhs, .. } => {
                 self.expr(lhs);

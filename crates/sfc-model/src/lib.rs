@@ -130,6 +130,7 @@ pub fn check_parsed(
         lower::check_attributes(&pou.attributes, &["sfc.target"], "a POU", &mut diags);
         let attr_target = lower::target_attr(&pou.attributes, &mut diags);
         let target = opts.target.or(attr_target).unwrap_or(Target::Blank);
+        lower::check_pou_actions(pou, &mut diags);
         let mut body = std::mem::replace(&mut pou.body, ast::Body::St(Vec::new()));
         if let ast::Body::Sfc(elements) = &mut body {
             let chart = lower::lower(file_id, i, pou, elements, target, &mut diags);

@@ -248,6 +248,32 @@ struct Declared {
     kind: &'static str,
 }
 
+/// The actions of a POU that is no chart: each name once in the POU's namespace (SFC0206, as
+/// a chart's names).
+pub fn check_pou_actions(pou: &ast::Pou, diags: &mut Vec<Diagnostic>) {
+    let mut names: HashMap<String, Declared> = HashMap::default();
+    for v in pou_variables(pou) {
+        names.entry(v.name.to_ascii_uppercase()).or_insert(Declared { span: v.span, kind: "a variable" });
+    }
+    for a in &pou.actions {
+        let key = a.name.text.to_ascii_uppercase();
+        if let Some(prev) = names.get(&key) {
+            diags.push(
+                Diagnostic::error(
+                    "SFC0206",
+                    a.name.span,
+                    format!("`{}` is already declared as {} in this POU", a.name.text, prev.kind),
+                )
+                .with_element(&a.name.text)
+                .with_label(prev.span, "first declared here")
+                .with_note("variables and actions share one case-insensitive namespace"),
+            );
+        } else {
+            names.insert(key, Declared { span: a.name.span, kind: "an action" });
+        }
+    }
+}
+
 /// Builds the chart of an SFC POU. `file` and `item` locate it; `target` is the effective target.
 /// The transition conditions and action bodies move from the AST into the chart (the AST keeps
 /// `Condition::Missing` and empty bodies in their place), so large charts are not held twice.

@@ -486,9 +486,36 @@ fn pou_body_text(src: &str, pou: &ast::Pou) -> String {
     }
     let kw = pou.kind.end_keyword();
     let end = pou.span.end.saturating_sub(kw.len() as u32);
-    let end = if slice(src, Span::new(0, end, pou.span.end)).eq_ignore_ascii_case(kw) { end } else { pou.span.end };
+    let mut end = if slice(src, Span::new(0, end, pou.span.end)).eq_ignore_ascii_case(kw) { end } else { pou.span.end };
+    // The actions after the statements are written as the POU's `actions`.
+    if let Some(first) = pou.actions.first() {
+        end = end.min(first.span.start);
+    }
     let text = slice(src, Span::new(0, start, end.max(start)));
     dedent(text, 0)
+}
+
+/// The `actions` of a POU that is no chart (CODESYS's actions of a function block), each with
+/// its body as written.
+fn write_pou_actions(x: &mut X, src: &str, actions: &[ast::Action]) {
+    if actions.is_empty() {
+        return;
+    }
+    x.open("actions", &[]);
+    for a in actions {
+        x.open("action", &[("name", a.name.text.clone())]);
+        x.open("body", &[]);
+        let lang = match a.body {
+            ast::ActionBody::St(_) => "ST",
+            ast::ActionBody::Il(_) => "IL",
+        };
+        x.formatted(lang, &sfc::action_body_text(src, a.name.span, a.span));
+        x.close("body");
+        x.add_data(&a.attributes, &[], &[attrs::DESCRIPTION]);
+        x.documentation(&a.attributes);
+        x.close("action");
+    }
+    x.close("actions");
 }
 
 /// Whether an error keeps the file from being exported faithfully: lexical and syntax errors
@@ -752,6 +779,7 @@ fn write_pou(x: &mut X, src: &str, pou: &ast::Pou, chart: Option<&sfc_model::Cha
         }
         x.close("interface");
     }
+    write_pou_actions(x, src, &pou.actions);
     match (&pou.body, chart) {
         (ast::Body::Sfc(_), Some(chart)) => sfc::write_chart(x, src, pou, chart),
         (ast::Body::Il(_), _) => {

@@ -911,12 +911,11 @@ fn pou(cx: &mut Ctx, p: Node) {
         cx.diag("SFC0710", anchor(extra), "only the first body of a POU is imported");
     }
     if !is_sfc {
-        for a in &actions {
-            cx.diag(
-                "SFC0705",
-                anchor(*a),
-                "an action of a POU whose body is not SFC has no place in IEC 61131-3 text; it is not imported",
-            );
+        // The actions of a POU that is no chart (CODESYS's actions of a function block), after
+        // its statements.
+        if !actions.is_empty() {
+            cx.em.str("\n");
+            sfc::write_actions(cx, &actions);
         }
         for t in &transitions {
             cx.diag("SFC0710", anchor(*t), "a transition condition of a POU whose body is not SFC is never used");

@@ -90,6 +90,7 @@ fn print_body(body: ast::Body, span: ast::Span) -> String {
         attributes: Vec::new(),
         var_blocks: Vec::new(),
         body,
+        actions: Vec::new(),
         span,
     };
     let unit = ast::SourceUnit { items: vec![ast::Item::Pou(pou)], trivia: Vec::new(), blank_lines: Vec::new(), span };

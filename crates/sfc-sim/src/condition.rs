@@ -236,8 +236,8 @@ impl Binder<'_> {
                 Ok((Node::Binary(*op, Box::new(a), Box::new(b)), kind))
             }
             ExprKind::Name(_) | ExprKind::Member { .. } | ExprKind::Index { .. } => self.read(e),
-            ExprKind::Call { callee, .. } => {
-                Err(format!("`{}`: calls (`{}(…)`) are not allowed in a scenario condition", self.text, callee.text))
+            ExprKind::Call { callee: name, .. } | ExprKind::MemberCall { member: name, .. } => {
+                Err(format!("`{}`: calls (`{}(…)`) are not allowed in a scenario condition", self.text, name.text))
             }
             ExprKind::Address(_) => {
                 Err(format!("`{}`: name the variable declared at the address instead of the address", self.text))

@@ -117,8 +117,52 @@ impl Checker<'_, '_> {
         }
     }
 
-    /// A call used as a statement (`Timer(IN := x);`, `F(1);`, `Action();`).
+    /// `inst.Act()`: an action of the function block instance `base` (CODESYS's
+    /// `Gripper.Close();`), called as a statement: it runs the action's body on the instance.
+    pub(crate) fn member_call_stmt(&mut self, base: &Expr, member: &Ident, args: &[Arg], span: Span) {
+        let ty = self.check_expr(base, None);
+        if ty.is_error() {
+            self.check_args_loosely(args);
+            return;
+        }
+        let env = self.scope.env();
+        let fb = env.fb_of(&ty).cloned();
+        match fb {
+            Some(fb) if fb.actions.iter().any(|a| a.eq_ignore_ascii_case(&member.text)) => {
+                if !args.is_empty() {
+                    self.error("SFC0307", span, format!("action `{}` takes no arguments", member.text));
+                }
+            }
+            Some(fb) => {
+                let mut d = Diagnostic::new(
+                    "SFC0306",
+                    member.span,
+                    format!("function block `{}` has no action `{}`", fb.name, member.text),
+                );
+                if let Some(s) = closest(&member.text, fb.actions.iter().map(String::as_str)) {
+                    d = d.with_note(format!("did you mean `{s}`?"));
+                } else if fb.actions.is_empty() {
+                    d = d.with_note(format!("`{}` declares no actions", fb.name));
+                }
+                self.report(d);
+                self.check_args_loosely(args);
+            }
+            // An instance of a block kept as written (a library's): not analysed.
+            None if matches!(&ty, Type::FunctionBlock(n) if env.is_opaque(n)) => self.check_args_loosely(args),
+            None => {
+                let p = self.phrase(base, &ty);
+                self.error("SFC0306", member.span, format!("`{}` is called, but its base is {p}", member.text));
+                self.check_args_loosely(args);
+            }
+        }
+    }
+
+    /// A call used as a statement (`Timer(IN := x);`, `F(1);`, `Action();`, `inst.Act();`).
     pub(crate) fn call_stmt(&mut self, e: &Expr) {
+        if let ExprKind::MemberCall { base, member, args } = &e.kind {
+            self.member_call_stmt(base, member, args, e.span);
+            return;
+        }
         let ExprKind::Call { callee, args } = &e.kind else {
             self.check_expr(e, None);
             return;

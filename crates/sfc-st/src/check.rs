@@ -669,6 +669,15 @@ impl<'s, 'e> Checker<'s, 'e> {
             ExprKind::Member { base, member } => self.member(base, member, false),
             ExprKind::Index { base, indices } => self.index(base, indices, false),
             ExprKind::Call { callee, args } => self.call_value(callee, args, e.span, expected),
+            ExprKind::MemberCall { base, member, args } => {
+                self.member_call_stmt(base, member, args, e.span);
+                self.error(
+                    "SFC0302",
+                    e.span,
+                    format!("an action call has no value; call `{}` as a statement", member.text),
+                );
+                Type::Error
+            }
             ExprKind::Unary { op, operand } => self.unary(*op, operand, e, expected),
             ExprKind::Binary { op, lhs, rhs } => self.binary(*op, lhs, rhs, e.span, expected),
             ExprKind::Paren(inner) => self.check_expr(inner, expected),

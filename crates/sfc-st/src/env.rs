@@ -156,6 +156,9 @@ pub struct PouInterface {
     /// The body is a Sequential Function Chart: the POU has the implicit control variables
     /// ([`sfc_control_variables`]).
     pub sfc: bool,
+    /// The names of the POU's actions (a chart's, or those after a non-chart body), which
+    /// `inst.Act()` calls from outside.
+    pub actions: Vec<String>,
 }
 
 impl PouInterface {
@@ -519,6 +522,7 @@ fn standard_fb(name: &str) -> Option<PouInterface> {
         standard: true,
         span: Span::default(),
         sfc: false,
+        actions: Vec::new(),
     })
 }
 
@@ -708,6 +712,7 @@ impl<'a> Builder<'a> {
             standard: false,
             span: pou.name.span,
             sfc,
+            actions: pou.actions().map(|a| a.name.text.clone()).collect(),
         }
     }
 }

@@ -141,6 +141,10 @@ fn check_pou_inner(
             };
         }
     }
+    // The actions of a POU that is no chart (a clash is the model's SFC0206 too).
+    for a in &pou.actions {
+        let _ = scope.add_action(&a.name);
+    }
     prepare(&mut scope, pou);
     let mut ck = Checker::new(&mut scope);
     if types.is_some() {
@@ -177,6 +181,11 @@ fn check_pou_inner(
             ck.set_element(None);
         }
     }
+    for a in &pou.actions {
+        ck.set_element(Some(a.name.text.clone()));
+        ck.check_action_body(&a.body);
+    }
+    ck.set_element(None);
     if let Some(t) = types {
         t.extend(ck.take_expr_types());
     }

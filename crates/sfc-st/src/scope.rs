@@ -138,6 +138,7 @@ impl<'e> Scope<'e> {
             standard: false,
             span: pou.name.span,
             sfc,
+            actions: pou.actions().map(|a| a.name.text.clone()).collect(),
         };
         let mut scope = Scope::for_interface(env, &iface);
         scope.pending = pending;

@@ -143,7 +143,23 @@ pub struct Pou {
     pub attributes: Vec<Attribute>,
     pub var_blocks: Vec<VarBlock>,
     pub body: Body,
+    /// The actions of a POU whose body is not a chart (CODESYS's actions of a PROGRAM or
+    /// FUNCTION_BLOCK written in ST or IL: `ACTION Extend: … END_ACTION` after the body's
+    /// statements, called `Extend();` inside the POU and `inst.Extend();` from outside). A
+    /// chart's actions are elements of the chart (`Body::Sfc`); [`Pou::actions`] iterates both.
+    pub actions: Vec<Action>,
     pub span: Span,
+}
+
+impl Pou {
+    /// Every action of the POU: the chart's, or those after a non-chart body.
+    pub fn actions(&self) -> impl Iterator<Item = &Action> {
+        let chart = self.body.sfc().unwrap_or_default().iter().filter_map(|e| match e {
+            SfcElement::Action(a) => Some(a),
+            _ => None,
+        });
+        chart.chain(self.actions.iter())
+    }
 }
 
 /// The body of a POU.
@@ -496,6 +512,13 @@ pub enum ExprKind {
     /// `F(1, 2)`, `Fb(IN := x, Q => y)`
     Call {
         callee: Ident,
+        args: Vec<Arg>,
+    },
+    /// `inst.Act()`: a call of a member of `base` (an action of a function block instance;
+    /// CODESYS's `Gripper.Close();`).
+    MemberCall {
+        base: Box<Expr>,
+        member: Ident,
         args: Vec<Arg>,
     },
     Unary {

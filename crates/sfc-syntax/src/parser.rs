@@ -837,34 +837,66 @@ impl<'a> Parser<'a> {
             }
         }
         let end_kw = kind.end_keyword();
-        let body = self.body(end_kw);
+        // A chart being drawn may hold only actions yet; the editor marks its POU as a chart.
+        let chart = attributes
+            .iter()
+            .any(|a| ["sfc.target", "sfc.graph", "sfc.loose"].iter().any(|n| a.name.eq_ignore_ascii_case(n)));
+        let (body, actions) = self.body(end_kw, chart);
         self.expect_end(end_kw, self.span_of(kw));
         if self.at_kw(end_kw) {
             self.bump();
         }
-        Pou { kind, name, return_type, attributes, var_blocks, body, span: self.span_from(start) }
+        Pou { kind, name, return_type, attributes, var_blocks, body, actions, span: self.span_from(start) }
     }
 
-    fn body(&mut self, end_kw: &str) -> Body {
+    /// The body, and the actions after it when it is not a chart. A body is a chart when it
+    /// has a step or a transition, or when `chart` (the POU carries a chart's attribute:
+    /// `sfc.target`, `sfc.graph`, `sfc.loose`); otherwise actions alone (a function block whose
+    /// code is all in its actions) follow an empty ST body.
+    fn body(&mut self, end_kw: &str, chart: bool) -> (Body, Vec<Action>) {
         // An identifier followed by an identifier starts no statement: a misspelled element?
         if self.nth(1).kind == TokenKind::Ident {
             self.fix_keyword_typo(&["STEP", "INITIAL_STEP", "TRANSITION", "ACTION"]);
         }
         if self.at_any_kw(&["STEP", "INITIAL_STEP", "TRANSITION", "ACTION"]) {
-            return Body::Sfc(self.sfc_elements(end_kw));
+            let elements = self.sfc_elements(end_kw);
+            return match only_actions(&elements).filter(|_| !chart) {
+                Some(actions) => (Body::St(Vec::new()), actions),
+                None => (Body::Sfc(elements), Vec::new()),
+            };
         }
-        if self.looks_like_il() {
-            return Body::Il(self.il_body(&[end_kw]));
+        let body = if self.looks_like_il() {
+            Body::Il(self.il_body(&[end_kw, "ACTION"]))
+        } else {
+            Body::St(self.stmt_list(&[end_kw, "ACTION"]))
+        };
+        if !self.at_any_kw(&["STEP", "INITIAL_STEP", "TRANSITION", "ACTION"]) {
+            return (body, Vec::new());
         }
-        let stmts = self.stmt_list(&[end_kw]);
-        // A chart may follow statements by mistake; parse it anyway and report.
-        if self.at_any_kw(&["STEP", "INITIAL_STEP", "TRANSITION", "ACTION"]) {
-            if !stmts.is_empty() {
-                self.error_here("expected the end of the POU (a POU body is either statements or a chart)");
+        let elements = self.sfc_elements(end_kw);
+        match only_actions(&elements) {
+            Some(actions) => (body, actions),
+            None => {
+                // A chart after statements by mistake: parsed, and reported.
+                let empty = match &body {
+                    Body::St(s) => s.is_empty(),
+                    Body::Il(il) => il.instructions.is_empty(),
+                    Body::Sfc(_) => true,
+                };
+                if !empty {
+                    let at = elements
+                        .iter()
+                        .find(|e| !matches!(e, SfcElement::Action(_)))
+                        .map_or(self.cur_span(), SfcElement::span);
+                    self.push_error(
+                        "SFC0101",
+                        at,
+                        "expected the end of the POU (a POU body is either statements or a chart)".into(),
+                    );
+                }
+                (Body::Sfc(elements), Vec::new())
             }
-            return Body::Sfc(self.sfc_elements(end_kw));
         }
-        Body::St(stmts)
     }
 
     /// IL bodies start with `label:` or an IL operator not followed by ST punctuation.
@@ -1826,7 +1858,7 @@ split it with intermediate variables"
                     self.recover_stmt();
                 }
                 StmtKind::Assign { target: Box::new(target), value: Box::new(value) }
-            } else if matches!(target.kind, ExprKind::Call { .. }) {
+            } else if matches!(target.kind, ExprKind::Call { .. } | ExprKind::MemberCall { .. }) {
                 if !self.expect(TokenKind::Semi, "`;` after the call") {
                     self.recover_stmt();
                 }
@@ -2069,7 +2101,16 @@ split it with intermediate variables"
                 if m.kind == TokenKind::Ident || m.kind == TokenKind::Int {
                     self.bump();
                     let member = Ident::new(self.text_of(m), self.span_of(m));
-                    e = Expr { kind: ExprKind::Member { base: Box::new(e), member }, span: self.span_from(start) };
+                    e = if m.kind == TokenKind::Ident && self.at(TokenKind::LParen) {
+                        // `inst.Act()`: a member called (an action of an instance).
+                        let args = self.call_args();
+                        Expr {
+                            kind: ExprKind::MemberCall { base: Box::new(e), member, args },
+                            span: self.span_from(start),
+                        }
+                    } else {
+                        Expr { kind: ExprKind::Member { base: Box::new(e), member }, span: self.span_from(start) }
+                    };
                 } else {
                     self.error_here("expected a member name after `.`");
                     break;
@@ -2134,6 +2175,17 @@ split it with intermediate variables"
 }
 
 /// Reports identifiers with a leading double, doubled or trailing underscore (seed 000).
+/// The actions of `elements` when it holds nothing else (no step, no transition).
+fn only_actions(elements: &[SfcElement]) -> Option<Vec<Action>> {
+    elements
+        .iter()
+        .map(|e| match e {
+            SfcElement::Action(a) => Some(a.clone()),
+            _ => None,
+        })
+        .collect()
+}
+
 fn check_identifier(text: &str, span: Span, diags: &mut Vec<Diagnostic>) {
     if text.contains("__") || (text.ends_with('_') && !text.is_empty()) {
         diags.push(Diagnostic::error(

@@ -277,6 +277,13 @@ impl<'a> Printer<'a> {
                 Body::Sfc(elements) => self.sfc(elements),
             }
         }
+        // The actions of a POU that is no chart, after its statements.
+        for (i, action) in pou.actions.iter().enumerate() {
+            if i > 0 || !body_empty || !pou.var_blocks.is_empty() {
+                self.blank();
+            }
+            self.action(action);
+        }
         self.close(pou.span.end, pou.kind.end_keyword());
     }
 
@@ -784,6 +791,14 @@ fn write_expr(out: &mut String, e: &Expr) {
         }
         ExprKind::Call { callee, args } => {
             out.push_str(&callee.text);
+            out.push('(');
+            out.push_str(&call_args(args));
+            out.push(')');
+        }
+        ExprKind::MemberCall { base, member, args } => {
+            write_operand(out, base, !is_postfix_base(base));
+            out.push('.');
+            out.push_str(&member.text);
             out.push('(');
             out.push_str(&call_args(args));
             out.push(')');

@@ -81,6 +81,19 @@ fn write(e: &Expr, fold: bool, out: &mut String, depth: u32) -> Option<()> {
             }
             out.push(')');
         }
+        ExprKind::MemberCall { base, member, args } => {
+            child(base, 10, fold, out, depth)?;
+            out.push('.');
+            ident(&member.text, fold, out);
+            out.push('(');
+            for (i, a) in args.iter().enumerate() {
+                if i > 0 {
+                    out.push_str(", ");
+                }
+                arg(a, fold, out, depth)?;
+            }
+            out.push(')');
+        }
         ExprKind::Unary { op, operand } => {
             match op {
                 UnaryOp::Not => out.push_str("NOT "),

@@ -238,6 +238,21 @@ impl Walker<'_> {
                 }
             }
             ExprKind::Call { callee, args } => self.call(&callee.text, args, u, depth + 1),
+            ExprKind::MemberCall { base, args, .. } => {
+                // An action of an instance runs on the instance: it may write any of it, and
+                // the globals its type uses.
+                if let Some(r) = self.root(base, depth + 1) {
+                    if let Some(globals) =
+                        self.instance_types.get(&r).and_then(|t| self.externals.get(&t.to_ascii_uppercase()))
+                    {
+                        u.writes.extend(globals.iter().cloned());
+                    }
+                    u.writes.insert(r);
+                }
+                for v in args.iter().filter_map(|a| a.value.as_ref()) {
+                    self.expr(v, u, depth + 1);
+                }
+            }
             ExprKind::Unary { operand, .. } => self.expr(operand, u, depth + 1),
             ExprKind::Paren(inner) => self.expr(inner, u, depth + 1),
             ExprKind::Binary { op, lhs, rhs } => {

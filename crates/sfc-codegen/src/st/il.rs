@@ -120,7 +120,7 @@ pub(crate) fn cannot_fault(e: &Expr) -> bool {
         ExprKind::Binary { op, lhs, rhs } => {
             !matches!(op, BinaryOp::Div | BinaryOp::Mod | BinaryOp::Pow) && cannot_fault(lhs) && cannot_fault(rhs)
         }
-        ExprKind::Index { .. } | ExprKind::Call { .. } | ExprKind::Error => false,
+        ExprKind::Index { .. } | ExprKind::Call { .. } | ExprKind::MemberCall { .. } | ExprKind::Error => false,
     }
 }
 
@@ -134,6 +134,10 @@ fn reads_of(e: &Expr, out: &mut Vec<String>) {
             indices.iter().for_each(|i| reads_of(i, out));
         }
         ExprKind::Call { args, .. } => args.iter().filter_map(|a| a.value.as_ref()).for_each(|v| reads_of(v, out)),
+        ExprKind::MemberCall { base, args, .. } => {
+            reads_of(base, out);
+            args.iter().filter_map(|a| a.value.as_ref()).for_each(|v| reads_of(v, out));
+        }
         ExprKind::Unary { operand, .. } => reads_of(operand, out),
         ExprKind::Binary { lhs, rhs, .. } => {
             reads_of(lhs, out);

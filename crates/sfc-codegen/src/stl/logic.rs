@@ -8,7 +8,7 @@ use super::TIMER_BASE_US;
 use sfc_diagnostics::{Diagnostic, Span};
 use sfc_model::{Chart, StepId};
 use sfc_st::{const_eval, parse_il_op, IlOp, Value};
-use sfc_syntax::ast::{BinaryOp, Expr, ExprKind, IlBody, IlInstruction, LiteralKind, Stmt, StmtKind, UnaryOp};
+use sfc_syntax::ast::{BinaryOp, Expr, ExprKind, Ident, IlBody, IlInstruction, LiteralKind, Stmt, StmtKind, UnaryOp};
 use std::collections::HashMap;
 
 /// Largest preset of an S7-200 timer (`+32767`, 3276.7 s at 100 ms).
@@ -290,11 +290,11 @@ impl Lowerer<'_> {
                 self.err("SFC0810", e.span, msg, site);
                 None
             }
-            ExprKind::Call { callee, .. } => {
+            ExprKind::Call { callee: Ident { text, .. }, .. }
+            | ExprKind::MemberCall { member: Ident { text, .. }, .. } => {
                 let msg = format!(
-                    "the call of `{}` cannot be translated to the S7-200 program (only counter blocks, called \
-                     as a statement in an action)",
-                    callee.text
+                    "the call of `{text}` cannot be translated to the S7-200 program (only counter blocks, called \
+                     as a statement in an action)"
                 );
                 self.err("SFC0810", e.span, msg, site);
                 None

@@ -670,18 +670,23 @@ fn size_attrs(el: &El) -> Vec<(&'static str, String)> {
 
 /// The body text of an action: between `ACTION name:` and `END_ACTION`.
 fn action_text(src: &str, a: &sfc_model::ActionNode) -> String {
-    let after_name = a.name_span.end as usize;
+    action_body_text(src, a.name_span, a.span)
+}
+
+/// The body of `ACTION name: … END_ACTION` spanning `span`, the name at `name`, as written.
+pub(super) fn action_body_text(src: &str, name: Span, span: Span) -> String {
+    let after_name = name.end as usize;
     let start = src
-        .get(after_name..a.span.end as usize)
+        .get(after_name..span.end as usize)
         .and_then(|r| r.find(':'))
         .map(|i| after_name + i + 1)
         .unwrap_or(after_name);
     let kw = "END_ACTION";
-    let end = (a.span.end as usize).saturating_sub(kw.len());
-    let end = if src.get(end..a.span.end as usize).is_some_and(|t| t.eq_ignore_ascii_case(kw)) {
+    let end = (span.end as usize).saturating_sub(kw.len());
+    let end = if src.get(end..span.end as usize).is_some_and(|t| t.eq_ignore_ascii_case(kw)) {
         end
     } else {
-        a.span.end as usize
+        span.end as usize
     };
     dedent(slice(src, Span::new(0, start as u32, end.max(start) as u32)), 0)
 }

@@ -218,23 +218,7 @@ pub(super) fn chart<'a, 'i>(cx: &mut Ctx, sfc: Node<'a, 'i>, actions: &[Node<'a,
     }
 
     // Actions of the POU, then the inline ones.
-    for a in actions {
-        cx.em.open(anchor(*a));
-        let list = element_attrs(*a);
-        cx.attributes(&list, "    ");
-        let name = cx.name(*a, "name", "action");
-        cx.em.str("    ACTION ");
-        cx.em.frag(&name);
-        cx.em.str(":\n");
-        match child(*a, "body") {
-            Some(b) => action_body(cx, b, "        "),
-            None => {
-                cx.diag("SFC0705", anchor(*a), "the action has no body");
-            }
-        }
-        cx.em.str("    END_ACTION\n\n");
-        cx.em.close();
-    }
+    write_actions(cx, actions);
     if let Some(name) = compute_action {
         cx.em.open(anchor(sfc));
         cx.em.str(&format!("    ACTION {name}:\n"));
@@ -1079,5 +1063,27 @@ fn write_expression(cx: &mut Ctx, x: &XText) {
             first = false;
             start = i + 1;
         }
+    }
+}
+
+/// The `action`s of a POU as `ACTION name: … END_ACTION` (with their attributes), in document
+/// order: a chart's, or those after the statements of a POU that is no chart.
+pub(crate) fn write_actions(cx: &mut Ctx, actions: &[Node]) {
+    for a in actions {
+        cx.em.open(anchor(*a));
+        let list = element_attrs(*a);
+        cx.attributes(&list, "    ");
+        let name = cx.name(*a, "name", "action");
+        cx.em.str("    ACTION ");
+        cx.em.frag(&name);
+        cx.em.str(":\n");
+        match child(*a, "body") {
+            Some(b) => action_body(cx, b, "        "),
+            None => {
+                cx.diag("SFC0705", anchor(*a), "the action has no body");
+            }
+        }
+        cx.em.str("    END_ACTION\n\n");
+        cx.em.close();
     }
 }

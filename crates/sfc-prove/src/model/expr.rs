@@ -323,6 +323,9 @@ impl<'a> Enc<'a> {
                 self.binary(*op, l, r, rt, expected, e.span)
             }
             ExprKind::Call { callee, args } => self.call_value(f, callee, args, e.span, expected),
+            ExprKind::MemberCall { member, .. } => {
+                err(e.span, format!("the call of the action `{}` of an instance cannot be modelled", member.text))
+            }
             ExprKind::Error => err(e.span, "the expression has a syntax error"),
         }
     }

@@ -49,6 +49,21 @@ pub(crate) fn run_pou(ctx: &mut Ctx<'_>, p: usize, base: usize) -> R<()> {
     }
 }
 
+/// Runs action `k` of POU `p` on the frame at `base`: a chart's action body, or an action of a
+/// POU that is no chart (`Act();` inside the POU, `inst.Act();` from outside).
+pub(crate) fn run_action(ctx: &mut Ctx<'_>, p: usize, k: usize, base: usize) -> R<()> {
+    let prog = ctx.prog;
+    let pou = &prog.pous[p];
+    let body = match &pou.body {
+        PouBody::Chart(cc) => cc.bodies.get(k),
+        PouBody::Code(_) => pou.actions.get(k),
+    };
+    match body {
+        Some(b) => b(ctx, base).map_err(Box::new),
+        None => Ok(()),
+    }
+}
+
 /// Runs the initial-value code of POU `p` on the frame at `base` (nested instances included).
 pub(crate) fn run_inits(ctx: &mut Ctx<'_>, p: usize, base: usize) -> R<()> {
     let prog = ctx.prog;
@@ -206,8 +221,31 @@ impl Cx<'_, '_> {
         }))
     }
 
+    /// `inst.Act();`: action `Act` of the function block type of `inst`, run on the instance.
+    fn member_call(&self, base: &Expr, member: &Ident, span: Span) -> C<StmtFn> {
+        let inst = self.place(base)?;
+        let Type::FunctionBlock(fb) = inst.ty.clone() else {
+            return Err(self.error(base.span, "an action is called on a function block instance"));
+        };
+        let p = self.u.fb_pou(&fb).ok_or_else(|| self.error(member.span, format!("`{fb}` has no actions")))?;
+        let k = match self.u.pous[p].names.get(&member.text.to_ascii_uppercase()) {
+            Some(Sym::Action(k)) => *k,
+            _ => return Err(self.error(member.span, format!("`{fb}` has no action `{}`", member.text))),
+        };
+        let slot = inst.loc.slot_fn();
+        Ok(Box::new(move |c, b| {
+            c.budget.charge(span)?;
+            let ib = slot(c, b)?;
+            run_action(c, p, k, ib)?;
+            Ok(Flow::Next)
+        }))
+    }
+
     /// A call used as a statement.
     pub(crate) fn call_stmt(&self, e: &Expr) -> C<StmtFn> {
+        if let ExprKind::MemberCall { base, member, .. } = &e.kind {
+            return self.member_call(base, member, e.span);
+        }
         let ExprKind::Call { callee, args } = &e.kind else {
             let v = self.expr(e, None)?;
             let f = v.value();
@@ -221,14 +259,11 @@ impl Cx<'_, '_> {
                 self.fb_call(callee, PlaceC::new(Loc::Static(place), ty), args, e.span)
             }
             Some(Sym::Action(a)) => {
-                let p = self.pou.ok_or_else(|| self.error(e.span, "an action outside a chart"))?;
+                let p = self.pou.ok_or_else(|| self.error(e.span, "an action outside a POU"))?;
                 let span = e.span;
                 Ok(Box::new(move |c, b| {
                     c.budget.charge(span)?;
-                    let prog = c.prog;
-                    if let PouBody::Chart(cc) = &prog.pous[p].body {
-                        (cc.bodies[a])(c, b).map_err(Box::new)?;
-                    }
+                    run_action(c, p, a, b)?;
                     Ok(Flow::Next)
                 }))
             }

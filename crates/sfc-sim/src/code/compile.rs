@@ -235,8 +235,12 @@ impl Program {
         let mut charts: Vec<Option<Chart>> = charts.into_iter().map(Some).collect();
         let mut out = Vec::new();
         for (meta, body) in parts.into_iter().zip(bodies) {
+            let mut actions = Vec::new();
             let body = match body {
-                Compiled::Code(b) => PouBody::Code(b),
+                Compiled::Code(b, a) => {
+                    actions = a;
+                    PouBody::Code(b)
+                }
                 Compiled::Chart { guards, fast, bodies, associations } => {
                     let chart = meta.chart.and_then(|c| charts[c].take()).expect("chart POUs have a chart");
                     PouBody::Chart(Box::new(ChartCode {
@@ -255,7 +259,14 @@ impl Program {
                     }))
                 }
             };
-            out.push(PouCode { name: meta.name, kind: meta.kind, layout: meta.layout, body, wiring: meta.wiring });
+            out.push(PouCode {
+                name: meta.name,
+                kind: meta.kind,
+                layout: meta.layout,
+                body,
+                actions,
+                wiring: meta.wiring,
+            });
         }
         Ok(Program {
             pous: out,
@@ -278,8 +289,14 @@ impl Program {
 }
 
 enum Compiled {
-    Code(Block),
-    Chart { guards: Vec<Guard>, fast: Vec<FastGuard>, bodies: Vec<Block>, associations: Vec<Vec<AssocCode>> },
+    /// The body and the actions after it.
+    Code(Block, Vec<Block>),
+    Chart {
+        guards: Vec<Guard>,
+        fast: Vec<FastGuard>,
+        bodies: Vec<Block>,
+        associations: Vec<Vec<AssocCode>>,
+    },
 }
 
 /// POUs in an order where every block type comes before the POUs that contain instances of it;
@@ -511,6 +528,11 @@ fn fill_names(u: &mut Unit<'_>, i: usize) {
             }
             for (k, a) in ch.actions.iter().enumerate() {
                 names.entry(a.name.to_ascii_uppercase()).or_insert(Sym::Action(k));
+            }
+        } else {
+            // The actions of a POU that is no chart, by their index in `PouCode::actions`.
+            for (k, a) in m.ast.actions.iter().enumerate() {
+                names.entry(a.name.text.to_ascii_uppercase()).or_insert(Sym::Action(k));
             }
         }
     }
@@ -861,10 +883,28 @@ fn compile_pou(u: &Unit<'_>, i: usize, template: &[Value]) -> Compiled {
             });
             Ok(b)
         });
-        return Compiled::Code(r.unwrap_or_else(|d| {
-            u.report(d);
-            placeholder_block()
-        }));
+        let actions = m
+            .ast
+            .actions
+            .iter()
+            .map(|a| {
+                let b = match &a.body {
+                    ActionBody::St(stmts) => cx.stmt_list(stmts).map(to_block),
+                    ActionBody::Il(il) => cx.il_block(il),
+                };
+                b.unwrap_or_else(|d| {
+                    u.report(d);
+                    placeholder_block()
+                })
+            })
+            .collect();
+        return Compiled::Code(
+            r.unwrap_or_else(|d| {
+                u.report(d);
+                placeholder_block()
+            }),
+            actions,
+        );
     };
     let ch = &u.charts[c];
     let mut guards: Vec<Guard> = Vec::new();

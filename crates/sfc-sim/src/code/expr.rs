@@ -129,6 +129,9 @@ impl Cx<'_, '_> {
                 Ok(read(p, size))
             }
             ExprKind::Call { callee, args } => self.call_value_at(callee, args, e.span),
+            ExprKind::MemberCall { member, .. } => {
+                Err(self.error(member.span, format!("an action call (`{}`) has no value", member.text)))
+            }
             ExprKind::Unary { op, operand } => {
                 let v = self.expr(operand, expected)?;
                 match op {

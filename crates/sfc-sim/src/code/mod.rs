@@ -177,6 +177,9 @@ pub struct PouCode {
     pub kind: PouKind,
     pub layout: Layout,
     pub body: PouBody,
+    /// The actions of a POU that is no chart, in declaration order (a chart's are in its
+    /// [`ChartCode::bodies`]).
+    pub actions: Vec<Block>,
     /// Terminal labels, the error-code variable and the inputs its calls pass.
     pub wiring: wiring::Wiring,
 }
