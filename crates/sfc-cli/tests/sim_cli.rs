@@ -619,3 +619,32 @@ fn a_plcopen_chart_shows_its_import_notes_and_errors_in_the_xml() {
     assert!(stderr(&out).contains("bad.xml:1348:27"), "the error at its XML line: {}", both(&out));
     assert!(stderr(&out).contains("<expression>NoSuchButton</expression>"), "{}", both(&out));
 }
+
+/// `--pou` of a POU kept as written (CODESYS object orientation the simulator does not run yet)
+/// says so, with why, instead of "no POU named"; a name nowhere in the file lists every POU,
+/// those kept as written too.
+#[test]
+fn pou_kept_as_written_says_why_it_cannot_be_simulated() {
+    let d = temp_dir("verbatim-pou");
+    let file = d.join("plant.st");
+    std::fs::write(
+        &file,
+        "{attribute 'sfc.verbatim' := 'not analysed: it has methods (CODESYS object orientation)'}\n\
+         FUNCTION_BLOCK Axis\n    METHOD MoveTo : BOOL\n    END_METHOD\nEND_FUNCTION_BLOCK\n\n\
+         PROGRAM Main\n    VAR\n        Go : BOOL;\n    END_VAR\n    INITIAL_STEP Idle: END_STEP\n    \
+         TRANSITION FROM Idle TO Run := Go; END_TRANSITION\n    STEP Run: END_STEP\n    \
+         TRANSITION FROM Run TO Idle := NOT Go; END_TRANSITION\nEND_PROGRAM\n",
+    )
+    .unwrap();
+    let out = sfc_in(&d, &["sim", "plant.st", "--pou", "Axis", "--scans", "1"]);
+    let err = stderr(&out);
+    assert_eq!(out.status.code(), Some(2), "{}", both(&out));
+    assert!(err.contains("`Axis` is kept as written, not analysed, so it cannot be simulated"), "{err}");
+    assert!(err.contains("it has methods (CODESYS object orientation)"), "{err}");
+    let out = sfc_in(&d, &["sim", "plant.st", "--pou", "Conveyor", "--scans", "1"]);
+    let err = stderr(&out);
+    assert!(err.contains("no POU named `Conveyor`"), "{err}");
+    assert!(err.contains("the file declares: Main, Axis (kept as written, not analysed)"), "{err}");
+    let out = sfc_in(&d, &["sim", "plant.st", "--pou", "Main", "--scans", "2"]);
+    assert_eq!(out.status.code(), Some(0), "the sound POU runs: {}", both(&out));
+}

@@ -955,9 +955,47 @@ fn choose_pou(
             )),
             Some(p) => Ok(p.name.text.clone()),
             None => {
-                let names: Vec<&str> = pous.iter().map(|p| p.name.text.as_str()).collect();
+                // A POU kept as written (not analysed) is there, but cannot be simulated: say so.
+                let kept: Vec<&sfc_syntax::ast::Verbatim> = unit
+                    .items
+                    .iter()
+                    .filter_map(|i| match i {
+                        Item::Verbatim(v)
+                            if matches!(v.keyword.as_str(), "PROGRAM" | "FUNCTION_BLOCK" | "FUNCTION") =>
+                        {
+                            Some(v)
+                        }
+                        _ => None,
+                    })
+                    .collect();
+                if let Some(v) = kept.iter().find(|v| v.name.as_ref().is_some_and(|n| n.is(name))) {
+                    let why = v
+                        .attributes
+                        .iter()
+                        .rev()
+                        .find(|a| a.name.eq_ignore_ascii_case("sfc.verbatim"))
+                        .and_then(|a| a.value.as_deref())
+                        .map(sfc_syntax::attr_value::unescape)
+                        .filter(|w| !w.trim().is_empty() && w != "opaque");
+                    let mut d = Diagnostic::error(
+                        "SFC0321",
+                        v.name.as_ref().map_or(v.span, |n| n.span),
+                        format!("`{name}` is kept as written, not analysed, so it cannot be simulated"),
+                    );
+                    if let Some(w) = why {
+                        d = d.with_note(w);
+                    }
+                    return Err(d);
+                }
+                let mut names: Vec<String> = pous.iter().map(|p| p.name.text.clone()).collect();
+                names.extend(
+                    kept.iter()
+                        .filter_map(|v| v.name.as_ref())
+                        .map(|n| format!("{} (kept as written, not analysed)", n.text)),
+                );
+                let list = if names.is_empty() { "no POU".to_string() } else { names.join(", ") };
                 Err(Diagnostic::error("SFC0321", Span::default(), format!("no POU named `{name}` in this file"))
-                    .with_note(format!("the file declares: {}", names.join(", "))))
+                    .with_note(format!("the file declares: {list}")))
             }
         };
     }
