@@ -122,8 +122,12 @@ impl X {
         for k in taken {
             self.comments[k].2 = true;
             let t = self.comments[k].1.clone();
-            let inner =
-                t.strip_prefix("(*").and_then(|x| x.strip_suffix("*)")).or_else(|| t.strip_prefix("//")).unwrap_or(&t);
+            let inner = t
+                .strip_prefix("(*")
+                .and_then(|x| x.strip_suffix("*)"))
+                .or_else(|| t.strip_prefix("/*").and_then(|x| x.strip_suffix("*/")))
+                .or_else(|| t.strip_prefix("//"))
+                .unwrap_or(&t);
             plain.push(inner.trim().to_string());
             raw.push(t);
         }

@@ -232,10 +232,10 @@ impl<'i> Ctx<'i> {
                 for c in v.split('\n').scan(false, |inside, line| {
                     let start = !*inside;
                     let t = line.trim_start();
-                    let opens = t.starts_with("(*") || t.starts_with("//");
+                    let opens = t.starts_with("(*") || t.starts_with("/*") || t.starts_with("//");
                     if start && opens && !t.starts_with("//") {
-                        *inside = !t.ends_with("*)");
-                    } else if !start && line.trim_end().ends_with("*)") {
+                        *inside = !(t.ends_with("*)") || t.ends_with("*/"));
+                    } else if !start && (line.trim_end().ends_with("*)") || line.trim_end().ends_with("*/")) {
                         *inside = false;
                     }
                     Some((start && opens, line))

@@ -140,6 +140,7 @@ impl<'a> Lexer<'a> {
                     self.push(TokenKind::Whitespace, start);
                 }
                 b'(' if self.peek(1) == b'*' => self.block_comment(),
+                b'/' if self.peek(1) == b'*' => self.slash_comment(),
                 b'/' if self.peek(1) == b'/' => {
                     while self.pos < self.src.len() && self.peek(0) != b'\n' {
                         self.pos += 1;
@@ -184,6 +185,23 @@ impl<'a> Lexer<'a> {
             }
         }
         self.error("SFC0001", start, start + 2, "unterminated comment: `(*` has no closing `*)`");
+        self.push(TokenKind::BlockComment, start);
+    }
+
+    /// `/* … */`, IEC 61131-3 3rd edition's other block comment (CODESYS writes it). It does
+    /// not nest either; a `/*` inside is text.
+    fn slash_comment(&mut self) {
+        let start = self.pos;
+        self.pos += 2;
+        while self.pos < self.src.len() {
+            if self.peek(0) == b'*' && self.peek(1) == b'/' {
+                self.pos += 2;
+                self.push(TokenKind::BlockComment, start);
+                return;
+            }
+            self.pos += 1;
+        }
+        self.error("SFC0001", start, start + 2, "unterminated comment: `/*` has no closing `*/`");
         self.push(TokenKind::BlockComment, start);
     }
 
@@ -430,6 +448,18 @@ mod tests {
         assert_eq!(kinds("1..10"), vec![Int, DotDot, Int, Eof]);
         assert_eq!(kinds("1.5e-3"), vec![Real, Eof]);
         assert_eq!(kinds("UINT#16#FE INT#-5 T#-2s"), vec![Typed, Typed, Typed, Eof]);
+    }
+
+    #[test]
+    fn slash_star_comments_as_iec_3rd_edition_and_codesys_write_them() {
+        use TokenKind::*;
+        let (toks, d) = lex(0, "/* a\n (* b *) */ x");
+        assert!(d.is_empty(), "{d:?}");
+        assert_eq!(toks.iter().map(|t| t.kind).collect::<Vec<_>>(), vec![BlockComment, Whitespace, Ident, Eof]);
+        assert_eq!(kinds("a / b"), vec![Ident, Slash, Ident, Eof]);
+        let (toks, d) = lex(0, "x /* open");
+        assert_eq!(d.len(), 1, "unterminated: {d:?}");
+        assert_eq!(toks.iter().filter(|t| t.kind == BlockComment).count(), 1);
     }
 
     #[test]
