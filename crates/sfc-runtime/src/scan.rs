@@ -915,7 +915,6 @@ impl ScanThread {
         Simulation::fit_to(&s.ty, v).map_err(|e| format!("`{}` is {e}", info.name))
     }
 
-    /// Publishes what is waiting, without waiting for the lock.
     /// The status block for the values of scan `scan`.
     fn status(&self, scan: u64) -> crate::io::Status {
         crate::io::Status {
@@ -949,6 +948,7 @@ impl ScanThread {
         };
     }
 
+    /// Publishes what is waiting, without waiting for the lock.
     fn publish(&mut self) {
         self.sync_status();
         let hub = self.hub.clone();
