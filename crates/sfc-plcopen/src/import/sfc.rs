@@ -340,6 +340,7 @@ fn graph<'a, 'i>(
         key.push(i);
         match e.kind {
             "step" => {
+                step_actions_not_imported(cx, e.n);
                 let name = cx.name(e.n, "name", "step");
                 let mut list = Vec::new();
                 if layout {
@@ -1085,5 +1086,41 @@ pub(crate) fn write_actions(cx: &mut Ctx, actions: &[Node]) {
         }
         cx.em.str("    END_ACTION\n\n");
         cx.em.close();
+    }
+}
+
+/// CODESYS's data name of an SFC element's properties (a step's step actions among them).
+const CODESYS_SFC_ELEMENT: &str = "http://www.3s-software.com/plcopenxml/sfc/element";
+
+/// CODESYS's step actions (entry, main, exit) are properties of the step, by GUID. They are
+/// not imported yet (issue 31): each one is said, so a chart that runs without them is not
+/// taken for the chart CODESYS runs. Their XML stays with the step (`sfc.adddata`).
+fn step_actions_not_imported(cx: &mut Ctx, step: Node) {
+    const KINDS: [(&str, &str); 3] = [
+        ("a6b08bd8-b696-47e3-9cbf-7408b61c9ff8", "entry"),
+        ("700a583f-b4d4-43e4-8c14-629c7cd3bec8", "step (main)"),
+        ("a2621e18-7de3-4ea6-ae6d-89e9e0b7befd", "exit"),
+    ];
+    let props = children(step, "addData")
+        .flat_map(|a| children(a, "data"))
+        .filter(|d| attr(*d, "name") == Some(CODESYS_SFC_ELEMENT))
+        .flat_map(|d| d.descendants().filter(|n| n.is_element() && n.tag_name().name() == "attribute"));
+    for p in props.collect::<Vec<_>>() {
+        let Some((_, kind)) = KINDS.iter().find(|(g, _)| attr(p, "guid").is_some_and(|v| v.eq_ignore_ascii_case(g)))
+        else {
+            continue;
+        };
+        let action = p.text().unwrap_or("").trim();
+        if action.is_empty() {
+            continue;
+        }
+        cx.diag(
+            "SFC0710",
+            anchor(p),
+            format!(
+                "the {kind} action `{action}` of step `{}` (a CODESYS step action) is not imported yet: it does not run",
+                attr(step, "name").unwrap_or("?").trim()
+            ),
+        );
     }
 }
