@@ -19,24 +19,26 @@ fn carwash() -> PathBuf {
     root().join("examples/carwash/carwash.st")
 }
 
-/// asyncua is there, or the test says loudly why it does not run.
-fn asyncua() -> bool {
-    let ok = std::process::Command::new("bash").arg(root().join("scripts/asyncua-deps.sh")).status();
-    if !ok.is_ok_and(|s| s.success()) {
-        eprintln!("\n\n*** SKIPPED: asyncua cannot be installed (scripts/asyncua-deps.sh failed) ***\n\n");
-        return false;
-    }
-    true
+use common::asyncua;
+
+/// `carwash_client.py` in `mode` against `url`; its JSON report.
+fn client(mode: &str, url: &str, rest: &[&str]) -> serde_json::Value {
+    let mut args = vec![mode, url];
+    args.extend_from_slice(rest);
+    client_script("carwash_client.py", &args)
 }
 
-/// The client script in `mode` against `url`; its JSON report.
-fn client(mode: &str, url: &str, rest: &[&str]) -> serde_json::Value {
-    let script = root().join("crates/sfc-cli/tests/opcua/carwash_client.py");
-    let out =
-        std::process::Command::new("python3").arg(script).arg(mode).arg(url).args(rest).output().expect("python3 runs");
-    let stdout = String::from_utf8_lossy(&out.stdout);
-    assert!(out.status.success(), "the asyncua client failed:\n{stdout}\n{}", String::from_utf8_lossy(&out.stderr));
-    serde_json::from_str(stdout.lines().last().unwrap_or("")).unwrap_or_else(|e| panic!("{e}: {stdout}"))
+/// `sfc run CHART` with OPC UA on a free loopback port, SecurityPolicy None allowed (local
+/// clients, anonymous), its PKI in `pki`, no retain file, for at most two minutes, and `extra`.
+fn open_run(chart: &Path, pki: &Path, extra: &[&str]) -> Run {
+    let mut args =
+        vec![s(chart), "--no-retain", "--opcua", "opc.tcp://127.0.0.1:0", "--opcua-allow-none", "--opcua-pki"];
+    args.push(s(pki));
+    args.extend_from_slice(extra);
+    if !extra.contains(&"--for") {
+        args.extend(["--for", "T#120s"]);
+    }
+    Run::start(&args)
 }
 
 fn opcua_url(run: &mut Run) -> String {
@@ -76,19 +78,7 @@ fn an_asyncua_client_browses_reads_subscribes_and_writes() {
     }
     let dir = scratch("opcua-open");
     let pki = dir.join("pki");
-    let mut run = Run::start(&[
-        s(&carwash()),
-        "--no-retain",
-        "--opcua",
-        "opc.tcp://127.0.0.1:0",
-        "--opcua-allow-none",
-        "--opcua-pki",
-        s(&pki),
-        "--monitor",
-        "127.0.0.1:0",
-        "--for",
-        "T#120s",
-    ]);
+    let mut run = open_run(&carwash(), &pki, &["--monitor", "127.0.0.1:0"]);
     let url = opcua_url(&mut run);
     // A variable forced from the monitor reads its forced value over OPC UA.
     let mon = run.monitor();
@@ -165,16 +155,7 @@ fn a_secure_session_with_a_user_and_an_untrusted_certificate() {
         return;
     }
     let dir = scratch("opcua-secure");
-    let mut hash = command(&["run", "--hash-password"])
-        .stdin(Stdio::piped())
-        .stdout(Stdio::piped())
-        .stderr(Stdio::piped())
-        .spawn()
-        .unwrap();
-    hash.stdin.take().unwrap().write_all(b"op3rator\n").unwrap();
-    let out = hash.wait_with_output().unwrap();
-    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
-    let h = String::from_utf8(out.stdout).unwrap().trim().to_string();
+    let h = hash("op3rator");
     assert!(h.starts_with("$argon2id$"), "{h}");
     assert!(!h.contains("op3rator"));
     let config = dir.join("plant.toml");
@@ -249,21 +230,11 @@ fn jitter_p99(dir: &Path, clients: usize, secs: u64, realtime: bool) -> (u64, se
     let pki = dir.join("pki");
     let d = format!("T#{secs}s");
     let chart = carwash();
-    let mut args = vec![
-        s(&chart),
-        "--no-retain",
-        "--opcua",
-        "opc.tcp://127.0.0.1:0",
-        "--opcua-allow-none",
-        "--opcua-pki",
-        s(&pki),
-        "--for",
-        &d,
-    ];
+    let mut extra = vec!["--for", d.as_str()];
     if realtime {
-        args.push("--realtime");
+        extra.push("--realtime");
     }
-    let mut run = Run::start(&args);
+    let mut run = open_run(&chart, &pki, &extra);
     let url = opcua_url(&mut run);
     let load = if clients > 0 {
         client("load", &url, &[&clients.to_string(), &(secs.saturating_sub(2)).to_string()])
@@ -321,21 +292,7 @@ fn the_spindle_mechanism_its_actions_and_its_error_record() {
     }
     let dir = scratch("opcua-spindle");
     let chart = root().join("examples/spindle/spindle.st");
-    let mut run = Run::start(&[
-        s(&chart),
-        "--no-retain",
-        "--period",
-        "T#10ms",
-        "--opcua",
-        "opc.tcp://127.0.0.1:0",
-        "--opcua-allow-none",
-        "--opcua-pki",
-        s(&dir.join("pki")),
-        "--monitor",
-        "127.0.0.1:0",
-        "--for",
-        "T#120s",
-    ]);
+    let mut run = open_run(&chart, &dir.join("pki"), &["--period", "T#10ms", "--monitor", "127.0.0.1:0"]);
     let url = opcua_url(&mut run);
     let script = root().join("crates/sfc-cli/tests/opcua/spindle_client.py");
     let out = std::process::Command::new("python3").arg(script).arg(&url).output().expect("python3 runs");
@@ -433,28 +390,23 @@ fn every_view_shows_the_same_outputs_in_run_stop_and_fault() {
     }
     use std::io::BufRead;
     let dir = scratch("opcua-views");
-    let mut run = Run::start(&[
-        s(&common::chart("runaway.st")),
-        "--no-retain",
-        "--halted",
-        "--watchdog",
-        "T#50ms",
-        "--modbus",
-        "127.0.0.1:0",
-        "--monitor",
-        "127.0.0.1:0",
-        "--opcua",
-        "opc.tcp://127.0.0.1:0",
-        "--opcua-allow-none",
-        "--opcua-pki",
-        s(&dir.join("pki")),
-        "--report",
-        "T#50ms",
-        "--report-format",
-        "json",
-        "--for",
-        "T#120s",
-    ]);
+    let mut run = open_run(
+        &common::chart("runaway.st"),
+        &dir.join("pki"),
+        &[
+            "--halted",
+            "--watchdog",
+            "T#50ms",
+            "--modbus",
+            "127.0.0.1:0",
+            "--monitor",
+            "127.0.0.1:0",
+            "--report",
+            "T#50ms",
+            "--report-format",
+            "json",
+        ],
+    );
     let url = opcua_url(&mut run);
     let mb = run.modbus();
     let mon = run.monitor();
@@ -659,17 +611,7 @@ fn every_node_has_its_documented_node_id() {
     }
     let dir = scratch("opcua-ids");
     for (chart, pou) in [("examples/carwash/carwash.st", "CarWash"), ("examples/spindle/spindle.st", "Main")] {
-        let mut run = Run::start(&[
-            s(&root().join(chart)),
-            "--no-retain",
-            "--opcua",
-            "opc.tcp://127.0.0.1:0",
-            "--opcua-allow-none",
-            "--opcua-pki",
-            s(&dir.join("pki")),
-            "--for",
-            "T#120s",
-        ]);
+        let mut run = open_run(&root().join(chart), &dir.join("pki"), &[]);
         let url = opcua_url(&mut run);
         let out = std::process::Command::new("python3")
             .arg(root().join("crates/sfc-cli/tests/opcua/node_ids_client.py"))
@@ -703,25 +645,11 @@ fn a_subscriber_sees_a_change_within_its_publishing_interval() {
     let dir = scratch("opcua-latency");
     let (echo, pki) = (common::chart("echo.st"), dir.join("pki"));
     for (publish, min) in [(10.0f64, None), (50.0, None), (10.0, Some("T#20ms"))] {
-        let mut args = vec![
-            s(&echo),
-            "--no-retain",
-            "--period",
-            "T#1ms",
-            "--modbus",
-            "127.0.0.1:0",
-            "--opcua",
-            "opc.tcp://127.0.0.1:0",
-            "--opcua-allow-none",
-            "--opcua-pki",
-            s(&pki),
-            "--for",
-            "T#120s",
-        ];
+        let mut extra = vec!["--period", "T#1ms", "--modbus", "127.0.0.1:0"];
         if let Some(m) = min {
-            args.extend(["--opcua-min-publish", m]);
+            extra.extend(["--opcua-min-publish", m]);
         }
-        let mut run = Run::start(&args);
+        let mut run = open_run(&echo, &pki, &extra);
         let url = opcua_url(&mut run);
         let mb = run.modbus();
         let r = client_script("latency_client.py", &[&url, &mb.port().to_string(), "40", &publish.to_string()]);
@@ -783,21 +711,11 @@ fn soak_with_modbus_both_opcua_stacks_and_monitor_clients() {
     }
     let secs: u64 = if std::env::var_os("SFC_SOAK").is_some() { 600 } else { 30 };
     let dir = scratch("opcua-soak");
-    let mut run = Run::start(&[
-        s(&carwash()),
-        "--no-retain",
-        "--modbus",
-        "127.0.0.1:0",
-        "--monitor",
-        "127.0.0.1:0",
-        "--opcua",
-        "opc.tcp://127.0.0.1:0",
-        "--opcua-allow-none",
-        "--opcua-pki",
-        s(&dir.join("pki")),
-        "--for",
-        &format!("T#{}s", secs + 120),
-    ]);
+    let mut run = open_run(
+        &carwash(),
+        &dir.join("pki"),
+        &["--modbus", "127.0.0.1:0", "--monitor", "127.0.0.1:0", "--for", &format!("T#{}s", secs + 120)],
+    );
     let url = opcua_url(&mut run);
     let mb = run.modbus();
     let mon = run.monitor();
@@ -900,17 +818,7 @@ fn an_open62541_client_browses_reads_subscribes_and_writes() {
         return;
     }
     let dir = scratch("opcua-o6");
-    let mut run = Run::start(&[
-        s(&carwash()),
-        "--no-retain",
-        "--opcua",
-        "opc.tcp://127.0.0.1:0",
-        "--opcua-allow-none",
-        "--opcua-pki",
-        s(&dir.join("pki")),
-        "--for",
-        "T#120s",
-    ]);
+    let mut run = open_run(&carwash(), &dir.join("pki"), &[]);
     let url = opcua_url(&mut run);
     let r = client_script("o6_client.py", &["open", &url]);
     assert_eq!(r["client"], "o6");

@@ -535,9 +535,7 @@ fn idle_modbus_connections_are_closed() {
 /// A real client (pymodbus) reads the 32-bit values in the documented word orders.
 #[test]
 fn pymodbus_reads_32_bit_values_in_both_word_orders() {
-    let deps = std::process::Command::new("bash").arg(root().join("scripts/pymodbus-deps.sh")).status();
-    if !deps.is_ok_and(|s| s.success()) {
-        eprintln!("\n\n*** SKIPPED: pymodbus cannot be installed (scripts/pymodbus-deps.sh failed) ***\n\n");
+    if !common::pymodbus() {
         return;
     }
     for order in ["big", "little"] {

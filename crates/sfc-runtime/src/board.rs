@@ -183,7 +183,7 @@ pub struct ImageView {
     /// the first state is published).
     pub scan: Option<Arc<ScanState>>,
     /// Error records per chart instance.
-    pub errors: Vec<MechanismErrors>,
+    pub errors: Arc<Vec<MechanismErrors>>,
     /// The scan thread's statistics.
     pub digest: Option<StatsDigest>,
 }
@@ -357,8 +357,9 @@ pub struct Board {
     /// The scan thread's statistics as figures (their JSON is made by whoever reads them).
     pub digest: Option<StatsDigest>,
     /// Per chart instance ([`ChartInfo::charts`]): its last completed error record and how many
-    /// were made, as the monitor's `mechanisms` and the run log tell them.
-    pub errors: Vec<MechanismErrors>,
+    /// were made, as the monitor's `mechanisms` and the run log tell them (a new list each
+    /// time one changes, so a reader copies a pointer).
+    pub errors: Arc<Vec<MechanismErrors>>,
 }
 
 /// The error records of one mechanism (`docs/runtime.md`, "OPC UA").
@@ -660,7 +661,7 @@ pub struct Hub {
     /// Copy every step's time into each state (an OPC UA server publishes the `T` of
     /// inactive steps; nothing else reads it, so without one the scan leaves it empty).
     pub step_times: AtomicBool,
-    /// The newest state in full, as [`Hub::latest`] or [`Hub::image`] rebuilt it last.
+    /// The newest state in full, as [`Hub::image`] rebuilt it last.
     latest_full: Mutex<Option<FullState>>,
 }
 
@@ -693,18 +694,11 @@ impl Hub {
         (Arc::new(hub), rx)
     }
 
-    /// The newest state in full (`None` before the first scan), as the scan published it. The
-    /// one rebuilt last is kept until a newer state is published.
-    pub fn latest(&self) -> Option<Arc<ScanState>> {
-        let tail = self.lock().tail_latest();
-        self.full_of(tail, None)
-    }
-
-    /// The newest state of `tail` in full, with the safe values in place when `safe` (the
-    /// cache holds the last one built).
-    fn full_of(&self, tail: Tail, safe: Option<RunState>) -> Option<Arc<ScanState>> {
+    /// The newest state of `tail` in full, with the safe values in place when the run is in
+    /// `state` STOP or FAULT (the cache holds the last one built).
+    fn full_of(&self, tail: Tail, state: RunState) -> Option<Arc<ScanState>> {
         let newest = tail.newest()?.clone();
-        let overlay = safe.is_some_and(|s| s != RunState::Run);
+        let overlay = state != RunState::Run;
         {
             let cached = self.latest_full.lock().unwrap_or_else(|e| e.into_inner());
             if let Some((src, with_safe, full)) = cached.as_ref() {
@@ -733,7 +727,7 @@ impl Hub {
             let b = self.lock();
             (b.tail_latest(), b.state, b.state_seq, b.halted, b.fault.clone(), b.errors.clone(), b.digest)
         };
-        let scan = self.full_of(tail, Some(state));
+        let scan = self.full_of(tail, state);
         ImageView { state, state_seq, halted, fault, scan, errors, digest }
     }
 

@@ -489,21 +489,12 @@ pub struct Side {
     tick: std::time::Duration,
 }
 
-/// Makes the PKI folder private: created with mode 0700 (and its `private/` too), or refused
-/// when it exists and others may read it; the private key, once made, gets 0600 (it is written
-/// inside the private folder, so no other user can reach it in between). `after`: the key has
-/// been made.
+/// Makes the PKI folder private before the server uses it: the folder and its `private/` are
+/// created with mode 0700, or refused when they exist and others may read them, as is a private
+/// key others may read.
 #[cfg(unix)]
-fn private_pki(dir: &std::path::Path, after: bool) -> Result<(), String> {
+fn private_pki(dir: &std::path::Path) -> Result<(), String> {
     use std::os::unix::fs::{DirBuilderExt, PermissionsExt};
-    let key = dir.join("private/private.pem");
-    if after {
-        if key.is_file() {
-            std::fs::set_permissions(&key, std::fs::Permissions::from_mode(0o600))
-                .map_err(|e| format!("cannot make the OPC UA private key {} private: {e}", key.display()))?;
-        }
-        return Ok(());
-    }
     for d in [dir.to_path_buf(), dir.join("private")] {
         match std::fs::metadata(&d) {
             Ok(m) if !m.is_dir() => return Err(format!("the OPC UA PKI folder {} is not a folder", d.display())),
@@ -524,6 +515,7 @@ fn private_pki(dir: &std::path::Path, after: bool) -> Result<(), String> {
                 .map_err(|e| format!("cannot create the OPC UA PKI folder {}: {e}", d.display()))?,
         }
     }
+    let key = private_key(dir);
     if let Ok(m) = std::fs::metadata(&key) {
         if m.permissions().mode() & 0o077 != 0 {
             return Err(format!(
@@ -537,8 +529,30 @@ fn private_pki(dir: &std::path::Path, after: bool) -> Result<(), String> {
     Ok(())
 }
 
+/// Gives the private key the server made on its first start mode 0600 (it was written inside
+/// the private folder, so no other user could reach it in between).
+#[cfg(unix)]
+fn private_key_mode(dir: &std::path::Path) -> Result<(), String> {
+    use std::os::unix::fs::PermissionsExt;
+    let key = private_key(dir);
+    if key.is_file() {
+        std::fs::set_permissions(&key, std::fs::Permissions::from_mode(0o600))
+            .map_err(|e| format!("cannot make the OPC UA private key {} private: {e}", key.display()))?;
+    }
+    Ok(())
+}
+
+fn private_key(dir: &std::path::Path) -> std::path::PathBuf {
+    dir.join("private/private.pem")
+}
+
 #[cfg(not(unix))]
-fn private_pki(_dir: &std::path::Path, _after: bool) -> Result<(), String> {
+fn private_pki(_dir: &std::path::Path) -> Result<(), String> {
+    Ok(())
+}
+
+#[cfg(not(unix))]
+fn private_key_mode(_dir: &std::path::Path) -> Result<(), String> {
     Ok(())
 }
 
@@ -547,7 +561,7 @@ pub fn build(hub: &Arc<Hub>, o: &OpcuaOptions, listener: std::net::TcpListener) 
     let port = listener.local_addr().map_err(|e| e.to_string())?.port();
     let host = o.addr.ip().to_string();
     let url = format!("opc.tcp://{host}:{port}/");
-    private_pki(&o.pki_dir, false)?;
+    private_pki(&o.pki_dir)?;
     // Anonymous sessions: on the secure endpoints only to read (`anonymous_read`); on the None
     // endpoint (`allow_none`, loopback) to read and write.
     let secure_ids = if o.anonymous_read { vec![ANONYMOUS_USER_TOKEN_ID.to_string()] } else { Vec::new() };
@@ -576,7 +590,7 @@ pub fn build(hub: &Arc<Hub>, o: &OpcuaOptions, listener: std::net::TcpListener) 
         .pki_dir(o.pki_dir.clone())
         .create_sample_keypair(true)
         .certificate_path("own/cert.der")
-        .private_key_path("private/private.pem")
+        .private_key_path(private_key(std::path::Path::new("")))
         .trust_client_certs(false)
         .check_cert_time(true)
         .subscription_poll_interval_ms(tick.as_millis().max(1) as u64)
@@ -601,7 +615,7 @@ pub fn build(hub: &Arc<Hub>, o: &OpcuaOptions, listener: std::net::TcpListener) 
         builder = builder.add_endpoint("none", none);
     }
     let (server, handle) = builder.build().map_err(|e| format!("cannot start the OPC UA server: {e}"))?;
-    private_pki(&o.pki_dir, true)?;
+    private_key_mode(&o.pki_dir)?;
     let nodes = handle
         .node_managers()
         .get_of_type::<InMemoryNodeManager<SfcNodes>>()
@@ -1055,27 +1069,30 @@ async fn follow(
 ) {
     let published_nodes = std::mem::take(&mut nodes.inner().table.write().unwrap_or_else(|e| e.into_inner()).published);
     let mut last: Vec<Option<(Variant, Option<StatusCode>)>> = vec![None; published_nodes.len()];
-    // What the last values were made from: the newest state, the run's state, halted, the
-    // statistics and the error records' counts.
-    type Seen = (Option<usize>, u64, bool, Option<crate::jitter::StatsDigest>, Vec<u64>);
-    let mut seen: Option<Seen> = None;
+    // The reading the last values were made from. The newest state and the error records are
+    // compared by identity (each change is a new `Arc`); holding them keeps their memory from
+    // being reused for another state in the meantime.
+    let mut seen: Option<ImageView> = None;
     let mut lookup = Lookup::default();
     let mut every = tokio::time::interval(tick);
     every.set_missed_tick_behavior(tokio::time::MissedTickBehavior::Delay);
     while !hub.closing() {
         every.tick().await;
         let image = hub.image();
-        let key = (
-            image.scan.as_ref().map(|s| Arc::as_ptr(s) as usize),
-            image.state_seq,
-            image.halted,
-            image.digest,
-            image.errors.iter().map(|e| e.count).collect::<Vec<_>>(),
-        );
-        if seen.as_ref() == Some(&key) {
+        let same = seen.as_ref().is_some_and(|s| {
+            s.state_seq == image.state_seq
+                && s.halted == image.halted
+                && s.digest == image.digest
+                && Arc::ptr_eq(&s.errors, &image.errors)
+                && match (&s.scan, &image.scan) {
+                    (Some(a), Some(b)) => Arc::ptr_eq(a, b),
+                    (None, None) => true,
+                    _ => false,
+                }
+        });
+        if same {
             continue;
         }
-        seen = Some(key);
         if let Some(st) = &image.scan {
             lookup.fill(&hub.info, st);
         }
@@ -1092,6 +1109,7 @@ async fn follow(
         if !changed.is_empty() {
             let _ = nodes.set_values(&subscriptions, changed.into_iter());
         }
+        seen = Some(image);
     }
 }
 

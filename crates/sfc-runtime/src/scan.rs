@@ -976,7 +976,7 @@ impl ScanThread {
             b.push_halt(halted, reason);
         }
         if let Some(errors) = self.unpublished_errors.take() {
-            b.errors = errors;
+            b.errors = Arc::new(errors);
         }
         if self.stats.scans.is_multiple_of(50) || b.halted {
             b.digest = Some(self.stats.digest());

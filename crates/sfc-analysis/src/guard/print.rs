@@ -72,27 +72,13 @@ fn write(e: &Expr, fold: bool, out: &mut String, depth: u32) -> Option<()> {
         }
         ExprKind::Call { callee, args } => {
             ident(&callee.text, fold, out);
-            out.push('(');
-            for (i, a) in args.iter().enumerate() {
-                if i > 0 {
-                    out.push_str(", ");
-                }
-                arg(a, fold, out, depth)?;
-            }
-            out.push(')');
+            arg_list(args, fold, out, depth)?;
         }
         ExprKind::MemberCall { base, member, args } => {
             child(base, 10, fold, out, depth)?;
             out.push('.');
             ident(&member.text, fold, out);
-            out.push('(');
-            for (i, a) in args.iter().enumerate() {
-                if i > 0 {
-                    out.push_str(", ");
-                }
-                arg(a, fold, out, depth)?;
-            }
-            out.push(')');
+            arg_list(args, fold, out, depth)?;
         }
         ExprKind::Unary { op, operand } => {
             match op {
@@ -127,6 +113,19 @@ fn child(e: &Expr, min: u8, fold: bool, out: &mut String, depth: u32) -> Option<
     } else {
         write(e, fold, out, depth + 1)
     }
+}
+
+/// `(a, b, …)` of a call.
+fn arg_list(args: &[Arg], fold: bool, out: &mut String, depth: u32) -> Option<()> {
+    out.push('(');
+    for (i, a) in args.iter().enumerate() {
+        if i > 0 {
+            out.push_str(", ");
+        }
+        arg(a, fold, out, depth)?;
+    }
+    out.push(')');
+    Some(())
 }
 
 fn arg(a: &Arg, fold: bool, out: &mut String, depth: u32) -> Option<()> {

@@ -348,6 +348,11 @@ fn python_deps(name: &str) -> bool {
     true
 }
 
+/// asyncua (an OPC UA client) is there.
+pub fn asyncua() -> bool {
+    python_deps("asyncua")
+}
+
 /// pymodbus (a Modbus client) is there.
 pub fn pymodbus() -> bool {
     python_deps("pymodbus")

@@ -135,9 +135,9 @@ async def open_session(url):
     return report
 
 
-async def secure_session(url, pki, user, password, client_dir):
+async def client_certificate(client_dir):
+    """A self-signed client certificate in `client_dir`: (key, cert, application URI)."""
     from asyncua.crypto.cert_gen import setup_self_signed_certificate
-    from asyncua.crypto.security_policies import SecurityPolicyBasic256Sha256
     from cryptography.x509.oid import ExtendedKeyUsageOID
 
     client_dir = Path(client_dir)
@@ -147,6 +147,13 @@ async def secure_session(url, pki, user, password, client_dir):
     await setup_self_signed_certificate(
         key, cert, app_uri, "localhost", [ExtendedKeyUsageOID.CLIENT_AUTH], {"commonName": "sfc test client"}
     )
+    return key, cert, app_uri
+
+
+async def secure_session(url, pki, user, password, client_dir):
+    from asyncua.crypto.security_policies import SecurityPolicyBasic256Sha256
+
+    key, cert, app_uri = await client_certificate(client_dir)
     report = {}
 
     async def connect(mode, with_user=True):
@@ -212,17 +219,9 @@ async def roles(url, pki, client_dir):
     """What each kind of session may do: anonymous on the None endpoint and on
     Basic256Sha256 SignAndEncrypt, and the users `reader` (role read), `operator` (operate) and
     `boss` (admin): read, write an input, read the input's UserAccessLevel, call Halt."""
-    from asyncua.crypto.cert_gen import setup_self_signed_certificate
     from asyncua.crypto.security_policies import SecurityPolicyBasic256Sha256
-    from cryptography.x509.oid import ExtendedKeyUsageOID
 
-    client_dir = Path(client_dir)
-    client_dir.mkdir(parents=True, exist_ok=True)
-    key, cert = client_dir / "key.pem", client_dir / "cert.der"
-    app_uri = "urn:sfc:test:client"
-    await setup_self_signed_certificate(
-        key, cert, app_uri, "localhost", [ExtendedKeyUsageOID.CLIENT_AUTH], {"commonName": "sfc test client"}
-    )
+    key, cert, app_uri = await client_certificate(client_dir)
 
     async def client(user, secure):
         c = Client(url=url, timeout=10)
