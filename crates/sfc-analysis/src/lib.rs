@@ -55,7 +55,7 @@ pub fn check_parsed(
     let mut checked = sfc_model::check_parsed(file_id, name, text, parsed, &model_opts);
     if analysis && !checked.has_errors() {
         let mut found = Vec::new();
-        for chart in &checked.charts {
+        for chart in checked.charts.iter().chain(&checked.action_charts) {
             found.extend(analyze_chart(&checked, chart, &Options::default()));
         }
         checked.diagnostics.extend(found);

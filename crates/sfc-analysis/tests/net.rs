@@ -29,9 +29,11 @@ fn mk_chart(n: usize, initial: &[usize], trans: &[(Vec<usize>, Vec<usize>)]) -> 
         item: 0,
         pou: "Random".into(),
         pou_kind: ast::PouKind::Program,
+        action: None,
         target: Target::Blank,
         steps: (0..n)
             .map(|i| StepNode {
+                step_actions: Vec::new(),
                 name: format!("S{i}"),
                 initial: initial.contains(&i),
                 associations: Vec::new(),

@@ -74,6 +74,10 @@ pub fn build_table(
     limits: Limits,
     flatten: bool,
 ) -> Result<TableOutput, Vec<Diagnostic>> {
+    let refused = crate::codesys_actions(None, chart, "a transition table");
+    if !refused.is_empty() {
+        return Err(refused);
+    }
     if target == Target::Blank {
         return Err(vec![Diagnostic::error(
             "SFC0410",

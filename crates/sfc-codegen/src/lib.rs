@@ -4,3 +4,39 @@
 pub mod atmt;
 pub mod st;
 pub mod stl;
+
+use sfc_diagnostics::Diagnostic;
+use sfc_model::{Chart, Checked};
+
+/// SFC0806 for what the code generators do not generate yet and must not leave out: the
+/// charts of the POU's actions written in SFC (`checked`'s, when given) and the step actions
+/// of `chart`'s steps (CODESYS's). `target` names the output in the message.
+pub fn codesys_actions(checked: Option<&Checked>, chart: &Chart, target: &str) -> Vec<Diagnostic> {
+    let mut out: Vec<Diagnostic> = checked
+        .into_iter()
+        .flat_map(|c| c.action_charts.iter())
+        .filter(|c| c.item == chart.item)
+        .map(|c| {
+            let action = c.action.as_deref().unwrap_or_default();
+            Diagnostic::error(
+                "SFC0806",
+                c.name_span,
+                format!("`{}.{action}` is an action written in SFC, which {target} does not generate yet", c.pou),
+            )
+            .with_element(action)
+        })
+        .collect();
+    for s in &chart.steps {
+        if let Some(a) = s.step_actions.first() {
+            out.push(
+                Diagnostic::error(
+                    "SFC0806",
+                    a.span,
+                    format!("step `{}` has step actions (CODESYS), which {target} does not generate yet", s.name),
+                )
+                .with_element(&s.name),
+            );
+        }
+    }
+    out
+}

@@ -63,6 +63,10 @@ pub fn build_st(checked: &Checked, chart: &Chart) -> Result<String, Vec<Diagnost
     if checked.has_errors() {
         return Err(checked.diagnostics.iter().filter(|d| d.is_error()).cloned().collect());
     }
+    let refused = crate::codesys_actions(Some(checked), chart, "the ST target");
+    if !refused.is_empty() {
+        return Err(refused);
+    }
     let pou = match checked.unit.items.get(chart.item) {
         Some(ast::Item::Pou(p)) if p.name.is(&chart.pou) => p,
         _ => {
@@ -913,6 +917,8 @@ impl<'a> Gen<'a> {
                     }
                     None => Vec::new(),
                 },
+                // Refused before generation (SFC0806, `sfc-driver`).
+                ast::ActionBody::Sfc(_) => Vec::new(),
                 ast::ActionBody::Il(b) => {
                     if il::Ctx::needs_goto(b) && self.goto.is_empty() {
                         self.goto = self.names.fresh("SfcGoto");

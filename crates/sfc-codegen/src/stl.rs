@@ -107,6 +107,10 @@ pub fn build_stl(checked: &Checked, chart: &Chart, opts: StlOptions) -> Result<S
     if checked.has_errors() {
         return Err(checked.diagnostics.iter().filter(|d| d.is_error()).cloned().collect());
     }
+    let refused = crate::codesys_actions(Some(checked), chart, "the STL target");
+    if !refused.is_empty() {
+        return Err(refused);
+    }
     let Some(Item::Pou(pou)) = checked.unit.items.get(chart.item) else {
         return Err(vec![Diagnostic::error(
             "SFC0810",
@@ -378,6 +382,7 @@ impl<'a> Gen<'a> {
             match &a.body {
                 ast::ActionBody::St(stmts) => stmt_names(stmts, &mut used),
                 ast::ActionBody::Il(b) => il_names(b, &mut used),
+                ast::ActionBody::Sfc(_) => {}
             }
         }
         let mut referenced: HashSet<String> = HashSet::new();
@@ -709,6 +714,8 @@ impl<'a> Gen<'a> {
             let body = match &act.body {
                 ast::ActionBody::St(stmts) => low.st_body(stmts, &site),
                 ast::ActionBody::Il(b) => low.il_body(b, &site),
+                // Refused before generation (SFC0806, `sfc-driver`).
+                ast::ActionBody::Sfc(_) => None,
             };
             e.body = body.unwrap_or_default();
         }

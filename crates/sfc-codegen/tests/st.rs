@@ -256,6 +256,9 @@ fn examples_and_semantics_scenarios_behave_identically() {
         let name = s.chart_name();
         let translated = match translate_all(&name, s.chart_text()) {
             Ok(t) => t,
+            // CODESYS's SFC actions and step actions are refused by the ST target (SFC0806):
+            // refused, not translated wrongly.
+            Err(e) if e.contains("SFC0806") => continue,
             Err(e) => {
                 failures.push(format!("{}: not translated:\n{e}", s.name));
                 continue;

@@ -182,6 +182,12 @@ function block.";
 operand type does not fit.";
     "SFC0317" Warning "variable never used"
         "A local variable is declared but never read or written.";
+    "SFC0322" Warning "internal variable of an instance read from outside"
+        "A local variable (`VAR`) of a function block instance is read from outside the block \
+(`Valve.DI_Open`). IEC 61131-3 lets only inputs and outputs be reached through an instance; \
+CODESYS and TwinCAT also allow reading its local variables (their static analysis reports it as \
+SA0102), so projects written there do it. sfc reads the value as they do. Writing it stays an \
+error (SFC0309).";
     "SFC0318" Error "duplicate declaration"
         "A type, POU, enumerated value or structure field is declared twice, or a declaration \
 redefines a standard type, function or function block. Rename one of them.";
@@ -390,6 +396,12 @@ projects with an SVG HMI do. The library declares each as an elementary type (`H
 STRING), and the import adds that declaration, so the HMI variables are checked and simulated as \
 the values they are.";
 
+    "SFC0715" Warning "variable renamed with its uses"
+        "A variable of the imported POU is named by a word that begins a chart element in sfc's \
+text (`Step`, `Action`, `Transition`, `From`: IEC 61131-3 reserves them, CODESYS's ST does \
+not). It is imported as `X_Step`, and every use of it in the code of the file is renamed alike, \
+so the program does what it did. An export writes the new name.";
+
     "SFC0801" Error "chart cannot be translated to ST"
         "The Structured Text target (`--target st`) replaces the chart's POU by a plain ST POU of \
 the same kind and name. It needs an error-free file, a PROGRAM or FUNCTION_BLOCK (a FUNCTION \
@@ -416,6 +428,12 @@ END_ACTION` after the POU's statements, called `inst.Act();`), as CODESYS, TwinC
 e!COCKPIT write them. The Structured Text target copies them as they are: CODESYS and its family \
 compile the result, IEC 61131-3 compilers that know actions only inside a chart (MatIEC, which \
 Beremiz and OpenPLC v3 use) do not.";
+    "SFC0806" Error "CODESYS action not generated for this target"
+        "The chart's POU has an action written in SFC (a chart inside an action) or a step with \
+step actions (`ENTRY_ACTION`, `STEP_ACTION`, `EXIT_ACTION`), as CODESYS, TwinCAT and e!COCKPIT \
+write them. The ST, STL, ATMT and EATMT targets do not generate them yet, and leaving them out \
+would give a program that does something else. `sfc sim`, `sfc check`, `--target text` and \
+`--target plcopen` handle them.";
     "SFC0810" Error "not expressible in the S7-200 program"
         "The S7-200 statement-list target (`--target stl`) turns conditions into bit logic over \
 inputs, outputs, memory, step, timer and counter bits, and into compare contacts (`LDW>=`, \

@@ -246,6 +246,11 @@ pub struct Element {
     #[serde(skip_serializing_if = "Vec::is_empty")]
     #[cfg_attr(test, ts(as = "Option<Vec<Association>>", optional))]
     pub associations: Vec<Association>,
+    /// Steps: CODESYS's step actions as written (`ENTRY_ACTION := Init_entry`,
+    /// `STEP_ACTION := Motor.ACT_Run`, `EXIT_ACTION := …`), in order.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    #[cfg_attr(test, ts(as = "Option<Vec<String>>", optional))]
+    pub step_actions: Vec<String>,
     /// Steps and transitions: attribute pragmas the editor does not edit (see
     /// [`OtherAttribute`]).
     #[serde(skip_serializing_if = "Vec::is_empty")]

@@ -147,6 +147,7 @@ pub fn read<'a>(text: &str, chart: &'a Chart, pou: &ast::Pou, trivia: &[ast::Tri
         e.timeout = pragma::text(&s.attributes, "sfc.timeout");
         e.is_final = pragma::flag(&s.attributes, "sfc.final");
         e.attributes = pragma::others(&s.attributes, pragma::STEP);
+        e.step_actions = s.step_actions.iter().map(|a| format!("{} := {}", a.kind.keyword(), a.name())).collect();
         steps.push(e);
         step_stored.push(stored);
         let assocs = ast_steps

@@ -180,6 +180,21 @@ impl Probe {
         (String::new(), String::new())
     }
 
+    /// The text of a step action (`ENTRY_ACTION := Name`) as the text writes it, when it reads
+    /// back as one step action; `None` otherwise.
+    pub fn step_action(&mut self, written: &str) -> Option<String> {
+        let written = written.trim().trim_end_matches(';').trim().to_string();
+        let text = format!("PROGRAM P\n    INITIAL_STEP S:\n        {written};\n    END_STEP\n\n{END}END_PROGRAM\n");
+        let (_, elements) = parse_probe(&text)?;
+        match (elements.len(), &elements[0]) {
+            (2, SfcElement::Step(s)) if s.step_actions.len() == 1 && s.associations.is_empty() => {
+                let a = &s.step_actions[0];
+                Some(format!("{} := {}", a.kind.keyword(), a.name()))
+            }
+            _ => None,
+        }
+    }
+
     /// The text of an association (`Action(Q, T#1s, Indicator)`), when it reads back exactly.
     pub fn association(&mut self, a: &Association) -> Option<String> {
         let written = association_text(a);

@@ -132,7 +132,8 @@ pub fn action_body(text: &str, span: Span, name_span: Span) -> String {
 pub fn action_language(body: &ast::ActionBody) -> Language {
     match body {
         ast::ActionBody::Il(_) => Language::Il,
-        ast::ActionBody::St(_) => Language::St,
+        // An action written in SFC is edited as its text for now (its steps and transitions).
+        ast::ActionBody::St(_) | ast::ActionBody::Sfc(_) => Language::St,
     }
 }
 

@@ -39,6 +39,7 @@ pub fn as_read(e: &Element, probe: &mut Probe) -> Element {
             r.initial = e.initial;
             r.timeout = e.timeout.clone();
             r.is_final = e.is_final;
+            r.step_actions = e.step_actions.iter().filter_map(|a| probe.step_action(a)).collect();
         }
         Some(ElementKind::Transition) => {
             r.attributes = pragma::readable(&e.attributes, pragma::TRANSITION);
@@ -297,11 +298,14 @@ pub fn write(doc: &EditorDoc) -> Written {
             step_blocks.get(&i).map(|b| vec![("sfc.actionblock", b.join(";"))]).unwrap_or_default();
         element_attributes(e, &mut t, &extra);
         let kw = if e.initial { "INITIAL_STEP" } else { "STEP" };
-        match step_assocs.get(&i).filter(|a| !a.is_empty()) {
-            None => t.push_str(&format!("{IND}{kw} {}: END_STEP\n", e.name)),
-            Some(assocs) => {
+        let none = Vec::new();
+        let assocs = step_assocs.get(&i).unwrap_or(&none);
+        let step_actions: Vec<String> = e.step_actions.iter().filter_map(|a| probe.step_action(a)).collect();
+        match step_actions.len() + assocs.len() {
+            0 => t.push_str(&format!("{IND}{kw} {}: END_STEP\n", e.name)),
+            _ => {
                 t.push_str(&format!("{IND}{kw} {}:\n", e.name));
-                for a in assocs {
+                for a in step_actions.iter().chain(assocs) {
                     t.push_str(&format!("{IND}{IND}{a};\n"));
                 }
                 t.push_str(&format!("{IND}END_STEP\n"));

@@ -244,6 +244,15 @@ pub fn compile(checked: &Checked, target: BuildTarget, opts: &CompileOptions) ->
         _ => {}
     }
     let chart = pick_chart(checked, opts.pou).map_err(CompileError::Chart)?;
+    // (What the generators refuse, SFC0806, is their own check: `sfc_codegen::codesys_actions`;
+    // a transition table has no actions, so the charts of SFC actions are refused here for it.)
+    if target.table_target().is_some() {
+        let refused: Vec<Diagnostic> =
+            sfc_codegen::codesys_actions(Some(checked), chart, &format!("--target {}", target.name()));
+        if !refused.is_empty() {
+            return Err(CompileError::Diagnostics(refused));
+        }
+    }
     let built = match (target, target.table_target()) {
         (_, Some(table)) => {
             let limits = Limits::of(table, opts.nstep, opts.ntr);

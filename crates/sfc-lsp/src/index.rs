@@ -377,6 +377,13 @@ impl Builder<'_> {
             }
             self.sfc_decls(elements);
         }
+        // The actions of a POU that is no chart; the steps of those written in SFC.
+        for a in &p.actions {
+            self.add(&a.name.text, SymbolKind::Action, a.name.span, a.span);
+            if let ActionBody::Sfc(inner) = &a.body {
+                self.sfc_decls(inner);
+            }
+        }
         self.pou = None;
     }
 
@@ -455,6 +462,9 @@ impl Builder<'_> {
                 }
                 SfcElement::Action(a) => {
                     self.add(&a.name.text, SymbolKind::Action, a.name.span, a.span);
+                    if let ActionBody::Sfc(inner) = &a.body {
+                        self.sfc_decls(inner);
+                    }
                 }
                 SfcElement::Transition(t) => {
                     unnamed += 1;
@@ -503,47 +513,58 @@ impl Builder<'_> {
         match &p.body {
             ast::Body::St(stmts) => self.stmts(stmts),
             ast::Body::Il(il) => self.il(il),
-            ast::Body::Sfc(elements) => {
-                for e in elements {
-                    match e {
-                        SfcElement::Step(s) => {
-                            for a in &s.associations {
-                                self.occ(&a.action, Role::Association, None);
-                                if let Some(q) = &a.qualifier {
-                                    self.ix
-                                        .qualifiers
-                                        .push(QualifierUse { span: q.span, name: q.text.to_ascii_uppercase() });
-                                }
-                                if let Some(d) = &a.duration {
-                                    self.expr(d);
-                                }
-                                for i in &a.indicators {
-                                    self.occ(i, Role::Code, None);
-                                }
-                            }
-                        }
-                        SfcElement::Transition(t) => {
-                            if let Some(p) = &t.priority {
-                                self.expr(p);
-                            }
-                            for s in t.from.iter().chain(&t.to) {
-                                self.occ(s, Role::StepLink, None);
-                            }
-                            match &t.condition {
-                                Condition::St(e) => self.expr(e),
-                                Condition::Il(il) => self.il(il),
-                                Condition::Missing => {}
-                            }
-                        }
-                        SfcElement::Action(a) => match &a.body {
-                            ActionBody::St(stmts) => self.stmts(stmts),
-                            ActionBody::Il(il) => self.il(il),
-                        },
-                    }
-                }
-            }
+            ast::Body::Sfc(elements) => self.chart_body(elements),
+        }
+        for a in &p.actions {
+            self.action_body(&a.body);
         }
         self.pou = None;
+    }
+
+    fn action_body(&mut self, body: &ActionBody) {
+        match body {
+            ActionBody::St(stmts) => self.stmts(stmts),
+            ActionBody::Il(il) => self.il(il),
+            ActionBody::Sfc(elements) => self.chart_body(elements),
+        }
+    }
+
+    fn chart_body(&mut self, elements: &[SfcElement]) {
+        for e in elements {
+            match e {
+                SfcElement::Step(s) => {
+                    for a in &s.step_actions {
+                        self.expr(&a.action);
+                    }
+                    for a in &s.associations {
+                        self.occ(&a.action, Role::Association, None);
+                        if let Some(q) = &a.qualifier {
+                            self.ix.qualifiers.push(QualifierUse { span: q.span, name: q.text.to_ascii_uppercase() });
+                        }
+                        if let Some(d) = &a.duration {
+                            self.expr(d);
+                        }
+                        for i in &a.indicators {
+                            self.occ(i, Role::Code, None);
+                        }
+                    }
+                }
+                SfcElement::Transition(t) => {
+                    if let Some(p) = &t.priority {
+                        self.expr(p);
+                    }
+                    for s in t.from.iter().chain(&t.to) {
+                        self.occ(s, Role::StepLink, None);
+                    }
+                    match &t.condition {
+                        Condition::St(e) => self.expr(e),
+                        Condition::Il(il) => self.il(il),
+                        Condition::Missing => {}
+                    }
+                }
+                SfcElement::Action(a) => self.action_body(&a.body),
+            }
+        }
     }
 
     fn type_spec(&mut self, t: &TypeSpec) {

@@ -128,6 +128,8 @@ pub struct StepNode {
     pub name: String,
     pub initial: bool,
     pub associations: Vec<Association>,
+    /// CODESYS's step actions (entry, step, exit), as written.
+    pub step_actions: Vec<ast::StepAction>,
     /// `sfc.tag`: the ATMT/EATMT state number.
     pub tag: Option<u32>,
     /// `sfc.timeout`: supervision time in microseconds.
@@ -196,6 +198,9 @@ pub struct Chart {
     pub item: usize,
     pub pou: String,
     pub pou_kind: ast::PouKind,
+    /// The action written in SFC whose body this chart is (CODESYS's SFC action); `None` for
+    /// the POU's body. Its actions are the POU's actions that its steps name.
+    pub action: Option<String>,
     pub target: Target,
     pub steps: Vec<StepNode>,
     pub transitions: Vec<TransitionNode>,

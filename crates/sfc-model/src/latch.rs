@@ -33,6 +33,8 @@ fn writes(chart: &Chart) -> Vec<(String, Write, Span, usize)> {
         match &a.body {
             ActionBody::St(stmts) => st_writes(stmts, i, &mut out),
             ActionBody::Il(body) => il_writes(&body.instructions, i, &mut out),
+            // Runs its own chart, whose steps name the POU's actions (checked with them).
+            ActionBody::Sfc(_) => {}
         }
     }
     out

@@ -48,6 +48,10 @@ pub struct Checked {
     pub unit: ast::SourceUnit,
     /// One chart per SFC POU, in file order.
     pub charts: Vec<Chart>,
+    /// The charts of actions written in SFC (CODESYS's SFC actions), in file order: each names
+    /// its POU (`item`, `pou`) and its action ([`Chart::action`]). In the POU's AST such an
+    /// action's body is left as an empty `ActionBody::Sfc`.
+    pub action_charts: Vec<Chart>,
     /// Every diagnostic, sorted by position.
     pub diagnostics: Vec<Diagnostic>,
     /// With [`CheckOptions::keep_types`]: the type the checker gave each ST expression and IL
@@ -119,6 +123,7 @@ pub fn check_parsed(
     let (type_diags, expr_types) = code::check_unit(tree.unit(), opts.keep_types);
     let mut unit = tree.into_owned();
     let mut charts = Vec::new();
+    let mut action_charts = Vec::new();
     for (i, item) in unit.items.iter_mut().enumerate() {
         if let ast::Item::Globals(block) = item {
             lower::check_variable_attributes(block, file_id, &mut diags);
@@ -132,8 +137,13 @@ pub fn check_parsed(
         let target = opts.target.or(attr_target).unwrap_or(Target::Blank);
         lower::check_pou_actions(pou, &mut diags);
         let mut body = std::mem::replace(&mut pou.body, ast::Body::St(Vec::new()));
+        let mut inner = take_action_charts(&mut body, &mut pou.actions);
+        let mentioned: rustc_hash::FxHashSet<String> =
+            inner.iter().flat_map(|(_, e)| lower::mentioned_actions(e)).collect();
+        let mut main: Option<usize> = None;
         if let ast::Body::Sfc(elements) = &mut body {
-            let chart = lower::lower(file_id, i, pou, elements, target, &mut diags);
+            let of = lower::ChartOf { mentioned, ..Default::default() };
+            let chart = lower::lower_chart(file_id, i, pou, elements, target, of, &mut diags);
             validate::structure(&chart, text, &mut diags);
             latch::latched_outputs(pou, &chart, &mut diags);
             let limits = Limits::of(target, opts.nstep, opts.ntr);
@@ -143,7 +153,50 @@ pub fn check_parsed(
                 rules.retain(|d| !FLATTENING_REPLACES.contains(&d.code));
             }
             diags.extend(rules);
+            main = Some(charts.len());
             charts.push(chart);
+        }
+        // The charts of the actions written in SFC: their names join the POU's namespace after
+        // the body's, and their steps name the POU's actions.
+        let mut taken: Vec<(String, Span, &'static str)> = Vec::new();
+        if let Some(c) = main {
+            taken.extend(charts[c].steps.iter().map(|s| (s.name.clone(), s.name_span, "a step")));
+            taken.extend(charts[c].actions.iter().map(|a| (a.name.clone(), a.name_span, "an action")));
+        }
+        taken.extend(pou.actions.iter().map(|a| (a.name.text.clone(), a.name.span, "an action")));
+        for ((action, name_span, span), elements) in inner.iter_mut() {
+            let wanted = lower::mentioned_actions(elements);
+            let actions: Vec<ActionNode> = match main {
+                Some(c) => charts[c]
+                    .actions
+                    .iter()
+                    .filter(|a| wanted.contains(&a.name.to_ascii_uppercase()))
+                    .cloned()
+                    .collect(),
+                None => pou
+                    .actions
+                    .iter()
+                    .filter(|a| wanted.contains(&a.name.key()))
+                    .map(|a| ActionNode {
+                        name: a.name.text.clone(),
+                        body: a.body.clone(),
+                        attributes: a.attributes.clone(),
+                        name_span: a.name.span,
+                        span: a.span,
+                    })
+                    .collect(),
+            };
+            let of = lower::ChartOf {
+                action: Some(action.clone()),
+                spans: Some((*name_span, *span)),
+                taken: taken.clone(),
+                actions,
+                ..Default::default()
+            };
+            let chart = lower::lower_chart(file_id, i, pou, elements, target, of, &mut diags);
+            validate::structure(&chart, text, &mut diags);
+            taken.extend(chart.steps.iter().map(|s| (s.name.clone(), s.name_span, "a step")));
+            action_charts.push(chart);
         }
         pou.body = body;
     }
@@ -151,7 +204,26 @@ pub fn check_parsed(
     bang_outside_eatmt(file_id, text, &charts, &mut diags);
     sfc_diagnostics::sort(&mut diags);
     diags.dedup();
-    Checked { file: SourceFile::new(name, text), unit, charts, diagnostics: diags, expr_types }
+    Checked { file: SourceFile::new(name, text), unit, charts, action_charts, diagnostics: diags, expr_types }
+}
+
+/// An action written in SFC: its name, the name's span and its whole span.
+type ActionChart = (String, Span, Span);
+
+/// Takes the charts of a POU's actions written in SFC out of the AST, as `(action, elements)`
+/// in declaration order, leaving an empty `ActionBody::Sfc` in their place.
+fn take_action_charts(body: &mut ast::Body, actions: &mut [ast::Action]) -> Vec<(ActionChart, Vec<ast::SfcElement>)> {
+    let in_chart = body.sfc_mut().into_iter().flatten().filter_map(|e| match e {
+        ast::SfcElement::Action(a) => Some(a),
+        _ => None,
+    });
+    in_chart
+        .chain(actions.iter_mut())
+        .filter_map(|a| match &mut a.body {
+            ast::ActionBody::Sfc(e) => Some(((a.name.text.clone(), a.name.span, a.span), std::mem::take(e))),
+            _ => None,
+        })
+        .collect()
 }
 
 /// `!c5` is the EATMT spelling of a negated input; anywhere else it is not IEC 61131-3.
@@ -183,8 +255,17 @@ pub fn dependencies(unit: &ast::SourceUnit, text: &str, pou: &str) -> std::colle
     use std::collections::{HashMap, HashSet};
     let mut spans: HashMap<String, Span> = HashMap::new();
     for item in &unit.items {
-        if let ast::Item::Pou(p) = item {
-            spans.entry(p.name.text.to_ascii_uppercase()).or_insert(p.span);
+        match item {
+            ast::Item::Pou(p) => {
+                spans.entry(p.name.text.to_ascii_uppercase()).or_insert(p.span);
+            }
+            // A POU kept as written is depended on like any other.
+            ast::Item::Verbatim(v) if matches!(v.keyword.as_str(), "PROGRAM" | "FUNCTION_BLOCK" | "FUNCTION") => {
+                if let Some(n) = &v.name {
+                    spans.entry(n.text.to_ascii_uppercase()).or_insert(v.span);
+                }
+            }
+            _ => {}
         }
     }
     let mut out = HashSet::new();
@@ -238,7 +319,51 @@ pub fn errors_for(checked: &Checked, pou: &str) -> Vec<Diagnostic> {
 /// block kept as written, so item numbers stay), so the rest can be compiled; returns whether
 /// any was left out.
 pub fn set_aside_unrelated(checked: &mut Checked, pou: &str) -> bool {
-    let deps = dependencies(&checked.unit, &checked.file.text, pou);
+    set_aside(checked, pou, false)
+}
+
+/// Leaves out of `checked` every POU that `pou` does not depend on, with an error or not (a
+/// simulation of `pou` runs only what it uses, so what it cannot run elsewhere in the file does
+/// not stop it); returns whether any was left out.
+pub fn set_aside_unused(checked: &mut Checked, pou: &str) -> bool {
+    set_aside(checked, pou, true)
+}
+
+fn set_aside(checked: &mut Checked, pou: &str, all: bool) -> bool {
+    let mut deps = dependencies(&checked.unit, &checked.file.text, pou);
+    if all {
+        // The file's global variables and types may name blocks too (a global instance): those
+        // stay, with what they use. (A configuration's program instances are the runtime's.)
+        let text = &checked.file.text;
+        let mut outside = String::new();
+        for item in &checked.unit.items {
+            let span = match item {
+                ast::Item::Globals(b) => b.span,
+                ast::Item::Types(t) => t.span,
+                _ => continue,
+            };
+            outside.push_str(text.get(span.start as usize..span.end as usize).unwrap_or(""));
+            outside.push('\n');
+        }
+        let (toks, _) = sfc_syntax::lexer::lex(0, &outside);
+        let names: std::collections::HashSet<String> = toks
+            .iter()
+            .filter(|t| t.kind == sfc_syntax::lexer::TokenKind::Ident)
+            .map(|t| outside[t.start as usize..t.end as usize].to_ascii_uppercase())
+            .collect();
+        let pous: Vec<String> = checked
+            .unit
+            .items
+            .iter()
+            .filter_map(|i| match i {
+                ast::Item::Pou(p) if names.contains(&p.name.text.to_ascii_uppercase()) => Some(p.name.text.clone()),
+                _ => None,
+            })
+            .collect();
+        for name in pous {
+            deps.extend(dependencies(&checked.unit, text, &name));
+        }
+    }
     let errors: Vec<Span> = checked.diagnostics.iter().filter(|d| d.is_error()).map(|d| d.span).collect();
     let mut any = false;
     for item in checked.unit.items.iter_mut() {
@@ -246,7 +371,7 @@ pub fn set_aside_unrelated(checked: &mut Checked, pou: &str) -> bool {
         if deps.contains(&p.name.text.to_ascii_uppercase()) {
             continue;
         }
-        if !errors.iter().any(|e| p.span.start <= e.start && e.start < p.span.end) {
+        if !all && !errors.iter().any(|e| p.span.start <= e.start && e.start < p.span.end) {
             continue;
         }
         let text = checked.file.text.get(p.span.start as usize..p.span.end as usize).unwrap_or("").to_string();
@@ -269,6 +394,7 @@ pub fn set_aside_unrelated(checked: &mut Checked, pou: &str) -> bool {
             .map(|(k, _)| k)
             .collect();
         checked.charts.retain(|c| kept.contains(&c.item));
+        checked.action_charts.retain(|c| kept.contains(&c.item));
         checked.diagnostics.retain(|d| !d.is_error() || errors_for_span(&checked.unit, d.span));
     }
     any

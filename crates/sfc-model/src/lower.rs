@@ -285,12 +285,56 @@ pub fn lower(
     target: Target,
     diags: &mut Vec<Diagnostic>,
 ) -> Chart {
+    lower_chart(file, item, pou, elements, target, ChartOf::default(), diags)
+}
+
+/// Which chart of a POU is lowered: its body (the default), or an action written in SFC.
+#[derive(Default)]
+pub struct ChartOf {
+    /// The action written in SFC; `None` for the POU's body.
+    pub action: Option<String>,
+    /// The action's name and whole span (the chart's `name_span` and `span`).
+    pub spans: Option<(Span, Span)>,
+    /// Names of the POU declared before this chart (other charts' steps, the actions), which
+    /// its names must not reuse: `(name, span, "a step" | "an action")`.
+    pub taken: Vec<(String, Span, &'static str)>,
+    /// For an action's chart: the POU's actions (the chart declares none of its own).
+    pub actions: Vec<ActionNode>,
+    /// Actions named by the associations of the POU's other charts (not "never used").
+    pub mentioned: FxHashSet<String>,
+}
+
+/// The actions a chart's steps name, in associations and as step actions (upper case).
+pub fn mentioned_actions(elements: &[ast::SfcElement]) -> FxHashSet<String> {
+    let mut out = FxHashSet::default();
+    for e in elements {
+        if let ast::SfcElement::Step(s) = e {
+            out.extend(s.associations.iter().map(|a| a.action.key()));
+            out.extend(s.step_actions.iter().map(|a| a.name().to_ascii_uppercase()));
+        }
+    }
+    out
+}
+
+/// [`lower`] of one chart of a POU (see [`ChartOf`]).
+pub fn lower_chart(
+    file: u32,
+    item: usize,
+    pou: &ast::Pou,
+    elements: &mut [ast::SfcElement],
+    target: Target,
+    of: ChartOf,
+    diags: &mut Vec<Diagnostic>,
+) -> Chart {
     let vars = pou_variables(pou);
     let mut names: HashMap<String, Declared> = HashMap::default();
     // Clashes between two variables are the type checker's (it checks every POU's
     // declarations); here variables only seed the namespace that chart names must not reuse.
     for v in &vars {
         names.entry(v.name.to_ascii_uppercase()).or_insert(Declared { span: v.span, kind: "a variable" });
+    }
+    for (name, span, kind) in &of.taken {
+        names.entry(name.to_ascii_uppercase()).or_insert(Declared { span: *span, kind });
     }
     let mut declare = |name: &str, span: Span, kind: &'static str, diags: &mut Vec<Diagnostic>| -> bool {
         if name.is_empty() {
@@ -319,9 +363,13 @@ pub fn lower(
 
     // Steps and actions first (transitions and associations refer to them in any order).
     let mut steps: Vec<StepNode> = Vec::new();
-    let mut actions: Vec<ActionNode> = Vec::new();
     let mut step_index: HashMap<String, StepId> = HashMap::default();
     let mut action_index: HashMap<String, ActionId> = HashMap::default();
+    let is_action_chart = of.action.is_some();
+    let mut actions: Vec<ActionNode> = of.actions;
+    for (k, a) in actions.iter().enumerate() {
+        action_index.insert(a.name.to_ascii_uppercase(), k);
+    }
     for el in elements.iter_mut() {
         match el {
             ast::SfcElement::Step(s) => {
@@ -331,6 +379,7 @@ pub fn lower(
                     name: s.name.text.clone(),
                     initial: s.initial,
                     associations: Vec::new(),
+                    step_actions: s.step_actions.clone(),
                     tag: tag_attr(&s.attributes, diags),
                     timeout: timeout_attr(&s.attributes, diags),
                     is_final: final_attr(&s.attributes, diags),
@@ -385,15 +434,9 @@ pub fn lower(
 
     // Unused actions: judged on the associations as written, so an association rejected for
     // another reason (say an unknown qualifier) does not also make its action "unused".
-    if !matches!(target, Target::Atmt | Target::Eatmt) {
-        let mentioned: FxHashSet<String> = elements
-            .iter()
-            .filter_map(|e| match e {
-                ast::SfcElement::Step(s) => Some(s.associations.iter().map(|a| a.action.key())),
-                _ => None,
-            })
-            .flatten()
-            .collect();
+    if !matches!(target, Target::Atmt | Target::Eatmt) && !is_action_chart {
+        let mut mentioned = mentioned_actions(elements);
+        mentioned.extend(of.mentioned);
         for action in &actions {
             if !mentioned.contains(&action.name.to_ascii_uppercase()) {
                 diags.push(
@@ -496,12 +539,13 @@ pub fn lower(
         item,
         pou: pou.name.text.clone(),
         pou_kind: pou.kind,
+        action: of.action,
         target,
         steps,
         transitions,
         actions,
-        name_span: pou.name.span,
-        span: pou.span,
+        name_span: of.spans.map_or(pou.name.span, |s| s.0),
+        span: of.spans.map_or(pou.span, |s| s.1),
     }
 }
 

@@ -73,3 +73,14 @@ pub fn all<'a>(attrs: &'a [sfc_syntax::ast::Attribute], name: &'a str) -> impl I
 pub fn get_num(attrs: &[sfc_syntax::ast::Attribute], name: &str) -> Option<f64> {
     get(attrs, name).and_then(|v| v.trim().parse::<f64>().ok()).filter(|v| v.is_finite())
 }
+
+/// CODESYS's data name of an SFC element's properties (a step's step actions among them).
+pub const CODESYS_SFC_ELEMENT: &str = "http://www.3s-software.com/plcopenxml/sfc/element";
+
+/// The GUIDs of CODESYS's step actions in a step's `sfc/element` properties, with the word the
+/// text writes each with.
+pub const STEP_ACTION_GUIDS: [(&str, sfc_syntax::ast::StepActionKind); 3] = [
+    ("a6b08bd8-b696-47e3-9cbf-7408b61c9ff8", sfc_syntax::ast::StepActionKind::Entry),
+    ("700a583f-b4d4-43e4-8c14-629c7cd3bec8", sfc_syntax::ast::StepActionKind::Main),
+    ("a2621e18-7de3-4ea6-ae6d-89e9e0b7befd", sfc_syntax::ast::StepActionKind::Exit),
+];

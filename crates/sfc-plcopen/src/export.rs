@@ -492,8 +492,9 @@ fn pou_body_text(src: &str, pou: &ast::Pou) -> String {
     let end = pou.span.end.saturating_sub(kw.len() as u32);
     let mut end = if slice(src, Span::new(0, end, pou.span.end)).eq_ignore_ascii_case(kw) { end } else { pou.span.end };
     // The actions after the statements are written as the POU's `actions`.
+    // (The first action's attributes are written before its ACTION keyword, and are its own.)
     if let Some(first) = pou.actions.first() {
-        end = end.min(first.span.start);
+        end = end.min(first.attributes.iter().map(|a| a.span.start).fold(first.span.start, u32::min));
     }
     let text = slice(src, Span::new(0, start, end.max(start)));
     dedent(text, 0)
@@ -501,21 +502,26 @@ fn pou_body_text(src: &str, pou: &ast::Pou) -> String {
 
 /// The `actions` of a POU that is no chart (CODESYS's actions of a function block), each with
 /// its body as written.
-fn write_pou_actions(x: &mut X, src: &str, actions: &[ast::Action]) {
+fn write_pou_actions(x: &mut X, src: &str, actions: &[ast::Action], subs: &[&sfc_model::Chart]) {
     if actions.is_empty() {
         return;
     }
     x.open("actions", &[]);
     for a in actions {
         x.open("action", &[("name", a.name.text.clone())]);
-        x.open("body", &[]);
-        let lang = match a.body {
-            ast::ActionBody::St(_) => "ST",
-            ast::ActionBody::Il(_) => "IL",
-        };
-        x.formatted(lang, &sfc::action_body_text(src, a.name.span, a.span));
-        x.close("body");
-        x.add_data(&a.attributes, &[], &[attrs::DESCRIPTION]);
+        let sub = subs.iter().find(|c| a.body.sfc().is_some() && c.action.as_deref() == Some(&a.name.text));
+        match sub {
+            Some(sub) => {
+                let none = (Default::default(), Default::default());
+                sfc::write_sfc(x, src, sub, &a.attributes, &none.0, &none.1);
+            }
+            None => {
+                x.open("body", &[]);
+                x.formatted(sfc::body_lang(&a.body), &sfc::action_body_text(src, a.name.span, a.span));
+                x.close("body");
+            }
+        }
+        x.add_data(&a.attributes, &[], &[attrs::DESCRIPTION, attrs::COMMENT, attrs::LOOSE]);
         x.documentation(&a.attributes);
         x.close("action");
     }
@@ -623,7 +629,7 @@ pub fn export(checked: &Checked) -> Result<String, Vec<Diagnostic>> {
         match item {
             ast::Item::Pou(pou) => {
                 let chart = checked.charts.iter().find(|c| c.item == i);
-                write_pou(&mut x, src, pou, chart);
+                write_pou(&mut x, src, pou, chart, &action_charts(checked, i));
             }
             ast::Item::Verbatim(v) => write_verbatim_pou(&mut x, v),
             _ => {}
@@ -686,7 +692,7 @@ pub fn export_pou(checked: &Checked) -> Result<String, Vec<Diagnostic>> {
     for (i, item) in checked.unit.items.iter().enumerate() {
         if let ast::Item::Pou(pou) = item {
             let chart = checked.charts.iter().find(|c| c.item == i);
-            write_pou(&mut x, src, pou, chart);
+            write_pou(&mut x, src, pou, chart, &action_charts(checked, i));
             return Ok(x.finish());
         }
     }
@@ -760,11 +766,16 @@ fn write_verbatim_pou(x: &mut X, v: &ast::Verbatim) {
         p.attributes = v.attributes.clone();
         let checked = sfc_model::check_source(0, "", &v.text, &sfc_model::CheckOptions::default());
         let chart = checked.charts.first().filter(|_| matches!(p.body, ast::Body::Sfc(_)));
-        write_pou(x, &checked.file.text, &p, chart);
+        write_pou(x, &checked.file.text, &p, chart, &action_charts(&checked, 0));
     }
 }
 
-fn write_pou(x: &mut X, src: &str, pou: &ast::Pou, chart: Option<&sfc_model::Chart>) {
+/// The charts of the actions written in SFC of item `i`.
+fn action_charts(checked: &Checked, i: usize) -> Vec<&sfc_model::Chart> {
+    checked.action_charts.iter().filter(|c| c.item == i).collect()
+}
+
+fn write_pou(x: &mut X, src: &str, pou: &ast::Pou, chart: Option<&sfc_model::Chart>, subs: &[&sfc_model::Chart]) {
     let kind = match pou.kind {
         ast::PouKind::Program => "program",
         ast::PouKind::FunctionBlock => "functionBlock",
@@ -783,9 +794,9 @@ fn write_pou(x: &mut X, src: &str, pou: &ast::Pou, chart: Option<&sfc_model::Cha
         }
         x.close("interface");
     }
-    write_pou_actions(x, src, &pou.actions);
+    write_pou_actions(x, src, &pou.actions, subs);
     match (&pou.body, chart) {
-        (ast::Body::Sfc(_), Some(chart)) => sfc::write_chart(x, src, pou, chart),
+        (ast::Body::Sfc(_), Some(chart)) => sfc::write_chart(x, src, pou, chart, subs),
         (ast::Body::Il(_), _) => {
             x.open("body", &[]);
             x.formatted("IL", &pou_body_text(src, pou));

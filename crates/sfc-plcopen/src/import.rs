@@ -148,6 +148,12 @@ pub(crate) struct Ctx<'i> {
     pub externals: Vec<(String, Frag)>,
     /// Upper-case names of the enumerated types of the file (`Enum.Value` is `Enum#Value`).
     pub enum_types: HashSet<String>,
+    /// Variables named by a word that sfc's text reserves for charts and CODESYS's ST does not
+    /// (`Step`, `Action`, `Transition`): upper-case name → the name they are imported as; their
+    /// uses in the code are renamed alike (`dialect::map`).
+    pub renamed: std::collections::HashMap<String, String>,
+    /// The file's PROGRAMs (upper case): CODESYS code may read their variables (`Main.X`).
+    pub programs: HashSet<String>,
     /// Upper-case names of every global variable of the file.
     pub global_names: HashSet<String>,
     /// The name of the POU being written.
@@ -211,6 +217,16 @@ impl<'i> Ctx<'i> {
             return f;
         }
         let fixed = sanitize(raw);
+        if what == "variable" && self.renamed.contains_key(&raw.to_ascii_uppercase()) {
+            self.diag(
+                "SFC0715",
+                range.clone(),
+                format!("the variable `{raw}` is imported as `{fixed}`, and so are its uses in the code"),
+            )
+            .notes
+            .push(format!("`{}` begins a chart element in sfc's text (IEC 61131-3 reserves it); CODESYS lets a variable be called so", raw.to_ascii_uppercase()));
+            return Frag::located(fixed, range);
+        }
         self.diag(
             "SFC0704",
             range.clone(),
@@ -260,6 +276,12 @@ pub(crate) const COMMENTS_KEY: &str = "\u{0}comments";
 /// attributes, foreign `addData` → `sfc.adddata`. Comments an export kept (in our `addData`,
 /// their text also in `documentation`) come back as comments.
 pub(crate) fn element_attrs(n: Node) -> Vec<(String, String)> {
+    element_attrs_without(n, &|_| false)
+}
+
+/// [`element_attrs`] leaving out of the foreign `addData` the elements `skip` names (what the
+/// text holds in its own words, such as a step's step actions).
+pub(crate) fn element_attrs_without(n: Node, skip: &dyn Fn(Node) -> bool) -> Vec<(String, String)> {
     let mut out = Vec::new();
     let comments = own_data(n, "comments").and_then(|c| attr(c, "text")).filter(|t| !t.trim().is_empty());
     if let Some(c) = comments {
@@ -281,7 +303,7 @@ pub(crate) fn element_attrs(n: Node) -> Vec<(String, String)> {
                     }
                 }
             } else {
-                foreign.push_str(&xml::serialize(data));
+                foreign.push_str(&xml::serialize_without(data, skip));
             }
         }
         if !foreign.is_empty() {
@@ -353,16 +375,35 @@ pub(crate) fn project(cx: &mut Ctx, root: Node) {
         .filter_map(|g| attr(*g, "name").map(|n| n.trim().to_ascii_uppercase()))
         .filter(|n| !n.is_empty())
         .collect();
+    cx.programs = root
+        .descendants()
+        .filter(|d| d.is_element() && d.tag_name().name() == "pou" && attr(*d, "pouType") == Some("program"))
+        .filter_map(|p| attr(p, "name").map(|n| n.trim().to_ascii_uppercase()))
+        .collect();
+    cx.renamed = root
+        .descendants()
+        .filter(|d| d.is_element() && d.tag_name().name() == "variable")
+        .filter_map(|v| attr(v, "name").map(str::trim))
+        .filter(|n| dialect::SFC_WORDS.iter().any(|w| w.eq_ignore_ascii_case(n)))
+        .map(|n| (n.to_ascii_uppercase(), sanitize(n)))
+        .collect();
     cx.global_names = lists
         .iter()
         .flat_map(|g| children(*g, "variable"))
         .filter_map(|v| attr(v, "name").map(|n| n.trim().to_ascii_uppercase()))
         .collect();
-    // Data types.
-    if let Some(dt) = types.and_then(|t| child(t, "dataTypes")) {
-        let list: Vec<Node> = children(dt, "dataType").collect();
-        if !list.is_empty() {
-            cx.em.open(anchor(dt));
+    // Data types: the project's, and those CODESYS keeps in a resource's `addData` (an
+    // application's data types, one per `…/datatype` data).
+    let dt = types.and_then(|t| child(t, "dataTypes"));
+    let mut list: Vec<Node> = dt.map(|dt| children(dt, "dataType").collect()).unwrap_or_default();
+    list.extend(root.descendants().filter(|d| {
+        d.is_element()
+            && d.tag_name().name() == "dataType"
+            && d.parent().is_some_and(|p| p.tag_name().name() == "data" && attr(p, "name") == Some(CODESYS_DATATYPE))
+    }));
+    if let Some(first) = list.first().copied() {
+        {
+            cx.em.open(anchor(dt.unwrap_or(first)));
             cx.em.str("TYPE\n");
             for d in list {
                 cx.em.open(anchor(d));
@@ -481,8 +522,11 @@ pub(crate) fn project(cx: &mut Ctx, root: Node) {
     // Beremiz's `python_eval` or `HMI_*` blocks): opaque function blocks, with a warning.
     opaque_types(cx, root, &pous);
     // POUs.
-    let any_sfc =
-        pous.iter().any(|(p, _)| child(*p, "body").is_some_and(|b| elements(b).any(|e| e.tag_name().name() == "SFC")));
+    // A chart is a POU's body or an action's (CODESYS's SFC action).
+    let is_chart = |n: Node| child(n, "body").is_some_and(|b| elements(b).any(|e| e.tag_name().name() == "SFC"));
+    let any_sfc = pous
+        .iter()
+        .any(|(p, _)| is_chart(*p) || child(*p, "actions").is_some_and(|a| children(a, "action").any(is_chart)));
     let mut externals: Vec<Vec<(String, Frag)>> = Vec::new();
     for (_, r) in &resources {
         let mut list = Vec::new();
@@ -533,6 +577,9 @@ fn pou_list(pous: &[(Node, Option<usize>)]) -> String {
 pub(crate) const CODESYS_APPLICATION: &str = "http://www.3s-software.com/plcopenxml/application";
 /// The `name` of CODESYS's data holding one POU of a resource.
 pub(crate) const CODESYS_POU: &str = "http://www.3s-software.com/plcopenxml/pou";
+
+/// The `data` name under which CODESYS keeps an application's data types.
+pub(crate) const CODESYS_DATATYPE: &str = "http://www.3s-software.com/plcopenxml/datatype";
 
 /// The POUs a CODESYS resource keeps in its `addData`.
 fn resource_pous<'a, 'i>(r: Node<'a, 'i>) -> Vec<Node<'a, 'i>> {
@@ -959,7 +1006,7 @@ pub(crate) fn action_body(cx: &mut Ctx, body: Node, indent: &str) {
     let lang = elements(body).find(|e| ["IL", "ST", "FBD", "LD", "SFC"].contains(&e.tag_name().name()));
     match lang {
         None => {
-            cx.diag("SFC0705", anchor(body), "the action body has no IL, ST, FBD or LD");
+            cx.diag("SFC0705", anchor(body), "the action body has no IL, ST, FBD, LD or SFC");
         }
         Some(l) => {
             cx.em.open(anchor(l));
@@ -968,9 +1015,7 @@ pub(crate) fn action_body(cx: &mut Ctx, body: Node, indent: &str) {
                     let t = dialect::map(cx, &xml::formatted_text(l));
                     cx.em.lines(&t, indent)
                 }
-                "SFC" => {
-                    cx.diag("SFC0705", anchor(l), "an action body written in SFC cannot be imported");
-                }
+                "SFC" => sfc::action_chart(cx, l),
                 _ => {
                     let stmts = network::statements(cx, l, indent);
                     cx.em.frag(&stmts);
@@ -1321,6 +1366,8 @@ pub(crate) fn run(file: u32, xml_text: &str) -> (String, SourceMap, Vec<Diagnost
         compute: Vec::new(),
         scoped_globals: false,
         gvl_names: HashSet::new(),
+        renamed: Default::default(),
+        programs: HashSet::new(),
         externals: Vec::new(),
         enum_types: HashSet::new(),
         global_names: HashSet::new(),

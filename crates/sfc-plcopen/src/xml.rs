@@ -350,8 +350,13 @@ pub(crate) fn offset_of(src: &str, row: u32, col: u32) -> u32 {
 /// The element itself is written without a namespace declaration: it takes the namespace of
 /// the place it is written to (a PLCopen `addData/data` element, in whichever PLCopen version).
 pub(crate) fn serialize(n: Node) -> String {
+    serialize_without(n, &|_| false)
+}
+
+/// [`serialize`] leaving out the elements `skip` names (and what they hold).
+pub(crate) fn serialize_without(n: Node, skip: &dyn Fn(Node) -> bool) -> String {
     let mut out = String::new();
-    ser(n, n.tag_name().namespace(), &mut out, 0);
+    ser(n, n.tag_name().namespace(), &mut out, 0, skip);
     out
 }
 
@@ -359,8 +364,8 @@ pub(crate) fn serialize(n: Node) -> String {
 /// dropped, so no input can exhaust the stack).
 const MAX_NESTING: usize = 128;
 
-fn ser(n: Node, parent_ns: Option<&str>, out: &mut String, depth: usize) {
-    if depth > MAX_NESTING {
+fn ser(n: Node, parent_ns: Option<&str>, out: &mut String, depth: usize, skip: &dyn Fn(Node) -> bool) {
+    if depth > MAX_NESTING || skip(n) {
         return;
     }
     if n.is_text() {
@@ -398,7 +403,7 @@ fn ser(n: Node, parent_ns: Option<&str>, out: &mut String, depth: usize) {
     }
     out.push('>');
     for c in n.children() {
-        ser(c, ns, out, depth + 1);
+        ser(c, ns, out, depth + 1, skip);
     }
     out.push_str("</");
     out.push_str(name);

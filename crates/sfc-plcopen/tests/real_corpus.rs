@@ -33,7 +33,7 @@ fn files(dir: &Path, out: &mut Vec<PathBuf>) {
 }
 
 /// The counts of `count.py` for each file, or `None` when Python cannot run (and `CI` is unset).
-fn script_counts(paths: &[PathBuf]) -> Option<Vec<BTreeMap<String, [usize; 3]>>> {
+fn script_counts(paths: &[PathBuf]) -> Option<Vec<BTreeMap<String, [usize; 4]>>> {
     let out = Command::new("python3").arg(real_dir().join("count.py")).args(paths).output();
     let out = match out {
         Ok(o) if o.status.success() => o,
@@ -45,7 +45,7 @@ fn script_counts(paths: &[PathBuf]) -> Option<Vec<BTreeMap<String, [usize; 3]>>>
         }
     };
     let text = String::from_utf8(out.stdout).expect("UTF-8");
-    let lines: Vec<BTreeMap<String, [usize; 3]>> = text
+    let lines: Vec<BTreeMap<String, [usize; 4]>> = text
         .lines()
         .map(|l| {
             let v: serde_json::Value = serde_json::from_str(l).expect("count.py prints JSON");
@@ -55,7 +55,7 @@ fn script_counts(paths: &[PathBuf]) -> Option<Vec<BTreeMap<String, [usize; 3]>>>
                 .map(|(k, v)| {
                     let a: Vec<usize> =
                         v.as_array().expect("a list").iter().map(|n| n.as_u64().unwrap_or(0) as usize).collect();
-                    (k.clone(), [a[0], a[1], a[2]])
+                    (k.clone(), [a[0], a[1], a[2], a[3]])
                 })
                 .collect()
         })
@@ -64,14 +64,14 @@ fn script_counts(paths: &[PathBuf]) -> Option<Vec<BTreeMap<String, [usize; 3]>>>
     Some(lines)
 }
 
-fn check_file(path: &Path, expected: Option<&BTreeMap<String, [usize; 3]>>) -> Result<(), String> {
+fn check_file(path: &Path, expected: Option<&BTreeMap<String, [usize; 4]>>) -> Result<(), String> {
     let name = path.strip_prefix(root()).unwrap_or(path).display().to_string();
     let xml = std::fs::read_to_string(path).map_err(|e| format!("{name}: {e}"))?;
     let (file, checked, diags) = sfc_plcopen::check_xml(0, &name, &xml, &opts());
     if let Some(d) = diags.iter().find(|d| d.is_error()) {
         return Err(format!("{name}: imports with an error:\n{}", render(std::slice::from_ref(d), &file)));
     }
-    if checked.charts.is_empty() {
+    if checked.charts.is_empty() && checked.action_charts.is_empty() {
         return Err(format!("{name}: no chart imported"));
     }
     if let Some(expected) = expected {
@@ -87,24 +87,34 @@ fn check_file(path: &Path, expected: Option<&BTreeMap<String, [usize; 3]>>) -> R
                 .filter(|a| a.name.eq_ignore_ascii_case(sfc_syntax::attr_value::LOOSE))
                 .count()
         };
-        let mut got: BTreeMap<String, [usize; 3]> = checked
+        let mut got: BTreeMap<String, [usize; 4]> = checked
             .charts
             .iter()
             .map(|c| {
-                (c.pou.to_ascii_uppercase(), [c.steps.len(), c.transitions.len() + loose(&c.pou), c.actions.len()])
+                let step_actions = c.steps.iter().map(|s| s.step_actions.len()).sum();
+                (
+                    c.pou.to_ascii_uppercase(),
+                    [c.steps.len(), c.transitions.len() + loose(&c.pou), c.actions.len(), step_actions],
+                )
             })
             .collect();
+        // The charts of actions written in SFC, as `POU.ACTION`.
+        for c in &checked.action_charts {
+            let key = format!("{}.{}", c.pou, c.action.as_deref().unwrap_or_default()).to_ascii_uppercase();
+            let step_actions = c.steps.iter().map(|s| s.step_actions.len()).sum();
+            got.insert(key, [c.steps.len(), c.transitions.len(), 0, step_actions]);
+        }
         // The actions of POUs that are no chart.
         for p in
             checked.unit.items.iter().filter_map(|i| if let sfc_syntax::ast::Item::Pou(p) = i { Some(p) } else { None })
         {
             if !p.actions.is_empty() {
-                got.insert(p.name.text.to_ascii_uppercase(), [0, 0, p.actions.len()]);
+                got.insert(p.name.text.to_ascii_uppercase(), [0, 0, p.actions.len(), 0]);
             }
         }
         if &got != expected {
             return Err(format!(
-                "{name}: [steps, transitions, actions] per POU differ from the XML's\n  count.py: {expected:?}\n  sfc:      {got:?}"
+                "{name}: [steps, transitions, actions, step actions] per POU differ from the XML's\n  count.py: {expected:?}\n  sfc:      {got:?}"
             ));
         }
     }
@@ -325,7 +335,7 @@ fn unconnected_transitions_of_a_chart_being_drawn_are_kept_and_exported_back() {
     if let Some(counts) = script_counts(&[path.clone()]) {
         assert_eq!(
             counts[0]["TANKFILL"],
-            [chart.steps.len(), chart.transitions.len() + kept.len(), chart.actions.len()]
+            [chart.steps.len(), chart.transitions.len() + kept.len(), chart.actions.len(), 0]
         );
     }
     // The export writes the chart as drawn: the step and the three transitions, wired as before.

@@ -234,10 +234,46 @@ impl Simulation {
             if !errors.is_empty() {
                 return Err((checked.file, errors));
             }
-            sfc_model::set_aside_unrelated(&mut checked, &top);
+        }
+        // Only what `top` uses is compiled: what cannot be simulated elsewhere in the file
+        // (an error, a construct the simulator lacks) does not stop it.
+        sfc_model::set_aside_unused(&mut checked, &top);
+        // A block it uses that is kept as written (not analysed) cannot run: say which.
+        let deps = sfc_model::dependencies(&checked.unit, &checked.file.text, &top);
+        let kept = checked.unit.items.iter().find_map(|i| match i {
+            sfc_syntax::ast::Item::Verbatim(v)
+                if matches!(v.keyword.as_str(), "FUNCTION_BLOCK" | "FUNCTION" | "PROGRAM")
+                    && v.name.as_ref().is_some_and(|n| !n.is(&top) && deps.contains(&n.text.to_ascii_uppercase())) =>
+            {
+                Some(v)
+            }
+            _ => None,
+        });
+        if let Some(v) = kept {
+            let name = v.name.as_ref().map(|n| n.text.clone()).unwrap_or_default();
+            let why = v
+                .attributes
+                .iter()
+                .rev()
+                .find(|a| a.name.eq_ignore_ascii_case("sfc.verbatim"))
+                .and_then(|a| a.value.as_deref())
+                .map(sfc_syntax::attr_value::unescape)
+                .filter(|w| !w.trim().is_empty() && w != "opaque");
+            let mut d = Diagnostic::error(
+                "SFC0321",
+                v.name.as_ref().map_or(v.span, |n| n.span),
+                format!("`{top}` uses `{name}`, which is kept as written, not analysed, so it cannot be simulated"),
+            );
+            if let Some(w) = why {
+                d = d.with_note(format!("`{name}`: {w}"));
+            }
+            return Err((checked.file, vec![d]));
         }
         let source = checked.file;
-        let prog = match Program::compile_with(&checked.unit, checked.charts, &checked.expr_types, opts.profile) {
+        // The POUs' charts, then the charts of their actions written in SFC.
+        let mut charts = checked.charts;
+        charts.extend(checked.action_charts);
+        let prog = match Program::compile_with(&checked.unit, charts, &checked.expr_types, opts.profile) {
             Ok(p) => p,
             Err(d) => return Err((source, d)),
         };

@@ -127,6 +127,42 @@ impl Checker<'_, '_> {
         }
         let env = self.scope.env();
         let fb = env.fb_of(&ty).cloned();
+        // `inst.Inner(…)`: a call of a function block instance inside `inst` (CODESYS calls an
+        // instance passed in an input so: `xPPU.Stack();`).
+        let inner_ty = fb.as_ref().and_then(|fb| {
+            let is_action = fb.actions.iter().any(|a| a.eq_ignore_ascii_case(&member.text));
+            fb.var(&member.text).filter(|_| !is_action).map(|v| v.ty.clone())
+        });
+        // An instance of a block kept as written (a library's): not analysed.
+        // (A member whose type is unknown has been reported where it is declared.)
+        if matches!(&inner_ty, Some(Type::FunctionBlock(n)) if env.is_opaque(n))
+            || inner_ty.as_ref().is_some_and(Type::is_error)
+        {
+            self.check_args_loosely(args);
+            return;
+        }
+        if let Some(inner) = inner_ty.and_then(|t| env.fb_of(&t).cloned()) {
+            let path = Expr {
+                kind: ExprKind::Member { base: Box::new(base.clone()), member: member.clone() },
+                span: Span::new(base.span.file, base.span.start, member.span.end),
+            };
+            if self.check_expr(&path, None).is_error() {
+                self.check_args_loosely(args);
+                return;
+            }
+            if self.in_guard {
+                self.error(
+                    "SFC0305",
+                    span,
+                    format!(
+                        "calling function block `{}` changes its state; call it in an action and test its outputs here",
+                        member.text
+                    ),
+                );
+            }
+            self.bind_pou_args(&member.text, &inner, args, span, false);
+            return;
+        }
         match fb {
             Some(fb) if fb.actions.iter().any(|a| a.eq_ignore_ascii_case(&member.text)) => {
                 if !args.is_empty() {
@@ -158,7 +194,7 @@ impl Checker<'_, '_> {
     }
 
     /// A call used as a statement (`Timer(IN := x);`, `F(1);`, `Action();`, `inst.Act();`).
-    pub(crate) fn call_stmt(&mut self, e: &Expr) {
+    pub fn call_stmt(&mut self, e: &Expr) {
         if let ExprKind::MemberCall { base, member, args } = &e.kind {
             self.member_call_stmt(base, member, args, e.span);
             return;

@@ -166,6 +166,8 @@ impl<'s, 'e> Checker<'s, 'e> {
         match body {
             ActionBody::St(stmts) => self.check_stmts(stmts),
             ActionBody::Il(il) => self.check_il(il),
+            // Its elements are checked as a chart (`check_unit`).
+            ActionBody::Sfc(_) => {}
         }
     }
 
@@ -979,6 +981,22 @@ impl<'s, 'e> Checker<'s, 'e> {
                             ),
                         );
                         Type::Error
+                    }
+                    // CODESYS and TwinCAT let a local variable of an instance be read from
+                    // outside (IEC 61131-3 does not): a warning, and the value is read.
+                    _ if !write && param.kind == VarKind::Var => {
+                        self.report(
+                            Diagnostic::warning(
+                                "SFC0322",
+                                member.span,
+                                format!(
+                                    "`{}` is internal to function block `{}`; reading it from outside is CODESYS, not IEC 61131-3",
+                                    param.name, fb.name
+                                ),
+                            )
+                            .with_note("give the block an output for it to keep the chart portable"),
+                        );
+                        param.ty.clone()
                     }
                     _ => {
                         self.error(

@@ -8,7 +8,7 @@ use crate::value::{const_eval, ConstLookup, Value};
 use rustc_hash::FxHashMap;
 use sfc_diagnostics::{Diagnostic, Span};
 use sfc_syntax::ast::{
-    Body, DirectAddress, Ident, Initializer, Item, Pou, PouKind, Retain, SourceUnit, TypeDecl, TypeSpecKind, VarBlock,
+    DirectAddress, Ident, Initializer, Item, Pou, PouKind, Retain, SourceUnit, TypeDecl, TypeSpecKind, VarBlock,
     VarKind,
 };
 use std::collections::HashMap;
@@ -700,7 +700,7 @@ impl<'a> Builder<'a> {
         }
         let return_type = pou.return_type.as_ref().map(|spec| resolve_spec(self, spec, None, diags));
         self.local_consts.clear();
-        let sfc = matches!(pou.body, Body::Sfc(_));
+        let sfc = pou.has_chart();
         if sfc {
             add_sfc_control_variables(&mut vars, pou.name.span, diags);
         }

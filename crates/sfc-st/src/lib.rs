@@ -47,7 +47,7 @@ pub use types::{Generic, Type};
 pub use value::{const_eval, ConstLookup, NoConstants, Value};
 
 use sfc_diagnostics::{Diagnostic, Span};
-use sfc_syntax::ast::{Body, Item, Pou, SfcElement, SourceUnit};
+use sfc_syntax::ast::{ActionBody, Body, Item, Pou, SfcElement, SourceUnit};
 use std::collections::HashMap;
 
 /// Type-checks a whole file: declarations, global and type initial values, and the code of
@@ -145,6 +145,14 @@ fn check_pou_inner(
     for a in &pou.actions {
         let _ = scope.add_action(&a.name);
     }
+    // The steps of the actions written in SFC share the POU's namespace.
+    for a in pou.actions() {
+        for el in a.body.sfc().unwrap_or_default() {
+            if let SfcElement::Step(s) = el {
+                let _ = scope.add_step(&s.name);
+            }
+        }
+    }
     prepare(&mut scope, pou);
     let mut ck = Checker::new(&mut scope);
     if types.is_some() {
@@ -154,36 +162,14 @@ fn check_pou_inner(
     match &pou.body {
         Body::St(stmts) => ck.check_stmts(stmts),
         Body::Il(il) => ck.check_il(il),
-        Body::Sfc(elements) => {
-            let names = transition_names(&ck, elements);
-            let mut transitions = names.into_iter();
-            for el in elements {
-                match el {
-                    SfcElement::Step(s) => {
-                        ck.set_element(Some(s.name.text.clone()));
-                        for a in &s.associations {
-                            ck.check_association(a);
-                        }
-                    }
-                    SfcElement::Transition(t) => {
-                        ck.set_element(transitions.next());
-                        if let Some(p) = &t.priority {
-                            ck.check_priority(p);
-                        }
-                        ck.check_condition(&t.condition);
-                    }
-                    SfcElement::Action(a) => {
-                        ck.set_element(Some(a.name.text.clone()));
-                        ck.check_action_body(&a.body);
-                    }
-                }
-            }
-            ck.set_element(None);
-        }
+        Body::Sfc(elements) => check_chart(&mut ck, elements),
     }
     for a in &pou.actions {
         ck.set_element(Some(a.name.text.clone()));
-        ck.check_action_body(&a.body);
+        match &a.body {
+            ActionBody::Sfc(elements) => check_chart(&mut ck, elements),
+            body => ck.check_action_body(body),
+        }
     }
     ck.set_element(None);
     if let Some(t) = types {
@@ -192,6 +178,41 @@ fn check_pou_inner(
     let mut diags = ck.finish();
     diags.extend(scope.unused_diagnostics());
     diags
+}
+
+/// Checks the elements of a chart (a POU's body, or an action written in SFC).
+fn check_chart(ck: &mut Checker<'_, '_>, elements: &[SfcElement]) {
+    let names = transition_names(ck, elements);
+    let mut transitions = names.into_iter();
+    for el in elements {
+        match el {
+            SfcElement::Step(s) => {
+                ck.set_element(Some(s.name.text.clone()));
+                for a in &s.associations {
+                    ck.check_association(a);
+                }
+                // A step action is checked as the call that runs it.
+                for call in s.step_actions.iter().filter_map(|a| a.call()) {
+                    ck.call_stmt(&call);
+                }
+            }
+            SfcElement::Transition(t) => {
+                ck.set_element(transitions.next());
+                if let Some(p) = &t.priority {
+                    ck.check_priority(p);
+                }
+                ck.check_condition(&t.condition);
+            }
+            SfcElement::Action(a) => {
+                ck.set_element(Some(a.name.text.clone()));
+                match &a.body {
+                    ActionBody::Sfc(inner) => check_chart(ck, inner),
+                    body => ck.check_action_body(body),
+                }
+            }
+        }
+    }
+    ck.set_element(None);
 }
 
 /// The names of the transitions in declaration order: as declared, or `T<n>` (`n` the

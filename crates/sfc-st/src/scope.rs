@@ -126,7 +126,7 @@ impl<'e> Scope<'e> {
             }
         }
         let return_type = pou.return_type.as_ref().map(|s| env.resolve_type_spec(s, &lookup, &mut pending));
-        let sfc = matches!(pou.body, sfc_syntax::ast::Body::Sfc(_));
+        let sfc = pou.has_chart();
         if sfc {
             add_sfc_control_variables(&mut vars, pou.name.span, &mut pending);
         }

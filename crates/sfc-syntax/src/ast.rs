@@ -152,6 +152,22 @@ pub struct Pou {
 }
 
 impl Pou {
+    /// Whether the POU holds a chart: its body, or an action written in SFC.
+    pub fn has_chart(&self) -> bool {
+        matches!(self.body, Body::Sfc(_)) || self.actions().any(|a| matches!(a.body, ActionBody::Sfc(_)))
+    }
+
+    /// The steps of the POU's charts: its body's, then those of its actions written in SFC
+    /// (one namespace: step names are unique within the POU).
+    pub fn all_steps(&self) -> impl Iterator<Item = &Step> {
+        let body = self.body.sfc().unwrap_or_default().iter();
+        let actions = self.actions().flat_map(|a| a.body.sfc().unwrap_or_default().iter());
+        body.chain(actions).filter_map(|e| match e {
+            SfcElement::Step(s) => Some(s),
+            _ => None,
+        })
+    }
+
     /// Every action of the POU: the chart's, or those after a non-chart body.
     pub fn actions(&self) -> impl Iterator<Item = &Action> {
         let chart = self.body.sfc().unwrap_or_default().iter().filter_map(|e| match e {
@@ -174,6 +190,13 @@ pub enum Body {
 }
 
 impl Body {
+    pub fn sfc_mut(&mut self) -> Option<&mut Vec<SfcElement>> {
+        match self {
+            Body::Sfc(e) => Some(e),
+            _ => None,
+        }
+    }
+
     pub fn sfc(&self) -> Option<&[SfcElement]> {
         match self {
             Body::Sfc(e) => Some(e),
@@ -361,8 +384,88 @@ pub struct Step {
     pub initial: bool,
     pub name: Ident,
     pub associations: Vec<ActionAssociation>,
+    /// CODESYS's step actions (`ENTRY_ACTION := A;`, `STEP_ACTION := B;`, `EXIT_ACTION := C;`),
+    /// beside the IEC associations.
+    pub step_actions: Vec<StepAction>,
     pub attributes: Vec<Attribute>,
     pub span: Span,
+}
+
+/// Which step action: CODESYS runs the entry action when the step becomes active, the step
+/// (main) action every scan while it is active, the exit action once when it is left.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum StepActionKind {
+    Entry,
+    Main,
+    Exit,
+}
+
+impl StepActionKind {
+    pub const ALL: [StepActionKind; 3] = [StepActionKind::Entry, StepActionKind::Main, StepActionKind::Exit];
+
+    /// The word the text writes it with.
+    pub fn keyword(self) -> &'static str {
+        match self {
+            StepActionKind::Entry => "ENTRY_ACTION",
+            StepActionKind::Main => "STEP_ACTION",
+            StepActionKind::Exit => "EXIT_ACTION",
+        }
+    }
+
+    pub fn from_keyword(word: &str) -> Option<StepActionKind> {
+        StepActionKind::ALL.into_iter().find(|k| k.keyword().eq_ignore_ascii_case(word))
+    }
+
+    /// In words: "entry", "step", "exit".
+    pub fn word(self) -> &'static str {
+        match self {
+            StepActionKind::Entry => "entry",
+            StepActionKind::Main => "step",
+            StepActionKind::Exit => "exit",
+        }
+    }
+}
+
+/// `ENTRY_ACTION := Reset_Timer;` or `STEP_ACTION := Motor.ACT_Stop;` inside a step: the action
+/// of the POU, or an action of one of its instances, that the step runs.
+#[derive(Debug, Clone, PartialEq)]
+pub struct StepAction {
+    pub kind: StepActionKind,
+    /// The action: a name, or `instance.Action`.
+    pub action: Expr,
+    pub span: Span,
+}
+
+impl StepAction {
+    /// The call that runs it: `Name()` or `instance.Action()`.
+    pub fn call(&self) -> Option<Expr> {
+        let kind = match &self.action.kind {
+            ExprKind::Name(id) => ExprKind::Call { callee: id.clone(), args: Vec::new() },
+            ExprKind::Member { base, member } => {
+                ExprKind::MemberCall { base: base.clone(), member: member.clone(), args: Vec::new() }
+            }
+            _ => return None,
+        };
+        Some(Expr { kind, span: self.action.span })
+    }
+
+    /// The action as written: `Name` or `instance.Action`.
+    pub fn name(&self) -> String {
+        fn path(e: &Expr, out: &mut String) {
+            match &e.kind {
+                ExprKind::Name(id) => out.push_str(&id.text),
+                ExprKind::Member { base, member } => {
+                    path(base, out);
+                    out.push('.');
+                    out.push_str(&member.text);
+                }
+                _ => {}
+            }
+        }
+        let mut out = String::new();
+        path(&self.action, &mut out);
+        out
+    }
 }
 
 /// `Action(Qualifier, T#5s, Indicator);`
@@ -416,6 +519,20 @@ pub struct Action {
 pub enum ActionBody {
     St(Vec<Stmt>),
     Il(IlBody),
+    /// A chart inside an action (CODESYS's SFC action): its own initial step, steps and
+    /// transitions, whose associations name the POU's actions. Step names are unique within
+    /// the POU. Calling the action (or an association of it) runs one scan of this chart.
+    Sfc(Vec<SfcElement>),
+}
+
+impl ActionBody {
+    /// The chart of an action written in SFC.
+    pub fn sfc(&self) -> Option<&[SfcElement]> {
+        match self {
+            ActionBody::Sfc(e) => Some(e),
+            _ => None,
+        }
+    }
 }
 
 // ---------------------------------------------------------------------------------------------

@@ -1313,6 +1313,29 @@ impl<'a> Parser<'a> {
         elements
     }
 
+    /// The elements of an action written in SFC. Its associations name the POU's actions, so an
+    /// ACTION inside it is reported and skipped.
+    fn action_chart(&mut self) -> Vec<SfcElement> {
+        let mut elements = Vec::new();
+        while !self.at(TokenKind::Eof) && !self.at_kw("END_ACTION") {
+            if self.at_kw("STEP") || self.at_kw("INITIAL_STEP") {
+                elements.push(SfcElement::Step(self.step()));
+            } else if self.at_kw("TRANSITION") {
+                elements.push(SfcElement::Transition(self.transition()));
+            } else if self.at_any_kw(&["ACTION", "END_PROGRAM", "END_FUNCTION_BLOCK", "PROGRAM", "FUNCTION_BLOCK"]) {
+                // END_ACTION is missing: `expect_end` reports it.
+                break;
+            } else {
+                self.error_here("expected STEP, INITIAL_STEP, TRANSITION or END_ACTION in an action written in SFC");
+                self.bump();
+                self.recover_to(&["STEP", "INITIAL_STEP", "TRANSITION", "END_ACTION", "ACTION"], false);
+            }
+            let end = self.prev_end();
+            self.drop_attrs_before(end);
+        }
+        elements
+    }
+
     fn step(&mut self) -> Step {
         let kw = self.bump();
         let start = kw.start;
@@ -1321,9 +1344,17 @@ impl<'a> Parser<'a> {
         let name = self.expect_ident("a step name").unwrap_or_else(|| Ident::new("", self.cur_span()));
         self.expect(TokenKind::Colon, "`:` after the step name");
         let mut associations = Vec::new();
+        let mut step_actions = Vec::new();
         while !self.at(TokenKind::Eof) && !self.at_kw("END_STEP") {
             if self.at_any_kw(STOPPERS) {
                 break;
+            }
+            // `ENTRY_ACTION := A;` (the words are no keywords: only so before `:=`).
+            if self.nth(1).kind == TokenKind::Assign {
+                if let Some(kind) = StepActionKind::from_keyword(self.text_of(self.tok())) {
+                    step_actions.push(self.step_action(kind));
+                    continue;
+                }
             }
             // An association is `Name(…)`: anything else here may be a misspelled `END_STEP`.
             if self.nth(1).kind != TokenKind::LParen && self.fix_keyword_typo(&["END_STEP"]) {
@@ -1338,7 +1369,25 @@ impl<'a> Parser<'a> {
             }
         }
         self.expect_end("END_STEP", self.span_of(kw));
-        Step { initial, name, associations, attributes, span: self.span_from(start) }
+        Step { initial, name, associations, step_actions, attributes, span: self.span_from(start) }
+    }
+
+    /// `ENTRY_ACTION := Name;` or `… := instance.Action;` (the current token is the word).
+    fn step_action(&mut self, kind: StepActionKind) -> StepAction {
+        let start = self.bump().start;
+        self.bump(); // `:=`
+        let first = self.expect_ident("an action name").unwrap_or_else(|| Ident::new("", self.cur_span()));
+        let mut action = Expr { span: first.span, kind: ExprKind::Name(first) };
+        while self.at(TokenKind::Dot) {
+            self.bump();
+            let Some(member) = self.expect_ident("an action name after `.`") else { break };
+            let span = Span::new(action.span.file, action.span.start, member.span.end);
+            action = Expr { kind: ExprKind::Member { base: Box::new(action), member }, span };
+        }
+        if !self.expect(TokenKind::Semi, &format!("`;` after the {} action", kind.word())) {
+            self.recover_to(&["END_STEP"], true);
+        }
+        StepAction { kind, action, span: self.span_from(start) }
     }
 
     fn association(&mut self) -> Option<ActionAssociation> {
@@ -1495,7 +1544,10 @@ impl<'a> Parser<'a> {
                 d.notes.push(format!("IEC 61131-3 writes `ACTION {}: … END_ACTION`", name.text));
             }
         }
-        let body = if self.looks_like_il() {
+        let body = if self.at_any_kw(&["STEP", "INITIAL_STEP", "TRANSITION"]) {
+            // An action written in SFC: steps and transitions up to END_ACTION.
+            ActionBody::Sfc(self.action_chart())
+        } else if self.looks_like_il() {
             ActionBody::Il(self.il_body(&["END_ACTION"]))
         } else {
             ActionBody::St(self.stmt_list(&["END_ACTION"]))

@@ -426,13 +426,17 @@ impl<'a> Printer<'a> {
         self.push(&step.name.text);
         self.push(":");
         // One line when empty, unless a comment inside would then move out of the step.
-        if step.associations.is_empty() && !self.trivia_before(step.span.end) {
+        if step.associations.is_empty() && step.step_actions.is_empty() && !self.trivia_before(step.span.end) {
             self.push(" END_STEP");
             self.end();
             return;
         }
         self.end();
         self.indent += 1;
+        // The step actions first, then the IEC associations, each in the order written.
+        for a in &step.step_actions {
+            self.line(a.span.start, &format!("{} := {};", a.kind.keyword(), expr(&a.action)));
+        }
         for assoc in &step.associations {
             self.line(assoc.span.start, &format!("{};", association(assoc)));
         }
@@ -478,6 +482,7 @@ impl<'a> Printer<'a> {
         let empty = match &action.body {
             ActionBody::St(stmts) => stmts.is_empty(),
             ActionBody::Il(il) => il.instructions.is_empty(),
+            ActionBody::Sfc(elements) => elements.is_empty(),
         };
         if empty && !self.trivia_before(action.span.end) {
             self.push(" END_ACTION");
@@ -489,6 +494,7 @@ impl<'a> Printer<'a> {
         match &action.body {
             ActionBody::St(stmts) => self.stmts(stmts),
             ActionBody::Il(il) => self.il_body(il),
+            ActionBody::Sfc(elements) => self.sfc(elements),
         }
         self.close(action.span.end, "END_ACTION");
     }

@@ -113,6 +113,11 @@ text?: string, align?: "left" | "center" | "right", font?: string,
  */
 step?: string, associations?: Array<Association>, 
 /**
+ * Steps: CODESYS's step actions as written (`ENTRY_ACTION := Init_entry`,
+ * `STEP_ACTION := Motor.ACT_Run`, `EXIT_ACTION := …`), in order.
+ */
+stepActions?: Array<string>, 
+/**
  * Steps and transitions: attribute pragmas the editor does not edit (see
  * [`OtherAttribute`]).
  */

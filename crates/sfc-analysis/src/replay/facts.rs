@@ -563,6 +563,9 @@ impl Walker<'_> {
         match body {
             ActionBody::St(stmts) => self.stmts(stmts, &mut u, 0),
             ActionBody::Il(il) => self.il_body(il, &mut u),
+            // An action written in SFC writes through the actions its steps name, which are
+            // read where the charts of the POU's actions are (not yet: see docs/targets.md).
+            ActionBody::Sfc(_) => {}
         }
         u
     }
@@ -791,6 +794,7 @@ fn pou_external_writes(unit: &SourceUnit, chart_pou: &str, w: &Walker<'_>) -> BT
                         match &a.body {
                             ActionBody::St(stmts) => w.stmts(stmts, &mut u, 0),
                             ActionBody::Il(il) => w.il_body(il, &mut u),
+                            ActionBody::Sfc(_) => {}
                         }
                     }
                 }

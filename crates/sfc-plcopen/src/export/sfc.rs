@@ -10,10 +10,11 @@
 //! order, so an import, which orders alternatives left to right, keeps their order.
 
 use super::{column_if_leading, dedent, description, slice, X};
-use crate::attrs;
+use crate::attrs::{self, CODESYS_SFC_ELEMENT, STEP_ACTION_GUIDS};
 use sfc_diagnostics::Span;
 use sfc_model::{ActionTarget, Chart, Duration};
 use sfc_syntax::ast;
+use std::borrow::Cow;
 use std::collections::{HashMap, HashSet};
 
 const STEP_H: f64 = 30.0;
@@ -691,10 +692,44 @@ pub(super) fn action_body_text(src: &str, name: Span, span: Span) -> String {
     dedent(slice(src, Span::new(0, start as u32, end.max(start) as u32)), 0)
 }
 
-fn body_lang(body: &ast::ActionBody) -> &'static str {
+/// The step's attributes with its step actions written into its kept addData, as CODESYS
+/// writes them: properties by GUID in the step's `sfc/element` data (made when there is none).
+fn with_step_actions<'a>(list: &'a [ast::Attribute], step_actions: &[ast::StepAction]) -> Cow<'a, [ast::Attribute]> {
+    if step_actions.is_empty() {
+        return Cow::Borrowed(list);
+    }
+    let mut props = String::new();
+    for a in step_actions {
+        let guid = STEP_ACTION_GUIDS.iter().find(|(_, k)| *k == a.kind).map(|(g, _)| *g).unwrap_or_default();
+        props.push_str(&format!("<attribute guid=\"{guid}\">{}</attribute>", crate::xml::escape_text(&a.name())));
+    }
+    let mut foreign: String = attrs::all(list, attrs::ADDDATA).map(attrs::unescape).collect();
+    let open = format!("<data name=\"{CODESYS_SFC_ELEMENT}\"");
+    let at = foreign.find(&open).and_then(|d| {
+        let rel = foreign[d..].find("<attributes")?;
+        let end = foreign[d + rel..].find('>')?;
+        Some(d + rel + end + 1).filter(|&i| !foreign[..i].ends_with("/>"))
+    });
+    match at {
+        Some(i) => foreign.insert_str(i, &props),
+        None => foreign.push_str(&format!(
+            "<data name=\"{CODESYS_SFC_ELEMENT}\" handleUnknown=\"implementation\"><attributes xmlns=\"\">{props}</attributes></data>"
+        )),
+    }
+    let mut out: Vec<ast::Attribute> =
+        list.iter().filter(|a| !a.name.eq_ignore_ascii_case(attrs::ADDDATA)).cloned().collect();
+    out.push(ast::Attribute {
+        name: attrs::ADDDATA.to_string(),
+        value: Some(sfc_syntax::attr_value::escape(&foreign)),
+        span: Default::default(),
+    });
+    Cow::Owned(out)
+}
+
+pub(super) fn body_lang(body: &ast::ActionBody) -> &'static str {
     match body {
-        ast::ActionBody::St(_) => "ST",
         ast::ActionBody::Il(_) => "IL",
+        ast::ActionBody::St(_) | ast::ActionBody::Sfc(_) => "ST",
     }
 }
 
@@ -710,8 +745,9 @@ fn condition_text(src: &str, c: &ast::Condition) -> Option<(&'static str, String
     }
 }
 
-/// Writes the `actions`, `transitions` and `body` of an SFC POU.
-pub(super) fn write_chart(x: &mut X, src: &str, pou: &ast::Pou, chart: &Chart) {
+/// Writes the `actions`, `transitions` and `body` of an SFC POU; `subs` are the charts of its
+/// actions written in SFC.
+pub(super) fn write_chart(x: &mut X, src: &str, pou: &ast::Pou, chart: &Chart, subs: &[&Chart]) {
     // Actions written inline in their action block: marked so, and used exactly once.
     let mut uses: HashMap<usize, usize> = HashMap::new();
     for s in &chart.steps {
@@ -728,6 +764,7 @@ pub(super) fn write_chart(x: &mut X, src: &str, pou: &ast::Pou, chart: &Chart) {
         .filter(|(i, a)| {
             attrs::get(&a.attributes, attrs::INLINE).is_some_and(|v| v.trim().eq_ignore_ascii_case("true"))
                 && uses.get(i) == Some(&1)
+                && a.body.sfc().is_none()
         })
         .map(|(i, _)| i)
         .collect();
@@ -737,10 +774,15 @@ pub(super) fn write_chart(x: &mut X, src: &str, pou: &ast::Pou, chart: &Chart) {
         for &i in &listed {
             let a = &chart.actions[i];
             x.open("action", &[("name", a.name.clone())]);
-            x.open("body", &[]);
-            x.formatted(body_lang(&a.body), &action_text(src, a));
-            x.close("body");
-            x.add_data(&a.attributes, &[], &[attrs::DESCRIPTION]);
+            match subs.iter().find(|c| a.body.sfc().is_some() && c.action.as_deref() == Some(&a.name)) {
+                Some(sub) => write_sfc(x, src, sub, &a.attributes, &HashSet::new(), &HashMap::new()),
+                None => {
+                    x.open("body", &[]);
+                    x.formatted(body_lang(&a.body), &action_text(src, a));
+                    x.close("body");
+                }
+            }
+            x.add_data(&a.attributes, &[], &[attrs::DESCRIPTION, attrs::COMMENT, attrs::LOOSE]);
             x.documentation(&a.attributes);
             x.close("action");
         }
@@ -782,7 +824,20 @@ pub(super) fn write_chart(x: &mut X, src: &str, pou: &ast::Pou, chart: &Chart) {
         x.close("transitions");
     }
 
-    let els = build(chart, &pou.attributes);
+    write_sfc(x, src, chart, &pou.attributes, &inline, &by_ref);
+}
+
+/// Writes the `body` of a chart (a POU's, or an action's written in SFC): `inline` are the
+/// actions written in their action block, `by_ref` the conditions written by reference.
+pub(super) fn write_sfc(
+    x: &mut X,
+    src: &str,
+    chart: &Chart,
+    attributes: &[ast::Attribute],
+    inline: &HashSet<usize>,
+    by_ref: &HashMap<usize, String>,
+) {
+    let els = build(chart, attributes);
     x.open("body", &[]);
     x.open("SFC", &[]);
     // Steps and transitions in declaration order of the source, the rest after them.
@@ -817,7 +872,7 @@ pub(super) fn write_chart(x: &mut X, src: &str, pou: &ast::Pou, chart: &Chart) {
                 // laid out afresh, replaced).
                 let native = [attrs::X, attrs::Y, attrs::W, attrs::H, attrs::ACTIONBLOCK, attrs::DESCRIPTION];
                 x.take_comments(src, step.span);
-                x.add_data(&step.attributes, &[], &native);
+                x.add_data(&with_step_actions(&step.attributes, &step.step_actions), &[], &native);
                 x.documentation(&step.attributes);
                 x.close("step");
             }

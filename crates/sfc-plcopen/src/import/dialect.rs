@@ -118,6 +118,12 @@ fn code_reason(cx: &Ctx, text: &str) -> Option<String> {
                     && sig.get(i + 2).is_some_and(|t| t.kind == TokenKind::Ident)
                     && map_type(&format!("{w}.{}", word(i + 2))).is_none()
                 {
+                    if cx.programs.contains(&up) {
+                        return Some(format!(
+                            "it reads `{w}.{}`, a variable of the program `{w}` (CODESYS lets any code reach into a program; sfc does not simulate that yet)",
+                            word(i + 2)
+                        ));
+                    }
                     return Some(format!(
                         "it uses `{w}.{}`, and `{w}` is declared nowhere in the file (a namespace or another program)",
                         word(i + 2)
@@ -138,7 +144,38 @@ pub(super) fn map_type(name: &str) -> Option<&str> {
 
 /// Code copied from the XML with CODESYS spellings that have an IEC meaning rewritten:
 /// `Enum.Value` → `Enum#Value`, `GVL.X` → `X`, `Standard.TON` → `TON`.
+/// Words sfc's text reserves for charts that CODESYS's ST lets a variable be named by.
+pub(crate) const SFC_WORDS: &[&str] =
+    &["STEP", "INITIAL_STEP", "END_STEP", "TRANSITION", "END_TRANSITION", "ACTION", "END_ACTION", "FROM"];
+
+/// `t` with the variables named by a chart word renamed as their declarations are
+/// ([`Ctx::renamed`]), then mapped by [`map_dots`].
 pub(super) fn map(cx: &Ctx, t: &XText) -> XText {
+    if cx.verbatim || cx.renamed.is_empty() {
+        return map_dots(cx, t);
+    }
+    let text = &t.text;
+    let (toks, _) = lex(0, text);
+    let mut out = XText { anchor: t.anchor.clone(), ..Default::default() };
+    let mut at = 0usize;
+    for k in toks.iter().filter(|k| k.kind == TokenKind::Ident) {
+        let word = &text[k.start as usize..k.end as usize];
+        if let Some(new) = cx.renamed.get(&word.to_ascii_uppercase()) {
+            out.push(&t.slice(at..k.start as usize));
+            out.push(&XText::synthetic(new.clone(), t.anchor.clone()));
+            at = k.end as usize;
+        }
+    }
+    if at == 0 {
+        return map_dots(cx, t);
+    }
+    out.push(&t.slice(at..text.len()));
+    map_dots(cx, &out)
+}
+
+/// Code copied from the XML with CODESYS spellings that have an IEC meaning rewritten:
+/// `Enum.Value` → `Enum#Value`, `GVL.X` → `X`, `Standard.TON` → `TON`.
+fn map_dots(cx: &Ctx, t: &XText) -> XText {
     if cx.verbatim
         || !t.text.contains('.')
         || (cx.enum_types.is_empty() && cx.gvl_names.is_empty() && !t.text.contains("tandard"))

@@ -12,8 +12,8 @@
 //! only by wire positions: the x where a transition's wire leaves the divergence. CODESYS and
 //! TwinCAT write every position as (0, 0): such a body has no layout, and document order stays.
 
-use super::{action_body, attr_xtext, element_attrs, is_ident, network, own_data, Ctx};
-use crate::attrs::{self, Loose};
+use super::{action_body, attr_xtext, element_attrs, element_attrs_without, is_ident, network, own_data, Ctx};
+use crate::attrs::{self, Loose, CODESYS_SFC_ELEMENT, STEP_ACTION_GUIDS};
 use crate::emit::Frag;
 use crate::xml::{self, anchor, attr, attr_range, child, children, elements, XText};
 use roxmltree::Node;
@@ -43,6 +43,8 @@ struct OutStep {
     name: Frag,
     initial: bool,
     attrs: Vec<(String, String)>,
+    /// `ENTRY_ACTION := …;` lines (CODESYS's step actions).
+    step_actions: Vec<Frag>,
     assocs: Vec<Frag>,
     anchor: Range<u32>,
 }
@@ -99,6 +101,22 @@ struct Importer<'p, 'a, 'i> {
 
 /// Writes the chart of an SFC POU and its actions.
 pub(super) fn chart<'a, 'i>(cx: &mut Ctx, sfc: Node<'a, 'i>, actions: &[Node<'a, 'i>], named: &[Node<'a, 'i>]) {
+    chart_of(cx, sfc, actions, named, false)
+}
+
+/// Writes the steps and transitions of an action written in SFC (CODESYS's SFC action): its
+/// associations name the POU's actions, so it declares none itself.
+pub(super) fn action_chart(cx: &mut Ctx, sfc: Node) {
+    chart_of(cx, sfc, &[], &[], true)
+}
+
+fn chart_of<'a, 'i>(
+    cx: &mut Ctx,
+    sfc: Node<'a, 'i>,
+    actions: &[Node<'a, 'i>],
+    named: &[Node<'a, 'i>],
+    in_action: bool,
+) {
     let mut imp = Importer {
         nets: HashMap::new(),
         inline: Vec::new(),
@@ -113,11 +131,17 @@ pub(super) fn chart<'a, 'i>(cx: &mut Ctx, sfc: Node<'a, 'i>, actions: &[Node<'a,
     let g = graph(cx, &mut imp, sfc, layout, 0, Vec::new());
 
     let mut g = g;
-    cx.loose = std::mem::take(&mut g.loose);
+    cx.loose.append(&mut g.loose);
     // Function block calls of condition networks run in an action stored in the initial step.
     let compute = std::mem::take(&mut cx.compute);
     let mut compute_action = None;
-    if !compute.is_empty() {
+    if !compute.is_empty() && in_action {
+        cx.diag(
+            "SFC0705",
+            anchor(sfc),
+            "the function blocks wired into the conditions of an action written in SFC are not imported",
+        );
+    } else if !compute.is_empty() {
         let first_initial =
             g.steps.iter().enumerate().filter(|(_, s)| s.initial).min_by(|a, b| a.1.key.cmp(&b.1.key)).map(|(i, _)| i);
         match first_initial.and_then(|i| g.steps.get_mut(i)) {
@@ -240,6 +264,16 @@ pub(super) fn chart<'a, 'i>(cx: &mut Ctx, sfc: Node<'a, 'i>, actions: &[Node<'a,
         .map(|(i, n)| (n, i))
         .collect();
     inline.sort_by_key(|ia| (step_pos.get(&ia.step.to_ascii_uppercase()).copied().unwrap_or(usize::MAX), ia.k));
+    if in_action {
+        for ia in inline {
+            cx.diag(
+                "SFC0705",
+                anchor(ia.action),
+                format!("the inline action of step `{}` in an action written in SFC is not imported", ia.step),
+            );
+        }
+        return;
+    }
     for ia in inline {
         cx.em.open(anchor(ia.action));
         let mut list = vec![(attrs::INLINE.to_string(), "true".to_string())];
@@ -340,13 +374,15 @@ fn graph<'a, 'i>(
         key.push(i);
         match e.kind {
             "step" => {
-                step_actions_not_imported(cx, e.n);
+                let (step_actions, imported) = step_actions(cx, e.n);
                 let name = cx.name(e.n, "name", "step");
                 let mut list = Vec::new();
                 if layout {
                     list.extend(geometry(e.n));
                 }
-                list.extend(element_attrs(e.n));
+                // The step actions are in the text: their attributes leave the kept addData
+                // (an export writes them back from the text).
+                list.extend(element_attrs_without(e.n, &|n| imported.contains(&n.id())));
                 if first_step.is_none() {
                     first_step = Some((i, name.clone()));
                 }
@@ -357,6 +393,7 @@ fn graph<'a, 'i>(
                     name,
                     initial: xml::flag(e.n, "initialStep"),
                     attrs: list,
+                    step_actions,
                     assocs: Vec::new(),
                     anchor: anchor(e.n),
                 });
@@ -425,6 +462,7 @@ fn graph<'a, 'i>(
                         name,
                         initial: false,
                         attrs: list,
+                        step_actions: Vec::new(),
                         assocs: Vec::new(),
                         anchor: anchor(e.n),
                     });
@@ -969,11 +1007,11 @@ fn write_step(cx: &mut Ctx, s: &OutStep) {
     cx.attributes(&s.attrs, "    ");
     cx.em.str(if s.initial { "    INITIAL_STEP " } else { "    STEP " });
     cx.em.frag(&s.name);
-    if s.assocs.is_empty() {
+    if s.assocs.is_empty() && s.step_actions.is_empty() {
         cx.em.str(": END_STEP\n\n");
     } else {
         cx.em.str(":\n");
-        for a in &s.assocs {
+        for a in s.step_actions.iter().chain(&s.assocs) {
             cx.em.frag(a);
         }
         cx.em.str("    END_STEP\n\n");
@@ -1089,38 +1127,41 @@ pub(crate) fn write_actions(cx: &mut Ctx, actions: &[Node]) {
     }
 }
 
-/// CODESYS's data name of an SFC element's properties (a step's step actions among them).
-const CODESYS_SFC_ELEMENT: &str = "http://www.3s-software.com/plcopenxml/sfc/element";
-
-/// CODESYS's step actions (entry, main, exit) are properties of the step, by GUID. They are
-/// not imported yet (issue 31): each one is said, so a chart that runs without them is not
-/// taken for the chart CODESYS runs. Their XML stays with the step (`sfc.adddata`).
-fn step_actions_not_imported(cx: &mut Ctx, step: Node) {
-    const KINDS: [(&str, &str); 3] = [
-        ("a6b08bd8-b696-47e3-9cbf-7408b61c9ff8", "entry"),
-        ("700a583f-b4d4-43e4-8c14-629c7cd3bec8", "step (main)"),
-        ("a2621e18-7de3-4ea6-ae6d-89e9e0b7befd", "exit"),
-    ];
+/// CODESYS's step actions (entry, main, exit) of a step, properties by GUID: the lines
+/// `ENTRY_ACTION := Name;` and the property elements they come from. A value that is no
+/// action name (`Name` or `instance.Action`) is said and stays in the step's addData.
+fn step_actions(cx: &mut Ctx, step: Node) -> (Vec<Frag>, Vec<roxmltree::NodeId>) {
     let props = children(step, "addData")
         .flat_map(|a| children(a, "data"))
         .filter(|d| attr(*d, "name") == Some(CODESYS_SFC_ELEMENT))
         .flat_map(|d| d.descendants().filter(|n| n.is_element() && n.tag_name().name() == "attribute"));
+    let mut lines = Vec::new();
+    let mut taken = Vec::new();
     for p in props.collect::<Vec<_>>() {
-        let Some((_, kind)) = KINDS.iter().find(|(g, _)| attr(p, "guid").is_some_and(|v| v.eq_ignore_ascii_case(g)))
+        let Some((_, kind)) =
+            STEP_ACTION_GUIDS.iter().find(|(g, _)| attr(p, "guid").is_some_and(|v| v.eq_ignore_ascii_case(g)))
         else {
             continue;
         };
         let action = p.text().unwrap_or("").trim();
         if action.is_empty() {
+            taken.push(p.id());
             continue;
         }
-        cx.diag(
-            "SFC0710",
-            anchor(p),
-            format!(
-                "the {kind} action `{action}` of step `{}` (a CODESYS step action) is not imported yet: it does not run",
-                attr(step, "name").unwrap_or("?").trim()
-            ),
-        );
+        if !action.split('.').all(is_ident) {
+            cx.diag(
+                "SFC0704",
+                anchor(p),
+                format!(
+                    "the {} action `{action}` of step `{}` is no action name; it is kept in the step's data and does not run",
+                    kind.word(),
+                    attr(step, "name").unwrap_or("?").trim()
+                ),
+            );
+            continue;
+        }
+        lines.push(Frag::located(format!("        {} := {action};\n", kind.keyword()), anchor(p)));
+        taken.push(p.id());
     }
+    (lines, taken)
 }

@@ -141,7 +141,16 @@ fn cond_text(src: &str, c: &ast::Condition) -> String {
 
 /// The text of an action body (between `ACTION name:` and `END_ACTION`), normalised.
 fn action_text(src: &str, a: &sfc_model::ActionNode) -> String {
-    let body = slice(src, a.name_span.end, a.span.end);
+    // An action written in SFC is compared as a chart of its own (`Checked::action_charts`).
+    if a.body.sfc().is_some() {
+        return "SFC".into();
+    }
+    body_text(src, a.name_span.end, a.span.end)
+}
+
+/// The text of an action's body between the name's end and `END_ACTION`, normalised.
+fn body_text(src: &str, name_end: u32, end: u32) -> String {
+    let body = slice(src, name_end, end);
     let body = body.trim_start().trim_start_matches(':');
     let n = norm(body);
     let cut = n.len().saturating_sub("END_ACTION".len());
@@ -239,13 +248,32 @@ pub fn same_model(a: &Checked, b: &Checked, layout_added: bool) -> Result<(), St
             return Err(format!("POU {}: declarations differ\n  {da:?}\n  {db:?}", x.name.text));
         }
     }
-    if a.charts.len() != b.charts.len() {
-        return Err(format!("{} charts, then {}", a.charts.len(), b.charts.len()));
+    // The actions of POUs that are no chart.
+    for (x, y) in pa.iter().zip(pb.iter()) {
+        let list = |p: &ast::Pou, src: &str| -> Vec<String> {
+            p.actions
+                .iter()
+                .map(|a| match a.body {
+                    ast::ActionBody::Sfc(_) => format!("{}: SFC", a.name.text),
+                    _ => format!("{}: {}", a.name.text, body_text(src, a.name.span.end, a.span.end)),
+                })
+                .collect()
+        };
+        if list(x, sa) != list(y, sb) {
+            return Err(format!("POU {}: actions differ\n  {:?}\n  {:?}", x.name.text, list(x, sa), list(y, sb)));
+        }
     }
-    for (x, y) in a.charts.iter().zip(b.charts.iter()) {
-        let pou = &x.pou;
-        if !x.pou.eq_ignore_ascii_case(&y.pou) {
-            return Err(format!("chart {} became {}", x.pou, y.pou));
+    let all = |c: &Checked| c.charts.len() + c.action_charts.len();
+    if all(a) != all(b) {
+        return Err(format!("{} charts, then {}", all(a), all(b)));
+    }
+    for (x, y) in a.charts.iter().chain(&a.action_charts).zip(b.charts.iter().chain(&b.action_charts)) {
+        let pou = &match &x.action {
+            Some(act) => format!("{}.{act}", x.pou),
+            None => x.pou.clone(),
+        };
+        if !x.pou.eq_ignore_ascii_case(&y.pou) || x.action != y.action {
+            return Err(format!("chart {pou} became {} {:?}", y.pou, y.action));
         }
         let steps = |c: &sfc_model::Chart| -> Vec<String> {
             c.steps.iter().map(|s| format!("{} {}", s.name, s.initial)).collect()
@@ -280,6 +308,17 @@ pub fn same_model(a: &Checked, b: &Checked, layout_added: bool) -> Result<(), St
                     s.name,
                     assoc(x, s),
                     assoc(y, t)
+                ));
+            }
+            let step_actions = |st: &sfc_model::StepNode| -> Vec<String> {
+                st.step_actions.iter().map(|a| format!("{} := {}", a.kind.keyword(), a.name())).collect()
+            };
+            if step_actions(s) != step_actions(t) {
+                return Err(format!(
+                    "{pou}: step actions of {} differ\n  {:?}\n  {:?}",
+                    s.name,
+                    step_actions(s),
+                    step_actions(t)
                 ));
             }
             same_attrs(&format!("{pou}: step {}", s.name), &s.attributes, &t.attributes, layout_added)?;

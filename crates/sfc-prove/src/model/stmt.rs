@@ -49,6 +49,8 @@ impl<'a> Enc<'a> {
         match body {
             ActionBody::St(stmts) => self.exec_list(&f, stmts),
             ActionBody::Il(il) => self.exec_il(&f, il),
+            // Refused before encoding (`encode`).
+            ActionBody::Sfc(_) => {}
         }
         self.returned = saved_ret;
     }

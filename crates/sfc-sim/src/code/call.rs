@@ -222,15 +222,23 @@ impl Cx<'_, '_> {
     }
 
     /// `inst.Act();`: action `Act` of the function block type of `inst`, run on the instance.
-    fn member_call(&self, base: &Expr, member: &Ident, span: Span) -> C<StmtFn> {
+    fn member_call(&self, base: &Expr, member: &Ident, args: &[Arg], span: Span) -> C<StmtFn> {
         let inst = self.place(base)?;
         let Type::FunctionBlock(fb) = inst.ty.clone() else {
             return Err(self.error(base.span, "an action is called on a function block instance"));
         };
-        let p = self.u.fb_pou(&fb).ok_or_else(|| self.error(member.span, format!("`{fb}` has no actions")))?;
-        let k = match self.u.pous[p].names.get(&member.text.to_ascii_uppercase()) {
-            Some(Sym::Action(k)) => *k,
-            _ => return Err(self.error(member.span, format!("`{fb}` has no action `{}`", member.text))),
+        let action =
+            self.u.fb_pou(&fb).and_then(|p| match self.u.pous[p].names.get(&member.text.to_ascii_uppercase()) {
+                Some(Sym::Action(k)) => Some((p, *k)),
+                _ => None,
+            });
+        let Some((p, k)) = action else {
+            // `inst.Inner(…)`: the instance `Inner` inside `inst` is called.
+            let inner = self.member(base, member)?;
+            if matches!(inner.ty, Type::FunctionBlock(_)) {
+                return self.fb_call(member, inner, args, span);
+            }
+            return Err(self.error(member.span, format!("`{fb}` has no action `{}`", member.text)));
         };
         let slot = inst.loc.slot_fn();
         Ok(Box::new(move |c, b| {
@@ -243,8 +251,8 @@ impl Cx<'_, '_> {
 
     /// A call used as a statement.
     pub(crate) fn call_stmt(&self, e: &Expr) -> C<StmtFn> {
-        if let ExprKind::MemberCall { base, member, .. } = &e.kind {
-            return self.member_call(base, member, e.span);
+        if let ExprKind::MemberCall { base, member, args } = &e.kind {
+            return self.member_call(base, member, args, e.span);
         }
         let ExprKind::Call { callee, args } = &e.kind else {
             let v = self.expr(e, None)?;

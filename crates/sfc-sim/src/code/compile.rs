@@ -4,7 +4,7 @@
 use super::place::{write, Loc, PlaceC};
 use super::rt::*;
 use super::stmt::to_block;
-use super::unit::{Cx, Globals, PouMeta, Sym, Unit, C};
+use super::unit::{Cx, Globals, PouMeta, SubMeta, Sym, Unit, C};
 use super::{
     AssocCode, Block, ChartCode, ControlSlots, DurationCode, FastGuard, Guard, Layout, Place, PouBody, PouCode,
     Program, VarSlot,
@@ -78,7 +78,8 @@ fn il_depth(list: &[IlInstruction], d: u32) -> u32 {
 
 impl Program {
     /// Compiles every POU of a checked file. `unit` is the parsed file whose SFC bodies were
-    /// moved into `charts` (see `sfc_model::check_source`), `types` the checker's expression
+    /// moved into `charts` (see `sfc_model::check_source`: its `charts`, then its
+    /// `action_charts`), `types` the checker's expression
     /// types by span (`CheckOptions::keep_types`).
     ///
     /// Err: SFC0320 diagnostics for what cannot be simulated.
@@ -138,10 +139,16 @@ impl Program {
                 continue;
             };
             pou_index.entry(p.name.key()).or_insert(pous.len());
+            // The charts of its actions written in SFC come after those of the POUs'.
+            let subs = (0..charts.len())
+                .filter(|&c| charts[c].item == item_idx && charts[c].action.is_some())
+                .map(|chart| SubMeta { chart, ..Default::default() })
+                .collect();
             pous.push(PouMeta {
                 ast: p,
                 iface,
-                chart: charts.iter().position(|c| c.item == item_idx),
+                chart: charts.iter().position(|c| c.item == item_idx && c.action.is_none()),
+                subs,
                 layout: Layout::default(),
                 names: HashMap::new(),
                 step_x: Vec::new(),
@@ -213,6 +220,7 @@ impl Program {
             action_a: Vec<u32>,
             control: ControlSlots,
             chart_slot: u32,
+            subs: Vec<SubMeta>,
             wiring: super::wiring::Wiring,
         }
         let parts: Vec<Parts> = u
@@ -230,44 +238,76 @@ impl Program {
                 action_a: m.action_a,
                 control: m.control,
                 chart_slot: m.chart_slot,
+                subs: m.subs,
             })
             .collect();
         let mut charts: Vec<Option<Chart>> = charts.into_iter().map(Some).collect();
         let mut out = Vec::new();
+        // The charts of actions written in SFC: each a POU of its own after the file's, named
+        // `Pou.Action`, laid out in its POU's frame.
+        let mut extra: Vec<PouCode> = Vec::new();
+        let first_extra = parts.len();
         for (meta, body) in parts.into_iter().zip(bodies) {
             let mut actions = Vec::new();
-            let body = match body {
-                Compiled::Code(b, a) => {
+            let (body, sub_parts) = match body {
+                Compiled::Code(b, a, subs) => {
                     actions = a;
-                    PouBody::Code(b)
+                    (PouBody::Code(b), subs)
                 }
-                Compiled::Chart { guards, fast, bodies, associations } => {
+                Compiled::Chart(main, subs) => {
                     let chart = meta.chart.and_then(|c| charts[c].take()).expect("chart POUs have a chart");
-                    PouBody::Chart(Box::new(ChartCode {
-                        chart,
-                        step_x: meta.step_x,
-                        step_t: meta.step_t,
-                        action_q: meta.action_q,
-                        action_a: meta.action_a,
-                        guards,
-                        fast,
-                        bodies,
-                        associations,
-                        control: meta.control,
-                        chart_slot: meta.chart_slot,
-                        plan: Default::default(),
-                    }))
+                    let code = chart_code(chart, &meta.step_x, &meta.step_t, meta.action_q, meta.action_a, main);
+                    (
+                        PouBody::Chart(Box::new(ChartCode {
+                            control: meta.control,
+                            chart_slot: meta.chart_slot,
+                            ..code
+                        })),
+                        subs,
+                    )
                 }
             };
+            let mut subs = Vec::new();
+            for (sub, p) in meta.subs.into_iter().zip(sub_parts) {
+                let Some(chart) = charts[sub.chart].take() else { continue };
+                let name = format!("{}.{}", meta.name, chart.action.as_deref().unwrap_or_default());
+                let x = &meta.step_x[sub.steps.clone()];
+                let t = &meta.step_t[sub.steps.clone()];
+                let code = chart_code(chart, x, t, sub.action_q, sub.action_a, p);
+                subs.push(first_extra + extra.len());
+                extra.push(PouCode {
+                    name,
+                    kind: meta.kind,
+                    layout: meta.layout.clone(),
+                    body: PouBody::Chart(Box::new(ChartCode {
+                        control: meta.control,
+                        chart_slot: sub.chart_slot,
+                        ..code
+                    })),
+                    actions: Vec::new(),
+                    subs: Vec::new(),
+                    wiring: meta.wiring.clone(),
+                });
+            }
             out.push(PouCode {
                 name: meta.name,
                 kind: meta.kind,
                 layout: meta.layout,
                 body,
                 actions,
+                subs,
                 wiring: meta.wiring,
             });
         }
+        // Frames are never made of an action's chart: its templates and initial values are its
+        // POU's, and empty here.
+        let mut templates = templates;
+        let mut inits = inits;
+        for _ in &extra {
+            templates.push(Vec::new());
+            inits.push(Vec::new());
+        }
+        out.extend(extra);
         Ok(Program {
             pous: out,
             globals: globals.layout,
@@ -289,14 +329,10 @@ impl Program {
 }
 
 enum Compiled {
-    /// The body and the actions after it.
-    Code(Block, Vec<Block>),
-    Chart {
-        guards: Vec<Guard>,
-        fast: Vec<FastGuard>,
-        bodies: Vec<Block>,
-        associations: Vec<Vec<AssocCode>>,
-    },
+    /// The body and the actions after it, and the charts of those written in SFC.
+    Code(Block, Vec<Block>, Vec<ChartParts>),
+    /// The chart, and the charts of its actions written in SFC.
+    Chart(ChartParts, Vec<ChartParts>),
 }
 
 /// POUs in an order where every block type comes before the POUs that contain instances of it;
@@ -414,11 +450,32 @@ fn lay_out(u: &mut Unit<'_>, i: usize) {
             off += 2;
         }
     }
+    let mut subs = m.subs.clone();
+    for sub in &mut subs {
+        let ch = &u.charts[sub.chart];
+        let first = step_x.len();
+        for _ in &ch.steps {
+            step_x.push(off);
+            step_t.push(off + 1);
+            off += 2;
+        }
+        sub.steps = first..step_x.len();
+        for _ in &ch.actions {
+            sub.action_q.push(off);
+            sub.action_a.push(off + 1);
+            off += 2;
+        }
+    }
     let mut il = 0;
     if let Body::Il(b) = &m.ast.body {
         il = il.max(il_depth(&b.instructions, 0));
     }
-    if let Some(ch) = chart {
+    for a in &m.ast.actions {
+        if let ActionBody::Il(b) = &a.body {
+            il = il.max(il_depth(&b.instructions, 0));
+        }
+    }
+    for ch in chart.into_iter().chain(subs.iter().map(|s| &u.charts[s.chart])) {
         for a in &ch.actions {
             if let ActionBody::Il(b) = &a.body {
                 il = il.max(il_depth(&b.instructions, 0));
@@ -435,6 +492,10 @@ fn lay_out(u: &mut Unit<'_>, i: usize) {
     let mut chart_slot = 0;
     if chart.is_some() {
         chart_slot = off;
+        off += 1;
+    }
+    for sub in &mut subs {
+        sub.chart_slot = off;
         off += 1;
     }
     let mut result = None;
@@ -460,6 +521,7 @@ fn lay_out(u: &mut Unit<'_>, i: usize) {
     m.action_a = action_a;
     m.control = control;
     m.chart_slot = chart_slot;
+    m.subs = subs;
     m.il_base = il_base;
     m.il_slots = il;
     m.result = result;
@@ -533,6 +595,12 @@ fn fill_names(u: &mut Unit<'_>, i: usize) {
             // The actions of a POU that is no chart, by their index in `PouCode::actions`.
             for (k, a) in m.ast.actions.iter().enumerate() {
                 names.entry(a.name.text.to_ascii_uppercase()).or_insert(Sym::Action(k));
+            }
+        }
+        // The steps of its actions written in SFC, by their index in the POU's `step_x`.
+        for sub in &m.subs {
+            for (k, s) in u.charts[sub.chart].steps.iter().enumerate() {
+                names.entry(s.name.to_ascii_uppercase()).or_insert(Sym::Step(sub.steps.start + k));
             }
         }
     }
@@ -883,40 +951,107 @@ fn compile_pou(u: &Unit<'_>, i: usize, template: &[Value]) -> Compiled {
             });
             Ok(b)
         });
-        let actions = m
-            .ast
-            .actions
-            .iter()
-            .map(|a| {
-                let b = match &a.body {
-                    ActionBody::St(stmts) => cx.stmt_list(stmts).map(to_block),
-                    ActionBody::Il(il) => cx.il_block(il),
-                };
-                b.unwrap_or_else(|d| {
-                    u.report(d);
-                    placeholder_block()
-                })
-            })
-            .collect();
+        let actions = m.ast.actions.iter().map(|a| action_block(&cx, m, &a.name.text, &a.body)).collect();
+        let subs = m.subs.iter().map(|sub| compile_chart(&cx, &u.charts[sub.chart])).collect();
         return Compiled::Code(
             r.unwrap_or_else(|d| {
                 u.report(d);
                 placeholder_block()
             }),
             actions,
+            subs,
         );
     };
-    let ch = &u.charts[c];
+    let main = compile_chart(&cx, &u.charts[c]);
+    let subs = m.subs.iter().map(|sub| compile_chart(&cx, &u.charts[sub.chart])).collect();
+    Compiled::Chart(main, subs)
+}
+
+/// A chart's code from its compiled parts and its slots (the control and chart slots are set
+/// by the caller).
+fn chart_code(chart: Chart, x: &[u32], t: &[u32], q: Vec<u32>, a: Vec<u32>, p: ChartParts) -> ChartCode {
+    ChartCode {
+        chart,
+        step_x: x.to_vec(),
+        step_t: t.to_vec(),
+        action_q: q,
+        action_a: a,
+        guards: p.guards,
+        fast: p.fast,
+        bodies: p.bodies,
+        associations: p.associations,
+        step_actions: p.step_actions,
+        control: ControlSlots::default(),
+        chart_slot: 0,
+        plan: Default::default(),
+    }
+}
+
+/// The code of an action body: its statements, or for an action written in SFC one scan of
+/// its chart (the chart instance is in the frame's slot for it).
+fn action_block(cx: &Cx<'_, '_>, m: &PouMeta<'_>, name: &str, body: &ActionBody) -> Block {
+    let b = match body {
+        ActionBody::St(stmts) => cx.stmt_list(stmts).map(to_block),
+        ActionBody::Il(il) => cx.il_block(il),
+        ActionBody::Sfc(_) => {
+            let sub = m
+                .subs
+                .iter()
+                .find(|s| cx.u.charts[s.chart].action.as_deref().is_some_and(|a| a.eq_ignore_ascii_case(name)));
+            match sub {
+                Some(sub) => {
+                    let slot = sub.chart_slot as usize;
+                    let span = cx.u.charts[sub.chart].name_span;
+                    let name = name.to_string();
+                    Ok(Box::new(move |c: &mut super::Ctx<'_>, base: usize| {
+                        let depth = CALL_DEPTH.with(|d| d.get());
+                        if depth >= MAX_CALL_DEPTH {
+                            return Err(*fault(format!("the chart of action `{name}` runs itself (recursion)"), span));
+                        }
+                        CALL_DEPTH.with(|d| d.set(depth + 1));
+                        let idx = int_of(&c.mem[base + slot]);
+                        let r = crate::engine::run_chart(c, idx.max(0) as usize);
+                        CALL_DEPTH.with(|d| d.set(depth));
+                        r
+                    }) as Block)
+                }
+                None => Err(cx.u.error(
+                    cx.u.charts.first().map(|c| c.name_span).unwrap_or_default(),
+                    format!("the chart of action `{name}` is missing"),
+                )),
+            }
+        }
+    };
+    b.unwrap_or_else(|d| {
+        cx.u.report(d);
+        placeholder_block()
+    })
+}
+
+/// The compiled parts of one chart of a POU.
+struct ChartParts {
+    guards: Vec<Guard>,
+    fast: Vec<FastGuard>,
+    bodies: Vec<Block>,
+    associations: Vec<Vec<AssocCode>>,
+    step_actions: Vec<Vec<(sfc_syntax::ast::StepActionKind, Block)>>,
+}
+
+/// Compiles the conditions, action bodies and associations of a chart of the POU being
+/// compiled (its body's, or an action's written in SFC).
+fn compile_chart(cx: &Cx<'_, '_>, ch: &Chart) -> ChartParts {
+    let u = cx.u;
+    let m = cx.meta().expect("a chart belongs to a POU");
     let mut guards: Vec<Guard> = Vec::new();
     let mut fast: Vec<FastGuard> = Vec::new();
     for t in &ch.transitions {
         let g = if matches!(ch.target, Target::Atmt | Target::Eatmt) {
             match sfc_model::condition_input(&t.condition, ch.target) {
-                Some(ci) => atmt_guard(&cx, ch.target, ci, t.span),
-                None => guard(&cx, &t.condition),
+                Some(ci) => atmt_guard(cx, ch.target, ci, t.span),
+                None => guard(cx, &t.condition),
             }
         } else {
-            guard(&cx, &t.condition)
+            guard(cx, &t.condition)
         };
         let (g, f) = g.unwrap_or_else(|d| {
             u.report(d);
@@ -925,17 +1060,7 @@ fn compile_pou(u: &Unit<'_>, i: usize, template: &[Value]) -> Compiled {
         guards.push(g);
         fast.push(f);
     }
-    let mut bodies = Vec::new();
-    for a in &ch.actions {
-        let b = match &a.body {
-            ActionBody::St(stmts) => cx.stmt_list(stmts).map(to_block),
-            ActionBody::Il(il) => cx.il_block(il),
-        };
-        bodies.push(b.unwrap_or_else(|d| {
-            u.report(d);
-            placeholder_block()
-        }));
-    }
+    let bodies = ch.actions.iter().map(|a| action_block(cx, m, &a.name, &a.body)).collect();
     let mut associations = Vec::new();
     for s in &ch.steps {
         let mut list = Vec::new();
@@ -972,7 +1097,25 @@ fn compile_pou(u: &Unit<'_>, i: usize, template: &[Value]) -> Compiled {
         }
         associations.push(list);
     }
-    Compiled::Chart { guards, fast, bodies, associations }
+    // A step action runs as the call `A();` or `inst.A();` does.
+    let step_actions = ch
+        .steps
+        .iter()
+        .map(|s| {
+            s.step_actions
+                .iter()
+                .filter_map(|a| {
+                    let call = a.call()?;
+                    let b = cx.call_stmt(&call).map(|f| to_block(vec![f])).unwrap_or_else(|d| {
+                        u.report(d);
+                        placeholder_block()
+                    });
+                    Some((a.kind, b))
+                })
+                .collect()
+        })
+        .collect();
+    ChartParts { guards, fast, bodies, associations, step_actions }
 }
 
 fn guard(cx: &Cx<'_, '_>, cond: &Condition) -> C<(Guard, FastGuard)> {

@@ -278,7 +278,7 @@ impl Cx<'_, '_> {
         }
     }
 
-    fn member(&self, base: &Expr, member: &Ident) -> C<PlaceC> {
+    pub(crate) fn member(&self, base: &Expr, member: &Ident) -> C<PlaceC> {
         if let ExprKind::Name(id) = &base.kind {
             let m = self.meta();
             match (self.lookup(&id.text), m) {
@@ -290,9 +290,19 @@ impl Cx<'_, '_> {
                     };
                 }
                 (Some(Sym::Action(i)), Some(m)) => {
+                    // A POU that is no chart has no action control: its actions run when called.
+                    let (Some(&q), Some(&a)) = (m.action_q.get(i), m.action_a.get(i)) else {
+                        return Err(self.error(
+                            member.span,
+                            format!(
+                                "`{}` is an action of a POU that is no chart: it has no `{}`",
+                                id.text, member.text
+                            ),
+                        ));
+                    };
                     return match member.text.to_ascii_uppercase().as_str() {
-                        "Q" => Ok(PlaceC::new(Loc::Static(Place::Local(m.action_q[i])), Type::Bool)),
-                        "A" => Ok(PlaceC::new(Loc::Static(Place::Local(m.action_a[i])), Type::Bool)),
+                        "Q" => Ok(PlaceC::new(Loc::Static(Place::Local(q)), Type::Bool)),
+                        "A" => Ok(PlaceC::new(Loc::Static(Place::Local(a)), Type::Bool)),
                         _ => Err(self.error(member.span, format!("actions have no member `{}`", member.text))),
                     };
                 }

@@ -50,6 +50,7 @@ impl Program {
                 mem[top_frame + cc.chart_slot as usize] = Value::Int(0);
                 charts.push(ChartInstance { pou: top, frame: top_frame, path: String::new() });
             }
+            self.action_charts(top, top_frame, "", &mut mem, &mut charts);
             for v in &p.layout.vars {
                 self.walk(&v.ty, top_frame + v.offset as usize, v.name.clone(), &mut mem, &mut charts, 0);
             }
@@ -172,6 +173,20 @@ impl Program {
         }
     }
 
+    /// The instances of the charts of the actions written in SFC of POU `p`'s frame at `frame`
+    /// (instance path `path`): named `path.Action`.
+    fn action_charts(&self, p: usize, frame: usize, path: &str, mem: &mut [Value], out: &mut Vec<ChartInstance>) {
+        for &sub in &self.pous[p].subs {
+            let PouBody::Chart(cc) = &self.pous[sub].body else { continue };
+            if let Some(s) = mem.get_mut(frame + cc.chart_slot as usize) {
+                *s = Value::Int(out.len() as i64);
+            }
+            let action = cc.chart.action.as_deref().unwrap_or_default();
+            let path = if path.is_empty() { action.to_string() } else { format!("{path}.{action}") };
+            out.push(ChartInstance { pou: sub, frame, path });
+        }
+    }
+
     /// Finds SFC instances inside a value of `ty` at `slot`, depth first.
     fn walk(&self, ty: &Type, slot: usize, path: String, mem: &mut [Value], out: &mut Vec<ChartInstance>, depth: u32) {
         if depth > 64 {
@@ -186,6 +201,7 @@ impl Program {
                     }
                     out.push(ChartInstance { pou: j, frame: slot, path: path.clone() });
                 }
+                self.action_charts(j, slot, &path, mem, out);
                 for v in &self.pous[j].layout.vars {
                     self.walk(&v.ty, slot + v.offset as usize, format!("{path}.{}", v.name), mem, out, depth + 1);
                 }

@@ -180,6 +180,9 @@ pub struct PouCode {
     /// The actions of a POU that is no chart, in declaration order (a chart's are in its
     /// [`ChartCode::bodies`]).
     pub actions: Vec<Block>,
+    /// The charts of its actions written in SFC: indices of POUs named `Pou.Action`, placed
+    /// after the file's POUs, whose chart lives in this POU's frame.
+    pub subs: Vec<usize>,
     /// Terminal labels, the error-code variable and the inputs its calls pass.
     pub wiring: wiring::Wiring,
 }
@@ -255,6 +258,9 @@ pub struct ChartCode {
     pub bodies: Vec<Block>,
     /// Per step, per association (same order as `chart.steps[s].associations`).
     pub associations: Vec<Vec<AssocCode>>,
+    /// Per step: its step actions (CODESYS's entry, step and exit actions), in the order
+    /// written; empty for most charts.
+    pub step_actions: Vec<Vec<(sfc_syntax::ast::StepActionKind, Block)>>,
     pub control: ControlSlots,
     /// Hidden slot holding `Value::Int(i)`: this instance's index in `Ctx::charts`.
     pub chart_slot: u32,

@@ -160,6 +160,14 @@ impl Program {
                 return Some(Cur::Action { pou, base, k });
             }
         }
+        // The steps of its actions written in SFC (one namespace with the body's).
+        for &sub in &p.subs {
+            if let PouBody::Chart(cc) = &self.pous[sub].body {
+                if let Some(k) = cc.chart.step(name) {
+                    return Some(Cur::Step { pou: sub, base, k });
+                }
+            }
+        }
         None
     }
 }

@@ -42,11 +42,25 @@ pub(crate) struct PouMeta<'a> {
     pub action_a: Vec<u32>,
     pub control: ControlSlots,
     pub chart_slot: u32,
+    /// The charts of the POU's actions written in SFC.
+    pub subs: Vec<SubMeta>,
     /// First scratch slot of IL current results (one per nesting level).
     pub il_base: u32,
     pub il_slots: u32,
     /// FUNCTION result: offset and type.
     pub result: Option<(u32, Type)>,
+}
+
+/// The chart of an action written in SFC, laid out in its POU's frame.
+#[derive(Default, Clone)]
+pub(crate) struct SubMeta {
+    /// Index into the charts.
+    pub chart: usize,
+    /// Its steps in the POU's `step_x`/`step_t` (after the body's and earlier actions').
+    pub steps: std::ops::Range<usize>,
+    pub action_q: Vec<u32>,
+    pub action_a: Vec<u32>,
+    pub chart_slot: u32,
 }
 
 impl PouMeta<'_> {

@@ -132,11 +132,37 @@ impl Control {
 /// Steps 6–7: action control for every live entity, then the bodies with `A` TRUE.
 #[inline(always)]
 pub(crate) fn action_phase(ctx: &mut Ctx<'_>, chart: usize, code: &ChartCode, plan: &ChartPlan) -> Result<(), Fault> {
+    if plan.step_actions {
+        step_actions(ctx, chart, code)?;
+    }
     let st = &ctx.charts[chart];
     if st.entered.is_empty() && st.live.is_empty() {
         return Ok(()); // no action holds state and none was activated
     }
     run_actions(ctx, chart, code, plan)
+}
+
+/// CODESYS's step actions, before the IEC actions (CODESYS, "Processing order in SFC"): the
+/// exit actions of the steps left since they last ran, the entry actions of the steps entered,
+/// then the step (main) action of every active step; each group in step order.
+pub(crate) fn step_actions(ctx: &mut Ctx<'_>, chart: usize, code: &ChartCode) -> Result<(), Fault> {
+    use sfc_syntax::ast::StepActionKind as K;
+    let st = &mut ctx.charts[chart];
+    let mut now: Vec<u32> = st.active.clone();
+    now.sort_unstable();
+    let before = std::mem::replace(&mut st.stepped, now.clone());
+    let frame = st.frame;
+    let left = before.iter().filter(|s| now.binary_search(s).is_err());
+    let entered = now.iter().filter(|s| before.binary_search(s).is_err());
+    let mut todo: Vec<(u32, K)> = left.map(|&s| (s, K::Exit)).collect();
+    todo.extend(entered.map(|&s| (s, K::Entry)));
+    todo.extend(now.iter().map(|&s| (s, K::Main)));
+    for (s, kind) in todo {
+        for (_, body) in code.step_actions[s as usize].iter().filter(|(k, _)| *k == kind) {
+            body(ctx, frame)?;
+        }
+    }
+    Ok(())
 }
 
 fn run_actions(ctx: &mut Ctx<'_>, chart: usize, code: &ChartCode, plan: &ChartPlan) -> Result<(), Fault> {

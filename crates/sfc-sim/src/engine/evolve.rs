@@ -164,6 +164,7 @@ pub(crate) fn reset(ctx: &mut Ctx<'_>, chart: usize, code: &ChartCode) {
     }
     st.left.clear();
     st.entered.clear();
+    st.stepped.clear();
     for c in st.controls.iter_mut() {
         *c = Default::default();
     }

@@ -451,6 +451,11 @@ fn scan(
         }
         a.state |= a.stored;
     }
+    // (CODESYS's step actions, which MatIEC does not know, run before its actions as in every
+    // profile: docs/sim.md, "Step actions".)
+    if plan.step_actions {
+        super::action::step_actions(ctx, chart, code)?;
+    }
     // 8. Actions execution: variables, then the bodies.
     for &e in &plan.variable_entities {
         let a = m.actions[e as usize];

@@ -131,6 +131,8 @@ pub struct ChartPlan {
     pub(crate) tr: Vec<TrInfo>,
     /// Per step: its link (one-in/one-out fast path), or a record of kind `NONE`.
     pub(crate) link: Vec<Link>,
+    /// Some step has step actions (CODESYS's entry, step, exit actions).
+    pub(crate) step_actions: bool,
     /// Frame offsets of the `X` and `T` slots of each step.
     pub(crate) x_slots: Vec<u32>,
     pub(crate) t_slots: Vec<u32>,
@@ -292,6 +294,7 @@ impl ChartPlan {
             alpha_rank[e] = rank as u32;
         }
         ChartPlan {
+            step_actions: code.step_actions.iter().any(|v| !v.is_empty()),
             outgoing: Rows::from_lists(outgoing.into_iter()),
             tr,
             link,

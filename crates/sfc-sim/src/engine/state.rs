@@ -109,6 +109,9 @@ pub struct ChartState {
     pub(crate) track_left: bool,
     /// Steps activated since the last action phase.
     pub(crate) entered: Vec<u32>,
+    /// The active steps when the step actions last ran, sorted (charts with step actions only):
+    /// the steps left and entered since are the difference.
+    pub(crate) stepped: Vec<u32>,
     /// The active set changed since the last `finish_scan`.
     pub(crate) changed: bool,
     /// Keep `SFCCurrentStep` up to date in memory: only when some code of the file reads it
@@ -160,6 +163,7 @@ impl ChartState {
             left: Vec::new(),
             track_left: true,
             entered: Vec::new(),
+            stepped: Vec::new(),
             changed: true,
             track_current: true,
             stamp: vec![0; nt],
