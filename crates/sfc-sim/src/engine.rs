@@ -191,6 +191,23 @@ pub struct FaultPlace {
     pub steps: Vec<String>,
 }
 
+/// SFC0321 at a POU kept as written (not analysed), with why it is (its `sfc.verbatim`).
+fn kept_as_written(v: &sfc_syntax::ast::Verbatim, message: String) -> Diagnostic {
+    let why = v
+        .attributes
+        .iter()
+        .rev()
+        .find(|a| a.name.eq_ignore_ascii_case("sfc.verbatim"))
+        .and_then(|a| a.value.as_deref())
+        .map(sfc_syntax::attr_value::unescape)
+        .filter(|w| !w.trim().is_empty() && w != "opaque");
+    let mut d = Diagnostic::error("SFC0321", v.name.as_ref().map_or(v.span, |n| n.span), message);
+    if let Some(w) = why {
+        d = d.with_note(w);
+    }
+    d
+}
+
 /// The chart states of the SFC instances of a fresh memory (each instance's hidden slot set
 /// to its index).
 fn chart_states(prog: &Program, instances: Vec<crate::code::ChartInstance>, mem: &mut [Value]) -> Vec<ChartState> {
@@ -251,22 +268,10 @@ impl Simulation {
         });
         if let Some(v) = kept {
             let name = v.name.as_ref().map(|n| n.text.clone()).unwrap_or_default();
-            let why = v
-                .attributes
-                .iter()
-                .rev()
-                .find(|a| a.name.eq_ignore_ascii_case("sfc.verbatim"))
-                .and_then(|a| a.value.as_deref())
-                .map(sfc_syntax::attr_value::unescape)
-                .filter(|w| !w.trim().is_empty() && w != "opaque");
-            let mut d = Diagnostic::error(
-                "SFC0321",
-                v.name.as_ref().map_or(v.span, |n| n.span),
+            let d = kept_as_written(
+                v,
                 format!("`{top}` uses `{name}`, which is kept as written, not analysed, so it cannot be simulated"),
             );
-            if let Some(w) = why {
-                d = d.with_note(format!("`{name}`: {w}"));
-            }
             return Err((checked.file, vec![d]));
         }
         let source = checked.file;
@@ -1005,23 +1010,10 @@ fn choose_pou(
                     })
                     .collect();
                 if let Some(v) = kept.iter().find(|v| v.name.as_ref().is_some_and(|n| n.is(name))) {
-                    let why = v
-                        .attributes
-                        .iter()
-                        .rev()
-                        .find(|a| a.name.eq_ignore_ascii_case("sfc.verbatim"))
-                        .and_then(|a| a.value.as_deref())
-                        .map(sfc_syntax::attr_value::unescape)
-                        .filter(|w| !w.trim().is_empty() && w != "opaque");
-                    let mut d = Diagnostic::error(
-                        "SFC0321",
-                        v.name.as_ref().map_or(v.span, |n| n.span),
+                    return Err(kept_as_written(
+                        v,
                         format!("`{name}` is kept as written, not analysed, so it cannot be simulated"),
-                    );
-                    if let Some(w) = why {
-                        d = d.with_note(w);
-                    }
-                    return Err(d);
+                    ));
                 }
                 let mut names: Vec<String> = pous.iter().map(|p| p.name.text.clone()).collect();
                 names.extend(

@@ -150,17 +150,7 @@ impl Checker<'_, '_> {
                 self.check_args_loosely(args);
                 return;
             }
-            if self.in_guard {
-                self.error(
-                    "SFC0305",
-                    span,
-                    format!(
-                        "calling function block `{}` changes its state; call it in an action and test its outputs here",
-                        member.text
-                    ),
-                );
-            }
-            self.bind_pou_args(&member.text, &inner, args, span, false);
+            self.instance_call(member, &inner, args, span);
             return;
         }
         match fb {
@@ -479,6 +469,12 @@ impl Checker<'_, '_> {
     pub(crate) fn fb_call(&mut self, name: &Ident, sym: Sym, fb: &PouInterface, args: &[Arg], span: Span) {
         self.scope.mark(sym, false);
         self.scope.mark(sym, true);
+        self.instance_call(name, fb, args, span);
+    }
+
+    /// The call of instance `name` of block `fb` (a variable, or `inst.Inner`): its arguments,
+    /// and in a transition condition the side effect.
+    fn instance_call(&mut self, name: &Ident, fb: &PouInterface, args: &[Arg], span: Span) {
         if self.in_guard {
             self.error(
                 "SFC0305",
