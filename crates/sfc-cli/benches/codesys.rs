@@ -180,7 +180,7 @@ fn block(k: usize, steps: usize) -> String {
     }
     let mut locals = var("Count", "INT", "Parts handled since the last reset");
     locals.push_str(&var("Log", "INT", "Steps entered, for the operator's statistics"));
-    for i in 0..9 {
+    for i in 0..12 {
         locals.push_str(&var(&format!("Spare{i}"), "DINT", "Reserved for the next revision of the station"));
     }
     let mut body = String::new();
