@@ -197,7 +197,7 @@ fn show(e: &Expr) -> String {
         }
         ExprKind::Paren(i) => show(i),
         // Not a condition: an action call (a statement).
-        ExprKind::MemberCall { .. } | ExprKind::Error => "?".into(),
+        ExprKind::MemberCall { .. } | ExprKind::Deref(_) | ExprKind::Error => "?".into(),
     }
 }
 

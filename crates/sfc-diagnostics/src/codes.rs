@@ -42,6 +42,11 @@ last may have a fraction: `T#5d14h12m18s3.5ms`, `TIME#14.7h`. Resolution is 1 µ
     "SFC0006" Error "invalid identifier"
         "Identifiers start with a letter or `_`, contain letters, digits and single underscores, and \
 do not end with `_`: `MAX_U_24` is valid, `__MAX_U`, `MAX__U` and `MAX_U_` are not.";
+    "SFC0013" Note "CODESYS identifier"
+        "In a POU marked `{attribute 'sfc.dialect' := 'codesys'}` (the PLCopen import marks those \
+of CODESYS and TwinCAT projects that need it), identifiers with doubled or trailing underscores \
+(`Move_Forwards__Pos3`), which CODESYS and TwinCAT accept, are read as written. IEC 61131-3 does \
+not allow them; the note names the first.";
     "SFC0007" Error "invalid escape in string literal"
         "Strings use `$` escapes: `$$ $' $\" $L $N $P $R $T`, `$hh` (two hex digits) in `'…'` and \
 `$hhhh` in `\"…\"`.";
@@ -137,6 +142,11 @@ is active.\n\n    STEP S2: Show(N); END_STEP\n    ACTION Show: Visible := TRUE; 
 Associate the output itself so it follows the step (`STEP S2: Visible(N); END_STEP`), or reset \
 it (`Visible := FALSE` in another step, or `IF NOT Show.Q THEN Visible := FALSE; END_IF` for the \
 action's last run).";
+    "SFC0220" Warning "step name repeated in another chart of the POU"
+        "A step of an action written in SFC has the name of a step of another chart of the same POU \
+(its body or another action's). CODESYS's documentation asks for step names unique within the POU; \
+TwinCAT projects exist that repeat them, and each chart keeps its own step. In code, `Step.X` means \
+the step declared first.";
 
     "SFC0301" Error "undeclared variable"
         "A name in an expression or statement is not a variable, step, action or constant of \

@@ -432,7 +432,7 @@ pub fn auto_layout(doc: &EditorDoc) -> EditorDoc {
 /// The ids of the blocks a diagnostic's `element` (a step, transition or action name) designates:
 /// the step or transition, or the action blocks that use the action.
 pub fn element_ids(doc: &EditorDoc, element: &str) -> Vec<String> {
-    graph::element_ids(doc, element, &mut readback::Probe::default())
+    graph::element_ids(doc, element, &mut readback::Probe::for_attributes(&doc.attributes))
 }
 
 /// A new chart (seed 001 "New…"): the POU `name` for `target` with one initial step `Init`.
@@ -468,12 +468,12 @@ pub fn blank(name: &str, target: ChartTarget) -> EditorDoc {
 /// connections, in document order. References follow; references to missing blocks become
 /// `missing:ID`.
 pub fn normalize_ids(doc: &EditorDoc) -> EditorDoc {
-    let mut probe = readback::Probe::default();
+    let mut probe = readback::Probe::for_attributes(&doc.attributes);
     let d = graph::derive(doc, &mut probe);
     graph::normalize(doc, &d)
 }
 
 /// The problems [`to_text`] reports for a document, without writing it.
 pub fn problems(doc: &EditorDoc) -> Vec<Problem> {
-    graph::derive(doc, &mut readback::Probe::default()).problems
+    graph::derive(doc, &mut readback::Probe::for_attributes(&doc.attributes)).problems
 }

@@ -250,7 +250,7 @@ pub fn read<'a>(text: &str, chart: &'a Chart, pou: &ast::Pou, trivia: &[ast::Tri
 
 /// The document of a chart read from text, with canonical ids.
 pub fn document(r: &ReadChart) -> EditorDoc {
-    let mut probe = Probe::default();
+    let mut probe = Probe::for_attributes(&r.attributes);
     let doc = from_sidecar(r, &mut probe).unwrap_or_else(|| {
         let mut doc = laid_out(r, &mut probe);
         add_loose(&mut doc, &r.loose);
@@ -791,7 +791,7 @@ fn clear_text_labels(doc: &mut EditorDoc) {
 /// document's own blocks are placed on that layout (text labels, and steps or transitions the
 /// text cannot hold yet, stay where they are).
 pub fn auto_layout(doc: &EditorDoc) -> EditorDoc {
-    let mut probe = Probe::default();
+    let mut probe = Probe::for_attributes(&doc.attributes);
     let d = graph::derive(doc, &mut probe);
     let mut out = doc.clone();
     for c in &mut out.connections {

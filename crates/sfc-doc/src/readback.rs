@@ -19,6 +19,9 @@ const END: &str = "    STEP Zz_probe_end: END_STEP\n";
 pub struct Probe {
     names: HashMap<String, bool>,
     comments: HashMap<String, bool>,
+    /// The chart's POU is marked `{attribute 'sfc.dialect' := 'codesys'}`: names with doubled
+    /// or trailing underscores (`Move__Pos3`) are names.
+    codesys: bool,
 }
 
 /// The SFC elements of the only POU of a probe, when it parsed without any diagnostic.
@@ -28,7 +31,9 @@ fn parse_probe(text: &str) -> Option<(ast::Pou, Vec<SfcElement>)> {
 
 /// [`parse_probe`] with the probe's comments.
 fn parse_probe_with_trivia(text: &str) -> Option<(ast::Pou, Vec<SfcElement>, Vec<ast::Trivia>)> {
-    let (unit, diags) = sfc_syntax::parse(0, text);
+    let (unit, mut diags) = sfc_syntax::parse(0, text);
+    // The note that a CODESYS name was read (a probe of a POU marked `sfc.dialect`).
+    diags.retain(|d| d.code != "SFC0013");
     let comments: Vec<ast::Trivia> = unit.trivia.iter().filter(|t| region::is_comment(t)).cloned().collect();
     if !diags.is_empty() || unit.items.len() != 1 {
         return None;
@@ -45,19 +50,29 @@ fn parse_probe_with_trivia(text: &str) -> Option<(ast::Pou, Vec<SfcElement>, Vec
 }
 
 impl Probe {
+    /// A probe for a chart whose POU carries `attributes` (those the editor keeps as they are).
+    pub fn for_attributes(attributes: &[crate::OtherAttribute]) -> Probe {
+        let codesys = attributes.iter().any(|a| {
+            a.name.eq_ignore_ascii_case("sfc.dialect")
+                && a.value.as_deref().is_some_and(|v| v.eq_ignore_ascii_case("codesys"))
+        });
+        Probe { codesys, ..Probe::default() }
+    }
+
     /// Whether `s` can be written as a POU, step, transition and action name.
     pub fn is_name(&mut self, s: &str) -> bool {
         if let Some(&v) = self.names.get(s) {
             return v;
         }
-        let ok = !s.is_empty() && s.len() <= 1000 && Self::name_probe(s);
+        let ok = !s.is_empty() && s.len() <= 1000 && Self::name_probe(s, self.codesys);
         self.names.insert(s.to_string(), ok);
         ok
     }
 
-    fn name_probe(s: &str) -> bool {
+    fn name_probe(s: &str, codesys: bool) -> bool {
+        let dialect = if codesys { "{attribute 'sfc.dialect' := 'codesys'}\n" } else { "" };
         let text = format!(
-            "PROGRAM {s}\n    INITIAL_STEP {s}: {s}(N); END_STEP\n    TRANSITION {s} FROM {s} TO {s}\n        := TRUE;\n    END_TRANSITION\n{END}END_PROGRAM\n"
+            "{dialect}PROGRAM {s}\n    INITIAL_STEP {s}: {s}(N); END_STEP\n    TRANSITION {s} FROM {s} TO {s}\n        := TRUE;\n    END_TRANSITION\n{END}END_PROGRAM\n"
         );
         let Some((pou, elements)) = parse_probe(&text) else { return false };
         if pou.name.text != s || elements.len() != 3 {

@@ -115,7 +115,7 @@ fn element_attributes(e: &Element, out: &mut String, extra: &[(&str, String)]) {
 
 /// Writes a document; see [`crate::to_text`].
 pub fn write(doc: &EditorDoc) -> Written {
-    let mut probe = Probe::default();
+    let mut probe = Probe::for_attributes(&doc.attributes);
     let d = graph::derive(doc, &mut probe);
     let mut problems = d.problems.clone();
     let mut car = Sidecar { v: sidecar::VERSION, ..Sidecar::default() };

@@ -194,7 +194,7 @@ impl FileIndex {
                 Item::Pou(p) => b.pou_decl(p),
                 Item::Types(t) => b.types(t),
                 Item::Globals(g) => b.var_block(g, None),
-                Item::Verbatim(_) => {}
+                Item::Verbatim(_) | Item::Interface(_) => {}
             }
         }
         for item in &unit.items {
@@ -575,6 +575,7 @@ impl Builder<'_> {
                 }
             }
             TypeSpecKind::String { length: Some(e), .. } => self.expr(e),
+            TypeSpecKind::Indirect { target, .. } => self.type_spec(target),
             TypeSpecKind::Array { ranges, element } => {
                 for (a, b) in ranges {
                     self.expr(a);
@@ -634,7 +635,7 @@ impl Builder<'_> {
 
     fn stmt(&mut self, s: &Stmt) {
         match &s.kind {
-            StmtKind::Assign { target, value } => {
+            StmtKind::Assign { target, value } | StmtKind::RefAssign { target, value } => {
                 self.expr(target);
                 self.expr(value);
             }
@@ -716,7 +717,7 @@ impl Builder<'_> {
                 self.expr(lhs);
                 self.expr(rhs);
             }
-            ExprKind::Paren(inner) => self.expr(inner),
+            ExprKind::Paren(inner) | ExprKind::Deref(inner) => self.expr(inner),
             ExprKind::Literal(l) => {
                 if let (ast::LiteralKind::Enum(v), Some(_)) = (&l.kind, &l.type_prefix) {
                     self.occ(v, Role::Code, None);

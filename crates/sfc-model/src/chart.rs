@@ -170,6 +170,14 @@ pub struct ActionNode {
     pub span: Span,
 }
 
+impl ActionNode {
+    /// An action of an instance associated with a step (`Motor.Stop`): not declared in the POU,
+    /// its body is the call of it.
+    pub fn of_instance(&self) -> bool {
+        self.name.contains('.')
+    }
+}
+
 /// A branching structure implied by the connections.
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub enum Branch {

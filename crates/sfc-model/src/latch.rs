@@ -97,7 +97,7 @@ fn st_writes(stmts: &[ast::Stmt], action: usize, out: &mut Vec<(String, Write, S
                 st_writes(body, action, out);
             }
             StmtKind::While { body, .. } | StmtKind::Repeat { body, .. } => st_writes(body, action, out),
-            StmtKind::Exit | StmtKind::Return | StmtKind::Empty => {}
+            StmtKind::Exit | StmtKind::Return | StmtKind::Empty | StmtKind::RefAssign { .. } => {}
         }
     }
 }

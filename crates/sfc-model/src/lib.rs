@@ -6,6 +6,7 @@ pub mod chart;
 mod code;
 mod latch;
 pub mod lower;
+mod objects;
 pub mod validate;
 
 pub use chart::*;
@@ -118,8 +119,13 @@ pub fn check_parsed(
     parsed: (impl Into<Tree>, Vec<Diagnostic>),
     opts: &CheckOptions,
 ) -> Checked {
-    let tree: Tree = parsed.0.into();
+    let mut tree: Tree = parsed.0.into();
     let mut diags = parsed.1;
+    if objects::any(tree.unit(), text) {
+        let mut unit = tree.into_owned();
+        objects::keep_objects(&mut unit, text, &mut diags);
+        tree = Tree::Owned(unit);
+    }
     let (type_diags, expr_types) = code::check_unit(tree.unit(), opts.keep_types);
     let mut unit = tree.into_owned();
     let mut charts = Vec::new();
@@ -260,7 +266,9 @@ pub fn dependencies(unit: &ast::SourceUnit, text: &str, pou: &str) -> std::colle
                 spans.entry(p.name.text.to_ascii_uppercase()).or_insert(p.span);
             }
             // A POU kept as written is depended on like any other.
-            ast::Item::Verbatim(v) if matches!(v.keyword.as_str(), "PROGRAM" | "FUNCTION_BLOCK" | "FUNCTION") => {
+            ast::Item::Verbatim(v)
+                if matches!(v.keyword.as_str(), "PROGRAM" | "FUNCTION_BLOCK" | "FUNCTION" | "INTERFACE") =>
+            {
                 if let Some(n) = &v.name {
                     spans.entry(n.text.to_ascii_uppercase()).or_insert(v.span);
                 }

@@ -78,6 +78,8 @@ const KNOWN_ATTRIBUTES: &[&str] = &[
     "sfc.projectdata",
     "sfc.verbatim",
     "sfc.pouxml",
+    // A POU whose identifiers follow CODESYS's rules (doubled or trailing underscores).
+    "sfc.dialect",
     // Transitions drawn but not connected on both sides (PLCopen import and editor), which the
     // chart does not hold (`sfc_syntax::attr_value::Loose`).
     "sfc.loose",
@@ -246,6 +248,8 @@ pub fn target_attr(attrs: &[ast::Attribute], diags: &mut Vec<Diagnostic>) -> Opt
 struct Declared {
     span: Span,
     kind: &'static str,
+    /// Declared by another chart of the POU (its body or another action's chart).
+    elsewhere: bool,
 }
 
 /// The actions of a POU that is no chart: each name once in the POU's namespace (SFC0206, as
@@ -253,7 +257,11 @@ struct Declared {
 pub fn check_pou_actions(pou: &ast::Pou, diags: &mut Vec<Diagnostic>) {
     let mut names: HashMap<String, Declared> = HashMap::default();
     for v in pou_variables(pou) {
-        names.entry(v.name.to_ascii_uppercase()).or_insert(Declared { span: v.span, kind: "a variable" });
+        names.entry(v.name.to_ascii_uppercase()).or_insert(Declared {
+            span: v.span,
+            kind: "a variable",
+            elsewhere: false,
+        });
     }
     for a in &pou.actions {
         let key = a.name.text.to_ascii_uppercase();
@@ -269,7 +277,7 @@ pub fn check_pou_actions(pou: &ast::Pou, diags: &mut Vec<Diagnostic>) {
                 .with_note("variables and actions share one case-insensitive namespace"),
             );
         } else {
-            names.insert(key, Declared { span: a.name.span, kind: "an action" });
+            names.insert(key, Declared { span: a.name.span, kind: "an action", elsewhere: false });
         }
     }
 }
@@ -331,16 +339,36 @@ pub fn lower_chart(
     // Clashes between two variables are the type checker's (it checks every POU's
     // declarations); here variables only seed the namespace that chart names must not reuse.
     for v in &vars {
-        names.entry(v.name.to_ascii_uppercase()).or_insert(Declared { span: v.span, kind: "a variable" });
+        names.entry(v.name.to_ascii_uppercase()).or_insert(Declared {
+            span: v.span,
+            kind: "a variable",
+            elsewhere: false,
+        });
     }
     for (name, span, kind) in &of.taken {
-        names.entry(name.to_ascii_uppercase()).or_insert(Declared { span: *span, kind });
+        names.entry(name.to_ascii_uppercase()).or_insert(Declared { span: *span, kind, elsewhere: true });
     }
     let mut declare = |name: &str, span: Span, kind: &'static str, diags: &mut Vec<Diagnostic>| -> bool {
         if name.is_empty() {
             return false;
         }
         let key = name.to_ascii_uppercase();
+        if let Some(prev) = names.get(&key).filter(|p| p.elsewhere && p.kind == "a step" && kind == "a step") {
+            // A step of another chart of the POU: real TwinCAT projects repeat step names across
+            // a POU's SFC actions, each chart keeping its own step.
+            diags.push(
+                Diagnostic::warning(
+                    "SFC0220",
+                    span,
+                    format!("`{name}` is also a step of another chart of this POU; `{name}.X` in code means the first"),
+                )
+                .with_element(name)
+                .with_label(prev.span, "first declared here")
+                .with_note("CODESYS's documentation asks for step names unique within the POU"),
+            );
+            names.insert(key, Declared { span, kind, elsewhere: false });
+            return true;
+        }
         if let Some(prev) = names.get(&key) {
             diags.push(
                 Diagnostic::error(
@@ -354,7 +382,7 @@ pub fn lower_chart(
             );
             false
         } else {
-            names.insert(key, Declared { span, kind });
+            names.insert(key, Declared { span, kind, elsewhere: false });
             true
         }
     };
@@ -414,6 +442,29 @@ pub fn lower_chart(
                 }
             }
             ast::SfcElement::Transition(_) => {}
+        }
+    }
+
+    // Actions of instances associated with steps (`Motor.Stop(S)`, CODESYS): each an action
+    // of the chart whose body calls it, under its qualified name.
+    for el in elements.iter() {
+        let ast::SfcElement::Step(s) = el else { continue };
+        for a in &s.associations {
+            let Some(call) = a.instance_call() else { continue };
+            if action_index.contains_key(&a.action.key()) {
+                continue;
+            }
+            action_index.insert(a.action.key(), actions.len());
+            actions.push(ActionNode {
+                name: a.action.text.clone(),
+                body: ast::ActionBody::St(vec![ast::Stmt {
+                    kind: ast::StmtKind::Call(Box::new(call)),
+                    span: a.action.span,
+                }]),
+                attributes: Vec::new(),
+                name_span: a.action.span,
+                span: a.action.span,
+            });
         }
     }
 
@@ -530,7 +581,10 @@ pub fn lower_chart(
             k += 1;
             candidate = format!("{base}_{k}");
         }
-        names.insert(candidate.to_ascii_uppercase(), Declared { span: transitions[idx].span, kind: "a transition" });
+        names.insert(
+            candidate.to_ascii_uppercase(),
+            Declared { span: transitions[idx].span, kind: "a transition", elsewhere: false },
+        );
         transitions[idx].name = candidate;
     }
 

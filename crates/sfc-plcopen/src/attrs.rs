@@ -33,6 +33,8 @@ pub const INLINE: &str = "sfc.inline";
 pub const COMMENT: &str = "sfc.comment";
 pub const GVL: &str = "sfc.gvl";
 pub const VERBATIM: &str = "sfc.verbatim";
+/// `codesys`: the POU's names follow CODESYS's rules (doubled or trailing underscores).
+pub const DIALECT: &str = "sfc.dialect";
 pub const POUXML: &str = "sfc.pouxml";
 pub const FILEHEADER: &str = "sfc.fileheader";
 pub const CONTENTHEADER: &str = "sfc.contentheader";

@@ -291,6 +291,15 @@ const XSD_ELEMENTARY: &[&str] = &[
 /// Writes the content of a `type`/`baseType`/`returnType` element.
 pub(crate) fn write_type(x: &mut X, src: &str, t: &ast::TypeSpec) {
     match &t.kind {
+        // TC6's `pointer`; a reference as CODESYS names it, by its text.
+        ast::TypeSpecKind::Indirect { kind: ast::Indirection::Pointer, target } => {
+            x.open("pointer", &[]);
+            x.open("baseType", &[]);
+            write_type(x, src, target);
+            x.close("baseType");
+            x.close("pointer");
+        }
+        ast::TypeSpecKind::Indirect { .. } => x.empty("derived", &[("name", slice(src, t.span).trim().to_string())]),
         ast::TypeSpecKind::Named(id) => {
             let upper = id.text.to_ascii_uppercase();
             let upper = match upper.as_str() {

@@ -2,6 +2,7 @@
 //! interfaces and bodies, configurations. SFC bodies are in [`sfc`], FBD/LD networks in
 //! [`network`].
 
+mod codesys;
 mod dialect;
 mod network;
 mod sfc;
@@ -11,6 +12,7 @@ use crate::emit::{Emitter, Frag, SourceMap};
 use crate::xml::{self, anchor, attr, attr_range, child, children, elements, XText};
 use roxmltree::Node;
 use sfc_diagnostics::{Diagnostic, Span};
+use sfc_syntax::keywords::cannot_name;
 use std::collections::HashSet;
 use std::ops::Range;
 
@@ -21,79 +23,6 @@ pub const NAMESPACES: &[&str] = &[
     "http://www.plcopen.org/xml/tc6.xsd",
 ];
 
-/// Words that cannot name a step, transition, action, variable or POU.
-const RESERVED: &[&str] = &[
-    "END_IF",
-    "END_CASE",
-    "END_FOR",
-    "END_WHILE",
-    "END_REPEAT",
-    "END_VAR",
-    "END_STEP",
-    "END_TRANSITION",
-    "END_ACTION",
-    "END_PROGRAM",
-    "END_FUNCTION",
-    "END_FUNCTION_BLOCK",
-    "END_TYPE",
-    "END_STRUCT",
-    "END_CONFIGURATION",
-    "END_RESOURCE",
-    "IF",
-    "THEN",
-    "ELSIF",
-    "ELSE",
-    "CASE",
-    "OF",
-    "FOR",
-    "DO",
-    "BY",
-    "WHILE",
-    "REPEAT",
-    "UNTIL",
-    "EXIT",
-    "RETURN",
-    "VAR",
-    "VAR_INPUT",
-    "VAR_OUTPUT",
-    "VAR_IN_OUT",
-    "VAR_GLOBAL",
-    "VAR_EXTERNAL",
-    "VAR_ACCESS",
-    "VAR_TEMP",
-    "STEP",
-    "INITIAL_STEP",
-    "TRANSITION",
-    "ACTION",
-    "PROGRAM",
-    "FUNCTION",
-    "FUNCTION_BLOCK",
-    "TYPE",
-    "STRUCT",
-    "ARRAY",
-    "AND",
-    "OR",
-    "XOR",
-    "NOT",
-    "MOD",
-    "AND_THEN",
-    "OR_ELSE",
-    "CONFIGURATION",
-    "RESOURCE",
-    "FROM",
-    "TO",
-    "TRUE",
-    "FALSE",
-    "AT",
-    "CONSTANT",
-    "RETAIN",
-    "NON_RETAIN",
-    "TASK",
-    "WITH",
-    "ON",
-    "PRIORITY",
-];
-
 /// Whether `s` is an IEC identifier (letters, digits, single underscores, not a keyword).
 pub(crate) fn is_ident(s: &str) -> bool {
     let b = s.as_bytes();
@@ -102,7 +31,18 @@ pub(crate) fn is_ident(s: &str) -> bool {
         && b.iter().all(|c| c.is_ascii_alphanumeric() || *c == b'_')
         && !s.contains("__")
         && !s.ends_with('_')
-        && !RESERVED.iter().any(|k| k.eq_ignore_ascii_case(s))
+        && !cannot_name(s)
+}
+
+/// A name CODESYS and TwinCAT accept and IEC 61131-3 does not: a letter, then letters, digits
+/// and underscores, with a doubled or trailing underscore (`Move_Forwards__Pos3`). A leading
+/// `__` is CODESYS's operators' (`__TRUNC`), not such a name.
+pub(crate) fn is_codesys_ident(s: &str) -> bool {
+    let b = s.as_bytes();
+    b.first().is_some_and(u8::is_ascii_alphabetic)
+        && b.iter().all(|c| c.is_ascii_alphanumeric() || *c == b'_')
+        && (s.contains("__") || s.ends_with('_'))
+        && !cannot_name(s)
 }
 
 /// A usable identifier made from `s` (invalid characters become `_`).
@@ -118,10 +58,7 @@ pub(crate) fn sanitize(s: &str) -> String {
     while out.ends_with('_') {
         out.pop();
     }
-    if out.is_empty()
-        || out.as_bytes().first().is_some_and(u8::is_ascii_digit)
-        || RESERVED.iter().any(|k| k.eq_ignore_ascii_case(&out))
-    {
+    if out.is_empty() || out.as_bytes().first().is_some_and(u8::is_ascii_digit) || cannot_name(&out) {
         out.insert_str(0, "X_");
     }
     out
@@ -164,6 +101,12 @@ pub(crate) struct Ctx<'i> {
     pub condition_functions: usize,
     /// The POU being written is kept as written: its code is copied without mapping.
     pub verbatim: bool,
+    /// The file comes from CODESYS or a tool built on it (TwinCAT, e!COCKPIT): each POU is
+    /// marked `sfc.dialect`, so CODESYS's names and typing rules apply to its code.
+    pub codesys_file: bool,
+    /// The POU being written names things as CODESYS allows (`Move__Pos3`): such names are kept
+    /// (the POU is marked `sfc.dialect`), see [`Ctx::is_name`].
+    pub codesys_names: bool,
     /// Transitions of the SFC body being written that are not connected on both sides: they go
     /// into `sfc.loose` attributes of the POU.
     pub loose: Vec<sfc_syntax::attr_value::Loose>,
@@ -175,6 +118,12 @@ pub(crate) struct Ctx<'i> {
 }
 
 impl<'i> Ctx<'i> {
+    /// Whether `s` can name something of the POU being written in text: an IEC identifier, or
+    /// in a POU marked `sfc.dialect` a CODESYS one ([`is_codesys_ident`]).
+    pub(crate) fn is_name(&self, s: &str) -> bool {
+        is_ident(s) || (self.codesys_names && is_codesys_ident(s))
+    }
+
     /// `base`, or `base_1`, `base_2`, … : a name not yet used in the POU, now taken.
     pub fn fresh_name(&mut self, base: &str) -> String {
         let mut name = base.to_string();
@@ -211,7 +160,7 @@ impl<'i> Ctx<'i> {
     pub fn name(&mut self, n: Node, name: &str, what: &str) -> Frag {
         let range = attr_range(n, name).unwrap_or_else(|| anchor(n));
         let raw = attr(n, name).unwrap_or("").trim();
-        if is_ident(raw) && attr(n, name).is_some_and(|v| v == raw) {
+        if self.is_name(raw) && attr(n, name).is_some_and(|v| v == raw) {
             let mut f = Frag::plain(raw);
             f.marks.push(crate::emit::MapEntry { text: 0..raw.len() as u32, xml: range, exact: true });
             return f;
@@ -333,6 +282,7 @@ pub(crate) fn own_data<'a, 'i: 'a>(n: Node<'a, 'i>, what: &str) -> Option<Node<'
 /// Imports a document; `root` is its `project` element.
 pub(crate) fn project(cx: &mut Ctx, root: Node) {
     let types = child(root, "types");
+    cx.codesys_file = dialect::codesys_file(root);
     // The headers and the project's foreign `addData` travel on the first POU, so an export
     // writes them back.
     // (Not those of sfc's own export, which it writes again.)
@@ -384,7 +334,7 @@ pub(crate) fn project(cx: &mut Ctx, root: Node) {
         .descendants()
         .filter(|d| d.is_element() && d.tag_name().name() == "variable")
         .filter_map(|v| attr(v, "name").map(str::trim))
-        .filter(|n| dialect::SFC_WORDS.iter().any(|w| w.eq_ignore_ascii_case(n)))
+        .filter(|n| sfc_syntax::keywords::CHART_WORDS.iter().any(|w| w.eq_ignore_ascii_case(n)))
         .map(|n| (n.to_ascii_uppercase(), sanitize(n)))
         .collect();
     cx.global_names = lists
@@ -856,6 +806,13 @@ fn pou(cx: &mut Ctx, p: Node) {
     pou_attrs.splice(0..0, header);
     let verbatim = dialect::reasons(cx, p);
     cx.verbatim = verbatim.is_some();
+    // A POU of a CODESYS project, or one naming things with doubled or trailing underscores as
+    // CODESYS does: marked, so CODESYS's names and typing rules apply to it.
+    let marked = pou_attrs.iter().any(|(k, v)| k == attrs::DIALECT && v.trim().eq_ignore_ascii_case("codesys"));
+    cx.codesys_names = !cx.verbatim && (marked || cx.codesys_file || dialect::codesys_names(p));
+    if cx.codesys_names && !marked {
+        pou_attrs.push((attrs::DIALECT.to_string(), "codesys".to_string()));
+    }
     if let Some(why) = &verbatim {
         pou_attrs.insert(0, (attrs::VERBATIM.to_string(), attrs::escape(&format!("not analysed: {why}"))));
         pou_attrs.push((attrs::POUXML.to_string(), attrs::escape(&xml::serialize(p))));
@@ -867,6 +824,9 @@ fn pou(cx: &mut Ctx, p: Node) {
     cx.em.str(kind);
     cx.em.str(" ");
     cx.em.frag(&name);
+    if cx.verbatim {
+        cx.em.str(&codesys::inheritance(p));
+    }
     let iface = child(p, "interface");
     if kind == "FUNCTION" {
         cx.em.str(" : ");
@@ -968,6 +928,10 @@ fn pou(cx: &mut Ctx, p: Node) {
             cx.diag("SFC0710", anchor(*t), "a transition condition of a POU whose body is not SFC is never used");
         }
     }
+    // Methods and properties, in text (the POU is kept as written: its XML is exported).
+    if cx.verbatim {
+        codesys::members(cx, p);
+    }
     let body_text = std::mem::replace(&mut cx.em, head);
     // Transitions of the SFC body left unconnected go with the POU's attributes.
     let mut lines = String::new();
@@ -1027,7 +991,7 @@ pub(crate) fn action_body(cx: &mut Ctx, body: Node, indent: &str) {
 }
 
 /// `VAR … END_VAR` from a `varList`.
-fn var_list(cx: &mut Ctx, l: Node, kw: &str, indent: &str) {
+pub(crate) fn var_list(cx: &mut Ctx, l: Node, kw: &str, indent: &str) {
     let vars: Vec<Node> = children(l, "variable").collect();
     let mut head = kw.to_string();
     if xml::flag(l, "constant") {
@@ -1236,6 +1200,16 @@ pub(crate) fn type_text(cx: &mut Ctx, t: Node, indent: &str) -> Frag {
             f.push_str(&format!(" ({lo}..{hi})"));
             f.locate(at)
         }
+        // In a POU kept as written, the text says what it is; elsewhere the type checker cannot
+        // use it yet.
+        "pointer" if cx.verbatim => {
+            let mut f = Frag::plain("POINTER TO ");
+            match child(e, "baseType") {
+                Some(b) => f.push(&type_text(cx, b, indent)),
+                None => f.push_str("BYTE"),
+            }
+            f.locate(at)
+        }
         "pointer" => {
             cx.diag("SFC0705", at.clone(), "pointer types are not IEC 61131-3; imported as the pointed-to type");
             match child(e, "baseType") {
@@ -1374,6 +1348,8 @@ pub(crate) fn run(file: u32, xml_text: &str) -> (String, SourceMap, Vec<Diagnost
         emitted_globals: None,
         header_attrs: Vec::new(),
         verbatim: false,
+        codesys_names: false,
+        codesys_file: false,
         loose: Vec::new(),
         pou_name: String::new(),
         functions: Vec::new(),

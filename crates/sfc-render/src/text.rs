@@ -91,6 +91,11 @@ fn print_body(body: ast::Body, span: ast::Span) -> String {
         var_blocks: Vec::new(),
         body,
         actions: Vec::new(),
+        modifiers: Vec::new(),
+        extends: None,
+        implements: Vec::new(),
+        methods: Vec::new(),
+        properties: Vec::new(),
         span,
     };
     let unit = ast::SourceUnit { items: vec![ast::Item::Pou(pou)], trivia: Vec::new(), blank_lines: Vec::new(), span };

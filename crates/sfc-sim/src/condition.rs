@@ -242,6 +242,7 @@ impl Binder<'_> {
             ExprKind::Address(_) => {
                 Err(format!("`{}`: name the variable declared at the address instead of the address", self.text))
             }
+            ExprKind::Deref(_) => Err(format!("`{}` dereferences a pointer, which a condition cannot", self.text)),
             ExprKind::Error => Err(format!("`{}` is not an ST expression", self.text)),
         }
     }

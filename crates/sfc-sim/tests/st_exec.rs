@@ -371,7 +371,9 @@ fn instantiate_lists_sfc_instances() {
     let mem = prog.instantiate(top);
     let paths: Vec<&str> = mem.charts.iter().map(|c| c.path.as_str()).collect();
     assert_eq!(paths, ["", "Rev", "Cells[1].Seq1", "Cells[2].Seq1"]);
-    assert_eq!(mem.top_frame, prog.globals.size as usize);
+    // A PROGRAM is one instance, the global named after it: run as the top, that is its frame.
+    let main = prog.globals.vars.iter().find(|v| v.name == "Main" && v.implicit).expect("Main's instance");
+    assert_eq!(mem.top_frame, main.offset as usize);
     for (i, c) in mem.charts.iter().enumerate() {
         let PouBody::Chart(cc) = &prog.pous[c.pou].body else { panic!("an SFC POU") };
         assert_eq!(mem.mem[c.frame + cc.chart_slot as usize], Value::Int(i as i64), "chart slot of {}", c.path);

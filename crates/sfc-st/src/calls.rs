@@ -70,7 +70,7 @@ impl Checker<'_, '_> {
 
     /// Checks the argument values of a call that cannot be checked against a signature, so
     /// the names in them still count as used and their own errors are found.
-    fn check_args_loosely(&mut self, args: &[Arg]) {
+    pub(crate) fn check_args_loosely(&mut self, args: &[Arg]) {
         for a in args {
             if let Some(v) = &a.value {
                 if a.output {
@@ -155,9 +155,8 @@ impl Checker<'_, '_> {
         }
         match fb {
             Some(fb) if fb.actions.iter().any(|a| a.eq_ignore_ascii_case(&member.text)) => {
-                if !args.is_empty() {
-                    self.error("SFC0307", span, format!("action `{}` takes no arguments", member.text));
-                }
+                let sfc = fb.sfc_actions.iter().any(|a| a.eq_ignore_ascii_case(&member.text));
+                self.action_args(&member.text, sfc, args, span);
             }
             Some(fb) => {
                 let mut d = Diagnostic::new(
@@ -203,11 +202,56 @@ impl Checker<'_, '_> {
             }
             Callee::Action(sym) => {
                 self.scope.mark(sym, false);
-                if !args.is_empty() {
-                    self.error("SFC0307", e.span, format!("action `{}` takes no arguments", callee.text));
-                }
+                let env = self.scope.env();
+                let sfc = self
+                    .scope
+                    .pou_name()
+                    .and_then(|p| env.pou(p))
+                    .is_some_and(|p| p.sfc_actions.iter().any(|a| a.eq_ignore_ascii_case(&callee.text)));
+                self.action_args(&callee.text, sfc, args, e.span);
             }
             other => self.other_callee(callee, other, args),
+        }
+    }
+
+    /// The arguments of a call of an action: none, or for an action written in SFC its chart's
+    /// flags (`Act(SFCReset := TRUE)`, CODESYS), each a BOOL given by name.
+    fn action_args(&mut self, action: &str, sfc: bool, args: &[Arg], span: Span) {
+        if args.is_empty() {
+            return;
+        }
+        if !sfc {
+            self.error("SFC0307", span, format!("action `{action}` takes no arguments"));
+            return;
+        }
+        for a in args {
+            let flag = a.name.as_ref().filter(|n| crate::env::SFC_ACTION_FLAGS.iter().any(|f| n.is(f)));
+            match (flag, &a.value) {
+                (Some(_), Some(v)) if !a.output => {
+                    let t = self.check_expr(v, Some(&Type::Bool));
+                    if !t.assignable_to(&Type::Bool) {
+                        let what = self.phrase(v, &t);
+                        self.error(
+                            "SFC0302",
+                            v.span,
+                            format!("type mismatch: a chart flag is BOOL, but the argument is {what}"),
+                        );
+                    }
+                }
+                _ => {
+                    self.error(
+                        "SFC0307",
+                        a.span,
+                        format!(
+                            "the call of action `{action}` (written in SFC) sets only its chart's flags: {}",
+                            crate::env::SFC_ACTION_FLAGS.map(|f| format!("`{f} := …`")).join(", ")
+                        ),
+                    );
+                    if let Some(v) = &a.value {
+                        self.check_expr(v, None);
+                    }
+                }
+            }
         }
     }
 
@@ -612,6 +656,8 @@ impl Checker<'_, '_> {
                 }
                 Some(ParamType::Fixed(t)) => {
                     let ok = match (&o.ty, o.untyped) {
+                        // CODESYS converts an integer argument to the input's integer type.
+                        (Some(ty), _) if self.codesys && ty.is_integer() && t.is_integer() => true,
                         (Some(ty), _) => ty.assignable_to(t),
                         (None, Some(u)) => {
                             self.record(o.expr.span, t);

@@ -58,9 +58,19 @@ pub struct Checker<'s, 'e> {
     /// filled only after [`Checker::keep_types`] (plain checking does not pay for it).
     types: HashMap<Span, Type>,
     keep_types: bool,
+    /// The code is CODESYS's (its POU is marked `{attribute 'sfc.dialect' := 'codesys'}`):
+    /// CODESYS's typing rules apply where they are wider than IEC 61131-3's (`NOT` of an
+    /// integer is its bitwise complement; an integer argument of another integer type is
+    /// converted implicitly).
+    pub(crate) codesys: bool,
 }
 
 impl<'s, 'e> Checker<'s, 'e> {
+    /// Applies CODESYS's typing rules (see [`Checker::codesys`]'s field).
+    pub fn set_codesys(&mut self, on: bool) {
+        self.codesys = on;
+    }
+
     /// A checker for code in `scope`.
     pub fn new(scope: &'s mut Scope<'e>) -> Self {
         let diags = std::mem::take(&mut scope.pending);
@@ -74,6 +84,7 @@ impl<'s, 'e> Checker<'s, 'e> {
             too_deep: false,
             types: HashMap::new(),
             keep_types: false,
+            codesys: false,
         }
     }
 
@@ -211,6 +222,10 @@ impl<'s, 'e> Checker<'s, 'e> {
     /// variable used as an action, which the chart writes), checks its duration and
     /// indicators. Whether the action exists is the chart model's check (SFC0207).
     pub fn check_association(&mut self, assoc: &ActionAssociation) {
+        if let Some(call) = assoc.instance_call() {
+            // `Motor.Stop(S)`: the action of an instance, called while the association is active.
+            self.call_stmt(&call);
+        }
         match self.scope.resolve(&assoc.action.text) {
             Some(sym @ Sym::Action(_)) => self.scope.mark(sym, false),
             Some(sym @ (Sym::Local(_) | Sym::Global(_))) => self.scope.mark(sym, true),
@@ -364,6 +379,11 @@ impl<'s, 'e> Checker<'s, 'e> {
 
     fn stmt_inner(&mut self, stmt: &Stmt) {
         match &stmt.kind {
+            // Not typed (sfc-model keeps a POU using references as written before it is checked).
+            StmtKind::RefAssign { target, value } => {
+                self.check_expr(target, None);
+                self.check_expr(value, None);
+            }
             StmtKind::Assign { target, value } => {
                 let tt = self.target(target);
                 let vt = self.check_expr(value, Some(&tt));
@@ -672,6 +692,12 @@ impl<'s, 'e> Checker<'s, 'e> {
             ExprKind::Index { base, indices } => self.index(base, indices, false),
             ExprKind::Call { callee, args } => self.call_value(callee, args, e.span, expected),
             ExprKind::MemberCall { base, member, args } => {
+                // A method of a block kept as written (object orientation is not analysed yet):
+                // accepted, not typed.
+                if self.check_expr(base, None).is_error() {
+                    self.check_args_loosely(args);
+                    return Type::Error;
+                }
                 self.member_call_stmt(base, member, args, e.span);
                 self.error(
                     "SFC0302",
@@ -683,6 +709,8 @@ impl<'s, 'e> Checker<'s, 'e> {
             ExprKind::Unary { op, operand } => self.unary(*op, operand, e, expected),
             ExprKind::Binary { op, lhs, rhs } => self.binary(*op, lhs, rhs, e.span, expected),
             ExprKind::Paren(inner) => self.check_expr(inner, expected),
+            // Not typed (sfc-model keeps a POU dereferencing as written before it is checked).
+            ExprKind::Deref(_) => Type::Error,
             ExprKind::Error => Type::Error,
         }
     }
@@ -955,6 +983,11 @@ impl<'s, 'e> Checker<'s, 'e> {
                     self.report(d);
                     return Type::Error;
                 };
+                // A program's variables are reachable from any code (`Main.X`, CODESYS): its
+                // one instance is a global (see `TypeEnv::is_reached`).
+                if fb.kind == sfc_syntax::ast::PouKind::Program {
+                    return param.ty.clone();
+                }
                 match param.kind {
                     VarKind::Input => param.ty.clone(),
                     VarKind::Output if !write => param.ty.clone(),
@@ -1114,6 +1147,10 @@ impl<'s, 'e> Checker<'s, 'e> {
             }
             UnaryOp::Not => {
                 let t = self.check_expr(operand, expected.filter(|t| t.is_bit()));
+                // CODESYS: the bitwise complement of an integer.
+                if self.codesys && t.is_integer() {
+                    return t;
+                }
                 if !t.is_bit() && !t.is_error() {
                     let p = self.phrase(operand, &t);
                     self.error(

@@ -159,7 +159,18 @@ pub struct PouInterface {
     /// The names of the POU's actions (a chart's, or those after a non-chart body), which
     /// `inst.Act()` calls from outside.
     pub actions: Vec<String>,
+    /// The names of those actions written in SFC: a call may set their chart's flags
+    /// (`Act(SFCReset := TRUE)`, CODESYS).
+    pub sfc_actions: Vec<String>,
 }
+
+/// The names of the actions of `pou` written in SFC.
+pub(crate) fn sfc_actions(pou: &Pou) -> Vec<String> {
+    pou.actions().filter(|a| a.body.sfc().is_some()).map(|a| a.name.text.clone()).collect()
+}
+
+/// The flags of an action's chart a call may set (`Act(SFCReset := TRUE)`), all BOOL inputs.
+pub const SFC_ACTION_FLAGS: [&str; 4] = ["SFCInit", "SFCReset", "SFCPause", "SFCQuitError"];
 
 impl PouInterface {
     /// The variable with this name (case-insensitive).
@@ -207,9 +218,17 @@ pub struct TypeEnv {
     /// such a type, a call of such a function, and everything done with them is accepted
     /// without analysis (their type is [`Type::Error`]).
     opaque: std::collections::HashSet<String>,
+    /// Variables of programs that code reaches into (`Main.X`, CODESYS), as upper-case
+    /// `(program, variable)`: the program's one instance is a global named after it.
+    reached: std::collections::HashSet<(String, String)>,
 }
 
 impl TypeEnv {
+    /// Whether code of the file reaches variable `var` of program `program` (`Main.X`).
+    pub fn is_reached(&self, program: &str, var: &str) -> bool {
+        self.reached.contains(&(program.to_ascii_uppercase(), var.to_ascii_uppercase()))
+    }
+
     /// Whether `name` is a POU kept as written, so not analysed (an opaque type or function).
     pub fn is_opaque(&self, name: &str) -> bool {
         self.opaque.contains(&name.to_ascii_uppercase())
@@ -271,10 +290,14 @@ impl TypeEnv {
                 }
                 Item::Verbatim(v) => {
                     if let (true, Some(name)) =
-                        (matches!(v.keyword.as_str(), "PROGRAM" | "FUNCTION_BLOCK" | "FUNCTION"), &v.name)
+                        (matches!(v.keyword.as_str(), "PROGRAM" | "FUNCTION_BLOCK" | "FUNCTION" | "INTERFACE"), &v.name)
                     {
                         b.opaque.insert(name.key());
                     }
+                }
+                // An interface is a type others may name; what it holds is not checked yet.
+                Item::Interface(i) => {
+                    b.opaque.insert(i.name.key());
                 }
                 Item::Globals(_) => {}
             }
@@ -325,6 +348,35 @@ impl TypeEnv {
             .flat_map(|p| p.vars.iter().filter(|v| v.kind == VarKind::Global).cloned())
             .collect();
         for var in program_globals {
+            env.add_global(var, &mut seen, &mut diags);
+        }
+
+        // Every PROGRAM is one instance, which CODESYS lets any code reach into (`Main.X`):
+        // a global named after it, unless a global already has the name.
+        env.reached = reached_programs(unit, &env);
+        let mut instances: Vec<String> =
+            env.pous.iter().filter(|p| p.kind == PouKind::Program).map(|p| p.name.to_ascii_uppercase()).collect();
+        instances.sort_unstable();
+        instances.dedup();
+        let implicit: Vec<VarInfo> = instances
+            .iter()
+            .filter(|p| !seen.contains_key(*p))
+            .filter_map(|p| env.pou(p))
+            .map(|p| VarInfo {
+                name: p.name.clone(),
+                span: p.span,
+                kind: VarKind::Global,
+                constant: false,
+                retain: None,
+                persistent: false,
+                ty: Type::FunctionBlock(p.name.to_ascii_uppercase()),
+                location: None,
+                init: None,
+                value: None,
+                implicit: true,
+            })
+            .collect();
+        for var in implicit {
             env.add_global(var, &mut seen, &mut diags);
         }
 
@@ -490,6 +542,28 @@ impl TypeEnv {
     }
 }
 
+/// `(program, variable)` for every `Program.Variable` (or `Program.Action()`) in the code of
+/// the file, upper case.
+fn reached_programs(unit: &SourceUnit, env: &TypeEnv) -> std::collections::HashSet<(String, String)> {
+    let mut out = std::collections::HashSet::new();
+    for item in &unit.items {
+        let Item::Pou(pou) = item else { continue };
+        sfc_syntax::visit::pou_exprs(pou, &mut |e| {
+            let (sfc_syntax::ast::ExprKind::Member { base, member }
+            | sfc_syntax::ast::ExprKind::MemberCall { base, member, .. }) = &e.kind
+            else {
+                return;
+            };
+            if let sfc_syntax::ast::ExprKind::Name(n) = &base.kind {
+                if env.pou(&n.text).is_some_and(|p| p.kind == PouKind::Program) {
+                    out.insert((n.key(), member.key()));
+                }
+            }
+        });
+    }
+    out
+}
+
 fn duplicate_var(var: &VarInfo, prev: Span) -> Diagnostic {
     Diagnostic::new("SFC0206", var.span, format!("variable `{}` is declared more than once", var.name))
         .with_label(prev, "first declared here")
@@ -523,6 +597,7 @@ fn standard_fb(name: &str) -> Option<PouInterface> {
         span: Span::default(),
         sfc: false,
         actions: Vec::new(),
+        sfc_actions: Vec::new(),
     })
 }
 
@@ -713,6 +788,7 @@ impl<'a> Builder<'a> {
             span: pou.name.span,
             sfc,
             actions: pou.actions().map(|a| a.name.text.clone()).collect(),
+            sfc_actions: sfc_actions(pou),
         }
     }
 }

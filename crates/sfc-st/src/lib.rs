@@ -47,7 +47,7 @@ pub use types::{Generic, Type};
 pub use value::{const_eval, ConstLookup, NoConstants, Value};
 
 use sfc_diagnostics::{Diagnostic, Span};
-use sfc_syntax::ast::{ActionBody, Body, Item, Pou, SfcElement, SourceUnit};
+use sfc_syntax::ast::{ActionBody, Body, Item, Pou, PouKind, SfcElement, SourceUnit};
 use std::collections::HashMap;
 
 /// Type-checks a whole file: declarations, global and type initial values, and the code of
@@ -115,6 +115,15 @@ fn check_unit_inner(
     diags
 }
 
+/// Whether `pou` is marked `{attribute 'sfc.dialect' := 'codesys'}`: CODESYS's typing rules
+/// apply to its code.
+pub fn is_codesys(pou: &Pou) -> bool {
+    pou.attributes.iter().any(|a| {
+        a.name.eq_ignore_ascii_case("sfc.dialect")
+            && a.value.as_deref().is_some_and(|v| v.eq_ignore_ascii_case("codesys"))
+    })
+}
+
 /// Type-checks one POU of the file `env` was built from (see [`check_unit`]).
 pub fn check_pou(env: &TypeEnv, pou: &Pou) -> Vec<Diagnostic> {
     check_pou_with(env, pou, &mut |_, _| {})
@@ -155,6 +164,7 @@ fn check_pou_inner(
     }
     prepare(&mut scope, pou);
     let mut ck = Checker::new(&mut scope);
+    ck.set_codesys(is_codesys(pou));
     if types.is_some() {
         ck.keep_types();
     }
@@ -176,7 +186,12 @@ fn check_pou_inner(
         t.extend(ck.take_expr_types());
     }
     let mut diags = ck.finish();
-    diags.extend(scope.unused_diagnostics());
+    // A variable of a program that other code reads as `Main.X` is used there.
+    let reached = |d: &Diagnostic| {
+        pou.kind == PouKind::Program
+            && scope.unused_variables().iter().any(|v| v.span == d.span && env.is_reached(&pou.name.text, &v.name))
+    };
+    diags.extend(scope.unused_diagnostics().into_iter().filter(|d| !reached(d)));
     diags
 }
 

@@ -47,6 +47,9 @@ pub(crate) fn resolve_spec<N: TypeNames + ?Sized>(
 ) -> Type {
     match &spec.kind {
         TypeSpecKind::Named(id) => named(names, id, diags),
+        // A POU declaring a pointer or reference is kept as written before it is checked
+        // (sfc-model's objects); one met elsewhere (a global, a type) is not typed.
+        TypeSpecKind::Indirect { .. } => Type::Error,
         TypeSpecKind::String { wide, length } => {
             let len = match length {
                 None => None,

@@ -139,6 +139,7 @@ impl<'e> Scope<'e> {
             span: pou.name.span,
             sfc,
             actions: pou.actions().map(|a| a.name.text.clone()).collect(),
+            sfc_actions: crate::env::sfc_actions(pou),
         };
         let mut scope = Scope::for_interface(env, &iface);
         scope.pending = pending;

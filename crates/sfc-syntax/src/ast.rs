@@ -83,6 +83,8 @@ pub enum Item {
     /// `CONFIGURATION … END_CONFIGURATION` and other blocks that are recognised, kept verbatim
     /// for the printer, and not analysed.
     Verbatim(Verbatim),
+    /// `INTERFACE I_Cyl [EXTENDS I_Base, …] … END_INTERFACE` (IEC 61131-3 3rd edition).
+    Interface(Interface),
 }
 
 impl Item {
@@ -92,6 +94,7 @@ impl Item {
             Item::Types(t) => t.span,
             Item::Globals(v) => v.span,
             Item::Verbatim(v) => v.span,
+            Item::Interface(i) => i.span,
         }
     }
 }
@@ -148,6 +151,16 @@ pub struct Pou {
     /// statements, called `Extend();` inside the POU and `inst.Extend();` from outside). A
     /// chart's actions are elements of the chart (`Body::Sfc`); [`Pou::actions`] iterates both.
     pub actions: Vec<Action>,
+    /// `ABSTRACT`, `FINAL`, `PUBLIC`, `INTERNAL` after the POU keyword, as written.
+    pub modifiers: Vec<Ident>,
+    /// `FUNCTION_BLOCK FB_Cyl EXTENDS FB_Base`
+    pub extends: Option<Ident>,
+    /// `IMPLEMENTS I_Cyl, I_Other`
+    pub implements: Vec<Ident>,
+    /// The methods of a FUNCTION_BLOCK (or PROGRAM, as CODESYS allows), in source order.
+    pub methods: Vec<Method>,
+    /// The properties (CODESYS, TwinCAT), in source order.
+    pub properties: Vec<Property>,
     pub span: Span,
 }
 
@@ -176,6 +189,59 @@ impl Pou {
         });
         chart.chain(self.actions.iter())
     }
+}
+
+// ---------------------------------------------------------------------------------------------
+// Objects: IEC 61131-3 3rd edition's methods and interfaces, CODESYS's properties
+
+/// `METHOD [PUBLIC|PRIVATE|PROTECTED|INTERNAL] [ABSTRACT|FINAL] Name [: Type] … END_METHOD`
+#[derive(Debug, Clone, PartialEq)]
+pub struct Method {
+    pub name: Ident,
+    /// Access specifier and modifiers, as written.
+    pub modifiers: Vec<Ident>,
+    pub return_type: Option<TypeSpec>,
+    pub attributes: Vec<Attribute>,
+    pub var_blocks: Vec<VarBlock>,
+    /// The statements (none in an INTERFACE, or for an ABSTRACT method).
+    pub body: Body,
+    pub span: Span,
+}
+
+/// `PROPERTY [PUBLIC|…] Name : Type GET … END_GET SET … END_SET END_PROPERTY`: CODESYS's
+/// property, a pair of methods read and written as a variable of the instance.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Property {
+    pub name: Ident,
+    pub modifiers: Vec<Ident>,
+    pub ty: TypeSpec,
+    pub attributes: Vec<Attribute>,
+    /// `GET … END_GET`: its locals and statements; the value is assigned to the property name.
+    pub get: Option<Accessor>,
+    /// `SET … END_SET`: the new value is read through the property name.
+    pub set: Option<Accessor>,
+    pub span: Span,
+}
+
+/// One accessor of a [`Property`].
+#[derive(Debug, Clone, PartialEq)]
+pub struct Accessor {
+    pub modifiers: Vec<Ident>,
+    pub attributes: Vec<Attribute>,
+    pub var_blocks: Vec<VarBlock>,
+    pub body: Body,
+    pub span: Span,
+}
+
+/// `INTERFACE I_Cyl [EXTENDS I_Base, …]`: method and property prototypes.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Interface {
+    pub name: Ident,
+    pub attributes: Vec<Attribute>,
+    pub extends: Vec<Ident>,
+    pub methods: Vec<Method>,
+    pub properties: Vec<Property>,
+    pub span: Span,
 }
 
 /// The body of a POU.
@@ -264,8 +330,26 @@ pub struct VarDecl {
     pub access_mode: Option<String>,
     pub ty: TypeSpec,
     pub init: Option<Initializer>,
+    /// `Start : BOOL R_EDGE;`: an input that is TRUE for the call in which it rose (fell).
+    pub edge: Option<Edge>,
     pub attributes: Vec<Attribute>,
     pub span: Span,
+}
+
+/// The edge of an edge-triggered input (`R_EDGE`, `F_EDGE`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum Edge {
+    Rising,
+    Falling,
+}
+
+impl Edge {
+    pub fn keyword(self) -> &'static str {
+        match self {
+            Edge::Rising => "R_EDGE",
+            Edge::Falling => "F_EDGE",
+        }
+    }
 }
 
 /// `TYPE … END_TYPE`
@@ -305,8 +389,31 @@ pub enum TypeSpecKind {
     Enum { base: Option<Ident>, values: Vec<(Ident, Option<Expr>)> },
     /// `STRUCT a : INT; b : BOOL := TRUE; END_STRUCT`
     Struct(Vec<VarDecl>),
+    /// `POINTER TO INT`, `REFERENCE TO INT` (CODESYS), `REF_TO INT` (IEC 61131-3 3rd edition).
+    Indirect { kind: Indirection, target: Box<TypeSpec> },
     /// Placeholder after a syntax error (a diagnostic has been reported).
     Error,
+}
+
+/// How a [`TypeSpecKind::Indirect`] is written.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum Indirection {
+    /// `POINTER TO`
+    Pointer,
+    /// `REFERENCE TO`
+    Reference,
+    /// `REF_TO`
+    RefTo,
+}
+
+impl Indirection {
+    pub fn keyword(self) -> &'static str {
+        match self {
+            Indirection::Pointer => "POINTER TO",
+            Indirection::Reference => "REFERENCE TO",
+            Indirection::RefTo => "REF_TO",
+        }
+    }
 }
 
 /// An initial value.
@@ -471,6 +578,8 @@ impl StepAction {
 /// `Action(Qualifier, T#5s, Indicator);`
 #[derive(Debug, Clone, PartialEq)]
 pub struct ActionAssociation {
+    /// An action of the POU, a BOOL variable, or an action of an instance (`Motor.Stop`,
+    /// CODESYS), whose IEC action control calls `Motor.Stop()`.
     pub action: Ident,
     /// As written (`N`, `SD`, …); `None` means the null qualifier (= N).
     pub qualifier: Option<Ident>,
@@ -478,6 +587,22 @@ pub struct ActionAssociation {
     pub duration: Option<Expr>,
     pub indicators: Vec<Ident>,
     pub span: Span,
+}
+
+impl ActionAssociation {
+    /// For an action of an instance (`Motor.Stop`, `Table.Motor.Stop`), the call that runs it.
+    pub fn instance_call(&self) -> Option<Expr> {
+        let text = &self.action.text;
+        let (path, last) = text.rsplit_once('.')?;
+        let span = self.action.span;
+        let mut parts = path.split('.');
+        let mut base = Expr { kind: ExprKind::Name(Ident::new(parts.next()?, span)), span };
+        for p in parts {
+            base = Expr { kind: ExprKind::Member { base: Box::new(base), member: Ident::new(p, span) }, span };
+        }
+        let member = Ident::new(last, span);
+        Some(Expr { kind: ExprKind::MemberCall { base: Box::new(base), member, args: Vec::new() }, span })
+    }
 }
 
 /// `TRANSITION [name] [(PRIORITY := n)] FROM … TO … := cond; END_TRANSITION`
@@ -554,6 +679,11 @@ pub enum StmtKind {
     },
     /// A call used as a statement: `Timer(IN := x, PT := T#1s);`, `F(1);`
     Call(Box<Expr>),
+    /// `r REF= x;`: the reference `r` made to designate `x` (CODESYS).
+    RefAssign {
+        target: Box<Expr>,
+        value: Box<Expr>,
+    },
     /// `IF c THEN … ELSIF c THEN … ELSE … END_IF`
     If {
         branches: Vec<(Expr, Vec<Stmt>)>,
@@ -649,6 +779,8 @@ pub enum ExprKind {
     },
     /// `( e )`, kept so the printer reproduces the user's grouping.
     Paren(Box<Expr>),
+    /// `p^`: what a pointer or reference points to (`THIS^`, `SUPER^`).
+    Deref(Box<Expr>),
     /// Placeholder after a syntax error (a diagnostic has been reported).
     Error,
 }

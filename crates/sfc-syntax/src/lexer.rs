@@ -56,6 +56,8 @@ pub enum TokenKind {
     /// `!`: not IEC, but the negation of an EATMT condition input (`!c5`); the parser reads it
     /// as NOT and the checker rejects it outside EATMT charts.
     Bang,
+    /// `^`: dereference (`p^`, `THIS^`; IEC 61131-3 3rd edition, CODESYS).
+    Caret,
     /// A character no token starts with (reported).
     Unknown,
     Eof,
@@ -386,6 +388,7 @@ impl<'a> Lexer<'a> {
             (b'>', _) => (TokenKind::Gt, 1),
             (b'&', _) => (TokenKind::Amp, 1),
             (b'!', _) => (TokenKind::Bang, 1),
+            (b'^', _) => (TokenKind::Caret, 1),
             _ => {
                 // One whole UTF-8 character (or a run of bytes) no token starts with.
                 let mut end = self.pos + 1;
@@ -395,8 +398,9 @@ impl<'a> Lexer<'a> {
                 // Glue a run of unknown characters into one token: one error, not hundreds.
                 loop {
                     let Some(&c) = self.src.get(end) else { break };
-                    let starts_token =
-                        c.is_ascii_whitespace() || c.is_ascii_alphanumeric() || b"_()[],;:.+-*/=<>&!'\"%{".contains(&c);
+                    let starts_token = c.is_ascii_whitespace()
+                        || c.is_ascii_alphanumeric()
+                        || b"_()[],;:.+-*/=<>&!^'\"%{".contains(&c);
                     if starts_token {
                         break;
                     }

@@ -5,9 +5,11 @@
 pub mod ast;
 pub mod attr_value;
 pub mod encoding;
+pub mod keywords;
 pub mod lexer;
 pub mod literal;
 mod parser;
 pub mod print;
+pub mod visit;
 
 pub use parser::{parse, parse_expression, parse_statements, MAX_DEPTH, MAX_STMT_DEPTH};

@@ -235,6 +235,7 @@ impl<'a> Printer<'a> {
             Item::Types(block) => self.type_block(block),
             Item::Globals(block) => self.var_block(block),
             Item::Verbatim(v) => self.verbatim(v),
+            Item::Interface(i) => self.interface(i),
         }
     }
 
@@ -251,8 +252,17 @@ impl<'a> Printer<'a> {
     fn pou(&mut self, pou: &Pou) {
         self.open(lead(pou.span, &pou.attributes));
         self.push(pou.kind.keyword());
+        self.modifiers(&pou.modifiers);
         self.push(" ");
         self.push(&pou.name.text);
+        if let Some(base) = &pou.extends {
+            self.push(" EXTENDS ");
+            self.push(&base.text);
+        }
+        if !pou.implements.is_empty() {
+            self.push(" IMPLEMENTS ");
+            self.push(&names(&pou.implements));
+        }
         if let Some(ty) = &pou.return_type {
             self.push(" : ");
             self.type_spec(ty);
@@ -262,13 +272,16 @@ impl<'a> Printer<'a> {
         for block in &pou.var_blocks {
             self.var_block(block);
         }
+        // Methods and properties before the body, as IEC 61131-3 3rd edition orders them.
+        self.members(!pou.var_blocks.is_empty(), &pou.methods, &pou.properties);
         let body_empty = match &pou.body {
             Body::St(stmts) => stmts.is_empty(),
             Body::Il(il) => il.instructions.is_empty(),
             Body::Sfc(elements) => elements.is_empty(),
         };
+        let before = !pou.var_blocks.is_empty() || !pou.methods.is_empty() || !pou.properties.is_empty();
         if !body_empty {
-            if !pou.var_blocks.is_empty() {
+            if before {
                 self.blank();
             }
             match &pou.body {
@@ -279,12 +292,108 @@ impl<'a> Printer<'a> {
         }
         // The actions of a POU that is no chart, after its statements.
         for (i, action) in pou.actions.iter().enumerate() {
-            if i > 0 || !body_empty || !pou.var_blocks.is_empty() {
+            if i > 0 || !body_empty || before {
                 self.blank();
             }
             self.action(action);
         }
         self.close(pou.span.end, pou.kind.end_keyword());
+    }
+
+    fn modifiers(&mut self, modifiers: &[Ident]) {
+        for m in modifiers {
+            self.push(" ");
+            self.push(&m.text);
+        }
+    }
+
+    /// Methods, then properties, each after a blank line (also the first when `after` is set).
+    fn members(&mut self, after: bool, methods: &[Method], properties: &[Property]) {
+        for (i, m) in methods.iter().enumerate() {
+            if after || i > 0 {
+                self.blank();
+            }
+            self.method(m);
+        }
+        for (i, p) in properties.iter().enumerate() {
+            if after || i > 0 || !methods.is_empty() {
+                self.blank();
+            }
+            self.property(p);
+        }
+    }
+
+    /// Var blocks, then the code, a blank line between them.
+    fn code(&mut self, var_blocks: &[VarBlock], body: &Body) {
+        for block in var_blocks {
+            self.var_block(block);
+        }
+        let empty = match body {
+            Body::St(stmts) => stmts.is_empty(),
+            Body::Il(il) => il.instructions.is_empty(),
+            Body::Sfc(elements) => elements.is_empty(),
+        };
+        if !empty && !var_blocks.is_empty() {
+            self.blank();
+        }
+        match body {
+            Body::St(stmts) => self.stmts(stmts),
+            Body::Il(il) => self.il_body(il),
+            Body::Sfc(elements) => self.sfc(elements),
+        }
+    }
+
+    fn method(&mut self, m: &Method) {
+        self.open(lead(m.span, &m.attributes));
+        self.push("METHOD");
+        self.modifiers(&m.modifiers);
+        self.push(" ");
+        self.push(&m.name.text);
+        if let Some(ty) = &m.return_type {
+            self.push(" : ");
+            self.type_spec(ty);
+        }
+        self.end();
+        self.indent += 1;
+        self.code(&m.var_blocks, &m.body);
+        self.close(m.span.end, "END_METHOD");
+    }
+
+    fn property(&mut self, p: &Property) {
+        self.open(lead(p.span, &p.attributes));
+        self.push("PROPERTY");
+        self.modifiers(&p.modifiers);
+        self.push(" ");
+        self.push(&p.name.text);
+        self.push(" : ");
+        self.type_spec(&p.ty);
+        self.end();
+        self.indent += 1;
+        for (kw, end, acc) in [("GET", "END_GET", &p.get), ("SET", "END_SET", &p.set)] {
+            let Some(acc) = acc else { continue };
+            self.open(lead(acc.span, &acc.attributes));
+            self.push(kw);
+            self.modifiers(&acc.modifiers);
+            self.end();
+            self.indent += 1;
+            self.code(&acc.var_blocks, &acc.body);
+            self.close(acc.span.end, end);
+        }
+        self.close(p.span.end, "END_PROPERTY");
+    }
+
+    fn interface(&mut self, i: &Interface) {
+        self.open(lead(i.span, &i.attributes));
+        self.push("INTERFACE ");
+        self.push(&i.name.text);
+        if !i.extends.is_empty() {
+            self.push(" EXTENDS ");
+            self.push(&names(&i.extends));
+        }
+        self.end();
+        self.indent += 1;
+        self.members(false, &i.methods, &i.properties);
+        self.close(i.span.end, "END_INTERFACE");
     }
 
     fn type_block(&mut self, block: &TypeBlock) {
@@ -344,6 +453,10 @@ impl<'a> Printer<'a> {
             self.push(" : ");
         }
         self.type_spec(&decl.ty);
+        if let Some(edge) = decl.edge {
+            self.push(" ");
+            self.push(edge.keyword());
+        }
         if let Some(mode) = &decl.access_mode {
             self.push(" ");
             self.push(mode);
@@ -361,6 +474,11 @@ impl<'a> Printer<'a> {
     fn type_spec(&mut self, ty: &TypeSpec) {
         match &ty.kind {
             TypeSpecKind::Named(name) => self.push(&name.text),
+            TypeSpecKind::Indirect { kind, target } => {
+                self.push(kind.keyword());
+                self.push(" ");
+                self.type_spec(target);
+            }
             TypeSpecKind::String { wide, length } => {
                 self.push(if *wide { "WSTRING" } else { "STRING" });
                 if let Some(length) = length {
@@ -519,6 +637,9 @@ impl<'a> Printer<'a> {
         match &stmt.kind {
             StmtKind::Assign { target, value } => self.line(start, &format!("{} := {};", expr(target), expr(value))),
             StmtKind::Call(call) => self.line(start, &format!("{};", expr(call))),
+            StmtKind::RefAssign { target, value } => {
+                self.line(start, &format!("{} REF= {};", expr(target), expr(value)))
+            }
             StmtKind::If { branches, else_body } => {
                 for (i, (cond, body)) in branches.iter().enumerate() {
                     if i == 0 {
@@ -835,6 +956,10 @@ fn write_expr(out: &mut String, e: &Expr) {
             write_expr(out, inner);
             out.push(')');
         }
+        ExprKind::Deref(base) => {
+            write_operand(out, base, !is_postfix_base(base));
+            out.push('^');
+        }
         ExprKind::Error => {}
     }
 }
@@ -859,6 +984,7 @@ fn is_postfix_base(e: &Expr) -> bool {
             | ExprKind::Index { .. }
             | ExprKind::Call { .. }
             | ExprKind::Paren(_)
+            | ExprKind::Deref(_)
     )
 }
 
@@ -902,6 +1028,11 @@ fn unary_operand_needs_parens(operand: &Expr) -> bool {
         ExprKind::Binary { op, .. } => op.precedence() < UNARY_PRECEDENCE,
         _ => false,
     }
+}
+
+/// `A, B, C`
+fn names(list: &[Ident]) -> String {
+    list.iter().map(|n| n.text.as_str()).collect::<Vec<_>>().join(", ")
 }
 
 #[cfg(test)]

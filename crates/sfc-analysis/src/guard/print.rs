@@ -98,6 +98,10 @@ fn write(e: &Expr, fold: bool, out: &mut String, depth: u32) -> Option<()> {
             child(rhs, p + 1, fold, out, depth)?;
         }
         ExprKind::Paren(inner) => write(inner, fold, out, depth + 1)?,
+        ExprKind::Deref(base) => {
+            child(base, 10, fold, out, depth)?;
+            out.push('^');
+        }
         ExprKind::Error => return None,
     }
     Some(())

@@ -415,7 +415,7 @@ impl Translator<'_, '_> {
             ExprKind::Name(_) | ExprKind::Member { .. } | ExprKind::Index { .. } | ExprKind::Address(_) => {
                 self.bool_leaf(e, b)
             }
-            ExprKind::Error | ExprKind::MemberCall { .. } => Err(Unknown),
+            ExprKind::Error | ExprKind::MemberCall { .. } | ExprKind::Deref(_) => Err(Unknown),
             ExprKind::Unary { .. } => self.opaque(e, b),
         }
     }

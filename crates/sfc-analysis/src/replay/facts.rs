@@ -192,6 +192,7 @@ impl Walker<'_> {
         }
         match &e.kind {
             ExprKind::Literal(_) | ExprKind::Error => {}
+            ExprKind::Deref(base) => self.expr(base, u, depth + 1),
             ExprKind::Address(_) => {
                 if let Some(p) = self.path(e, depth) {
                     u.read(p);
@@ -370,7 +371,7 @@ impl Walker<'_> {
             return;
         }
         match &s.kind {
-            StmtKind::Assign { target, value } => {
+            StmtKind::Assign { target, value } | StmtKind::RefAssign { target, value } => {
                 if let Some(r) = self.root(target, depth) {
                     u.writes.insert(r);
                 }

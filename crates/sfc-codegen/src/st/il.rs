@@ -120,7 +120,11 @@ pub(crate) fn cannot_fault(e: &Expr) -> bool {
         ExprKind::Binary { op, lhs, rhs } => {
             !matches!(op, BinaryOp::Div | BinaryOp::Mod | BinaryOp::Pow) && cannot_fault(lhs) && cannot_fault(rhs)
         }
-        ExprKind::Index { .. } | ExprKind::Call { .. } | ExprKind::MemberCall { .. } | ExprKind::Error => false,
+        ExprKind::Index { .. }
+        | ExprKind::Call { .. }
+        | ExprKind::MemberCall { .. }
+        | ExprKind::Deref(_)
+        | ExprKind::Error => false,
     }
 }
 
@@ -143,7 +147,7 @@ fn reads_of(e: &Expr, out: &mut Vec<String>) {
             reads_of(lhs, out);
             reads_of(rhs, out);
         }
-        ExprKind::Paren(i) => reads_of(i, out),
+        ExprKind::Paren(i) | ExprKind::Deref(i) => reads_of(i, out),
         ExprKind::Address(a) => out.push(a.text.to_ascii_uppercase()),
         ExprKind::Literal(_) | ExprKind::Error => {}
     }

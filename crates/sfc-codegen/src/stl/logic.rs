@@ -304,6 +304,11 @@ impl Lowerer<'_> {
                 self.err("SFC0810", e.span, msg, site);
                 None
             }
+            ExprKind::Deref(_) => {
+                let msg = format!("pointers (`{}`) are not operands of the S7-200 program", self.snippet(e.span));
+                self.err("SFC0810", e.span, msg, site);
+                None
+            }
             // A syntax error, already reported.
             ExprKind::Error => None,
         }

@@ -768,7 +768,9 @@ pub(super) fn write_chart(x: &mut X, src: &str, pou: &ast::Pou, chart: &Chart, s
         })
         .map(|(i, _)| i)
         .collect();
-    let listed: Vec<usize> = (0..chart.actions.len()).filter(|i| !inline.contains(i)).collect();
+    // An instance's action (`Motor.Stop`) is referenced by its blocks, declared in its POU.
+    let listed: Vec<usize> =
+        (0..chart.actions.len()).filter(|i| !inline.contains(i) && !chart.actions[*i].of_instance()).collect();
     if !listed.is_empty() {
         x.open("actions", &[]);
         for &i in &listed {

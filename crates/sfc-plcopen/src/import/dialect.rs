@@ -107,23 +107,19 @@ fn code_reason(cx: &Ctx, text: &str) -> Option<String> {
                 if (up == "POINTER" || up == "REFERENCE") && word(i + 1).eq_ignore_ascii_case("TO") {
                     return Some(format!("it declares a `{w} TO` variable"));
                 }
-                // `A.B` where `A` names nothing of the POU or the file: a namespace or another
-                // program's variable, which IEC 61131-3 cannot reach.
+                // `A.B` where `A` names nothing of the POU or the file: a namespace, which
+                // IEC 61131-3 cannot reach. (A program's variable, `Main.X`, is reachable: the
+                // program's one instance is a global named after it.)
                 if next == Some(TokenKind::Dot)
                     && prev != Some(TokenKind::Dot)
                     && !cx.used.contains(&up)
                     && !cx.global_names.contains(&up)
                     && !cx.gvl_names.contains(&up)
                     && !cx.enum_types.contains(&up)
+                    && !cx.programs.contains(&up)
                     && sig.get(i + 2).is_some_and(|t| t.kind == TokenKind::Ident)
                     && map_type(&format!("{w}.{}", word(i + 2))).is_none()
                 {
-                    if cx.programs.contains(&up) {
-                        return Some(format!(
-                            "it reads `{w}.{}`, a variable of the program `{w}` (CODESYS lets any code reach into a program; sfc does not simulate that yet)",
-                            word(i + 2)
-                        ));
-                    }
                     return Some(format!(
                         "it uses `{w}.{}`, and `{w}` is declared nowhere in the file (a namespace or another program)",
                         word(i + 2)
@@ -141,12 +137,6 @@ pub(super) fn map_type(name: &str) -> Option<&str> {
     let (_, last) = name.rsplit_once('.')?;
     (sfc_st::stdlib::std_function_block(last).is_some() || sfc_st::stdlib::std_function(last).is_some()).then_some(last)
 }
-
-/// Code copied from the XML with CODESYS spellings that have an IEC meaning rewritten:
-/// `Enum.Value` → `Enum#Value`, `GVL.X` → `X`, `Standard.TON` → `TON`.
-/// Words sfc's text reserves for charts that CODESYS's ST lets a variable be named by.
-pub(crate) const SFC_WORDS: &[&str] =
-    &["STEP", "INITIAL_STEP", "END_STEP", "TRANSITION", "END_TRANSITION", "ACTION", "END_ACTION", "FROM"];
 
 /// `t` with the variables named by a chart word renamed as their declarations are
 /// ([`Ctx::renamed`]), then mapped by [`map_dots`].
@@ -237,4 +227,36 @@ pub(super) fn enum_types(root: Node) -> std::collections::HashSet<String> {
         .filter(|d| child(*d, "baseType").is_some_and(|b| elements(b).any(|e| e.tag_name().name() == "enum")))
         .filter_map(|d| attr(d, "name").map(|n| n.trim().to_ascii_uppercase()))
         .collect()
+}
+
+/// Whether the POU `p` names something as CODESYS allows and IEC 61131-3 does not
+/// ([`super::is_codesys_ident`]): a variable, step, action, transition or jump target, or an
+/// identifier of its code.
+pub(super) fn codesys_names(p: Node) -> bool {
+    let named = p.descendants().filter(|e| e.is_element()).any(|e| {
+        let key = if e.tag_name().name() == "jumpStep" { "targetName" } else { "name" };
+        attr(e, key).is_some_and(|n| super::is_codesys_ident(n.trim()))
+    });
+    named || {
+        let mut ids = std::collections::HashSet::new();
+        for t in code_texts(p) {
+            identifiers(&t, &mut ids);
+        }
+        ids.iter().any(|i| super::is_codesys_ident(i))
+    }
+}
+
+/// Whether the project `root` was written by CODESYS or a tool built on it (TwinCAT,
+/// e!COCKPIT): its file header names one, or it holds CODESYS's `addData`.
+pub(super) fn codesys_file(root: Node) -> bool {
+    let header = child(root, "fileHeader")
+        .map(|h| format!("{} {}", attr(h, "productName").unwrap_or(""), attr(h, "companyName").unwrap_or("")))
+        .unwrap_or_default()
+        .to_ascii_uppercase();
+    ["CODESYS", "TWINCAT", "E!COCKPIT", "3S-SMART", "BECKHOFF"].iter().any(|k| header.contains(k))
+        || root.descendants().any(|d| {
+            d.is_element()
+                && d.tag_name().name() == "data"
+                && attr(d, "name").is_some_and(|n| n.contains("3s-software.com"))
+        })
 }

@@ -138,7 +138,15 @@ pub(super) fn parse<'a, 'i>(body: Node<'a, 'i>) -> Net<'a, 'i> {
             _ => {}
         }
         g.text = match kind {
-            "inVariable" | "outVariable" | "inOutVariable" => child(n, "expression").map(|e| xml::text_of(e).trim()),
+            // CODESYS accepts `a = b;` in an input's expression: the `;` ends nothing.
+            "inVariable" => child(n, "expression").map(|e| {
+                let t = xml::text_of(e).trim();
+                match t.text.strip_suffix(';') {
+                    Some(s) => t.slice(0..s.len()).trim(),
+                    None => t,
+                }
+            }),
+            "outVariable" | "inOutVariable" => child(n, "expression").map(|e| xml::text_of(e).trim()),
             "contact" | "coil" => child(n, "variable").map(|e| xml::text_of(e).trim()),
             _ => None,
         };

@@ -12,7 +12,7 @@
 //! only by wire positions: the x where a transition's wire leaves the divergence. CODESYS and
 //! TwinCAT write every position as (0, 0): such a body has no layout, and document order stays.
 
-use super::{action_body, attr_xtext, element_attrs, element_attrs_without, is_ident, network, own_data, Ctx};
+use super::{action_body, attr_xtext, element_attrs, element_attrs_without, network, own_data, Ctx};
 use crate::attrs::{self, Loose, CODESYS_SFC_ELEMENT, STEP_ACTION_GUIDS};
 use crate::emit::Frag;
 use crate::xml::{self, anchor, attr, attr_range, child, children, elements, XText};
@@ -712,15 +712,41 @@ fn up(
                 }
             }
         }
-        "selectionDivergence" | "simultaneousConvergence" => {
+        "selectionDivergence" => {
             for cc in el.ins.iter().flatten() {
                 up(cx, els, ids, cc, step_out, out, seen, depth + 1);
+            }
+        }
+        // A parallel branch that ends in a jump (CODESYS draws it into the convergence) does
+        // not converge: the steps before the transition are the other branches' last steps.
+        "simultaneousConvergence" => {
+            for cc in el.ins.iter().flatten().filter(|cc| !is_jump(els, ids, cc)) {
+                up(cx, els, ids, cc, step_out, out, seen, depth + 1);
+            }
+        }
+        // CODESYS draws a branch that ends in a jump into the convergence below it: the jump
+        // does not flow on, so a convergence whose one other input is a step is that step.
+        "selectionConvergence" => {
+            let flowing: Vec<&Conn> = el.ins.iter().flatten().filter(|cc| !is_jump(els, ids, cc)).collect();
+            if let [one] = flowing[..] {
+                up(cx, els, ids, one, step_out, out, seen, depth + 1);
+            } else {
+                cx.diag(
+                    "SFC0706",
+                    c.range.clone(),
+                    String::from("a transition must follow a step, not a `selectionConvergence`"),
+                );
             }
         }
         other => {
             cx.diag("SFC0706", c.range.clone(), format!("a transition must follow a step, not a `{other}`"));
         }
     }
+}
+
+/// Whether the connection `c` comes from a jump.
+fn is_jump(els: &[El], ids: &HashMap<u64, usize>, c: &Conn) -> bool {
+    ids.get(&c.r).and_then(|&k| els.get(k)).is_some_and(|e| e.kind == "jumpStep")
 }
 
 /// Walks down from a transition to the steps after it (through simultaneous divergences,
@@ -760,7 +786,7 @@ fn down(
                 let range = attr_range(e.n, "targetName").unwrap_or_else(|| anchor(e.n));
                 let f = match macro_entry.get(&target.to_ascii_uppercase()) {
                     Some(en) => en.clone().locate(range),
-                    None if is_ident(&target) => {
+                    None if cx.is_name(&target) => {
                         let mut f = Frag::plain(target.clone());
                         if attr_is_exact(cx, e.n, "targetName", &target) {
                             f.marks.push(crate::emit::MapEntry {
@@ -802,7 +828,13 @@ fn attr_is_exact(cx: &Ctx, n: Node, name: &str, value: &str) -> bool {
 fn association<'a, 'i>(cx: &mut Ctx, imp: &mut Importer<'_, 'a, 'i>, a: Node<'a, 'i>, step: &str) -> Option<Frag> {
     let at = anchor(a);
     let name = if let Some(r) = child(a, "reference") {
-        cx.name(r, "name", "action")
+        // `Motor.ACT_Stop`: an action of an instance (CODESYS), kept qualified.
+        let raw = attr(r, "name").unwrap_or("").trim();
+        if raw.contains('.') && raw.split('.').all(|p| cx.is_name(p)) {
+            Frag::located(raw.to_string(), attr_range(r, "name").unwrap_or_else(|| anchor(r)))
+        } else {
+            cx.name(r, "name", "action")
+        }
     } else if let Some(body) = child(a, "inline") {
         let k = imp.inline_count.entry(step.to_ascii_uppercase()).or_insert(0);
         *k += 1;
@@ -844,7 +876,7 @@ fn condition<'a, 'i>(
     let at = anchor(t);
     let mut name = own_data(t, "name")
         .and_then(|n| attr(n, "value"))
-        .filter(|v| is_ident(v) && !cx.used.contains(&v.to_ascii_uppercase()))
+        .filter(|v| cx.is_name(v) && !cx.used.contains(&v.to_ascii_uppercase()))
         .map(|v| Frag::located(v, at.clone()));
     if let Some(n) = &name {
         cx.used.insert(n.text.to_ascii_uppercase());
@@ -856,13 +888,13 @@ fn condition<'a, 'i>(
     let negated = xml::flag(c, "negated");
     if let Some(inline) = child(c, "inline") {
         if let Some(n) = attr(inline, "name").map(str::trim).filter(|n| !n.is_empty()) {
-            if is_ident(n) && cx.used.contains(&n.to_ascii_uppercase()) {
+            if cx.is_name(n) && cx.used.contains(&n.to_ascii_uppercase()) {
                 cx.diag(
                     "SFC0710",
                     attr_range(inline, "name").unwrap_or_else(|| anchor(inline)),
                     format!("`{n}` already names something else in the POU; the transition is imported without a name"),
                 );
-            } else if is_ident(n) {
+            } else if cx.is_name(n) {
                 cx.used.insert(n.to_ascii_uppercase());
                 let mut f = Frag::plain(n);
                 if let Some(r) = attr_range(inline, "name").filter(|r| super::attr_is_raw(cx.src, r, n)) {
@@ -1148,7 +1180,7 @@ fn step_actions(cx: &mut Ctx, step: Node) -> (Vec<Frag>, Vec<roxmltree::NodeId>)
             taken.push(p.id());
             continue;
         }
-        if !action.split('.').all(is_ident) {
+        if !action.split('.').all(|p| cx.is_name(p)) {
             cx.diag(
                 "SFC0704",
                 anchor(p),

@@ -326,6 +326,7 @@ impl<'a> Enc<'a> {
             ExprKind::MemberCall { member, .. } => {
                 err(e.span, format!("the call of the action `{}` of an instance cannot be modelled", member.text))
             }
+            ExprKind::Deref(_) => err(e.span, "pointers and references cannot be modelled"),
             ExprKind::Error => err(e.span, "the expression has a syntax error"),
         }
     }

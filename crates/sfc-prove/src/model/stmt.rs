@@ -226,6 +226,9 @@ impl<'a> Enc<'a> {
                 Ok(())
             }
             StmtKind::Empty => Ok(()),
+            StmtKind::RefAssign { .. } => {
+                Err(ExprError { span: s.span, message: "references cannot be modelled".into() })
+            }
         }
     }
 

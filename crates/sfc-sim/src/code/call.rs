@@ -240,13 +240,56 @@ impl Cx<'_, '_> {
             }
             return Err(self.error(member.span, format!("`{fb}` has no action `{}`", member.text)));
         };
+        let flags = self.action_flags(p, k, args, span)?;
         let slot = inst.loc.slot_fn();
         Ok(Box::new(move |c, b| {
             c.budget.charge(span)?;
             let ib = slot(c, b)?;
+            for (off, v) in &flags {
+                let x = v(c, b)?;
+                c.mem[ib + *off as usize] = x;
+            }
             run_action(c, p, k, ib)?;
             Ok(Flow::Next)
         }))
+    }
+
+    /// The chart flags a call of action `k` of POU `p` sets (`Act(SFCReset := TRUE)`, an
+    /// action written in SFC): each flag's offset in the POU's frame and its value.
+    fn action_flags(&self, p: usize, k: usize, args: &[Arg], span: Span) -> C<Vec<(u32, ValFn)>> {
+        if args.is_empty() {
+            return Ok(Vec::new());
+        }
+        let m = &self.u.pous[p];
+        let name = match m.chart {
+            Some(c) => self.u.charts[c].actions.get(k).map(|a| a.name.clone()),
+            None => m.ast.actions.get(k).map(|a| a.name.text.clone()),
+        }
+        .unwrap_or_default();
+        let sub = m
+            .subs
+            .iter()
+            .find(|s| self.u.charts[s.chart].action.as_deref().is_some_and(|a| a.eq_ignore_ascii_case(&name)));
+        let Some(sub) = sub else {
+            return Err(self.error(span, format!("action `{name}` takes no arguments")));
+        };
+        let mut out = Vec::new();
+        for a in args {
+            let flag = a.name.as_ref().map(|n| n.text.to_ascii_uppercase()).unwrap_or_default();
+            let off = match flag.as_str() {
+                "SFCINIT" => Some(sub.control.init),
+                "SFCRESET" => sub.control.reset,
+                "SFCPAUSE" => Some(sub.control.pause),
+                "SFCQUITERROR" => Some(sub.control.quit_error),
+                _ => None,
+            };
+            let (Some(off), Some(v), false) = (off, &a.value, a.output) else {
+                return Err(self.error(a.span, format!("a call of action `{name}` sets only its chart's flags")));
+            };
+            let v = self.expr_as(v, &Type::Bool)?;
+            out.push((off, v.value()));
+        }
+        Ok(out)
     }
 
     /// A call used as a statement.
@@ -269,8 +312,13 @@ impl Cx<'_, '_> {
             Some(Sym::Action(a)) => {
                 let p = self.pou.ok_or_else(|| self.error(e.span, "an action outside a POU"))?;
                 let span = e.span;
+                let flags = self.action_flags(p, a, args, span)?;
                 Ok(Box::new(move |c, b| {
                     c.budget.charge(span)?;
+                    for (off, v) in &flags {
+                        let x = v(c, b)?;
+                        c.mem[b + *off as usize] = x;
+                    }
                     run_action(c, p, a, b)?;
                     Ok(Flow::Next)
                 }))

@@ -280,7 +280,7 @@ impl Program {
                     kind: meta.kind,
                     layout: meta.layout.clone(),
                     body: PouBody::Chart(Box::new(ChartCode {
-                        control: meta.control,
+                        control: sub.control,
                         chart_slot: sub.chart_slot,
                         ..code
                     })),
@@ -498,6 +498,36 @@ fn lay_out(u: &mut Unit<'_>, i: usize) {
         sub.chart_slot = off;
         off += 1;
     }
+    // Each action chart's own SFC flags, as hidden variables `Act.SFCInit`, … of the frame.
+    for sub in &mut subs {
+        let action = u.charts[sub.chart].action.clone().unwrap_or_default();
+        let mut flag = |name: &str, ty: Type, kind: VarKind| {
+            let at = off;
+            vars.push(VarSlot {
+                name: format!("{action}.{name}"),
+                ty,
+                kind,
+                offset: at,
+                size: 1,
+                location: None,
+                implicit: true,
+                retain: false,
+                persistent: false,
+            });
+            off += 1;
+            at
+        };
+        let s = Type::String { len: None };
+        sub.control = ControlSlots {
+            init: flag("SFCInit", Type::Bool, VarKind::Input),
+            pause: flag("SFCPause", Type::Bool, VarKind::Input),
+            quit_error: flag("SFCQuitError", Type::Bool, VarKind::Input),
+            error: flag("SFCError", Type::Bool, VarKind::Output),
+            error_step: flag("SFCErrorStep", s.clone(), VarKind::Output),
+            current_step: flag("SFCCurrentStep", s, VarKind::Output),
+            reset: Some(flag("SFCReset", Type::Bool, VarKind::Input)),
+        };
+    }
     let mut result = None;
     if m.kind() == PouKind::Function {
         let rt = m.iface.return_type.clone().unwrap_or(Type::Bool);
@@ -512,6 +542,7 @@ fn lay_out(u: &mut Unit<'_>, i: usize) {
         error: find("SFCError").unwrap_or(0),
         error_step: find("SFCErrorStep").unwrap_or(0),
         current_step: find("SFCCurrentStep").unwrap_or(0),
+        reset: None,
     };
     let m = &mut u.pous[i];
     m.layout = Layout { vars, size: off };
@@ -547,7 +578,8 @@ fn lay_out_globals(u: &Unit<'_>) {
             offset: off,
             size,
             location: v.location.as_ref().map(|l| l.text.clone()),
-            implicit: false,
+            // A program's instance (`Main`), not declared by the user.
+            implicit: v.implicit,
             retain: v.retain == Some(sfc_syntax::ast::Retain::Retain),
             persistent: v.persistent,
         });

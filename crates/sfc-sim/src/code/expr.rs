@@ -152,6 +152,7 @@ impl Cx<'_, '_> {
                 ops::binary(*op, l, r, rt, e.span)
             }
             ExprKind::Paren(inner) => self.expr(inner, expected),
+            ExprKind::Deref(_) => Err(self.error(e.span, "pointers and references are not simulated yet")),
             ExprKind::Error => Err(self.error(e.span, "the expression has a syntax error")),
         }
     }

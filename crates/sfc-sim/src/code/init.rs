@@ -16,10 +16,23 @@ impl Program {
     pub fn instantiate(&self, top: usize) -> Memory {
         let mut mem = self.support.globals_template.clone();
         mem.resize(self.globals.size as usize, Value::Bool(false));
-        let top_frame = mem.len();
-        if let Some(t) = self.support.templates.get(top) {
-            mem.extend_from_slice(t);
-        }
+        // A PROGRAM is its one instance, the global named after it (code reaches into it as
+        // `Main.X`): run as the top, that global is its frame.
+        let own = self
+            .pous
+            .get(top)
+            .filter(|p| p.kind == PouKind::Program)
+            .and_then(|p| self.globals.vars.iter().find(|v| v.implicit && v.name.eq_ignore_ascii_case(&p.name)));
+        let top_frame = match own {
+            Some(v) => v.offset as usize,
+            None => {
+                let at = mem.len();
+                if let Some(t) = self.support.templates.get(top) {
+                    mem.extend_from_slice(t);
+                }
+                at
+            }
+        };
         {
             let mut charts = Vec::new();
             let mut sink = ScanSink::default();
@@ -55,7 +68,8 @@ impl Program {
                 self.walk(&v.ty, top_frame + v.offset as usize, v.name.clone(), &mut mem, &mut charts, 0);
             }
         }
-        for v in &self.globals.vars {
+        // The instances of the programs are not run (unless one is the top, listed above).
+        for v in self.globals.vars.iter().filter(|v| !v.implicit) {
             self.walk(&v.ty, v.offset as usize, v.name.clone(), &mut mem, &mut charts, 0);
         }
         Memory { mem, top_frame, charts }

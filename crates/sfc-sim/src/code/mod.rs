@@ -225,6 +225,9 @@ pub struct ControlSlots {
     pub error_step: u32,
     /// `SFCCurrentStep : STRING` (output): the first active step in declaration order.
     pub current_step: u32,
+    /// `SFCReset : BOOL` (input) of the chart of an action written in SFC (CODESYS): back to
+    /// the initial situation, which is then processed.
+    pub reset: Option<u32>,
 }
 
 /// A guard the engine evaluates without calling its closure.

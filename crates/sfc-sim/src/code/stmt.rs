@@ -143,6 +143,7 @@ impl Cx<'_, '_> {
             StmtKind::Exit => Ok(Box::new(|_, _| Ok(Flow::Exit))),
             StmtKind::Return => Ok(Box::new(|_, _| Ok(Flow::Return))),
             StmtKind::Empty => Ok(Box::new(|_, _| Ok(Flow::Next))),
+            StmtKind::RefAssign { .. } => Err(self.error(s.span, "references are not simulated yet")),
         }
     }
 

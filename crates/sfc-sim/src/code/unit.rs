@@ -61,6 +61,8 @@ pub(crate) struct SubMeta {
     pub action_q: Vec<u32>,
     pub action_a: Vec<u32>,
     pub chart_slot: u32,
+    /// Its own SFC flags (CODESYS gives each chart its own: `Act(SFCReset := TRUE)`).
+    pub control: ControlSlots,
 }
 
 impl PouMeta<'_> {

@@ -49,6 +49,10 @@ pub fn run_chart(ctx: &mut Ctx<'_>, chart: usize) -> Result<(), Fault> {
         reset(ctx, chart, code);
         return Ok(());
     }
+    // SFCReset (an action's chart, CODESYS): back to the initial situation, processed on.
+    if ctl.reset.is_some_and(|r| read_bool(ctx.mem, frame + r as usize)) {
+        reset(ctx, chart, code);
+    }
     if read_bool(ctx.mem, frame + ctl.quit_error as usize) {
         ctx.mem[frame + ctl.error as usize] = Value::Bool(false);
     }

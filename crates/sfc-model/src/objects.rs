@@ -1,0 +1,147 @@
+//! Object orientation and indirection in text (methods, properties, interfaces, `EXTENDS`,
+//! `IMPLEMENTS`, pointers and references, `THIS^`), and edge-triggered inputs: the parser reads
+//! and the printer writes them, the type checker and the simulator do not yet. A POU that holds
+//! one is kept as written (a block others may name, as an import's kept POU is) with one note
+//! that names the first such construct and its line; nothing of it is lost, and the other POUs
+//! of the file are checked as usual.
+
+use sfc_diagnostics::{Diagnostic, Span};
+use sfc_syntax::ast::{self, Item, Pou, TypeSpec, TypeSpecKind};
+use sfc_syntax::lexer::{lex, TokenKind};
+
+/// Whether `unit` holds anything [`keep_objects`] would keep as written.
+pub(crate) fn any(unit: &ast::SourceUnit, text: &str) -> bool {
+    unit.items.iter().any(|i| match i {
+        Item::Interface(_) => true,
+        Item::Pou(p) => first_construct(p, text).is_some(),
+        _ => false,
+    })
+}
+
+/// The POUs another POU extends (upper case), with the first that extends each.
+fn extended(unit: &ast::SourceUnit) -> std::collections::HashMap<String, String> {
+    let mut out = std::collections::HashMap::new();
+    for i in &unit.items {
+        if let Item::Pou(p) = i {
+            if let Some(b) = &p.extends {
+                out.entry(b.text.to_ascii_uppercase()).or_insert_with(|| p.name.text.clone());
+            }
+        }
+    }
+    out
+}
+
+/// Replaces every interface, and every POU holding a construct the checker does not know yet,
+/// by a block kept as written, with a note (SFC0104) naming why.
+pub(crate) fn keep_objects(unit: &mut ast::SourceUnit, text: &str, diags: &mut Vec<Diagnostic>) {
+    let extended = extended(unit);
+    for item in unit.items.iter_mut() {
+        let (keyword, name, attributes, span, why) = match item {
+            Item::Interface(i) => (
+                "INTERFACE",
+                i.name.clone(),
+                i.attributes.clone(),
+                i.span,
+                (
+                    "an interface: sfc reads and prints it, and does not type-check or simulate object orientation yet"
+                        .to_string(),
+                    i.name.span,
+                ),
+            ),
+            Item::Pou(p) => {
+                // A base block's variables are used by the blocks extending it, which are kept.
+                let base = extended.get(&p.name.key()).map(|by| {
+                    (format!("`{by}` extends it; sfc reads and prints it, and does not type-check or simulate object orientation yet"), p.name.span)
+                });
+                match first_construct(p, text).or(base) {
+                    Some(why) => (p.kind.keyword(), p.name.clone(), p.attributes.clone(), p.span, why),
+                    None => continue,
+                }
+            }
+            _ => continue,
+        };
+        let line = 1 + text.get(..why.1.start as usize).unwrap_or("").matches('\n').count();
+        diags.push(
+            Diagnostic::note_diag(
+                "SFC0104",
+                name.span,
+                format!("`{keyword} {}` is kept as written, not analysed", name.text),
+            )
+            .with_note(format!("not analysed: {} (line {line})", why.0)),
+        );
+        *item = Item::Verbatim(ast::Verbatim {
+            keyword: keyword.to_string(),
+            attributes,
+            name: Some(name),
+            text: text.get(span.start as usize..span.end as usize).unwrap_or("").to_string(),
+            span,
+        });
+    }
+}
+
+/// The first construct of `p` the checker does not know yet, in words, with its span.
+fn first_construct(p: &Pou, text: &str) -> Option<(String, Span)> {
+    const LATER: &str = "sfc reads and prints it, and does not type-check or simulate object orientation yet";
+    if let Some(m) = p.methods.first() {
+        return Some((format!("it has the method `{}`; {LATER}", m.name.text), m.name.span));
+    }
+    if let Some(q) = p.properties.first() {
+        return Some((format!("it has the property `{}`; {LATER}", q.name.text), q.name.span));
+    }
+    if let Some(b) = &p.extends {
+        return Some((format!("it extends `{}`; {LATER}", b.text), b.span));
+    }
+    if let Some(i) = p.implements.first() {
+        return Some((format!("it implements `{}`; {LATER}", i.text), i.span));
+    }
+    for d in p.var_blocks.iter().flat_map(|b| &b.decls) {
+        if let Some(kind) = indirection(&d.ty) {
+            return Some((
+                format!(
+                    "it declares a `{}` variable; sfc does not type-check or simulate pointers and references yet",
+                    kind.keyword()
+                ),
+                d.ty.span,
+            ));
+        }
+        if let (Some(edge), Some(n)) = (d.edge, d.names.first()) {
+            return Some((
+                format!("`{}` is declared {}; sfc does not simulate edge-triggered inputs yet", n.text, edge.keyword()),
+                n.span,
+            ));
+        }
+    }
+    // `p^` and `r REF= x` in the code: found in the POU's tokens.
+    let body = text.get(p.span.start as usize..p.span.end as usize)?;
+    let (toks, _) = lex(p.span.file, body);
+    let sig: Vec<_> = toks.iter().filter(|t| !t.kind.is_trivia()).collect();
+    for (k, t) in sig.iter().enumerate() {
+        let at = Span::new(p.span.file, p.span.start + t.start, p.span.start + t.end);
+        let word = &body[t.start as usize..t.end as usize];
+        if t.kind == TokenKind::Caret {
+            let before =
+                k.checked_sub(1).and_then(|j| sig.get(j)).map_or("", |b| &body[b.start as usize..b.end as usize]);
+            return Some((
+                format!("it dereferences `{before}^`; sfc does not type-check or simulate pointers and references yet"),
+                at,
+            ));
+        }
+        if word.eq_ignore_ascii_case("REF") && sig.get(k + 1).is_some_and(|n| n.kind == TokenKind::Eq) {
+            return Some((
+                "it assigns a reference (`REF=`); sfc does not type-check or simulate pointers and references yet"
+                    .into(),
+                at,
+            ));
+        }
+    }
+    None
+}
+
+fn indirection(t: &TypeSpec) -> Option<ast::Indirection> {
+    match &t.kind {
+        TypeSpecKind::Indirect { kind, .. } => Some(*kind),
+        TypeSpecKind::Array { element, .. } => indirection(element),
+        TypeSpecKind::Struct(fields) => fields.iter().find_map(|f| indirection(&f.ty)),
+        _ => None,
+    }
+}

@@ -1,0 +1,133 @@
+//! CODESYS's objects in a POU's `addData` (methods, properties) and in its interface's
+//! (`EXTENDS`, `IMPLEMENTS`), written as the text of IEC 61131-3's 3rd edition and CODESYS
+//! (`METHOD … END_METHOD`, `PROPERTY … GET … END_GET … END_PROPERTY`). The type checker and the
+//! simulator do not handle them yet, so a POU holding them is kept as written (its XML travels
+//! in `sfc.pouxml` for the export): this text is what a reader, `sfc fmt` and the language
+//! server see.
+
+use super::{var_list, Ctx};
+use crate::xml::{self, attr, child, children, elements};
+use roxmltree::Node;
+
+/// `data` names (their ends) of CODESYS's objects.
+const METHOD: &str = "/method";
+const PROPERTY: &str = "/property";
+const INHERITANCE: &str = "/pouinheritance";
+
+/// ` EXTENDS A IMPLEMENTS B, C` for the header of POU `p`, from its interface's `addData`.
+pub(super) fn inheritance(p: Node) -> String {
+    let Some(inh) = child(p, "interface")
+        .into_iter()
+        .flat_map(|i| children(i, "addData"))
+        .flat_map(|a| children(a, "data"))
+        .filter(|d| attr(*d, "name").is_some_and(|n| n.ends_with(INHERITANCE)))
+        .find_map(|d| child(d, "Inheritance"))
+    else {
+        return String::new();
+    };
+    let names = |tag: &str| -> Vec<String> {
+        children(inh, tag).map(|e| xml::text_of(e).text.trim().to_string()).filter(|n| !n.is_empty()).collect()
+    };
+    let mut out = String::new();
+    if let Some(base) = names("Extends").first() {
+        out.push_str(&format!(" EXTENDS {base}"));
+    }
+    let implements = names("Implements");
+    if !implements.is_empty() {
+        out.push_str(&format!(" IMPLEMENTS {}", implements.join(", ")));
+    }
+    out
+}
+
+/// The methods and properties of POU `p` as text, each after a blank line.
+pub(super) fn members(cx: &mut Ctx, p: Node) {
+    let datas: Vec<Node> = children(p, "addData").flat_map(|a| children(a, "data")).collect();
+    for d in datas {
+        let name = attr(d, "name").unwrap_or("");
+        if name.ends_with(METHOD) {
+            for m in children(d, "Method") {
+                cx.em.str("\n");
+                method(cx, m);
+            }
+        } else if name.ends_with(PROPERTY) {
+            for q in children(d, "Property") {
+                cx.em.str("\n");
+                property(cx, q);
+            }
+        }
+    }
+}
+
+/// `PRIVATE`, … from an object's `interface/addData/…/accessmodifiers`.
+fn access(n: Node) -> String {
+    let Some(am) = child(n, "interface")
+        .into_iter()
+        .flat_map(|i| children(i, "addData"))
+        .flat_map(|a| children(a, "data"))
+        .find_map(|d| child(d, "AccessModifiers"))
+    else {
+        return String::new();
+    };
+    ["Public", "Private", "Protected", "Internal", "Abstract", "Final"]
+        .iter()
+        .filter(|k| attr(am, k).is_some_and(|v| v.trim().eq_ignore_ascii_case("true")))
+        .map(|k| format!(" {}", k.to_ascii_uppercase()))
+        .collect()
+}
+
+/// The var blocks of an object's `interface` (the POU's own kinds) and its code, at `indent`.
+fn code(cx: &mut Ctx, n: Node, indent: &str) {
+    if let Some(i) = child(n, "interface") {
+        for l in elements(i) {
+            let kw = match l.tag_name().name() {
+                "localVars" => "VAR",
+                "tempVars" => "VAR_TEMP",
+                "inputVars" => "VAR_INPUT",
+                "outputVars" => "VAR_OUTPUT",
+                "inOutVars" => "VAR_IN_OUT",
+                "externalVars" => "VAR_EXTERNAL",
+                _ => continue,
+            };
+            var_list(cx, l, kw, indent);
+        }
+    }
+    if let Some(st) = child(n, "body").and_then(|b| elements(b).find(|e| matches!(e.tag_name().name(), "ST" | "IL"))) {
+        let t = xml::formatted_text(st);
+        cx.em.lines(&t, indent);
+    }
+}
+
+fn return_type(cx: &mut Ctx, n: Node) -> Option<crate::emit::Frag> {
+    let rt = child(n, "interface").and_then(|i| child(i, "returnType"))?;
+    Some(super::type_text(cx, rt, "    "))
+}
+
+fn method(cx: &mut Ctx, m: Node) {
+    let name = attr(m, "name").unwrap_or("").trim().to_string();
+    cx.em.str(&format!("    METHOD{} {name}", access(m)));
+    if let Some(t) = return_type(cx, m) {
+        cx.em.str(" : ");
+        cx.em.frag(&t);
+    }
+    cx.em.str("\n");
+    code(cx, m, "        ");
+    cx.em.str("    END_METHOD\n");
+}
+
+fn property(cx: &mut Ctx, q: Node) {
+    let name = attr(q, "name").unwrap_or("").trim().to_string();
+    cx.em.str(&format!("    PROPERTY{} {name} : ", access(q)));
+    match return_type(cx, q) {
+        Some(t) => cx.em.frag(&t),
+        None => cx.em.str("BOOL"),
+    }
+    cx.em.str("\n");
+    for (tag, kw) in [("GetAccessor", "GET"), ("SetAccessor", "SET")] {
+        if let Some(a) = child(q, tag) {
+            cx.em.str(&format!("        {kw}{}\n", access(a)));
+            code(cx, a, "            ");
+            cx.em.str(&format!("        END_{kw}\n"));
+        }
+    }
+    cx.em.str("    END_PROPERTY\n");
+}
