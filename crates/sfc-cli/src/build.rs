@@ -85,7 +85,11 @@ pub fn build(r: BuildRequest) -> u8 {
         nstep: r.nstep,
         ntr: r.ntr,
         stl_method: r.stl_method.unwrap_or_default(),
+        original: compile::is_xml(&r.file, &decoded.text).then_some(decoded.text.as_str()),
     };
+    // A conversion writes its output whatever the file's errors (reported above), and then
+    // says by its exit code that the file has errors.
+    let status_after = if !compiling && checked.has_errors() { Status::Findings } else { Status::Ok };
     let unparsed = checked
         .diagnostics
         .iter()
@@ -93,7 +97,7 @@ pub fn build(r: BuildRequest) -> u8 {
     if r.target == BuildTarget::Text && unparsed {
         // Text that does not parse is not reprinted (the printer would drop what it could not
         // read): it is written as it is, its errors reported above.
-        return write_out(&r, &checked.file.text);
+        return finish(write_out(&r, &checked.file.text), status_after);
     }
     let text = match compile::compile(&checked, r.target, &copts) {
         Ok(built) => {
@@ -121,7 +125,16 @@ pub fn build(r: BuildRequest) -> u8 {
             return Status::Findings.code();
         }
     };
-    write_out(&r, &text)
+    finish(write_out(&r, &text), status_after)
+}
+
+/// The exit code of a build whose output was written (`written`): `status` unless writing failed.
+fn finish(written: u8, status: Status) -> u8 {
+    if written == Status::Ok.code() {
+        status.code()
+    } else {
+        written
+    }
 }
 
 /// Writes the result to `-o OUT` (atomically) or standard output.

@@ -670,6 +670,32 @@ fn outline_and_semantic_tokens() {
     c.stop();
 }
 
+/// Methods, properties and interfaces are in the outline (under their POU, at file level).
+#[test]
+fn outline_holds_methods_properties_and_interfaces() {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../tests/fixtures/invalid/objects_kept_as_written.st");
+    let text = std::fs::read_to_string(&path).unwrap();
+    let mut c = Client::start(None, no_idle());
+    let u = c.open(&path, &text);
+    let syms = c
+        .request::<req::DocumentSymbolRequest>(DocumentSymbolParams {
+            text_document: TextDocumentIdentifier::new(u.clone()),
+            work_done_progress_params: Default::default(),
+            partial_result_params: Default::default(),
+        })
+        .unwrap()
+        .unwrap();
+    let DocumentSymbolResponse::Nested(syms) = syms else { panic!() };
+    let names: Vec<(&str, Option<&str>)> = syms.iter().map(|s| (s.name.as_str(), s.detail.as_deref())).collect();
+    assert!(names.contains(&("I_Cylinder", Some("interface"))), "{names:?}");
+    let cyl = syms.iter().find(|s| s.name == "FB_Cylinder").expect("FB_Cylinder");
+    let kids: Vec<(&str, Option<&str>)> =
+        cyl.children.as_ref().unwrap().iter().map(|s| (s.name.as_str(), s.detail.as_deref())).collect();
+    assert!(kids.contains(&("Extend", Some("method"))), "{kids:?}");
+    assert!(kids.contains(&("Position", Some("property"))), "{kids:?}");
+    c.stop();
+}
+
 #[test]
 fn a_hundred_rapid_edits_leave_no_stale_result() {
     let text = std::fs::read_to_string(fixture("tank.st")).unwrap();

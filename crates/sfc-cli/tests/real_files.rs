@@ -144,10 +144,46 @@ fn an_error_in_one_pou_does_not_block_another() {
     let out = sfc(&["check", "--no-analysis", p]);
     assert_eq!(out.status.code(), Some(1));
     assert!(text(&out.stderr).contains("Undeclared"), "{}", text(&out.stderr));
+    // A conversion writes its output and says by its exit code that the file has errors.
     let out = sfc(&["build", p, "--target", "text"]);
-    assert_eq!(out.status.code(), Some(0), "{}", text(&out.stderr));
+    assert_eq!(out.status.code(), Some(1), "{}", text(&out.stderr));
     assert!(text(&out.stdout).contains("PROGRAM Broken"));
     assert!(text(&out.stderr).contains("Undeclared"), "the errors are reported: {}", text(&out.stderr));
+    // To PLCopen too, with the type errors reported.
+    let xml = d.join("two.xml");
+    let out = sfc(&["build", p, "--target", "plcopen", "-o", xml.to_str().unwrap()]);
+    assert_eq!(out.status.code(), Some(1), "{}", text(&out.stderr));
+    assert!(std::fs::read_to_string(&xml).unwrap().contains("<pou name=\"Broken\""));
+}
+
+/// A POU whose errors keep its chart from being written whole (an association naming no
+/// action) is still exported: from text with its text in its addData, which the import reads
+/// back as it was; from PLCopen as it was read. Both with SFC0716 and exit code 1.
+#[test]
+fn plcopen_export_never_refuses_a_pou() {
+    let d = temp_dir("export-never-refuses");
+    let f = d.join("two.st");
+    std::fs::write(&f, TWO_POUS.replace("STEP B: END_STEP", "STEP B: Missing(N); END_STEP")).unwrap();
+    let xml = d.join("two.xml");
+    let out = sfc(&["build", f.to_str().unwrap(), "--target", "plcopen", "-o", xml.to_str().unwrap()]);
+    assert_eq!(out.status.code(), Some(1), "{}", text(&out.stderr));
+    assert!(text(&out.stderr).contains("SFC0716"), "{}", text(&out.stderr));
+    let written = std::fs::read_to_string(&xml).unwrap();
+    assert!(written.contains("<pou name=\"Good\"") && written.contains("<SFC>"), "{written}");
+    assert!(written.contains("<pou name=\"Broken\"") && written.contains("Missing(N)"), "{written}");
+    let back = sfc(&["build", xml.to_str().unwrap(), "--target", "text"]);
+    assert_eq!(back.status.code(), Some(1), "{}", text(&back.stderr));
+    assert!(
+        text(&back.stdout).contains("PROGRAM Broken") && text(&back.stdout).contains("Missing(N);"),
+        "{}",
+        text(&back.stdout)
+    );
+    assert!(text(&back.stderr).contains("Missing") && text(&back.stderr).contains("SFC0716"), "{}", text(&back.stderr));
+    let again = d.join("again.xml");
+    let out = sfc(&["build", xml.to_str().unwrap(), "--target", "plcopen", "-o", again.to_str().unwrap()]);
+    assert_eq!(out.status.code(), Some(1), "{}", text(&out.stderr));
+    assert!(text(&out.stderr).contains("as it was read from the PLCopen file"), "{}", text(&out.stderr));
+    assert!(std::fs::read_to_string(&again).unwrap().contains("Missing(N)"));
 }
 
 /// A PLCopen file without any SFC POU gets a warning, never a silent exit 0 with empty output.

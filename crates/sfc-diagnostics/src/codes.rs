@@ -411,6 +411,12 @@ the values they are.";
 text (`Step`, `Action`, `Transition`, `From`: IEC 61131-3 reserves them, CODESYS's ST does \
 not). It is imported as `X_Step`, and every use of it in the code of the file is renamed alike, \
 so the program does what it did. An export writes the new name.";
+    "SFC0716" Warning "POU written as it was read"
+        "`sfc build --target plcopen` never refuses a POU for its own errors: a POU whose errors \
+keep its chart from being written whole (a syntax error, an association naming no action, a \
+timed qualifier without duration, …) is written as it was read from the PLCopen file, or, for \
+textual input, with its text kept in its `addData`, which `sfc` reads back as it was. The import \
+says so when it reads such a POU.";
 
     "SFC0801" Error "chart cannot be translated to ST"
         "The Structured Text target (`--target st`) replaces the chart's POU by a plain ST POU of \

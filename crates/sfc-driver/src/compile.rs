@@ -181,6 +181,9 @@ pub struct CompileOptions<'a> {
     pub ntr: Option<u32>,
     /// STL: set/reset or SCR.
     pub stl_method: sfc_codegen::stl::StlMethod,
+    /// PLCopen: the PLCopen file the checked text was imported from, whose element a POU with
+    /// errors is written as (`sfc_plcopen::export_with`).
+    pub original: Option<&'a str>,
 }
 
 /// A successful compilation.
@@ -240,7 +243,11 @@ pub fn compile(checked: &Checked, target: BuildTarget, opts: &CompileOptions) ->
             let (unit, _) = sfc_syntax::parse(0, &checked.file.text);
             return Ok(plain(sfc_syntax::print::print(&unit)));
         }
-        BuildTarget::Plcopen => return sfc_plcopen::export(checked).map(plain).map_err(CompileError::Diagnostics),
+        BuildTarget::Plcopen => {
+            return sfc_plcopen::export_with(checked, opts.original)
+                .map(|(text, notes)| Compiled { text, notes, flattened: None, symbols: None })
+                .map_err(CompileError::Diagnostics)
+        }
         _ => {}
     }
     let chart = pick_chart(checked, opts.pou).map_err(CompileError::Chart)?;

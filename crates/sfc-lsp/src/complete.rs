@@ -374,6 +374,9 @@ fn symbol_item(ix: &FileIndex, s: &crate::index::Symbol) -> CompletionItem {
             (CompletionItemKind::EVENT, if st.initial { "initial step".into() } else { "step".into() })
         }
         SymbolKind::Action => (CompletionItemKind::METHOD, "action".into()),
+        SymbolKind::Method => (CompletionItemKind::METHOD, "method".into()),
+        SymbolKind::Property => (CompletionItemKind::PROPERTY, "property".into()),
+        SymbolKind::Interface => (CompletionItemKind::INTERFACE, "interface".into()),
         SymbolKind::Transition(_) => (CompletionItemKind::OPERATOR, "transition".into()),
         SymbolKind::Pou(k) => (CompletionItemKind::MODULE, k.keyword().to_string()),
         SymbolKind::Type => (CompletionItemKind::STRUCT, "type".into()),

@@ -198,6 +198,9 @@ pub fn describe(ix: &FileIndex, s: &Symbol) -> String {
             out
         }
         SymbolKind::Pou(k) => format!("**{} {}**", k.keyword(), s.name),
+        SymbolKind::Method => format!("**method {}**\n\nnot type-checked or simulated yet", s.name),
+        SymbolKind::Property => format!("**property {}**\n\nnot type-checked or simulated yet", s.name),
+        SymbolKind::Interface => format!("**interface {}**", s.name),
         SymbolKind::Type => format!("**type {}**", s.name),
         SymbolKind::EnumValue => format!("**enumerated value {}**", s.name),
     }

@@ -25,6 +25,12 @@ pub enum SymbolKind {
     Step(StepDetail),
     Action,
     Transition(TransitionDetail),
+    /// A method of a function block or program (IEC 61131-3 3rd edition).
+    Method,
+    /// A property of a function block or program (CODESYS).
+    Property,
+    /// An interface (IEC 61131-3 3rd edition), at file level.
+    Interface,
 }
 
 impl SymbolKind {
@@ -40,6 +46,9 @@ impl SymbolKind {
             SymbolKind::Step(_) => "step",
             SymbolKind::Action => "action",
             SymbolKind::Transition(_) => "transition",
+            SymbolKind::Method => "method",
+            SymbolKind::Property => "property",
+            SymbolKind::Interface => "interface",
         }
     }
 }
@@ -194,7 +203,11 @@ impl FileIndex {
                 Item::Pou(p) => b.pou_decl(p),
                 Item::Types(t) => b.types(t),
                 Item::Globals(g) => b.var_block(g, None),
-                Item::Verbatim(_) | Item::Interface(_) => {}
+                Item::Interface(i) => {
+                    b.pou = None;
+                    b.add(&i.name.text, SymbolKind::Interface, i.name.span, i.span);
+                }
+                Item::Verbatim(_) => {}
             }
         }
         for item in &unit.items {
@@ -384,6 +397,13 @@ impl Builder<'_> {
                 self.sfc_decls(inner);
             }
         }
+        // Its methods and properties (their own variables are not the POU's).
+        for m in &p.methods {
+            self.add(&m.name.text, SymbolKind::Method, m.name.span, m.span);
+        }
+        for q in &p.properties {
+            self.add(&q.name.text, SymbolKind::Property, q.name.span, q.span);
+        }
         self.pou = None;
     }
 
@@ -517,6 +537,19 @@ impl Builder<'_> {
         }
         for a in &p.actions {
             self.action_body(&a.body);
+        }
+        // The code of its methods and properties: the POU's names used there are found.
+        let bodies = p
+            .methods
+            .iter()
+            .map(|m| &m.body)
+            .chain(p.properties.iter().flat_map(|q| [&q.get, &q.set]).flatten().map(|a| &a.body));
+        for b in bodies {
+            match b {
+                ast::Body::St(stmts) => self.stmts(stmts),
+                ast::Body::Il(il) => self.il(il),
+                ast::Body::Sfc(elements) => self.chart_body(elements),
+            }
         }
         self.pou = None;
     }

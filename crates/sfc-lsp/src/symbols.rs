@@ -37,6 +37,7 @@ pub fn document_symbols(a: &Analysis) -> Vec<DocumentSymbol> {
                 n
             }
             Kind::Type => node(a, s, SymbolKind::STRUCT, Some("type".into())),
+            Kind::Interface => node(a, s, SymbolKind::INTERFACE, Some("interface".into())),
             Kind::EnumValue => continue,
             Kind::Variable(v) => node(a, s, SymbolKind::VARIABLE, Some(format!("{} {}", v.section.keyword(), v.ty))),
             _ => continue,
@@ -100,6 +101,13 @@ fn pou_children(a: &Analysis, pou: usize) -> Vec<DocumentSymbol> {
     }
     for s in syms.iter().filter(|s| matches!(s.kind, Kind::Action)) {
         out.push(node(a, s, SymbolKind::METHOD, Some("action".into())));
+    }
+    for s in syms.iter() {
+        match s.kind {
+            Kind::Method => out.push(node(a, s, SymbolKind::METHOD, Some("method".into()))),
+            Kind::Property => out.push(node(a, s, SymbolKind::PROPERTY, Some("property".into()))),
+            _ => {}
+        }
     }
     out
 }

@@ -18,6 +18,9 @@ pub const TYPES: &[&str] = &[
     "enumMember",
     "qualifier",
     "namespace",
+    "method",
+    "property",
+    "interface",
 ];
 /// Token modifiers, in legend order (bits).
 pub const MODIFIERS: &[&str] = &["declaration", "readonly", "defaultLibrary", "initial"];
@@ -49,6 +52,9 @@ fn classify(kind: &Kind) -> (&'static str, u32) {
         Kind::Pou(sfc_syntax::ast::PouKind::Function) => ("function", 0),
         Kind::Pou(_) => ("namespace", 0),
         Kind::EnumValue => ("enumMember", 0),
+        Kind::Method => ("method", 0),
+        Kind::Property => ("property", 0),
+        Kind::Interface => ("interface", 0),
     }
 }
 

@@ -545,18 +545,48 @@ fn blocks_export(d: &Diagnostic) -> bool {
     // A second initial step in a network (which Beremiz, MatIEC and OpenPLC run), no initial
     // step or a step connected to nothing (a chart being drawn) are written as drawn: the chart
     // stays complete.
+    // A bound or length that is no constant (SFC0105) is written as it is, as text.
     d.is_error()
-        && !["SFC0201", "SFC0202", "SFC0203"].contains(&d.code)
+        && !["SFC0201", "SFC0202", "SFC0203", "SFC0105"].contains(&d.code)
         && ["SFC00", "SFC01", "SFC02"].iter().any(|p| d.code.starts_with(p))
 }
 
 /// Exports a checked file as a PLCopen TC6 v2.01 project. Fails with the errors that keep it
-/// from being written faithfully (see [`blocks_export`]).
+/// from being written faithfully (see [`blocks_export`]) outside every POU; see
+/// [`export_with`] for a POU with such errors.
 pub fn export(checked: &Checked) -> Result<String, Vec<Diagnostic>> {
-    let errors: Vec<Diagnostic> = checked.diagnostics.iter().filter(|d| blocks_export(d)).cloned().collect();
-    if !errors.is_empty() {
-        return Err(errors);
+    export_with(checked, None).map(|(text, _)| text)
+}
+
+/// The `data` name under which an export keeps, in a POU's `addData`, the text of a POU it could
+/// not write as PLCopen (it has errors that keep its chart from being whole); the import reads
+/// that text back as it is.
+pub const SOURCE_DATA: &str = "https://sfc.invalid/plcopen/source";
+
+/// [`export`] that never refuses a POU for its own errors: a POU with errors that keep it from
+/// being written faithfully is written as it was read (its element of `original`, the PLCopen
+/// file the checked text was imported from) or, without one, with its text kept in its
+/// `addData` ([`SOURCE_DATA`]) for the import to read back. Each such POU gets a note
+/// (SFC0716), returned beside the project.
+pub fn export_with(checked: &Checked, original: Option<&str>) -> Result<(String, Vec<Diagnostic>), Vec<Diagnostic>> {
+    let unit = &checked.unit;
+    let item_span = |it: &ast::Item| match it {
+        ast::Item::Pou(p) => Some(p.span),
+        _ => None,
+    };
+    let blocking: Vec<&Diagnostic> = checked.diagnostics.iter().filter(|d| blocks_export(d)).collect();
+    let inside =
+        |d: &Diagnostic, s: sfc_diagnostics::Span| s.start <= d.span.start && d.span.start < s.end.max(s.start + 1);
+    let outside: Vec<Diagnostic> = blocking
+        .iter()
+        .filter(|d| !unit.items.iter().filter_map(item_span).any(|s| inside(d, s)))
+        .map(|d| (*d).clone())
+        .collect();
+    if !outside.is_empty() {
+        return Err(outside);
     }
+    let original_doc = original.and_then(|o| roxmltree::Document::parse(o).ok());
+    let mut notes = Vec::new();
     let src = checked.file.text.as_str();
     let unit = &checked.unit;
     let mut x = X::new();
@@ -637,6 +667,18 @@ pub fn export(checked: &Checked) -> Result<String, Vec<Diagnostic>> {
     for (i, item) in unit.items.iter().enumerate() {
         match item {
             ast::Item::Pou(pou) => {
+                if let Some(first) = blocking.iter().find(|d| inside(d, pou.span)) {
+                    let from = write_as_read(&mut x, src, pou, original_doc.as_ref());
+                    notes.push(
+                        Diagnostic::warning(
+                            "SFC0716",
+                            pou.name.span,
+                            format!("`{}` has errors, so it is written {from}", pou.name.text),
+                        )
+                        .with_note(format!("the first: {}", first.message)),
+                    );
+                    continue;
+                }
                 let chart = checked.charts.iter().find(|c| c.item == i);
                 write_pou(&mut x, src, pou, chart, &action_charts(checked, i));
             }
@@ -654,7 +696,48 @@ pub fn export(checked: &Checked) -> Result<String, Vec<Diagnostic>> {
         x.close("addData");
     }
     x.close("project");
-    Ok(x.finish())
+    Ok((x.finish(), notes))
+}
+
+/// Writes a POU that has errors as it was read: its element of the original PLCopen file, or
+/// its interface with its text in `addData` ([`SOURCE_DATA`]). Says which, for the note.
+fn write_as_read(x: &mut X, src: &str, pou: &ast::Pou, original: Option<&roxmltree::Document>) -> &'static str {
+    let found = original.and_then(|doc| {
+        doc.descendants().find(|n| {
+            n.is_element()
+                && n.tag_name().name() == "pou"
+                && n.attribute("name").is_some_and(|v| v.trim().eq_ignore_ascii_case(&pou.name.text))
+        })
+    });
+    if let Some(n) = found {
+        x.raw(&crate::xml::serialize(n));
+        return "as it was read from the PLCopen file";
+    }
+    let kind = match pou.kind {
+        ast::PouKind::Program => "program",
+        ast::PouKind::FunctionBlock => "functionBlock",
+        ast::PouKind::Function => "function",
+    };
+    x.open("pou", &[("name", pou.name.text.clone()), ("pouType", kind.into())]);
+    if let Some(rt) = &pou.return_type {
+        x.open("interface", &[]);
+        x.open("returnType", &[]);
+        write_type(x, src, rt);
+        x.close("returnType");
+        x.close("interface");
+    }
+    x.open("body", &[]);
+    x.formatted("ST", "");
+    x.close("body");
+    x.open("addData", &[]);
+    x.open("data", &[("name", SOURCE_DATA.to_string()), ("handleUnknown", "discard".to_string())]);
+    // From its first attribute pragma, so they travel with it.
+    let start = pou.attributes.iter().map(|a| a.span.start).min().unwrap_or(pou.span.start).min(pou.span.start);
+    x.formatted("text", src.get(start as usize..pou.span.end as usize).unwrap_or(""));
+    x.close("data");
+    x.close("addData");
+    x.close("pou");
+    "with its text in its addData (for sfc to read back), not as a chart"
 }
 
 /// The attributes of a kept `fileHeader`, made valid for v2.01: the required ones present,

@@ -749,6 +749,27 @@ fn interval(s: &str) -> String {
 
 /// One POU.
 fn pou(cx: &mut Ctx, p: Node) {
+    // A POU sfc's export could not write as PLCopen (it had errors): its text, as it was.
+    if let Some(text) = children(p, "addData")
+        .flat_map(|a| children(a, "data"))
+        .find(|d| attr(*d, "name") == Some(crate::export::SOURCE_DATA))
+        .and_then(|d| child(d, "text"))
+    {
+        let t = xml::formatted_text(text);
+        cx.diag(
+            "SFC0716",
+            anchor(p),
+            format!(
+                "`{}` had errors when it was exported: its text is read as it was written",
+                attr(p, "name").unwrap_or("?").trim()
+            ),
+        );
+        cx.em.open(anchor(p));
+        cx.em.lines(&t, "");
+        cx.em.str("\n");
+        cx.em.close();
+        return;
+    }
     let diags_before = cx.diags.len();
     cx.em.open(anchor(p));
     let kind = match attr(p, "pouType").unwrap_or("") {

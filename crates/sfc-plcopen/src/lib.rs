@@ -29,7 +29,7 @@ mod splice;
 mod xml;
 
 pub use emit::{MapEntry, SourceMap};
-pub use export::{export, export_pou, fmt_duration};
+pub use export::{export, export_pou, export_with, fmt_duration, SOURCE_DATA};
 pub use import::NAMESPACES;
 pub use splice::{splice_pou, SpliceError};
 

@@ -69,15 +69,33 @@ fn text_file(corpus: &Path, path: &Path) -> Result<(), String> {
     let text = std::fs::read_to_string(path).map_err(|e| e.to_string())?;
     let checked = check_text(&name, &text);
     let expect = expect_dir(corpus, path);
-    match sfc_plcopen::export(&checked) {
+    match sfc_plcopen::export_with(&checked, None) {
         Err(errors) => {
-            // A file that does not parse cannot be exported: the errors say why.
+            // A file whose errors outside every POU keep it from being written: they say why.
             if errors.is_empty() {
                 return Err(format!("{name}: export failed without a reason"));
             }
             snapshot(&with_ext(&expect, "export.diags"), &render(&errors, &checked.file))
         }
-        Ok(xml) => {
+        Ok((xml, notes)) if !notes.is_empty() => {
+            // POUs with errors are written with their text (SFC0716), which the import gives
+            // back as it was.
+            snapshot(&with_ext(&expect, "xml"), &xml)?;
+            snapshot(&with_ext(&expect, "export.diags"), &render(&notes, &checked.file))?;
+            if let Some(r) = xmllint(&xml) {
+                r.map_err(|e| format!("{name}: the export does not validate:\n{e}"))?;
+            }
+            let back = sfc_plcopen::import(0, &name, &xml).text;
+            for n in &notes {
+                let pou = n.message.split('`').nth(1).unwrap_or("");
+                let needle = format!(" {pou}\n");
+                if !back.contains(&needle) || !text.contains(&needle) {
+                    return Err(format!("{name}: `{pou}` does not come back from its addData"));
+                }
+            }
+            Ok(())
+        }
+        Ok((xml, _)) => {
             snapshot(&with_ext(&expect, "xml"), &xml)?;
             if let Some(r) = xmllint(&xml) {
                 r.map_err(|e| format!("{name}: the export does not validate:\n{e}"))?;

@@ -173,8 +173,10 @@ pub(crate) fn sfc_actions(pou: &Pou) -> Vec<String> {
 pub const SFC_ACTION_FLAGS: [&str; 4] = ["SFCInit", "SFCReset", "SFCPause", "SFCQuitError"];
 
 impl PouInterface {
-    /// The variable with this name (case-insensitive).
+    /// The variable with this name (case-insensitive); for a standard block also under
+    /// CODESYS's name of it ([`crate::stdlib::param_alias`]).
     pub fn var(&self, name: &str) -> Option<&VarInfo> {
+        let name = if self.standard { crate::stdlib::param_alias(&self.name, name).unwrap_or(name) } else { name };
         self.vars.iter().find(|v| v.name.eq_ignore_ascii_case(name))
     }
 

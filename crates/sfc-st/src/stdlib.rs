@@ -430,3 +430,17 @@ mod tests {
         assert!(std_function_block("CTU_REAL").is_none());
     }
 }
+
+/// The IEC 61131-3 name of a parameter of a standard function block that CODESYS names
+/// otherwise: RS's `SET` and `RESET1` are `S` and `R1`, SR's `SET1` and `RESET` are `S1` and `R`.
+pub fn param_alias(fb: &str, name: &str) -> Option<&'static str> {
+    let fb = fb.to_ascii_uppercase();
+    let name = name.to_ascii_uppercase();
+    match (fb.as_str(), name.as_str()) {
+        ("RS", "SET") => Some("S"),
+        ("RS", "RESET1") => Some("R1"),
+        ("SR", "SET1") => Some("S1"),
+        ("SR", "RESET") => Some("R"),
+        _ => None,
+    }
+}

@@ -101,7 +101,9 @@ impl Cx<'_, '_> {
             .collect()
     }
 
-    fn bind<'e>(&self, owner: &str, params: &[Param], args: &'e [Arg], span: Span) -> C<Bound<'e>> {
+    /// Binds `args` to `params` of `owner` (named in messages) of type `ty` (a standard block's
+    /// name, for CODESYS's names of its inputs).
+    fn bind<'e>(&self, owner: &str, ty: &str, params: &[Param], args: &'e [Arg], span: Span) -> C<Bound<'e>> {
         let positional: Vec<&Param> =
             params.iter().filter(|p| matches!(p.kind, VarKind::Input | VarKind::InOut)).collect();
         let mut b = Bound { inputs: Vec::new(), in_outs: Vec::new(), outputs: Vec::new(), en: None, eno: None };
@@ -117,7 +119,11 @@ impl Cx<'_, '_> {
                 }
             }
             let p = match &a.name {
-                Some(n) => params.iter().find(|p| p.name.eq_ignore_ascii_case(&n.text)),
+                Some(n) => {
+                    // CODESYS's names of RS's and SR's inputs are IEC 61131-3's.
+                    let n = sfc_st::stdlib::param_alias(ty, &n.text).unwrap_or(&n.text);
+                    params.iter().find(|p| p.name.eq_ignore_ascii_case(n))
+                }
                 None => positional.get(i).copied(),
             };
             let Some(p) = p else {
@@ -154,7 +160,7 @@ impl Cx<'_, '_> {
             return Err(self.error(name.span, format!("`{}` is not a function block instance", name.text)));
         };
         let params = self.params_of_fb(&fb).ok_or_else(|| self.error(name.span, format!("unknown block `{fb}`")))?;
-        let bound = self.bind(&name.text, &params, args, span)?;
+        let bound = self.bind(&name.text, &fb, &params, args, span)?;
         let param_place = |p: &Param| PlaceC::new(inst.loc.clone().offset(p.offset), p.ty.clone());
         let mut pre: Vec<StmtFn> = Vec::new();
         let mut post: Vec<StmtFn> = Vec::new();
@@ -412,7 +418,7 @@ impl Cx<'_, '_> {
     pub(crate) fn func_call(&self, fi: usize, args: &[Arg], span: Span) -> C<TExpr> {
         let m = &self.u.pous[fi];
         let params = self.pou_params(fi);
-        let bound = self.bind(m.name(), &params, args, span)?;
+        let bound = self.bind(m.name(), m.name(), &params, args, span)?;
         if bound.en.is_some() || bound.eno.is_some() {
             return Err(self.error(span, "EN/ENO on a user function call"));
         }
