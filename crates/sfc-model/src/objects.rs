@@ -113,6 +113,10 @@ fn first_construct(p: &Pou, text: &str) -> Option<(String, Span)> {
     }
     // `p^` and `r REF= x` in the code: found in the POU's tokens.
     let body = text.get(p.span.start as usize..p.span.end as usize)?;
+    // Most POUs hold neither: no second lexing of them.
+    if !body.contains('^') && !body.contains("REF") && !body.contains("ref") && !body.contains("Ref") {
+        return None;
+    }
     let (toks, _) = lex(p.span.file, body);
     let sig: Vec<_> = toks.iter().filter(|t| !t.kind.is_trivia()).collect();
     for (k, t) in sig.iter().enumerate() {
