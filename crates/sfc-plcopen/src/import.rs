@@ -865,17 +865,7 @@ fn pou(cx: &mut Ctx, p: Node) {
     cx.em.str("\n");
     if let Some(i) = iface {
         for l in elements(i) {
-            let kw = match l.tag_name().name() {
-                "localVars" => "VAR",
-                "tempVars" => "VAR_TEMP",
-                "inputVars" => "VAR_INPUT",
-                "outputVars" => "VAR_OUTPUT",
-                "inOutVars" => "VAR_IN_OUT",
-                "externalVars" => "VAR_EXTERNAL",
-                "globalVars" => "VAR_GLOBAL",
-                "accessVars" => "VAR_ACCESS",
-                _ => continue,
-            };
+            let Some(kw) = var_keyword(l.tag_name().name()) else { continue };
             cx.em.open(anchor(l));
             var_list(cx, l, kw, "    ");
             cx.em.close();
@@ -1012,6 +1002,21 @@ pub(crate) fn action_body(cx: &mut Ctx, body: Node, indent: &str) {
 }
 
 /// `VAR … END_VAR` from a `varList`.
+/// The keyword of the var block an `interface` child element holds (`inputVars` → VAR_INPUT).
+pub(crate) fn var_keyword(element: &str) -> Option<&'static str> {
+    Some(match element {
+        "localVars" => "VAR",
+        "tempVars" => "VAR_TEMP",
+        "inputVars" => "VAR_INPUT",
+        "outputVars" => "VAR_OUTPUT",
+        "inOutVars" => "VAR_IN_OUT",
+        "externalVars" => "VAR_EXTERNAL",
+        "globalVars" => "VAR_GLOBAL",
+        "accessVars" => "VAR_ACCESS",
+        _ => return None,
+    })
+}
+
 pub(crate) fn var_list(cx: &mut Ctx, l: Node, kw: &str, indent: &str) {
     let vars: Vec<Node> = children(l, "variable").collect();
     let mut head = kw.to_string();

@@ -5,7 +5,7 @@
 //! in `sfc.pouxml` for the export): this text is what a reader, `sfc fmt` and the language
 //! server see.
 
-use super::{var_list, Ctx};
+use super::{var_keyword, var_list, Ctx};
 use crate::xml::{self, attr, child, children, elements};
 use roxmltree::Node;
 
@@ -79,16 +79,9 @@ fn access(n: Node) -> String {
 fn code(cx: &mut Ctx, n: Node, indent: &str) {
     if let Some(i) = child(n, "interface") {
         for l in elements(i) {
-            let kw = match l.tag_name().name() {
-                "localVars" => "VAR",
-                "tempVars" => "VAR_TEMP",
-                "inputVars" => "VAR_INPUT",
-                "outputVars" => "VAR_OUTPUT",
-                "inOutVars" => "VAR_IN_OUT",
-                "externalVars" => "VAR_EXTERNAL",
-                _ => continue,
-            };
-            var_list(cx, l, kw, indent);
+            if let Some(kw) = var_keyword(l.tag_name().name()) {
+                var_list(cx, l, kw, indent);
+            }
         }
     }
     if let Some(st) = child(n, "body").and_then(|b| elements(b).find(|e| matches!(e.tag_name().name(), "ST" | "IL"))) {

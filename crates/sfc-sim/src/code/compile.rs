@@ -420,17 +420,7 @@ fn lay_out(u: &mut Unit<'_>, i: usize) {
             if m.iface.vars.iter().any(|v| v.name.eq_ignore_ascii_case(&name)) {
                 continue;
             }
-            vars.push(VarSlot {
-                name,
-                ty: Type::Bool,
-                kind: VarKind::Input,
-                offset: off,
-                size: 1,
-                location: None,
-                implicit: true,
-                retain: false,
-                persistent: false,
-            });
+            vars.push(hidden_slot(name, Type::Bool, VarKind::Input, off));
             off += 1;
         }
     }
@@ -503,17 +493,7 @@ fn lay_out(u: &mut Unit<'_>, i: usize) {
         let action = u.charts[sub.chart].action.clone().unwrap_or_default();
         let mut flag = |name: &str, ty: Type, kind: VarKind| {
             let at = off;
-            vars.push(VarSlot {
-                name: format!("{action}.{name}"),
-                ty,
-                kind,
-                offset: at,
-                size: 1,
-                location: None,
-                implicit: true,
-                retain: false,
-                persistent: false,
-            });
+            vars.push(hidden_slot(format!("{action}.{name}"), ty, kind, at));
             off += 1;
             at
         };
@@ -556,6 +536,11 @@ fn lay_out(u: &mut Unit<'_>, i: usize) {
     m.il_base = il_base;
     m.il_slots = il;
     m.result = result;
+}
+
+/// A one-slot variable of a frame that the user did not declare.
+fn hidden_slot(name: String, ty: Type, kind: VarKind, offset: u32) -> VarSlot {
+    VarSlot { name, ty, kind, offset, size: 1, location: None, implicit: true, retain: false, persistent: false }
 }
 
 fn lay_out_globals(u: &Unit<'_>) {
