@@ -144,82 +144,9 @@ pub fn location(uri: &Uri, a: &Analysis, span: Span) -> Location {
     Location::new(uri.clone(), a.range(span))
 }
 
-/// Keywords and reserved words a name may not be.
-pub const KEYWORDS: &[&str] = &[
-    "PROGRAM",
-    "END_PROGRAM",
-    "FUNCTION",
-    "END_FUNCTION",
-    "FUNCTION_BLOCK",
-    "END_FUNCTION_BLOCK",
-    "VAR",
-    "VAR_INPUT",
-    "VAR_OUTPUT",
-    "VAR_IN_OUT",
-    "VAR_GLOBAL",
-    "VAR_EXTERNAL",
-    "VAR_ACCESS",
-    "VAR_TEMP",
-    "END_VAR",
-    "CONSTANT",
-    "RETAIN",
-    "NON_RETAIN",
-    "AT",
-    "TYPE",
-    "END_TYPE",
-    "STRUCT",
-    "END_STRUCT",
-    "ARRAY",
-    "OF",
-    "STRING",
-    "WSTRING",
-    "STEP",
-    "INITIAL_STEP",
-    "END_STEP",
-    "TRANSITION",
-    "END_TRANSITION",
-    "ACTION",
-    "END_ACTION",
-    "FROM",
-    "TO",
-    "PRIORITY",
-    "IF",
-    "THEN",
-    "ELSIF",
-    "ELSE",
-    "END_IF",
-    "CASE",
-    "END_CASE",
-    "FOR",
-    "BY",
-    "DO",
-    "END_FOR",
-    "WHILE",
-    "END_WHILE",
-    "REPEAT",
-    "UNTIL",
-    "END_REPEAT",
-    "EXIT",
-    "RETURN",
-    "AND",
-    "OR",
-    "XOR",
-    "NOT",
-    "MOD",
-    "AND_THEN",
-    "OR_ELSE",
-    "TRUE",
-    "FALSE",
-    "CONFIGURATION",
-    "END_CONFIGURATION",
-    "RESOURCE",
-    "END_RESOURCE",
-    "TASK",
-    "ON",
-    "WITH",
-    "READ_ONLY",
-    "READ_WRITE",
-];
+/// Words a new name may not be besides the language's own (`sfc_syntax::keywords`): the
+/// access modes of VAR_ACCESS and the string types.
+const MORE_KEYWORDS: &[&str] = &["READ_ONLY", "READ_WRITE", "STRING", "WSTRING"];
 
 /// Why `name` cannot be a new name, if it cannot (IEC 61131-3 identifier rules, keywords,
 /// standard names).
@@ -234,7 +161,7 @@ pub fn invalid_name(name: &str) -> Option<String> {
     if name.contains("__") || name.ends_with('_') {
         return Some(format!("`{name}` is not an IEC 61131-3 identifier (no double `_`, no `_` at the end)"));
     }
-    if KEYWORDS.iter().any(|k| k.eq_ignore_ascii_case(name)) {
+    if sfc_syntax::keywords::cannot_name(name) || MORE_KEYWORDS.iter().any(|k| k.eq_ignore_ascii_case(name)) {
         return Some(format!("`{name}` is a keyword"));
     }
     if sfc_st::Type::elementary(name).is_some()
@@ -385,4 +312,19 @@ pub fn prepare_rename(uri: &Uri, a: &Analysis, offset: u32) -> Result<Range, Str
         }
     }
     Ok(a.range(span))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::invalid_name;
+
+    /// A new name is checked against the language's own words (one list, in sfc-syntax), so
+    /// the words of methods and properties are refused too.
+    #[test]
+    fn keywords_are_not_new_names() {
+        for k in ["END_METHOD", "end_property", "IF", "FROM", "READ_WRITE", "STRING"] {
+            assert!(invalid_name(k).is_some_and(|w| w.contains("keyword")), "{k}");
+        }
+        assert_eq!(invalid_name("Extend_Cylinder"), None);
+    }
 }
