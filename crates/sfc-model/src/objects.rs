@@ -1,9 +1,11 @@
-//! Object orientation and indirection in text (methods, properties, interfaces, `EXTENDS`,
-//! `IMPLEMENTS`, pointers and references, `THIS^`), and edge-triggered inputs: the parser reads
-//! and the printer writes them, the type checker and the simulator do not yet. A POU that holds
-//! one is kept as written (a block others may name, as an import's kept POU is) with one note
-//! that names the first such construct and its line; nothing of it is lost, and the other POUs
-//! of the file are checked as usual.
+//! What of object orientation the checker and the simulator do not know yet: interfaces (and
+//! calls through them), pointers and references, `SUPER^()`, `THIS^` passed on, and
+//! edge-triggered inputs. The parser reads and the printer writes them; a POU that holds one
+//! is kept as written (a block others may name, as an import's kept POU is) with one note that
+//! names the first such construct and its line, and so is a block extending a kept one; nothing
+//! of it is lost, and the other POUs of the file are checked as usual. Methods, properties,
+//! `EXTENDS` (with overriding), `IMPLEMENTS`, `THIS^.x` and `SUPER^.M()` are checked by sfc-st
+//! and simulated.
 
 use sfc_diagnostics::{Diagnostic, Span};
 use sfc_syntax::ast::{self, Item, Pou, TypeSpec, TypeSpecKind};
@@ -18,23 +20,32 @@ pub(crate) fn any(unit: &ast::SourceUnit, text: &str) -> bool {
     })
 }
 
-/// The POUs another POU extends (upper case), with the first that extends each.
-fn extended(unit: &ast::SourceUnit) -> std::collections::HashMap<String, String> {
-    let mut out = std::collections::HashMap::new();
-    for i in &unit.items {
-        if let Item::Pou(p) = i {
-            if let Some(b) = &p.extends {
-                out.entry(b.text.to_ascii_uppercase()).or_insert_with(|| p.name.text.clone());
-            }
-        }
-    }
-    out
-}
-
 /// Replaces every interface, and every POU holding a construct the checker does not know yet,
 /// by a block kept as written, with a note (SFC0104) naming why.
 pub(crate) fn keep_objects(unit: &mut ast::SourceUnit, text: &str, diags: &mut Vec<Diagnostic>) {
-    let extended = extended(unit);
+    // Why each POU is kept, by upper-case name; then those extending a kept one, transitively.
+    let mut why: std::collections::HashMap<String, (String, Span)> = std::collections::HashMap::new();
+    for i in &unit.items {
+        if let Item::Pou(p) = i {
+            if let Some(w) = first_construct(p, text) {
+                why.insert(p.name.key(), w);
+            }
+        }
+    }
+    loop {
+        let mut more = Vec::new();
+        for i in &unit.items {
+            let Item::Pou(p) = i else { continue };
+            let Some(b) = &p.extends else { continue };
+            if !why.contains_key(&p.name.key()) && why.contains_key(&b.key()) {
+                more.push((p.name.key(), (format!("it extends `{}`, which is kept as written", b.text), b.span)));
+            }
+        }
+        if more.is_empty() {
+            break;
+        }
+        why.extend(more);
+    }
     for item in unit.items.iter_mut() {
         let (keyword, name, attributes, span, why) = match item {
             Item::Interface(i) => (
@@ -43,21 +54,15 @@ pub(crate) fn keep_objects(unit: &mut ast::SourceUnit, text: &str, diags: &mut V
                 i.attributes.clone(),
                 i.span,
                 (
-                    "an interface: sfc reads and prints it, and does not type-check or simulate object orientation yet"
+                    "an interface: sfc reads and prints it, and does not type-check or simulate calls through interfaces yet"
                         .to_string(),
                     i.name.span,
                 ),
             ),
-            Item::Pou(p) => {
-                // A base block's variables are used by the blocks extending it, which are kept.
-                let base = extended.get(&p.name.key()).map(|by| {
-                    (format!("`{by}` extends it; sfc reads and prints it, and does not type-check or simulate object orientation yet"), p.name.span)
-                });
-                match first_construct(p, text).or(base) {
-                    Some(why) => (p.kind.keyword(), p.name.clone(), p.attributes.clone(), p.span, why),
-                    None => continue,
-                }
-            }
+            Item::Pou(p) => match why.remove(&p.name.key()) {
+                Some(why) => (p.kind.keyword(), p.name.clone(), p.attributes.clone(), p.span, why),
+                None => continue,
+            },
             _ => continue,
         };
         let line = 1 + text.get(..why.1.start as usize).unwrap_or("").matches('\n').count();
@@ -81,19 +86,6 @@ pub(crate) fn keep_objects(unit: &mut ast::SourceUnit, text: &str, diags: &mut V
 
 /// The first construct of `p` the checker does not know yet, in words, with its span.
 fn first_construct(p: &Pou, text: &str) -> Option<(String, Span)> {
-    const LATER: &str = "sfc reads and prints it, and does not type-check or simulate object orientation yet";
-    if let Some(m) = p.methods.first() {
-        return Some((format!("it has the method `{}`; {LATER}", m.name.text), m.name.span));
-    }
-    if let Some(q) = p.properties.first() {
-        return Some((format!("it has the property `{}`; {LATER}", q.name.text), q.name.span));
-    }
-    if let Some(b) = &p.extends {
-        return Some((format!("it extends `{}`; {LATER}", b.text), b.span));
-    }
-    if let Some(i) = p.implements.first() {
-        return Some((format!("it implements `{}`; {LATER}", i.text), i.span));
-    }
     for d in p.var_blocks.iter().flat_map(|b| &b.decls) {
         if let Some(kind) = indirection(&d.ty) {
             return Some((
@@ -125,6 +117,21 @@ fn first_construct(p: &Pou, text: &str) -> Option<(String, Span)> {
         if t.kind == TokenKind::Caret {
             let before =
                 k.checked_sub(1).and_then(|j| sig.get(j)).map_or("", |b| &body[b.start as usize..b.end as usize]);
+            let after = sig.get(k + 1).map_or("", |n| &body[n.start as usize..n.end as usize]);
+            // `THIS^.x`, `THIS^.M()`, `SUPER^.M()`: the block itself, typed and simulated.
+            if (before.eq_ignore_ascii_case("THIS") || before.eq_ignore_ascii_case("SUPER")) && after == "." {
+                continue;
+            }
+            // `SUPER^()`: the base block's body, called.
+            if before.eq_ignore_ascii_case("SUPER") && after == "(" {
+                continue;
+            }
+            if before.eq_ignore_ascii_case("THIS") {
+                return Some((
+                    "it passes `THIS^` on; sfc does not type-check or simulate references to blocks yet".into(),
+                    at,
+                ));
+            }
             return Some((
                 format!("it dereferences `{before}^`; sfc does not type-check or simulate pointers and references yet"),
                 at,

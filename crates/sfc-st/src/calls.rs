@@ -20,12 +20,23 @@ enum Callee {
     Std(StdFunction),
     /// A function block type called directly (needs an instance).
     FbType(String),
+    /// A method of the block whose code this is (`M(…)` for `THIS^.M(…)`).
+    Method(crate::env::MethodSig),
+    /// `SUPER^()`: the body of the base block.
+    SuperBody,
     Unknown,
 }
 
 impl Checker<'_, '_> {
     fn callee(&self, name: &Ident) -> Callee {
         let env = self.scope.env();
+        if name.text == "SUPER^" {
+            let base = self.scope.pou_name().and_then(|p| env.function_block(p)).and_then(|fb| fb.base.clone());
+            return match base {
+                Some(_) => Callee::SuperBody,
+                None => Callee::NotCallable("`SUPER^()` calls the body of the base block, and this block extends none".into()),
+            };
+        }
         match self.scope.resolve(&name.text) {
             Some(sym @ (Sym::Local(_) | Sym::Global(_))) => {
                 let ty = self.scope.var_info(sym).map(|v| v.ty.clone()).unwrap_or(Type::Error);
@@ -43,6 +54,9 @@ impl Checker<'_, '_> {
                 return Callee::NotCallable(format!("function `{}` cannot call itself (recursion)", name.text))
             }
             None => {}
+        }
+        if let Some(m) = self.scope.pou_name().and_then(|p| env.function_block(p)).and_then(|fb| fb.method(&name.text)) {
+            return Callee::Method(m.clone());
         }
         if let Some(f) = env.function(&name.text) {
             return Callee::UserFunction(f.clone());
@@ -110,6 +124,7 @@ impl Checker<'_, '_> {
                 }
             }
             Callee::Std(f) => self.std_call(&f, args, span, expected),
+            Callee::Method(m) => self.method_call(&m, args, span, true),
             other => {
                 self.other_callee(name, other, args);
                 Type::Error
@@ -151,6 +166,10 @@ impl Checker<'_, '_> {
                 return;
             }
             self.instance_call(member, &inner, args, span);
+            return;
+        }
+        if let Some(m) = fb.as_ref().and_then(|fb| fb.method(&member.text)).cloned() {
+            self.method_call(&m, args, span, false);
             return;
         }
         match fb {
@@ -199,6 +218,14 @@ impl Checker<'_, '_> {
             }
             Callee::Std(f) => {
                 self.std_call(&f, args, e.span, None);
+            }
+            Callee::Method(m) => {
+                self.method_call(&m, args, e.span, false);
+            }
+            Callee::SuperBody => {
+                if !args.is_empty() {
+                    self.error("SFC0307", e.span, "`SUPER^()` takes no arguments");
+                }
             }
             Callee::Action(sym) => {
                 self.scope.mark(sym, false);
@@ -277,7 +304,8 @@ impl Checker<'_, '_> {
                     _ => {}
                 }
             }
-            Callee::Instance(..) | Callee::UserFunction(_) | Callee::Std(_) => {}
+            Callee::SuperBody => self.error("SFC0302", name.span, "`SUPER^()` has no value; call it as a statement"),
+            Callee::Instance(..) | Callee::UserFunction(_) | Callee::Std(_) | Callee::Method(_) => {}
         }
         self.check_args_loosely(args);
     }
@@ -507,6 +535,12 @@ impl Checker<'_, '_> {
                 );
             }
         }
+    }
+
+    /// Binds the arguments of a method call to the method's parameters (as a function's; an
+    /// omitted input keeps its initial value).
+    pub(crate) fn bind_method_args(&mut self, m: &PouInterface, args: &[Arg], span: Span) {
+        self.bind_pou_args(&m.name, m, args, span, false);
     }
 
     /// A call of a function block instance. In a transition condition it is a side effect.

@@ -623,6 +623,9 @@ impl<'s, 'e> Checker<'s, 'e> {
                     Type::Error
                 }
                 None => {
+                    if let Some(p) = self.own_property(&id.text) {
+                        return self.property_access(&p, id, true);
+                    }
                     if !self.scope.enum_types_with_value(&id.text).is_empty() {
                         self.error("SFC0308", e.span, format!("cannot assign to the enumerated value `{}`", id.text));
                     } else {
@@ -692,11 +695,14 @@ impl<'s, 'e> Checker<'s, 'e> {
             ExprKind::Index { base, indices } => self.index(base, indices, false),
             ExprKind::Call { callee, args } => self.call_value(callee, args, e.span, expected),
             ExprKind::MemberCall { base, member, args } => {
-                // A method of a block kept as written (object orientation is not analysed yet):
-                // accepted, not typed.
-                if self.check_expr(base, None).is_error() {
+                // A method of a block kept as written: accepted, not typed.
+                let bt = self.check_expr(base, None);
+                if bt.is_error() {
                     self.check_args_loosely(args);
                     return Type::Error;
+                }
+                if let Some(m) = self.scope.env().fb_of(&bt).and_then(|fb| fb.method(&member.text)).cloned() {
+                    return self.method_call(&m, args, e.span, true);
                 }
                 self.member_call_stmt(base, member, args, e.span);
                 self.error(
@@ -709,8 +715,9 @@ impl<'s, 'e> Checker<'s, 'e> {
             ExprKind::Unary { op, operand } => self.unary(*op, operand, e, expected),
             ExprKind::Binary { op, lhs, rhs } => self.binary(*op, lhs, rhs, e.span, expected),
             ExprKind::Paren(inner) => self.check_expr(inner, expected),
-            // Not typed (sfc-model keeps a POU dereferencing as written before it is checked).
-            ExprKind::Deref(_) => Type::Error,
+            // `THIS^` and `SUPER^`; other dereferences are not typed (sfc-model keeps a POU
+            // dereferencing a pointer as written before it is checked).
+            ExprKind::Deref(inner) => self.this_type(inner).unwrap_or(Type::Error),
             ExprKind::Error => Type::Error,
         }
     }
@@ -877,6 +884,9 @@ impl<'s, 'e> Checker<'s, 'e> {
                 Type::Error
             }
             None => {
+                if let Some(p) = self.own_property(&id.text) {
+                    return self.property_access(&p, id, false);
+                }
                 if let Some(t) = expected.filter(|t| t.enum_value(&id.text).is_some()) {
                     return t.clone();
                 }
@@ -886,6 +896,61 @@ impl<'s, 'e> Checker<'s, 'e> {
                 self.undeclared(id);
                 Type::Error
             }
+        }
+    }
+
+    /// The block `THIS^` (the POU whose code this is) or `SUPER^` (its base) stands for.
+    pub(crate) fn this_type(&self, inner: &Expr) -> Option<Type> {
+        let ExprKind::Name(id) = &inner.kind else { return None };
+        let pou = self.scope.pou_name()?;
+        let env = self.scope.env();
+        let fb = env.function_block(pou)?;
+        if id.is("THIS") {
+            return Some(Type::FunctionBlock(fb.name.to_ascii_uppercase()));
+        }
+        if id.is("SUPER") {
+            let base = env.function_block(fb.base.as_deref()?)?;
+            return Some(Type::FunctionBlock(base.name.to_ascii_uppercase()));
+        }
+        None
+    }
+
+    /// A property of the POU whose code this is, named without `THIS^.`.
+    fn own_property(&self, name: &str) -> Option<crate::env::PropSig> {
+        let env = self.scope.env();
+        env.function_block(self.scope.pou_name()?)?.property(name).cloned()
+    }
+
+    /// A property read (its GET) or written (its SET): its type.
+    fn property_access(&mut self, p: &crate::env::PropSig, at: &Ident, write: bool) -> Type {
+        let (has, what) = if write { (p.set.is_some(), "SET") } else { (p.get.is_some(), "GET") };
+        if !has {
+            self.error(
+                "SFC0308",
+                at.span,
+                format!(
+                    "property `{}` has no {what}; it cannot be {}",
+                    p.name,
+                    if write { "written" } else { "read" }
+                ),
+            );
+            return Type::Error;
+        }
+        p.ty.clone()
+    }
+
+    /// A call of method `m` (`inst.M(…)`, `THIS^.M(…)`, `M(…)` in its block); its value when
+    /// `value` (an error for a method without result).
+    pub(crate) fn method_call(&mut self, m: &crate::env::MethodSig, args: &[sfc_syntax::ast::Arg], span: Span, value: bool) -> Type {
+        let f = m.as_function();
+        self.bind_method_args(&f, args, span);
+        match (&m.return_type, value) {
+            (Some(t), _) => t.clone(),
+            (None, true) => {
+                self.error("SFC0302", span, format!("method `{}` returns no value", m.name));
+                Type::Error
+            }
+            (None, false) => Type::Error,
         }
     }
 
@@ -970,6 +1035,12 @@ impl<'s, 'e> Checker<'s, 'e> {
             Type::FunctionBlock(fb_name) => {
                 let env = self.scope.env();
                 let Some(fb) = env.function_block(fb_name) else { return Type::Error };
+                if let Some(p) = fb.property(&member.text) {
+                    let p = p.clone();
+                    return self.property_access(&p, member, write);
+                }
+                // `THIS^.x`: every variable of the block itself.
+                let this = matches!(&base.kind, ExprKind::Deref(_));
                 let Some(param) = fb.var(&member.text) else {
                     let mut d = Diagnostic::new(
                         "SFC0309",
@@ -985,7 +1056,7 @@ impl<'s, 'e> Checker<'s, 'e> {
                 };
                 // A program's variables are reachable from any code (`Main.X`, CODESYS): its
                 // one instance is a global (see `TypeEnv::is_reached`).
-                if fb.kind == sfc_syntax::ast::PouKind::Program {
+                if fb.kind == sfc_syntax::ast::PouKind::Program || this {
                     return param.ty.clone();
                 }
                 match param.kind {

@@ -162,6 +162,67 @@ pub struct PouInterface {
     /// The names of those actions written in SFC: a call may set their chart's flags
     /// (`Act(SFCReset := TRUE)`, CODESYS).
     pub sfc_actions: Vec<String>,
+    /// The methods (CODESYS's `METHOD`): its own, then those of its base blocks that it does
+    /// not override.
+    pub methods: Vec<MethodSig>,
+    /// The properties (CODESYS's `PROPERTY`), own then inherited, as [`PouInterface::methods`].
+    pub properties: Vec<PropSig>,
+    /// `EXTENDS Base`: the base block's name as written.
+    pub base: Option<String>,
+}
+
+/// A method of a function block (or program), or one accessor of a property: its variables
+/// (inputs, outputs, in-outs, locals, as declared in it) and its result. Inside its body the
+/// method's own name is its result variable, as a function's.
+#[derive(Debug, Clone, PartialEq)]
+pub struct MethodSig {
+    /// The name as declared (a property accessor carries the property's name).
+    pub name: String,
+    /// The POU that declares it (the base block, for an inherited method).
+    pub owner: String,
+    /// Its variables, in declaration order; a property's SET has the property's name as input.
+    pub vars: Vec<VarInfo>,
+    /// The result type (a property's GET: the property's type).
+    pub return_type: Option<Type>,
+    /// The span of its name.
+    pub span: Span,
+}
+
+impl MethodSig {
+    /// The method as a function, for binding the arguments of a call.
+    pub fn as_function(&self) -> PouInterface {
+        PouInterface {
+            name: self.name.clone(),
+            kind: PouKind::Function,
+            vars: self.vars.clone(),
+            return_type: self.return_type.clone(),
+            standard: false,
+            span: self.span,
+            sfc: false,
+            actions: Vec::new(),
+            sfc_actions: Vec::new(),
+            methods: Vec::new(),
+            properties: Vec::new(),
+            base: None,
+        }
+    }
+}
+
+/// A property of a function block: read through its GET, written through its SET.
+#[derive(Debug, Clone, PartialEq)]
+pub struct PropSig {
+    /// The name as declared.
+    pub name: String,
+    /// The POU that declares it.
+    pub owner: String,
+    /// Its type.
+    pub ty: Type,
+    /// `GET`: the accessor whose result is the value read.
+    pub get: Option<MethodSig>,
+    /// `SET`: the accessor whose input (the property's name) is the value written.
+    pub set: Option<MethodSig>,
+    /// The span of its name.
+    pub span: Span,
 }
 
 /// The names of the actions of `pou` written in SFC.
@@ -178,6 +239,16 @@ impl PouInterface {
     pub fn var(&self, name: &str) -> Option<&VarInfo> {
         let name = if self.standard { crate::stdlib::param_alias(&self.name, name).unwrap_or(name) } else { name };
         self.vars.iter().find(|v| v.name.eq_ignore_ascii_case(name))
+    }
+
+    /// The method with this name (case-insensitive), own or inherited.
+    pub fn method(&self, name: &str) -> Option<&MethodSig> {
+        self.methods.iter().find(|m| m.name.eq_ignore_ascii_case(name))
+    }
+
+    /// The property with this name (case-insensitive), own or inherited.
+    pub fn property(&self, name: &str) -> Option<&PropSig> {
+        self.properties.iter().find(|p| p.name.eq_ignore_ascii_case(name))
     }
 
     /// The parameters that positional (non-formal) arguments bind to: VAR_INPUT and
@@ -340,6 +411,8 @@ impl TypeEnv {
                 env.pous.push(iface);
             }
         }
+
+        inherit(&mut env.pous, &env.pou_index, &mut diags);
 
         // VAR_GLOBAL inside a PROGRAM (IEC 61131-3 2nd ed.) is reachable from the blocks it
         // calls through VAR_EXTERNAL, like a file-level global.
@@ -600,6 +673,9 @@ fn standard_fb(name: &str) -> Option<PouInterface> {
         sfc: false,
         actions: Vec::new(),
         sfc_actions: Vec::new(),
+        methods: Vec::new(),
+        properties: Vec::new(),
+        base: None,
     })
 }
 
@@ -791,6 +867,156 @@ impl<'a> Builder<'a> {
             sfc,
             actions: pou.actions().map(|a| a.name.text.clone()).collect(),
             sfc_actions: sfc_actions(pou),
+            methods: pou.methods.iter().map(|m| self.method_sig(pou, m, diags)).collect(),
+            properties: pou.properties.iter().map(|p| self.property_sig(pou, p, diags)).collect(),
+            base: pou.extends.as_ref().map(|b| b.text.clone()),
+        }
+    }
+
+    /// The variables of a method or accessor, each name declared once.
+    fn own_vars(&mut self, blocks: &[VarBlock], diags: &mut Vec<Diagnostic>) -> Vec<VarInfo> {
+        self.local_consts.clear();
+        let mut vars: Vec<VarInfo> = Vec::new();
+        let mut seen: HashMap<String, Span> = HashMap::new();
+        for block in blocks {
+            for var in self.block_vars(block, diags) {
+                let key = var.name.to_ascii_uppercase();
+                if let Some(prev) = seen.get(&key) {
+                    diags.push(duplicate_var(&var, *prev));
+                    continue;
+                }
+                seen.insert(key, var.span);
+                vars.push(var);
+            }
+        }
+        vars
+    }
+
+    fn method_sig(&mut self, pou: &Pou, m: &sfc_syntax::ast::Method, diags: &mut Vec<Diagnostic>) -> MethodSig {
+        let vars = self.own_vars(&m.var_blocks, diags);
+        MethodSig {
+            name: m.name.text.clone(),
+            owner: pou.name.text.clone(),
+            vars,
+            return_type: m.return_type.as_ref().map(|spec| resolve_spec(self, spec, None, diags)),
+            span: m.name.span,
+        }
+    }
+
+    fn property_sig(&mut self, pou: &Pou, p: &sfc_syntax::ast::Property, diags: &mut Vec<Diagnostic>) -> PropSig {
+        let ty = resolve_spec(self, &p.ty, None, diags);
+        let get = p.get.as_ref().map(|a| MethodSig {
+            name: p.name.text.clone(),
+            owner: pou.name.text.clone(),
+            vars: self.own_vars(&a.var_blocks, diags),
+            return_type: Some(ty.clone()),
+            span: p.name.span,
+        });
+        let set = p.set.as_ref().map(|a| {
+            let mut vars = self.own_vars(&a.var_blocks, diags);
+            vars.insert(
+                0,
+                VarInfo {
+                    name: p.name.text.clone(),
+                    span: p.name.span,
+                    kind: VarKind::Input,
+                    constant: false,
+                    retain: None,
+                    persistent: false,
+                    ty: ty.clone(),
+                    location: None,
+                    init: None,
+                    value: None,
+                    implicit: true,
+                },
+            );
+            MethodSig { name: p.name.text.clone(), owner: pou.name.text.clone(), vars, return_type: None, span: p.name.span }
+        });
+        PropSig { name: p.name.text.clone(), owner: pou.name.text.clone(), ty, get, set, span: p.name.span }
+    }
+}
+
+/// `EXTENDS`: each block that extends another gets the base's variables before its own, and
+/// the base's methods and properties that it does not override (after its own). Unknown bases
+/// and cycles are reported.
+fn inherit(pous: &mut [PouInterface], index: &FxHashMap<String, usize>, diags: &mut Vec<Diagnostic>) {
+    fn chain(pous: &[PouInterface], index: &FxHashMap<String, usize>, i: usize) -> Result<Vec<usize>, ()> {
+        let mut out = Vec::new();
+        let mut at = i;
+        while let Some(b) = &pous[at].base {
+            let Some(&j) = index.get(&b.to_ascii_uppercase()) else { break };
+            if j == i || out.contains(&j) {
+                return Err(());
+            }
+            out.push(j);
+            at = j;
+        }
+        Ok(out)
+    }
+    let originals: Vec<PouInterface> = pous.to_vec();
+    for i in 0..pous.len() {
+        let Some(base) = pous[i].base.clone() else { continue };
+        let bi = index.get(&base.to_ascii_uppercase()).copied();
+        match bi.map(|b| &originals[b]) {
+            None => {
+                diags.push(Diagnostic::new(
+                    "SFC0313",
+                    pous[i].span,
+                    format!("`{}` extends `{base}`, which is not declared", pous[i].name),
+                ));
+                continue;
+            }
+            Some(b) if b.kind == PouKind::Function || b.kind != pous[i].kind => {
+                diags.push(Diagnostic::new(
+                    "SFC0313",
+                    pous[i].span,
+                    format!("`{}` extends `{base}`, which is a {}", pous[i].name, b.kind.keyword()),
+                ));
+                continue;
+            }
+            Some(_) => {}
+        }
+        let Ok(bases) = chain(&originals, index, i) else {
+            diags.push(Diagnostic::new(
+                "SFC0313",
+                pous[i].span,
+                format!("`{}` extends itself through `{base}`", pous[i].name),
+            ));
+            pous[i].base = None;
+            continue;
+        };
+        // The farthest base first: its variables lie first in every frame of the family.
+        let mut vars: Vec<VarInfo> = Vec::new();
+        for &b in bases.iter().rev() {
+            vars.extend(originals[b].vars.iter().filter(|v| !v.implicit).cloned());
+        }
+        let own = std::mem::take(&mut pous[i].vars);
+        for v in own {
+            if let Some(prev) = vars.iter().find(|p| p.name.eq_ignore_ascii_case(&v.name)) {
+                if !v.implicit {
+                    diags.push(duplicate_var(&v, prev.span));
+                }
+                continue;
+            }
+            vars.push(v);
+        }
+        pous[i].vars = vars;
+        for &b in &bases {
+            for m in &originals[b].methods {
+                if pous[i].method(&m.name).is_none() {
+                    pous[i].methods.push(m.clone());
+                }
+            }
+            for p in &originals[b].properties {
+                if pous[i].property(&p.name).is_none() {
+                    pous[i].properties.push(p.clone());
+                }
+            }
+            for a in &originals[b].actions {
+                if !pous[i].actions.iter().any(|x| x.eq_ignore_ascii_case(a)) {
+                    pous[i].actions.push(a.clone());
+                }
+            }
         }
     }
 }

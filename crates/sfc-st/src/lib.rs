@@ -39,7 +39,7 @@ mod value;
 mod tests;
 
 pub use check::Checker;
-pub use env::{is_sfc_control_variable, sfc_control_variables, PouInterface, TypeDef, TypeEnv, VarInfo};
+pub use env::{is_sfc_control_variable, sfc_control_variables, MethodSig, PouInterface, PropSig, TypeDef, TypeEnv, VarInfo};
 pub use il::{parse_il_op, IlOp};
 pub use scope::{Binding, Scope, Usage};
 pub use suggest::closest;
@@ -47,7 +47,7 @@ pub use types::{Generic, Type};
 pub use value::{const_eval, ConstLookup, NoConstants, Value};
 
 use sfc_diagnostics::{Diagnostic, Span};
-use sfc_syntax::ast::{ActionBody, Body, Item, Pou, PouKind, SfcElement, SourceUnit};
+use sfc_syntax::ast::{ActionBody, Body, Ident, Item, Pou, PouKind, SfcElement, SourceUnit};
 use std::collections::HashMap;
 
 /// Type-checks a whole file: declarations, global and type initial values, and the code of
@@ -182,6 +182,27 @@ fn check_pou_inner(
         }
     }
     ck.set_element(None);
+    // Methods and property accessors: their variables over the POU's, their name their result.
+    let iface = env.interface_of(pou);
+    let own = |name: &Ident| -> Option<&MethodSig> {
+        iface?.methods.iter().find(|m| m.span == name.span && m.owner == pou.name.text)
+    };
+    for m in &pou.methods {
+        if let Some(sig) = own(&m.name) {
+            check_method(&mut ck, &m.name, sig, &m.body);
+        }
+    }
+    for p in &pou.properties {
+        let Some(sig) = iface.and_then(|i| i.property(&p.name.text)).filter(|s| s.span == p.name.span) else {
+            continue;
+        };
+        for (acc, s) in [(&p.get, &sig.get), (&p.set, &sig.set)] {
+            if let (Some(a), Some(s)) = (acc, s) {
+                check_method(&mut ck, &p.name, s, &a.body);
+            }
+        }
+    }
+    ck.set_element(None);
     if let Some(t) = types {
         t.extend(ck.take_expr_types());
     }
@@ -191,8 +212,23 @@ fn check_pou_inner(
         pou.kind == PouKind::Program
             && scope.unused_variables().iter().any(|v| v.span == d.span && env.is_reached(&pou.name.text, &v.name))
     };
-    diags.extend(scope.unused_diagnostics().into_iter().filter(|d| !reached(d)));
+    // A variable inherited from a base block (`EXTENDS`) is the base's to use.
+    let own = |d: &Diagnostic| d.span.file != pou.span.file || (pou.span.start <= d.span.start && d.span.end <= pou.span.end);
+    diags.extend(scope.unused_diagnostics().into_iter().filter(|d| !reached(d) && own(d)));
     diags
+}
+
+/// Checks the body of a method or property accessor in its own scope.
+fn check_method(ck: &mut Checker<'_, '_>, name: &Ident, sig: &MethodSig, body: &Body) {
+    ck.set_element(Some(name.text.clone()));
+    let frame = ck.scope.enter_method(sig);
+    match body {
+        Body::St(stmts) => ck.check_stmts(stmts),
+        Body::Il(il) => ck.check_il(il),
+        Body::Sfc(_) => {}
+    }
+    let unused = ck.scope.leave_method(frame);
+    ck.diagnostics_mut().extend(unused);
 }
 
 /// Checks the elements of a chart (a POU's body, or an action written in SFC).

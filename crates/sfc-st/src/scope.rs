@@ -43,6 +43,15 @@ pub enum Binding<'a> {
     Action(&'a str),
 }
 
+/// What [`Scope::leave_method`] restores.
+#[derive(Debug)]
+pub struct MethodFrame {
+    vars_len: usize,
+    shadowed: Vec<(String, Option<Sym>)>,
+    return_type: Option<Type>,
+    result_name: Option<String>,
+}
+
 /// A resolved name, cheap to copy while the checker mutates usage.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub(crate) enum Sym {
@@ -69,6 +78,8 @@ pub struct Scope<'e> {
     /// The POU's body is a chart (its control variables are used by the chart itself).
     sfc: bool,
     return_type: Option<Type>,
+    /// Inside a method: its name, which is its result variable.
+    result_name: Option<String>,
     vars: Vec<VarInfo>,
     var_usage: Vec<Usage>,
     global_usage: Vec<Usage>,
@@ -91,6 +102,7 @@ impl<'e> Scope<'e> {
             pou_kind: None,
             sfc: false,
             return_type: None,
+            result_name: None,
             vars: Vec::new(),
             var_usage: Vec::new(),
             global_usage: vec![Usage::default(); env.globals().len()],
@@ -140,6 +152,9 @@ impl<'e> Scope<'e> {
             sfc,
             actions: pou.actions().map(|a| a.name.text.clone()).collect(),
             sfc_actions: crate::env::sfc_actions(pou),
+            methods: Vec::new(),
+            properties: Vec::new(),
+            base: None,
         };
         let mut scope = Scope::for_interface(env, &iface);
         scope.pending = pending;
@@ -211,6 +226,49 @@ impl<'e> Scope<'e> {
         Ok(())
     }
 
+    /// Enters the code of method (or property accessor) `m` of this POU: its variables hide
+    /// the POU's of the same name, and its name is its result. [`Scope::leave_method`] undoes it.
+    pub fn enter_method(&mut self, m: &crate::env::MethodSig) -> MethodFrame {
+        let frame = MethodFrame {
+            vars_len: self.vars.len(),
+            shadowed: Vec::new(),
+            return_type: self.return_type.take(),
+            result_name: self.result_name.take(),
+        };
+        let mut frame = frame;
+        for v in &m.vars {
+            let key = v.name.to_ascii_uppercase();
+            let prev = self.index.insert(key.clone(), Sym::Local(self.vars.len()));
+            frame.shadowed.push((key, prev));
+            self.vars.push(v.clone());
+            self.var_usage.push(Usage::default());
+        }
+        self.return_type = m.return_type.clone();
+        self.result_name = Some(m.name.clone());
+        frame
+    }
+
+    /// Leaves a method entered with [`Scope::enter_method`]; SFC0317 for its unused locals.
+    pub fn leave_method(&mut self, frame: MethodFrame) -> Vec<Diagnostic> {
+        let unused = self.vars[frame.vars_len..]
+            .iter()
+            .zip(&self.var_usage[frame.vars_len..])
+            .filter(|(v, u)| matches!(v.kind, VarKind::Var | VarKind::Temp) && v.location.is_none() && !u.used())
+            .map(|(v, _)| Diagnostic::new("SFC0317", v.span, format!("variable `{}` is never used", v.name)))
+            .collect();
+        for (key, prev) in frame.shadowed.into_iter().rev() {
+            match prev {
+                Some(s) => self.index.insert(key, s),
+                None => self.index.remove(&key),
+            };
+        }
+        self.vars.truncate(frame.vars_len);
+        self.var_usage.truncate(frame.vars_len);
+        self.return_type = frame.return_type;
+        self.result_name = frame.result_name;
+        unused
+    }
+
     /// Declares a variable the caller knows of without a declaration (e.g. the implicit BOOL
     /// condition inputs `C0`…`C15` of an ATMT chart); `Err` as for [`Scope::add_step`].
     pub fn declare(&mut self, var: VarInfo) -> Result<(), Span> {
@@ -250,7 +308,8 @@ impl<'e> Scope<'e> {
         if let Some(s) = found {
             return Some(*s);
         }
-        if self.return_type.is_some() && self.pou_name.as_deref().is_some_and(|p| p.eq_ignore_ascii_case(name)) {
+        let result = self.result_name.as_deref().or(self.pou_name.as_deref());
+        if self.return_type.is_some() && result.is_some_and(|p| p.eq_ignore_ascii_case(name)) {
             return Some(Sym::Return);
         }
         let g = self.env.global_position(name)?;
@@ -373,7 +432,7 @@ impl<'e> Scope<'e> {
             .iter()
             .map(|v| v.name.as_str())
             .chain(self.env.globals().iter().map(|v| v.name.as_str()))
-            .chain(self.pou_name.as_deref().filter(|_| self.return_type.is_some()))
+            .chain(self.result_name.as_deref().or(self.pou_name.as_deref()).filter(|_| self.return_type.is_some()))
     }
 
     /// The enumerated types that have a value of this name: inline enumerations of this POU's

@@ -26,15 +26,15 @@ pub(crate) struct Param {
 }
 
 /// Arguments bound to parameters.
-struct Bound<'e> {
+pub(crate) struct Bound<'e> {
     /// (parameter, value)
-    inputs: Vec<(Param, &'e Expr)>,
+    pub(crate) inputs: Vec<(Param, &'e Expr)>,
     /// (parameter, caller's variable)
-    in_outs: Vec<(Param, &'e Expr)>,
+    pub(crate) in_outs: Vec<(Param, &'e Expr)>,
     /// (parameter, target, negated)
-    outputs: Vec<(Param, &'e Expr, bool)>,
-    en: Option<&'e Expr>,
-    eno: Option<(&'e Expr, bool)>,
+    pub(crate) outputs: Vec<(Param, &'e Expr, bool)>,
+    pub(crate) en: Option<&'e Expr>,
+    pub(crate) eno: Option<(&'e Expr, bool)>,
 }
 
 /// Runs the body of POU `p` on the frame at `base` (one scan of its chart for an SFC block).
@@ -103,7 +103,7 @@ impl Cx<'_, '_> {
 
     /// Binds `args` to `params` of `owner` (named in messages) of type `ty` (a standard block's
     /// name, for CODESYS's names of its inputs).
-    fn bind<'e>(&self, owner: &str, ty: &str, params: &[Param], args: &'e [Arg], span: Span) -> C<Bound<'e>> {
+    pub(crate) fn bind<'e>(&self, owner: &str, ty: &str, params: &[Param], args: &'e [Arg], span: Span) -> C<Bound<'e>> {
         let positional: Vec<&Param> =
             params.iter().filter(|p| matches!(p.kind, VarKind::Input | VarKind::InOut)).collect();
         let mut b = Bound { inputs: Vec::new(), in_outs: Vec::new(), outputs: Vec::new(), en: None, eno: None };
@@ -229,6 +229,9 @@ impl Cx<'_, '_> {
 
     /// `inst.Act();`: action `Act` of the function block type of `inst`, run on the instance.
     fn member_call(&self, base: &Expr, member: &Ident, args: &[Arg], span: Span) -> C<StmtFn> {
+        if let Some((t, k)) = self.member_method(base, member)? {
+            return self.method_stmt(t, k, args, span);
+        }
         let inst = self.place(base)?;
         let Type::FunctionBlock(fb) = inst.ty.clone() else {
             return Err(self.error(base.span, "an action is called on a function block instance"));
@@ -311,6 +314,9 @@ impl Cx<'_, '_> {
                 Ok(Flow::Next)
             }));
         };
+        if callee.text == "SUPER^" {
+            return self.super_body(e.span);
+        }
         match self.lookup(&callee.text) {
             Some(Sym::Var { place, ty, .. }) if matches!(ty, Type::FunctionBlock(_)) => {
                 self.fb_call(callee, PlaceC::new(Loc::Static(place), ty), args, e.span)
@@ -329,6 +335,10 @@ impl Cx<'_, '_> {
                     Ok(Flow::Next)
                 }))
             }
+            None if self.own_method(callee).is_some() => {
+                let (t, k) = self.own_method(callee).expect("a method");
+                self.method_stmt(t, k, args, e.span)
+            }
             _ => {
                 let v = self.call_value_at(callee, args, e.span)?;
                 let f = v.value();
@@ -344,6 +354,9 @@ impl Cx<'_, '_> {
     pub(crate) fn call_value_at(&self, callee: &Ident, args: &[Arg], span: Span) -> C<TExpr> {
         if let Some(Sym::Var { .. } | Sym::Step(_) | Sym::Action(_) | Sym::Return) = self.lookup(&callee.text) {
             return Err(self.error(callee.span, format!("`{}` is not a function", callee.text)));
+        }
+        if let Some((t, k)) = self.lookup(&callee.text).is_none().then(|| self.own_method(callee)).flatten() {
+            return self.method_value(t, k, args, span);
         }
         if let Some(fi) = self.u.function(&callee.text) {
             return self.func_call(fi, args, span);

@@ -4,9 +4,9 @@
 use super::place::{write, Loc, PlaceC};
 use super::rt::*;
 use super::stmt::to_block;
-use super::unit::{Cx, Globals, PouMeta, SubMeta, Sym, Unit, C};
+use super::unit::{Cx, Globals, MethodKind, MethodMeta, PouMeta, SubMeta, Sym, Unit, C};
 use super::{
-    AssocCode, Block, ChartCode, ControlSlots, DurationCode, FastGuard, Guard, Layout, Place, PouBody, PouCode,
+    AssocCode, Block, ChartCode, ControlSlots, DurationCode, FastGuard, Guard, Layout, MethodCode, Place, PouBody, PouCode,
     Program, VarSlot,
 };
 use crate::value::Value;
@@ -160,6 +160,7 @@ impl Program {
                 il_base: 0,
                 il_slots: 0,
                 result: None,
+                methods: Vec::new(),
             });
         }
         let mut u = Unit {
@@ -199,6 +200,7 @@ impl Program {
         for i in 0..u.pous.len() {
             bodies.push(compile_pou(&u, i, &templates[i]));
         }
+        let mut methods: Vec<Vec<MethodCode>> = (0..u.pous.len()).map(|i| compile_methods(&u, i, &templates[i])).collect();
         check_function_frames(&u);
         let diags = u.diags.into_inner();
         if !diags.is_empty() {
@@ -247,7 +249,7 @@ impl Program {
         // `Pou.Action`, laid out in its POU's frame.
         let mut extra: Vec<PouCode> = Vec::new();
         let first_extra = parts.len();
-        for (meta, body) in parts.into_iter().zip(bodies) {
+        for ((meta, body), methods) in parts.into_iter().zip(bodies).zip(methods.drain(..)) {
             let mut actions = Vec::new();
             let (body, sub_parts) = match body {
                 Compiled::Code(b, a, subs) => {
@@ -287,6 +289,7 @@ impl Program {
                     actions: Vec::new(),
                     subs: Vec::new(),
                     wiring: meta.wiring.clone(),
+                    methods: Vec::new(),
                 });
             }
             out.push(PouCode {
@@ -297,6 +300,7 @@ impl Program {
                 actions,
                 subs,
                 wiring: meta.wiring,
+                methods,
             });
         }
         // Frames are never made of an action's chart: its templates and initial values are its
@@ -360,6 +364,14 @@ fn layout_order(u: &Unit<'_>) -> Vec<usize> {
         let mut names = Vec::new();
         for v in &u.pous[i].iface.vars {
             fb_names(&v.ty, &mut names);
+        }
+        for (_, _, sig, _) in class_methods(u, i) {
+            for v in sig.vars.iter() {
+                fb_names(&v.ty, &mut names);
+            }
+            if let Some(t) = &sig.return_type {
+                fb_names(t, &mut names);
+            }
         }
         for name in names {
             if let Some(j) = u.fb_pou(&name) {
@@ -514,6 +526,39 @@ fn lay_out(u: &mut Unit<'_>, i: usize) {
         result = Some((off, rt.clone()));
         off += u.type_size(&rt);
     }
+    // Methods and property accessors: their variables and result are slots of the frame.
+    let mut methods = Vec::new();
+    for (kind, owner, sig, body) in class_methods(u, i) {
+        let suffix = match kind {
+            MethodKind::Method => "",
+            MethodKind::Get => ".GET",
+            MethodKind::Set => ".SET",
+        };
+        let prefix = format!("{}.{}{suffix}", u.pous[owner].name(), sig.name);
+        let mut names = HashMap::new();
+        let mut mvars = Vec::new();
+        let result = sig.return_type.clone().map(|t| (sig.name.clone(), t));
+        let all = sig.vars.iter().map(|v| (v.name.clone(), v.ty.clone(), v.constant.then_some(v.value).flatten()));
+        for (name, ty, konst) in all.chain(result.map(|(n, t)| (n, t, None))) {
+            let size = u.type_size(&ty);
+            let slot = VarSlot {
+                name: format!("{prefix}.{name}"),
+                ty: ty.clone(),
+                kind: VarKind::Var,
+                offset: off,
+                size,
+                location: None,
+                implicit: true,
+                retain: false,
+                persistent: false,
+            };
+            names.insert(name.to_ascii_uppercase(), Sym::Var { place: Place::Local(off), ty, konst });
+            mvars.push(slot.clone());
+            vars.push(slot);
+            off += size;
+        }
+        methods.push(MethodMeta { kind, owner, sig, body, names, vars: mvars });
+    }
     let find = |name: &str| vars.iter().find(|v: &&VarSlot| v.name.eq_ignore_ascii_case(name)).map(|v| v.offset);
     let control = ControlSlots {
         init: find("SFCInit").unwrap_or(0),
@@ -536,6 +581,81 @@ fn lay_out(u: &mut Unit<'_>, i: usize) {
     m.il_base = il_base;
     m.il_slots = il;
     m.result = result;
+    m.methods = methods;
+}
+
+/// POU `i` and its bases (`EXTENDS`), nearest first.
+pub(crate) fn class_chain(u: &Unit<'_>, i: usize) -> Vec<usize> {
+    let mut out = vec![i];
+    let mut at = i;
+    while let Some(b) = u.pous[at].iface.base.as_deref().and_then(|b| u.fb_pou(b)) {
+        if out.contains(&b) {
+            break;
+        }
+        out.push(b);
+        at = b;
+    }
+    out
+}
+
+/// The methods and property accessors a frame of POU `i` holds: those its class and each of
+/// its bases declare (overridden ones too, for `SUPER^.M()`), with the POU declaring each.
+fn class_methods<'a>(u: &Unit<'a>, i: usize) -> Vec<(MethodKind, usize, sfc_st::MethodSig, &'a Body)> {
+    let mut out = Vec::new();
+    for c in class_chain(u, i) {
+        let m = &u.pous[c];
+        let ast: &'a sfc_syntax::ast::Pou = m.ast;
+        for d in &ast.methods {
+            if let Some(sig) = m.iface.methods.iter().find(|s| s.span == d.name.span) {
+                out.push((MethodKind::Method, c, sig.clone(), &d.body));
+            }
+        }
+        for p in &ast.properties {
+            let Some(ps) = m.iface.properties.iter().find(|s| s.span == p.name.span) else { continue };
+            if let (Some(a), Some(sig)) = (&p.get, &ps.get) {
+                out.push((MethodKind::Get, c, sig.clone(), &a.body));
+            }
+            if let (Some(a), Some(sig)) = (&p.set, &ps.set) {
+                out.push((MethodKind::Set, c, sig.clone(), &a.body));
+            }
+        }
+    }
+    out
+}
+
+/// The compiled methods of POU `i` (in [`PouMeta::methods`] order): the initial values of
+/// their variables, run at every call, and their statements.
+fn compile_methods(u: &Unit<'_>, i: usize, template: &[Value]) -> Vec<MethodCode> {
+    let mut out = Vec::new();
+    for (k, mm) in u.pous[i].methods.iter().enumerate() {
+        let cx = Cx { u, pou: Some(i), method: Some(k), owner: None };
+        let mut init = Vec::new();
+        let mut r: C<()> = Ok(());
+        for (slot, v) in mm.vars.iter().zip(mm.sig.vars.iter().map(Some).chain(std::iter::repeat(None))) {
+            let (off, size) = (slot.offset as usize, slot.size as usize);
+            let fresh: Vec<Value> = template.get(off..off + size).map(<[Value]>::to_vec).unwrap_or_default();
+            init.push(InitOp::Run(Box::new(move |c, b| {
+                c.mem[b + off..b + off + fresh.len()].clone_from_slice(&fresh);
+                Ok(())
+            })));
+            let loc = Loc::Static(Place::Local(slot.offset));
+            r = r.and_then(|_| cx.type_inits(&slot.ty, None, &loc, &mut init, 0));
+            if let Some(initial) = v.and_then(|v| v.init.as_ref()) {
+                r = r.and_then(|_| cx.initializer(initial, &slot.ty, &loc, &mut init));
+            }
+        }
+        let body = r.and_then(|_| match mm.body {
+            Body::St(stmts) => cx.stmt_list(stmts).map(to_block),
+            Body::Il(il) => cx.il_block(il),
+            Body::Sfc(_) => Err(u.error(mm.sig.span, "a method written in SFC")),
+        });
+        let body = body.unwrap_or_else(|d| {
+            u.report(d);
+            placeholder_block()
+        });
+        out.push(MethodCode { init, body });
+    }
+    out
 }
 
 /// A one-slot variable of a frame that the user did not declare.
@@ -696,7 +816,7 @@ impl Cx<'_, '_> {
         }
         if let Some(TypeSpec { kind: TypeSpecKind::Named(id), .. }) = spec {
             if let Some(decl) = self.u.type_decls.get(&id.key()) {
-                let g = Cx { u: self.u, pou: None };
+                let g = Cx { u: self.u, pou: None, method: None, owner: None };
                 g.type_inits(ty, Some(&decl.spec), loc, out, depth + 1)?;
                 if let Some(init) = &decl.init {
                     g.initializer(init, ty, loc, out)?;
@@ -757,7 +877,7 @@ impl Cx<'_, '_> {
             Type::Enum { name: Some(n), .. } => {
                 if let Some(def) = self.u.env.type_def(n) {
                     if let Some(init) = &def.init {
-                        Cx { u: self.u, pou: None }.initializer(init, ty, loc, out)?;
+                        Cx { u: self.u, pou: None, method: None, owner: None }.initializer(init, ty, loc, out)?;
                     }
                 }
             }
@@ -858,7 +978,7 @@ impl Cx<'_, '_> {
 }
 
 fn frame_inits(u: &Unit<'_>, i: usize) -> Vec<InitOp> {
-    let cx = Cx { u, pou: Some(i) };
+    let cx = Cx { u, pou: Some(i), method: None, owner: None };
     let m = &u.pous[i];
     let mut out = Vec::new();
     for v in &m.layout.vars {
@@ -882,7 +1002,7 @@ fn frame_inits(u: &Unit<'_>, i: usize) -> Vec<InitOp> {
 }
 
 fn globals_inits(u: &Unit<'_>) -> Vec<InitOp> {
-    let cx = Cx { u, pou: None };
+    let cx = Cx { u, pou: None, method: None, owner: None };
     let mut out = Vec::new();
     let decls: Vec<&VarDecl> = u
         .ast
@@ -920,7 +1040,7 @@ fn placeholder_block() -> Block {
 /// The VAR_TEMP variables of a FUNCTION_BLOCK or PROGRAM take their initial values again at
 /// every call (a FUNCTION's whole frame is fresh anyway).
 fn temp_inits(u: &Unit<'_>, i: usize, template: &[Value]) -> C<Vec<InitOp>> {
-    let cx = Cx { u, pou: Some(i) };
+    let cx = Cx { u, pou: Some(i), method: None, owner: None };
     let m = &u.pous[i];
     let mut out = Vec::new();
     if m.kind() == PouKind::Function {
@@ -943,7 +1063,7 @@ fn temp_inits(u: &Unit<'_>, i: usize, template: &[Value]) -> C<Vec<InitOp>> {
 }
 
 fn compile_pou(u: &Unit<'_>, i: usize, template: &[Value]) -> Compiled {
-    let cx = Cx { u, pou: Some(i) };
+    let cx = Cx { u, pou: Some(i), method: None, owner: None };
     let m = &u.pous[i];
     let Some(c) = m.chart else {
         let r = match &m.ast.body {

@@ -123,15 +123,20 @@ impl Cx<'_, '_> {
         match &e.kind {
             ExprKind::Literal(lit) => self.literal(lit, e),
             ExprKind::Name(id) => self.name(id, e),
+            ExprKind::Member { base, member } if self.property(Some(base), member)?.is_some() => {
+                let t = self.property(Some(base), member)?.expect("a property");
+                self.property_get(t, member)
+            }
             ExprKind::Address(_) | ExprKind::Member { .. } | ExprKind::Index { .. } => {
                 let p = self.place(e)?;
                 let size = self.u.type_size(&p.ty);
                 Ok(read(p, size))
             }
             ExprKind::Call { callee, args } => self.call_value_at(callee, args, e.span),
-            ExprKind::MemberCall { member, .. } => {
-                Err(self.error(member.span, format!("an action call (`{}`) has no value", member.text)))
-            }
+            ExprKind::MemberCall { base, member, args } => match self.member_method(base, member)? {
+                Some((t, k)) => self.method_value(t, k, args, e.span),
+                None => Err(self.error(member.span, format!("an action call (`{}`) has no value", member.text))),
+            },
             ExprKind::Unary { op, operand } => {
                 let v = self.expr(operand, expected)?;
                 match op {
@@ -228,6 +233,10 @@ impl Cx<'_, '_> {
             }
             Some(Sym::Step(_)) => Err(self.error(id.span, format!("`{}` is a step; read `{0}.X`", id.text))),
             Some(Sym::Action(_)) => Err(self.error(id.span, format!("`{}` is an action; read `{0}.Q`", id.text))),
+            None if self.property(None, id)?.is_some() => {
+                let t = self.property(None, id)?.expect("a property");
+                self.property_get(t, id)
+            }
             None => {
                 let ty = self
                     .recorded(e)
@@ -280,6 +289,9 @@ impl Cx<'_, '_> {
     }
 
     pub(crate) fn member(&self, base: &Expr, member: &Ident) -> C<PlaceC> {
+        if let Some(p) = self.self_member(base, member)? {
+            return Ok(p);
+        }
         if let ExprKind::Name(id) = &base.kind {
             let m = self.meta();
             match (self.lookup(&id.text), m) {

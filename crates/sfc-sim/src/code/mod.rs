@@ -185,6 +185,14 @@ pub struct PouCode {
     pub subs: Vec<usize>,
     /// Terminal labels, the error-code variable and the inputs its calls pass.
     pub wiring: wiring::Wiring,
+    /// Its methods and property accessors, run on an instance's frame.
+    pub(crate) methods: Vec<MethodCode>,
+}
+
+/// A compiled method (or property accessor): the fresh values of its variables, then its code.
+pub(crate) struct MethodCode {
+    pub init: Vec<compile::InitOp>,
+    pub body: Block,
 }
 
 pub enum PouBody {
@@ -359,6 +367,7 @@ mod compile;
 mod convert;
 mod expr;
 mod il;
+mod method;
 mod init;
 mod ops;
 mod place;

@@ -6,7 +6,7 @@ use super::unit::{Cx, Sym, C};
 use super::Block;
 use crate::value::Value;
 use sfc_st::Type;
-use sfc_syntax::ast::{CaseArm, CaseLabel, Expr, Ident, Stmt, StmtKind};
+use sfc_syntax::ast::{CaseArm, CaseLabel, Expr, ExprKind, Ident, Stmt, StmtKind};
 
 /// Runs statements in order, stopping at EXIT or RETURN.
 pub(crate) fn seq(mut v: Vec<StmtFn>) -> StmtFn {
@@ -69,6 +69,15 @@ impl Cx<'_, '_> {
     fn stmt(&self, s: &Stmt) -> C<StmtFn> {
         match &s.kind {
             StmtKind::Assign { target, value } => {
+                // A property written: its SET runs.
+                let prop = match &target.kind {
+                    ExprKind::Member { base, member } => self.property(Some(base), member)?.map(|t| (t, member)),
+                    ExprKind::Name(id) if self.lookup(&id.text).is_none() => self.property(None, id)?.map(|t| (t, id)),
+                    _ => None,
+                };
+                if let Some((t, name)) = prop {
+                    return self.property_set(t, name, value, s.span);
+                }
                 let p = self.place(target)?;
                 let v = self.expr_as(value, &p.ty)?;
                 let size = self.u.type_size(&p.ty);

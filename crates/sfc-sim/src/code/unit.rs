@@ -49,6 +49,31 @@ pub(crate) struct PouMeta<'a> {
     pub il_slots: u32,
     /// FUNCTION result: offset and type.
     pub result: Option<(u32, Type)>,
+    /// The methods and property accessors of its class: its own and its bases', overridden
+    /// ones included (`SUPER^.M()`), each laid out in its frame.
+    pub methods: Vec<MethodMeta<'a>>,
+}
+
+/// What a [`MethodMeta`] is.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) enum MethodKind {
+    Method,
+    Get,
+    Set,
+}
+
+/// A method (or property accessor) of a block, compiled for the frame of one class: its
+/// variables are slots of the instance's frame, fresh at every call.
+pub(crate) struct MethodMeta<'a> {
+    pub kind: MethodKind,
+    /// The POU that declares it (a base block, for an inherited method).
+    pub owner: usize,
+    pub sig: sfc_st::MethodSig,
+    pub body: &'a sfc_syntax::ast::Body,
+    /// Upper-case name → its variables and its result (named after it).
+    pub names: HashMap<String, Sym>,
+    /// Its variables' slots.
+    pub vars: Vec<VarSlot>,
 }
 
 /// The chart of an action written in SFC, laid out in its POU's frame.
@@ -172,6 +197,11 @@ impl<'a> Unit<'a> {
 pub(crate) struct Cx<'u, 'a> {
     pub u: &'u Unit<'a>,
     pub pou: Option<usize>,
+    /// The method (index into the POU's [`PouMeta::methods`]) whose code this is.
+    pub method: Option<usize>,
+    /// The POU whose code this is, when not [`Cx::pou`] nor the method's (a base block's body
+    /// run by `SUPER^()`).
+    pub owner: Option<usize>,
 }
 
 impl<'u, 'a> Cx<'u, 'a> {
@@ -182,6 +212,11 @@ impl<'u, 'a> Cx<'u, 'a> {
     /// Resolves a name as the checker's scope does: POU variables, steps and actions, the
     /// function's result, then globals.
     pub(crate) fn lookup(&self, name: &str) -> Option<Sym> {
+        if let (Some(m), Some(k)) = (self.meta(), self.method) {
+            if let Some(s) = m.methods.get(k).and_then(|mm| mm.names.get(&name.to_ascii_uppercase())) {
+                return Some(s.clone());
+            }
+        }
         if let Some(m) = self.meta() {
             if let Some(s) = m.names.get(&name.to_ascii_uppercase()) {
                 return Some(s.clone());

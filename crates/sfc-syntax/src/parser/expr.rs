@@ -234,6 +234,14 @@ impl Parser<'_> {
             } else if self.at(TokenKind::Caret) {
                 // `p^`: what the pointer `p` points to (`THIS^`, `SUPER^`).
                 self.bump();
+                if matches!(&e.kind, ExprKind::Name(id) if id.is("SUPER")) && self.at(TokenKind::LParen) {
+                    // `SUPER^()`: the body of the base block, called (CODESYS); the callee is
+                    // named `SUPER^`.
+                    let callee = Ident::new("SUPER^".to_string(), self.span_from(start));
+                    let args = self.call_args();
+                    e = Expr { kind: ExprKind::Call { callee, args }, span: self.span_from(start) };
+                    continue;
+                }
                 e = Expr { kind: ExprKind::Deref(Box::new(e)), span: self.span_from(start) };
             } else {
                 break;
