@@ -23,11 +23,14 @@ pub(crate) struct X {
     comments: Vec<(Span, String, bool)>,
     /// The comments of the element being written: its raw comments and their text.
     pending: Option<(String, String)>,
+    /// CODESYS `data` fragments the next `add_data` writes (a POU's methods and properties),
+    /// replacing foreign ones of the same kinds.
+    objects: Vec<String>,
 }
 
 impl X {
     fn new() -> X {
-        X { w: Writer::new_with_indent(Vec::new(), b' ', 2), comments: Vec::new(), pending: None }
+        X { w: Writer::new_with_indent(Vec::new(), b' ', 2), comments: Vec::new(), pending: None, objects: Vec::new() }
     }
 
     fn tag(name: &str, attrs: &[(&str, String)]) -> BytesStart<'static> {
@@ -60,6 +63,11 @@ impl X {
         }
         self.close("xhtml:p");
         self.close(name);
+    }
+
+    /// Text content, escaped.
+    pub fn text(&mut self, t: &str) {
+        let _ = self.w.write_event(Event::Text(quick_xml::events::BytesText::new(t)));
     }
 
     /// An XML fragment written as it is (a foreign `addData` element kept by the import).
@@ -222,7 +230,15 @@ impl X {
             extra.push(("comments", vec![("text", raw.clone())]));
         }
         let extra = extra.as_slice();
-        let foreign: Vec<String> = attrs::all(list, attrs::ADDDATA).map(attrs::unescape).collect();
+        let objects = std::mem::take(&mut self.objects);
+        // Methods and properties written from the text replace those the import carried.
+        let has_objects = !objects.is_empty();
+        let replaced = |f: &String| {
+            has_objects
+                && ["/method\"", "/property\"", "/pouinheritance\""].iter().any(|k| f.split('>').next().unwrap_or("").contains(k))
+        };
+        let foreign: Vec<String> =
+            attrs::all(list, attrs::ADDDATA).map(attrs::unescape).filter(|f| !replaced(f)).chain(objects).collect();
         let own: Vec<&ast::Attribute> = list
             .iter()
             .filter(|a| a.name.to_ascii_lowercase().starts_with("sfc."))
@@ -500,13 +516,96 @@ fn pou_body_text(src: &str, pou: &ast::Pou) -> String {
     let kw = pou.kind.end_keyword();
     let end = pou.span.end.saturating_sub(kw.len() as u32);
     let mut end = if slice(src, Span::new(0, end, pou.span.end)).eq_ignore_ascii_case(kw) { end } else { pou.span.end };
-    // The actions after the statements are written as the POU's `actions`.
+    // The actions after the statements are written as the POU's `actions`, its methods and
+    // properties as CODESYS data.
     // (The first action's attributes are written before its ACTION keyword, and are its own.)
     if let Some(first) = pou.actions.first() {
         end = end.min(first.attributes.iter().map(|a| a.span.start).fold(first.span.start, u32::min));
     }
+    for (span, attributes) in pou
+        .methods
+        .iter()
+        .map(|m| (m.span, &m.attributes))
+        .chain(pou.properties.iter().map(|p| (p.span, &p.attributes)))
+    {
+        end = end.min(attributes.iter().map(|a| a.span.start).fold(span.start, u32::min));
+    }
     let text = slice(src, Span::new(0, start, end.max(start)));
     dedent(text, 0)
+}
+
+/// `<body><ST>` of a method or accessor, as CODESYS writes it (an `xhtml` element of its own
+/// namespace: the fragment stands alone in `addData`).
+fn write_code_body(x: &mut X, text: &str) {
+    x.open("body", &[]);
+    x.open("ST", &[]);
+    x.open("xhtml", &[("xmlns", "http://www.w3.org/1999/xhtml".into())]);
+    x.text(text);
+    x.close("xhtml");
+    x.close("ST");
+    x.close("body");
+}
+
+/// The statements of a method or property accessor spanning `span`, after its declarations
+/// and before its END keyword.
+fn code_text(src: &str, after: u32, span: Span, blocks: &[ast::VarBlock], end_kw: &str) -> String {
+    let start = blocks.iter().map(|b| b.span.end).fold(after, u32::max);
+    let end = span.end.saturating_sub(end_kw.len() as u32);
+    let end = if slice(src, Span::new(0, end, span.end)).eq_ignore_ascii_case(end_kw) { end } else { span.end };
+    dedent(slice(src, Span::new(0, start, end.max(start))), 0)
+}
+
+/// `<interface>` of a method or accessor: its result and variables.
+fn write_code_interface(x: &mut X, src: &str, ret: Option<&ast::TypeSpec>, blocks: &[ast::VarBlock]) {
+    x.open("interface", &[]);
+    if let Some(rt) = ret {
+        x.open("returnType", &[]);
+        write_type(x, src, rt);
+        x.close("returnType");
+    }
+    for b in blocks {
+        write_var_block(x, src, b, var_list_name(b.kind));
+    }
+    x.close("interface");
+}
+
+/// A POU's methods and properties as CODESYS writes them (`data` of its `addData`, named
+/// `…/plcopenxml/method` and `…/plcopenxml/property`), for [`X::add_data`].
+fn object_fragments(src: &str, pou: &ast::Pou) -> Vec<String> {
+    const NS: &str = "http://www.3s-software.com/plcopenxml/";
+    let mut out = Vec::new();
+    for m in &pou.methods {
+        let mut x = X::new();
+        x.open("data", &[("name", format!("{NS}method")), ("handleUnknown", "implementation".into())]);
+        x.open("Method", &[("name", m.name.text.clone())]);
+        write_code_interface(&mut x, src, m.return_type.as_ref(), &m.var_blocks);
+        let after = m.return_type.as_ref().map_or(m.name.span.end, |t| t.span.end);
+        write_code_body(&mut x, &code_text(src, after, m.span, &m.var_blocks, "END_METHOD"));
+        x.empty("addData", &[]);
+        x.close("Method");
+        x.close("data");
+        out.push(x.finish());
+    }
+    for p in &pou.properties {
+        let mut x = X::new();
+        x.open("data", &[("name", format!("{NS}property")), ("handleUnknown", "implementation".into())]);
+        x.open("Property", &[("name", p.name.text.clone())]);
+        write_code_interface(&mut x, src, Some(&p.ty), &[]);
+        for (tag, acc, kw) in [("GetAccessor", &p.get, "END_GET"), ("SetAccessor", &p.set, "END_SET")] {
+            let Some(a) = acc else { continue };
+            x.open(tag, &[]);
+            write_code_interface(&mut x, src, None, &a.var_blocks);
+            // The accessor's keyword (GET/SET) starts its span.
+            write_code_body(&mut x, &code_text(src, a.span.start + 3, a.span, &a.var_blocks, kw));
+            x.empty("addData", &[]);
+            x.close(tag);
+        }
+        x.empty("addData", &[]);
+        x.close("Property");
+        x.close("data");
+        out.push(x.finish());
+    }
+    out
 }
 
 /// The `actions` of a POU that is no chart (CODESYS's actions of a function block), each with
@@ -874,7 +973,7 @@ fn write_pou(x: &mut X, src: &str, pou: &ast::Pou, chart: Option<&sfc_model::Cha
         ast::PouKind::Function => "function",
     };
     x.open("pou", &[("name", pou.name.text.clone()), ("pouType", kind.into())]);
-    if pou.return_type.is_some() || !pou.var_blocks.is_empty() {
+    if pou.return_type.is_some() || !pou.var_blocks.is_empty() || pou.extends.is_some() || !pou.implements.is_empty() {
         x.open("interface", &[]);
         if let Some(rt) = &pou.return_type {
             x.open("returnType", &[]);
@@ -884,8 +983,33 @@ fn write_pou(x: &mut X, src: &str, pou: &ast::Pou, chart: Option<&sfc_model::Cha
         for b in &pou.var_blocks {
             write_var_block(x, src, b, var_list_name(b.kind));
         }
+        if pou.extends.is_some() || !pou.implements.is_empty() {
+            x.open("addData", &[]);
+            x.open(
+                "data",
+                &[
+                    ("name", "http://www.3s-software.com/plcopenxml/pouinheritance".into()),
+                    ("handleUnknown", "implementation".into()),
+                ],
+            );
+            x.open("Inheritance", &[]);
+            if let Some(b) = &pou.extends {
+                x.open("Extends", &[]);
+                x.text(&b.text);
+                x.close("Extends");
+            }
+            for i in &pou.implements {
+                x.open("Implements", &[]);
+                x.text(&i.text);
+                x.close("Implements");
+            }
+            x.close("Inheritance");
+            x.close("data");
+            x.close("addData");
+        }
         x.close("interface");
     }
+    x.objects = object_fragments(src, pou);
     write_pou_actions(x, src, &pou.actions, subs);
     match (&pou.body, chart) {
         (ast::Body::Sfc(_), Some(chart)) => sfc::write_chart(x, src, pou, chart, subs),

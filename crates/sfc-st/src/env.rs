@@ -294,6 +294,8 @@ pub struct TypeEnv {
     /// Variables of programs that code reaches into (`Main.X`, CODESYS), as upper-case
     /// `(program, variable)`: the program's one instance is a global named after it.
     reached: std::collections::HashSet<(String, String)>,
+    /// Upper-case names of the blocks that POUs kept as written extend.
+    opaque_bases: std::collections::HashSet<String>,
 }
 
 impl TypeEnv {
@@ -362,6 +364,13 @@ impl TypeEnv {
                     }
                 }
                 Item::Verbatim(v) => {
+                    // `FUNCTION_BLOCK B EXTENDS A …`: the header line names the base.
+                    let header: Vec<&str> = v.text.lines().next().unwrap_or("").split_whitespace().collect();
+                    if let Some(k) = header.iter().position(|w| w.eq_ignore_ascii_case("EXTENDS")) {
+                        if let Some(b) = header.get(k + 1) {
+                            env.opaque_bases.insert(b.trim_end_matches(',').to_ascii_uppercase());
+                        }
+                    }
                     if let (true, Some(name)) =
                         (matches!(v.keyword.as_str(), "PROGRAM" | "FUNCTION_BLOCK" | "FUNCTION" | "INTERFACE"), &v.name)
                     {
@@ -513,6 +522,13 @@ impl TypeEnv {
     /// two POUs with the same name has its own).
     pub fn interface_of(&self, pou: &Pou) -> Option<&PouInterface> {
         self.pous.iter().find(|p| p.span == pou.name.span && p.name == pou.name.text)
+    }
+
+    /// Whether a POU of the file extends the block `name` (`EXTENDS`): its variables are used
+    /// by the code of the blocks extending it too.
+    pub fn is_extended(&self, name: &str) -> bool {
+        self.pous.iter().any(|p| p.base.as_deref().is_some_and(|b| b.eq_ignore_ascii_case(name)))
+            || self.opaque_bases.contains(&name.to_ascii_uppercase())
     }
 
     /// A user FUNCTION by name.

@@ -214,7 +214,9 @@ fn check_pou_inner(
     };
     // A variable inherited from a base block (`EXTENDS`) is the base's to use.
     let own = |d: &Diagnostic| d.span.file != pou.span.file || (pou.span.start <= d.span.start && d.span.end <= pou.span.end);
-    diags.extend(scope.unused_diagnostics().into_iter().filter(|d| !reached(d) && own(d)));
+    if !env.is_extended(&pou.name.text) {
+        diags.extend(scope.unused_diagnostics().into_iter().filter(|d| !reached(d) && own(d)));
+    }
     diags
 }
 
