@@ -555,8 +555,14 @@ fn code_text(src: &str, after: u32, span: Span, blocks: &[ast::VarBlock], end_kw
     dedent(slice(src, Span::new(0, start, end.max(start))), 0)
 }
 
-/// `<interface>` of a method or accessor: its result and variables.
-fn write_code_interface(x: &mut X, src: &str, ret: Option<&ast::TypeSpec>, blocks: &[ast::VarBlock]) {
+/// `<interface>` of a method or accessor: its result, variables and access modifiers.
+fn write_code_interface(
+    x: &mut X,
+    src: &str,
+    ret: Option<&ast::TypeSpec>,
+    blocks: &[ast::VarBlock],
+    modifiers: &[ast::Ident],
+) {
     x.open("interface", &[]);
     if let Some(rt) = ret {
         x.open("returnType", &[]);
@@ -565,6 +571,24 @@ fn write_code_interface(x: &mut X, src: &str, ret: Option<&ast::TypeSpec>, block
     }
     for b in blocks {
         write_var_block(x, src, b, var_list_name(b.kind));
+    }
+    let flags: Vec<(&str, String)> = ["Public", "Private", "Protected", "Internal", "Abstract", "Final"]
+        .into_iter()
+        .filter(|k| modifiers.iter().any(|m| m.is(k)))
+        .map(|k| (k, "true".to_string()))
+        .collect();
+    if !flags.is_empty() {
+        x.open("addData", &[]);
+        x.open(
+            "data",
+            &[
+                ("name", "http://www.3s-software.com/plcopenxml/accessmodifiers".into()),
+                ("handleUnknown", "implementation".into()),
+            ],
+        );
+        x.empty("AccessModifiers", &flags);
+        x.close("data");
+        x.close("addData");
     }
     x.close("interface");
 }
@@ -578,7 +602,7 @@ fn object_fragments(src: &str, pou: &ast::Pou) -> Vec<String> {
         let mut x = X::new();
         x.open("data", &[("name", format!("{NS}method")), ("handleUnknown", "implementation".into())]);
         x.open("Method", &[("name", m.name.text.clone())]);
-        write_code_interface(&mut x, src, m.return_type.as_ref(), &m.var_blocks);
+        write_code_interface(&mut x, src, m.return_type.as_ref(), &m.var_blocks, &m.modifiers);
         let after = m.return_type.as_ref().map_or(m.name.span.end, |t| t.span.end);
         write_code_body(&mut x, &code_text(src, after, m.span, &m.var_blocks, "END_METHOD"));
         x.empty("addData", &[]);
@@ -590,11 +614,11 @@ fn object_fragments(src: &str, pou: &ast::Pou) -> Vec<String> {
         let mut x = X::new();
         x.open("data", &[("name", format!("{NS}property")), ("handleUnknown", "implementation".into())]);
         x.open("Property", &[("name", p.name.text.clone())]);
-        write_code_interface(&mut x, src, Some(&p.ty), &[]);
+        write_code_interface(&mut x, src, Some(&p.ty), &[], &p.modifiers);
         for (tag, acc, kw) in [("GetAccessor", &p.get, "END_GET"), ("SetAccessor", &p.set, "END_SET")] {
             let Some(a) = acc else { continue };
             x.open(tag, &[]);
-            write_code_interface(&mut x, src, None, &a.var_blocks);
+            write_code_interface(&mut x, src, None, &a.var_blocks, &a.modifiers);
             // The accessor's keyword (GET/SET) starts its span.
             write_code_body(&mut x, &code_text(src, a.span.start + 3, a.span, &a.var_blocks, kw));
             x.empty("addData", &[]);

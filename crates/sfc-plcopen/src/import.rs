@@ -785,7 +785,8 @@ fn pou(cx: &mut Ctx, p: Node) {
             "PROGRAM"
         }
     };
-    let attrs_list = element_attrs(p);
+    // Methods and properties are written as text (`codesys::members`), not carried as data.
+    let attrs_list = element_attrs_without(p, &codesys::is_member_data);
     cx.used.clear();
     cx.extra_vars.clear();
     cx.compute.clear();
@@ -845,9 +846,7 @@ fn pou(cx: &mut Ctx, p: Node) {
     cx.em.str(kind);
     cx.em.str(" ");
     cx.em.frag(&name);
-    if cx.verbatim {
-        cx.em.str(&codesys::inheritance(p));
-    }
+    cx.em.str(&codesys::inheritance(p));
     let iface = child(p, "interface");
     if kind == "FUNCTION" {
         cx.em.str(" : ");
@@ -939,10 +938,8 @@ fn pou(cx: &mut Ctx, p: Node) {
             cx.diag("SFC0710", anchor(*t), "a transition condition of a POU whose body is not SFC is never used");
         }
     }
-    // Methods and properties, in text (the POU is kept as written: its XML is exported).
-    if cx.verbatim {
-        codesys::members(cx, p);
-    }
+    // Methods and properties, in text (an export writes them back as CODESYS data).
+    codesys::members(cx, p);
     let body_text = std::mem::replace(&mut cx.em, head);
     // Transitions of the SFC body left unconnected go with the POU's attributes.
     let mut lines = String::new();

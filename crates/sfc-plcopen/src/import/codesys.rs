@@ -1,9 +1,7 @@
 //! CODESYS's objects in a POU's `addData` (methods, properties) and in its interface's
 //! (`EXTENDS`, `IMPLEMENTS`), written as the text of IEC 61131-3's 3rd edition and CODESYS
-//! (`METHOD … END_METHOD`, `PROPERTY … GET … END_GET … END_PROPERTY`). The type checker and the
-//! simulator do not handle them yet, so a POU holding them is kept as written (its XML travels
-//! in `sfc.pouxml` for the export): this text is what a reader, `sfc fmt` and the language
-//! server see.
+//! (`METHOD … END_METHOD`, `PROPERTY … GET … END_GET … END_PROPERTY`), which the type checker
+//! and the simulator handle; the export writes them back in CODESYS's shapes.
 
 use super::{var_keyword, var_list, Ctx};
 use crate::xml::{self, attr, child, children, elements};
@@ -37,6 +35,11 @@ pub(super) fn inheritance(p: Node) -> String {
         out.push_str(&format!(" IMPLEMENTS {}", implements.join(", ")));
     }
     out
+}
+
+/// Whether `n` is a `data` element of a method or property (written as text instead).
+pub(super) fn is_member_data(n: Node) -> bool {
+    n.tag_name().name() == "data" && attr(n, "name").is_some_and(|a| a.ends_with(METHOD) || a.ends_with(PROPERTY))
 }
 
 /// The methods and properties of POU `p` as text, each after a blank line.
@@ -85,7 +88,7 @@ fn code(cx: &mut Ctx, n: Node, indent: &str) {
         }
     }
     if let Some(st) = child(n, "body").and_then(|b| elements(b).find(|e| matches!(e.tag_name().name(), "ST" | "IL"))) {
-        let t = xml::formatted_text(st);
+        let t = super::dialect::map(cx, &xml::formatted_text(st));
         cx.em.lines(&t, indent);
     }
 }

@@ -3,35 +3,21 @@
 //! What has an IEC 61131-3 meaning is mapped as the code is copied ([`map`]): `Enum.Value` is
 //! `Enum#Value`, `GVL.X` (a variable of a named global variable list) is `X`, `Standard.TON`
 //! (a standard block through its library's namespace) is `TON`. What has none (pointers, `ADR`,
-//! `__POUNAME`, `THIS`, methods, `EXTENDS`, properties, library namespaces) is found before the
+//! `__POUNAME`, library namespaces) is found before the
 //! POU is written ([`reasons`]): the POU is then kept as written and not analysed (a note), and
 //! never an error that blocks the rest of the file.
 
 use super::Ctx;
-use crate::xml::{self, attr, child, children, elements, XText};
+use crate::xml::{self, attr, child, elements, XText};
 use roxmltree::Node;
 use sfc_syntax::lexer::{lex, TokenKind};
 
 /// Operators and built-ins of CODESYS ST that IEC 61131-3 lacks.
 const VENDOR_WORDS: &[&str] =
-    &["ADR", "ADRINST", "BITADR", "SIZEOF", "XSIZEOF", "INDEXOF", "THIS", "SUPER", "REF", "NEW", "DELETE"];
+    &["ADR", "ADRINST", "BITADR", "SIZEOF", "XSIZEOF", "INDEXOF", "REF", "NEW", "DELETE"];
 
 /// Why the POU `p` cannot be analysed, if it cannot: its first vendor construct, in words.
 pub(super) fn reasons(cx: &Ctx, p: Node) -> Option<String> {
-    // Object orientation lives in the POU's addData (methods, properties, inheritance).
-    for d in children(p, "addData").flat_map(|a| children(a, "data")) {
-        let name = attr(d, "name").unwrap_or("");
-        for (tail, what) in [
-            ("/method", "it has methods (CODESYS object orientation)"),
-            ("/property", "it has properties (CODESYS object orientation)"),
-            ("/pouinheritance", "it uses EXTENDS or IMPLEMENTS (CODESYS object orientation)"),
-            ("/interface", "it implements an interface (CODESYS object orientation)"),
-        ] {
-            if name.ends_with(tail) {
-                return Some(what.to_string());
-            }
-        }
-    }
     if let Some(i) = child(p, "interface") {
         for e in i.descendants().filter(|e| e.is_element()) {
             match e.tag_name().name() {
@@ -100,9 +86,6 @@ fn code_reason(cx: &Ctx, text: &str) -> Option<String> {
                     && !cx.used.contains(&up)
                 {
                     return Some(format!("it calls `{w}`, a CODESYS operator"));
-                }
-                if (up == "THIS" || up == "SUPER") && prev != Some(TokenKind::Dot) && !cx.used.contains(&up) {
-                    return Some(format!("it uses `{w}` (CODESYS object orientation)"));
                 }
                 if (up == "POINTER" || up == "REFERENCE") && word(i + 1).eq_ignore_ascii_case("TO") {
                     return Some(format!("it declares a `{w} TO` variable"));
