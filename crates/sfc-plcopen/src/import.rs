@@ -307,10 +307,12 @@ pub(crate) fn project(cx: &mut Ctx, root: Node) {
         let h = format!("<contentHeader name=\"project\">{}</contentHeader>", crate::export::COORDINATE_INFO);
         cx.header_attrs.push((attrs::CONTENTHEADER.to_string(), attrs::escape(&h)));
     }
+    // The project's own addData travels with the file, but for the application and the global
+    // variable lists of the project's pool, which are imported (below).
     let project_data: String = child(root, "addData")
         .into_iter()
         .flat_map(|a| children(a, "data"))
-        .filter(|d| attr(*d, "name") != Some(CODESYS_APPLICATION))
+        .filter(|d| attr(*d, "name") != Some(CODESYS_APPLICATION) && !is_pool_lists(*d))
         .map(xml::serialize)
         .collect();
     if !project_data.is_empty() {
@@ -459,6 +461,17 @@ pub(crate) fn project(cx: &mut Ctx, root: Node) {
             global_list(cx, g, "");
         }
     }
+    // CODESYS: the global variable lists of the project's pool (`addData/data[…/globalvars]`),
+    // which every application of the project sees.
+    let pool: Vec<Node> = child(root, "addData")
+        .into_iter()
+        .flat_map(|a| children(a, "data"))
+        .filter(|d| is_pool_lists(*d))
+        .flat_map(|d| children(d, "globalVars"))
+        .collect();
+    for g in pool {
+        global_list(cx, g, "");
+    }
     if !scoped {
         cx.emitted_globals = Some(HashSet::new());
         for (_, r) in &resources {
@@ -553,12 +566,32 @@ fn instance_type<'a>(pi: Node<'a, '_>) -> &'a str {
 
 /// A `globalVars` list as `VAR_GLOBAL … END_VAR` at `indent`.
 fn global_list(cx: &mut Ctx, g: Node, indent: &str) {
+    // CODESYS writes a list holding VAR_GLOBAL and VAR_GLOBAL CONSTANT blocks as an empty list
+    // whose `mixedattrsvarlist` holds one list per block.
+    if children(g, "variable").next().is_none() {
+        let blocks: Vec<Node> = children(g, "addData")
+            .flat_map(|a| children(a, "data"))
+            .filter(|d| attr(*d, "name").is_some_and(|n| n.ends_with("/mixedattrsvarlist")))
+            .flat_map(|d| elements(d).flat_map(|m| children(m, "globalVars")))
+            .collect();
+        if !blocks.is_empty() {
+            for b in blocks {
+                global_list(cx, b, indent);
+            }
+            return;
+        }
+    }
     cx.em.open(anchor(g));
     var_list(cx, g, "VAR_GLOBAL", indent);
     if indent.is_empty() {
         cx.em.str("\n");
     }
     cx.em.close();
+}
+
+/// CODESYS's global variable lists of the project's pool: `project/addData/data[…/globalvars]`.
+fn is_pool_lists(d: Node) -> bool {
+    attr(d, "name").is_some_and(|n| n.ends_with("plcopenxml/globalvars"))
 }
 
 /// Standard function blocks and those of CODESYS's `Standard` library (`Standard.TON`).

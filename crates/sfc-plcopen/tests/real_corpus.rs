@@ -94,7 +94,14 @@ fn check_file(path: &Path, expected: Option<&BTreeMap<String, [usize; 4]>>) -> R
                 let step_actions = c.steps.iter().map(|s| s.step_actions.len()).sum();
                 (
                     c.pou.to_ascii_uppercase(),
-                    [c.steps.len(), c.transitions.len() + loose(&c.pou), c.actions.len(), step_actions],
+                    // An association naming an instance's action (`Line.ACT_Run`, CODESYS) is
+                    // that block's action, counted under it, not one of this POU's.
+                    [
+                        c.steps.len(),
+                        c.transitions.len() + loose(&c.pou),
+                        c.actions.iter().filter(|a| !a.of_instance()).count(),
+                        step_actions,
+                    ],
                 )
             })
             .collect();
@@ -349,4 +356,29 @@ fn unconnected_transitions_of_a_chart_being_drawn_are_kept_and_exported_back() {
     assert_eq!(diags.iter().filter(|d| d.code == "SFC0706").count(), 3, "{diags:?}");
     assert_eq!(loose(&again), kept);
     assert_eq!(again.charts[0].transitions.len(), chart.transitions.len());
+}
+
+/// CODESYS spellings outside ST bodies and lists outside resources: bits read by partial access
+/// (`wStatus.%X3` is `wStatus.3`), a contact and a coil naming a qualified global
+/// (`GVL_Cip.bEStop` is `bEStop`), and the global variable lists of the project's pool (its
+/// `addData`), one of them holding a VAR_GLOBAL and a VAR_GLOBAL CONSTANT block, which CODESYS
+/// writes as an empty list with its `mixedattrsvarlist`.
+#[test]
+fn partial_access_qualified_contacts_and_pool_lists_are_imported() {
+    let read = |rel: &str| {
+        let xml = std::fs::read_to_string(real_dir().join(rel)).expect("fixture");
+        let (_, checked, diags) = sfc_plcopen::check_xml(0, rel, &xml, &opts());
+        assert!(!diags.iter().any(|d| d.is_error()), "{rel}: {diags:?}");
+        checked.file.text.clone()
+    };
+    let t = read("twincat/car_park_barrier.xml");
+    assert!(t.contains("bJam := wStatus.3 OR wStatus.7;"), "{t}");
+    assert!(!t.contains("%X"), "{t}");
+    let t = read("twincat/cip_skid_ld_selection.xml");
+    assert!(t.contains("NOT bEStop") && !t.contains("GVL_Cip.bEStop"), "{t}");
+    let t = read("codesys/batch_mixer_pool_gvls.xml");
+    assert!(t.contains("xValveA : BOOL;"), "{t}");
+    assert!(t.contains("VAR_GLOBAL CONSTANT"), "{t}");
+    assert!(t.contains("tMix : TIME := T#20S;") && t.contains("rSetA : REAL := 12.5;"), "{t}");
+    assert!(!t.contains("plcopenxml/globalvars"), "the pool's lists are imported, not carried: {t}");
 }

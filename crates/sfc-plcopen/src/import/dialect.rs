@@ -147,11 +147,15 @@ pub(super) fn map(cx: &Ctx, t: &XText) -> XText {
 }
 
 /// Code copied from the XML with CODESYS spellings that have an IEC meaning rewritten:
-/// `Enum.Value` → `Enum#Value`, `GVL.X` → `X`, `Standard.TON` → `TON`.
+/// `Enum.Value` → `Enum#Value`, `GVL.X` → `X`, `Standard.TON` → `TON`, and the partial access
+/// of a bit, `w.%X3` (IEC 61131-3 3rd edition, which CODESYS also writes), → `w.3`.
 fn map_dots(cx: &Ctx, t: &XText) -> XText {
     if cx.verbatim
         || !t.text.contains('.')
-        || (cx.enum_types.is_empty() && cx.gvl_names.is_empty() && !t.text.contains("tandard"))
+        || (cx.enum_types.is_empty()
+            && cx.gvl_names.is_empty()
+            && !t.text.contains("tandard")
+            && !t.text.contains(".%"))
     {
         return t.clone();
     }
@@ -164,6 +168,19 @@ fn map_dots(cx: &Ctx, t: &XText) -> XText {
     while let (Some(&a), Some(&dot), Some(&b)) = (sig.get(i), sig.get(i + 1), sig.get(i + 2)) {
         let prev_dot = i.checked_sub(1).and_then(|k| sig.get(k)).is_some_and(|t| t.kind == TokenKind::Dot);
         let adjacent = a.end == dot.start && dot.end == b.start;
+        // `w.%X3` → `w.3`: a bit of a variable (the partial access of a byte, word or double
+        // word, `%B`/`%W`/`%D`, has no IEC 61131-2 spelling and is left as written).
+        if dot.kind == TokenKind::Dot && b.kind == TokenKind::Address && dot.end == b.start {
+            let bw = &text[b.start as usize..b.end as usize];
+            let bit = bw.get(2..).unwrap_or("");
+            if bw.len() > 2 && bw[..2].eq_ignore_ascii_case("%X") && bit.bytes().all(|c| c.is_ascii_digit()) {
+                out.push(&t.slice(at..b.start as usize));
+                out.push(&XText::synthetic(bit.to_string(), t.anchor.clone()));
+                at = b.end as usize;
+                i += 2;
+                continue;
+            }
+        }
         if a.kind == TokenKind::Ident
             && dot.kind == TokenKind::Dot
             && b.kind == TokenKind::Ident

@@ -421,7 +421,7 @@ impl Tr<'_, '_, '_, '_, '_> {
             "inOutVariable" => {
                 self.statement(i);
                 let Some(t) = g.text.as_ref() else { return self.falsum(i) };
-                let f = text_frag(t);
+                let f = text_frag(&super::dialect::map(self.cx, t));
                 if negated_out {
                     f.not()
                 } else {
@@ -434,7 +434,8 @@ impl Tr<'_, '_, '_, '_, '_> {
                     self.report(i, "SFC0705", "the contact has no variable".into());
                     return self.falsum(i);
                 };
-                let mut term = text_frag(var);
+                // A contact reads a variable as an expression does (`GVL.X`, `E.Value` mapped).
+                let mut term = text_frag(&super::dialect::map(self.cx, var));
                 if xml::flag(g.n, "negated") {
                     term = term.not();
                 } else if let Some(e @ ("rising" | "falling")) = xml::attr(g.n, "edge") {
@@ -645,7 +646,7 @@ impl Tr<'_, '_, '_, '_, '_> {
         let ind = self.indent.clone();
         let stmt: Option<Frag> = match g.kind {
             "outVariable" | "inOutVariable" => {
-                let target = g.text.clone();
+                let target = g.text.as_ref().map(|t| super::dialect::map(self.cx, t));
                 let value = g.ins.first().and_then(|p| self.input(i, p));
                 match (target, value) {
                     (Some(t), Some(v)) => {
@@ -669,7 +670,7 @@ impl Tr<'_, '_, '_, '_, '_> {
                 }
             }
             "coil" => {
-                let var = g.text.clone();
+                let var = g.text.as_ref().map(|t| super::dialect::map(self.cx, t));
                 let mut power =
                     g.ins.first().and_then(|p| self.input(i, p)).unwrap_or_else(|| Frag::located("FALSE", at.clone()));
                 if let Some(e @ ("rising" | "falling")) = xml::attr(g.n, "edge") {
