@@ -68,8 +68,10 @@ impl Program {
                 self.walk(&v.ty, top_frame + v.offset as usize, v.name.clone(), &mut mem, &mut charts, 0);
             }
         }
-        // The instances of the programs are not run (unless one is the top, listed above).
-        for v in self.globals.vars.iter().filter(|v| !v.implicit) {
+        // The instances of the other programs are listed too: they run only when code calls
+        // them (`Unit(bRun := x);`), and a chart's first call is its scan 0.
+        let top_global = own.map(|v| v.offset);
+        for v in self.globals.vars.iter().filter(|v| Some(v.offset) != top_global) {
             self.walk(&v.ty, v.offset as usize, v.name.clone(), &mut mem, &mut charts, 0);
         }
         Memory { mem, top_frame, charts }
