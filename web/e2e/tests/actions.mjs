@@ -2,13 +2,13 @@
 // press_actions.st holds a function block written in ST whose cycle is an action written in SFC,
 // and a program whose chart has one too. The block's tab shows its body as text; a click on the
 // action in the charts bar opens the action's chart on a canvas of its own, where a transition's
-// condition is changed, a step moved (undone and redone) and a step's entry action set in
-// Properties. Saved, the file holds the changes inside the action, keeps the other POU byte for
-// byte, and `sfc check` passes; reloaded, the editor shows them again. Screenshot in
-// e2e/out/actions-chart.png.
+// condition is changed, a step moved (undone and redone), a step's entry action set in
+// Properties and a step added from the Tools palette in place of the jump back. Saved, the file
+// holds the changes inside the action, keeps the other POU byte for byte, and `sfc check`
+// passes; reloaded, the editor shows them again. Screenshot in e2e/out/actions-chart.png.
 import fs from 'node:fs';
 import path from 'node:path';
-import { assert, box, drag, openEditor, panelShows, select, setCondition, setField, sfc, shotPath, waitChart } from '../helpers.mjs';
+import { assert, box, drag, dropFromPalette, openEditor, panelShows, select, setCondition, setField, sfc, shotPath, waitChart, wire } from '../helpers.mjs';
 
 const here = path.dirname(new URL(import.meta.url).pathname);
 const doc = (page) => page.evaluate(() => window.__sfc.doc());
@@ -75,6 +75,22 @@ export const tests = [
         raise.id,
       );
       await page.waitForFunction(() => window.__sfc.tabs().find((x) => x.active)?.dirty);
+
+      // A step added with the Tools palette: the jump back to Ready replaced by a final step Done.
+      const jump = d.elements.find((e) => e.kind === 'jump');
+      await select(page, jump.id);
+      await page.locator('.menubar .menu-title', { hasText: 'Edit' }).click();
+      await page.locator('.menu-dropdown .menu-item', { hasText: 'Delete' }).click();
+      await page.waitForFunction((id) => !window.__sfc.doc().elements.some((e) => e.id === id), jump.id);
+      const done = await dropFromPalette(page, 'step', { x: 80, y: 440 });
+      assert(await wire(page, back.id, done), 'the transition was not wired to the new step');
+      await select(page, done);
+      await setField(page, '#p-name', 'Done');
+      await page.locator('.side-panel .prop-row', { hasText: 'Final step' }).locator('input[type=checkbox]').check();
+      await page.waitForFunction((id) => {
+        const e = window.__sfc.doc().elements.find((x) => x.id === id);
+        return e.name === 'Done' && e.final;
+      }, done);
       await page.screenshot({ path: shotPath(t, 'actions-chart.png') });
 
       // Saved from the action's chart: the whole POU, the action's body from its chart.
@@ -86,6 +102,7 @@ export const tests = [
       assert(/STEP Raise:\n\s+ENTRY_ACTION := Lower_entry;\n\s+EXIT_ACTION := Raise_exit;\n\s+END_STEP/.test(press), `step actions not saved:\n${press}`);
       assert(/\n    Cycle\(\);\n/.test(press) && !press.includes("'sfc.target'"), `the block is no longer written in ST:\n${press}`);
       assert(/ACTION Cycle:[\s\S]*INITIAL_STEP Ready/.test(press), `the chart is not in its action:\n${press}`);
+      assert(/ACTION Cycle:[\s\S]*FROM Raise TO Done\n[\s\S]*'sfc.final' := 'true'\}\n\s+STEP Done: END_STEP\n\s+END_ACTION/.test(press), `the new step is not in the action:\n${press}`);
       const line = original.slice(original.indexOf('PROGRAM Line'));
       assert(saved.endsWith(line), 'the other POU changed');
       sfc(t, ['check', 'press_actions.st']);
@@ -110,6 +127,7 @@ export const tests = [
       assert(d.elements.some((e) => e.condition === 'AtTop AND NOT Start'), 'condition after reload');
       assert(step(d, 'Raise').x === movedX, `Raise at ${step(d, 'Raise').x} after reload, ${movedX} saved`);
       assert(step(d, 'Raise').stepActions.length === 2, 'step actions after reload');
+      assert(step(d, 'Done')?.final && !d.elements.some((e) => e.kind === 'jump'), 'the new step after reload');
     },
   },
 ];

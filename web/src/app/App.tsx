@@ -529,7 +529,8 @@ export function App({ api, createCanvas }: AppProps) {
     canvas.select([...d.elements.map((e) => e.id), ...d.connections.map((c) => c.id)]);
   };
   const zoomBy = (f: number) => canvas?.zoom(Math.min(4, Math.max(0.2, canvas.getZoom() * f)));
-  const exportSvg = () => canvas && tab && download(`${tab.pou}.svg`, canvas.exportSvg(), 'image/svg+xml');
+  // An action's chart is exported as `POU.Action.svg`.
+  const exportSvg = () => canvas && tab && download(`${tab.pou}${tab.view ? `.${tab.view}` : ''}.svg`, canvas.exportSvg(), 'image/svg+xml');
   const print = () => canvas && tab && setDialog({ kind: 'print', svg: canvas.exportSvg(), doc: canvas.getDoc(), path: tab.path });
   const mdi = session !== null && !host;
   const hasChart = !!canvas;
