@@ -61,6 +61,15 @@ pub struct EditorDoc {
     /// header line and its first SFC element.
     #[serde(default)]
     pub declarations: String,
+    /// The POU's body when it is not a chart (ST statements or IL instructions, dedented): a
+    /// FUNCTION_BLOCK or PROGRAM written in ST or IL that holds actions written in SFC (added to
+    /// the contract by sfc-doc). Such a document has no blocks; its actions' charts are edited.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    #[cfg_attr(test, ts(optional))]
+    pub body: Option<String>,
+    #[serde(default, skip_serializing_if = "is_st")]
+    #[cfg_attr(test, ts(as = "Option<Language>", optional))]
+    pub body_language: Language,
     /// Named actions with their bodies, in declaration order.
     #[serde(default)]
     pub actions: Vec<ActionDef>,
@@ -142,6 +151,13 @@ pub struct ActionDef {
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     #[cfg_attr(test, ts(as = "Option<Vec<String>>", optional))]
     pub comments: Vec<String>,
+    /// An action written in SFC (CODESYS's SFC action): its chart as a document of its own
+    /// (`pou` the POU's name, no declarations or actions of its own; its steps name the POU's
+    /// actions). When present, saving writes the action's body from it (`body` is the text it
+    /// wrote when opened); the attributes of the chart (its layout) travel in the chart.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    #[cfg_attr(test, ts(as = "Option<EditorDoc>", optional))]
+    pub chart: Option<Box<EditorDoc>>,
 }
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
@@ -357,14 +373,46 @@ pub struct Opened {
 /// that `open` returned is already normalised, so for it the round trip is exact equality.
 pub fn open(file_id: u32, name: &str, text: &str) -> Opened {
     let checked = sfc_model::check_source(file_id, name, text, &sfc_model::CheckOptions::default());
+    // The checker takes the elements of actions written in SFC out of its tree: their
+    // associations as written come from a parse of their own.
+    let parsed = (!checked.action_charts.is_empty()).then(|| sfc_syntax::parse(file_id, text).0);
+    let parsed_action = |chart: &sfc_model::Chart| {
+        parsed.as_ref()?.items.iter().find_map(|item| match item {
+            sfc_syntax::ast::Item::Pou(p) => p.actions().find(|a| a.name.span == chart.name_span),
+            _ => None,
+        })
+    };
+    // The POUs with a chart: their body, or actions written in SFC (a POU in ST that holds
+    // them opens too, its body as text), in file order.
+    let mut items: Vec<usize> = checked.charts.iter().chain(&checked.action_charts).map(|c| c.item).collect();
+    items.sort_unstable();
+    items.dedup();
     let mut charts = Vec::new();
-    for chart in &checked.charts {
-        let Some(sfc_syntax::ast::Item::Pou(pou)) = checked.unit.items.get(chart.item) else { continue };
+    for item in items {
+        let Some(sfc_syntax::ast::Item::Pou(pou)) = checked.unit.items.get(item) else { continue };
         // A FUNCTION cannot hold a chart (SFC0218 says so); the editor has no document for it.
         if pou.kind == sfc_syntax::ast::PouKind::Function {
             continue;
         }
-        charts.push(open::document(&open::read(text, chart, pou, &checked.unit.trivia)));
+        let trivia = &checked.unit.trivia;
+        let mut doc = match checked.charts.iter().find(|c| c.item == item) {
+            Some(chart) => open::document(&open::read(text, chart, pou, trivia)),
+            None => open::text_document(text, pou, trivia),
+        };
+        for chart in checked.action_charts.iter().filter(|c| c.item == item) {
+            let (Some(name), Some(action)) = (&chart.action, parsed_action(chart)) else { continue };
+            let Some(def) = doc.actions.iter_mut().find(|a| a.name.eq_ignore_ascii_case(name)) else { continue };
+            let mut sub = open::action_document(text, chart, pou, action, trivia);
+            sub.pou = doc.pou.clone();
+            // The chart's attributes (its layout) are the chart's; the action keeps the rest.
+            def.attributes.clear();
+            def.chart = Some(Box::new(sub));
+            // Its body is the one the chart writes, so a document `open` returned reads back
+            // equal once saved.
+            let mut probe = readback::Probe::for_attributes(&doc.attributes);
+            def.body = write::flat_action(def, &doc.attributes, &mut probe).0.body;
+        }
+        charts.push(doc);
     }
     Opened { charts, diagnostics: checked.diagnostics, file: checked.file }
 }
@@ -444,6 +492,8 @@ pub fn blank(name: &str, target: ChartTarget) -> EditorDoc {
         target,
         description: String::new(),
         declarations: "VAR\nEND_VAR".to_string(),
+        body: None,
+        body_language: Language::St,
         actions: Vec::new(),
         elements: vec![Element {
             id: "step:Init".to_string(),

@@ -56,15 +56,14 @@ enum Owner {
 /// element they belong to, in source order: comments in the declarations, a condition or an
 /// action are part of that text; every other one belongs to the element it is inside of, the
 /// element whose line it ends, or else the element after it.
-fn comments_by_owner(text: &str, chart: &Chart, pou: &ast::Pou, trivia: &[ast::Trivia]) -> Vec<(Owner, String)> {
-    let start = pou.attributes.iter().map(|a| a.span.start).chain([pou.span.start]).min().unwrap_or(0);
-    let end = pou.span.end;
+fn comments_by_owner(text: &str, chart: &Chart, holder: &Holder, trivia: &[ast::Trivia]) -> Vec<(Owner, String)> {
+    let (start, end) = (holder.start, holder.end);
     let mut anchors: Vec<(u32, u32, Owner)> = Vec::new();
     anchors.extend(chart.steps.iter().enumerate().map(|(k, s)| (s.span.start, s.span.end, Owner::Step(k))));
     anchors.extend(chart.transitions.iter().enumerate().map(|(k, t)| (t.span.start, t.span.end, Owner::Transition(k))));
     anchors.extend(chart.actions.iter().enumerate().map(|(k, a)| (a.span.start, a.span.end, Owner::Action(k))));
     anchors.sort_by_key(|a| (a.0, a.1));
-    let mut held: Vec<Option<(usize, usize)>> = vec![region::declarations_range(text, pou)];
+    let mut held: Vec<Option<(usize, usize)>> = vec![holder.declarations];
     held.extend(chart.transitions.iter().map(|t| region::condition_range(text, &t.condition)));
     held.extend(chart.actions.iter().map(|a| Some((a.span.start as usize, a.span.end as usize))));
     let mut out = Vec::new();
@@ -125,12 +124,62 @@ fn numbers(s: &str) -> Option<Vec<f64>> {
     s.split_whitespace().map(|p| p.parse::<f64>().ok().filter(|v| v.is_finite())).collect()
 }
 
+/// What holds a chart in the text: a POU's body, or an action written in SFC.
+pub struct Holder<'a> {
+    /// The attribute pragmas before the POU (or the action): the chart's own (`sfc.graph`, …).
+    pub attributes: &'a [ast::Attribute],
+    /// The chart's elements as parsed (their associations as written).
+    pub elements: &'a [ast::SfcElement],
+    /// Where the holder's text lies; comments outside belong to others.
+    pub start: u32,
+    pub end: u32,
+    /// The declarations' range (their comments are part of them).
+    pub declarations: Option<(usize, usize)>,
+    /// An action's chart: its actions are the POU's, listed in the POU's document.
+    pub action: bool,
+}
+
+impl<'a> Holder<'a> {
+    /// A POU whose body is the chart.
+    pub fn pou(text: &str, pou: &'a ast::Pou) -> Holder<'a> {
+        Holder {
+            attributes: &pou.attributes,
+            elements: pou.body.sfc().unwrap_or(&[]),
+            start: pou.attributes.iter().map(|a| a.span.start).chain([pou.span.start]).min().unwrap_or(0),
+            end: pou.span.end,
+            declarations: region::declarations_range(text, pou),
+            action: false,
+        }
+    }
+
+    /// An action written in SFC (`action` as parsed, before the checker took its elements).
+    pub fn action(action: &'a ast::Action) -> Holder<'a> {
+        Holder {
+            attributes: &action.attributes,
+            elements: action.body.sfc().unwrap_or(&[]),
+            start: action.span.start,
+            end: action.span.end,
+            declarations: None,
+            action: true,
+        }
+    }
+}
+
 /// Reads one chart of a checked file (`trivia`: the file's comments and pragmas).
 pub fn read<'a>(text: &str, chart: &'a Chart, pou: &ast::Pou, trivia: &[ast::Trivia]) -> ReadChart<'a> {
-    let ast_steps: HashMap<(u32, u32), &ast::Step> = pou
-        .body
-        .sfc()
-        .unwrap_or(&[])
+    read_in(text, chart, pou, &Holder::pou(text, pou), trivia)
+}
+
+/// Reads the chart `holder` holds, of the POU `pou`.
+pub fn read_in<'a>(
+    text: &str,
+    chart: &'a Chart,
+    pou: &ast::Pou,
+    holder: &Holder,
+    trivia: &[ast::Trivia],
+) -> ReadChart<'a> {
+    let ast_steps: HashMap<(u32, u32), &ast::Step> = holder
+        .elements
         .iter()
         .filter_map(|e| match e {
             ast::SfcElement::Step(s) => Some(((s.span.start, s.span.end), s)),
@@ -198,10 +247,14 @@ pub fn read<'a>(text: &str, chart: &'a Chart, pou: &ast::Pou, trivia: &[ast::Tri
             description: pragma::text(&a.attributes, "sfc.description").unwrap_or_default(),
             attributes: pragma::others(&a.attributes, pragma::ACTION),
             comments: Vec::new(),
+            chart: None,
         })
         .collect();
+    if holder.action {
+        actions.clear();
+    }
     let mut trailing_comments = Vec::new();
-    for (owner, c) in comments_by_owner(text, chart, pou, trivia) {
+    for (owner, c) in comments_by_owner(text, chart, holder, trivia) {
         let list = match owner {
             Owner::Step(k) => steps.get_mut(k).map(|e| &mut e.comments),
             Owner::Transition(k) => transitions.get_mut(k).map(|e| &mut e.comments),
@@ -210,7 +263,8 @@ pub fn read<'a>(text: &str, chart: &'a Chart, pou: &ast::Pou, trivia: &[ast::Tri
         };
         list.unwrap_or(&mut trailing_comments).push(c);
     }
-    let comments = pragma::all(&pou.attributes, "sfc.comment")
+    let attrs = holder.attributes;
+    let comments = pragma::all(attrs, "sfc.comment")
         .into_iter()
         .filter_map(|v| {
             let (head, body) = v.split_once('\n').unwrap_or((v.as_str(), ""));
@@ -229,9 +283,14 @@ pub fn read<'a>(text: &str, chart: &'a Chart, pou: &ast::Pou, trivia: &[ast::Tri
     ReadChart {
         chart,
         pou_kind: if pou.kind == ast::PouKind::FunctionBlock { PouKind::FunctionBlock } else { PouKind::Program },
-        target: chart_target(&pou.attributes),
-        description: pragma::text(&pou.attributes, "sfc.description").unwrap_or_default(),
-        declarations: region::declarations(text, pou),
+        target: chart_target(if holder.action { &pou.attributes } else { attrs }),
+        // An action's description is the action's (its entry in the POU's document).
+        description: if holder.action {
+            String::new()
+        } else {
+            pragma::text(attrs, "sfc.description").unwrap_or_default()
+        },
+        declarations: if holder.action { String::new() } else { region::declarations(text, pou) },
         steps,
         step_stored,
         step_assocs,
@@ -242,9 +301,18 @@ pub fn read<'a>(text: &str, chart: &'a Chart, pou: &ast::Pou, trivia: &[ast::Tri
         actions,
         comments,
         trailing_comments,
-        graph: pragma::text(&pou.attributes, sidecar::NAME),
-        attributes: pragma::others(&pou.attributes, pragma::POU),
-        loose: pragma::all(&pou.attributes, LOOSE).iter().filter_map(|v| Loose::read(v)).collect(),
+        graph: pragma::text(attrs, sidecar::NAME),
+        // An action's chart is read and written in its POU's dialect (`sfc.dialect`, not
+        // written into the action: see `write::flat_action`).
+        attributes: if holder.action {
+            let dialect = pou.attributes.iter().filter(|a| a.name.eq_ignore_ascii_case("sfc.dialect"));
+            let own = attrs.iter().filter(|a| !a.name.eq_ignore_ascii_case("sfc.dialect")).cloned().collect::<Vec<_>>();
+            let list: Vec<ast::Attribute> = dialect.cloned().chain(own).collect();
+            pragma::others(&list, &[pragma::POU, pragma::ACTION].concat())
+        } else {
+            pragma::others(attrs, pragma::POU)
+        },
+        loose: pragma::all(attrs, LOOSE).iter().filter_map(|v| Loose::read(v)).collect(),
     }
 }
 
@@ -313,6 +381,8 @@ fn empty_doc(r: &ReadChart) -> EditorDoc {
         target: r.target,
         description: r.description.clone(),
         declarations: r.declarations.clone(),
+        body: None,
+        body_language: crate::Language::St,
         actions: r.actions.clone(),
         elements: Vec::new(),
         connections: Vec::new(),
@@ -835,4 +905,93 @@ pub fn auto_layout(doc: &EditorDoc) -> EditorDoc {
         layout::route_all(&mut out, &d);
     }
     out
+}
+
+/// The document of an action written in SFC (`action` as parsed), its chart `chart`.
+pub fn action_document(
+    text: &str,
+    chart: &Chart,
+    pou: &ast::Pou,
+    action: &ast::Action,
+    trivia: &[ast::Trivia],
+) -> EditorDoc {
+    document(&read_in(text, chart, pou, &Holder::action(action), trivia))
+}
+
+/// The document of a POU whose body is ST or IL (it holds actions written in SFC): its body as
+/// text, its actions; no blocks. Comments outside the declarations, the body and the actions
+/// belong to the action after them, or else trail.
+pub fn text_document(text: &str, pou: &ast::Pou, trivia: &[ast::Trivia]) -> EditorDoc {
+    let decl = region::declarations_range(text, pou);
+    // The body lies between the declarations (or the header's line) and the first action.
+    let header_end = {
+        let after = pou.name.span.end as usize;
+        text.get(after..).and_then(|r| r.find('\n')).map_or(after, |i| after + i + 1)
+    };
+    let start = decl.map_or(header_end, |d| d.1).min(pou.span.end as usize);
+    let action_start = |a: &ast::Action| a.attributes.iter().map(|x| x.span.start).chain([a.span.start]).min();
+    let keyword_end = {
+        let kw = match pou.kind {
+            ast::PouKind::Program => "END_PROGRAM",
+            ast::PouKind::FunctionBlock => "END_FUNCTION_BLOCK",
+            ast::PouKind::Function => "END_FUNCTION",
+        };
+        let end = pou.span.end as usize;
+        let whole = text.get(..end).unwrap_or("");
+        if whole.len() >= kw.len() && whole[whole.len() - kw.len()..].eq_ignore_ascii_case(kw) {
+            end - kw.len()
+        } else {
+            end
+        }
+    };
+    let first_action = pou.actions.iter().filter_map(action_start).min().map(|a| a as usize);
+    // Comments before the first action stay in the body, as written.
+    let end = first_action.unwrap_or(keyword_end).max(start).min(text.len());
+    let body_text = text.get(start..end).unwrap_or("");
+    let language = match &pou.body {
+        ast::Body::Il(_) => crate::Language::Il,
+        _ => crate::Language::St,
+    };
+    let mut actions: Vec<ActionDef> = pou
+        .actions
+        .iter()
+        .map(|a| ActionDef {
+            name: a.name.text.clone(),
+            language: region::action_language(&a.body),
+            body: region::action_body(text, a.span, a.name.span),
+            description: pragma::text(&a.attributes, "sfc.description").unwrap_or_default(),
+            attributes: pragma::others(&a.attributes, pragma::ACTION),
+            comments: Vec::new(),
+            chart: None,
+        })
+        .collect();
+    // Comments between the actions (not inside one) belong to the next one, or trail.
+    let mut trailing_comments = Vec::new();
+    for t in trivia.iter().filter(|t| region::is_comment(t)) {
+        let (a, b) = (t.span.start as usize, t.span.end as usize);
+        if a < end
+            || b > keyword_end
+            || pou.actions.iter().any(|x| x.span.start as usize <= a && b <= x.span.end as usize)
+        {
+            continue;
+        }
+        match pou.actions.iter().position(|x| action_start(x).is_some_and(|s| s as usize >= b)) {
+            Some(k) => actions[k].comments.push(t.text.clone()),
+            None => trailing_comments.push(t.text.clone()),
+        }
+    }
+    EditorDoc {
+        pou: pou.name.text.clone(),
+        pou_kind: if pou.kind == ast::PouKind::FunctionBlock { PouKind::FunctionBlock } else { PouKind::Program },
+        target: ChartTarget::Blank,
+        description: pragma::text(&pou.attributes, "sfc.description").unwrap_or_default(),
+        declarations: region::declarations(text, pou),
+        body: Some(region::dedent(body_text).trim_start_matches('\n').trim_end().to_string()),
+        body_language: language,
+        actions,
+        elements: Vec::new(),
+        connections: Vec::new(),
+        attributes: pragma::others(&pou.attributes, pragma::POU),
+        trailing_comments,
+    }
 }

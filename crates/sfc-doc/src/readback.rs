@@ -59,6 +59,16 @@ impl Probe {
         Probe { codesys, ..Probe::default() }
     }
 
+    /// The pragma a probe starts with in a CODESYS POU, whose names (`Run__Pump.t`) its
+    /// conditions, bodies and step actions may use.
+    fn dialect(&self) -> &'static str {
+        if self.codesys {
+            "{attribute 'sfc.dialect' := 'codesys'}\n"
+        } else {
+            ""
+        }
+    }
+
     /// Whether `s` can be written as a POU, step, transition and action name.
     pub fn is_name(&mut self, s: &str) -> bool {
         if let Some(&v) = self.names.get(s) {
@@ -119,8 +129,9 @@ impl Probe {
         for _ in 0..2 {
             let Some(c) = cond.take() else { break };
             let fragment = condition_fragment(&c, lang);
+            let dialect = self.dialect();
             let text = format!(
-                "PROGRAM P\n    INITIAL_STEP S: END_STEP\n\n    TRANSITION FROM S TO S{fragment}    END_TRANSITION\n\n{END}END_PROGRAM\n"
+                "{dialect}PROGRAM P\n    INITIAL_STEP S: END_STEP\n\n    TRANSITION FROM S TO S{fragment}    END_TRANSITION\n\n{END}END_PROGRAM\n"
             );
             if let Some((_, elements, comments)) = parse_probe_with_trivia(&text) {
                 if let (3, SfcElement::Transition(t)) = (elements.len(), &elements[1]) {
@@ -144,7 +155,9 @@ impl Probe {
     pub fn action(&mut self, def: &ActionDef) -> (String, ActionDef) {
         let text_of = |body: &str| action_text(&def.name, body);
         let action = text_of(&def.body);
-        let text = format!("PROGRAM P\n    INITIAL_STEP S: END_STEP\n\n{action}\n{END}END_PROGRAM\n");
+        // An action written in SFC of a CODESYS POU may use its names (`Move__Pos3`).
+        let dialect = self.dialect();
+        let text = format!("{dialect}PROGRAM P\n    INITIAL_STEP S: END_STEP\n\n{action}\n{END}END_PROGRAM\n");
         if let Some((_, elements)) = parse_probe(&text) {
             if let (3, SfcElement::Action(a)) = (elements.len(), &elements[1]) {
                 let read = ActionDef {
@@ -154,6 +167,7 @@ impl Probe {
                     description: def.description.clone(),
                     attributes: pragma::readable(&def.attributes, pragma::ACTION),
                     comments: self.comments(&def.comments),
+                    chart: None,
                 };
                 return (action, read);
             }
@@ -165,6 +179,7 @@ impl Probe {
             description: def.description.clone(),
             attributes: pragma::readable(&def.attributes, pragma::ACTION),
             comments: self.comments(&def.comments),
+            chart: None,
         };
         (text_of(""), empty)
     }
@@ -199,7 +214,9 @@ impl Probe {
     /// back as one step action; `None` otherwise.
     pub fn step_action(&mut self, written: &str) -> Option<String> {
         let written = written.trim().trim_end_matches(';').trim().to_string();
-        let text = format!("PROGRAM P\n    INITIAL_STEP S:\n        {written};\n    END_STEP\n\n{END}END_PROGRAM\n");
+        let dialect = self.dialect();
+        let text =
+            format!("{dialect}PROGRAM P\n    INITIAL_STEP S:\n        {written};\n    END_STEP\n\n{END}END_PROGRAM\n");
         let (_, elements) = parse_probe(&text)?;
         match (elements.len(), &elements[0]) {
             (2, SfcElement::Step(s)) if s.step_actions.len() == 1 && s.associations.is_empty() => {
@@ -294,6 +311,7 @@ mod tests {
             description: String::new(),
             attributes: Vec::new(),
             comments: vec!["(* fills *)".into()],
+            chart: None,
         };
         assert_eq!(p.action(&def).1, def);
         let broken = ActionDef { body: "x := ;".into(), ..def.clone() };

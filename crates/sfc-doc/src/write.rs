@@ -5,7 +5,9 @@ use crate::graph::{self, Derived, Role};
 use crate::pragma::{self, escape, line, num};
 use crate::readback::Probe;
 use crate::sidecar::{self, ActEntry, End, Entry, Sidecar, Wire};
-use crate::{ChartTarget, EditorDoc, Element, ElementKind, PouKind, Problem, Written};
+use crate::{
+    ActionDef, ChartTarget, EditorDoc, Element, ElementKind, Language, OtherAttribute, PouKind, Problem, Written,
+};
 use sfc_diagnostics::Severity;
 use sfc_syntax::attr_value::{Loose, LOOSE};
 use std::collections::HashMap;
@@ -113,8 +115,101 @@ fn element_attributes(e: &Element, out: &mut String, extra: &[(&str, String)]) {
     out.push_str(&pragma::write_others(IND, &e.attributes, known));
 }
 
+/// The action written in SFC of a chart document (see [`ActionDef::chart`]) as the action its
+/// text is: the chart written the way a POU's is, its elements the action's body and its POU
+/// attributes (`sfc.graph`, `sfc.comment`, …) the action's attributes. The problems of the
+/// chart are named after the action; a condition that does not parse is SFC0101 (it would be
+/// written FALSE).
+pub fn flat_action(a: &ActionDef, pou_attributes: &[OtherAttribute], probe: &mut Probe) -> (ActionDef, Vec<Problem>) {
+    let Some(chart) = &a.chart else { return (a.clone(), Vec::new()) };
+    let dialect: Vec<OtherAttribute> =
+        pou_attributes.iter().filter(|x| x.name.eq_ignore_ascii_case("sfc.dialect")).cloned().collect();
+    let mut attributes = dialect.clone();
+    attributes.extend(chart.attributes.iter().filter(|x| !x.name.eq_ignore_ascii_case("sfc.dialect")).cloned());
+    let doc = EditorDoc {
+        pou: "P".to_string(),
+        pou_kind: PouKind::Program,
+        target: ChartTarget::Blank,
+        description: String::new(),
+        declarations: String::new(),
+        body: None,
+        body_language: Language::St,
+        actions: Vec::new(),
+        attributes,
+        ..(**chart).clone()
+    };
+    let written = write(&doc);
+    let mut problems = Vec::new();
+    for p in written.problems {
+        let typed = chart
+            .elements
+            .iter()
+            .find(|e| e.id == p.element)
+            .and_then(|e| e.condition.as_deref())
+            .is_some_and(|c| !c.trim().is_empty());
+        let (code, message) = if p.code == "SFC0217" && typed {
+            let name = chart.elements.iter().find(|e| e.id == p.element).map(|e| e.name.clone()).unwrap_or_default();
+            let which = if name.is_empty() { "a transition".to_string() } else { format!("`{name}`") };
+            ("SFC0101", format!("action `{}`: the condition of {which} does not parse", a.name))
+        } else {
+            (p.code, format!("action `{}`: {}", a.name, p.message))
+        };
+        problems.push(Problem { code, message, ..p });
+    }
+    // Lines before the header are the chart's attributes; those between it and the end, its
+    // elements.
+    let mut attrs = Vec::new();
+    let mut body = Vec::new();
+    let mut in_body = false;
+    for l in written.text.lines() {
+        if !in_body {
+            if l.starts_with("PROGRAM ") {
+                in_body = true;
+            } else if let Some(x) = attribute_of_line(l) {
+                let skip = ["sfc.target", "sfc.description", "sfc.dialect"];
+                if !skip.iter().any(|n| x.name.eq_ignore_ascii_case(n)) {
+                    attrs.push(x);
+                }
+            }
+        } else if l != "END_PROGRAM" {
+            body.push(l);
+        }
+    }
+    let mut flat = ActionDef {
+        name: a.name.clone(),
+        language: Language::St,
+        body: crate::region::dedent(&body.join("\n")),
+        description: a.description.clone(),
+        attributes: attrs,
+        comments: a.comments.clone(),
+        chart: None,
+    };
+    // The body as it reads back, so that the text alone says it.
+    let read = probe.action(&flat).1;
+    if !read.body.is_empty() {
+        flat.body = read.body;
+    }
+    (flat, problems)
+}
+
+/// `{attribute 'name' := 'value'}` or `{attribute 'name'}` as written by [`line`].
+fn attribute_of_line(l: &str) -> Option<OtherAttribute> {
+    let rest = l.trim().strip_prefix("{attribute '")?.strip_suffix('}')?;
+    let (name, value) = rest.split_once('\'')?;
+    let value = value.trim();
+    let value = if value.is_empty() {
+        None
+    } else {
+        Some(value.strip_prefix(":=")?.trim().strip_prefix('\'')?.strip_suffix('\'')?.to_string())
+    };
+    Some(OtherAttribute { name: name.to_string(), value })
+}
+
 /// Writes a document; see [`crate::to_text`].
 pub fn write(doc: &EditorDoc) -> Written {
+    if doc.body.is_some() {
+        return write_text_pou(doc);
+    }
     let mut probe = Probe::for_attributes(&doc.attributes);
     let d = graph::derive(doc, &mut probe);
     let mut problems = d.problems.clone();
@@ -137,43 +232,7 @@ pub fn write(doc: &EditorDoc) -> Written {
     }
 
     // Actions.
-    let mut actions_text = Vec::new();
-    let mut acts = Vec::new();
-    let mut plain_acts = true;
-    let mut action_names: HashMap<String, ()> = HashMap::new();
-    for a in &doc.actions {
-        let key = a.name.to_ascii_uppercase();
-        if !probe.is_name(&a.name) || action_names.contains_key(&key) {
-            let why = if action_names.contains_key(&key) { "another action has this name" } else { "no valid name" };
-            problems.push(problem(
-                "SFC0206",
-                &a.name,
-                format!("action `{}`: {why}; it is kept in the layout only", a.name),
-            ));
-            acts.push(ActEntry { x: Some(a.clone()), ..ActEntry::default() });
-            plain_acts = false;
-            continue;
-        }
-        action_names.insert(key, ());
-        let (text, read) = probe.action(a);
-        let mut entry = ActEntry { n: Some(a.name.clone()), ..ActEntry::default() };
-        if read != *a {
-            if read.body.is_empty() && !a.body.trim().is_empty() {
-                problems.push(problem("SFC0101", &a.name, format!("the body of action `{}` does not parse", a.name)));
-            }
-            entry.o = Some(a.clone());
-            plain_acts = false;
-        }
-        let mut t = String::new();
-        comment_lines(&a.comments, &mut probe, &mut t);
-        if !a.description.is_empty() {
-            t.push_str(&line(IND, "sfc.description", &escape(&a.description)));
-        }
-        t.push_str(&pragma::write_others(IND, &a.attributes, pragma::ACTION));
-        t.push_str(&text);
-        actions_text.push(t);
-        acts.push(entry);
-    }
+    let (actions_text, acts, plain_acts) = write_actions(doc, &mut probe, &mut problems);
     if !plain_acts {
         car.acts = Some(acts);
     }
@@ -466,4 +525,119 @@ fn other_entry(
     }
     let (st, sr) = step_ref(d, e);
     Entry { x: Some(bare(e)), st, sr, ..Entry::default() }
+}
+
+/// The actions of a document as text (each with its comments and attributes), their entries of
+/// the layout attribute, and whether the text alone says them all.
+fn write_actions(
+    doc: &EditorDoc,
+    probe: &mut Probe,
+    problems: &mut Vec<Problem>,
+) -> (Vec<String>, Vec<ActEntry>, bool) {
+    let mut actions_text = Vec::new();
+    let mut acts = Vec::new();
+    let mut plain_acts = true;
+    let mut action_names: HashMap<String, ()> = HashMap::new();
+    let flat: Vec<ActionDef> = doc
+        .actions
+        .iter()
+        .map(|a| {
+            let (f, p) = flat_action(a, &doc.attributes, probe);
+            problems.extend(p);
+            f
+        })
+        .collect();
+    for a in &flat {
+        let key = a.name.to_ascii_uppercase();
+        if !probe.is_name(&a.name) || action_names.contains_key(&key) {
+            let why = if action_names.contains_key(&key) { "another action has this name" } else { "no valid name" };
+            problems.push(problem(
+                "SFC0206",
+                &a.name,
+                format!("action `{}`: {why}; it is kept in the layout only", a.name),
+            ));
+            acts.push(ActEntry { x: Some(a.clone()), ..ActEntry::default() });
+            plain_acts = false;
+            continue;
+        }
+        action_names.insert(key, ());
+        let (text, read) = probe.action(a);
+        let mut entry = ActEntry { n: Some(a.name.clone()), ..ActEntry::default() };
+        if read != *a {
+            if read.body.is_empty() && !a.body.trim().is_empty() {
+                problems.push(problem("SFC0101", &a.name, format!("the body of action `{}` does not parse", a.name)));
+            }
+            entry.o = Some(a.clone());
+            plain_acts = false;
+        }
+        let mut t = String::new();
+        comment_lines(&a.comments, probe, &mut t);
+        if !a.description.is_empty() {
+            t.push_str(&line(IND, "sfc.description", &escape(&a.description)));
+        }
+        t.push_str(&pragma::write_others(IND, &a.attributes, pragma::ACTION));
+        t.push_str(&text);
+        actions_text.push(t);
+        acts.push(entry);
+    }
+    (actions_text, acts, plain_acts)
+}
+
+/// A POU whose body is ST or IL ([`EditorDoc::body`]): its attributes, header, declarations,
+/// body and actions, without the chart's attributes (a POU in ST is no chart).
+fn write_text_pou(doc: &EditorDoc) -> Written {
+    let mut probe = Probe::for_attributes(&doc.attributes);
+    let mut problems = Vec::new();
+    if !doc.elements.is_empty() {
+        problems.push(problem(
+            "SFC0101",
+            "",
+            format!("the body of `{}` is text, not a chart: its blocks cannot be written", doc.pou),
+        ));
+    }
+    let pou_name = if probe.is_name(&doc.pou) {
+        doc.pou.clone()
+    } else {
+        problems.push(problem("SFC0101", "", format!("`{}` is not a valid POU name", doc.pou)));
+        "Unnamed".to_string()
+    };
+    let (decl_text, decl_read) = probe.declarations(&doc.declarations);
+    if decl_read != doc.declarations && decl_text.is_empty() && !doc.declarations.trim().is_empty() {
+        problems.push(problem("SFC0101", "", "the declarations do not parse"));
+    }
+    let (actions_text, acts, _) = write_actions(doc, &mut probe, &mut problems);
+    for a in acts.iter().filter_map(|e| e.x.as_ref()) {
+        problems.push(problem("SFC0101", &a.name, format!("action `{}` cannot be written", a.name)));
+    }
+    let mut out = String::new();
+    if !doc.description.is_empty() {
+        out.push_str(&line("", "sfc.description", &escape(&doc.description)));
+    }
+    out.push_str(&pragma::write_others("", &doc.attributes, pragma::POU));
+    let kind = match doc.pou_kind {
+        PouKind::Program => "PROGRAM",
+        PouKind::FunctionBlock => "FUNCTION_BLOCK",
+    };
+    out.push_str(&format!("{kind} {pou_name}\n"));
+    out.push_str(&decl_text);
+    let body = doc.body.as_deref().unwrap_or("");
+    let mut blocks = Vec::new();
+    if !body.trim().is_empty() {
+        blocks.push(format!("{}\n", crate::region::indent(body.trim_end(), IND)));
+    }
+    blocks.extend(actions_text);
+    let mut trailing = String::new();
+    comment_lines(&doc.trailing_comments, &mut probe, &mut trailing);
+    if !trailing.is_empty() {
+        blocks.push(trailing);
+    }
+    if !blocks.is_empty() && !decl_text.is_empty() {
+        out.push('\n');
+    }
+    out.push_str(&blocks.join("\n"));
+    out.push_str(match doc.pou_kind {
+        PouKind::Program => "END_PROGRAM\n",
+        PouKind::FunctionBlock => "END_FUNCTION_BLOCK\n",
+    });
+    Written { text: out, problems }
 }

@@ -275,6 +275,8 @@ fn document() -> impl Strategy<Value = EditorDoc> {
                 target: sfc_doc::ChartTarget::Blank,
                 description: String::new(),
                 declarations: decl.to_string(),
+                body: None,
+                body_language: Language::St,
                 actions: actions
                     .into_iter()
                     .map(|(n, b)| sfc_doc::ActionDef {
@@ -284,6 +286,7 @@ fn document() -> impl Strategy<Value = EditorDoc> {
                         description: String::new(),
                         attributes: others(b.len() as i32),
                         comments: comments(b.len() as i32),
+                        chart: None,
                     })
                     .collect(),
                 attributes: others(elements.len() as i32 + 1),

@@ -65,6 +65,8 @@ fn diff(a: &EditorDoc, b: &EditorDoc) -> String {
 fn round_trip(name: &str, text: &str, same_structure: bool, canonical: bool) -> Result<usize, String> {
     let opened = open(0, name, text);
     let original = structure(text);
+    // A POU in ST holding actions written in SFC opens too; `structure` lists the charts.
+    let mut chart_index = 0;
     for (k, d) in opened.charts.iter().enumerate() {
         let w = to_text(d);
         let (_, diags) = sfc_syntax::parse(0, &w.text);
@@ -87,11 +89,18 @@ fn round_trip(name: &str, text: &str, same_structure: bool, canonical: bool) -> 
         if w2.text != w.text {
             return Err(format!("{name} chart {k}: to_text is not a fixed point\n{}\n----\n{}", w.text, w2.text));
         }
-        if same_structure {
+        if same_structure && d.body.is_none() {
             let saved = structure(&w.text);
-            if saved.first() != original.get(k) {
-                return Err(format!("{name} chart {k}: FROM/TO changed\n{:?}\n{:?}", original.get(k), saved.first()));
+            if saved.first() != original.get(chart_index) {
+                return Err(format!(
+                    "{name} chart {k}: FROM/TO changed\n{:?}\n{:?}",
+                    original.get(chart_index),
+                    saved.first()
+                ));
             }
+        }
+        if d.body.is_none() {
+            chart_index += 1;
         }
     }
     Ok(opened.charts.len())

@@ -351,3 +351,44 @@ async fn a_utf16_file_is_saved_as_utf16() {
     assert!(decoded.text.contains("Ventil öffnen"), "{}", decoded.text);
     assert_eq!(written, utf16(&decoded.text), "every character written as UTF-16");
 }
+
+/// A TwinCAT export whose function block is written in ST and keeps its sequence in an action
+/// written in SFC: it opens with its body as text and the action's chart, and a condition
+/// changed in that chart is saved into the PLCopen file, which reads back with it.
+#[tokio::test]
+async fn an_action_chart_of_a_block_in_st_is_saved_into_a_plcopen_file() {
+    let d = scratch("sfc_action_xml");
+    let corpus = Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../../tests/corpus/real/twincat/sorting_station_program_access.xml");
+    let path = d.join("sorting.xml");
+    std::fs::copy(&corpus, &path).unwrap();
+    let s = state(&[&d], None);
+    let opened = open_ok(&s, &path).await;
+    let mut block = chart(&opened, "SortingStation");
+    assert!(block["body"].as_str().unwrap().contains("ACT_Sequence(SFCReset := MAIN.Restart);"), "{block}");
+    assert_eq!(block["elements"], json!([]));
+    let k = block["actions"].as_array().unwrap().iter().position(|a| a["name"] == "ACT_Sequence").unwrap();
+    let sequence = &mut block["actions"][k]["chart"];
+    assert!(sequence["elements"].as_array().unwrap().iter().any(|e| e["name"] == "Init__Sorting"), "{sequence}");
+    let t = sequence["elements"]
+        .as_array_mut()
+        .unwrap()
+        .iter_mut()
+        .find(|e| e["condition"] == "Sort__Light.t > T#500ms")
+        .expect("the transition");
+    t["condition"] = json!("Sort__Light.t > T#600ms");
+    let a = save(&s, &path, "xml", &block, &opened["hash"]).await;
+    assert_eq!(a.status, 200, "{}", a.text);
+    let again = open_ok(&s, &path).await;
+    let block = chart(&again, "SortingStation");
+    let sequence = &block["actions"][k]["chart"];
+    assert!(
+        sequence["elements"].as_array().unwrap().iter().any(|e| e["condition"] == "Sort__Light.t > T#600ms"),
+        "{sequence}"
+    );
+    assert!(
+        !again["diagnostics"].as_array().unwrap().iter().any(|d| d["severity"] == "error"),
+        "{}",
+        again["diagnostics"]
+    );
+}

@@ -9,6 +9,7 @@ import { ApiError, type Api } from './api';
 import { targetsFor } from './buildResult';
 import { chartBuild, chartKind, kindFields, withBuild, type ChartKind } from './chartKind';
 import { witnessSituations } from './chart';
+import { actionChart, assemble, blocksNamed, sfcActions, viewKey } from './actionCharts';
 import { AboutDialog, CloseDialog, ConflictDialog, NewDialog, OpenDialog, SaveAsDialog, ShortcutsDialog, type NewChartRequest } from './dialogs';
 import { ErrorList, type WitnessView } from './ErrorList';
 import { rememberFile, Welcome } from './Welcome';
@@ -94,19 +95,45 @@ export function App({ api, createCanvas }: AppProps) {
 
   const host = session?.mode === 'host' ? session.host ?? null : null;
   const tab = store.active();
-  const canvas = tab ? canvases.current.get(tab.id) : undefined;
+  // The canvas of the chart the tab shows: the POU's, or that of one of its actions written in SFC.
+  const canvas = tab ? canvases.current.get(viewKey(tab.id, tab.view)) : undefined;
+  const actionView = tab?.view ?? null;
+
+  /** The POU's document of a tab with the charts of its actions as their canvases hold them
+   *  (what save, check, build and prove send). `draft`: the shown action chart with a pending edit. */
+  function docOf(tabId: string, draft?: EditorDoc): EditorDoc | null {
+    const x = store.get(tabId);
+    const pouCanvas = canvases.current.get(tabId);
+    if (!x || !pouCanvas) return null;
+    const charts = new Map<string, EditorDoc>();
+    for (const v of x.views) {
+      const c = canvases.current.get(viewKey(tabId, v));
+      if (c) charts.set(v, draft && v === x.view ? draft : c.getDoc());
+    }
+    const pouDoc = draft && x.view === null ? draft : pouCanvas.getDoc();
+    return assemble(pouDoc, charts);
+  }
+
+  /** Every canvas of a tab: the POU's and its open action charts'. */
+  function canvasesOf(x: TabState): CanvasHandle[] {
+    return [null, ...x.views].map((v) => canvases.current.get(viewKey(x.id, v))).filter((c): c is CanvasHandle => !!c);
+  }
+
   // Monitor mode (web/src/monitor): its menu, toolbar button and view over the workspace.
   const monitor = useMonitor({
     createCanvas,
-    current: () => (canvas && tab ? { doc: canvas.getDoc(), title: tabTitle(tab).replace(/\*$/, '') } : null),
+    current: () => {
+      const d = tab ? docOf(tab.id) : null;
+      return d && tab ? { doc: d, title: tabTitle(tab).replace(/\*$/, '') } : null;
+    },
     hasChart: !!canvas && !!tab,
     // A mechanism of another chart: its open tab becomes the one shown (and monitored).
     chartOf: (pou) => {
       const x = store.tabs.find((y) => y.pou.toUpperCase() === pou.toUpperCase());
-      const c = x ? canvases.current.get(x.id) : undefined;
-      if (!x || !c) return null;
+      const d = x ? docOf(x.id) : null;
+      if (!x || !d) return null;
       store.activate(x.id);
-      return { doc: c.getDoc(), title: tabTitle(x).replace(/\*$/, '') };
+      return { doc: d, title: tabTitle(x).replace(/\*$/, '') };
     },
   });
 
@@ -152,11 +179,16 @@ export function App({ api, createCanvas }: AppProps) {
     setWitness(null);
   }, [tab?.id, canvas]);
 
-  // Every error and warning block framed.
+  // Every error and warning block framed. In an action's chart the blocks are found by the
+  // names the diagnostics give (the server locates blocks in the POU's chart only).
   const diagnostics = tab?.diagnostics ?? [];
+  const blocksOf = (d: Diag): string[] => {
+    if (!actionView || !canvas) return d.elementIds;
+    return blocksNamed(canvas.getDoc(), d.element);
+  };
   useEffect(() => {
     if (!canvas) return;
-    const ids = (sev: Diag['severity']) => [...new Set(diagnostics.filter((d) => d.severity === sev).flatMap((d) => d.elementIds))];
+    const ids = (sev: Diag['severity']) => [...new Set(diagnostics.filter((d) => d.severity === sev).flatMap(blocksOf))];
     canvas.highlight('error', ids('error'));
     canvas.highlight('warning', ids('warning'));
   }, [canvas, diagnostics]);
@@ -165,9 +197,10 @@ export function App({ api, createCanvas }: AppProps) {
   useEffect(() => {
     if (!canvas) return;
     const d = selectedDiag === null ? undefined : diagnostics[selectedDiag];
-    if (highlightOn && d && d.elementIds.length > 0) {
-      canvas.highlight('selected-diagnostic', d.elementIds);
-      canvas.reveal(d.elementIds[0]);
+    const ids = d ? blocksOf(d) : [];
+    if (highlightOn && d && ids.length > 0) {
+      canvas.highlight('selected-diagnostic', ids);
+      canvas.reveal(ids[0]);
     } else canvas.clearHighlights('selected-diagnostic');
   }, [canvas, selectedDiag, highlightOn, diagnostics]);
 
@@ -195,24 +228,37 @@ export function App({ api, createCanvas }: AppProps) {
     return created;
   }
 
-  function attachCanvas(id: string, container: HTMLElement): () => void {
-    const c = createCanvas(container, { t: (key, opts) => t(key, opts) });
-    canvases.current.set(id, c);
-    containers.current.set(id, container);
-    const doc = pending.current.get(id);
-    pending.current.delete(id);
+  /** Whether the canvas `key` is the one the active tab shows. */
+  function shown(key: string): boolean {
+    const x = store.active();
+    return !!x && viewKey(x.id, x.view) === key;
+  }
+
+  /** A canvas for a tab's view (`key`: see viewKey): the POU's chart, or an action's. */
+  function attachCanvas(key: string, container: HTMLElement): () => void {
+    const [id] = key.split('::');
+    const isPou = key === id;
+    const c = createCanvas(container, { t: (k, opts) => t(k, opts) });
+    canvases.current.set(key, c);
+    containers.current.set(key, container);
+    const doc = pending.current.get(key);
+    pending.current.delete(key);
     if (doc) c.load(doc);
     const offs = [
       c.on('change', () => {
-        const d = c.getDoc();
-        store.update(id, { canvasDirty: c.isDirty(), outcome: 'none', pou: d.pou, ...kindOfTab(d) });
+        const x = store.get(id);
+        const dirty = x ? canvasesOf(x).some((o) => o.isDirty()) : c.isDirty();
+        if (isPou) {
+          const d = c.getDoc();
+          store.update(id, { canvasDirty: dirty, outcome: 'none', pou: d.pou, ...kindOfTab(d) });
+        } else store.update(id, { canvasDirty: dirty, outcome: 'none' });
         docChanged();
       }),
       c.on('selection', (ids) => {
-        if (store.activeId === id) setSelection(ids);
+        if (shown(key)) setSelection(ids);
       }),
       c.on('zoom', (level) => {
-        if (store.activeId === id) setZoom(level);
+        if (shown(key)) setZoom(level);
       }),
       c.on('properties', () => setPanels((p) => ({ ...p, properties: true }))),
     ];
@@ -220,9 +266,46 @@ export function App({ api, createCanvas }: AppProps) {
     return () => {
       offs.forEach((off) => off());
       c.destroy();
-      canvases.current.delete(id);
-      containers.current.delete(id);
+      canvases.current.delete(key);
+      containers.current.delete(key);
     };
+  }
+
+  /** Shows the chart of action `action` of a tab (opening its canvas the first time), or the
+   *  POU's own with null. */
+  function showView(x: TabState, action: string | null): void {
+    if (action === null) {
+      store.update(x.id, { view: null });
+      return;
+    }
+    const known = x.views.find((v) => v.toLowerCase() === action.toLowerCase());
+    if (known) {
+      store.update(x.id, { view: known });
+      return;
+    }
+    const pouDoc = canvases.current.get(x.id)?.getDoc();
+    const chart = pouDoc ? actionChart(pouDoc, action) : undefined;
+    if (!pouDoc || !chart) {
+      toasts.show('error', t('views.noChart', { action }));
+      return;
+    }
+    pending.current.set(viewKey(x.id, action), chart);
+    store.update(x.id, { views: [...x.views, action], view: action });
+  }
+
+  /** Closes the canvas of an action's chart; the chart as edited goes back into the POU's
+   *  document (one undoable change of the POU's chart when it differs). */
+  function closeView(x: TabState, action: string): void {
+    const c = canvases.current.get(viewKey(x.id, action));
+    const pc = canvases.current.get(x.id);
+    if (c && pc) {
+      const d = pc.getDoc();
+      const back = assemble(d, new Map([[action, c.getDoc()]]));
+      if (JSON.stringify(back.actions) !== JSON.stringify(d.actions)) pc.updateDoc({ actions: back.actions });
+    }
+    store.update(x.id, { views: x.views.filter((v) => v !== action), view: x.view === action ? null : x.view });
+    const y = store.get(x.id);
+    if (y) store.update(y.id, { canvasDirty: canvasesOf(y).some((o) => o.isDirty()) });
   }
 
   async function openFile(path: string): Promise<void> {
@@ -295,7 +378,7 @@ export function App({ api, createCanvas }: AppProps) {
       if (!chosen) return false;
       ({ path, format } = chosen);
     }
-    const doc = c.getDoc();
+    const doc = docOf(x.id) ?? c.getDoc();
     const hash = path === x.path ? x.hash : store.tabs.find((o) => o.path === path)?.hash ?? null;
     // Into its own file, the POU replaced is the one there, whatever the chart is called now.
     const replacing = path === x.path && x.filePou !== null ? { pou: x.filePou } : {};
@@ -313,7 +396,7 @@ export function App({ api, createCanvas }: AppProps) {
         return false;
       }
     }
-    c.markSaved();
+    for (const o of canvasesOf(x)) o.markSaved();
     store.update(x.id, { path: result.path, format, hash: result.hash, unsaved: false, canvasDirty: false, pou: doc.pou, filePou: doc.pou, diagnostics: result.diagnostics });
     // Other charts of the same file now compare against the new contents.
     for (const o of store.tabs) if (o.id !== x.id && o.path === result.path) store.update(o.id, { hash: result.hash });
@@ -353,7 +436,7 @@ export function App({ api, createCanvas }: AppProps) {
   async function runBuild(mode: BuildMode = buildMode): Promise<void> {
     if (!tab || !canvas || busy) return;
     (document.activeElement as HTMLElement | null)?.blur?.();
-    const doc = canvas.getDoc();
+    const doc = docOf(tab.id) ?? canvas.getDoc();
     const id = tab.id;
     setBusy(true);
     setWitness(null);
@@ -386,7 +469,7 @@ export function App({ api, createCanvas }: AppProps) {
       toasts.show('error', t('prove.saveFirst'));
       return;
     }
-    const doc = canvas.getDoc();
+    const doc = docOf(tab.id) ?? canvas.getDoc();
     const id = tab.id;
     const path = tab.path;
     setBusy(true);
@@ -422,9 +505,10 @@ export function App({ api, createCanvas }: AppProps) {
     }
   }
 
-  function liveCheck(doc: EditorDoc): void {
+  function liveCheck(draft: EditorDoc): void {
     const id = tab?.id;
     if (!id) return;
+    const doc = docOf(id, draft) ?? draft;
     api.check(doc, false).then(
       (diags) => store.update(id, { diagnostics: diags }),
       () => undefined,
@@ -433,7 +517,7 @@ export function App({ api, createCanvas }: AppProps) {
 
   /** Sends a key to the canvas' own keyboard handling (copy, paste, delete). */
   function canvasKey(key: string, ctrl = false): void {
-    const container = tab ? containers.current.get(tab.id) : undefined;
+    const container = tab ? containers.current.get(viewKey(tab.id, tab.view)) : undefined;
     // diagram-js listens on its canvas <svg> (not on the palette's icons).
     const target = container?.querySelector('.djs-container > svg') ?? container;
     target?.dispatchEvent(new KeyboardEvent('keydown', { key, ctrlKey: ctrl, bubbles: true, cancelable: true }));
@@ -445,7 +529,8 @@ export function App({ api, createCanvas }: AppProps) {
     canvas.select([...d.elements.map((e) => e.id), ...d.connections.map((c) => c.id)]);
   };
   const zoomBy = (f: number) => canvas?.zoom(Math.min(4, Math.max(0.2, canvas.getZoom() * f)));
-  const exportSvg = () => canvas && tab && download(`${tab.pou}.svg`, canvas.exportSvg(), 'image/svg+xml');
+  // An action's chart is exported as `POU.Action.svg`.
+  const exportSvg = () => canvas && tab && download(`${tab.pou}${tab.view ? `.${tab.view}` : ''}.svg`, canvas.exportSvg(), 'image/svg+xml');
   const print = () => canvas && tab && setDialog({ kind: 'print', svg: canvas.exportSvg(), doc: canvas.getDoc(), path: tab.path });
   const mdi = session !== null && !host;
   const hasChart = !!canvas;
@@ -561,6 +646,10 @@ export function App({ api, createCanvas }: AppProps) {
   // 500-step chart costs about 30 ms, and the shell renders on every store update).
   const revision = canvas?.revision();
   const doc = useMemo(() => canvas?.getDoc(), [canvas, revision]);
+  // The POU's own document (its actions, and whether its body is text), whatever the tab shows.
+  const pouCanvas = tab ? canvases.current.get(tab.id) : undefined;
+  const pouRevision = pouCanvas?.revision();
+  const pouDoc = useMemo(() => pouCanvas?.getDoc(), [pouCanvas, pouRevision]);
 
   return (
     <>
@@ -652,10 +741,62 @@ export function App({ api, createCanvas }: AppProps) {
       <div class="workspace">
         {monitor.overlay}
         <div class="main-column">
-          <div class={`canvas-area ${panels.tools ? '' : 'hide-palette'}`}>
-            {store.tabs.map((x) => (
-              <CanvasPane key={x.id} id={x.id} active={x.id === store.activeId} attach={attachCanvas} />
-            ))}
+          {tab && pouDoc && (sfcActions(pouDoc).length > 0 || tab.views.length > 0) && (
+            <div class="chart-views no-print" role="tablist" aria-label={t('views.label')}>
+              <button role="tab" aria-selected={tab.view === null} class={`chart-view ${tab.view === null ? 'active' : ''}`} title={t('views.pouHint')} onClick={() => showView(tab, null)}>
+                <span class="chart-view-kind">{pouDoc.body !== undefined ? pouDoc.bodyLanguage ?? 'ST' : 'SFC'}</span>
+                {pouDoc.pou}
+              </button>
+              {sfcActions(pouDoc).map((a) => (
+                <button
+                  key={a.name}
+                  role="tab"
+                  data-action={a.name}
+                  aria-selected={tab.view?.toLowerCase() === a.name.toLowerCase()}
+                  class={`chart-view ${tab.view?.toLowerCase() === a.name.toLowerCase() ? 'active' : ''}`}
+                  title={t('views.actionHint', { action: a.name })}
+                  onClick={() => showView(tab, a.name)}
+                >
+                  <span class="chart-view-kind">SFC</span>
+                  {pouDoc.pou}.{a.name}
+                  {tab.views.some((v) => v.toLowerCase() === a.name.toLowerCase()) && (
+                    <span
+                      class="chart-view-close"
+                      role="button"
+                      title={t('views.close', { action: a.name })}
+                      onClick={(e) => {
+                        e.stopPropagation();
+                        closeView(tab, tab.views.find((v) => v.toLowerCase() === a.name.toLowerCase())!);
+                      }}
+                    >
+                      ×
+                    </span>
+                  )}
+                </button>
+              ))}
+            </div>
+          )}
+          <div class={`canvas-area ${panels.tools && !(tab && tab.view === null && pouDoc?.body !== undefined) ? '' : 'hide-palette'}`}>
+            {store.tabs.flatMap((x) =>
+              [null, ...x.views].map((v) => (
+                <CanvasPane key={viewKey(x.id, v)} id={viewKey(x.id, v)} active={x.id === store.activeId && (x.view ?? null) === v} attach={attachCanvas} />
+              )),
+            )}
+            {tab && tab.view === null && pouDoc?.body !== undefined && (
+              <div class="text-body-note" role="note">
+                <p>{t('views.textBody', { pou: pouDoc.pou, language: pouDoc.bodyLanguage ?? 'ST' })}</p>
+                {sfcActions(pouDoc).length > 0 && (
+                  <p>
+                    {t('views.openAction')}{' '}
+                    {sfcActions(pouDoc).map((a) => (
+                      <button key={a.name} class="button small" onClick={() => showView(tab, a.name)}>
+                        {a.name}
+                      </button>
+                    ))}
+                  </p>
+                )}
+              </div>
+            )}
             {tab && tab.outcome !== 'none' && (
               <div class={`outcome ${tab.outcome}`} role="status">
                 {t(`outcome.${tab.outcome}`)}
@@ -727,7 +868,18 @@ export function App({ api, createCanvas }: AppProps) {
             </div>
             <div class="panel-body">
               {canvas && doc ? (
-                <PropertiesPanel doc={doc} selection={selection} canvas={canvas} diagnostics={diagnostics} onDraft={liveCheck} targetFixed={!!host} />
+                <PropertiesPanel
+                  doc={doc}
+                  selection={selection}
+                  canvas={canvas}
+                  diagnostics={diagnostics}
+                  onDraft={liveCheck}
+                  targetFixed={!!host}
+                  action={actionView}
+                  pouActions={pouDoc?.actions}
+                  openViews={tab?.views ?? []}
+                  onOpenAction={(name) => tab && showView(tab, name)}
+                />
               ) : (
                 <div class="empty">{t('props.noChart')}</div>
               )}

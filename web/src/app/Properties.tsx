@@ -7,6 +7,7 @@ import type { CanvasHandle } from '../diagram/types';
 import type { ActionDef, Association, Connection, EditorDoc, Element, Language } from '../doc';
 import { t, diagMessage } from '../i18n';
 import { freshName, isIecName, stepNames } from './chart';
+import { isStepActionName, stepActionsOf, withStepAction, type StepActionKind } from './actionCharts';
 import { CHART_KINDS, chartKind, kindFields, type ChartKind } from './chartKind';
 import { CodeEditor } from './CodeEditor';
 import { parseDuration, secondsToLiteral } from './duration';
@@ -49,6 +50,19 @@ interface PanelProps {
   onDraft: (doc: EditorDoc) => void;
   /** Host mode: the chart's target is fixed. */
   targetFixed: boolean;
+  /** The chart shown is that of this action written in SFC (null: the POU's). */
+  action?: string | null;
+  /** The POU's actions (an action's chart names them; its own document lists none). */
+  pouActions?: ActionDef[];
+  /** The actions whose charts are open in the tab (their names cannot change meanwhile). */
+  openViews?: string[];
+  /** Shows the chart of an action written in SFC. */
+  onOpenAction?: (name: string) => void;
+}
+
+/** The actions the blocks of the shown chart may name: the POU's. */
+function actionsFor(props: PanelProps): ActionDef[] {
+  return props.action ? props.pouActions ?? [] : props.doc.actions;
 }
 
 function Field(props: { label: string; children: ComponentChildren; error?: string; for?: string; hint?: string }) {
@@ -208,7 +222,7 @@ function ElementProperties(props: PanelProps & { element: Element }) {
   const isTransition = e.kind === 'transition';
   const named = isStep || isTransition;
   const otherNames = new Set(
-    [...doc.elements.filter((x) => x.id !== e.id && x.name).map((x) => x.name!), ...doc.actions.map((a) => a.name)].map((n) => n.toLowerCase()),
+    [...doc.elements.filter((x) => x.id !== e.id && x.name).map((x) => x.name!), ...actionsFor(props).map((a) => a.name)].map((n) => n.toLowerCase()),
   );
   const nameError = (v: string) => {
     if (v === '' && isTransition) return undefined;
@@ -283,6 +297,8 @@ function ElementProperties(props: PanelProps & { element: Element }) {
         </Section>
       )}
 
+      {isStep && <StepActions step={e} actions={actionsFor(props)} onCommit={(stepActions) => set({ stepActions })} />}
+
       {isTransition && (
         <Section title={t('props.condition')}>
           <Field label={t('props.language')} for="p-lang">
@@ -351,7 +367,7 @@ function ElementProperties(props: PanelProps & { element: Element }) {
       {(actionBlock || isStep) && (
         <Section title={owner?.name ? t('props.actionsOf', { step: owner.name }) : t('props.associations')}>
           {actionBlock ? (
-            <AssociationTable doc={doc} block={actionBlock} canvas={canvas} />
+            <AssociationTable doc={doc} actions={actionsFor(props)} block={actionBlock} canvas={canvas} />
           ) : (
             <div class="muted small">{t('props.noActionBlock')}</div>
           )}
@@ -416,7 +432,38 @@ function DescriptionInput(props: { id?: string; value: string; onCommit: (v: str
   );
 }
 
-function AssociationTable(props: { doc: EditorDoc; block: Element; canvas: CanvasHandle }) {
+/** CODESYS's step actions of a step: entry, step (main) and exit action, each an action of the
+ *  POU or `instance.Action`; empty removes it. */
+function StepActions(props: { step: Element; actions: ActionDef[]; onCommit: (list: string[]) => void }) {
+  const now = stepActionsOf(props.step);
+  const listId = `step-actions-${props.step.id}`;
+  const row = (kind: StepActionKind) => (
+    <Field label={t(`props.stepAction.${kind}`)} for={`p-sa-${kind}`} hint={t(`props.stepAction.${kind}Hint`)}>
+      <TextInput
+        id={`p-sa-${kind}`}
+        list={listId}
+        value={now[kind] ?? ''}
+        placeholder={t('props.stepAction.none')}
+        validate={(v) => (isStepActionName(v) ? undefined : t('props.stepAction.invalid'))}
+        onCommit={(v) => props.onCommit(withStepAction(props.step, kind, v))}
+      />
+    </Field>
+  );
+  return (
+    <Section title={t('props.stepActions')}>
+      <datalist id={listId}>
+        {props.actions.map((a) => (
+          <option key={a.name} value={a.name} />
+        ))}
+      </datalist>
+      {row('entry')}
+      {row('main')}
+      {row('exit')}
+    </Section>
+  );
+}
+
+function AssociationTable(props: { doc: EditorDoc; actions: ActionDef[]; block: Element; canvas: CanvasHandle }) {
   const rows = props.block.associations ?? [];
   const commit = (next: Association[]) => props.canvas.updateElement(props.block.id, { associations: next });
   const change = (k: number, patch: Partial<Association>) => {
@@ -437,7 +484,7 @@ function AssociationTable(props: { doc: EditorDoc; block: Element; canvas: Canva
   return (
     <div class="assoc">
       <datalist id={listId}>
-        {props.doc.actions.map((a) => (
+        {props.actions.map((a) => (
           <option key={a.name} value={a.name} />
         ))}
       </datalist>
@@ -502,7 +549,7 @@ function AssociationTable(props: { doc: EditorDoc; block: Element; canvas: Canva
           })}
         </tbody>
       </table>
-      <button class="button small" onClick={() => commit([...rows, { qualifier: 'N', action: props.doc.actions[0]?.name ?? '' }])}>
+      <button class="button small" onClick={() => commit([...rows, { qualifier: 'N', action: props.actions[0]?.name ?? '' }])}>
         <Icon name="plus" /> {t('props.addRow')}
       </button>
     </div>
@@ -518,8 +565,40 @@ function durationProblem(value: string): string | undefined {
   return r.ok ? undefined : t(r.error);
 }
 
+/** With nothing selected in an action's chart: which action of which POU it is. */
+function ActionChartProperties(props: PanelProps) {
+  const { doc } = props;
+  const def = (props.pouActions ?? []).find((a) => a.name.toLowerCase() === props.action?.toLowerCase());
+  return (
+    <div class="properties">
+      <div class="prop-heading">
+        <span class="kind-badge">{t('props.sfcAction')}</span>
+        <span>
+          {doc.pou}.{props.action}
+        </span>
+      </div>
+      <Section title={t('props.general')}>
+        <Field label={t('props.pouName')}>
+          <span class="readonly">{doc.pou}</span>
+        </Field>
+        <Field label={t('props.action')}>
+          <span class="readonly">{props.action}</span>
+        </Field>
+        {def?.description && (
+          <Field label={t('props.description')}>
+            <span class="readonly">{def.description}</span>
+          </Field>
+        )}
+      </Section>
+      <div class="muted small">{t('props.sfcActionHint')}</div>
+    </div>
+  );
+}
+
 function ChartProperties(props: PanelProps) {
+  if (props.action) return <ActionChartProperties {...props} />;
   const { doc, canvas } = props;
+  const opened = new Set((props.openViews ?? []).map((v) => v.toLowerCase()));
   const setActions = (actions: ActionDef[]) => canvas.updateDoc({ actions });
   const rename = (k: number, name: string) => {
     const old = doc.actions[k].name;
@@ -573,6 +652,25 @@ function ChartProperties(props: PanelProps) {
           onCommit={(v) => canvas.updateDoc({ declarations: v })}
         />
       </Section>
+      {doc.body !== undefined && (
+        <Section title={t('props.body', { language: doc.bodyLanguage ?? 'ST' })}>
+          <Field label={t('props.language')} for="p-body-lang">
+            <select id="p-body-lang" value={doc.bodyLanguage ?? 'ST'} onChange={(e) => canvas.updateDoc({ bodyLanguage: e.currentTarget.value as Language })}>
+              <option value="ST">ST</option>
+              <option value="IL">IL</option>
+            </select>
+          </Field>
+          <CodeEditor
+            label={t('props.body', { language: doc.bodyLanguage ?? 'ST' })}
+            language={doc.bodyLanguage ?? 'ST'}
+            value={doc.body}
+            rows={6}
+            diagnostics={[]}
+            onDraft={(v) => props.onDraft({ ...doc, body: v })}
+            onCommit={(v) => canvas.updateDoc({ body: v })}
+          />
+        </Section>
+      )}
       <Section title={t('props.actions')}>
         {doc.actions.length === 0 && <div class="muted small">{t('props.noActions')}</div>}
         {doc.actions.map((a, k) => (
@@ -580,17 +678,39 @@ function ChartProperties(props: PanelProps) {
             <div class="action-head">
               <TextInput
                 value={a.name}
-                validate={(v) => (!isIecName(v) ? t('props.invalidName') : taken(v, k) ? t('props.nameTaken') : undefined)}
+                validate={(v) =>
+                  a.chart && opened.has(a.name.toLowerCase()) && v.toLowerCase() !== a.name.toLowerCase()
+                    ? t('props.chartOpen')
+                    : !isIecName(v)
+                      ? t('props.invalidName')
+                      : taken(v, k)
+                        ? t('props.nameTaken')
+                        : undefined
+                }
                 onCommit={(v) => rename(k, v)}
               />
-              <select aria-label={t('props.language')} value={a.language ?? 'ST'} onChange={(e) => setActions(doc.actions.map((x, i) => (i === k ? { ...x, language: e.currentTarget.value as Language } : x)))}>
-                <option value="ST">ST</option>
-                <option value="IL">IL</option>
-              </select>
-              <button class="icon-button" title={t('props.deleteAction')} onClick={() => setActions(doc.actions.filter((_, i) => i !== k))}>
+              {a.chart ? (
+                <span class="chart-view-kind" title={t('props.sfcAction')}>SFC</span>
+              ) : (
+                <select aria-label={t('props.language')} value={a.language ?? 'ST'} onChange={(e) => setActions(doc.actions.map((x, i) => (i === k ? { ...x, language: e.currentTarget.value as Language } : x)))}>
+                  <option value="ST">ST</option>
+                  <option value="IL">IL</option>
+                </select>
+              )}
+              <button
+                class="icon-button"
+                title={t('props.deleteAction')}
+                disabled={!!a.chart && opened.has(a.name.toLowerCase())}
+                onClick={() => setActions(doc.actions.filter((_, i) => i !== k))}
+              >
                 <Icon name="delete" />
               </button>
             </div>
+            {a.chart ? (
+              <button class="button small open-action-chart" data-action={a.name} onClick={() => props.onOpenAction?.(a.name)}>
+                {t('props.openChart', { name: a.name })}
+              </button>
+            ) : (
             <CodeEditor
               label={t('props.actionBody', { name: a.name })}
               language={a.language ?? 'ST'}
@@ -600,6 +720,7 @@ function ChartProperties(props: PanelProps) {
               onDraft={(v) => props.onDraft({ ...doc, actions: doc.actions.map((x, i) => (i === k ? { ...x, body: v } : x)) })}
               onCommit={(v) => setActions(doc.actions.map((x, i) => (i === k ? { ...x, body: v } : x)))}
             />
+            )}
           </div>
         ))}
         <button

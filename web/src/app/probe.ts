@@ -4,9 +4,10 @@ import type { CanvasHandle } from '../diagram/types';
 import { blockOnScreen, cursorOf, pinOnScreen, toScreen, viewOf } from '../diagram/probe';
 import type { EditorDoc, Point } from '../doc';
 import type { TabStore } from './store';
+import { viewKey } from './actionCharts';
 
 export interface SfcProbe {
-  /** The active chart's document, or null without one. */
+  /** The active chart's document (the POU's, or the action's whose chart is shown), or null without one. */
   doc(): EditorDoc | null;
   /** The document of every tab, in tab order. */
   docs(): EditorDoc[];
@@ -32,18 +33,18 @@ export interface SfcProbe {
 
 /** Installs `window.__sfc` over the app's tabs and canvases; returns the uninstaller. */
 export function installProbe(store: TabStore, canvases: Map<string, CanvasHandle>): () => void {
+  // The canvas of the active tab's view: the POU's chart or an action's (actionCharts.ts).
+  const shown = (): CanvasHandle | undefined => {
+    const tab = store.active();
+    return tab ? canvases.get(viewKey(tab.id, tab.view)) : undefined;
+  };
   const active = (): CanvasHandle => {
-    const id = store.activeId;
-    const c = id ? canvases.get(id) : undefined;
+    const c = shown();
     if (!c) throw new Error('no chart is open');
     return c;
   };
   const probe: SfcProbe = {
-    doc: () => {
-      const id = store.activeId;
-      const c = id ? canvases.get(id) : undefined;
-      return c ? c.getDoc() : null;
-    },
+    doc: () => shown()?.getDoc() ?? null,
     docs: () => store.tabs.map((x) => canvases.get(x.id)).filter((c): c is CanvasHandle => !!c).map((c) => c.getDoc()),
     tabs: () =>
       store.tabs.map((x) => ({

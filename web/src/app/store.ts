@@ -29,6 +29,11 @@ export interface TabState {
   result: { target: BuildTarget; result: BuildResult } | null;
   /** The toolbar's build target; an IEC chart's mirrors its `sfc.build` attribute. */
   buildTarget: BuildTarget;
+  /** The chart shown: null for the POU's own (or its body in ST), else the name of an action
+   *  written in SFC whose chart is open (see actionCharts.ts). */
+  view: string | null;
+  /** The actions whose charts have a canvas in this tab, in the order they were opened. */
+  views: string[];
 }
 
 export type NewTab = Pick<TabState, 'path' | 'format' | 'hash' | 'pou' | 'chartTarget'> & Partial<Pick<TabState, 'unsaved' | 'diagnostics' | 'filePou' | 'buildTarget'>>;
@@ -60,6 +65,8 @@ export class TabStore {
       outcome: 'none',
       result: null,
       buildTarget: targetsFor(init.chartTarget)[0],
+      view: null,
+      views: [],
       ...init,
     };
     this.tabs = [...this.tabs, tab];

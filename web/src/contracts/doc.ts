@@ -16,6 +16,12 @@ target: ChartTarget, description?: string,
  */
 declarations: string, 
 /**
+ * The POU's body when it is not a chart (ST statements or IL instructions, dedented): a
+ * FUNCTION_BLOCK or PROGRAM written in ST or IL that holds actions written in SFC (added to
+ * the contract by sfc-doc). Such a document has no blocks; its actions' charts are edited.
+ */
+body?: string, bodyLanguage?: Language, 
+/**
  * Named actions with their bodies, in declaration order.
  */
 actions: Array<ActionDef>, elements: Array<Element>, connections: Array<Connection>, 
@@ -50,7 +56,14 @@ attributes?: Array<OtherAttribute>,
 /**
  * The comments written before the action in the text (each whole, delimiters included).
  */
-comments?: Array<string>, };
+comments?: Array<string>, 
+/**
+ * An action written in SFC (CODESYS's SFC action): its chart as a document of its own
+ * (`pou` the POU's name, no declarations or actions of its own; its steps name the POU's
+ * actions). When present, saving writes the action's body from it (`body` is the text it
+ * wrote when opened); the attributes of the chart (its layout) travel in the chart.
+ */
+chart?: EditorDoc, };
 
 export type ElementKind = "step" | "transition" | "selectionDivergence" | "selectionConvergence" | "simultaneousDivergence" | "simultaneousConvergence" | "jump" | "text" | "actionBlock";
 

@@ -42,7 +42,7 @@ export interface CanvasHandle {
   updateElement(id: string, props: Partial<Element> & Record<string, unknown>): void;
   /** Changes document-level fields (one undoable command); `attributes` are the POU's pragmas
    *  the editor passes through, e.g. an IEC chart's `sfc.build`. */
-  updateDoc(props: Partial<Pick<EditorDoc, 'pou' | 'target' | 'description' | 'declarations' | 'actions' | 'attributes'>>): void;
+  updateDoc(props: Partial<Pick<EditorDoc, 'pou' | 'target' | 'description' | 'declarations' | 'actions' | 'attributes' | 'body' | 'bodyLanguage'>>): void;
   /** Replaces all geometry with that of `laidOut` (same ids), as one undoable command. */
   applyLayout(laidOut: EditorDoc): void;
   undo(): void;

@@ -278,6 +278,88 @@ describe('shell', () => {
   });
 });
 
+describe('actions written in SFC and step actions', () => {
+  const cycle: EditorDoc = {
+    pou: 'Press',
+    pouKind: 'functionBlock',
+    target: 'blank',
+    declarations: '',
+    actions: [],
+    elements: [
+      { id: 'step:Ready', kind: 'step', name: 'Ready', initial: true, x: 40, y: 40, w: 80, h: 40 },
+      { id: 'step:Lower', kind: 'step', name: 'Lower', x: 40, y: 160, w: 80, h: 40, stepActions: ['ENTRY_ACTION := Lower_entry'] },
+    ],
+    connections: [],
+  };
+  const press: EditorDoc = {
+    pou: 'Press',
+    pouKind: 'functionBlock',
+    target: 'blank',
+    declarations: 'VAR\nEND_VAR',
+    body: 'Cycle();',
+    actions: [
+      { name: 'Lower_entry', body: 'Down := TRUE;' },
+      { name: 'Cycle', body: 'INITIAL_STEP Ready: END_STEP', chart: cycle },
+    ],
+    elements: [],
+    connections: [],
+  };
+
+  it('opens the chart of an action from its POU, edits it with undo and saves it into the POU', async () => {
+    server.session.open = ['/w/press.st'];
+    server.files['/w/press.st'] = { path: '/w/press.st', format: 'st', charts: [press], diagnostics: [], hash: 'h1' };
+    await start();
+    // The POU's body is text: the canvas says so and Properties edits it.
+    expect(text()).toContain('The body of Press is written in ST');
+    expect(root.querySelector('.canvas-area')?.classList.contains('hide-palette')).toBe(true);
+    expect([...root.querySelectorAll('.chart-view')].map((b) => b.textContent)).toEqual(['STPress', 'SFCPress.Cycle']);
+    await click(root.querySelector('.side-panel .open-action-chart[data-action="Cycle"]')!);
+    expect(canvases.length).toBe(2);
+    const c = canvases[1];
+    expect(c.getDoc().elements.map((e) => e.name)).toEqual(['Ready', 'Lower']);
+    expect(root.querySelector('.chart-view.active')?.textContent).toContain('Press.Cycle');
+    // The step's entry action in Properties, one undoable change of the action's chart.
+    await act(async () => c.select(['step:Lower']));
+    await flush();
+    const entry = root.querySelector('#p-sa-entry') as HTMLInputElement;
+    expect(entry.value).toBe('Lower_entry');
+    await act(async () => {
+      entry.value = 'Raise_entry';
+      entry.dispatchEvent(new Event('input', { bubbles: true }));
+      entry.dispatchEvent(new Event('change', { bubbles: true }));
+    });
+    await flush();
+    expect(c.getDoc().elements[1].stepActions).toEqual(['ENTRY_ACTION := Raise_entry']);
+    const exit = root.querySelector('#p-sa-exit') as HTMLInputElement;
+    await act(async () => {
+      exit.value = 'not a name';
+      exit.dispatchEvent(new Event('input', { bubbles: true }));
+      exit.dispatchEvent(new Event('change', { bubbles: true }));
+    });
+    await flush();
+    expect(text()).toContain('An action of the POU, or instance.Action');
+    expect(c.getDoc().elements[1].stepActions).toEqual(['ENTRY_ACTION := Raise_entry']);
+    expect(root.querySelector('.tab.active .tab-title')?.textContent).toBe('press.st: Press*');
+    c.undo();
+    expect(c.getDoc().elements[1].stepActions).toEqual(['ENTRY_ACTION := Lower_entry']);
+    c.redo();
+    await flush();
+    // Saving from the action's chart sends the POU with the chart as edited.
+    await act(async () => void root.ownerDocument.defaultView!.dispatchEvent(new KeyboardEvent('keydown', { key: 's', ctrlKey: true, bubbles: true })));
+    await flush();
+    const save = server.calls.find((x) => x.url === '/api/save')?.body as { doc: EditorDoc };
+    expect(save.doc.pou).toBe('Press');
+    expect(save.doc.body).toBe('Cycle();');
+    expect(save.doc.actions[1].chart?.elements[1].stepActions).toEqual(['ENTRY_ACTION := Raise_entry']);
+    expect(root.querySelector('.tab.active .tab-title')?.textContent).toBe('press.st: Press');
+    // Back to the POU, then the chart's canvas closed: its chart goes back into the POU's document.
+    await click(root.querySelectorAll('.chart-view')[0]);
+    expect(root.querySelector('.chart-view.active')?.textContent).toBe('STPress');
+    await click(root.querySelector('.chart-view-close')!);
+    expect(canvases[0].getDoc().actions[1].chart?.elements[1].stepActions).toEqual(['ENTRY_ACTION := Raise_entry']);
+  });
+});
+
 describe('IEC 61131-3 charts', () => {
   const choose = async (select: HTMLSelectElement, value: string) => {
     await act(async () => {
