@@ -128,6 +128,22 @@ pub fn check_parsed(
     }
     let (type_diags, expr_types) = code::check_unit(tree.unit(), opts.keep_types);
     let mut unit = tree.into_owned();
+    // The names code calls (`Act();`, `inst.Act();`, `Main.Act();`): an action called so is used
+    // (by name: a call from another POU is not resolved here).
+    let mut called: rustc_hash::FxHashSet<String> = rustc_hash::FxHashSet::default();
+    for item in &unit.items {
+        if let ast::Item::Pou(p) = item {
+            sfc_syntax::visit::pou_exprs(p, &mut |e| match &e.kind {
+                ast::ExprKind::Call { callee, .. } => {
+                    called.insert(callee.key());
+                }
+                ast::ExprKind::MemberCall { member, .. } => {
+                    called.insert(member.key());
+                }
+                _ => {}
+            });
+        }
+    }
     let mut charts = Vec::new();
     let mut action_charts = Vec::new();
     for (i, item) in unit.items.iter_mut().enumerate() {
@@ -144,8 +160,9 @@ pub fn check_parsed(
         lower::check_pou_actions(pou, &mut diags);
         let mut body = std::mem::replace(&mut pou.body, ast::Body::St(Vec::new()));
         let mut inner = take_action_charts(&mut body, &mut pou.actions);
-        let mentioned: rustc_hash::FxHashSet<String> =
+        let mut mentioned: rustc_hash::FxHashSet<String> =
             inner.iter().flat_map(|(_, e)| lower::mentioned_actions(e)).collect();
+        mentioned.extend(called.iter().cloned());
         let mut main: Option<usize> = None;
         if let ast::Body::Sfc(elements) = &mut body {
             let of = lower::ChartOf { mentioned, ..Default::default() };

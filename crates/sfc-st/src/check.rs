@@ -997,6 +997,39 @@ impl<'s, 'e> Checker<'s, 'e> {
         if base_ty.is_error() {
             return Type::Error;
         }
+        // Partial access `w.%X3`, `d.%W1` (IEC 61131-3 3rd edition): a bit, byte, word or
+        // double word of a bit string or integer.
+        if let Some(rest) = member.text.strip_prefix('%') {
+            let size = match rest.chars().next().map(|c| c.to_ascii_uppercase()) {
+                Some('X') => Some((1, Type::Bool)),
+                Some('B') => Some((8, Type::Byte)),
+                Some('W') => Some((16, Type::Word)),
+                Some('D') => Some((32, Type::DWord)),
+                Some('L') => Some((64, Type::LWord)),
+                _ => None,
+            };
+            let width = base_ty.bit_width().filter(|_| base_ty.is_integer() || base_ty.is_bit());
+            let index: Option<u32> = rest.get(1..).and_then(|i| i.parse().ok());
+            return match (size, width, index) {
+                (Some((bits, ty)), Some(w), Some(i)) if bits < w && (i + 1) * bits <= w => ty,
+                (Some(_), Some(_), Some(_)) => {
+                    self.error(
+                        "SFC0315",
+                        member.span,
+                        format!("partial access `.{}` is out of range for `{base_ty}`", member.text),
+                    );
+                    Type::Error
+                }
+                _ => {
+                    self.error(
+                        "SFC0309",
+                        member.span,
+                        format!("partial access `.{}` needs a bit string or an integer wider than it, not `{base_ty}`", member.text),
+                    );
+                    Type::Error
+                }
+            };
+        }
         // Bit access `w.3`.
         if !member.text.is_empty() && member.text.bytes().all(|b| b.is_ascii_digit()) {
             let width = base_ty.bit_width().filter(|_| base_ty.is_integer() || base_ty.is_bit());

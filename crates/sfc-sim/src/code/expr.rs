@@ -326,8 +326,16 @@ impl Cx<'_, '_> {
         if pb.bit.is_some() {
             return Err(self.error(member.span, "a bit has no members"));
         }
-        if !member.text.is_empty() && member.text.bytes().all(|b| b.is_ascii_digit()) {
-            let bit: u32 = member.text.parse().unwrap_or(0);
+        // Partial access `w.%X3` is the bit `w.3`; wider parts are not simulated yet.
+        let digits = match member.text.strip_prefix("%X").or_else(|| member.text.strip_prefix("%x")) {
+            Some(d) => d,
+            None if member.text.starts_with('%') => {
+                return Err(self.error(member.span, format!("partial access `.{}` (only `%X`, a bit, is simulated)", member.text)))
+            }
+            None => member.text.as_str(),
+        };
+        if !digits.is_empty() && digits.bytes().all(|b| b.is_ascii_digit()) {
+            let bit: u32 = digits.parse().unwrap_or(0);
             let w = W::of(&pb.ty);
             return Ok(PlaceC { loc: pb.loc, ty: Type::Bool, bit: Some(bit), bit_w: w });
         }
