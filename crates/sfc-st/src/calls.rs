@@ -178,12 +178,14 @@ impl Checker<'_, '_> {
                 self.action_args(&member.text, sfc, args, span);
             }
             Some(fb) => {
+                let what = if fb.methods.is_empty() { "action" } else { "action or method" };
                 let mut d = Diagnostic::new(
                     "SFC0306",
                     member.span,
-                    format!("function block `{}` has no action `{}`", fb.name, member.text),
+                    format!("function block `{}` has no {what} `{}`", fb.name, member.text),
                 );
-                if let Some(s) = closest(&member.text, fb.actions.iter().map(String::as_str)) {
+                let known = fb.actions.iter().map(String::as_str).chain(fb.methods.iter().map(|m| m.name.as_str()));
+                if let Some(s) = closest(&member.text, known) {
                     d = d.with_note(format!("did you mean `{s}`?"));
                 } else if fb.actions.is_empty() {
                     d = d.with_note(format!("`{}` declares no actions", fb.name));

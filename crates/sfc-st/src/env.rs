@@ -873,7 +873,7 @@ impl<'a> Builder<'a> {
         if sfc {
             add_sfc_control_variables(&mut vars, pou.name.span, diags);
         }
-        PouInterface {
+        let iface = PouInterface {
             name: pou.name.text.clone(),
             kind: pou.kind,
             vars,
@@ -886,7 +886,22 @@ impl<'a> Builder<'a> {
             methods: pou.methods.iter().map(|m| self.method_sig(pou, m, diags)).collect(),
             properties: pou.properties.iter().map(|p| self.property_sig(pou, p, diags)).collect(),
             base: pou.extends.as_ref().map(|b| b.text.clone()),
+        };
+        // A method or property shares the block's namespace with its variables.
+        let names = iface.methods.iter().map(|m| (&m.name, m.span)).chain(iface.properties.iter().map(|p| (&p.name, p.span)));
+        let mut seen: HashMap<String, Span> = iface.vars.iter().filter(|v| !v.implicit).map(|v| (v.name.to_ascii_uppercase(), v.span)).collect();
+        for (name, span) in names {
+            match seen.get(&name.to_ascii_uppercase()) {
+                Some(prev) => diags.push(
+                    Diagnostic::new("SFC0206", span, format!("`{name}` is declared more than once in `{}`", iface.name))
+                        .with_label(*prev, "first declared here"),
+                ),
+                None => {
+                    seen.insert(name.to_ascii_uppercase(), span);
+                }
+            }
         }
+        iface
     }
 
     /// The variables of a method or accessor, each name declared once.
