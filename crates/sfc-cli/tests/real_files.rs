@@ -90,10 +90,11 @@ fn every_pou_of_codesys_family_files_simulates() {
     }
     eprintln!("{runs} POUs simulated; kept as written, not simulated yet: {}", kept.join(", "));
     assert!(runs >= 30, "only {runs} POUs simulated");
-    // FB_Axis and the program using it (st_dialect_enum_oop.xml), FB_Device, FB_Valve and
-    // PRG_Valves (tank_objects.xml), FB_CabinDrive and PRG_Elevator (elevator_oop.xml): object
-    // orientation is not simulated yet; and PLC_PRG of library_fb_instances.xml (a WAGO library block).
-    assert!(kept.len() <= 8, "more POUs kept as written than the OOP ones known: {kept:?}");
+    // Pointers are not simulated yet: FB_Axis and the program using it (st_dialect_enum_oop.xml),
+    // FB_CabinDrive and the program using it (elevator_oop.xml); and PLC_PRG of
+    // library_fb_instances.xml (a WAGO library block). Methods, properties and EXTENDS
+    // (tank_objects.xml, the elevator's cabin) simulate.
+    assert!(kept.len() <= 5, "more POUs kept as written than the ones known: {kept:?}");
 }
 
 /// A CODESYS project export keeps its POUs in the application's resource: they are found, and

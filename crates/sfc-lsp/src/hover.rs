@@ -198,8 +198,12 @@ pub fn describe(ix: &FileIndex, s: &Symbol) -> String {
             out
         }
         SymbolKind::Pou(k) => format!("**{} {}**", k.keyword(), s.name),
-        SymbolKind::Method => format!("**method {}**\n\nnot type-checked or simulated yet", s.name),
-        SymbolKind::Property => format!("**property {}**\n\nnot type-checked or simulated yet", s.name),
+        SymbolKind::Method => {
+            format!("**method {0}**\n\nruns on an instance: `inst.{0}(…)`, or `{0}(…)` in its block", s.name)
+        }
+        SymbolKind::Property => {
+            format!("**property {0}**\n\nread through its GET (`inst.{0}`), written through its SET", s.name)
+        }
         SymbolKind::Interface => format!("**interface {}**", s.name),
         SymbolKind::Type => format!("**type {}**", s.name),
         SymbolKind::EnumValue => format!("**enumerated value {}**", s.name),
