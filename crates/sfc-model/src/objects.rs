@@ -15,7 +15,7 @@ use sfc_syntax::lexer::{lex, TokenKind};
 pub(crate) fn any(unit: &ast::SourceUnit, text: &str) -> bool {
     unit.items.iter().any(|i| match i {
         Item::Interface(_) => true,
-        Item::Pou(p) => first_construct(p, text).is_some(),
+        Item::Pou(p) => p.extends.is_some() || first_construct(p, text).is_some(),
         _ => false,
     })
 }
@@ -32,13 +32,29 @@ pub(crate) fn keep_objects(unit: &mut ast::SourceUnit, text: &str, diags: &mut V
             }
         }
     }
+    // A block extending one the file does not analyse (kept as written, or not declared in the
+    // file: a library's) is kept too: its inherited variables and methods are unknown.
+    let analysed: std::collections::HashSet<String> = unit
+        .items
+        .iter()
+        .filter_map(|i| match i {
+            Item::Pou(p) => Some(p.name.key()),
+            _ => None,
+        })
+        .collect();
     loop {
         let mut more = Vec::new();
         for i in &unit.items {
             let Item::Pou(p) = i else { continue };
             let Some(b) = &p.extends else { continue };
-            if !why.contains_key(&p.name.key()) && why.contains_key(&b.key()) {
+            if why.contains_key(&p.name.key()) {
+                continue;
+            }
+            if why.contains_key(&b.key()) {
                 more.push((p.name.key(), (format!("it extends `{}`, which is kept as written", b.text), b.span)));
+            } else if !analysed.contains(&b.key()) {
+                let what = format!("it extends `{}`, which the file does not declare (a library's block?)", b.text);
+                more.push((p.name.key(), (what, b.span)));
             }
         }
         if more.is_empty() {

@@ -993,7 +993,9 @@ impl<'s, 'e> Checker<'s, 'e> {
                 _ => {}
             }
         }
-        let base_ty = if write { self.target(base) } else { self.check_expr(base, None) };
+        // `THIS^.x := …` writes the block's own variable: the base is not a target itself.
+        let base_ty =
+            if write && !matches!(base.kind, ExprKind::Deref(_)) { self.target(base) } else { self.check_expr(base, None) };
         if base_ty.is_error() {
             return Type::Error;
         }
@@ -1178,7 +1180,9 @@ impl<'s, 'e> Checker<'s, 'e> {
 
     /// `base[i, j]`.
     fn index(&mut self, base: &Expr, indices: &[Expr], write: bool) -> Type {
-        let base_ty = if write { self.target(base) } else { self.check_expr(base, None) };
+        // `THIS^.x := …` writes the block's own variable: the base is not a target itself.
+        let base_ty =
+            if write && !matches!(base.kind, ExprKind::Deref(_)) { self.target(base) } else { self.check_expr(base, None) };
         let dims = match &base_ty {
             Type::Array { dims, .. } => Some(dims.clone()),
             _ => None,

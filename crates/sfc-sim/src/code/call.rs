@@ -561,23 +561,30 @@ impl FnCall {
             }
         }
         run_pou(c, self.idx, fbase)?;
-        for (off, size, s, neg) in &self.copies_out {
-            match s {
-                Sink::One(f) => {
-                    let mut v = c.mem[fbase + off].clone();
-                    if *neg {
-                        v = Value::Bool(!bool_of(&v));
-                    }
-                    f(c, b, v)?;
-                }
-                Sink::Many(f) => {
-                    let v = c.mem[fbase + off..fbase + off + size].to_vec();
-                    f(c, b, v)?;
-                }
-            }
-        }
+        copy_out(c, b, fbase, &self.copies_out)?;
         Ok(get(&c.mem[fbase..]))
     }
+}
+
+/// After a call of a function or method whose frame is at `fbase`: its outputs and in-outs
+/// `(offset, size, sink, negated)` written to the caller's variables (frame `b`).
+pub(crate) fn copy_out(c: &mut Ctx<'_>, b: usize, fbase: usize, copies_out: &[(usize, usize, Sink, bool)]) -> R<()> {
+    for (off, size, s, neg) in copies_out {
+        match s {
+            Sink::One(f) => {
+                let mut v = c.mem[fbase + off].clone();
+                if *neg {
+                    v = Value::Bool(!bool_of(&v));
+                }
+                f(c, b, v)?;
+            }
+            Sink::Many(f) => {
+                let v = c.mem[fbase + off..fbase + off + size].to_vec();
+                f(c, b, v)?;
+            }
+        }
+    }
+    Ok(())
 }
 
 /// The place of an instance given by name (for `CAL`).

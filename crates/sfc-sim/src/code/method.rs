@@ -6,7 +6,7 @@
 //! again for its frame, so a call `M()` or `THIS^.M()` in inherited code runs the override the
 //! instance's own block declares, and `SUPER^.M()` the base's.
 
-use super::call::{run_inits, Param};
+use super::call::{copy_out, run_inits, Param};
 use super::compile::InitOp;
 use super::convert::coerce;
 use super::place::{read, sink, Loc, PlaceC, Sink};
@@ -83,21 +83,7 @@ impl MethodCall {
             }
         }
         (code.body)(c, ib).map_err(Box::new)?;
-        for (off, size, s, neg) in &self.copies_out {
-            match s {
-                Sink::One(f) => {
-                    let mut v = c.mem[ib + off].clone();
-                    if *neg {
-                        v = Value::Bool(!bool_of(&v));
-                    }
-                    f(c, b, v)?;
-                }
-                Sink::Many(f) => {
-                    let v = c.mem[ib + off..ib + off + size].to_vec();
-                    f(c, b, v)?;
-                }
-            }
-        }
+        copy_out(c, b, ib, &self.copies_out)?;
         Ok(ib)
     }
 }
