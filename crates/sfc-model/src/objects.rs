@@ -1,6 +1,5 @@
 //! What of object orientation the checker and the simulator do not know yet: interfaces (and
-//! calls through them), pointers and references, `SUPER^()`, `THIS^` passed on, and
-//! edge-triggered inputs. The parser reads and the printer writes them; a POU that holds one
+//! calls through them), pointers and references, and `THIS^` passed on. The parser reads and the printer writes them; a POU that holds one
 //! is kept as written (a block others may name, as an import's kept POU is) with one note that
 //! names the first such construct and its line, and so is a block extending a kept one; nothing
 //! of it is lost, and the other POUs of the file are checked as usual. Methods, properties,
@@ -110,12 +109,6 @@ fn first_construct(p: &Pou, text: &str) -> Option<(String, Span)> {
                     kind.keyword()
                 ),
                 d.ty.span,
-            ));
-        }
-        if let (Some(edge), Some(n)) = (d.edge, d.names.first()) {
-            return Some((
-                format!("`{}` is declared {}; sfc does not simulate edge-triggered inputs yet", n.text, edge.keyword()),
-                n.span,
             ));
         }
     }

@@ -837,6 +837,19 @@ impl<'a> Builder<'a> {
         let mut out = Vec::new();
         for decl in &block.decls {
             let ty = resolve_spec(self, &decl.ty, None, diags);
+            if let (Some(edge), Some(n)) = (decl.edge, decl.names.first()) {
+                if block.kind != VarKind::Input || !(ty.is_bool() || ty.is_error()) {
+                    diags.push(Diagnostic::new(
+                        "SFC0302",
+                        n.span,
+                        format!(
+                            "`{}` is declared {}, which only a BOOL VAR_INPUT can be (IEC 61131-3 table 14)",
+                            n.text,
+                            edge.keyword()
+                        ),
+                    ));
+                }
+            }
             if let Some(addr) = &decl.location {
                 check_location(addr, &ty, decl.names.first(), diags);
             }

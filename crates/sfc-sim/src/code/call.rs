@@ -40,6 +40,14 @@ pub(crate) struct Bound<'e> {
 /// Runs the body of POU `p` on the frame at `base` (one scan of its chart for an SFC block).
 pub(crate) fn run_pou(ctx: &mut Ctx<'_>, p: usize, base: usize) -> R<()> {
     let prog = ctx.prog;
+    // An edge-triggered input reads TRUE in the call in which the value passed rose (R_EDGE)
+    // or fell (F_EDGE) since the previous call, as an R_TRIG/F_TRIG on it would.
+    for &(x, prev, rising) in &prog.pous[p].edges {
+        let now = bool_of(&ctx.mem[base + x as usize]);
+        let before = bool_of(&ctx.mem[base + prev as usize]);
+        ctx.mem[base + prev as usize] = Value::Bool(now);
+        ctx.mem[base + x as usize] = Value::Bool(if rising { now && !before } else { !now && before });
+    }
     match &prog.pous[p].body {
         PouBody::Code(b) => b(ctx, base).map_err(Box::new),
         PouBody::Chart(cc) => {

@@ -161,6 +161,7 @@ impl Program {
                 il_slots: 0,
                 result: None,
                 methods: Vec::new(),
+                edges: Vec::new(),
             });
         }
         let mut u = Unit {
@@ -224,6 +225,7 @@ impl Program {
             chart_slot: u32,
             subs: Vec<SubMeta>,
             wiring: super::wiring::Wiring,
+            edges: Vec<(u32, u32, bool)>,
         }
         let parts: Vec<Parts> = u
             .pous
@@ -241,6 +243,7 @@ impl Program {
                 control: m.control,
                 chart_slot: m.chart_slot,
                 subs: m.subs,
+                edges: m.edges,
             })
             .collect();
         let mut charts: Vec<Option<Chart>> = charts.into_iter().map(Some).collect();
@@ -290,6 +293,7 @@ impl Program {
                     subs: Vec::new(),
                     wiring: meta.wiring.clone(),
                     methods: Vec::new(),
+                    edges: Vec::new(),
                 });
             }
             out.push(PouCode {
@@ -301,6 +305,7 @@ impl Program {
                 subs,
                 wiring: meta.wiring,
                 methods,
+                edges: meta.edges,
             });
         }
         // Frames are never made of an action's chart: its templates and initial values are its
@@ -526,6 +531,15 @@ fn lay_out(u: &mut Unit<'_>, i: usize) {
         result = Some((off, rt.clone()));
         off += u.type_size(&rt);
     }
+    // Edge-triggered inputs: each with a slot for the value its previous call passed.
+    let mut edges = Vec::new();
+    for v in &m.iface.vars {
+        let Some(edge) = decl_of(m.ast, &v.name).and_then(|d| d.edge) else { continue };
+        let Some(slot) = vars.iter().find(|s| s.name.eq_ignore_ascii_case(&v.name)).map(|s| s.offset) else { continue };
+        vars.push(hidden_slot(format!("{}.prev", v.name), Type::Bool, VarKind::Var, off));
+        edges.push((slot, off, edge == sfc_syntax::ast::Edge::Rising));
+        off += 1;
+    }
     // Methods and property accessors: their variables and result are slots of the frame.
     let mut methods = Vec::new();
     for (kind, owner, sig, body) in class_methods(u, i) {
@@ -582,6 +596,7 @@ fn lay_out(u: &mut Unit<'_>, i: usize) {
     m.il_slots = il;
     m.result = result;
     m.methods = methods;
+    m.edges = edges;
 }
 
 /// POU `i` and its bases (`EXTENDS`), nearest first.

@@ -187,6 +187,8 @@ pub struct PouCode {
     pub wiring: wiring::Wiring,
     /// Its methods and property accessors, run on an instance's frame.
     pub(crate) methods: Vec<MethodCode>,
+    /// Its edge-triggered inputs: (input slot, previous value slot, rising), frame offsets.
+    pub(crate) edges: Vec<(u32, u32, bool)>,
 }
 
 /// A compiled method (or property accessor): the fresh values of its variables, then its code.

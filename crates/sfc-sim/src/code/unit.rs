@@ -49,6 +49,9 @@ pub(crate) struct PouMeta<'a> {
     pub il_slots: u32,
     /// FUNCTION result: offset and type.
     pub result: Option<(u32, Type)>,
+    /// Its edge-triggered inputs (`Start : BOOL R_EDGE`): the input's slot, the slot of its
+    /// value at the previous call, rising.
+    pub edges: Vec<(u32, u32, bool)>,
     /// The methods and property accessors of its class: its own and its bases', overridden
     /// ones included (`SUPER^.M()`), each laid out in its frame.
     pub methods: Vec<MethodMeta<'a>>,
