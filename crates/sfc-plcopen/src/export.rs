@@ -1033,7 +1033,6 @@ fn write_pou(x: &mut X, src: &str, pou: &ast::Pou, chart: Option<&sfc_model::Cha
         }
         x.close("interface");
     }
-    x.objects = object_fragments(src, pou);
     write_pou_actions(x, src, &pou.actions, subs);
     match (&pou.body, chart) {
         (ast::Body::Sfc(_), Some(chart)) => sfc::write_chart(x, src, pou, chart, subs),
@@ -1049,6 +1048,8 @@ fn write_pou(x: &mut X, src: &str, pou: &ast::Pou, chart: Option<&sfc_model::Cha
         }
     }
     x.take_comments(src, Span::new(pou.span.file, pou.span.start, pou.name.span.end));
+    // Its methods and properties go into the POU's own `addData` (not an action's).
+    x.objects = object_fragments(src, pou);
     x.add_data(
         &pou.attributes,
         &[],

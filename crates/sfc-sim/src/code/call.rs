@@ -280,7 +280,7 @@ impl Cx<'_, '_> {
         let m = &self.u.pous[p];
         let name = match m.chart {
             Some(c) => self.u.charts[c].actions.get(k).map(|a| a.name.clone()),
-            None => m.ast.actions.get(k).map(|a| a.name.text.clone()),
+            None => super::compile::pou_actions(self.u, p).get(k).map(|a| a.name.text.clone()),
         }
         .unwrap_or_default();
         let sub = m

@@ -599,6 +599,23 @@ fn lay_out(u: &mut Unit<'_>, i: usize) {
     m.edges = edges;
 }
 
+/// The actions of POU `i` that is no chart, in the order of `PouCode::actions`: its own, then
+/// those its bases declare (written in ST or IL) that it does not declare again, compiled for
+/// its frame.
+pub(crate) fn pou_actions<'a>(u: &Unit<'a>, i: usize) -> Vec<&'a sfc_syntax::ast::Action> {
+    let own: &'a sfc_syntax::ast::Pou = u.pous[i].ast;
+    let mut out: Vec<&'a sfc_syntax::ast::Action> = own.actions.iter().collect();
+    for b in class_chain(u, i).into_iter().skip(1) {
+        let base: &'a sfc_syntax::ast::Pou = u.pous[b].ast;
+        for a in &base.actions {
+            if a.body.sfc().is_none() && !out.iter().any(|x| x.name.key() == a.name.key()) {
+                out.push(a);
+            }
+        }
+    }
+    out
+}
+
 /// POU `i` and its bases (`EXTENDS`), nearest first.
 pub(crate) fn class_chain(u: &Unit<'_>, i: usize) -> Vec<usize> {
     let mut out = vec![i];
@@ -745,7 +762,7 @@ fn fill_names(u: &mut Unit<'_>, i: usize) {
             }
         } else {
             // The actions of a POU that is no chart, by their index in `PouCode::actions`.
-            for (k, a) in m.ast.actions.iter().enumerate() {
+            for (k, a) in pou_actions(u, i).into_iter().enumerate() {
                 names.entry(a.name.text.to_ascii_uppercase()).or_insert(Sym::Action(k));
             }
         }
@@ -1103,7 +1120,7 @@ fn compile_pou(u: &Unit<'_>, i: usize, template: &[Value]) -> Compiled {
             });
             Ok(b)
         });
-        let actions = m.ast.actions.iter().map(|a| action_block(&cx, m, &a.name.text, &a.body)).collect();
+        let actions = pou_actions(u, i).into_iter().map(|a| action_block(&cx, m, &a.name.text, &a.body)).collect();
         let subs = m.subs.iter().map(|sub| compile_chart(&cx, &u.charts[sub.chart])).collect();
         return Compiled::Code(
             r.unwrap_or_else(|d| {
