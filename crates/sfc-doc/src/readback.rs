@@ -195,7 +195,9 @@ impl Probe {
             if written.is_empty() {
                 return (written, String::new());
             }
-            let text = format!("PROGRAM P\n{written}\n{END}END_PROGRAM\n");
+            // In the POU's dialect: CODESYS names (`bLoop__Under`) are declared as written.
+            let dialect = self.dialect();
+            let text = format!("{dialect}PROGRAM P\n{written}\n{END}END_PROGRAM\n");
             let Some((pou, elements, comments)) = parse_probe_with_trivia(&text) else { break };
             if elements.len() != 1 {
                 break;
