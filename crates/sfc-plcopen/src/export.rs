@@ -235,7 +235,9 @@ impl X {
         let has_objects = !objects.is_empty();
         let replaced = |f: &String| {
             has_objects
-                && ["/method\"", "/property\"", "/pouinheritance\""].iter().any(|k| f.split('>').next().unwrap_or("").contains(k))
+                && ["/method\"", "/property\"", "/pouinheritance\""]
+                    .iter()
+                    .any(|k| f.split('>').next().unwrap_or("").contains(k))
         };
         let foreign: Vec<String> =
             attrs::all(list, attrs::ADDDATA).map(attrs::unescape).filter(|f| !replaced(f)).chain(objects).collect();

@@ -34,7 +34,9 @@ impl Checker<'_, '_> {
             let base = self.scope.pou_name().and_then(|p| env.function_block(p)).and_then(|fb| fb.base.clone());
             return match base {
                 Some(_) => Callee::SuperBody,
-                None => Callee::NotCallable("`SUPER^()` calls the body of the base block, and this block extends none".into()),
+                None => Callee::NotCallable(
+                    "`SUPER^()` calls the body of the base block, and this block extends none".into(),
+                ),
             };
         }
         match self.scope.resolve(&name.text) {
@@ -55,7 +57,8 @@ impl Checker<'_, '_> {
             }
             None => {}
         }
-        if let Some(m) = self.scope.pou_name().and_then(|p| env.function_block(p)).and_then(|fb| fb.method(&name.text)) {
+        if let Some(m) = self.scope.pou_name().and_then(|p| env.function_block(p)).and_then(|fb| fb.method(&name.text))
+        {
             return Callee::Method(m.clone());
         }
         if let Some(f) = env.function(&name.text) {

@@ -928,11 +928,7 @@ impl<'s, 'e> Checker<'s, 'e> {
             self.error(
                 "SFC0308",
                 at.span,
-                format!(
-                    "property `{}` has no {what}; it cannot be {}",
-                    p.name,
-                    if write { "written" } else { "read" }
-                ),
+                format!("property `{}` has no {what}; it cannot be {}", p.name, if write { "written" } else { "read" }),
             );
             return Type::Error;
         }
@@ -941,7 +937,13 @@ impl<'s, 'e> Checker<'s, 'e> {
 
     /// A call of method `m` (`inst.M(…)`, `THIS^.M(…)`, `M(…)` in its block); its value when
     /// `value` (an error for a method without result).
-    pub(crate) fn method_call(&mut self, m: &crate::env::MethodSig, args: &[sfc_syntax::ast::Arg], span: Span, value: bool) -> Type {
+    pub(crate) fn method_call(
+        &mut self,
+        m: &crate::env::MethodSig,
+        args: &[sfc_syntax::ast::Arg],
+        span: Span,
+        value: bool,
+    ) -> Type {
         let f = m.as_function();
         self.bind_method_args(&f, args, span);
         match (&m.return_type, value) {
@@ -994,8 +996,11 @@ impl<'s, 'e> Checker<'s, 'e> {
             }
         }
         // `THIS^.x := …` writes the block's own variable: the base is not a target itself.
-        let base_ty =
-            if write && !matches!(base.kind, ExprKind::Deref(_)) { self.target(base) } else { self.check_expr(base, None) };
+        let base_ty = if write && !matches!(base.kind, ExprKind::Deref(_)) {
+            self.target(base)
+        } else {
+            self.check_expr(base, None)
+        };
         if base_ty.is_error() {
             return Type::Error;
         }
@@ -1026,7 +1031,10 @@ impl<'s, 'e> Checker<'s, 'e> {
                     self.error(
                         "SFC0309",
                         member.span,
-                        format!("partial access `.{}` needs a bit string or an integer wider than it, not `{base_ty}`", member.text),
+                        format!(
+                            "partial access `.{}` needs a bit string or an integer wider than it, not `{base_ty}`",
+                            member.text
+                        ),
                     );
                     Type::Error
                 }
@@ -1181,8 +1189,11 @@ impl<'s, 'e> Checker<'s, 'e> {
     /// `base[i, j]`.
     fn index(&mut self, base: &Expr, indices: &[Expr], write: bool) -> Type {
         // `THIS^.x := …` writes the block's own variable: the base is not a target itself.
-        let base_ty =
-            if write && !matches!(base.kind, ExprKind::Deref(_)) { self.target(base) } else { self.check_expr(base, None) };
+        let base_ty = if write && !matches!(base.kind, ExprKind::Deref(_)) {
+            self.target(base)
+        } else {
+            self.check_expr(base, None)
+        };
         let dims = match &base_ty {
             Type::Array { dims, .. } => Some(dims.clone()),
             _ => None,

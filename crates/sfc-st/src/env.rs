@@ -901,13 +901,19 @@ impl<'a> Builder<'a> {
             base: pou.extends.as_ref().map(|b| b.text.clone()),
         };
         // A method or property shares the block's namespace with its variables.
-        let names = iface.methods.iter().map(|m| (&m.name, m.span)).chain(iface.properties.iter().map(|p| (&p.name, p.span)));
-        let mut seen: HashMap<String, Span> = iface.vars.iter().filter(|v| !v.implicit).map(|v| (v.name.to_ascii_uppercase(), v.span)).collect();
+        let names =
+            iface.methods.iter().map(|m| (&m.name, m.span)).chain(iface.properties.iter().map(|p| (&p.name, p.span)));
+        let mut seen: HashMap<String, Span> =
+            iface.vars.iter().filter(|v| !v.implicit).map(|v| (v.name.to_ascii_uppercase(), v.span)).collect();
         for (name, span) in names {
             match seen.get(&name.to_ascii_uppercase()) {
                 Some(prev) => diags.push(
-                    Diagnostic::new("SFC0206", span, format!("`{name}` is declared more than once in `{}`", iface.name))
-                        .with_label(*prev, "first declared here"),
+                    Diagnostic::new(
+                        "SFC0206",
+                        span,
+                        format!("`{name}` is declared more than once in `{}`", iface.name),
+                    )
+                    .with_label(*prev, "first declared here"),
                 ),
                 None => {
                     seen.insert(name.to_ascii_uppercase(), span);
@@ -974,7 +980,13 @@ impl<'a> Builder<'a> {
                     implicit: true,
                 },
             );
-            MethodSig { name: p.name.text.clone(), owner: pou.name.text.clone(), vars, return_type: None, span: p.name.span }
+            MethodSig {
+                name: p.name.text.clone(),
+                owner: pou.name.text.clone(),
+                vars,
+                return_type: None,
+                span: p.name.span,
+            }
         });
         PropSig { name: p.name.text.clone(), owner: pou.name.text.clone(), ty, get, set, span: p.name.span }
     }

@@ -39,7 +39,9 @@ mod value;
 mod tests;
 
 pub use check::Checker;
-pub use env::{is_sfc_control_variable, sfc_control_variables, MethodSig, PouInterface, PropSig, TypeDef, TypeEnv, VarInfo};
+pub use env::{
+    is_sfc_control_variable, sfc_control_variables, MethodSig, PouInterface, PropSig, TypeDef, TypeEnv, VarInfo,
+};
 pub use il::{parse_il_op, IlOp};
 pub use scope::{Binding, Scope, Usage};
 pub use suggest::closest;
@@ -213,7 +215,8 @@ fn check_pou_inner(
             && scope.unused_variables().iter().any(|v| v.span == d.span && env.is_reached(&pou.name.text, &v.name))
     };
     // A variable inherited from a base block (`EXTENDS`) is the base's to use.
-    let own = |d: &Diagnostic| d.span.file != pou.span.file || (pou.span.start <= d.span.start && d.span.end <= pou.span.end);
+    let own =
+        |d: &Diagnostic| d.span.file != pou.span.file || (pou.span.start <= d.span.start && d.span.end <= pou.span.end);
     if !env.is_extended(&pou.name.text) {
         diags.extend(scope.unused_diagnostics().into_iter().filter(|d| !reached(d) && own(d)));
     }

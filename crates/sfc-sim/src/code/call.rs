@@ -111,7 +111,14 @@ impl Cx<'_, '_> {
 
     /// Binds `args` to `params` of `owner` (named in messages) of type `ty` (a standard block's
     /// name, for CODESYS's names of its inputs).
-    pub(crate) fn bind<'e>(&self, owner: &str, ty: &str, params: &[Param], args: &'e [Arg], span: Span) -> C<Bound<'e>> {
+    pub(crate) fn bind<'e>(
+        &self,
+        owner: &str,
+        ty: &str,
+        params: &[Param],
+        args: &'e [Arg],
+        span: Span,
+    ) -> C<Bound<'e>> {
         let positional: Vec<&Param> =
             params.iter().filter(|p| matches!(p.kind, VarKind::Input | VarKind::InOut)).collect();
         let mut b = Bound { inputs: Vec::new(), in_outs: Vec::new(), outputs: Vec::new(), en: None, eno: None };

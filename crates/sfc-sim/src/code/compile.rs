@@ -6,8 +6,8 @@ use super::rt::*;
 use super::stmt::to_block;
 use super::unit::{Cx, Globals, MethodKind, MethodMeta, PouMeta, SubMeta, Sym, Unit, C};
 use super::{
-    AssocCode, Block, ChartCode, ControlSlots, DurationCode, FastGuard, Guard, Layout, MethodCode, Place, PouBody, PouCode,
-    Program, VarSlot,
+    AssocCode, Block, ChartCode, ControlSlots, DurationCode, FastGuard, Guard, Layout, MethodCode, Place, PouBody,
+    PouCode, Program, VarSlot,
 };
 use crate::value::Value;
 use sfc_diagnostics::{Diagnostic, Span};
@@ -201,7 +201,8 @@ impl Program {
         for i in 0..u.pous.len() {
             bodies.push(compile_pou(&u, i, &templates[i]));
         }
-        let mut methods: Vec<Vec<MethodCode>> = (0..u.pous.len()).map(|i| compile_methods(&u, i, &templates[i])).collect();
+        let mut methods: Vec<Vec<MethodCode>> =
+            (0..u.pous.len()).map(|i| compile_methods(&u, i, &templates[i])).collect();
         check_function_frames(&u);
         let diags = u.diags.into_inner();
         if !diags.is_empty() {

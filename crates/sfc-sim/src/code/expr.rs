@@ -330,7 +330,8 @@ impl Cx<'_, '_> {
         let digits = match member.text.strip_prefix("%X").or_else(|| member.text.strip_prefix("%x")) {
             Some(d) => d,
             None if member.text.starts_with('%') => {
-                return Err(self.error(member.span, format!("partial access `.{}` (only `%X`, a bit, is simulated)", member.text)))
+                return Err(self
+                    .error(member.span, format!("partial access `.{}` (only `%X`, a bit, is simulated)", member.text)))
             }
             None => member.text.as_str(),
         };

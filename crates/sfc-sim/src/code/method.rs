@@ -216,7 +216,12 @@ impl Cx<'_, '_> {
             let x = self.expr_as(v, &p.ty)?;
             let size = self.u.type_size(&p.ty) as usize;
             if kind_of(&p.ty) == Kind::Agg {
-                inputs.push((p.offset as usize, Box::new(|_: &mut Ctx<'_>, _: usize| Ok(Value::default())) as ValFn, Some(x.agg()), size));
+                inputs.push((
+                    p.offset as usize,
+                    Box::new(|_: &mut Ctx<'_>, _: usize| Ok(Value::default())) as ValFn,
+                    Some(x.agg()),
+                    size,
+                ));
             } else {
                 inputs.push((p.offset as usize, x.value(), None, size));
             }
