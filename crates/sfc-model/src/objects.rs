@@ -1,13 +1,13 @@
 //! What of object orientation the checker and the simulator do not know yet: interfaces (and
-//! calls through them), pointers and references, and `THIS^` passed on. The parser reads and the printer writes them; a POU that holds one
+//! calls through them) and `THIS^` passed on. The parser reads and the printer writes them; a POU that holds one
 //! is kept as written (a block others may name, as an import's kept POU is) with one note that
 //! names the first such construct and its line, and so is a block extending a kept one; nothing
 //! of it is lost, and the other POUs of the file are checked as usual. Methods, properties,
-//! `EXTENDS` (with overriding), `IMPLEMENTS`, `THIS^.x` and `SUPER^.M()` are checked by sfc-st
-//! and simulated.
+//! `EXTENDS` (with overriding), `IMPLEMENTS`, `THIS^.x`, `SUPER^.M()`, pointers (`POINTER TO`,
+//! `ADR`, `p^`) and references (`REFERENCE TO`, `REF=`) are checked by sfc-st and simulated.
 
 use sfc_diagnostics::{Diagnostic, Span};
-use sfc_syntax::ast::{self, Item, Pou, TypeSpec, TypeSpecKind};
+use sfc_syntax::ast::{self, Item, Pou};
 use sfc_syntax::lexer::{lex, TokenKind};
 
 /// Whether `unit` holds anything [`keep_objects`] would keep as written.
@@ -101,67 +101,25 @@ pub(crate) fn keep_objects(unit: &mut ast::SourceUnit, text: &str, diags: &mut V
 
 /// The first construct of `p` the checker does not know yet, in words, with its span.
 fn first_construct(p: &Pou, text: &str) -> Option<(String, Span)> {
-    for d in p.var_blocks.iter().flat_map(|b| &b.decls) {
-        if let Some(kind) = indirection(&d.ty) {
-            return Some((
-                format!(
-                    "it declares a `{}` variable; sfc does not type-check or simulate pointers and references yet",
-                    kind.keyword()
-                ),
-                d.ty.span,
-            ));
-        }
-    }
-    // `p^` and `r REF= x` in the code: found in the POU's tokens.
+    // `THIS^` passed on as a value: found in the POU's tokens.
     let body = text.get(p.span.start as usize..p.span.end as usize)?;
-    // Most POUs hold neither: no second lexing of them.
-    if !body.contains('^') && !body.contains("REF") && !body.contains("ref") && !body.contains("Ref") {
+    // Most POUs hold none: no second lexing of them.
+    if !body.contains('^') {
         return None;
     }
     let (toks, _) = lex(p.span.file, body);
     let sig: Vec<_> = toks.iter().filter(|t| !t.kind.is_trivia()).collect();
     for (k, t) in sig.iter().enumerate() {
-        let at = Span::new(p.span.file, p.span.start + t.start, p.span.start + t.end);
-        let word = &body[t.start as usize..t.end as usize];
-        if t.kind == TokenKind::Caret {
-            let before =
-                k.checked_sub(1).and_then(|j| sig.get(j)).map_or("", |b| &body[b.start as usize..b.end as usize]);
-            let after = sig.get(k + 1).map_or("", |n| &body[n.start as usize..n.end as usize]);
-            // `THIS^.x`, `THIS^.M()`, `SUPER^.M()`: the block itself, typed and simulated.
-            if (before.eq_ignore_ascii_case("THIS") || before.eq_ignore_ascii_case("SUPER")) && after == "." {
-                continue;
-            }
-            // `SUPER^()`: the base block's body, called.
-            if before.eq_ignore_ascii_case("SUPER") && after == "(" {
-                continue;
-            }
-            if before.eq_ignore_ascii_case("THIS") {
-                return Some((
-                    "it passes `THIS^` on; sfc does not type-check or simulate references to blocks yet".into(),
-                    at,
-                ));
-            }
-            return Some((
-                format!("it dereferences `{before}^`; sfc does not type-check or simulate pointers and references yet"),
-                at,
-            ));
+        if t.kind != TokenKind::Caret {
+            continue;
         }
-        if word.eq_ignore_ascii_case("REF") && sig.get(k + 1).is_some_and(|n| n.kind == TokenKind::Eq) {
-            return Some((
-                "it assigns a reference (`REF=`); sfc does not type-check or simulate pointers and references yet"
-                    .into(),
-                at,
-            ));
+        let at = Span::new(p.span.file, p.span.start + t.start, p.span.start + t.end);
+        let before = k.checked_sub(1).and_then(|j| sig.get(j)).map_or("", |b| &body[b.start as usize..b.end as usize]);
+        let after = sig.get(k + 1).map_or("", |n| &body[n.start as usize..n.end as usize]);
+        // `THIS^.x`, `THIS^.M()`, `SUPER^.M()`, `SUPER^()`: the block itself, typed and simulated.
+        if before.eq_ignore_ascii_case("THIS") && after != "." {
+            return Some(("it passes `THIS^` on; sfc does not type-check or simulate references to blocks yet".into(), at));
         }
     }
     None
-}
-
-fn indirection(t: &TypeSpec) -> Option<ast::Indirection> {
-    match &t.kind {
-        TypeSpecKind::Indirect { kind, .. } => Some(*kind),
-        TypeSpecKind::Array { element, .. } => indirection(element),
-        TypeSpecKind::Struct(fields) => fields.iter().find_map(|f| indirection(&f.ty)),
-        _ => None,
-    }
 }

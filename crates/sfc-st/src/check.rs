@@ -379,11 +379,7 @@ impl<'s, 'e> Checker<'s, 'e> {
 
     fn stmt_inner(&mut self, stmt: &Stmt) {
         match &stmt.kind {
-            // Not typed (sfc-model keeps a POU using references as written before it is checked).
-            StmtKind::RefAssign { target, value } => {
-                self.check_expr(target, None);
-                self.check_expr(value, None);
-            }
+            StmtKind::RefAssign { target, value } => self.ref_assign(target, value),
             StmtKind::Assign { target, value } => {
                 let tt = self.target(target);
                 let vt = self.check_expr(value, Some(&tt));
@@ -604,7 +600,10 @@ impl<'s, 'e> Checker<'s, 'e> {
                         self.report(d);
                         return Type::Error;
                     }
-                    info.ty.clone()
+                    match &info.ty {
+                        Type::Reference(t) => t.as_ref().clone(),
+                        t => t.clone(),
+                    }
                 }
                 Some(Sym::Return) => {
                     self.scope.mark(Sym::Return, true);
@@ -636,6 +635,7 @@ impl<'s, 'e> Checker<'s, 'e> {
             },
             ExprKind::Member { base, member } => self.member(base, member, true),
             ExprKind::Index { base, indices } => self.index(base, indices, true),
+            ExprKind::Deref(inner) if self.this_type(inner).is_none() => self.deref(inner),
             ExprKind::Address(a) => address_type(a),
             ExprKind::Error => Type::Error,
             ExprKind::Literal(_) => {
@@ -717,7 +717,7 @@ impl<'s, 'e> Checker<'s, 'e> {
             ExprKind::Paren(inner) => self.check_expr(inner, expected),
             // `THIS^` and `SUPER^`; other dereferences are not typed (sfc-model keeps a POU
             // dereferencing a pointer as written before it is checked).
-            ExprKind::Deref(inner) => self.this_type(inner).unwrap_or(Type::Error),
+            ExprKind::Deref(inner) => self.deref(inner),
             ExprKind::Error => Type::Error,
         }
     }
@@ -861,7 +861,11 @@ impl<'s, 'e> Checker<'s, 'e> {
         match self.scope.resolve(&id.text) {
             Some(sym @ (Sym::Local(_) | Sym::Global(_))) => {
                 self.scope.mark(sym, false);
-                self.scope.var_info(sym).map(|v| v.ty.clone()).unwrap_or(Type::Error)
+                // A reference is read as what it designates.
+                match self.scope.var_info(sym).map(|v| v.ty.clone()).unwrap_or(Type::Error) {
+                    Type::Reference(t) => *t,
+                    t => t,
+                }
             }
             Some(Sym::Return) => {
                 self.scope.mark(Sym::Return, false);
@@ -913,6 +917,86 @@ impl<'s, 'e> Checker<'s, 'e> {
             return Some(Type::FunctionBlock(base.name.to_ascii_uppercase()));
         }
         None
+    }
+
+    /// `p^`: what the pointer `p` points to (`THIS^`, `SUPER^`: the block itself).
+    fn deref(&mut self, inner: &Expr) -> Type {
+        if let Some(t) = self.this_type(inner) {
+            return t;
+        }
+        match self.check_expr(inner, None) {
+            Type::Pointer(t) => *t,
+            Type::Error => Type::Error,
+            t => {
+                let what = self.phrase(inner, &t);
+                self.error("SFC0302", inner.span, format!("`^` dereferences a pointer, but this is {what}"));
+                Type::Error
+            }
+        }
+    }
+
+    /// `r REF= x`: `r` a `REFERENCE TO T`, `x` a variable of type `T`.
+    pub(crate) fn ref_assign(&mut self, target: &Expr, value: &Expr) {
+        let ty = match &target.kind {
+            ExprKind::Name(id) => match self.scope.resolve(&id.text) {
+                Some(sym @ (Sym::Local(_) | Sym::Global(_))) => {
+                    self.scope.mark(sym, true);
+                    self.scope.var_info(sym).map(|v| v.ty.clone())
+                }
+                _ => {
+                    self.check_expr(target, None);
+                    None
+                }
+            },
+            _ => {
+                self.check_expr(target, None);
+                None
+            }
+        };
+        let vt = self.check_expr(value, None);
+        match ty {
+            Some(Type::Reference(t)) => {
+                let place = matches!(
+                    value.kind,
+                    ExprKind::Name(_) | ExprKind::Member { .. } | ExprKind::Index { .. } | ExprKind::Deref(_)
+                );
+                if !place {
+                    self.error("SFC0308", value.span, "`REF=` makes a reference designate a variable; this is no variable");
+                } else if !vt.is_error() && vt != *t {
+                    let what = self.phrase(value, &vt);
+                    self.error(
+                        "SFC0302",
+                        value.span,
+                        format!("type mismatch: the reference designates a `{t}`, but this is {what}"),
+                    );
+                }
+            }
+            Some(Type::Error) | None => {}
+            Some(t) => self.error(
+                "SFC0302",
+                target.span,
+                format!("`REF=` sets a REFERENCE TO variable, but `{}` is `{t}`", expr_text(target)),
+            ),
+        }
+    }
+
+    /// `ADR(x)`: the address of a variable, a `POINTER TO` its type.
+    pub(crate) fn adr(&mut self, args: &[sfc_syntax::ast::Arg], span: Span) -> Type {
+        let [arg] = args else {
+            self.error("SFC0307", span, "`ADR` takes one variable");
+            self.check_args_loosely(args);
+            return Type::Error;
+        };
+        let Some(v) = &arg.value else { return Type::Error };
+        let t = self.check_expr(v, None);
+        if !matches!(v.kind, ExprKind::Name(_) | ExprKind::Member { .. } | ExprKind::Index { .. } | ExprKind::Deref(_)) {
+            self.error("SFC0308", v.span, "`ADR` takes the address of a variable; this is no variable");
+            return Type::Error;
+        }
+        if t.is_error() {
+            return Type::Error;
+        }
+        Type::Pointer(Box::new(t))
     }
 
     /// A property of the POU whose code this is, named without `THIS^.`.
@@ -1720,6 +1804,10 @@ pub(crate) fn fit(u: Untyped, t: &Type) -> Fit {
                     Some(0 | 1) => Fit::Fits,
                     _ => Fit::WrongKind,
                 };
+            }
+            // A pointer is set to, and compared with, 0 (none).
+            if matches!(t_base, Type::Pointer(_)) {
+                return if v == Some(0) { Fit::Fits } else { Fit::WrongKind };
             }
             let Some((lo, hi)) = t.int_range() else { return Fit::WrongKind };
             match v {

@@ -47,9 +47,19 @@ pub(crate) fn resolve_spec<N: TypeNames + ?Sized>(
 ) -> Type {
     match &spec.kind {
         TypeSpecKind::Named(id) => named(names, id, diags),
-        // A POU declaring a pointer or reference is kept as written before it is checked
-        // (sfc-model's objects); one met elsewhere (a global, a type) is not typed.
-        TypeSpecKind::Indirect { .. } => Type::Error,
+        // `POINTER TO T`, `REFERENCE TO T`, `REF_TO T` (CODESYS, IEC 61131-3 3rd edition).
+        TypeSpecKind::Indirect { kind, target } => {
+            let t = resolve_spec(names, target, None, diags);
+            if t.is_error() {
+                return Type::Error;
+            }
+            // IEC's `REF_TO` is dereferenced with `^`, as CODESYS's pointer; CODESYS's
+            // `REFERENCE TO` is an alias.
+            match kind {
+                sfc_syntax::ast::Indirection::Reference => Type::Reference(Box::new(t)),
+                _ => Type::Pointer(Box::new(t)),
+            }
+        }
         TypeSpecKind::String { wide, length } => {
             let len = match length {
                 None => None,

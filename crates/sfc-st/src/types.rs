@@ -94,6 +94,11 @@ pub enum Type {
     },
     /// An instance of a function block (standard or user); the type name, upper-case.
     FunctionBlock(String),
+    /// `POINTER TO T` (CODESYS): the address of a `T`, `0` for none; `p^` is the `T`.
+    Pointer(Box<Type>),
+    /// `REFERENCE TO T` (CODESYS) or `REF_TO T`: an alias of a `T`, set by `r REF= x`; read and
+    /// written, it is that `T`.
+    Reference(Box<Type>),
     /// The type of an erroneous expression: a diagnostic was already reported, and every
     /// operation involving it is accepted silently so one mistake gives one message.
     Error,
@@ -164,7 +169,8 @@ impl Generic {
         }
         match self {
             Generic::Any => true,
-            Generic::AnyElementary => ty.is_elementary(),
+            // A pointer is compared (`p <> 0`, `p = q`) as an address.
+            Generic::AnyElementary => ty.is_elementary() || matches!(ty, Type::Pointer(_)),
             Generic::AnyMagnitude => ty.is_num() || ty.is_duration(),
             Generic::AnyNum => ty.is_num(),
             Generic::AnyReal => ty.is_real(),
@@ -495,6 +501,8 @@ impl fmt::Display for Type {
                 }
                 return write!(f, "] OF {elem}");
             }
+            Type::Pointer(t) => return write!(f, "POINTER TO {t}"),
+            Type::Reference(t) => return write!(f, "REFERENCE TO {t}"),
             Type::Struct { name: Some(n), .. } | Type::Enum { name: Some(n), .. } => n,
             Type::Struct { name: None, fields } => {
                 f.write_str("STRUCT")?;

@@ -370,6 +370,17 @@ impl Cx<'_, '_> {
         if let Some(Sym::Var { .. } | Sym::Step(_) | Sym::Action(_) | Sym::Return) = self.lookup(&callee.text) {
             return Err(self.error(callee.span, format!("`{}` is not a function", callee.text)));
         }
+        // `ADR(x)` (CODESYS), `REF(x)` (IEC): the slot of `x` plus one.
+        if (callee.is("ADR") || callee.is("REF")) && self.lookup(&callee.text).is_none() && self.u.function(&callee.text).is_none() {
+            let [Arg { value: Some(v), .. }] = args else {
+                return Err(self.error(span, "`ADR` takes one variable"));
+            };
+            let p = self.place(v)?;
+            let ty = Type::Pointer(Box::new(p.ty.clone()));
+            let at = p.loc.slot_fn();
+            let f: IntFn = Box::new(move |c, b| Ok(at(c, b)? as i64 + 1));
+            return Ok(TExpr::new(CExpr::Int(f), ty, false));
+        }
         if let Some((t, k)) = self.lookup(&callee.text).is_none().then(|| self.own_method(callee)).flatten() {
             return self.method_value(t, k, args, span);
         }

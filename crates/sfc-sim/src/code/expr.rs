@@ -157,7 +157,11 @@ impl Cx<'_, '_> {
                 ops::binary(*op, l, r, rt, e.span)
             }
             ExprKind::Paren(inner) => self.expr(inner, expected),
-            ExprKind::Deref(_) => Err(self.error(e.span, "pointers and references are not simulated yet")),
+            ExprKind::Deref(_) => {
+                let p = self.place(e)?;
+                let size = self.u.type_size(&p.ty);
+                Ok(read(p, size))
+            }
             ExprKind::Error => Err(self.error(e.span, "the expression has a syntax error")),
         }
     }
@@ -223,8 +227,9 @@ impl Cx<'_, '_> {
                 if let (Some(k), true) = (konst, kind_of(&ty) != Kind::Agg) {
                     return Ok(st_const(k, &ty));
                 }
-                let size = self.u.type_size(&ty);
-                Ok(read(PlaceC::new(Loc::Static(place), ty), size))
+                let p = deref_reference(PlaceC::new(Loc::Static(place), ty), id.span);
+                let size = self.u.type_size(&p.ty);
+                Ok(read(p, size))
             }
             Some(Sym::Return) => {
                 let p = self.place(e)?;
@@ -270,7 +275,7 @@ impl Cx<'_, '_> {
     pub(crate) fn place(&self, e: &Expr) -> C<PlaceC> {
         match &e.kind {
             ExprKind::Name(id) => match self.lookup(&id.text) {
-                Some(Sym::Var { place, ty, .. }) => Ok(PlaceC::new(Loc::Static(place), ty)),
+                Some(Sym::Var { place, ty, .. }) => Ok(deref_reference(PlaceC::new(Loc::Static(place), ty), id.span)),
                 Some(Sym::Return) => {
                     let (off, ty) = self.meta().and_then(|m| m.result.clone()).expect("functions have a result slot");
                     Ok(PlaceC::new(Loc::Static(Place::Local(off)), ty))
@@ -284,6 +289,13 @@ impl Cx<'_, '_> {
             ExprKind::Paren(inner) => self.place(inner),
             ExprKind::Member { base, member } => self.member(base, member),
             ExprKind::Index { base, indices } => self.index(base, indices),
+            ExprKind::Deref(inner) => {
+                let p = self.place(inner)?;
+                let Type::Pointer(t) = p.ty.clone() else {
+                    return Err(self.error(e.span, "`^` of what is no pointer (`THIS^` passed on is not simulated yet)"));
+                };
+                Ok(PlaceC::new(Loc::Dyn(pointee(p.loc.slot_fn(), e.span)), *t))
+            }
             _ => Err(self.error(e.span, "the expression is not a variable")),
         }
     }
@@ -483,5 +495,26 @@ impl Cx<'_, '_> {
         g.index.insert(key.clone(), n);
         g.addresses.insert(key, slot);
         PlaceC::new(Loc::Static(Place::Global(slot)), ty)
+    }
+}
+
+/// The slot a pointer or reference held in the slot `at` designates: its value is that slot
+/// plus one, 0 for none (a fault when used).
+pub(crate) fn pointee(at: LocFn, span: sfc_diagnostics::Span) -> LocFn {
+    std::sync::Arc::new(move |c, b| {
+        let s = at(c, b)?;
+        match int_of(&c.mem[s]) {
+            v if v > 0 && (v as usize) <= c.mem.len() => Ok(v as usize - 1),
+            0 => Err(fault("a pointer or reference that designates nothing (0) is used", span)),
+            v => Err(fault(format!("a pointer or reference designates no variable ({v})"), span)),
+        }
+    })
+}
+
+/// A variable of type `REFERENCE TO T` is read and written as the `T` it designates.
+pub(crate) fn deref_reference(p: PlaceC, span: sfc_diagnostics::Span) -> PlaceC {
+    match p.ty.clone() {
+        Type::Reference(t) => PlaceC::new(Loc::Dyn(pointee(p.loc.slot_fn(), span)), *t),
+        _ => p,
     }
 }

@@ -152,7 +152,23 @@ impl Cx<'_, '_> {
             StmtKind::Exit => Ok(Box::new(|_, _| Ok(Flow::Exit))),
             StmtKind::Return => Ok(Box::new(|_, _| Ok(Flow::Return))),
             StmtKind::Empty => Ok(Box::new(|_, _| Ok(Flow::Next))),
-            StmtKind::RefAssign { .. } => Err(self.error(s.span, "references are not simulated yet")),
+            // `r REF= x`: the reference's own slot gets the address of `x` (plus one).
+            StmtKind::RefAssign { target, value } => {
+                let ExprKind::Name(id) = &target.kind else {
+                    return Err(self.error(target.span, "`REF=` of what is no variable"));
+                };
+                let Some(Sym::Var { place, .. }) = self.lookup(&id.text) else {
+                    return Err(self.error(target.span, "`REF=` of what is no variable"));
+                };
+                let at = Loc::Static(place).slot_fn();
+                let of = self.place(value)?.loc.slot_fn();
+                Ok(Box::new(move |c, b| {
+                    let slot = of(c, b)?;
+                    let s = at(c, b)?;
+                    c.mem[s] = Value::Int(slot as i64 + 1);
+                    Ok(Flow::Next)
+                }))
+            }
         }
     }
 
