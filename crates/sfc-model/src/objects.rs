@@ -118,7 +118,10 @@ fn first_construct(p: &Pou, text: &str) -> Option<(String, Span)> {
         let after = sig.get(k + 1).map_or("", |n| &body[n.start as usize..n.end as usize]);
         // `THIS^.x`, `THIS^.M()`, `SUPER^.M()`, `SUPER^()`: the block itself, typed and simulated.
         if before.eq_ignore_ascii_case("THIS") && after != "." {
-            return Some(("it passes `THIS^` on; sfc does not type-check or simulate references to blocks yet".into(), at));
+            return Some((
+                "it passes `THIS^` on; sfc does not type-check or simulate references to blocks yet".into(),
+                at,
+            ));
         }
     }
     None

@@ -1256,22 +1256,14 @@ pub(crate) fn type_text(cx: &mut Ctx, t: Node, indent: &str) -> Frag {
             f.push_str(&format!(" ({lo}..{hi})"));
             f.locate(at)
         }
-        // In a POU kept as written, the text says what it is; elsewhere the type checker cannot
-        // use it yet.
-        "pointer" if cx.verbatim => {
+        // `POINTER TO T` (CODESYS, typed and simulated).
+        "pointer" => {
             let mut f = Frag::plain("POINTER TO ");
             match child(e, "baseType") {
                 Some(b) => f.push(&type_text(cx, b, indent)),
                 None => f.push_str("BYTE"),
             }
             f.locate(at)
-        }
-        "pointer" => {
-            cx.diag("SFC0705", at.clone(), "pointer types are not IEC 61131-3; imported as the pointed-to type");
-            match child(e, "baseType") {
-                Some(b) => type_text(cx, b, indent),
-                None => Frag::located("BOOL", at),
-            }
         }
         other => {
             cx.diag("SFC0705", at.clone(), format!("`{other}` cannot be the type of a variable"));

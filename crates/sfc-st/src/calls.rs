@@ -102,7 +102,10 @@ impl Checker<'_, '_> {
     /// A call used as a value.
     pub(crate) fn call_value(&mut self, name: &Ident, args: &[Arg], span: Span, expected: Option<&Type>) -> Type {
         // CODESYS's `ADR(x)` (and IEC's `REF(x)`), unless the file declares a function so named.
-        if (name.is("ADR") || name.is("REF")) && self.scope.resolve(&name.text).is_none() && self.scope.env().function(&name.text).is_none() {
+        if (name.is("ADR") || name.is("REF"))
+            && self.scope.resolve(&name.text).is_none()
+            && self.scope.env().function(&name.text).is_none()
+        {
             return self.adr(args, span);
         }
         match self.callee(name) {

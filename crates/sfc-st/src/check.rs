@@ -961,7 +961,11 @@ impl<'s, 'e> Checker<'s, 'e> {
                     ExprKind::Name(_) | ExprKind::Member { .. } | ExprKind::Index { .. } | ExprKind::Deref(_)
                 );
                 if !place {
-                    self.error("SFC0308", value.span, "`REF=` makes a reference designate a variable; this is no variable");
+                    self.error(
+                        "SFC0308",
+                        value.span,
+                        "`REF=` makes a reference designate a variable; this is no variable",
+                    );
                 } else if !vt.is_error() && vt != *t {
                     let what = self.phrase(value, &vt);
                     self.error(
@@ -989,7 +993,8 @@ impl<'s, 'e> Checker<'s, 'e> {
         };
         let Some(v) = &arg.value else { return Type::Error };
         let t = self.check_expr(v, None);
-        if !matches!(v.kind, ExprKind::Name(_) | ExprKind::Member { .. } | ExprKind::Index { .. } | ExprKind::Deref(_)) {
+        if !matches!(v.kind, ExprKind::Name(_) | ExprKind::Member { .. } | ExprKind::Index { .. } | ExprKind::Deref(_))
+        {
             self.error("SFC0308", v.span, "`ADR` takes the address of a variable; this is no variable");
             return Type::Error;
         }

@@ -13,26 +13,10 @@ use roxmltree::Node;
 use sfc_syntax::lexer::{lex, TokenKind};
 
 /// Operators and built-ins of CODESYS ST that IEC 61131-3 lacks.
-const VENDOR_WORDS: &[&str] = &["ADR", "ADRINST", "BITADR", "SIZEOF", "XSIZEOF", "INDEXOF", "REF", "NEW", "DELETE"];
+const VENDOR_WORDS: &[&str] = &["ADRINST", "BITADR", "SIZEOF", "XSIZEOF", "INDEXOF", "NEW", "DELETE"];
 
 /// Why the POU `p` cannot be analysed, if it cannot: its first vendor construct, in words.
 pub(super) fn reasons(cx: &Ctx, p: Node) -> Option<String> {
-    if let Some(i) = child(p, "interface") {
-        for e in i.descendants().filter(|e| e.is_element()) {
-            match e.tag_name().name() {
-                "pointer" => return Some("it declares a POINTER TO variable".into()),
-                "reference" => return Some("it declares a REFERENCE TO variable".into()),
-                "derived" => {
-                    let n = attr(e, "name").unwrap_or("").trim();
-                    let up = n.to_ascii_uppercase();
-                    if up.starts_with("POINTER TO") || up.starts_with("REFERENCE TO") {
-                        return Some(format!("it declares a `{n}` variable"));
-                    }
-                }
-                _ => {}
-            }
-        }
-    }
     for t in code_texts(p) {
         if let Some(r) = code_reason(cx, &t) {
             return Some(r);
@@ -85,9 +69,6 @@ fn code_reason(cx: &Ctx, text: &str) -> Option<String> {
                     && !cx.used.contains(&up)
                 {
                     return Some(format!("it calls `{w}`, a CODESYS operator"));
-                }
-                if (up == "POINTER" || up == "REFERENCE") && word(i + 1).eq_ignore_ascii_case("TO") {
-                    return Some(format!("it declares a `{w} TO` variable"));
                 }
                 // `A.B` where `A` names nothing of the POU or the file: a namespace, which
                 // IEC 61131-3 cannot reach. (A program's variable, `Main.X`, is reachable: the

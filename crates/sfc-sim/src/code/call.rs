@@ -371,7 +371,10 @@ impl Cx<'_, '_> {
             return Err(self.error(callee.span, format!("`{}` is not a function", callee.text)));
         }
         // `ADR(x)` (CODESYS), `REF(x)` (IEC): the slot of `x` plus one.
-        if (callee.is("ADR") || callee.is("REF")) && self.lookup(&callee.text).is_none() && self.u.function(&callee.text).is_none() {
+        if (callee.is("ADR") || callee.is("REF"))
+            && self.lookup(&callee.text).is_none()
+            && self.u.function(&callee.text).is_none()
+        {
             let [Arg { value: Some(v), .. }] = args else {
                 return Err(self.error(span, "`ADR` takes one variable"));
             };

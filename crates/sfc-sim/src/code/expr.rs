@@ -292,7 +292,9 @@ impl Cx<'_, '_> {
             ExprKind::Deref(inner) => {
                 let p = self.place(inner)?;
                 let Type::Pointer(t) = p.ty.clone() else {
-                    return Err(self.error(e.span, "`^` of what is no pointer (`THIS^` passed on is not simulated yet)"));
+                    return Err(
+                        self.error(e.span, "`^` of what is no pointer (`THIS^` passed on is not simulated yet)")
+                    );
                 };
                 Ok(PlaceC::new(Loc::Dyn(pointee(p.loc.slot_fn(), e.span)), *t))
             }
