@@ -13,7 +13,7 @@ use roxmltree::Node;
 use sfc_syntax::lexer::{lex, TokenKind};
 
 /// Operators and built-ins of CODESYS ST that IEC 61131-3 lacks.
-const VENDOR_WORDS: &[&str] = &["ADRINST", "BITADR", "SIZEOF", "XSIZEOF", "INDEXOF", "NEW", "DELETE"];
+const VENDOR_WORDS: &[&str] = &["ADR", "ADRINST", "BITADR", "SIZEOF", "XSIZEOF", "INDEXOF", "NEW", "DELETE"];
 
 /// Why the POU `p` cannot be analysed, if it cannot: its first vendor construct, in words.
 pub(super) fn reasons(cx: &Ctx, p: Node) -> Option<String> {

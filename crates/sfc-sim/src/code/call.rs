@@ -468,6 +468,13 @@ impl Cx<'_, '_> {
         for (p, v) in &bound.inputs {
             inputs.push((p.clone(), self.expr_as(v, &p.ty)?));
         }
+        let (copies_in, copies_out) = self.copies(&bound)?;
+        self.make_call(fi, inputs, copies_in, copies_out, span)
+    }
+
+    /// The copies of a call's in-outs into its frame, and of its in-outs and outputs back to
+    /// the caller's variables (a function's or a method's: copy-in/copy-out).
+    pub(crate) fn copies(&self, bound: &Bound<'_>) -> C<(Vec<(usize, AggFn)>, Vec<(usize, usize, Sink, bool)>)> {
         let mut copies_in: Vec<(usize, AggFn)> = Vec::new();
         let mut copies_out: Vec<(usize, usize, Sink, bool)> = Vec::new();
         for (p, v) in &bound.in_outs {
@@ -481,7 +488,18 @@ impl Cx<'_, '_> {
             let size = self.u.type_size(&p.ty);
             copies_out.push((p.offset as usize, size as usize, sink(target, size), *neg));
         }
-        self.make_call(fi, inputs, copies_in, copies_out, span)
+        Ok((copies_in, copies_out))
+    }
+
+    /// The value of input `p` of a call, as its frame receives it: (offset, scalar value,
+    /// aggregate value, size).
+    pub(crate) fn input_slot(&self, p: &Param, x: TExpr) -> (usize, ValFn, Option<AggFn>, usize) {
+        let size = self.u.type_size(&p.ty) as usize;
+        if kind_of(&p.ty) == Kind::Agg {
+            (p.offset as usize, Box::new(|_, _| Ok(Value::default())), Some(x.agg()), size)
+        } else {
+            (p.offset as usize, x.value(), None, size)
+        }
     }
 
     /// A call of user FUNCTION `fi` with positional values (IL: the current result first).
@@ -510,15 +528,8 @@ impl Cx<'_, '_> {
         let m = &self.u.pous[fi];
         let (roff, rty) = m.result.clone().ok_or_else(|| self.error(span, "the function has no result"))?;
         let rsize = self.u.type_size(&rty) as usize;
-        let mut ins: Vec<(usize, ValFn, Option<AggFn>, usize)> = Vec::new();
-        for (p, x) in inputs {
-            let size = self.u.type_size(&p.ty) as usize;
-            if kind_of(&p.ty) == Kind::Agg {
-                ins.push((p.offset as usize, Box::new(|_, _| Ok(Value::default())), Some(x.agg()), size));
-            } else {
-                ins.push((p.offset as usize, x.value(), None, size));
-            }
-        }
+        let ins: Vec<(usize, ValFn, Option<AggFn>, usize)> =
+            inputs.into_iter().map(|(p, x)| self.input_slot(&p, x)).collect();
         let name = m.name().to_string();
         let call = std::sync::Arc::new(FnCall { idx: fi, inputs: ins, copies_in, copies_out, span, name });
         let r = roff as usize;

@@ -9,7 +9,7 @@
 use super::call::{copy_out, run_inits, Param};
 use super::compile::InitOp;
 use super::convert::coerce;
-use super::place::{read, sink, Loc, PlaceC, Sink};
+use super::place::{Loc, PlaceC, Sink};
 use super::rt::*;
 use super::texpr::{CExpr, TExpr};
 use super::unit::{Cx, MethodKind, C};
@@ -214,31 +214,9 @@ impl Cx<'_, '_> {
         let mut inputs = Vec::new();
         for (p, v) in &bound.inputs {
             let x = self.expr_as(v, &p.ty)?;
-            let size = self.u.type_size(&p.ty) as usize;
-            if kind_of(&p.ty) == Kind::Agg {
-                inputs.push((
-                    p.offset as usize,
-                    Box::new(|_: &mut Ctx<'_>, _: usize| Ok(Value::default())) as ValFn,
-                    Some(x.agg()),
-                    size,
-                ));
-            } else {
-                inputs.push((p.offset as usize, x.value(), None, size));
-            }
+            inputs.push(self.input_slot(p, x));
         }
-        let mut copies_in: Vec<(usize, AggFn)> = Vec::new();
-        let mut copies_out: Vec<(usize, usize, Sink, bool)> = Vec::new();
-        for (p, v) in &bound.in_outs {
-            let caller = self.place(v)?;
-            let size = self.u.type_size(&p.ty);
-            copies_in.push((p.offset as usize, read(caller.clone(), size).agg()));
-            copies_out.push((p.offset as usize, size as usize, sink(caller, size), false));
-        }
-        for (p, tg, neg) in &bound.outputs {
-            let target = self.place(tg)?;
-            let size = self.u.type_size(&p.ty);
-            copies_out.push((p.offset as usize, size as usize, sink(target, size), *neg));
-        }
+        let (copies_in, copies_out) = self.copies(&bound)?;
         Ok(MethodCall { slot: t.inst.loc.slot_fn(), pou: t.pou, k, inputs, copies_in, copies_out, span, name })
     }
 
@@ -314,13 +292,9 @@ impl Cx<'_, '_> {
         let (off, ty) = (slot.offset as usize, v.ty.clone());
         let x = self.expr(value, Some(&ty))?;
         let x = coerce(x, &ty, value.span)?;
-        let size = self.u.type_size(&ty) as usize;
+        let param = Param { name: v.name.clone(), kind: VarKind::Input, offset: off as u32, ty };
         let mut call = self.compile_call(t, k, &[], span)?;
-        if kind_of(&ty) == Kind::Agg {
-            call.inputs.push((off, Box::new(|_: &mut Ctx<'_>, _: usize| Ok(Value::default())), Some(x.agg()), size));
-        } else {
-            call.inputs.push((off, x.value(), None, size));
-        }
+        call.inputs.push(self.input_slot(&param, x));
         Ok(Box::new(move |c, b| {
             call.invoke(c, b)?;
             Ok(Flow::Next)
