@@ -121,7 +121,7 @@ pub fn check_parsed(
 ) -> Checked {
     let mut tree: Tree = parsed.0.into();
     let mut diags = parsed.1;
-    if objects::any(tree.unit(), text) {
+    if objects::any(tree.unit()) {
         let mut unit = tree.into_owned();
         objects::keep_objects(&mut unit, text, &mut diags);
         tree = Tree::Owned(unit);
@@ -282,6 +282,10 @@ pub fn dependencies(unit: &ast::SourceUnit, text: &str, pou: &str) -> std::colle
             ast::Item::Pou(p) => {
                 spans.entry(p.name.text.to_ascii_uppercase()).or_insert(p.span);
             }
+            // An interface is depended on by the blocks implementing it and the code naming it.
+            ast::Item::Interface(i) => {
+                spans.entry(i.name.text.to_ascii_uppercase()).or_insert(i.span);
+            }
             // A POU kept as written is depended on like any other.
             ast::Item::Verbatim(v)
                 if matches!(v.keyword.as_str(), "PROGRAM" | "FUNCTION_BLOCK" | "FUNCTION" | "INTERFACE") =>
@@ -323,6 +327,7 @@ pub fn errors_for(checked: &Checked, pou: &str) -> Vec<Diagnostic> {
         .iter()
         .filter_map(|i| match i {
             ast::Item::Pou(p) => Some((p.name.text.to_ascii_uppercase(), p.span)),
+            ast::Item::Interface(i) => Some((i.name.text.to_ascii_uppercase(), i.span)),
             _ => None,
         })
         .collect();

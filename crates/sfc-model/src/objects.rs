@@ -1,36 +1,24 @@
-//! What of object orientation the checker and the simulator do not know yet: interfaces (and
-//! calls through them) and `THIS^` passed on. The parser reads and the printer writes them; a POU that holds one
-//! is kept as written (a block others may name, as an import's kept POU is) with one note that
-//! names the first such construct and its line, and so is a block extending a kept one; nothing
-//! of it is lost, and the other POUs of the file are checked as usual. Methods, properties,
-//! `EXTENDS` (with overriding), `IMPLEMENTS`, `THIS^.x`, `SUPER^.M()`, pointers (`POINTER TO`,
-//! `ADR`, `p^`) and references (`REFERENCE TO`, `REF=`) are checked by sfc-st and simulated.
+//! What of object orientation the checker cannot analyse: a block extending one the file does
+//! not analyse (a library's block, or one kept as written), whose inherited variables and
+//! methods are unknown. Such a POU is kept as written (a block others may name, as an import's
+//! kept POU is) with one note that names why; nothing of it is lost, and the other POUs of the
+//! file are checked as usual. Methods, properties, interfaces (and calls through them),
+//! `EXTENDS` (with overriding), `IMPLEMENTS`, `THIS^`, `SUPER^`, pointers (`POINTER TO`, `ADR`,
+//! `p^`) and references (`REFERENCE TO`, `REF=`) are checked by sfc-st and simulated.
 
 use sfc_diagnostics::{Diagnostic, Span};
-use sfc_syntax::ast::{self, Item, Pou};
-use sfc_syntax::lexer::{lex, TokenKind};
+use sfc_syntax::ast::{self, Item};
 
 /// Whether `unit` holds anything [`keep_objects`] would keep as written.
-pub(crate) fn any(unit: &ast::SourceUnit, text: &str) -> bool {
-    unit.items.iter().any(|i| match i {
-        Item::Interface(_) => true,
-        Item::Pou(p) => p.extends.is_some() || first_construct(p, text).is_some(),
-        _ => false,
-    })
+pub(crate) fn any(unit: &ast::SourceUnit) -> bool {
+    unit.items.iter().any(|i| matches!(i, Item::Pou(p) if p.extends.is_some()))
 }
 
-/// Replaces every interface, and every POU holding a construct the checker does not know yet,
-/// by a block kept as written, with a note (SFC0104) naming why.
+/// Replaces every POU extending a block the file does not analyse by a block kept as written,
+/// with a note (SFC0104) naming why.
 pub(crate) fn keep_objects(unit: &mut ast::SourceUnit, text: &str, diags: &mut Vec<Diagnostic>) {
-    // Why each POU is kept, by upper-case name; then those extending a kept one, transitively.
+    // Why each POU is kept, by upper-case name: those extending a kept one, transitively.
     let mut why: std::collections::HashMap<String, (String, Span)> = std::collections::HashMap::new();
-    for i in &unit.items {
-        if let Item::Pou(p) = i {
-            if let Some(w) = first_construct(p, text) {
-                why.insert(p.name.key(), w);
-            }
-        }
-    }
     // A block extending one the file does not analyse (kept as written, or not declared in the
     // file: a library's) is kept too: its inherited variables and methods are unknown.
     let analysed: std::collections::HashSet<String> = unit
@@ -63,17 +51,6 @@ pub(crate) fn keep_objects(unit: &mut ast::SourceUnit, text: &str, diags: &mut V
     }
     for item in unit.items.iter_mut() {
         let (keyword, name, attributes, span, why) = match item {
-            Item::Interface(i) => (
-                "INTERFACE",
-                i.name.clone(),
-                i.attributes.clone(),
-                i.span,
-                (
-                    "an interface: sfc reads and prints it, and does not type-check or simulate calls through interfaces yet"
-                        .to_string(),
-                    i.name.span,
-                ),
-            ),
             Item::Pou(p) => match why.remove(&p.name.key()) {
                 Some(why) => (p.kind.keyword(), p.name.clone(), p.attributes.clone(), p.span, why),
                 None => continue,
@@ -97,32 +74,4 @@ pub(crate) fn keep_objects(unit: &mut ast::SourceUnit, text: &str, diags: &mut V
             span,
         });
     }
-}
-
-/// The first construct of `p` the checker does not know yet, in words, with its span.
-fn first_construct(p: &Pou, text: &str) -> Option<(String, Span)> {
-    // `THIS^` passed on as a value: found in the POU's tokens.
-    let body = text.get(p.span.start as usize..p.span.end as usize)?;
-    // Most POUs hold none: no second lexing of them.
-    if !body.contains('^') {
-        return None;
-    }
-    let (toks, _) = lex(p.span.file, body);
-    let sig: Vec<_> = toks.iter().filter(|t| !t.kind.is_trivia()).collect();
-    for (k, t) in sig.iter().enumerate() {
-        if t.kind != TokenKind::Caret {
-            continue;
-        }
-        let at = Span::new(p.span.file, p.span.start + t.start, p.span.start + t.end);
-        let before = k.checked_sub(1).and_then(|j| sig.get(j)).map_or("", |b| &body[b.start as usize..b.end as usize]);
-        let after = sig.get(k + 1).map_or("", |n| &body[n.start as usize..n.end as usize]);
-        // `THIS^.x`, `THIS^.M()`, `SUPER^.M()`, `SUPER^()`: the block itself, typed and simulated.
-        if before.eq_ignore_ascii_case("THIS") && after != "." {
-            return Some((
-                "it passes `THIS^` on; sfc does not type-check or simulate references to blocks yet".into(),
-                at,
-            ));
-        }
-    }
-    None
 }

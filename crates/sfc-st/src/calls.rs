@@ -151,6 +151,28 @@ impl Checker<'_, '_> {
             return;
         }
         let env = self.scope.env();
+        // `itf.M(…)`: a method of the interface, run on the instance it designates.
+        if let Type::Interface(i) = &ty {
+            match env.interface(i).map(|itf| (itf.method(&member.text).cloned(), itf)) {
+                Some((Some(m), _)) => {
+                    self.method_call(&m, args, span, false);
+                }
+                Some((None, itf)) => {
+                    let mut d = Diagnostic::new(
+                        "SFC0306",
+                        member.span,
+                        format!("interface `{}` has no method `{}`", itf.name, member.text),
+                    );
+                    if let Some(s) = closest(&member.text, itf.methods.iter().map(|m| m.name.as_str())) {
+                        d = d.with_note(format!("did you mean `{s}`?"));
+                    }
+                    self.report(d);
+                    self.check_args_loosely(args);
+                }
+                None => self.check_args_loosely(args),
+            }
+            return;
+        }
         let fb = env.fb_of(&ty).cloned();
         // `inst.Inner(…)`: a call of a function block instance inside `inst` (CODESYS calls an
         // instance passed in an input so: `xPPU.Stack();`).
@@ -375,7 +397,7 @@ impl Checker<'_, '_> {
             self.error("SFC0307", target.span, format!("only a BOOL output can be negated; `{param}` is `{ty}`"));
             return;
         }
-        if !ty.assignable_to(&tt) {
+        if !self.assignable(ty, &tt) {
             self.error(
                 "SFC0302",
                 target.span,
@@ -390,7 +412,7 @@ impl Checker<'_, '_> {
     /// `value` passed to input `param` of type `ty` of `owner`.
     fn input_binding(&mut self, owner: &str, param: &str, ty: &Type, value: &Expr) {
         let t = self.check_expr(value, Some(ty));
-        if !t.assignable_to(ty) {
+        if !self.assignable(&t, ty) {
             let p = self.phrase(value, &t);
             self.error(
                 "SFC0302",

@@ -383,7 +383,7 @@ impl<'s, 'e> Checker<'s, 'e> {
             StmtKind::Assign { target, value } => {
                 let tt = self.target(target);
                 let vt = self.check_expr(value, Some(&tt));
-                if !vt.assignable_to(&tt) {
+                if !self.assignable(&vt, &tt) {
                     let what = self.phrase(value, &vt);
                     let msg = match &target.kind {
                         ExprKind::Name(id) => {
@@ -701,10 +701,13 @@ impl<'s, 'e> Checker<'s, 'e> {
                     self.check_args_loosely(args);
                     return Type::Error;
                 }
-                if let Some(m) = self.scope.env().fb_of(&bt).and_then(|fb| fb.method(&member.text)).cloned() {
+                if let Some(m) = self.scope.env().method_of(&bt, &member.text).cloned() {
                     return self.method_call(&m, args, e.span, true);
                 }
                 self.member_call_stmt(base, member, args, e.span);
+                if matches!(bt, Type::Interface(_)) {
+                    return Type::Error; // no such method: reported
+                }
                 self.error(
                     "SFC0302",
                     e.span,
@@ -1004,6 +1007,17 @@ impl<'s, 'e> Checker<'s, 'e> {
         Type::Pointer(Box::new(t))
     }
 
+    /// Whether a value of type `from` may be assigned to a variable of type `to`: as
+    /// [`Type::assignable_to`], and an instance or interface to an interface it implements.
+    pub(crate) fn assignable(&self, from: &Type, to: &Type) -> bool {
+        match to {
+            Type::Interface(i) if matches!(from, Type::FunctionBlock(_) | Type::Interface(_)) => {
+                self.scope.env().converts_to_interface(from, i)
+            }
+            _ => from.assignable_to(to),
+        }
+    }
+
     /// A property of the POU whose code this is, named without `THIS^.`.
     fn own_property(&self, name: &str) -> Option<crate::env::PropSig> {
         let env = self.scope.env();
@@ -1164,6 +1178,31 @@ impl<'s, 'e> Checker<'s, 'e> {
                     Type::Error
                 }
             },
+            Type::Interface(name) => {
+                let env = self.scope.env();
+                let Some(itf) = env.interface(name) else { return Type::Error };
+                if let Some(p) = itf.property(&member.text) {
+                    let p = p.clone();
+                    return self.property_access(&p, member, write);
+                }
+                let mut d = Diagnostic::new(
+                    "SFC0309",
+                    member.span,
+                    format!("interface `{}` has no property `{}`", itf.name, member.text),
+                );
+                if itf.method(&member.text).is_some() {
+                    d = d.with_note(format!(
+                        "`{}` is a method: call it, `{}.{}(…)`",
+                        member.text,
+                        expr_text(base),
+                        member.text
+                    ));
+                } else if let Some(s) = closest(&member.text, itf.properties.iter().map(|p| p.name.as_str())) {
+                    d = d.with_note(format!("did you mean `{s}`?"));
+                }
+                self.report(d);
+                Type::Error
+            }
             Type::FunctionBlock(fb_name) => {
                 let env = self.scope.env();
                 let Some(fb) = env.function_block(fb_name) else { return Type::Error };
@@ -1811,7 +1850,7 @@ pub(crate) fn fit(u: Untyped, t: &Type) -> Fit {
                 };
             }
             // A pointer is set to, and compared with, 0 (none).
-            if matches!(t_base, Type::Pointer(_)) {
+            if matches!(t_base, Type::Pointer(_) | Type::Interface(_)) {
                 return if v == Some(0) { Fit::Fits } else { Fit::WrongKind };
             }
             let Some((lo, hi)) = t.int_range() else { return Fit::WrongKind };

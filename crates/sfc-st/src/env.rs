@@ -169,6 +169,39 @@ pub struct PouInterface {
     pub properties: Vec<PropSig>,
     /// `EXTENDS Base`: the base block's name as written.
     pub base: Option<String>,
+    /// `IMPLEMENTS I_A, I_B`: the interfaces' names as written (its own, not its base's).
+    pub implements: Vec<String>,
+}
+
+/// An `INTERFACE` (IEC 61131-3 3rd edition): the methods and properties every block
+/// implementing it has; a variable of its type calls them on the instance it designates.
+#[derive(Debug, Clone, PartialEq)]
+pub struct InterfaceInfo {
+    /// The name as declared.
+    pub name: String,
+    /// `EXTENDS I_Base, …`: the interfaces' names as written.
+    pub extends: Vec<String>,
+    /// Its methods: its own, then those of the interfaces it extends.
+    pub methods: Vec<MethodSig>,
+    /// Its properties, as [`InterfaceInfo::methods`].
+    pub properties: Vec<PropSig>,
+    /// The properties declared without GET and SET (upper-case): read and written through the
+    /// interface, and a block implementing it may have either accessor.
+    pub open_properties: Vec<String>,
+    /// The span of its name.
+    pub span: Span,
+}
+
+impl InterfaceInfo {
+    /// The method with this name (case-insensitive).
+    pub fn method(&self, name: &str) -> Option<&MethodSig> {
+        self.methods.iter().find(|m| m.name.eq_ignore_ascii_case(name))
+    }
+
+    /// The property with this name (case-insensitive).
+    pub fn property(&self, name: &str) -> Option<&PropSig> {
+        self.properties.iter().find(|p| p.name.eq_ignore_ascii_case(name))
+    }
 }
 
 /// A method of a function block (or program), or one accessor of a property: its variables
@@ -204,6 +237,7 @@ impl MethodSig {
             methods: Vec::new(),
             properties: Vec::new(),
             base: None,
+            implements: Vec::new(),
         }
     }
 }
@@ -296,6 +330,8 @@ pub struct TypeEnv {
     reached: std::collections::HashSet<(String, String)>,
     /// Upper-case names of the blocks that POUs kept as written extend.
     opaque_bases: std::collections::HashSet<String>,
+    /// The interfaces, by upper-case name.
+    interfaces: FxHashMap<String, InterfaceInfo>,
 }
 
 impl TypeEnv {
@@ -377,9 +413,15 @@ impl TypeEnv {
                         b.opaque.insert(name.key());
                     }
                 }
-                // An interface is a type others may name; what it holds is not checked yet.
                 Item::Interface(i) => {
-                    b.opaque.insert(i.name.key());
+                    let key = i.name.key();
+                    if let Some(prev) = b.name_span(&key) {
+                        diags.push(duplicate(&i.name, prev, "INTERFACE"));
+                    } else if reserved(&key) {
+                        diags.push(reserved_name(&i.name, "INTERFACE"));
+                    } else {
+                        b.interfaces.insert(key, i.name.span);
+                    }
                 }
                 Item::Globals(_) => {}
             }
@@ -421,7 +463,19 @@ impl TypeEnv {
             }
         }
 
+        // Interfaces, then what each inherits from those it extends.
+        for item in &unit.items {
+            if let Item::Interface(i) = item {
+                if b.interfaces.get(&i.name.key()) == Some(&i.name.span) {
+                    let info = b.interface_info(i, &mut diags);
+                    env.interfaces.insert(i.name.key(), info);
+                }
+            }
+        }
+        inherit_interfaces(&mut env.interfaces, &mut diags);
+
         inherit(&mut env.pous, &env.pou_index, &mut diags);
+        check_implements(&env, &mut diags);
 
         // VAR_GLOBAL inside a PROGRAM (IEC 61131-3 2nd ed.) is reachable from the blocks it
         // calls through VAR_EXTERNAL, like a file-level global.
@@ -511,6 +565,55 @@ impl TypeEnv {
     /// All declared data types.
     pub fn type_defs(&self) -> impl Iterator<Item = &TypeDef> {
         self.types.values()
+    }
+
+    /// An interface by name (case-insensitive).
+    pub fn interface(&self, name: &str) -> Option<&InterfaceInfo> {
+        self.interfaces.get(&name.to_ascii_uppercase())
+    }
+
+    /// Whether a value of type `from` may be assigned to (or passed as) an interface `to`: an
+    /// instance of a block that implements it (itself, through an interface extending it, or
+    /// through its base blocks), or an interface that is it or extends it.
+    pub fn converts_to_interface(&self, from: &Type, to: &str) -> bool {
+        let extends =
+            |i: &str| interface_chain(&self.interfaces, i).is_ok_and(|c| c.iter().any(|k| k.eq_ignore_ascii_case(to)));
+        match from {
+            Type::Interface(i) => extends(i),
+            Type::FunctionBlock(fb) => {
+                let mut at = self.function_block(fb);
+                let mut hops = 0;
+                while let Some(p) = at {
+                    if p.implements.iter().any(|i| extends(i)) {
+                        return true;
+                    }
+                    hops += 1;
+                    if hops > 64 {
+                        return false;
+                    }
+                    at = p.base.as_deref().and_then(|b| self.function_block(b));
+                }
+                false
+            }
+            _ => false,
+        }
+    }
+
+    /// The method `name` of a value of type `ty`: of the block of an instance, or of an
+    /// interface.
+    pub fn method_of(&self, ty: &Type, name: &str) -> Option<&MethodSig> {
+        match ty {
+            Type::Interface(i) => self.interface(i)?.method(name),
+            _ => self.fb_of(ty)?.method(name),
+        }
+    }
+
+    /// The property `name` of a value of type `ty`, as [`TypeEnv::method_of`].
+    pub fn property_of(&self, ty: &Type, name: &str) -> Option<&PropSig> {
+        match ty {
+            Type::Interface(i) => self.interface(i)?.property(name),
+            _ => self.fb_of(ty)?.property(name),
+        }
     }
 
     /// A user POU by name (the first one declared with that name).
@@ -692,6 +795,7 @@ fn standard_fb(name: &str) -> Option<PouInterface> {
         methods: Vec::new(),
         properties: Vec::new(),
         base: None,
+        implements: Vec::new(),
     })
 }
 
@@ -777,12 +881,18 @@ struct Builder<'a> {
     local_consts: HashMap<String, Value>,
     /// POUs kept as written: opaque types.
     opaque: std::collections::HashSet<String>,
+    /// Interfaces: where each name was declared.
+    interfaces: HashMap<String, Span>,
 }
 
 impl<'a> Builder<'a> {
     /// Where a type or POU name was first declared.
     fn name_span(&self, key: &str) -> Option<Span> {
-        self.decls.get(key).map(|d| d.name.span).or_else(|| self.pou_kinds.get(key).map(|(_, s)| *s))
+        self.decls
+            .get(key)
+            .map(|d| d.name.span)
+            .or_else(|| self.pou_kinds.get(key).map(|(_, s)| *s))
+            .or_else(|| self.interfaces.get(key).copied())
     }
 
     fn resolve_decl(&mut self, key: &str, diags: &mut Vec<Diagnostic>) -> Type {
@@ -896,9 +1006,10 @@ impl<'a> Builder<'a> {
             sfc,
             actions: pou.actions().map(|a| a.name.text.clone()).collect(),
             sfc_actions: sfc_actions(pou),
-            methods: pou.methods.iter().map(|m| self.method_sig(pou, m, diags)).collect(),
-            properties: pou.properties.iter().map(|p| self.property_sig(pou, p, diags)).collect(),
+            methods: pou.methods.iter().map(|m| self.method_sig(&pou.name.text, m, diags)).collect(),
+            properties: pou.properties.iter().map(|p| self.property_sig(&pou.name.text, p, diags)).collect(),
             base: pou.extends.as_ref().map(|b| b.text.clone()),
+            implements: pou.implements.iter().map(|i| i.text.clone()).collect(),
         };
         // A method or property shares the block's namespace with its variables.
         let names =
@@ -942,22 +1053,22 @@ impl<'a> Builder<'a> {
         vars
     }
 
-    fn method_sig(&mut self, pou: &Pou, m: &sfc_syntax::ast::Method, diags: &mut Vec<Diagnostic>) -> MethodSig {
+    fn method_sig(&mut self, owner: &str, m: &sfc_syntax::ast::Method, diags: &mut Vec<Diagnostic>) -> MethodSig {
         let vars = self.own_vars(&m.var_blocks, diags);
         MethodSig {
             name: m.name.text.clone(),
-            owner: pou.name.text.clone(),
+            owner: owner.to_string(),
             vars,
             return_type: m.return_type.as_ref().map(|spec| resolve_spec(self, spec, None, diags)),
             span: m.name.span,
         }
     }
 
-    fn property_sig(&mut self, pou: &Pou, p: &sfc_syntax::ast::Property, diags: &mut Vec<Diagnostic>) -> PropSig {
+    fn property_sig(&mut self, owner: &str, p: &sfc_syntax::ast::Property, diags: &mut Vec<Diagnostic>) -> PropSig {
         let ty = resolve_spec(self, &p.ty, None, diags);
         let get = p.get.as_ref().map(|a| MethodSig {
             name: p.name.text.clone(),
-            owner: pou.name.text.clone(),
+            owner: owner.to_string(),
             vars: self.own_vars(&a.var_blocks, diags),
             return_type: Some(ty.clone()),
             span: p.name.span,
@@ -982,13 +1093,46 @@ impl<'a> Builder<'a> {
             );
             MethodSig {
                 name: p.name.text.clone(),
-                owner: pou.name.text.clone(),
+                owner: owner.to_string(),
                 vars,
                 return_type: None,
                 span: p.name.span,
             }
         });
-        PropSig { name: p.name.text.clone(), owner: pou.name.text.clone(), ty, get, set, span: p.name.span }
+        PropSig { name: p.name.text.clone(), owner: owner.to_string(), ty, get, set, span: p.name.span }
+    }
+
+    /// An interface's own methods and properties. A property of an interface written without
+    /// GET and SET (CODESYS's text declares neither) has both.
+    fn interface_info(&mut self, i: &sfc_syntax::ast::Interface, diags: &mut Vec<Diagnostic>) -> InterfaceInfo {
+        let owner = i.name.text.as_str();
+        let methods = i.methods.iter().map(|m| self.method_sig(owner, m, diags)).collect();
+        let open_properties =
+            i.properties.iter().filter(|p| p.get.is_none() && p.set.is_none()).map(|p| p.name.key()).collect();
+        let properties = i
+            .properties
+            .iter()
+            .map(|p| {
+                let mut sig = self.property_sig(owner, p, diags);
+                if p.get.is_none() && p.set.is_none() {
+                    let both = sfc_syntax::ast::Property {
+                        get: Some(empty_accessor(p.span)),
+                        set: Some(empty_accessor(p.span)),
+                        ..p.clone()
+                    };
+                    sig = self.property_sig(owner, &both, diags);
+                }
+                sig
+            })
+            .collect();
+        InterfaceInfo {
+            name: i.name.text.clone(),
+            extends: i.extends.iter().map(|e| e.text.clone()).collect(),
+            methods,
+            properties,
+            open_properties,
+            span: i.name.span,
+        }
     }
 }
 
@@ -1077,6 +1221,152 @@ fn inherit(pous: &mut [PouInterface], index: &FxHashMap<String, usize>, diags: &
     }
 }
 
+/// An accessor without variables or code: what an interface's property declares.
+fn empty_accessor(span: Span) -> sfc_syntax::ast::Accessor {
+    sfc_syntax::ast::Accessor {
+        modifiers: Vec::new(),
+        attributes: Vec::new(),
+        var_blocks: Vec::new(),
+        body: sfc_syntax::ast::Body::St(Vec::new()),
+        span,
+    }
+}
+
+/// The interfaces `name` extends, itself first, each once (upper-case); `Err` with the
+/// unknown one, or on a cycle back to `name`.
+fn interface_chain(interfaces: &FxHashMap<String, InterfaceInfo>, name: &str) -> Result<Vec<String>, String> {
+    let first = name.to_ascii_uppercase();
+    let mut out = vec![first.clone()];
+    let mut k = 0;
+    while let Some(n) = out.get(k).cloned() {
+        k += 1;
+        let Some(i) = interfaces.get(&n) else { return Err(n) };
+        for e in &i.extends {
+            let key = e.to_ascii_uppercase();
+            if key == first {
+                return Err(format!("itself through `{}`", i.name));
+            }
+            if !out.contains(&key) {
+                out.push(key);
+            }
+        }
+    }
+    Ok(out)
+}
+
+/// `INTERFACE I EXTENDS A, B`: `I` gets the methods and properties of `A` and `B` it does not
+/// declare itself. Unknown interfaces and cycles are reported (SFC0313).
+fn inherit_interfaces(interfaces: &mut FxHashMap<String, InterfaceInfo>, diags: &mut Vec<Diagnostic>) {
+    let originals = interfaces.clone();
+    let mut keys: Vec<&String> = originals.keys().collect();
+    keys.sort_by_key(|k| originals[*k].span);
+    for key in keys {
+        let info = &originals[key];
+        let chain = match interface_chain(&originals, key) {
+            Ok(c) => c,
+            Err(why) => {
+                let what =
+                    if why.starts_with("itself") { why } else { format!("`{why}`, which is not a declared interface") };
+                diags.push(Diagnostic::new("SFC0313", info.span, format!("interface `{}` extends {what}", info.name)));
+                continue;
+            }
+        };
+        let Some(me) = interfaces.get_mut(key) else { continue };
+        for other in chain.iter().skip(1).filter_map(|k| originals.get(k)) {
+            for m in &other.methods {
+                if me.method(&m.name).is_none() {
+                    me.methods.push(m.clone());
+                }
+            }
+            for p in &other.properties {
+                if me.property(&p.name).is_none() {
+                    me.properties.push(p.clone());
+                    if other.open_properties.contains(&p.name.to_ascii_uppercase()) {
+                        me.open_properties.push(p.name.to_ascii_uppercase());
+                    }
+                }
+            }
+        }
+    }
+}
+
+/// `FUNCTION_BLOCK B IMPLEMENTS I`: `I` is a declared interface and `B` (with what it
+/// inherits) has each of its methods and properties, with the same result type and inputs
+/// (SFC0313 otherwise).
+fn check_implements(env: &TypeEnv, diags: &mut Vec<Diagnostic>) {
+    for pou in &env.pous {
+        for name in &pou.implements {
+            if env.is_opaque(name) {
+                continue;
+            }
+            let Some(itf) = env.interface(name) else {
+                let what = if env.pou(name).is_some() { "a POU, not an interface" } else { "not declared" };
+                diags.push(Diagnostic::new(
+                    "SFC0313",
+                    pou.span,
+                    format!("`{}` implements `{name}`, which is {what}", pou.name),
+                ));
+                continue;
+            };
+            for m in &itf.methods {
+                let params = |s: &MethodSig| -> Vec<(VarKind, String, Type)> {
+                    s.vars
+                        .iter()
+                        .filter(|v| matches!(v.kind, VarKind::Input | VarKind::Output | VarKind::InOut))
+                        .map(|v| (v.kind, v.name.to_ascii_uppercase(), v.ty.clone()))
+                        .collect()
+                };
+                match pou.method(&m.name) {
+                    None => diags.push(Diagnostic::new(
+                        "SFC0313",
+                        pou.span,
+                        format!("`{}` implements `{}` but has no method `{}`", pou.name, itf.name, m.name),
+                    )),
+                    Some(own) if own.return_type != m.return_type || params(own) != params(m) => diags.push(
+                        Diagnostic::new(
+                            "SFC0313",
+                            own.span,
+                            format!(
+                                "method `{}` of `{}` differs from its prototype in interface `{}` (result or parameters)",
+                                own.name, pou.name, itf.name
+                            ),
+                        )
+                        .with_label(m.span, "the prototype"),
+                    ),
+                    Some(_) => {}
+                }
+            }
+            for p in &itf.properties {
+                let own = pou.property(&p.name);
+                let open = itf.open_properties.contains(&p.name.to_ascii_uppercase());
+                let ok = own.is_some_and(|o| {
+                    o.ty == p.ty
+                        && (open || ((p.get.is_none() || o.get.is_some()) && (p.set.is_none() || o.set.is_some())))
+                });
+                if !ok {
+                    diags.push(Diagnostic::new(
+                        "SFC0313",
+                        own.map_or(pou.span, |o| o.span),
+                        format!(
+                            "`{}` implements `{}` but has no property `{}` of type `{}` with {}",
+                            pou.name,
+                            itf.name,
+                            p.name,
+                            p.ty,
+                            match (p.get.is_some(), p.set.is_some()) {
+                                _ if open => "GET or SET",
+                                (true, true) => "GET and SET",
+                                (true, false) => "GET",
+                                _ => "SET",
+                            }
+                        ),
+                    ));
+                }
+            }
+        }
+    }
+}
+
 struct ChainConsts<'a> {
     a: &'a HashMap<String, Value>,
     b: &'a HashMap<String, Value>,
@@ -1097,6 +1387,9 @@ impl TypeNames for Builder<'_> {
         }
         if self.opaque.contains(&key) {
             return Named::Type(Type::Error);
+        }
+        if self.interfaces.contains_key(&key) {
+            return Named::Type(Type::Interface(key));
         }
         match self.pou_kinds.get(&key) {
             Some((PouKind::Function, _)) => Named::NotAType("a function"),

@@ -40,7 +40,8 @@ mod tests;
 
 pub use check::Checker;
 pub use env::{
-    is_sfc_control_variable, sfc_control_variables, MethodSig, PouInterface, PropSig, TypeDef, TypeEnv, VarInfo,
+    is_sfc_control_variable, sfc_control_variables, InterfaceInfo, MethodSig, PouInterface, PropSig, TypeDef, TypeEnv,
+    VarInfo,
 };
 pub use il::{parse_il_op, IlOp};
 pub use scope::{Binding, Scope, Usage};

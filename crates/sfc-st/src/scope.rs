@@ -155,6 +155,7 @@ impl<'e> Scope<'e> {
             methods: Vec::new(),
             properties: Vec::new(),
             base: None,
+            implements: Vec::new(),
         };
         let mut scope = Scope::for_interface(env, &iface);
         scope.pending = pending;

@@ -94,6 +94,9 @@ pub enum Type {
     },
     /// An instance of a function block (standard or user); the type name, upper-case.
     FunctionBlock(String),
+    /// A variable of an interface type (`INTERFACE I_Cyl`, IEC 61131-3 3rd edition): it designates
+    /// an instance of a block that implements the interface, `0` for none; the name, upper-case.
+    Interface(String),
     /// `POINTER TO T` (CODESYS): the address of a `T`, `0` for none; `p^` is the `T`.
     Pointer(Box<Type>),
     /// `REFERENCE TO T` (CODESYS) or `REF_TO T`: an alias of a `T`, set by `r REF= x`; read and
@@ -169,8 +172,9 @@ impl Generic {
         }
         match self {
             Generic::Any => true,
-            // A pointer is compared (`p <> 0`, `p = q`) as an address.
-            Generic::AnyElementary => ty.is_elementary() || matches!(ty, Type::Pointer(_)),
+            // A pointer is compared (`p <> 0`, `p = q`) as an address, an interface as what it
+            // designates.
+            Generic::AnyElementary => ty.is_elementary() || matches!(ty, Type::Pointer(_) | Type::Interface(_)),
             Generic::AnyMagnitude => ty.is_num() || ty.is_duration(),
             Generic::AnyNum => ty.is_num(),
             Generic::AnyReal => ty.is_real(),
@@ -522,7 +526,7 @@ impl fmt::Display for Type {
                 return f.write_str(")");
             }
             Type::Subrange { base, lo, hi } => return write!(f, "{base} ({lo}..{hi})"),
-            Type::FunctionBlock(n) => n,
+            Type::FunctionBlock(n) | Type::Interface(n) => n,
             Type::Error => "<error>",
         };
         f.write_str(s)

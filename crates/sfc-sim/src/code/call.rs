@@ -244,6 +244,9 @@ impl Cx<'_, '_> {
 
     /// `inst.Act();`: action `Act` of the function block type of `inst`, run on the instance.
     fn member_call(&self, base: &Expr, member: &Ident, args: &[Arg], span: Span) -> C<StmtFn> {
+        if let Some(f) = self.interface_stmt(base, member, args, span)? {
+            return Ok(f);
+        }
         if let Some((t, k)) = self.member_method(base, member)? {
             return self.method_stmt(t, k, args, span);
         }

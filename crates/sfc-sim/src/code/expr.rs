@@ -120,6 +120,23 @@ impl Cx<'_, '_> {
             let ty = self.recorded(e).or_else(|| expected.cloned()).unwrap_or_else(|| natural(u));
             return Ok(untyped_const(u, &ty));
         }
+        // An instance (or `THIS^`) where an interface is expected: the value designating it.
+        if let Some(t @ Type::Interface(_)) = expected {
+            if let Some(v) = self.interface_value(e, t)? {
+                return Ok(v);
+            }
+        }
+        // `itf.P`, `itf.M(…)`: the property or method of the instance an interface designates.
+        if let ExprKind::Member { base, member } = &e.kind {
+            if let Some(v) = self.interface_get(base, member)? {
+                return Ok(v);
+            }
+        }
+        if let ExprKind::MemberCall { base, member, args } = &e.kind {
+            if let Some(v) = self.interface_method_value(base, member, args, e.span)? {
+                return Ok(v);
+            }
+        }
         match &e.kind {
             ExprKind::Literal(lit) => self.literal(lit, e),
             ExprKind::Name(id) => self.name(id, e),

@@ -10,6 +10,7 @@ use super::call::{copy_out, run_inits, Param};
 use super::compile::InitOp;
 use super::convert::coerce;
 use super::place::{Loc, PlaceC, Sink};
+use super::rt::fault;
 use super::rt::*;
 use super::texpr::{CExpr, TExpr};
 use super::unit::{Cx, MethodKind, C};
@@ -243,31 +244,36 @@ impl Cx<'_, '_> {
             return Err(self.error(span, format!("method `{}` returns no value", mm.sig.name)));
         };
         let r = mm.vars.last().map(|s| s.offset as usize).unwrap_or(0);
+        let run: LocFn = Arc::new(move |c, b| Ok(call.invoke(c, b)? + r));
+        Ok(self.result_at(rt, run))
+    }
+
+    /// The value of type `rt` in the slot `run` returns, after running what it runs.
+    fn result_at(&self, rt: Type, run: LocFn) -> TExpr {
         let rsize = self.u.type_size(&rt) as usize;
-        let call = Arc::new(call);
         let e = match kind_of(&rt) {
             Kind::Bool => CExpr::Bool(Box::new(move |c, b| {
-                let ib = call.invoke(c, b)?;
-                Ok(bool_of(&c.mem[ib + r]))
+                let s = run(c, b)?;
+                Ok(bool_of(&c.mem[s]))
             })),
             Kind::Int => CExpr::Int(Box::new(move |c, b| {
-                let ib = call.invoke(c, b)?;
-                Ok(int_of(&c.mem[ib + r]))
+                let s = run(c, b)?;
+                Ok(int_of(&c.mem[s]))
             })),
             Kind::Real => CExpr::Real(Box::new(move |c, b| {
-                let ib = call.invoke(c, b)?;
-                Ok(real_of(&c.mem[ib + r]))
+                let s = run(c, b)?;
+                Ok(real_of(&c.mem[s]))
             })),
             Kind::Str => CExpr::Str(Box::new(move |c, b| {
-                let ib = call.invoke(c, b)?;
-                Ok(str_of(&c.mem[ib + r]))
+                let s = run(c, b)?;
+                Ok(str_of(&c.mem[s]))
             })),
             Kind::Agg => CExpr::Agg(Box::new(move |c, b| {
-                let ib = call.invoke(c, b)?;
-                Ok(c.mem[ib + r..ib + r + rsize].to_vec())
+                let s = run(c, b)?;
+                Ok(c.mem[s..s + rsize].to_vec())
             })),
         };
-        Ok(TExpr::new(e, rt, false))
+        TExpr::new(e, rt, false)
     }
 
     /// A property read: its GET run on the instance, then its result.
@@ -333,5 +339,199 @@ impl Cx<'_, '_> {
         let cx = Cx { u: self.u, pou: self.pou, method: None, owner: None };
         let e = Expr { kind: ExprKind::Name(member.clone()), span: member.span };
         cx.place(&e).map(Some)
+    }
+}
+
+// ---------------------------------------------------------------------------------------------
+// Interfaces: a variable of an interface type designates an instance of a block implementing
+// it. Its value is the instance's frame slot plus one in the low 40 bits and the block (its
+// POU index plus one) above, 0 for none; a call through it runs the method of the instance's
+// own block (docs/sim.md, "Interfaces").
+
+const ITF_SHIFT: u32 = 40;
+
+/// The value of an interface designating the instance at `slot` of block `pou`.
+fn itf_value(slot: usize, pou: usize) -> i64 {
+    ((pou as i64 + 1) << ITF_SHIFT) | (slot as i64 + 1)
+}
+
+/// The instance's slot and block an interface value designates; `None` for none (0).
+fn itf_target(v: i64) -> Option<(usize, usize)> {
+    if v <= 0 {
+        return None;
+    }
+    let slot = (v & ((1i64 << ITF_SHIFT) - 1)) - 1;
+    let pou = (v >> ITF_SHIFT) - 1;
+    (slot >= 0 && pou >= 0).then_some((slot as usize, pou as usize))
+}
+
+/// The instance (slot, block) the interface in slot `at` designates, a fault for none.
+fn designated(c: &Ctx<'_>, at: usize, span: Span) -> R<(usize, usize)> {
+    match itf_target(int_of(&c.mem[at])) {
+        Some((slot, pou)) if slot < c.mem.len() => Ok((slot, pou)),
+        Some(_) => Err(fault("an interface designates no instance", span)),
+        None => Err(fault("an interface that designates nothing (0) is used", span)),
+    }
+}
+
+impl Cx<'_, '_> {
+    /// `itf := inst`, `itf := THIS^`, an instance passed to an interface input: the value
+    /// designating it. `None` when `e` is no instance of a user block.
+    pub(crate) fn interface_value(&self, e: &Expr, itf: &Type) -> C<Option<TExpr>> {
+        let Some(Type::FunctionBlock(fb)) = self.recorded(e) else { return Ok(None) };
+        let (at, pou) = match Self::self_ref(e) {
+            Some(_) => {
+                let p = self.pou.ok_or_else(|| self.error(e.span, "`THIS^` outside a function block"))?;
+                (Loc::Static(Place::Local(0)).slot_fn(), p)
+            }
+            None => {
+                let p = self.u.fb_pou(&fb).ok_or_else(|| {
+                    self.error(
+                        e.span,
+                        format!("an interface designates an instance of `{fb}`, which is no block of the file"),
+                    )
+                })?;
+                (self.place(e)?.loc.slot_fn(), p)
+            }
+        };
+        let f: IntFn = Box::new(move |c, b| Ok(itf_value(at(c, b)?, pou)));
+        Ok(Some(TExpr::new(CExpr::Int(f), itf.clone(), false)))
+    }
+
+    /// The blocks of the file implementing interface `itf`.
+    fn implementers(&self, itf: &str) -> Vec<usize> {
+        let mut out: Vec<usize> = self
+            .u
+            .pou_index
+            .values()
+            .copied()
+            .filter(|&p| self.u.pous[p].kind() != sfc_syntax::ast::PouKind::Function)
+            .filter(|&p| {
+                let ty = Type::FunctionBlock(self.u.pous[p].name().to_ascii_uppercase());
+                self.u.env.converts_to_interface(&ty, itf)
+            })
+            .collect();
+        out.sort_unstable();
+        out
+    }
+
+    /// For `base.M(…)` or `base.P` where `base` is an interface: the slot of the interface and
+    /// a target per implementing block, its instance found through the interface.
+    fn interface_targets(&self, base: &Expr) -> C<Option<(LocFn, Vec<Target>)>> {
+        let Some(Type::Interface(itf)) = self.recorded(base) else { return Ok(None) };
+        let at = self.place(base)?.loc.slot_fn();
+        let span = base.span;
+        let targets = self
+            .implementers(&itf)
+            .into_iter()
+            .map(|p| {
+                let at = at.clone();
+                let inst: LocFn = Arc::new(move |c, b| {
+                    let s = at(c, b)?;
+                    Ok(designated(c, s, span)?.0)
+                });
+                let ty = Type::FunctionBlock(self.u.pous[p].name().to_ascii_uppercase());
+                Target { inst: PlaceC::new(Loc::Dyn(inst), ty), pou: p, sup_of: None }
+            })
+            .collect();
+        Ok(Some((at, targets)))
+    }
+
+    /// Runs, for the instance the interface in slot `at` designates, the code compiled for its
+    /// block (`calls` by POU); the slot the code returns.
+    fn dispatch(at: LocFn, calls: Vec<(usize, LocFn)>, span: Span, what: String) -> LocFn {
+        Arc::new(move |c, b| {
+            let s = at(c, b)?;
+            let (_, pou) = designated(c, s, span)?;
+            match calls.iter().find(|(p, _)| *p == pou) {
+                Some((_, run)) => run(c, b),
+                None => Err(fault(format!("the instance an interface designates has no {what}"), span)),
+            }
+        })
+    }
+
+    /// `itf.M(…)`: the method of the designated instance's block; its result slot (or 0).
+    fn interface_call(
+        &self,
+        base: &Expr,
+        member: &Ident,
+        args: &[Arg],
+        span: Span,
+    ) -> C<Option<(LocFn, Option<Type>)>> {
+        let Some((at, targets)) = self.interface_targets(base)? else { return Ok(None) };
+        let mut calls = Vec::new();
+        let mut rt = None;
+        for t in targets {
+            let Some(k) = self.find_method(&t, &member.text, MethodKind::Method) else { continue };
+            let pou = t.pou;
+            let mm = &self.u.pous[pou].methods[k];
+            rt = mm.sig.return_type.clone();
+            let r = if rt.is_some() { mm.vars.last().map(|s| s.offset as usize).unwrap_or(0) } else { 0 };
+            let call = self.compile_call(t, k, args, span)?;
+            calls.push((pou, Arc::new(move |c: &mut Ctx<'_>, b: usize| Ok(call.invoke(c, b)? + r)) as LocFn));
+        }
+        Ok(Some((Self::dispatch(at, calls, span, format!("method `{}`", member.text)), rt)))
+    }
+
+    /// `itf.M(…)` as a statement, when `base` is an interface.
+    pub(crate) fn interface_stmt(&self, base: &Expr, member: &Ident, args: &[Arg], span: Span) -> C<Option<StmtFn>> {
+        let Some((run, _)) = self.interface_call(base, member, args, span)? else { return Ok(None) };
+        Ok(Some(Box::new(move |c, b| {
+            run(c, b)?;
+            Ok(Flow::Next)
+        })))
+    }
+
+    /// `itf.M(…)` as a value, when `base` is an interface.
+    pub(crate) fn interface_method_value(
+        &self,
+        base: &Expr,
+        member: &Ident,
+        args: &[Arg],
+        span: Span,
+    ) -> C<Option<TExpr>> {
+        let Some((run, rt)) = self.interface_call(base, member, args, span)? else { return Ok(None) };
+        let rt = rt.ok_or_else(|| self.error(span, format!("method `{}` returns no value", member.text)))?;
+        Ok(Some(self.result_at(rt, run)))
+    }
+
+    /// `itf.P` read, when `base` is an interface: the GET of the designated instance's block.
+    pub(crate) fn interface_get(&self, base: &Expr, name: &Ident) -> C<Option<TExpr>> {
+        let Some((at, targets)) = self.interface_targets(base)? else { return Ok(None) };
+        let Some(Type::Interface(itf)) = self.recorded(base) else { return Ok(None) };
+        let ty = self.u.env.interface(&itf).and_then(|i| i.property(&name.text)).map(|p| p.ty.clone());
+        let Some(ty) = ty else { return Ok(None) };
+        let mut calls = Vec::new();
+        for t in targets {
+            let Some(k) = self.find_method(&t, &name.text, MethodKind::Get) else { continue };
+            let pou = t.pou;
+            let r = self.u.pous[pou].methods[k].vars.last().map(|s| s.offset as usize).unwrap_or(0);
+            let call = self.compile_call(t, k, &[], name.span)?;
+            calls.push((pou, Arc::new(move |c: &mut Ctx<'_>, b: usize| Ok(call.invoke(c, b)? + r)) as LocFn));
+        }
+        let run = Self::dispatch(at, calls, name.span, format!("property `{}` with GET", name.text));
+        Ok(Some(self.result_at(ty, run)))
+    }
+
+    /// `itf.P := v`, when `base` is an interface: the SET of the designated instance's block.
+    pub(crate) fn interface_set(&self, base: &Expr, name: &Ident, value: &Expr, span: Span) -> C<Option<StmtFn>> {
+        let Some((at, targets)) = self.interface_targets(base)? else { return Ok(None) };
+        let mut calls: Vec<(usize, StmtFn)> = Vec::new();
+        for t in targets {
+            if self.find_method(&t, &name.text, MethodKind::Set).is_none() {
+                continue;
+            }
+            let pou = t.pou;
+            calls.push((pou, self.property_set(t, name, value, span)?));
+        }
+        let what = format!("property `{}` with SET", name.text);
+        Ok(Some(Box::new(move |c, b| {
+            let s = at(c, b)?;
+            let (_, pou) = designated(c, s, span)?;
+            match calls.iter().find(|(p, _)| *p == pou) {
+                Some((_, run)) => run(c, b),
+                None => Err(fault(format!("the instance an interface designates has no {what}"), span)),
+            }
+        })))
     }
 }

@@ -69,6 +69,12 @@ impl Cx<'_, '_> {
     fn stmt(&self, s: &Stmt) -> C<StmtFn> {
         match &s.kind {
             StmtKind::Assign { target, value } => {
+                // A property written through an interface: the SET of the designated instance.
+                if let ExprKind::Member { base, member } = &target.kind {
+                    if let Some(f) = self.interface_set(base, member, value, s.span)? {
+                        return Ok(f);
+                    }
+                }
                 // A property written: its SET runs.
                 let prop = match &target.kind {
                     ExprKind::Member { base, member } => self.property(Some(base), member)?.map(|t| (t, member)),
