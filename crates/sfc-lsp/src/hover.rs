@@ -35,7 +35,7 @@ pub fn hover(ws: &mut Workspace, uri: &Uri, a: &Arc<Analysis>, offset: u32) -> O
         let text = qualifier_text(&q.name)?;
         return Some(markdown(text, Some(a.range(q.span))));
     }
-    let (identity, span) = navigate::identity_at(uri, a, offset)?;
+    let (identity, span) = navigate::identity_at(ws, uri, a, offset)?;
     let decls = navigate::declarations(ws, uri, a, &identity);
     let Some(found) = decls.first() else {
         if let Identity::Global(key) = &identity {
