@@ -944,6 +944,17 @@ fn methods_properties_and_actions_across_files() {
         (motor.replace("Running", "Active").as_str(), main.replace("Running", "Active").as_str())
     );
     assert!(checks(&format!("{m2}{p2}")));
+    // The method's parameter: also the formal parameters of its calls.
+    let (m2, p2) = rename(&mut c, &mu, at(motor, "s : INT", 0, 0), "setpoint");
+    assert_eq!(
+        m2,
+        motor
+            .replace("s : INT", "setpoint : INT")
+            .replace("s + speed", "setpoint + speed")
+            .replace("(s :=", "(setpoint :=")
+    );
+    assert_eq!(p2, main.replace("(s :=", "(setpoint :="));
+    assert!(checks(&format!("{m2}{p2}")));
     // The method's variable: only in the method.
     let (m2, p2) = rename(&mut c, &mu, at(motor, "tmp := s", 0, 0), "sum");
     assert_eq!(m2, motor.replace("VAR tmp", "VAR sum").replace("tmp := s", "sum := s"));

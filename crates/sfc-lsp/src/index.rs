@@ -176,10 +176,18 @@ pub enum MemberBase {
     This,
     /// `SUPER^.Member`: the block it extends.
     Super,
+    /// A formal parameter of a call of the name (upper case): `Start(s := 1)`, `fb(IN := x)`,
+    /// `F(a := 1)`.
+    CallOf(String),
+    /// A formal parameter of a call of a member (`m.Start(s := 5)`): what the member follows
+    /// and its name (upper case).
+    CallOfMember(Box<MemberBase>, String),
 }
 
-/// A member written after a name (`m.Start`, `m.Running`, `THIS^.count`): whose member it is
-/// depends on the name's type, which may be a block of another file.
+/// A name that belongs to another namespace than where it is written: a member written after
+/// a name (`m.Start`, `m.Running`, `THIS^.count`), whose member it is depending on the name's
+/// type, which may be a block of another file; a formal parameter of a call (`s` of
+/// `m.Start(s := 5)`), a variable of what is called.
 #[derive(Debug, Clone, PartialEq)]
 pub struct MemberUse {
     /// The member's name.
@@ -421,22 +429,13 @@ impl Builder<'_> {
 
     /// `base.member`: the member, when the base is a name, `THIS^` or `SUPER^`.
     fn member_use(&mut self, base: &Expr, member: &ast::Ident) {
-        let base = match &base.kind {
-            ExprKind::Name(n) => MemberBase::Name(n.key()),
-            ExprKind::Deref(inner) => match &inner.kind {
-                ExprKind::Name(n) if n.is("THIS") => MemberBase::This,
-                ExprKind::Name(n) if n.is("SUPER") => MemberBase::Super,
-                _ => return,
-            },
-            _ => return,
-        };
-        self.ix.members.push(MemberUse {
-            span: member.span,
-            key: member.key(),
-            base,
-            pou: self.pou,
-            scope: self.scope,
-        });
+        if let Some(base) = member_base(base) {
+            self.push_member(member, base);
+        }
+    }
+
+    fn push_member(&mut self, name: &ast::Ident, base: MemberBase) {
+        self.ix.members.push(MemberUse { span: name.span, key: name.key(), base, pou: self.pou, scope: self.scope });
     }
 
     fn occ(&mut self, ident: &ast::Ident, role: Role, member: Option<&ast::Ident>) {
@@ -886,7 +885,8 @@ impl Builder<'_> {
             }
             ExprKind::Call { callee, args } => {
                 self.occ(callee, Role::Code, None);
-                self.args(args);
+                let of = (!callee.text.ends_with('^')).then(|| MemberBase::CallOf(callee.key()));
+                self.args(of, args);
             }
             ExprKind::MemberCall { base, member, args } => {
                 match &base.kind {
@@ -894,7 +894,8 @@ impl Builder<'_> {
                     _ => self.expr(base),
                 }
                 self.member_use(base, member);
-                self.args(args);
+                let of = member_base(base).map(|b| MemberBase::CallOfMember(Box::new(b), member.key()));
+                self.args(of, args);
             }
             ExprKind::Unary { operand, .. } => self.expr(operand),
             ExprKind::Binary { lhs, rhs, .. } => {
@@ -911,8 +912,12 @@ impl Builder<'_> {
         }
     }
 
-    fn args(&mut self, args: &[Arg]) {
+    /// The arguments of a call; their formal parameter names are those of `of`'s parameters.
+    fn args(&mut self, of: Option<MemberBase>, args: &[Arg]) {
         for a in args {
+            if let (Some(of), Some(n)) = (&of, &a.name) {
+                self.push_member(n, of.clone());
+            }
             if let Some(v) = &a.value {
                 self.expr(v);
             }
@@ -940,9 +945,22 @@ impl Builder<'_> {
                 self.il_instructions(n);
             }
             if let Some(a) = &i.call_args {
-                self.args(a);
+                self.args(None, a);
             }
         }
+    }
+}
+
+/// What a member written after `base` belongs to: a name, `THIS^` or `SUPER^`.
+fn member_base(base: &Expr) -> Option<MemberBase> {
+    match &base.kind {
+        ExprKind::Name(n) => Some(MemberBase::Name(n.key())),
+        ExprKind::Deref(inner) => match &inner.kind {
+            ExprKind::Name(n) if n.is("THIS") => Some(MemberBase::This),
+            ExprKind::Name(n) if n.is("SUPER") => Some(MemberBase::Super),
+            _ => None,
+        },
+        _ => None,
     }
 }
 
@@ -980,7 +998,7 @@ mod tests {
     }
 
     /// A method and each accessor have their own variables; the block's names used there are
-    /// the block's; members are recorded with what they follow.
+    /// the block's; members and formal parameters are recorded with what they belong to.
     #[test]
     fn scopes_of_methods_and_accessors_and_members() {
         let text = "FUNCTION_BLOCK B\nVAR x : INT; END_VAR\nMETHOD M : INT\nVAR_INPUT x : INT; END_VAR\nVAR y : INT; END_VAR\n\
@@ -1008,6 +1026,7 @@ mod tests {
             [
                 ("X", &MemberBase::This, Some(0)),
                 ("M", &MemberBase::Name("B".into()), Some(1)),
+                ("X", &MemberBase::CallOfMember(Box::new(MemberBase::Name("B".into())), "M".into()), Some(1)),
                 ("P", &MemberBase::Name("B".into()), Some(1))
             ]
         );

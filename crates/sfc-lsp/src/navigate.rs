@@ -31,17 +31,21 @@ fn is_global(s: &Symbol) -> bool {
     s.pou.is_none() || matches!(&s.kind, SymbolKind::Variable(v) if v.section == VarKind::External)
 }
 
-/// Whether a symbol of file `ix` can be reached from outside its POU as `inst.Name` (a method,
-/// property, action or variable of a FUNCTION_BLOCK or PROGRAM), or inherited.
+/// Whether a symbol of file `ix` can be named outside its POU: as `inst.Name` (a method,
+/// property, action or variable of a FUNCTION_BLOCK or PROGRAM), by a block inheriting it, or
+/// as a formal parameter of a call (`Start(s := 1)`, `F(a := 1)`).
 fn is_member(ix: &FileIndex, s: &Symbol) -> bool {
     let block = s.pou.and_then(|p| ix.pous.get(p)).is_some_and(|p| p.kind != PouKind::Function);
-    block
-        && s.scope.is_none()
-        && match &s.kind {
-            SymbolKind::Method | SymbolKind::Property | SymbolKind::Action => true,
-            SymbolKind::Variable(v) => !v.implicit && v.section != VarKind::External,
-            _ => false,
-        }
+    let parameter = matches!(&s.kind, SymbolKind::Variable(v)
+        if matches!(v.section, VarKind::Input | VarKind::Output | VarKind::InOut));
+    if s.pou.is_none() || s.scope.is_some() || !block {
+        return s.pou.is_some() && parameter;
+    }
+    match &s.kind {
+        SymbolKind::Method | SymbolKind::Property | SymbolKind::Action => true,
+        SymbolKind::Variable(v) => !v.implicit && v.section != VarKind::External,
+        _ => false,
+    }
 }
 
 /// The identity of symbol `id` of a file.
@@ -139,9 +143,22 @@ impl<'w> Resolver<'w> {
     /// The member of a block that `m` names (None: the member of a step, an action's `Q`, a
     /// standard block's output, a name whose type is no block of the workspace).
     pub fn member(&mut self, uri: &Uri, a: &Arc<Analysis>, m: &MemberUse) -> Option<Target> {
-        let (u, fa, p) = match &m.base {
-            MemberBase::Name(key) => {
-                let found = match self.name(uri, a, m.pou, m.scope, key) {
+        self.member_in(uri, a, m.pou, m.scope, &m.base, &m.key)
+    }
+
+    /// The member `key` of what `base` stands for in the code of POU `pou` (scope `scope`).
+    fn member_in(
+        &mut self,
+        uri: &Uri,
+        a: &Arc<Analysis>,
+        pou: Option<usize>,
+        scope: Option<usize>,
+        base: &MemberBase,
+        key: &str,
+    ) -> Option<Target> {
+        let (u, fa, p) = match base {
+            MemberBase::Name(name) => {
+                let found = match self.name(uri, a, pou, scope, name) {
                     Some(t) => Some(t),
                     // A global variable of another file.
                     None => self
@@ -164,13 +181,55 @@ impl<'w> Resolver<'w> {
                     _ => return None,
                 }
             }
-            MemberBase::This => (uri.clone(), a.clone(), m.pou?),
+            MemberBase::This => (uri.clone(), a.clone(), pou?),
             MemberBase::Super => {
-                let base = a.index.pous.get(m.pou?)?.extends.clone()?;
+                let base = a.index.pous.get(pou?)?.extends.clone()?;
                 self.pou(uri, a, &base)?
             }
+            MemberBase::CallOf(callee) => {
+                let called = match self.name(uri, a, pou, scope, callee) {
+                    Some(t) => t,
+                    // A function of another file.
+                    None => {
+                        let (pu, pa, p) = self.pou(uri, a, callee)?;
+                        let span = pa.index.pous.get(p)?.name_span;
+                        let id = pa.index.symbols.iter().position(|s| s.pou.is_none() && s.name_span == span)?;
+                        (pu, pa, id)
+                    }
+                };
+                return self.parameter(uri, a, called, key);
+            }
+            MemberBase::CallOfMember(base, member) => {
+                let called = self.member_in(uri, a, pou, scope, base, member)?;
+                return self.parameter(uri, a, called, key);
+            }
         };
-        self.member_of(&u, &fa, p, &m.key)
+        self.member_of(&u, &fa, p, key)
+    }
+
+    /// The formal parameter `key` of what a call in file `uri` calls: a variable of a method,
+    /// of the block of an instance, of a function.
+    fn parameter(&mut self, uri: &Uri, a: &Arc<Analysis>, called: Target, key: &str) -> Option<Target> {
+        let (u, fa, id) = called;
+        let s = fa.index.symbol(id)?;
+        match &s.kind {
+            SymbolKind::Method => {
+                let sc = fa.index.scopes.iter().position(|sc| sc.owner == id)?;
+                let v = fa.index.lookup_scoped(sc, key)?;
+                Some((u, fa, v))
+            }
+            SymbolKind::Variable(v) => {
+                let ty = v.type_name.clone()?;
+                let (pu, pa, p) = self.pou(uri, a, &ty)?;
+                self.member_of(&pu, &pa, p, key)
+            }
+            SymbolKind::Pou(_) => {
+                let p = fa.index.pous.iter().position(|e| e.name_span == s.name_span)?;
+                let v = fa.index.lookup_local(p, key)?;
+                Some((u, fa, v))
+            }
+            _ => None,
+        }
     }
 }
 
@@ -566,6 +625,7 @@ END_FUNCTION_BLOCK
 
     const MAIN: &str = "PROGRAM Main
   VAR m : Motor; ok : BOOL; END_VAR
+  m(speed := 3);
   ok := m.Start(s := 5);
   IF m.Running THEN m.Reset(); END_IF
   m.Running := FALSE;
@@ -655,6 +715,9 @@ END_PROGRAM
         assert_eq!(def(at(&t, "GET Running", 0, 5)), [property()]);
         assert_eq!(def(at(&t, "on := Running", 0, 7)), [property()]);
         assert_eq!(def(at(&t, "m.Reset", 0, 3)), [here("Reset:", 0)]);
+        // The formal parameters of calls: the method's.
+        assert_eq!(def(at(&t, "(s := 1)", 0, 1)), [here("s : INT", 0)]);
+        assert_eq!(def(at(&t, "(s := 5)", 0, 1)), [here("s : INT", 0)]);
         // The instance itself is still its variable.
         assert_eq!(def(at(&t, "m.Reset", 0, 0)), [here("m : Motor", 0)]);
     }
@@ -693,9 +756,17 @@ END_PROGRAM
         // The block's `count`: in its body, its method and its action.
         let out = renamed(&mut ws, &u, &a, at(&t, "count : INT", 0, 0), "n").unwrap();
         assert_eq!(out["one.st"], t.replace("count", "n"));
-        // The block's `speed`, used in the method.
+        // The block's `speed`, used in the method and as a parameter of the instance's call.
         let out = renamed(&mut ws, &u, &a, at(&t, "s + speed", 0, 5), "rpm").unwrap();
         assert_eq!(out["one.st"], t.replace("speed", "rpm"));
+        // A parameter of the method: also where calls name it.
+        let out = renamed(&mut ws, &u, &a, at(&t, "s + speed", 0, 0), "setpoint").unwrap();
+        assert_eq!(
+            out["one.st"],
+            t.replace("s : INT", "setpoint : INT")
+                .replace("s + speed", "setpoint + speed")
+                .replace("(s :=", "(setpoint :=")
+        );
         // A method's variable cannot take a name the method uses or hide one of the block.
         let e = renamed(&mut ws, &u, &a, at(&t, "tmp := s", 0, 0), "count").unwrap_err();
         assert!(e.contains("would hide it"), "{e}");
