@@ -412,6 +412,7 @@ pub fn invalid_name(name: &str) -> Option<String> {
 }
 
 /// The edits of a rename, or why it is refused.
+#[allow(clippy::mutable_key_type)] // `Uri`: see `actions::action`.
 pub fn rename(
     ws: &mut Workspace,
     uri: &Uri,
