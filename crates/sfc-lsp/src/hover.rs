@@ -70,7 +70,12 @@ fn standard_hover(key: &str) -> Option<String> {
 
 /// The description of a symbol, in Markdown.
 pub fn describe(ix: &FileIndex, s: &Symbol) -> String {
-    let pou_name = s.pou.and_then(|p| ix.pous.get(p)).map(|p| p.name.clone());
+    // A variable of a method or accessor: `Block.Method`.
+    let owner = s.scope.and_then(|sc| ix.scopes.get(sc)).and_then(|sc| ix.symbol(sc.owner));
+    let pou_name = s.pou.and_then(|p| ix.pous.get(p)).map(|p| match owner {
+        Some(o) => format!("{}.{}", p.name, o.name),
+        None => p.name.clone(),
+    });
     match &s.kind {
         SymbolKind::Variable(v) => {
             let mut decl = format!("{} : {}", s.name, v.ty);

@@ -251,6 +251,7 @@ pub fn identity_at(ws: &mut Workspace, uri: &Uri, a: &Arc<Analysis>, offset: u32
     }
     let mut r = Resolver::new(ws);
     if let Some(m) = a.index.member_at(offset) {
+        // A member that is none of a block of the workspace (`S1.X`, `Timer.Q`) is no name.
         let (u, fa, id) = r.member(uri, a, m)?;
         return Some((identity_of(&u, &fa.index, id)?, m.span));
     }
@@ -721,6 +722,15 @@ END_PROGRAM
         assert_eq!(def(at(&t, "(s := 5)", 0, 1)), [here("s : INT", 0)]);
         // The instance itself is still its variable.
         assert_eq!(def(at(&t, "m.Reset", 0, 0)), [here("m : Motor", 0)]);
+        // Hover says whose variable it is, and what a member is.
+        let hover = |ws: &mut Workspace, offset| match crate::hover::hover(ws, &u, &a, offset).unwrap().contents {
+            lsp_types::HoverContents::Markup(m) => m.value,
+            other => panic!("{other:?}"),
+        };
+        let h = hover(&mut ws, at(&t, "tmp := s", 0, 0));
+        assert!(h.contains("variable of `Motor.Start`"), "{h}");
+        let h = hover(&mut ws, at(&t, "m.Start", 0, 3));
+        assert!(h.starts_with("**method Start**"), "{h}");
     }
 
     #[test]
