@@ -843,6 +843,64 @@ PROGRAM P\n  VAR d : Derived; END_VAR\n  d.Add(k := 1); d.Clear();\nEND_PROGRAM\
         assert_eq!(out["ext.st"], t.replace("Clear", "Zero"));
     }
 
+    /// `text` with the identifier `old` (whole words only) replaced.
+    fn replace_word(text: &str, old: &str, new: &str) -> String {
+        let ident = |c: Option<char>| c.is_some_and(|c| c.is_ascii_alphanumeric() || c == '_');
+        let mut out = String::new();
+        let mut last = 0;
+        for (i, _) in text.match_indices(old) {
+            let (before, after) = (text[..i].chars().next_back(), text[i + old.len()..].chars().next());
+            if !ident(before) && !ident(after) {
+                out.push_str(&text[last..i]);
+                out.push_str(new);
+                last = i + old.len();
+            }
+        }
+        out.push_str(&text[last..]);
+        out
+    }
+
+    /// The errors `sfc check` finds in a text.
+    fn errors(text: &str) -> Vec<String> {
+        let opts = sfc_model::CheckOptions::default();
+        let (_, _, diags) = sfc_driver::check_text(0, "t.st", text, sfc_driver::FileKind::Iec, &opts);
+        diags.iter().filter(|d| d.is_error()).map(|d| d.message.clone()).collect()
+    }
+
+    /// The fixture of methods, an action, a property and EXTENDS: each rename leaves a text
+    /// that checks.
+    #[test]
+    fn renames_in_the_methods_fixture_keep_it_valid() {
+        let t = include_str!("../../../tests/fixtures/valid/methods_actions_extends.st");
+        assert_eq!(errors(t), Vec::<String>::new());
+        let mut ws = Workspace::new(Vec::new());
+        let (u, a) = (uri("fixture.st"), analysis(t));
+        let file = |o: u32| vec![("fixture.st".to_string(), o)];
+        // Inherited members of an instance of the derived block; the override on the instance.
+        assert_eq!(definition(&mut ws, &u, &a, at(t, "Belt.ACT_Count", 0, 5)), file(at(t, "ACT_Count:", 0, 0)));
+        assert_eq!(definition(&mut ws, &u, &a, at(t, "Belt.Parts", 0, 5)), file(at(t, "PROPERTY Parts", 0, 9)));
+        assert_eq!(definition(&mut ws, &u, &a, at(t, "Belt.Add", 0, 5)), file(at(t, "METHOD Add", 1, 7)));
+        assert_eq!(definition(&mut ws, &u, &a, at(t, "SUPER^.Add", 0, 7)), file(at(t, "METHOD Add", 0, 7)));
+        assert_eq!(definition(&mut ws, &u, &a, at(t, "(Count := Count)", 0, 1)), file(at(t, "Count : INT", 0, 0)));
+        assert_eq!(definition(&mut ws, &u, &a, at(t, "(Count := Count)", 0, 10)), file(at(t, "Count : INT", 1, 0)));
+        for (from, new_name, changed) in [
+            (at(t, "nParts : INT", 0, 0), "nCount", "nParts"),
+            (at(t, "Belt.Parts", 1, 5), "PartCount", "Parts"),
+            (at(t, "Belt.ACT_Count", 0, 5), "ACT_Tally", "ACT_Count"),
+            (at(t, "METHOD PUBLIC Reset", 0, 14), "Clear", "Reset"),
+        ] {
+            let out = renamed(&mut ws, &u, &a, from, new_name).unwrap();
+            let text = &out["fixture.st"];
+            assert_eq!(*text, replace_word(t, changed, new_name), "{changed}");
+            assert_eq!(errors(text), Vec::<String>::new(), "{changed}");
+        }
+        // The derived block's `Add`: its declaration and the call on the instance.
+        let out = renamed(&mut ws, &u, &a, at(t, "Belt.Add", 0, 5), "Append").unwrap();
+        let text = &out["fixture.st"];
+        assert!(text.contains("METHOD Append") && text.contains("Belt.Append(2)") && text.contains("SUPER^.Add("));
+        assert_eq!(errors(text), Vec::<String>::new());
+    }
+
     /// Half-typed members and bases that are no block give nothing, without panicking.
     #[test]
     fn half_typed_members() {
