@@ -864,3 +864,120 @@ fn property_file_diagnostics_while_typing_and_the_proof_on_save() {
     assert!(proved[0].range.start.line + 1 >= line && proved[0].range.start.line <= line, "{proved:#?}");
     c.stop();
 }
+
+/// `sfc check -` on `text`: whether it has no error.
+fn checks(text: &str) -> bool {
+    let out = Command::new(env!("CARGO_BIN_EXE_sfc"))
+        .args(["check", "-"])
+        .stdin(Stdio::piped())
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .and_then(|mut ch| {
+            use std::io::Write;
+            ch.stdin.take().unwrap().write_all(text.as_bytes())?;
+            ch.wait_with_output()
+        })
+        .unwrap();
+    out.status.success()
+}
+
+/// A function block with a method, a property and an action in one file, used in another:
+/// definition goes to the member (and a method's variable to the method's declaration), rename
+/// changes both files, and the outline holds the members.
+#[test]
+fn methods_properties_and_actions_across_files() {
+    let dir = scratch("methods");
+    let motor = "FUNCTION_BLOCK Motor\n  VAR_INPUT speed : INT; END_VAR\n  VAR_OUTPUT on : BOOL; END_VAR\n  VAR count : INT; tmp : INT; END_VAR\n  METHOD Start : BOOL\n    VAR_INPUT s : INT; END_VAR\n    VAR tmp : INT; END_VAR\n    tmp := s + speed; count := count + 1; on := TRUE; Start := TRUE;\n  END_METHOD\n  PROPERTY Running : BOOL\n    GET Running := on; END_GET\n    SET on := Running; END_SET\n  END_PROPERTY\n  count := 0; tmp := 1;\n  ACTION Reset:\n    count := 0; Start(s := 1); THIS^.Start(s := 2);\n  END_ACTION\nEND_FUNCTION_BLOCK\n";
+    let main = "PROGRAM Main\n  VAR m : Motor; ok : BOOL; END_VAR\n  ok := m.Start(s := 5);\n  IF m.Running THEN m.Reset(); END_IF\n  m.Running := FALSE;\nEND_PROGRAM\n";
+    assert!(checks(&format!("{motor}{main}")), "the fixture is valid");
+    std::fs::write(dir.join("motor.st"), motor).unwrap();
+    std::fs::write(dir.join("main.st"), main).unwrap();
+    let mut c = Client::start(Some(&dir), no_idle());
+    let mu = c.open(&dir.join("motor.st"), motor);
+    let pu = c.open(&dir.join("main.st"), main);
+    let definition = |c: &mut Client, u: &Uri, p: Position| {
+        let def = c
+            .request::<req::GotoDefinition>(GotoDefinitionParams {
+                text_document_position_params: Client::pos(u, p.line, p.character),
+                work_done_progress_params: Default::default(),
+                partial_result_params: Default::default(),
+            })
+            .unwrap()
+            .unwrap();
+        let GotoDefinitionResponse::Array(def) = def else { panic!("{def:?}") };
+        def.iter().map(|l| (l.uri.as_str().rsplit('/').next().unwrap().to_string(), l.range.start)).collect::<Vec<_>>()
+    };
+    let in_motor = |needle: &str, n: usize| vec![("motor.st".to_string(), at(motor, needle, n, 0))];
+    assert_eq!(definition(&mut c, &pu, at(main, "m.Start", 0, 3)), in_motor("Start : BOOL", 0));
+    assert_eq!(definition(&mut c, &pu, at(main, "m.Running :=", 0, 3)), in_motor("Running : BOOL", 0));
+    assert_eq!(definition(&mut c, &pu, at(main, "m.Reset", 0, 3)), in_motor("Reset:", 0));
+    assert_eq!(definition(&mut c, &mu, at(motor, "Start(s := 1)", 0, 1)), in_motor("Start : BOOL", 0));
+    // The method's `tmp`, not the block's; the block's `count` from the method.
+    assert_eq!(definition(&mut c, &mu, at(motor, "tmp := s", 0, 1)), in_motor("tmp : INT; END_VAR\n    tmp", 0));
+    assert_eq!(definition(&mut c, &mu, at(motor, "count + 1", 0, 1)), in_motor("count : INT", 0));
+
+    let rename = |c: &mut Client, u: &Uri, p: Position, new_name: &str| {
+        let edit = c
+            .request::<req::Rename>(RenameParams {
+                text_document_position: Client::pos(u, p.line, p.character),
+                new_name: new_name.into(),
+                work_done_progress_params: Default::default(),
+            })
+            .unwrap()
+            .unwrap();
+        let changes = edit.changes.unwrap();
+        let file = |u: &Uri, text: &str| changes.get(u).map_or(text.to_string(), |e| apply(text, e));
+        (file(&mu, motor), file(&pu, main))
+    };
+    // A method, from a call on an instance in the other file.
+    let (m2, p2) = rename(&mut c, &pu, at(main, "m.Start", 0, 2), "Launch");
+    assert_eq!(
+        (m2.as_str(), p2.as_str()),
+        (motor.replace("Start", "Launch").as_str(), main.replace("Start", "Launch").as_str())
+    );
+    assert!(checks(&format!("{m2}{p2}")));
+    // A property, from its SET: its uses read and written, its GET and SET.
+    let (m2, p2) = rename(&mut c, &mu, at(motor, "on := Running", 0, 8), "Active");
+    assert_eq!(
+        (m2.as_str(), p2.as_str()),
+        (motor.replace("Running", "Active").as_str(), main.replace("Running", "Active").as_str())
+    );
+    assert!(checks(&format!("{m2}{p2}")));
+    // The method's parameter: also the formal parameters of its calls.
+    let (m2, p2) = rename(&mut c, &mu, at(motor, "s : INT", 0, 0), "setpoint");
+    assert_eq!(
+        m2,
+        motor
+            .replace("s : INT", "setpoint : INT")
+            .replace("s + speed", "setpoint + speed")
+            .replace("(s :=", "(setpoint :=")
+    );
+    assert_eq!(p2, main.replace("(s :=", "(setpoint :="));
+    assert!(checks(&format!("{m2}{p2}")));
+    // The method's variable: only in the method.
+    let (m2, p2) = rename(&mut c, &mu, at(motor, "tmp := s", 0, 0), "sum");
+    assert_eq!(m2, motor.replace("VAR tmp", "VAR sum").replace("tmp := s", "sum := s"));
+    assert_eq!(p2, main);
+    assert!(checks(&format!("{m2}{p2}")));
+
+    let syms = c
+        .request::<req::DocumentSymbolRequest>(DocumentSymbolParams {
+            text_document: TextDocumentIdentifier::new(mu.clone()),
+            work_done_progress_params: Default::default(),
+            partial_result_params: Default::default(),
+        })
+        .unwrap()
+        .unwrap();
+    let DocumentSymbolResponse::Nested(syms) = syms else { panic!() };
+    let kids = syms[0].children.as_ref().unwrap();
+    let names: Vec<(&str, Option<&str>)> = kids.iter().map(|s| (s.name.as_str(), s.detail.as_deref())).collect();
+    assert!(
+        names.ends_with(&[("Reset", Some("action")), ("Start", Some("method")), ("Running", Some("property"))]),
+        "{names:?}"
+    );
+    let start = kids.iter().find(|s| s.name == "Start").unwrap();
+    let vars: Vec<&str> = start.children.as_ref().unwrap().iter().map(|s| s.name.as_str()).collect();
+    assert_eq!(vars, ["s", "tmp"]);
+    c.stop();
+}

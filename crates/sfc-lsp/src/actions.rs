@@ -10,6 +10,9 @@ use sfc_diagnostics::Span;
 use sfc_syntax::ast::VarKind;
 use std::collections::HashMap;
 
+// `Uri` caches its parsed parts in cells, which clippy takes for a key that may change; its
+// hash and equality are those of its text, which never changes.
+#[allow(clippy::mutable_key_type)]
 fn action(
     title: String,
     kind: CodeActionKind,

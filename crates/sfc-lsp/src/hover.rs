@@ -35,7 +35,7 @@ pub fn hover(ws: &mut Workspace, uri: &Uri, a: &Arc<Analysis>, offset: u32) -> O
         let text = qualifier_text(&q.name)?;
         return Some(markdown(text, Some(a.range(q.span))));
     }
-    let (identity, span) = navigate::identity_at(uri, a, offset)?;
+    let (identity, span) = navigate::identity_at(ws, uri, a, offset)?;
     let decls = navigate::declarations(ws, uri, a, &identity);
     let Some(found) = decls.first() else {
         if let Identity::Global(key) = &identity {
@@ -70,7 +70,12 @@ fn standard_hover(key: &str) -> Option<String> {
 
 /// The description of a symbol, in Markdown.
 pub fn describe(ix: &FileIndex, s: &Symbol) -> String {
-    let pou_name = s.pou.and_then(|p| ix.pous.get(p)).map(|p| p.name.clone());
+    // A variable of a method or accessor: `Block.Method`.
+    let owner = s.scope.and_then(|sc| ix.scopes.get(sc)).and_then(|sc| ix.symbol(sc.owner));
+    let pou_name = s.pou.and_then(|p| ix.pous.get(p)).map(|p| match owner {
+        Some(o) => format!("{}.{}", p.name, o.name),
+        None => p.name.clone(),
+    });
     match &s.kind {
         SymbolKind::Variable(v) => {
             let mut decl = format!("{} : {}", s.name, v.ty);

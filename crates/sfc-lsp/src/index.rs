@@ -3,9 +3,13 @@
 //! found by walking the syntax tree (which recovers from errors, so a file being typed still
 //! has an index).
 //!
-//! Names follow `semantics.md`: case-insensitive; inside a POU, variables, steps, actions and
-//! transitions share one namespace; a name not found in its POU is a file-level name (a global,
-//! a type, a POU, an enumerated value), then one of another file of the workspace.
+//! Names follow `semantics.md`: case-insensitive; inside a POU, variables, steps, actions,
+//! transitions, methods and properties share one namespace; a method and each accessor (GET,
+//! SET) of a property has a namespace of its own for its variables, looked at first in its code;
+//! a name not found in its POU is a file-level name (a global, a type, a POU, an enumerated
+//! value), then one of another file of the workspace. A member written after a name
+//! (`inst.Start`, `THIS^.count`, `SUPER^.Add`) is a [`MemberUse`]: which block's member it is
+//! depends on the type of the name, found across files by `navigate`.
 
 use sfc_diagnostics::Span;
 use sfc_syntax::ast::{
@@ -117,6 +121,9 @@ pub struct Symbol {
     pub name_span: Span,
     /// The whole declaration.
     pub span: Span,
+    /// The method or accessor whose own variable it is (index into [`FileIndex::scopes`]);
+    /// `None` for the names of the POU's namespace and file-level names.
+    pub scope: Option<usize>,
 }
 
 impl Symbol {
@@ -156,6 +163,54 @@ pub struct Occurrence {
     pub role: Role,
     /// Followed by `.member` (`S1.X`, `Timer.Q`): the member's name.
     pub member: Option<String>,
+    /// Written in the code of a method or accessor (index into [`FileIndex::scopes`]).
+    pub scope: Option<usize>,
+}
+
+/// What a member is written after.
+#[derive(Debug, Clone, PartialEq)]
+pub enum MemberBase {
+    /// `name.Member`: a name (upper case) resolved where the member is written.
+    Name(String),
+    /// `THIS^.Member`: the block the code belongs to.
+    This,
+    /// `SUPER^.Member`: the block it extends.
+    Super,
+    /// A formal parameter of a call of the name (upper case): `Start(s := 1)`, `fb(IN := x)`,
+    /// `F(a := 1)`.
+    CallOf(String),
+    /// A formal parameter of a call of a member (`m.Start(s := 5)`): what the member follows
+    /// and its name (upper case).
+    CallOfMember(Box<MemberBase>, String),
+}
+
+/// A name that belongs to another namespace than where it is written: a member written after
+/// a name (`m.Start`, `m.Running`, `THIS^.count`), whose member it is depending on the name's
+/// type, which may be a block of another file; a formal parameter of a call (`s` of
+/// `m.Start(s := 5)`), a variable of what is called.
+#[derive(Debug, Clone, PartialEq)]
+pub struct MemberUse {
+    /// The member's name.
+    pub span: Span,
+    /// Upper-case member name.
+    pub key: String,
+    pub base: MemberBase,
+    pub pou: Option<usize>,
+    pub scope: Option<usize>,
+}
+
+/// The code of a method, or of one accessor of a property: a namespace of its own for the
+/// variables it declares, inside its POU's.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Scope {
+    /// Its POU (index into [`FileIndex::pous`]).
+    pub pou: usize,
+    /// The method or property (index into [`FileIndex::symbols`]).
+    pub owner: usize,
+    /// The whole method or accessor.
+    pub span: Span,
+    /// Its variables: indices into [`FileIndex::symbols`], in declaration order.
+    pub symbols: Vec<usize>,
 }
 
 /// A qualifier written in an association, for hover and colouring.
@@ -179,6 +234,8 @@ pub struct PouEntry {
     pub var_blocks: Vec<(VarKind, Span)>,
     /// The end of the header line (after the name and return type), where a new VAR block may go.
     pub header_end: u32,
+    /// `EXTENDS Base`: the name of the block it extends.
+    pub extends: Option<String>,
 }
 
 /// The index of one file.
@@ -188,8 +245,14 @@ pub struct FileIndex {
     pub occurrences: Vec<Occurrence>,
     pub qualifiers: Vec<QualifierUse>,
     pub pous: Vec<PouEntry>,
+    /// The methods' and accessors' namespaces.
+    pub scopes: Vec<Scope>,
+    /// Members written after a name, in source order.
+    pub members: Vec<MemberUse>,
     /// Upper-case name → symbol, for each POU (one namespace per POU).
     local: Vec<std::collections::HashMap<String, usize>>,
+    /// Upper-case name → symbol, for each scope.
+    scoped: Vec<std::collections::HashMap<String, usize>>,
     /// Upper-case name → file-level symbol.
     global: std::collections::HashMap<String, usize>,
 }
@@ -197,7 +260,7 @@ pub struct FileIndex {
 impl FileIndex {
     /// Indexes a parsed file; `text` is its source.
     pub fn new(unit: &ast::SourceUnit, text: &str) -> FileIndex {
-        let mut b = Builder { ix: FileIndex::default(), text, pou: None };
+        let mut b = Builder { ix: FileIndex::default(), text, pou: None, scope: None };
         for item in &unit.items {
             match item {
                 Item::Pou(p) => b.pou_decl(p),
@@ -216,6 +279,7 @@ impl FileIndex {
             }
         }
         b.ix.occurrences.sort_by_key(|o| o.span.start);
+        b.ix.members.sort_by_key(|m| m.span.start);
         b.ix
     }
 
@@ -232,6 +296,31 @@ impl FileIndex {
             }
         }
         self.global.get(key).copied()
+    }
+
+    /// The symbol `key` as code of scope `scope` (a method, an accessor) of POU `pou` sees it:
+    /// the scope's own variables first, then as [`FileIndex::lookup`].
+    pub fn lookup_in(&self, pou: Option<usize>, scope: Option<usize>, key: &str) -> Option<usize> {
+        if let Some(&s) = scope.and_then(|sc| self.scoped.get(sc)).and_then(|m| m.get(key)) {
+            return Some(s);
+        }
+        self.lookup(pou, key)
+    }
+
+    /// The symbol a use of a name stands for, in this file.
+    pub fn resolve(&self, o: &Occurrence) -> Option<usize> {
+        self.lookup_in(o.pou, o.scope, &o.key)
+    }
+
+    /// The variable of scope `scope` named `key`.
+    pub fn lookup_scoped(&self, scope: usize, key: &str) -> Option<usize> {
+        self.scoped.get(scope).and_then(|m| m.get(key)).copied()
+    }
+
+    /// The member written at `offset` (touching counts, as for [`FileIndex::occurrence_at`]).
+    pub fn member_at(&self, offset: u32) -> Option<&MemberUse> {
+        let i = self.members.partition_point(|m| m.span.start <= offset);
+        self.members.get(..i)?.iter().rev().take(4).find(|m| m.span.start <= offset && offset <= m.span.end)
     }
 
     /// The file-level symbol `key`.
@@ -283,6 +372,8 @@ struct Builder<'t> {
     ix: FileIndex,
     text: &'t str,
     pou: Option<usize>,
+    /// The method or accessor whose declarations or code are being read.
+    scope: Option<usize>,
 }
 
 fn slice(text: &str, span: Span) -> String {
@@ -298,9 +389,18 @@ impl Builder<'_> {
     fn add(&mut self, name: &str, kind: SymbolKind, name_span: Span, span: Span) -> usize {
         let id = self.ix.symbols.len();
         let key = name.to_ascii_uppercase();
-        self.ix.symbols.push(Symbol { name: name.to_string(), kind, pou: self.pou, name_span, span });
-        match self.pou {
-            Some(p) => {
+        let scope = self.scope;
+        self.ix.symbols.push(Symbol { name: name.to_string(), kind, pou: self.pou, name_span, span, scope });
+        match (self.pou, scope) {
+            (Some(_), Some(sc)) => {
+                if let Some(m) = self.ix.scoped.get_mut(sc) {
+                    m.entry(key).or_insert(id);
+                }
+                if let Some(e) = self.ix.scopes.get_mut(sc) {
+                    e.symbols.push(id);
+                }
+            }
+            (Some(p), None) => {
                 if let Some(m) = self.ix.local.get_mut(p) {
                     m.entry(key).or_insert(id);
                 }
@@ -308,11 +408,34 @@ impl Builder<'_> {
                     e.symbols.push(id);
                 }
             }
-            None => {
+            (None, _) => {
                 self.ix.global.entry(key).or_insert(id);
             }
         }
         id
+    }
+
+    /// A new scope of POU `pou` for the method or property `owner`, spanning `span`.
+    fn new_scope(&mut self, pou: usize, owner: usize, span: Span) -> usize {
+        self.ix.scopes.push(Scope { pou, owner, span, symbols: Vec::new() });
+        self.ix.scoped.push(Default::default());
+        self.ix.scopes.len() - 1
+    }
+
+    /// The scope of a method or accessor spanning `span`, made in [`Builder::pou_decl`].
+    fn scope_of(&self, span: Span) -> Option<usize> {
+        self.ix.scopes.iter().position(|s| s.span == span)
+    }
+
+    /// `base.member`: the member, when the base is a name, `THIS^` or `SUPER^`.
+    fn member_use(&mut self, base: &Expr, member: &ast::Ident) {
+        if let Some(base) = member_base(base) {
+            self.push_member(member, base);
+        }
+    }
+
+    fn push_member(&mut self, name: &ast::Ident, base: MemberBase) {
+        self.ix.members.push(MemberUse { span: name.span, key: name.key(), base, pou: self.pou, scope: self.scope });
     }
 
     fn occ(&mut self, ident: &ast::Ident, role: Role, member: Option<&ast::Ident>) {
@@ -322,6 +445,7 @@ impl Builder<'_> {
             pou: self.pou,
             role,
             member: member.map(|m| m.text.clone()),
+            scope: self.scope,
         });
     }
 
@@ -364,6 +488,7 @@ impl Builder<'_> {
             symbols: Vec::new(),
             var_blocks: p.var_blocks.iter().map(|b| (b.kind, b.span)).collect(),
             header_end,
+            extends: p.extends.as_ref().map(|e| e.text.clone()),
         });
         self.ix.local.push(Default::default());
         let idx = self.ix.pous.len() - 1;
@@ -397,13 +522,31 @@ impl Builder<'_> {
                 self.sfc_decls(inner);
             }
         }
-        // Its methods and properties (their own variables are not the POU's).
-        for m in &p.methods {
-            self.add(&m.name.text, SymbolKind::Method, m.name.span, m.span);
+        // Its methods and properties; the variables of a method or an accessor are its own.
+        let methods: Vec<usize> =
+            p.methods.iter().map(|m| self.add(&m.name.text, SymbolKind::Method, m.name.span, m.span)).collect();
+        let properties: Vec<usize> =
+            p.properties.iter().map(|q| self.add(&q.name.text, SymbolKind::Property, q.name.span, q.span)).collect();
+        for (m, owner) in p.methods.iter().zip(methods) {
+            self.scope = Some(self.new_scope(idx, owner, m.span));
+            for b in &m.var_blocks {
+                self.var_block(b, Some(idx));
+            }
+            if let Some(t) = &m.return_type {
+                self.type_spec(t);
+            }
         }
-        for q in &p.properties {
-            self.add(&q.name.text, SymbolKind::Property, q.name.span, q.span);
+        for (q, owner) in p.properties.iter().zip(properties) {
+            self.scope = None;
+            self.type_spec(&q.ty);
+            for acc in [&q.get, &q.set].into_iter().flatten() {
+                self.scope = Some(self.new_scope(idx, owner, acc.span));
+                for b in &acc.var_blocks {
+                    self.var_block(b, Some(idx));
+                }
+            }
         }
+        self.scope = None;
         self.pou = None;
     }
 
@@ -538,19 +681,22 @@ impl Builder<'_> {
         for a in &p.actions {
             self.action_body(&a.body);
         }
-        // The code of its methods and properties: the POU's names used there are found.
+        // The code of its methods and properties, each in its scope (its variables, then the
+        // POU's names).
         let bodies = p
             .methods
             .iter()
-            .map(|m| &m.body)
-            .chain(p.properties.iter().flat_map(|q| [&q.get, &q.set]).flatten().map(|a| &a.body));
-        for b in bodies {
+            .map(|m| (m.span, &m.body))
+            .chain(p.properties.iter().flat_map(|q| [&q.get, &q.set]).flatten().map(|a| (a.span, &a.body)));
+        for (span, b) in bodies {
+            self.scope = self.scope_of(span);
             match b {
                 ast::Body::St(stmts) => self.stmts(stmts),
                 ast::Body::Il(il) => self.il(il),
                 ast::Body::Sfc(elements) => self.chart_body(elements),
             }
         }
+        self.scope = None;
         self.pou = None;
     }
 
@@ -724,10 +870,13 @@ impl Builder<'_> {
     fn expr(&mut self, e: &Expr) {
         match &e.kind {
             ExprKind::Name(n) => self.occ(n, Role::Code, None),
-            ExprKind::Member { base, member } => match &base.kind {
-                ExprKind::Name(n) => self.occ(n, Role::Code, Some(member)),
-                _ => self.expr(base),
-            },
+            ExprKind::Member { base, member } => {
+                match &base.kind {
+                    ExprKind::Name(n) => self.occ(n, Role::Code, Some(member)),
+                    _ => self.expr(base),
+                }
+                self.member_use(base, member);
+            }
             ExprKind::Index { base, indices } => {
                 self.expr(base);
                 for i in indices {
@@ -736,14 +885,17 @@ impl Builder<'_> {
             }
             ExprKind::Call { callee, args } => {
                 self.occ(callee, Role::Code, None);
-                self.args(args);
+                let of = (!callee.text.ends_with('^')).then(|| MemberBase::CallOf(callee.key()));
+                self.args(of, args);
             }
             ExprKind::MemberCall { base, member, args } => {
                 match &base.kind {
                     ExprKind::Name(n) => self.occ(n, Role::Code, Some(member)),
                     _ => self.expr(base),
                 }
-                self.args(args);
+                self.member_use(base, member);
+                let of = member_base(base).map(|b| MemberBase::CallOfMember(Box::new(b), member.key()));
+                self.args(of, args);
             }
             ExprKind::Unary { operand, .. } => self.expr(operand),
             ExprKind::Binary { lhs, rhs, .. } => {
@@ -760,8 +912,12 @@ impl Builder<'_> {
         }
     }
 
-    fn args(&mut self, args: &[Arg]) {
+    /// The arguments of a call; their formal parameter names are those of `of`'s parameters.
+    fn args(&mut self, of: Option<MemberBase>, args: &[Arg]) {
         for a in args {
+            if let (Some(of), Some(n)) = (&of, &a.name) {
+                self.push_member(n, of.clone());
+            }
             if let Some(v) = &a.value {
                 self.expr(v);
             }
@@ -789,9 +945,22 @@ impl Builder<'_> {
                 self.il_instructions(n);
             }
             if let Some(a) = &i.call_args {
-                self.args(a);
+                self.args(None, a);
             }
         }
+    }
+}
+
+/// What a member written after `base` belongs to: a name, `THIS^` or `SUPER^`.
+fn member_base(base: &Expr) -> Option<MemberBase> {
+    match &base.kind {
+        ExprKind::Name(n) => Some(MemberBase::Name(n.key())),
+        ExprKind::Deref(inner) => match &inner.kind {
+            ExprKind::Name(n) if n.is("THIS") => Some(MemberBase::This),
+            ExprKind::Name(n) if n.is("SUPER") => Some(MemberBase::Super),
+            _ => None,
+        },
+        _ => None,
     }
 }
 
@@ -826,5 +995,40 @@ mod tests {
         );
         assert!(ix.lookup(Some(0), "SFCINIT").is_some());
         assert_eq!(ix.lookup(None, "P"), Some(0));
+    }
+
+    /// A method and each accessor have their own variables; the block's names used there are
+    /// the block's; members and formal parameters are recorded with what they belong to.
+    #[test]
+    fn scopes_of_methods_and_accessors_and_members() {
+        let text = "FUNCTION_BLOCK B\nVAR x : INT; END_VAR\nMETHOD M : INT\nVAR_INPUT x : INT; END_VAR\nVAR y : INT; END_VAR\n\
+                    y := x; M := THIS^.x;\nEND_METHOD\nPROPERTY P : INT\nGET VAR g : INT; END_VAR P := g + x; END_GET\n\
+                    END_PROPERTY\nEND_FUNCTION_BLOCK\nPROGRAM Q\nVAR b : B; END_VAR\nb.M(x := 1); b.P := 2;\nEND_PROGRAM\n";
+        let ix = index(text);
+        assert_eq!(ix.scopes.len(), 2);
+        let m = ix.lookup_local(0, "M").unwrap();
+        assert_eq!(ix.scopes[0].owner, m);
+        let uses: Vec<(usize, usize)> = ix
+            .occurrences
+            .iter()
+            .filter(|o| o.key == "X" || o.key == "Y" || o.key == "G")
+            .map(|o| (ix.resolve(o).unwrap(), o.scope.unwrap()))
+            .collect();
+        let (bx, mx) = (ix.lookup_local(0, "X").unwrap(), ix.lookup_scoped(0, "X").unwrap());
+        let (my, g) = (ix.lookup_scoped(0, "Y").unwrap(), ix.lookup_scoped(1, "G").unwrap());
+        assert_ne!(bx, mx);
+        assert_eq!(uses, [(my, 0), (mx, 0), (g, 1), (bx, 1)]);
+        assert!(ix.pou_symbols(0).all(|(id, _)| id != mx && id != my), "the method's variables are not the block's");
+        let members: Vec<(&str, &MemberBase, Option<usize>)> =
+            ix.members.iter().map(|u| (u.key.as_str(), &u.base, u.pou)).collect();
+        assert_eq!(
+            members,
+            [
+                ("X", &MemberBase::This, Some(0)),
+                ("M", &MemberBase::Name("B".into()), Some(1)),
+                ("X", &MemberBase::CallOfMember(Box::new(MemberBase::Name("B".into())), "M".into()), Some(1)),
+                ("P", &MemberBase::Name("B".into()), Some(1))
+            ]
+        );
     }
 }

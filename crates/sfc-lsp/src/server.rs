@@ -409,7 +409,9 @@ impl Server<'_> {
                 let uri = p.text_document_position_params.text_document.uri;
                 let a = self.analysis_of(&uri)?;
                 let offset = a.offset(p.text_document_position_params.position);
-                let Some((identity, _)) = navigate::identity_at(&uri, &a, offset) else { return to_json(()) };
+                let Some((identity, _)) = navigate::identity_at(&mut self.ws, &uri, &a, offset) else {
+                    return to_json(());
+                };
                 let locs: Vec<Location> = navigate::declarations(&mut self.ws, &uri, &a, &identity)
                     .iter()
                     .filter_map(|f| Some(navigate::location(&f.uri, &f.analysis, f.symbol()?.name_span)))
@@ -421,7 +423,9 @@ impl Server<'_> {
                 let uri = p.text_document_position.text_document.uri;
                 let a = self.analysis_of(&uri)?;
                 let offset = a.offset(p.text_document_position.position);
-                let Some((identity, _)) = navigate::identity_at(&uri, &a, offset) else { return to_json(()) };
+                let Some((identity, _)) = navigate::identity_at(&mut self.ws, &uri, &a, offset) else {
+                    return to_json(());
+                };
                 let locs: Vec<Location> = navigate::references(&mut self.ws, &uri, &a, &identity)
                     .into_iter()
                     .filter(|(_, _, _, decl)| p.context.include_declaration || !decl)
@@ -433,7 +437,7 @@ impl Server<'_> {
                 let p: TextDocumentPositionParams = params(r.params)?;
                 let a = self.analysis_of(&p.text_document.uri)?;
                 let offset = a.offset(p.position);
-                let range = navigate::prepare_rename(&p.text_document.uri, &a, offset).map_err(failed)?;
+                let range = navigate::prepare_rename(&mut self.ws, &p.text_document.uri, &a, offset).map_err(failed)?;
                 to_json(PrepareRenameResponse::Range(range))
             }
             req::Rename::METHOD => {
@@ -441,8 +445,9 @@ impl Server<'_> {
                 let uri = p.text_document_position.text_document.uri;
                 let a = self.analysis_of(&uri)?;
                 let offset = a.offset(p.text_document_position.position);
-                let (identity, _) = navigate::identity_at(&uri, &a, offset).ok_or_else(|| failed("no name here"))?;
-                navigate::prepare_rename(&uri, &a, offset).map_err(failed)?;
+                let (identity, _) =
+                    navigate::identity_at(&mut self.ws, &uri, &a, offset).ok_or_else(|| failed("no name here"))?;
+                navigate::prepare_rename(&mut self.ws, &uri, &a, offset).map_err(failed)?;
                 let edit = navigate::rename(&mut self.ws, &uri, &a, &identity, &p.new_name).map_err(failed)?;
                 to_json(edit)
             }

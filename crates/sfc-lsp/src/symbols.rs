@@ -1,6 +1,7 @@
 //! The outline: POUs (and types, globals) at the top; inside a POU its variables by section,
 //! then its steps in declaration order, each with the transitions that leave it (so the outline
-//! shows the step structure), then the actions.
+//! shows the step structure), then the actions, the methods and the properties, each method
+//! and property with the variables of its code.
 
 use crate::index::{Symbol, SymbolKind as Kind};
 use crate::workspace::Analysis;
@@ -102,12 +103,28 @@ fn pou_children(a: &Analysis, pou: usize) -> Vec<DocumentSymbol> {
     for s in syms.iter().filter(|s| matches!(s.kind, Kind::Action)) {
         out.push(node(a, s, SymbolKind::METHOD, Some("action".into())));
     }
-    for s in syms.iter() {
-        match s.kind {
-            Kind::Method => out.push(node(a, s, SymbolKind::METHOD, Some("method".into()))),
-            Kind::Property => out.push(node(a, s, SymbolKind::PROPERTY, Some("property".into()))),
-            _ => {}
+    for (id, s) in ix.pou_symbols(pou) {
+        let mut n = match s.kind {
+            Kind::Method => node(a, s, SymbolKind::METHOD, Some("method".into())),
+            Kind::Property => node(a, s, SymbolKind::PROPERTY, Some("property".into())),
+            _ => continue,
+        };
+        let vars: Vec<DocumentSymbol> = ix
+            .scopes
+            .iter()
+            .filter(|sc| sc.owner == id)
+            .flat_map(|sc| sc.symbols.iter().filter_map(|&v| ix.symbol(v)))
+            .filter_map(|v| match &v.kind {
+                Kind::Variable(d) => {
+                    Some(node(a, v, SymbolKind::VARIABLE, Some(format!("{} {}", d.section.keyword(), d.ty))))
+                }
+                _ => None,
+            })
+            .collect();
+        if !vars.is_empty() {
+            n.children = Some(vars);
         }
+        out.push(n);
     }
     out
 }

@@ -67,7 +67,7 @@ pub fn semantic_tokens(a: &Analysis) -> Vec<SemanticToken> {
         raw.push((s.name_span, type_index(t), m | 1));
     }
     for o in &ix.occurrences {
-        let resolved = ix.lookup(o.pou, &o.key).and_then(|id| ix.symbol(id));
+        let resolved = ix.resolve(o).and_then(|id| ix.symbol(id));
         let (t, m) = match resolved {
             Some(s) => classify(&s.kind),
             None if sfc_st::stdlib::std_function_block(&o.key).is_some() => ("type", 4),
