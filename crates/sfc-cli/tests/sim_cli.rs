@@ -648,3 +648,25 @@ fn pou_kept_as_written_says_why_it_cannot_be_simulated() {
     let out = sfc_in(&d, &["sim", "plant.st", "--pou", "Main", "--scans", "2"]);
     assert_eq!(out.status.code(), Some(0), "the sound POU runs: {}", both(&out));
 }
+
+/// Interfaces through the binary: the semantics fixture's scenario passes under `sfc sim`, and
+/// a call through an interface that designates nothing stops the run with a located fault.
+#[test]
+fn interfaces_dispatch_through_the_binary() {
+    let dir = root().join("crates/sfc-sim/tests/semantics");
+    let out = sfc_in(&dir, &["sim", "55_interfaces.st", "--scenario", "55_interfaces.scenario.toml"]);
+    assert_eq!(out.status.code(), Some(0), "{}", both(&out));
+    assert!(stdout(&out).contains("PASS 55_interfaces.scenario.toml"), "{}", both(&out));
+
+    let d = temp_dir("interface-none");
+    std::fs::write(
+        d.join("none.st"),
+        "INTERFACE I_Dev\n    METHOD Poll : INT\n    END_METHOD\nEND_INTERFACE\n\n\
+         PROGRAM Main\n    VAR\n        Dev : I_Dev;\n        x : INT;\n    END_VAR\n    x := Dev.Poll();\nEND_PROGRAM\n",
+    )
+    .unwrap();
+    let out = sfc_in(&d, &["sim", "none.st", "--scans", "1"]);
+    assert_eq!(out.status.code(), Some(1), "{}", both(&out));
+    assert!(stderr(&out).contains("an interface that designates nothing (0) is used"), "{}", both(&out));
+    assert!(stderr(&out).contains("none.st:11:10"), "{}", both(&out));
+}

@@ -198,6 +198,14 @@ operand type does not fit.";
 CODESYS and TwinCAT also allow reading its local variables (their static analysis reports it as \
 SA0102), so projects written there do it. sfc reads the value as they do. Writing it stays an \
 error (SFC0309).";
+    "SFC0323" Error "interface not implemented"
+        "A block that `IMPLEMENTS` an interface lacks one of the interface's methods or properties, \
+or declares it with another result type, other parameters, or without an accessor the interface \
+declares (`GET`, `SET`). Every call through the interface must find the method in the block.";
+    "SFC0324" Warning "interface not declared in the file"
+        "A block `IMPLEMENTS` an interface the file does not declare (a library's): what the \
+block promises is not checked. Declare the interface (`INTERFACE … END_INTERFACE`) in the file to \
+have it checked and to call the block through it.";
     "SFC0318" Error "duplicate declaration"
         "A type, POU, enumerated value or structure field is declared twice, or a declaration \
 redefines a standard type, function or function block. Rename one of them.";

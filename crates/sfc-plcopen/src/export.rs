@@ -634,6 +634,61 @@ fn object_fragments(src: &str, pou: &ast::Pou) -> Vec<String> {
     out
 }
 
+/// An interface as CODESYS writes it in the project's `addData`: `data[@name=…/interface]`
+/// holding `Interface` with its `Methods` and `Properties` (prototypes: their interfaces only)
+/// and its bases as `Inheritance/Extends` in its `addData`.
+fn interface_fragment(src: &str, i: &ast::Interface) -> String {
+    const NS: &str = "http://www.3s-software.com/plcopenxml/";
+    let mut x = X::new();
+    x.open("data", &[("name", format!("{NS}interface")), ("handleUnknown", "implementation".into())]);
+    x.open("Interface", &[("name", i.name.text.clone())]);
+    if !i.methods.is_empty() {
+        x.open("Methods", &[]);
+        for m in &i.methods {
+            x.open("Method", &[("name", m.name.text.clone())]);
+            write_code_interface(&mut x, src, m.return_type.as_ref(), &m.var_blocks, &m.modifiers);
+            x.empty("addData", &[]);
+            x.close("Method");
+        }
+        x.close("Methods");
+    }
+    if !i.properties.is_empty() {
+        x.open("Properties", &[]);
+        for p in &i.properties {
+            x.open("Property", &[("name", p.name.text.clone())]);
+            write_code_interface(&mut x, src, Some(&p.ty), &[], &p.modifiers);
+            for (tag, acc) in [("GetAccessor", &p.get), ("SetAccessor", &p.set)] {
+                let Some(a) = acc else { continue };
+                x.open(tag, &[]);
+                write_code_interface(&mut x, src, None, &a.var_blocks, &a.modifiers);
+                x.empty("addData", &[]);
+                x.close(tag);
+            }
+            x.empty("addData", &[]);
+            x.close("Property");
+        }
+        x.close("Properties");
+    }
+    if i.extends.is_empty() {
+        x.empty("addData", &[]);
+    } else {
+        x.open("addData", &[]);
+        x.open("data", &[("name", format!("{NS}interfaceinheritance")), ("handleUnknown", "implementation".into())]);
+        x.open("Inheritance", &[]);
+        for e in &i.extends {
+            x.open("Extends", &[]);
+            x.text(&e.text);
+            x.close("Extends");
+        }
+        x.close("Inheritance");
+        x.close("data");
+        x.close("addData");
+    }
+    x.close("Interface");
+    x.close("data");
+    x.finish()
+}
+
 /// The `actions` of a POU that is no chart (CODESYS's actions of a function block), each with
 /// its body as written.
 fn write_pou_actions(x: &mut X, src: &str, actions: &[ast::Action], subs: &[&sfc_model::Chart]) {
@@ -815,9 +870,25 @@ pub fn export_with(checked: &Checked, original: Option<&str>) -> Result<(String,
     x.close("types");
 
     config::write_instances(&mut x, src, unit);
-    if let Some(data) = header(attrs::PROJECTDATA) {
+    // The interfaces, as CODESYS keeps them: in the project's `addData`, before what an import
+    // carried over.
+    let interfaces: Vec<String> = unit
+        .items
+        .iter()
+        .filter_map(|i| match i {
+            ast::Item::Interface(i) => Some(interface_fragment(src, i)),
+            _ => None,
+        })
+        .collect();
+    let data = header(attrs::PROJECTDATA);
+    if !interfaces.is_empty() || data.is_some() {
         x.open("addData", &[]);
-        x.raw(&data);
+        for f in &interfaces {
+            x.raw(f);
+        }
+        if let Some(data) = data {
+            x.raw(&data);
+        }
         x.close("addData");
     }
     x.close("project");

@@ -313,6 +313,7 @@ pub(crate) fn project(cx: &mut Ctx, root: Node) {
         .into_iter()
         .flat_map(|a| children(a, "data"))
         .filter(|d| attr(*d, "name") != Some(CODESYS_APPLICATION) && !is_pool_lists(*d))
+        .filter(|d| !codesys::is_interface_data(*d))
         .map(xml::serialize)
         .collect();
     if !project_data.is_empty() {
@@ -384,6 +385,12 @@ pub(crate) fn project(cx: &mut Ctx, root: Node) {
             cx.em.str("END_TYPE\n\n");
             cx.em.close();
         }
+    }
+    // Interfaces (CODESYS keeps them in the project's or an application's `addData`).
+    for i in codesys::interfaces(root) {
+        cx.em.open(anchor(i));
+        codesys::interface(cx, i);
+        cx.em.close();
     }
     // Configurations, and the resources of a CODESYS/e!COCKPIT project export (under
     // `project/addData/data[@name=…/application]`, with an empty `types/pous`).
@@ -619,7 +626,8 @@ fn opaque_types(cx: &mut Ctx, root: Node, pous: &[(Node, Option<usize>)]) {
     let mut declared: HashSet<String> = HashSet::new();
     for d in root.descendants().filter(|d| d.is_element()) {
         let n = d.tag_name().name();
-        if n == "dataType" || n == "pou" {
+        // (An interface is declared in CODESYS's `addData`, `…/interface`.)
+        if n == "dataType" || n == "pou" || (n == "Interface" && d.parent().is_some_and(codesys::is_interface_data)) {
             if let Some(name) = attr(d, "name") {
                 declared.insert(name.trim().to_ascii_uppercase());
             }

@@ -1265,8 +1265,18 @@ fn inherit_interfaces(interfaces: &mut FxHashMap<String, InterfaceInfo>, diags: 
         let chain = match interface_chain(&originals, key) {
             Ok(c) => c,
             Err(why) => {
-                let what =
-                    if why.starts_with("itself") { why } else { format!("`{why}`, which is not a declared interface") };
+                let what = if why.starts_with("itself") {
+                    why
+                } else {
+                    // The name as written where it is extended.
+                    let written = originals
+                        .values()
+                        .flat_map(|i| i.extends.iter())
+                        .find(|e| e.eq_ignore_ascii_case(&why))
+                        .cloned()
+                        .unwrap_or(why);
+                    format!("`{written}`, which is not a declared interface")
+                };
                 diags.push(Diagnostic::new("SFC0313", info.span, format!("interface `{}` extends {what}", info.name)));
                 continue;
             }
@@ -1290,9 +1300,9 @@ fn inherit_interfaces(interfaces: &mut FxHashMap<String, InterfaceInfo>, diags: 
     }
 }
 
-/// `FUNCTION_BLOCK B IMPLEMENTS I`: `I` is a declared interface and `B` (with what it
-/// inherits) has each of its methods and properties, with the same result type and inputs
-/// (SFC0313 otherwise).
+/// `FUNCTION_BLOCK B IMPLEMENTS I`: `B` (with what it inherits) has each method and property
+/// of `I`, with the same result type and parameters (SFC0323 otherwise); an interface the file
+/// does not declare is a warning (SFC0324: a library's, not checked).
 fn check_implements(env: &TypeEnv, diags: &mut Vec<Diagnostic>) {
     for pou in &env.pous {
         for name in &pou.implements {
@@ -1300,12 +1310,23 @@ fn check_implements(env: &TypeEnv, diags: &mut Vec<Diagnostic>) {
                 continue;
             }
             let Some(itf) = env.interface(name) else {
-                let what = if env.pou(name).is_some() { "a POU, not an interface" } else { "not declared" };
-                diags.push(Diagnostic::new(
-                    "SFC0313",
-                    pou.span,
-                    format!("`{}` implements `{name}`, which is {what}", pou.name),
-                ));
+                diags.push(if env.pou(name).is_some() || env.type_def(name).is_some() {
+                    Diagnostic::new(
+                        "SFC0323",
+                        pou.span,
+                        format!("`{}` implements `{name}`, which is no interface", pou.name),
+                    )
+                } else {
+                    Diagnostic::warning(
+                        "SFC0324",
+                        pou.span,
+                        format!(
+                            "`{}` implements `{name}`, which the file does not declare (a library's interface?)",
+                            pou.name
+                        ),
+                    )
+                    .with_note("what the block promises is not checked")
+                });
                 continue;
             };
             for m in &itf.methods {
@@ -1318,13 +1339,13 @@ fn check_implements(env: &TypeEnv, diags: &mut Vec<Diagnostic>) {
                 };
                 match pou.method(&m.name) {
                     None => diags.push(Diagnostic::new(
-                        "SFC0313",
+                        "SFC0323",
                         pou.span,
                         format!("`{}` implements `{}` but has no method `{}`", pou.name, itf.name, m.name),
                     )),
                     Some(own) if own.return_type != m.return_type || params(own) != params(m) => diags.push(
                         Diagnostic::new(
-                            "SFC0313",
+                            "SFC0323",
                             own.span,
                             format!(
                                 "method `{}` of `{}` differs from its prototype in interface `{}` (result or parameters)",
@@ -1345,7 +1366,7 @@ fn check_implements(env: &TypeEnv, diags: &mut Vec<Diagnostic>) {
                 });
                 if !ok {
                     diags.push(Diagnostic::new(
-                        "SFC0313",
+                        "SFC0323",
                         own.map_or(pou.span, |o| o.span),
                         format!(
                             "`{}` implements `{}` but has no property `{}` of type `{}` with {}",

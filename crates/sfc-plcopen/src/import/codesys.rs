@@ -11,6 +11,54 @@ use roxmltree::Node;
 const METHOD: &str = "/method";
 const PROPERTY: &str = "/property";
 const INHERITANCE: &str = "/pouinheritance";
+/// An interface, in the project's (or an application's) `addData`.
+pub(crate) const INTERFACE: &str = "http://www.3s-software.com/plcopenxml/interface";
+
+/// Whether `n` is a `data` element holding an interface (written as text instead).
+pub(super) fn is_interface_data(n: Node) -> bool {
+    n.tag_name().name() == "data" && attr(n, "name") == Some(INTERFACE)
+}
+
+/// Every interface of the document, in document order: `data[@name=…/interface]/Interface`.
+pub(super) fn interfaces<'a, 'i>(root: Node<'a, 'i>) -> Vec<Node<'a, 'i>> {
+    root.descendants()
+        .filter(|d| d.is_element() && is_interface_data(*d))
+        .flat_map(|d| children(d, "Interface"))
+        .collect()
+}
+
+/// An interface as text: `INTERFACE Name [EXTENDS A, B]`, its methods' and properties'
+/// prototypes, `END_INTERFACE`. Its bases are read from an `Inheritance/Extends` in its
+/// `addData` (the shape of a POU's `pouinheritance`).
+pub(super) fn interface(cx: &mut Ctx, i: Node) {
+    let name = attr(i, "name").unwrap_or("").trim().to_string();
+    let bases: Vec<String> = children(i, "addData")
+        .flat_map(|a| children(a, "data"))
+        .filter_map(|d| child(d, "Inheritance"))
+        .flat_map(|inh| children(inh, "Extends"))
+        .map(|e| xml::text_of(e).text.trim().to_string())
+        .filter(|n| !n.is_empty())
+        .collect();
+    cx.em.str(&format!("INTERFACE {name}"));
+    if !bases.is_empty() {
+        cx.em.str(&format!(" EXTENDS {}", bases.join(", ")));
+    }
+    cx.em.str(
+        "
+",
+    );
+    let methods: Vec<Node> =
+        children(i, "Methods").flat_map(|l| children(l, "Method")).chain(children(i, "Method")).collect();
+    let properties: Vec<Node> =
+        children(i, "Properties").flat_map(|l| children(l, "Property")).chain(children(i, "Property")).collect();
+    for m in methods {
+        method(cx, m);
+    }
+    for q in properties {
+        property(cx, q);
+    }
+    cx.em.str("END_INTERFACE\n\n");
+}
 
 /// ` EXTENDS A IMPLEMENTS B, C` for the header of POU `p`, from its interface's `addData`.
 pub(super) fn inheritance(p: Node) -> String {

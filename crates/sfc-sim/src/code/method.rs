@@ -459,13 +459,13 @@ impl Cx<'_, '_> {
         span: Span,
     ) -> C<Option<(LocFn, Option<Type>)>> {
         let Some((at, targets)) = self.interface_targets(base)? else { return Ok(None) };
+        let Some(Type::Interface(itf)) = self.recorded(base) else { return Ok(None) };
+        let rt = self.u.env.interface(&itf).and_then(|i| i.method(&member.text)).and_then(|m| m.return_type.clone());
         let mut calls = Vec::new();
-        let mut rt = None;
         for t in targets {
             let Some(k) = self.find_method(&t, &member.text, MethodKind::Method) else { continue };
             let pou = t.pou;
             let mm = &self.u.pous[pou].methods[k];
-            rt = mm.sig.return_type.clone();
             let r = if rt.is_some() { mm.vars.last().map(|s| s.offset as usize).unwrap_or(0) } else { 0 };
             let call = self.compile_call(t, k, args, span)?;
             calls.push((pou, Arc::new(move |c: &mut Ctx<'_>, b: usize| Ok(call.invoke(c, b)? + r)) as LocFn));
