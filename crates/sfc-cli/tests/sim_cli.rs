@@ -670,3 +670,26 @@ fn interfaces_dispatch_through_the_binary() {
     assert!(stderr(&out).contains("an interface that designates nothing (0) is used"), "{}", both(&out));
     assert!(stderr(&out).contains("none.st:11:10"), "{}", both(&out));
 }
+
+/// Pointer arithmetic is checked but not simulated (addresses are variables here, not bytes):
+/// `sim` of the POU says so at the expression, and a POU that does not use it still runs.
+#[test]
+fn pointer_arithmetic_says_it_is_not_simulated() {
+    let d = temp_dir("pointer-arithmetic");
+    std::fs::write(
+        d.join("ptr.st"),
+        "PROGRAM Shift\n    VAR\n        p : POINTER TO BYTE;\n        b : ARRAY [0..3] OF BYTE;\n    END_VAR\n    \
+         p := ADR(b) + 2;\nEND_PROGRAM\n\nPROGRAM Index\n    VAR\n        p : POINTER TO BYTE;\n        \
+         b : ARRAY [0..3] OF BYTE;\n        x : BYTE;\n    END_VAR\n    p := ADR(b);\n    p[2] := 7;\n    x := b[2];\nEND_PROGRAM\n",
+    )
+    .unwrap();
+    let out = sfc_in(&d, &["check", "ptr.st"]);
+    assert_eq!(out.status.code(), Some(0), "pointer arithmetic type-checks: {}", both(&out));
+    let out = sfc_in(&d, &["sim", "ptr.st", "--pou", "Shift", "--scans", "1"]);
+    assert_eq!(out.status.code(), Some(1), "{}", both(&out));
+    assert!(stderr(&out).contains("pointer arithmetic is not simulated"), "{}", both(&out));
+    assert!(stderr(&out).contains("ptr.st:6:10"), "{}", both(&out));
+    let out = sfc_in(&d, &["sim", "ptr.st", "--pou", "Index", "--scans", "1", "--trace", "-"]);
+    assert_eq!(out.status.code(), Some(0), "{}", both(&out));
+    assert!(stdout(&out).contains("\"x\":7"), "{}", both(&out));
+}

@@ -663,6 +663,7 @@ fn opaque_types(cx: &mut Ctx, root: Node, pous: &[(Node, Option<usize>)]) {
             missing.push((name, range.unwrap_or_else(|| anchor(d)), what));
         }
     }
+    let functions = opaque_functions(root, pous, &declared, &seen);
     for (name, at, what) in missing {
         if let Some(base) = library_alias(&name) {
             cx.diag(
@@ -692,6 +693,83 @@ fn opaque_types(cx: &mut Ctx, root: Node, pous: &[(Node, Option<usize>)]) {
         cx.em.str(&format!("{{attribute 'sfc.verbatim' := 'opaque'}}\nFUNCTION_BLOCK {name}\nEND_FUNCTION_BLOCK\n\n"));
         cx.em.close();
     }
+    for (name, at) in functions {
+        cx.diag(
+            "SFC0713",
+            at.clone(),
+            format!("function `{name}` is not declared in the file: imported as an opaque function"),
+        )
+        .notes
+        .push(
+            "its calls are kept, but not analysed or simulated (a library's function: a CODESYS library such as \
+             SysMem or OSCAT, or a Beremiz extension)"
+                .into(),
+        );
+        cx.em.open(at);
+        cx.em.str(&format!("{{attribute 'sfc.verbatim' := 'opaque'}}\nFUNCTION {name}\nEND_FUNCTION\n\n"));
+        cx.em.close();
+    }
+}
+
+/// The functions the code of the POUs calls (`Name(`, not `x.Name(`) that nothing of the file
+/// declares under that name (no POU, type, variable, action, transition, step, method or
+/// property) and that are not standard or built in: a library's functions, each with where it
+/// is first called.
+fn opaque_functions(
+    root: Node,
+    pous: &[(Node, Option<usize>)],
+    declared: &HashSet<String>,
+    types: &HashSet<String>,
+) -> Vec<(String, Range<u32>)> {
+    const BUILT_IN: &[&str] = &["ADR", "REF", "SIZEOF", "LOWER_BOUND", "UPPER_BOUND", "THIS", "SUPER"];
+    let mut names: HashSet<String> = HashSet::new();
+    for d in root.descendants().filter(|d| d.is_element()) {
+        if let Some(n) = attr(d, "name").or_else(|| attr(d, "Name")) {
+            names.insert(n.trim().to_ascii_uppercase());
+        }
+    }
+    let mut out: Vec<(String, Range<u32>)> = Vec::new();
+    let mut seen: HashSet<String> = HashSet::new();
+    for (p, _) in pous {
+        for e in p.descendants().filter(|e| e.is_element() && matches!(e.tag_name().name(), "ST" | "IL")) {
+            let t = xml::formatted_text(e);
+            let (toks, _) = sfc_syntax::lexer::lex(0, &t.text);
+            let sig: Vec<_> = toks.iter().filter(|t| !t.kind.is_trivia()).collect();
+            for (i, tok) in sig.iter().enumerate() {
+                if tok.kind != sfc_syntax::lexer::TokenKind::Ident
+                    || sig.get(i + 1).is_none_or(|n| n.kind != sfc_syntax::lexer::TokenKind::LParen)
+                    || i.checked_sub(1).and_then(|k| sig.get(k)).is_some_and(|b| {
+                        matches!(b.kind, sfc_syntax::lexer::TokenKind::Dot | sfc_syntax::lexer::TokenKind::Caret)
+                    })
+                {
+                    continue;
+                }
+                let w = &t.text[tok.start as usize..tok.end as usize];
+                let key = w.to_ascii_uppercase();
+                if names.contains(&key)
+                    || declared.contains(&key)
+                    || types.contains(&key)
+                    || BUILT_IN.contains(&key.as_str())
+                    || cannot_name(w)
+                    || sfc_st::stdlib::std_function(w).is_some()
+                    || sfc_st::stdlib::std_function_block(w).is_some()
+                    || key.starts_with("__")
+                    || !is_ident(w)
+                    || !seen.insert(key)
+                {
+                    continue;
+                }
+                let at = t
+                    .runs
+                    .iter()
+                    .find(|r| r.text <= tok.start && tok.end <= r.text + r.len)
+                    .map(|r| r.raw + (tok.start - r.text)..r.raw + (tok.end - r.text))
+                    .unwrap_or_else(|| anchor(e));
+                out.push((w.to_string(), at));
+            }
+        }
+    }
+    out
 }
 
 /// `CONFIGURATION … END_CONFIGURATION` for a configuration (or a CODESYS application, `c` then
@@ -1165,6 +1243,14 @@ pub(crate) fn type_text(cx: &mut Ctx, t: Node, indent: &str) -> Frag {
         }
         "derived" => {
             let raw = attr(e, "name").unwrap_or("").trim();
+            // CODESYS writes a reference as a derived type: `<derived name="REFERENCE TO INT"/>`.
+            let words: Vec<&str> = raw.split_whitespace().collect();
+            if let [r, t, target] = words.as_slice() {
+                if r.eq_ignore_ascii_case("REFERENCE") && t.eq_ignore_ascii_case("TO") && is_ident(target) {
+                    let at = attr_range(e, "name").unwrap_or_else(|| at.clone());
+                    return Frag::located(format!("REFERENCE TO {target}"), at);
+                }
+            }
             match dialect::map_type(raw) {
                 Some(std) => Frag::located(std, attr_range(e, "name").unwrap_or_else(|| at.clone())),
                 // A library type through its namespace: an opaque block (`opaque_types`).

@@ -108,6 +108,19 @@ impl Checker<'_, '_> {
         {
             return self.adr(args, span);
         }
+        // CODESYS's `SIZEOF(x)` and `SIZEOF(T)`, `__ISVALIDREF(r)`.
+        if self.scope.resolve(&name.text).is_none() && self.scope.env().function(&name.text).is_none() {
+            if name.is("SIZEOF") {
+                return self.sizeof(args, span);
+            }
+            if name.is("__ISVALIDREF") {
+                return self.is_valid_ref(args, span);
+            }
+            if name.is("LOWER_BOUND") || name.is("UPPER_BOUND") {
+                self.bound(name, args, span);
+                return Type::DInt;
+            }
+        }
         match self.callee(name) {
             Callee::Instance(sym, fb) => {
                 self.fb_call(name, sym, &fb, args, span);

@@ -987,7 +987,98 @@ impl<'s, 'e> Checker<'s, 'e> {
         }
     }
 
-    /// `ADR(x)`: the address of a variable, a `POINTER TO` its type.
+    /// `SIZEOF(x)`, `SIZEOF(T)` (CODESYS): the bytes `x` or a `T` takes ([`Type::byte_size`]),
+    /// a constant of the smallest unsigned type holding it.
+    pub(crate) fn sizeof(&mut self, args: &[sfc_syntax::ast::Arg], span: Span) -> Type {
+        let [sfc_syntax::ast::Arg { value: Some(v), name: None, .. }] = args else {
+            self.error("SFC0307", span, "`SIZEOF` takes one variable or type");
+            self.check_args_loosely(args);
+            return Type::Error;
+        };
+        let t = match &v.kind {
+            ExprKind::Name(id) if self.scope.resolve(&id.text).is_none() => match self.scope.env().named_type(&id.text)
+            {
+                Some(t) => t,
+                None => self.check_expr(v, None),
+            },
+            _ => self.check_expr(v, None),
+        };
+        if t.is_error() {
+            return Type::Error;
+        }
+        Type::sizeof_type(t.byte_size())
+    }
+
+    /// `LOWER_BOUND(a, d)`, `UPPER_BOUND(a, d)` (IEC 61131-3 3rd edition): a bound of dimension
+    /// `d` (from 1, a constant) of array `a`, a DINT. Returns the bound when known.
+    pub(crate) fn bound(&mut self, name: &Ident, args: &[sfc_syntax::ast::Arg], span: Span) -> Option<i64> {
+        let [sfc_syntax::ast::Arg { value: Some(a), name: None, .. }, sfc_syntax::ast::Arg { value: Some(d), name: None, .. }] =
+            args
+        else {
+            self.error("SFC0307", span, format!("`{}` takes an array and a dimension", name.text));
+            self.check_args_loosely(args);
+            return None;
+        };
+        let at = self.check_expr(a, None);
+        self.check_expr(d, Some(&Type::DInt));
+        let dims = match at {
+            Type::Array { dims, .. } => dims,
+            Type::Error => return None,
+            t => {
+                let p = self.phrase(a, &t);
+                self.error("SFC0310", a.span, format!("`{}` takes an array, but this is {p}", name.text));
+                return None;
+            }
+        };
+        let k = match untyped(d) {
+            Some(Untyped::Int(Some(k))) if k >= 1 && (k as usize) <= dims.len() => k as usize,
+            _ => {
+                self.error(
+                    "SFC0315",
+                    d.span,
+                    format!("the dimension is a constant from 1 to {} (the array's dimensions)", dims.len()),
+                );
+                return None;
+            }
+        };
+        let (lo, hi) = dims[k - 1];
+        Some(if name.is("LOWER_BOUND") { lo } else { hi })
+    }
+
+    /// `__ISVALIDREF(r)` (CODESYS): whether a `REFERENCE TO` variable (a pointer, an interface)
+    /// designates something.
+    pub(crate) fn is_valid_ref(&mut self, args: &[sfc_syntax::ast::Arg], span: Span) -> Type {
+        let [sfc_syntax::ast::Arg { value: Some(v), name: None, .. }] = args else {
+            self.error("SFC0307", span, "`__ISVALIDREF` takes one reference");
+            self.check_args_loosely(args);
+            return Type::Bool;
+        };
+        let t = match &v.kind {
+            ExprKind::Name(id) => match self.scope.resolve(&id.text) {
+                Some(sym @ (Sym::Local(_) | Sym::Global(_))) => {
+                    self.scope.mark(sym, false);
+                    self.scope.var_info(sym).map(|v| v.ty.clone())
+                }
+                _ => None,
+            },
+            _ => None,
+        };
+        match t {
+            Some(Type::Reference(_) | Type::Pointer(_) | Type::Interface(_) | Type::Error) => {}
+            _ => {
+                self.check_expr(v, None);
+                self.error(
+                    "SFC0302",
+                    v.span,
+                    "`__ISVALIDREF` takes a variable declared `REFERENCE TO` (or a pointer or an interface)",
+                );
+            }
+        }
+        Type::Bool
+    }
+
+    /// `ADR(x)`: the address of a variable, a `POINTER TO` its type; of a string literal (CODESYS
+    /// keeps the literal in memory), a `POINTER TO STRING`.
     pub(crate) fn adr(&mut self, args: &[sfc_syntax::ast::Arg], span: Span) -> Type {
         let [arg] = args else {
             self.error("SFC0307", span, "`ADR` takes one variable");
@@ -995,6 +1086,15 @@ impl<'s, 'e> Checker<'s, 'e> {
             return Type::Error;
         };
         let Some(v) = &arg.value else { return Type::Error };
+        if let ExprKind::Literal(sfc_syntax::ast::Literal {
+            kind: sfc_syntax::ast::LiteralKind::String { wide, .. },
+            ..
+        }) = &v.kind
+        {
+            let t = if *wide { Type::WString { len: None } } else { Type::String { len: None } };
+            self.record(v.span, &t);
+            return Type::Pointer(Box::new(t));
+        }
         let t = self.check_expr(v, None);
         if !matches!(v.kind, ExprKind::Name(_) | ExprKind::Member { .. } | ExprKind::Index { .. } | ExprKind::Deref(_))
         {
@@ -1014,6 +1114,8 @@ impl<'s, 'e> Checker<'s, 'e> {
             Type::Interface(i) if matches!(from, Type::FunctionBlock(_) | Type::Interface(_)) => {
                 self.scope.env().converts_to_interface(from, i)
             }
+            // CODESYS assigns an address to a pointer of any type (`pByte := ADR(aBuffer)`).
+            Type::Pointer(_) if matches!(from, Type::Pointer(_)) => true,
             _ => from.assignable_to(to),
         }
     }
@@ -1322,6 +1424,16 @@ impl<'s, 'e> Checker<'s, 'e> {
         } else {
             self.check_expr(base, None)
         };
+        // CODESYS's pointer indexing: `p[i]` is the `i`-th element of the pointed type from `p`.
+        if let Type::Pointer(t) = &base_ty {
+            if let [i] = indices {
+                let it = self.check_expr(i, Some(&Type::DInt));
+                if !it.is_error() && !it.is_integer() {
+                    self.error("SFC0302", i.span, format!("type mismatch: an index is an integer, not `{it}`"));
+                }
+                return (**t).clone();
+            }
+        }
         let dims = match &base_ty {
             Type::Array { dims, .. } => Some(dims.clone()),
             _ => None,
@@ -1435,7 +1547,27 @@ impl<'s, 'e> Checker<'s, 'e> {
         // The other operand's type lets an enumerated value or a constant on the right adapt.
         let r_hint = l.ty.clone().filter(|t| !t.is_error() && !t.is_duration() && !t.is_date());
         let r = self.operand(rhs, r_hint.as_ref().or(hint));
+        if let Some(t) = self.pointer_arithmetic(op, &l, &r) {
+            return t;
+        }
         self.combine(op, vec![l, r], span, expected, &format!("operator `{}`", op.symbol()))
+    }
+
+    /// CODESYS's pointer arithmetic: `p + n`, `n + p`, `p - n` (a pointer moved by `n` bytes)
+    /// and `p - q` (the bytes between two pointers, a `LINT`).
+    fn pointer_arithmetic(&mut self, op: BinaryOp, l: &Operand<'_>, r: &Operand<'_>) -> Option<Type> {
+        let is_ptr = |o: &Operand<'_>| matches!(o.ty.as_ref().map(Type::base), Some(Type::Pointer(_)));
+        let is_int = |o: &Operand<'_>| {
+            matches!(o.untyped, Some(Untyped::Int(_))) || o.ty.as_ref().is_some_and(|t| t.is_integer() || t.is_bit())
+        };
+        let ptr = |o: &Operand<'_>| o.ty.clone().unwrap_or(Type::Error);
+        match op {
+            BinaryOp::Add if is_ptr(l) && is_int(r) => Some(ptr(l)),
+            BinaryOp::Add if is_int(l) && is_ptr(r) => Some(ptr(r)),
+            BinaryOp::Sub if is_ptr(l) && is_int(r) => Some(ptr(l)),
+            BinaryOp::Sub if is_ptr(l) && is_ptr(r) => Some(Type::LInt),
+            _ => None,
+        }
     }
 
     /// Types an operator (or an operator-like standard function such as `ADD`) applied to

@@ -567,6 +567,21 @@ impl TypeEnv {
         self.types.values()
     }
 
+    /// The type a name stands for where a type is expected (`SIZEOF(T)`): elementary, declared,
+    /// an interface or a function block.
+    pub fn named_type(&self, name: &str) -> Option<Type> {
+        if let Some(t) = Type::elementary(name) {
+            return Some(t);
+        }
+        if let Some(d) = self.type_def(name) {
+            return Some(d.ty.clone());
+        }
+        if self.interface(name).is_some() {
+            return Some(Type::Interface(name.to_ascii_uppercase()));
+        }
+        self.function_block(name).map(|_| Type::FunctionBlock(name.to_ascii_uppercase()))
+    }
+
     /// An interface by name (case-insensitive).
     pub fn interface(&self, name: &str) -> Option<&InterfaceInfo> {
         self.interfaces.get(&name.to_ascii_uppercase())

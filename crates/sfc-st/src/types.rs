@@ -322,6 +322,71 @@ impl Type {
         )
     }
 
+    /// The bytes a value of this type takes on a CODESYS target, as `SIZEOF` counts them:
+    /// elementary types by their IEC size (TIME, DATE, TOD and DT 4 bytes), `STRING(n)` n + 1,
+    /// `WSTRING(n)` 2 (n + 1) (80 characters by default), an enumeration 2 bytes (its base's
+    /// if typed), arrays element by element, structures with each member aligned to its own
+    /// alignment and the whole to the largest (CODESYS's default packing), pointers, references
+    /// and interfaces 8 bytes (a 64-bit target). `None` for an instance of a function block,
+    /// whose layout is the compiler's.
+    pub fn byte_size(&self) -> Option<u64> {
+        Some(match self {
+            Type::Bool | Type::SInt | Type::USInt | Type::Byte => 1,
+            Type::Int | Type::UInt | Type::Word => 2,
+            Type::DInt | Type::UDInt | Type::DWord | Type::Real => 4,
+            Type::Time | Type::Date | Type::TimeOfDay | Type::DateAndTime => 4,
+            Type::LInt | Type::ULInt | Type::LWord | Type::LReal | Type::LTime => 8,
+            Type::String { len } => u64::from(len.unwrap_or(80)) + 1,
+            Type::WString { len } => 2 * (u64::from(len.unwrap_or(80)) + 1),
+            Type::Enum { base: Some(b), .. } | Type::Subrange { base: b, .. } => b.byte_size()?,
+            Type::Enum { base: None, .. } => 2,
+            Type::Array { dims, elem } => {
+                let n: i64 = dims.iter().map(|(lo, hi)| (hi - lo + 1).max(0)).product();
+                (n.max(0) as u64).checked_mul(elem.byte_size()?)?
+            }
+            Type::Struct { fields, .. } => {
+                let mut at: u64 = 0;
+                for (_, t) in fields {
+                    let a = t.byte_align()?;
+                    at = at.div_ceil(a) * a + t.byte_size()?;
+                }
+                let a = self.byte_align()?;
+                at.div_ceil(a) * a
+            }
+            Type::Pointer(_) | Type::Reference(_) | Type::Interface(_) => 8,
+            Type::FunctionBlock(_) | Type::Error => return None,
+        })
+    }
+
+    /// The alignment of [`Type::byte_size`]: an elementary type's size, a string's 1, an array's
+    /// element's, a structure's largest member's.
+    fn byte_align(&self) -> Option<u64> {
+        Some(match self {
+            Type::String { .. } => 1,
+            Type::WString { .. } => 2,
+            Type::Array { elem, .. } => elem.byte_align()?,
+            Type::Struct { fields, .. } => {
+                let mut a = 1;
+                for (_, t) in fields {
+                    a = a.max(t.byte_align()?);
+                }
+                a
+            }
+            t => t.byte_size()?.clamp(1, 8),
+        })
+    }
+
+    /// The type CODESYS gives `SIZEOF`'s value: the smallest unsigned integer type holding it.
+    pub fn sizeof_type(size: Option<u64>) -> Type {
+        match size {
+            Some(n) if n < 256 => Type::USInt,
+            Some(n) if n < 65_536 => Type::UInt,
+            Some(n) if n < 4_294_967_296 => Type::UDInt,
+            Some(_) => Type::ULInt,
+            None => Type::UDInt,
+        }
+    }
+
     /// The storage width in bits of numeric, bit-string and duration types.
     pub fn bit_width(&self) -> Option<u32> {
         let w = match self.base() {

@@ -13,7 +13,10 @@ use roxmltree::Node;
 use sfc_syntax::lexer::{lex, TokenKind};
 
 /// Operators and built-ins of CODESYS ST that IEC 61131-3 lacks.
-const VENDOR_WORDS: &[&str] = &["ADR", "ADRINST", "BITADR", "SIZEOF", "XSIZEOF", "INDEXOF", "NEW", "DELETE"];
+const VENDOR_WORDS: &[&str] = &["ADRINST", "BITADR", "XSIZEOF", "INDEXOF", "NEW", "DELETE"];
+
+/// CODESYS built-ins with doubled underscores that sfc analyses.
+const KNOWN_BUILTINS: &[&str] = &["__ISVALIDREF"];
 
 /// Why the POU `p` cannot be analysed, if it cannot: its first vendor construct, in words.
 pub(super) fn reasons(cx: &Ctx, p: Node) -> Option<String> {
@@ -60,7 +63,7 @@ fn code_reason(cx: &Ctx, text: &str) -> Option<String> {
                 let up = w.to_ascii_uppercase();
                 let next = sig.get(i + 1).map(|t| t.kind);
                 let prev = i.checked_sub(1).and_then(|k| sig.get(k)).map(|t| t.kind);
-                if up.starts_with("__") {
+                if up.starts_with("__") && !KNOWN_BUILTINS.contains(&up.as_str()) {
                     return Some(format!("it uses `{w}`, a CODESYS built-in"));
                 }
                 if prev != Some(TokenKind::Dot)

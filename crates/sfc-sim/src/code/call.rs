@@ -14,7 +14,8 @@ use super::{Ctx, Place, PouBody};
 use crate::value::Value;
 use sfc_diagnostics::Span;
 use sfc_st::Type;
-use sfc_syntax::ast::{Arg, Expr, ExprKind, Ident, VarKind};
+use sfc_syntax::ast::{Arg, Expr, ExprKind, Ident, Literal, LiteralKind, VarKind};
+use std::sync::Arc;
 
 /// A parameter of a called POU: name, kind, frame offset, type.
 #[derive(Clone)]
@@ -373,14 +374,73 @@ impl Cx<'_, '_> {
         if let Some(Sym::Var { .. } | Sym::Step(_) | Sym::Action(_) | Sym::Return) = self.lookup(&callee.text) {
             return Err(self.error(callee.span, format!("`{}` is not a function", callee.text)));
         }
+        let builtin = self.lookup(&callee.text).is_none() && self.u.function(&callee.text).is_none();
+        // `SIZEOF(x)`, `SIZEOF(T)` (CODESYS): the bytes of the type on a CODESYS target, a
+        // constant (sfc_st::Type::byte_size).
+        if builtin && callee.is("SIZEOF") {
+            let [Arg { value: Some(v), .. }] = args else {
+                return Err(self.error(span, "`SIZEOF` takes one variable or type"));
+            };
+            let ty = match &v.kind {
+                ExprKind::Name(id) if self.lookup(&id.text).is_none() => self.u.env.named_type(&id.text),
+                _ => self.recorded(v),
+            };
+            let ty = ty.ok_or_else(|| self.error(v.span, "`SIZEOF` of what has no type"))?;
+            let Some(n) = ty.byte_size() else {
+                return Err(self.error(
+                    v.span,
+                    format!("`SIZEOF` of `{ty}` is not simulated (the layout of a function block instance is the PLC compiler's)"),
+                ));
+            };
+            let rt = self.recorded_at(span).unwrap_or_else(|| Type::sizeof_type(Some(n)));
+            return Ok(super::expr::untyped_const(super::expr::Untyped::Int(i128::from(n)), &rt));
+        }
+        // `LOWER_BOUND(a, d)`, `UPPER_BOUND(a, d)`: a bound of the array's type, a constant.
+        if builtin && (callee.is("LOWER_BOUND") || callee.is("UPPER_BOUND")) {
+            let (Some(Type::Array { dims, .. }), Some(d)) =
+                (args.first().and_then(|a| a.value.as_ref()).and_then(|a| self.recorded(a)), args.get(1))
+            else {
+                return Err(self.error(span, format!("`{}` takes an array and a dimension", callee.text)));
+            };
+            let k = d.value.as_ref().and_then(super::expr::untyped);
+            let Some(super::expr::Untyped::Int(k)) = k else {
+                return Err(self.error(span, "the dimension is a constant"));
+            };
+            let Some(&(lo, hi)) = usize::try_from(k).ok().and_then(|k| k.checked_sub(1)).and_then(|k| dims.get(k))
+            else {
+                return Err(self.error(span, "no such dimension"));
+            };
+            let v = if callee.is("LOWER_BOUND") { lo } else { hi };
+            return Ok(super::expr::untyped_const(super::expr::Untyped::Int(i128::from(v)), &Type::DInt));
+        }
+        // `__ISVALIDREF(r)` (CODESYS): whether the reference designates something.
+        if builtin && callee.is("__ISVALIDREF") {
+            let [Arg { value: Some(Expr { kind: ExprKind::Name(id), .. }), .. }] = args else {
+                return Err(self.error(span, "`__ISVALIDREF` takes one reference"));
+            };
+            let Some(Sym::Var { place, .. }) = self.lookup(&id.text) else {
+                return Err(self.error(id.span, format!("`{}` is not a variable", id.text)));
+            };
+            let at = Loc::Static(place).slot_fn();
+            let f: BoolFn = Box::new(move |c, b| {
+                let s = at(c, b)?;
+                Ok(int_of(&c.mem[s]) != 0)
+            });
+            return Ok(TExpr::new(CExpr::Bool(f), Type::Bool, false));
+        }
         // `ADR(x)` (CODESYS), `REF(x)` (IEC): the slot of `x` plus one.
-        if (callee.is("ADR") || callee.is("REF"))
-            && self.lookup(&callee.text).is_none()
-            && self.u.function(&callee.text).is_none()
-        {
+        if (callee.is("ADR") || callee.is("REF")) && builtin {
             let [Arg { value: Some(v), .. }] = args else {
                 return Err(self.error(span, "`ADR` takes one variable"));
             };
+            // `ADR('text')`: the literal, in a slot of its own.
+            if let ExprKind::Literal(Literal { kind: LiteralKind::String { value, wide }, .. }) = &v.kind {
+                let ty = if *wide { Type::WString { len: None } } else { Type::String { len: None } };
+                let p = self.literal_slot(Value::Str(Arc::from(value.as_str())), &ty);
+                let at = p.loc.slot_fn();
+                let f: IntFn = Box::new(move |c, b| Ok(at(c, b)? as i64 + 1));
+                return Ok(TExpr::new(CExpr::Int(f), Type::Pointer(Box::new(ty)), false));
+            }
             let p = self.place(v)?;
             let ty = Type::Pointer(Box::new(p.ty.clone()));
             let at = p.loc.slot_fn();

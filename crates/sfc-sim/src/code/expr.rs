@@ -162,6 +162,15 @@ impl Cx<'_, '_> {
                     UnaryOp::Not => ops::not(v, e.span),
                 }
             }
+            ExprKind::Binary { op, lhs, rhs }
+                if [lhs, rhs].iter().any(|o| matches!(self.recorded(o), Some(Type::Pointer(_))))
+                    && matches!(op, BinaryOp::Add | BinaryOp::Sub) =>
+            {
+                Err(self.error(
+                    e.span,
+                    "pointer arithmetic is not simulated: addresses here are variables, not bytes (index the pointer, `p[i]`, instead)",
+                ))
+            }
             ExprKind::Binary { op, lhs, rhs } => {
                 let l = self.expr(lhs, None)?;
                 let r = self.expr(rhs, Some(&l.ty))?;
@@ -394,6 +403,21 @@ impl Cx<'_, '_> {
     }
 
     fn index(&self, base: &Expr, indices: &[Expr]) -> C<PlaceC> {
+        // `p[i]` (CODESYS): the `i`-th element of the pointed type from `p`.
+        if let (Some(Type::Pointer(t)), [i]) = (self.recorded(base), indices) {
+            let at = pointee(self.place(base)?.loc.slot_fn(), base.span);
+            let size = self.u.type_size(&t) as i64;
+            let k = self.expr_as(i, &Type::LInt)?.int();
+            let span = i.span;
+            let loc: LocFn = Arc::new(move |c, b| {
+                let s = at(c, b)? as i64 + k(c, b)?.saturating_mul(size);
+                if s < 0 || s as usize >= c.mem.len() {
+                    return Err(fault("a pointer indexed beyond the variables", span));
+                }
+                Ok(s as usize)
+            });
+            return Ok(PlaceC::new(Loc::Dyn(loc), *t));
+        }
         let pb = self.place(base)?;
         let Type::Array { dims, elem } = &pb.ty else {
             return Err(self.error(base.span, format!("`{}` is not an array", pb.ty)));
@@ -467,6 +491,15 @@ impl Cx<'_, '_> {
 
     /// A direct address used in code: the located variable of the POU or a global with that
     /// address, else a global slot allocated for the address on first sight.
+    /// A global slot of its own holding `v` (`ADR('text')`: the literal kept in memory).
+    pub(crate) fn literal_slot(&self, v: Value, ty: &Type) -> PlaceC {
+        let mut g = self.u.globals.borrow_mut();
+        let slot = g.layout.size;
+        g.layout.size += 1;
+        g.template.push(v);
+        PlaceC::new(Loc::Static(Place::Global(slot)), ty.clone())
+    }
+
     pub(crate) fn address(&self, a: &DirectAddress) -> PlaceC {
         let key = a.text.to_ascii_uppercase();
         let ty = match a.size.to_ascii_uppercase() {

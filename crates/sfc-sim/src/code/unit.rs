@@ -234,7 +234,12 @@ impl<'u, 'a> Cx<'u, 'a> {
 
     /// The type the checker recorded for an expression.
     pub(crate) fn recorded(&self, e: &Expr) -> Option<Type> {
-        self.u.types.get(&e.span).filter(|t| !t.is_error()).cloned()
+        self.recorded_at(e.span)
+    }
+
+    /// The type the checker recorded for the expression spanning `span`.
+    pub(crate) fn recorded_at(&self, span: Span) -> Option<Type> {
+        self.u.types.get(&span).filter(|t| !t.is_error()).cloned()
     }
 
     pub(crate) fn error(&self, span: Span, msg: impl Into<String>) -> Box<Diagnostic> {

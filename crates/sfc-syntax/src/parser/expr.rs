@@ -285,7 +285,8 @@ impl Parser<'_> {
                     span: self.span_from(astart),
                 });
             }
-            if !self.eat(TokenKind::Comma) {
+            // A comma before `)` (CODESYS accepts it, often left by an argument commented out).
+            if !self.eat(TokenKind::Comma) || self.at(TokenKind::RParen) {
                 break;
             }
         }
