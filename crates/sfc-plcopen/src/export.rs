@@ -252,7 +252,7 @@ impl X {
         }
         self.open("addData", &[]);
         for f in &foreign {
-            if roxmltree::Document::parse(&format!("<r>{f}</r>")).is_ok() {
+            if well_formed(f) {
                 self.raw(f);
             }
         }
@@ -1018,8 +1018,13 @@ fn date_time(d: &str) -> String {
 
 /// Whether a kept XML fragment is well-formed (a hand edit may have broken it: then it is not
 /// written, rather than writing a broken file).
+/// Whether `fragment` is well-formed XML where the export writes it: inside the document, whose
+/// root declares the `xhtml` and `xsd` prefixes (a method's documentation uses `xhtml:p`).
 fn well_formed(fragment: &str) -> bool {
-    roxmltree::Document::parse(&format!("<r>{fragment}</r>")).is_ok()
+    roxmltree::Document::parse(&format!(
+        "<r xmlns:xhtml=\"http://www.w3.org/1999/xhtml\" xmlns:xsd=\"http://www.w3.org/2001/XMLSchema\">{fragment}</r>"
+    ))
+    .is_ok()
 }
 
 /// A declaration of a Beremiz svghmi library type as the library has it (`HMI_BOOL : BOOL`, which

@@ -26,6 +26,18 @@ fn one(path: &Path) -> Result<(), String> {
     if let Some(r) = xmllint(&xml) {
         r.map_err(|e| format!("{name}: the export does not validate:\n{e}"))?;
     }
+    // Every method, property and interface of the text is in the XML (counted apart from the
+    // exporter: lines of the text that begin with the keyword, elements of the XML).
+    for (kw, element) in [("METHOD", "<Method "), ("PROPERTY", "<Property "), ("INTERFACE", "<Interface ")] {
+        let in_text = text
+            .lines()
+            .filter(|l| l.trim_start().split_whitespace().next().is_some_and(|w| w.eq_ignore_ascii_case(kw)))
+            .count();
+        let in_xml = xml.matches(element).count();
+        if in_text != in_xml {
+            return Err(format!("{name}: {in_text} {kw} in the text, {in_xml} `{element}` in the export"));
+        }
+    }
     let (_, again, diags) = sfc_plcopen::check_xml(0, &name, &xml, &opts());
     // The import adds nothing the text did not have.
     let before: Vec<(&str, u32)> = checked.diagnostics.iter().map(|d| (d.code, 0)).collect();

@@ -503,9 +503,11 @@ impl Tr<'_, '_, '_, '_, '_> {
         };
         let out_name =
             out.map(|o| o.formal.clone()).or_else(|| formal.map(str::to_string)).unwrap_or_else(|| "OUT".into());
+        // CODESYS's EXECUTE box has no output but ENO.
+        let execute = instance.is_none() && type_name.eq_ignore_ascii_case("EXECUTE") && execute_code(g.n).is_some();
         // ENO is TRUE exactly when the block ran: its EN.
-        if out_name.eq_ignore_ascii_case("ENO") {
-            if instance.is_some() {
+        if out_name.eq_ignore_ascii_case("ENO") || execute {
+            if instance.is_some() || execute {
                 self.statement(i);
             }
             let en = g.ins.iter().find(|p| p.formal.as_deref().is_some_and(|f| f.eq_ignore_ascii_case("EN")));
@@ -708,7 +710,24 @@ impl Tr<'_, '_, '_, '_, '_> {
             "block" => {
                 let type_name = attr(g.n, "typeName").unwrap_or("").trim().to_string();
                 let instance = attr(g.n, "instanceName").map(str::trim).filter(|s| !s.is_empty()).map(str::to_string);
+                let st_code = (instance.is_none() && type_name.eq_ignore_ascii_case("EXECUTE"))
+                    .then(|| execute_code(g.n))
+                    .flatten();
                 match instance {
+                    // CODESYS's EXECUTE box: its ST code, run when EN is TRUE (the gate).
+                    None if st_code.is_some() => {
+                        let _ = self.args(i);
+                        let code = super::dialect::map(self.cx, &st_code.unwrap_or_default());
+                        let mut f = Frag::plain(String::new());
+                        for line in code.text.lines().filter(|l| !l.trim().is_empty()) {
+                            f.push_str(&format!("{ind}{line}\n"));
+                        }
+                        if !f.text.trim_end().ends_with(';') && !f.text.trim().is_empty() {
+                            // The box's last statement may go without `;`.
+                            f = Frag::plain(format!("{};\n", f.text.trim_end()));
+                        }
+                        Some(f)
+                    }
                     Some(inst) => {
                         let args = self.args(i);
                         let mut f = Frag::plain(ind.clone());
@@ -751,6 +770,15 @@ impl Tr<'_, '_, '_, '_, '_> {
     }
 }
 
+/// The ST code of CODESYS's EXECUTE box (`addData/data[@name=…/stcode]/STCode`).
+fn execute_code(n: Node) -> Option<XText> {
+    children(n, "addData")
+        .flat_map(|a| children(a, "data"))
+        .filter(|d| attr(*d, "name").is_some_and(|v| v.ends_with("/stcode")))
+        .find_map(|d| child(d, "STCode"))
+        .map(xml::text_of)
+}
+
 fn attr_range_or(n: Node, name: &str, or: &Range<u32>) -> Range<u32> {
     xml::attr_range(n, name).unwrap_or_else(|| or.clone())
 }
@@ -786,6 +814,9 @@ fn sinks(net: &Net) -> Vec<usize> {
                 "block" => {
                     attr(g.n, "instanceName").is_some_and(|s| !s.trim().is_empty())
                         || !net.consumed.get(i).copied().unwrap_or(false)
+                        // CODESYS's EXECUTE box runs its code even when its ENO goes on.
+                        || (attr(g.n, "typeName").is_some_and(|t| t.trim().eq_ignore_ascii_case("EXECUTE"))
+                            && execute_code(g.n).is_some())
                 }
                 _ => false,
             }

@@ -366,19 +366,22 @@ impl Cx<'_, '_> {
         if pb.bit.is_some() {
             return Err(self.error(member.span, "a bit has no members"));
         }
-        // Partial access `w.%X3` is the bit `w.3`; wider parts are not simulated yet.
-        let digits = match member.text.strip_prefix("%X").or_else(|| member.text.strip_prefix("%x")) {
-            Some(d) => d,
-            None if member.text.starts_with('%') => {
-                return Err(self
-                    .error(member.span, format!("partial access `.{}` (only `%X`, a bit, is simulated)", member.text)))
-            }
-            None => member.text.as_str(),
+        // Partial access (IEC 61131-3 3rd edition): `w.%X3` is the bit `w.3`, `d.%B1` the byte
+        // from bit 8, `d.%W1` the word from bit 16, `l.%D1` the double word from bit 32.
+        let (digits, bits, ty) = match member.text.strip_prefix('%').map(|r| r.split_at(r.len().min(1))) {
+            Some((k, d)) => match k.to_ascii_uppercase().as_str() {
+                "X" => (d, 1, Type::Bool),
+                "B" => (d, 8, Type::Byte),
+                "W" => (d, 16, Type::Word),
+                "D" => (d, 32, Type::DWord),
+                _ => return Err(self.error(member.span, format!("partial access `.{}`", member.text))),
+            },
+            None => (member.text.as_str(), 1, Type::Bool),
         };
         if !digits.is_empty() && digits.bytes().all(|b| b.is_ascii_digit()) {
-            let bit: u32 = digits.parse().unwrap_or(0);
+            let k: u32 = digits.parse().unwrap_or(0);
             let w = W::of(&pb.ty);
-            return Ok(PlaceC { loc: pb.loc, ty: Type::Bool, bit: Some(bit), bit_w: w });
+            return Ok(PlaceC { loc: pb.loc, ty, bit: Some(k.saturating_mul(bits)), bit_w: w, bits });
         }
         match &pb.ty {
             Type::Struct { fields, .. } => {

@@ -38,7 +38,8 @@ impl Loc {
     }
 }
 
-/// A compiled place with its type; `bit` for bit access `w.3` (then `ty` is BOOL).
+/// A compiled place with its type; `bit` for bit access `w.3` (then `ty` is BOOL) and partial
+/// access `d.%B1` (the lowest bit of the part; `bits` wide, `ty` BYTE, WORD or DWORD).
 #[derive(Clone)]
 pub(crate) struct PlaceC {
     pub loc: Loc,
@@ -46,12 +47,21 @@ pub(crate) struct PlaceC {
     pub bit: Option<u32>,
     /// Width of the bit string holding the bit.
     pub bit_w: W,
+    /// How many bits from `bit` the place is: 1 for a bit.
+    pub bits: u32,
 }
 
 impl PlaceC {
     pub(crate) fn new(loc: Loc, ty: Type) -> PlaceC {
-        PlaceC { loc, ty, bit: None, bit_w: W::I64 }
+        PlaceC { loc, ty, bit: None, bit_w: W::I64, bits: 1 }
     }
+}
+
+/// `old` with the `bits` bits from `shift` replaced by the low bits of `x`.
+fn put_bits(old: i64, shift: u32, bits: u32, x: i64) -> i64 {
+    let mask: u64 = if bits >= 64 { u64::MAX } else { (1u64 << bits) - 1 };
+    let cleared = (old as u64) & !(mask << shift);
+    (cleared | (((x as u64) & mask) << shift)) as i64
 }
 
 fn reader<T, G>(loc: Loc, get: G) -> Fx<T>
@@ -79,6 +89,11 @@ where
 pub(crate) fn read(p: PlaceC, size: u32) -> TExpr {
     if let Some(bit) = p.bit {
         let f = reader(p.loc, int_of);
+        if p.bits > 1 {
+            let mask: u64 = (1u64 << p.bits.min(63)) - 1;
+            let e = CExpr::Int(Box::new(move |c, b| Ok(((f(c, b)? as u64 >> bit) & mask) as i64)));
+            return TExpr::new(e, p.ty, false);
+        }
         let e = CExpr::Bool(Box::new(move |c, b| Ok((f(c, b)? as u64 >> bit) & 1 != 0)));
         return TExpr::new(e, Type::Bool, false);
     }
@@ -167,6 +182,16 @@ where
 
 /// Writes `v` (already of the place's type, see `coerce`) to the place.
 pub(crate) fn write(p: PlaceC, v: TExpr, size: u32) -> StmtFn {
+    if let (Some(bit), true) = (p.bit, p.bits > 1) {
+        let (val, w, bits, slot) = (v.int(), p.bit_w, p.bits, p.loc.slot_fn());
+        return Box::new(move |c, b| {
+            let x = val(c, b)?;
+            let s = slot(c, b)?;
+            let new = put_bits(int_of(&c.mem[s]), bit, bits, x);
+            c.mem[s] = Value::Int(w.wrap(new));
+            Ok(Flow::Next)
+        });
+    }
     if let Some(bit) = p.bit {
         let val = v.bool();
         let w = p.bit_w;
@@ -230,11 +255,17 @@ pub(crate) fn sink(p: PlaceC, size: u32) -> Sink {
     let ty = p.ty.clone();
     let slot = p.loc.slot_fn();
     if let Some(bit) = p.bit {
-        let w = p.bit_w;
+        let (w, bits) = (p.bit_w, p.bits);
         return Sink::One(Box::new(move |c, b, v| {
             let s = slot(c, b)?;
             let old = int_of(&c.mem[s]);
-            let new = if bool_of(&v) { old | (1i64 << bit) } else { old & !(1i64 << bit) };
+            let new = if bits > 1 {
+                put_bits(old, bit, bits, int_of(&v))
+            } else if bool_of(&v) {
+                old | (1i64 << bit)
+            } else {
+                old & !(1i64 << bit)
+            };
             c.mem[s] = Value::Int(w.wrap(new));
             Ok(())
         }));
