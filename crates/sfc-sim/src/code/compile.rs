@@ -534,8 +534,10 @@ fn lay_out(u: &mut Unit<'_>, i: usize) {
     }
     // Edge-triggered inputs: each with a slot for the value its previous call passed.
     let mut edges = Vec::new();
+    // (An inherited input is declared by the base that declares it.)
+    let chain: Vec<&sfc_syntax::ast::Pou> = class_chain(u, i).into_iter().map(|c| u.pous[c].ast).collect();
     for v in &m.iface.vars {
-        let Some(edge) = decl_of(m.ast, &v.name).and_then(|d| d.edge) else { continue };
+        let Some(edge) = chain.iter().find_map(|p| decl_of(p, &v.name)).and_then(|d| d.edge) else { continue };
         let Some(slot) = vars.iter().find(|s| s.name.eq_ignore_ascii_case(&v.name)).map(|s| s.offset) else { continue };
         vars.push(hidden_slot(format!("{}.prev", v.name), Type::Bool, VarKind::Var, off));
         edges.push((slot, off, edge == sfc_syntax::ast::Edge::Rising));
