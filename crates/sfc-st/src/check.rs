@@ -900,6 +900,13 @@ impl<'s, 'e> Checker<'s, 'e> {
                 if let Some(t) = self.scope.enum_types_with_value(&id.text).into_iter().next() {
                     return t;
                 }
+                // `THIS` (CODESYS): a pointer to the block's own instance.
+                if id.is("THIS") {
+                    let this = Expr { kind: ExprKind::Name(id.clone()), span: id.span };
+                    if let Some(t) = self.this_type(&this) {
+                        return Type::Pointer(Box::new(t));
+                    }
+                }
                 self.undeclared(id);
                 Type::Error
             }

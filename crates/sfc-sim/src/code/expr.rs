@@ -268,6 +268,13 @@ impl Cx<'_, '_> {
                 let t = self.property(None, id)?.expect("a property");
                 self.property_get(t, id)
             }
+            // `THIS`: the address of the block's own frame (its first slot, plus one).
+            None if id.is("THIS") && matches!(self.recorded(e), Some(Type::Pointer(_))) => {
+                let ty = self.recorded(e).unwrap_or(Type::Error);
+                let at = Loc::Static(Place::Local(0)).slot_fn();
+                let f: IntFn = Box::new(move |c, b| Ok(at(c, b)? as i64 + 1));
+                Ok(TExpr::new(super::texpr::CExpr::Int(f), ty, false))
+            }
             None => {
                 let ty = self
                     .recorded(e)
