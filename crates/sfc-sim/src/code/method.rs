@@ -516,22 +516,19 @@ impl Cx<'_, '_> {
     /// `itf.P := v`, when `base` is an interface: the SET of the designated instance's block.
     pub(crate) fn interface_set(&self, base: &Expr, name: &Ident, value: &Expr, span: Span) -> C<Option<StmtFn>> {
         let Some((at, targets)) = self.interface_targets(base)? else { return Ok(None) };
-        let mut calls: Vec<(usize, StmtFn)> = Vec::new();
+        let mut calls: Vec<(usize, LocFn)> = Vec::new();
         for t in targets {
             if self.find_method(&t, &name.text, MethodKind::Set).is_none() {
                 continue;
             }
             let pou = t.pou;
-            calls.push((pou, self.property_set(t, name, value, span)?));
+            let set = self.property_set(t, name, value, span)?;
+            calls.push((pou, Arc::new(move |c: &mut Ctx<'_>, b: usize| set(c, b).map(|_| 0usize)) as LocFn));
         }
-        let what = format!("property `{}` with SET", name.text);
+        let run = Self::dispatch(at, calls, span, format!("property `{}` with SET", name.text));
         Ok(Some(Box::new(move |c, b| {
-            let s = at(c, b)?;
-            let (_, pou) = designated(c, s, span)?;
-            match calls.iter().find(|(p, _)| *p == pou) {
-                Some((_, run)) => run(c, b),
-                None => Err(fault(format!("the instance an interface designates has no {what}"), span)),
-            }
+            run(c, b)?;
+            Ok(Flow::Next)
         })))
     }
 }
