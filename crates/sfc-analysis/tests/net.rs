@@ -39,6 +39,7 @@ fn mk_chart(n: usize, initial: &[usize], trans: &[(Vec<usize>, Vec<usize>)]) -> 
                 associations: Vec::new(),
                 tag: None,
                 timeout: None,
+                min_time: None,
                 is_final: false,
                 attributes: Vec::new(),
                 name_span: span,

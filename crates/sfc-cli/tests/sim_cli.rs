@@ -693,3 +693,46 @@ fn pointer_arithmetic_says_it_is_not_simulated() {
     assert_eq!(out.status.code(), Some(0), "{}", both(&out));
     assert!(stdout(&out).contains("\"x\":7"), "{}", both(&out));
 }
+
+/// The `codesys` profile, rule by rule (`crates/sfc-sim/tests/codesys/`): each chart run
+/// through the binary with its scenario gives exactly the trace derived by hand from CODESYS's
+/// online help and written beside it (`*.trace.csv`), and its scenario passes.
+#[test]
+fn codesys_rules_give_the_traces_derived_by_hand() {
+    let dir = root().join("crates/sfc-sim/tests/codesys");
+    let out_dir = temp_dir("codesys-rules");
+    let mut charts: Vec<PathBuf> = std::fs::read_dir(&dir)
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .filter(|p| p.extension().is_some_and(|e| e == "st"))
+        .collect();
+    charts.sort();
+    assert!(charts.len() >= 12, "the codesys fixtures: {}", charts.len());
+    let readme = std::fs::read_to_string(dir.join("README.md")).unwrap();
+    let mut failures = Vec::new();
+    for chart in &charts {
+        let stem = chart.file_stem().unwrap().to_string_lossy().into_owned();
+        assert!(readme.contains(&format!("`{stem}.st`")), "{stem} is listed in README.md");
+        let scenario = dir.join(format!("{stem}.scenario.toml"));
+        let expected = std::fs::read_to_string(dir.join(format!("{stem}.trace.csv")))
+            .unwrap_or_else(|_| panic!("{stem}.trace.csv beside the chart"));
+        let trace = out_dir.join(format!("{stem}.csv"));
+        let o = sfc(&[
+            "sim",
+            chart.to_str().unwrap(),
+            "--scenario",
+            scenario.to_str().unwrap(),
+            "--trace",
+            trace.to_str().unwrap(),
+        ]);
+        if !o.status.success() {
+            failures.push(format!("{stem}: exit {:?}\n{}", o.status.code(), both(&o)));
+            continue;
+        }
+        let actual = std::fs::read_to_string(&trace).unwrap();
+        if actual != expected {
+            failures.push(format!("{stem}: trace differs\n--- expected\n{expected}--- actual\n{actual}"));
+        }
+    }
+    assert!(failures.is_empty(), "{}", failures.join("\n"));
+}

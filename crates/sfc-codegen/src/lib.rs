@@ -26,7 +26,36 @@ pub fn codesys_actions(checked: Option<&Checked>, chart: &Chart, target: &str) -
             .with_element(action)
         })
         .collect();
+    // CODESYS's SFC flags that act only when declared (docs/sim.md, "Chart control variables").
+    let flags = ["SFCReset", "SFCEnableLimit", "SFCErrorPOU", "SFCTrans", "SFCTip", "SFCTipMode"];
+    if let Some(sfc_syntax::ast::Item::Pou(p)) = checked.and_then(|c| c.unit.items.get(chart.item)) {
+        for d in p.var_blocks.iter().flat_map(|b| b.decls.iter()).flat_map(|d| d.names.iter()) {
+            if let Some(f) = flags.iter().find(|f| d.is(f)) {
+                out.push(
+                    Diagnostic::error(
+                        "SFC0806",
+                        d.span,
+                        format!("`{f}` is one of CODESYS's SFC flags, which {target} does not generate yet"),
+                    )
+                    .with_element(*f),
+                );
+            }
+        }
+    }
     for s in &chart.steps {
+        if s.min_time.is_some() {
+            out.push(
+                Diagnostic::error(
+                    "SFC0806",
+                    s.name_span,
+                    format!(
+                        "step `{}` has a minimum time (`sfc.min_time`), which {target} does not generate yet",
+                        s.name
+                    ),
+                )
+                .with_element(&s.name),
+            );
+        }
         if let Some(a) = s.step_actions.first() {
             out.push(
                 Diagnostic::error(

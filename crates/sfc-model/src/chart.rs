@@ -134,6 +134,9 @@ pub struct StepNode {
     pub tag: Option<u32>,
     /// `sfc.timeout`: supervision time in microseconds.
     pub timeout: Option<i64>,
+    /// `sfc.min_time`: minimum time in microseconds (CODESYS's "minimum time" of a step): its
+    /// outgoing transitions wait for it.
+    pub min_time: Option<i64>,
     /// `sfc.final`: intentionally without a way out.
     pub is_final: bool,
     pub attributes: Vec<ast::Attribute>,

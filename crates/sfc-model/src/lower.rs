@@ -37,6 +37,7 @@ pub fn pou_variables(pou: &ast::Pou) -> Vec<VarInfo> {
 const KNOWN_ATTRIBUTES: &[&str] = &[
     "sfc.tag",
     "sfc.timeout",
+    "sfc.min_time",
     "sfc.target",
     "sfc.final",
     // The safe value of an output (`sfc run`, docs/runtime.md): written on a fault or a stop.
@@ -106,8 +107,8 @@ pub fn check_attributes(attrs: &[ast::Attribute], allowed: &[&str], what: &str, 
         }
         let meaningful = match lname.as_str() {
             "sfc.build" => allowed.contains(&"sfc.target"),
-            "sfc.tag" | "sfc.timeout" | "sfc.target" | "sfc.final" | "sfc.safe" | "sfc.terminal" | "sfc.error_code"
-            | "sfc.activation" => allowed.contains(&lname.as_str()),
+            "sfc.tag" | "sfc.timeout" | "sfc.min_time" | "sfc.target" | "sfc.final" | "sfc.safe" | "sfc.terminal"
+            | "sfc.error_code" | "sfc.activation" => allowed.contains(&lname.as_str()),
             _ => true,
         };
         if !KNOWN_ATTRIBUTES.contains(&lname.as_str()) {
@@ -192,8 +193,9 @@ fn tag_attr(attrs: &[ast::Attribute], diags: &mut Vec<Diagnostic>) -> Option<u32
     }
 }
 
-fn timeout_attr(attrs: &[ast::Attribute], diags: &mut Vec<Diagnostic>) -> Option<i64> {
-    let a = attr(attrs, "sfc.timeout")?;
+/// A step's duration attribute (`sfc.timeout`, `sfc.min_time`).
+fn duration_attr(attrs: &[ast::Attribute], name: &str, diags: &mut Vec<Diagnostic>) -> Option<i64> {
+    let a = attr(attrs, name)?;
     let v = a.value.as_deref().unwrap_or("").trim();
     let parsed = match v.split_once('#') {
         Some((p, body)) if ["T", "TIME"].iter().any(|k| p.eq_ignore_ascii_case(k)) => {
@@ -207,7 +209,7 @@ fn timeout_attr(attrs: &[ast::Attribute], diags: &mut Vec<Diagnostic>) -> Option
             diags.push(Diagnostic::error(
                 "SFC0601",
                 a.span,
-                format!("`sfc.timeout` must be a non-negative duration such as 'T#8.1s', found {v:?}"),
+                format!("`{name}` must be a non-negative duration such as 'T#8.1s', found {v:?}"),
             ));
             None
         }
@@ -401,7 +403,12 @@ pub fn lower_chart(
     for el in elements.iter_mut() {
         match el {
             ast::SfcElement::Step(s) => {
-                check_attributes(&s.attributes, &["sfc.tag", "sfc.timeout", "sfc.final"], "a step", diags);
+                check_attributes(
+                    &s.attributes,
+                    &["sfc.tag", "sfc.timeout", "sfc.min_time", "sfc.final"],
+                    "a step",
+                    diags,
+                );
                 let fresh = declare(&s.name.text, s.name.span, "a step", diags);
                 let node = StepNode {
                     name: s.name.text.clone(),
@@ -409,7 +416,8 @@ pub fn lower_chart(
                     associations: Vec::new(),
                     step_actions: s.step_actions.clone(),
                     tag: tag_attr(&s.attributes, diags),
-                    timeout: timeout_attr(&s.attributes, diags),
+                    timeout: duration_attr(&s.attributes, "sfc.timeout", diags),
+                    min_time: duration_attr(&s.attributes, "sfc.min_time", diags),
                     is_final: final_attr(&s.attributes, diags),
                     attributes: s.attributes.clone(),
                     name_span: s.name.span,

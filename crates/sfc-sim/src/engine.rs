@@ -21,6 +21,7 @@ use sfc_st::Type;
 use std::sync::Arc;
 
 mod action;
+mod codesys;
 mod evolve;
 mod matiec;
 mod mechanism;
@@ -603,7 +604,7 @@ impl Simulation {
         for c in &self.charts {
             let mut active = c.active.clone();
             active.sort_unstable();
-            let _ = write!(s, "{}:{}:{active:?}:", c.started, c.last_time);
+            let _ = write!(s, "{}:{}:{active:?}:{}{}:", c.started, c.last_time, c.tip_prev, c.quit_prev);
             for st in &c.steps {
                 let _ = write!(s, "{},{},{};", st.x, st.t, st.overdue);
             }
@@ -659,12 +660,17 @@ impl Simulation {
         let Some((base, member)) = name.rsplit_once('.') else {
             return false;
         };
-        if !["X", "T", "Q", "A"].iter().any(|m| m.eq_ignore_ascii_case(member)) {
+        if !["X", "T", "Q", "A", "_X", "_T"].iter().any(|m| m.eq_ignore_ascii_case(member)) {
             return false;
         }
         let (path, leaf) = match base.rsplit_once('.') {
             Some((p, l)) => (p, l),
             None => ("", base),
+        };
+        // CODESYS's `_<action>.x`.
+        let leaf = match leaf.strip_prefix('_') {
+            Some(a) if self.charts.iter().any(|c| c.plan.action_names.iter().any(|n| n.eq_ignore_ascii_case(a))) => a,
+            _ => leaf,
         };
         self.charts.iter().any(|c| {
             c.path.eq_ignore_ascii_case(path)
@@ -724,8 +730,8 @@ impl Simulation {
             return None;
         }
         let st = self.charts.iter().find(|c| c.path.eq_ignore_ascii_case(path))?;
-        let first = st.active.iter().copied().min();
-        Some(Value::Str(Arc::from(first.map(|s| st.plan.step_names[s as usize].as_str()).unwrap_or(""))))
+        let cur = evolve::current_step(self.opts.profile, &st.active);
+        Some(Value::Str(Arc::from(cur.map(|s| st.plan.step_names[s as usize].as_str()).unwrap_or(""))))
     }
     /// The type of what [`Simulation::get`] reads.
     pub fn type_of(&self, name: &str) -> Option<Type> {
@@ -936,6 +942,10 @@ fn step_flags_read(lower: &str) -> std::collections::HashSet<(String, u8)> {
     for (i, _) in lower.match_indices('.') {
         let mut k = i + 1;
         while k < b.len() && b[k] == b' ' {
+            k += 1;
+        }
+        // CODESYS's `_x` and `_t` read the same flags.
+        if b.get(k) == Some(&b'_') {
             k += 1;
         }
         let flag = match b.get(k) {

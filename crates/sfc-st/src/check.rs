@@ -1204,6 +1204,20 @@ impl<'s, 'e> Checker<'s, 'e> {
                         write,
                     );
                 }
+                None => {
+                    // CODESYS's implicit `_<action>.x` (executed) and `_<action>._x` (active).
+                    if let Some(sym @ Sym::Action(_)) = id.text.strip_prefix('_').and_then(|a| self.scope.resolve(a)) {
+                        self.scope.mark(sym, false);
+                        let action = format!("_{}", self.scope.chart_name(sym));
+                        return self.chart_member(
+                            &action,
+                            "action",
+                            member,
+                            &[("x", Type::Bool), ("_x", Type::Bool)],
+                            write,
+                        );
+                    }
+                }
                 _ => {}
             }
         }
@@ -1403,7 +1417,15 @@ impl<'s, 'e> Checker<'s, 'e> {
     }
 
     fn chart_member(&mut self, owner: &str, what: &str, member: &Ident, members: &[(&str, Type)], write: bool) -> Type {
-        let Some((name, ty)) = members.iter().find(|(n, _)| member.is(n)) else {
+        // CODESYS's `<step>._x` (active in the next cycle) and `<step>._t` read as `X` and `T`
+        // (docs/sim.md, "The `codesys` profile").
+        let alias = match member.text.to_ascii_uppercase().as_str() {
+            "_X" if what == "step" => Some("X"),
+            "_T" if what == "step" => Some("T"),
+            _ => None,
+        };
+        let found = members.iter().find(|(n, _)| member.is(n) || alias.is_some_and(|a| a == *n));
+        let Some((name, ty)) = found else {
             let list = members.iter().map(|(n, _)| format!("`.{n}`")).collect::<Vec<_>>().join(" and ");
             self.error(
                 "SFC0309",

@@ -524,6 +524,7 @@ fn lay_out(u: &mut Unit<'_>, i: usize) {
             error_step: flag("SFCErrorStep", s.clone(), VarKind::Output),
             current_step: flag("SFCCurrentStep", s, VarKind::Output),
             reset: Some(flag("SFCReset", Type::Bool, VarKind::Input)),
+            ..Default::default()
         };
     }
     let mut result = None;
@@ -577,6 +578,13 @@ fn lay_out(u: &mut Unit<'_>, i: usize) {
         methods.push(MethodMeta { kind, owner, sig, body, names, vars: mvars });
     }
     let find = |name: &str| vars.iter().find(|v: &&VarSlot| v.name.eq_ignore_ascii_case(name)).map(|v| v.offset);
+    // CODESYS's other SFC flags act only when declared (with their type; a STRING of any length).
+    let declared = |name: &str, ty: &Type| {
+        vars.iter()
+            .find(|v: &&VarSlot| !v.implicit && v.size == 1 && v.name.eq_ignore_ascii_case(name))
+            .filter(|v| if ty.is_string() { v.ty.is_string() } else { v.ty == *ty })
+            .map(|v| v.offset)
+    };
     let control = ControlSlots {
         init: find("SFCInit").unwrap_or(0),
         pause: find("SFCPause").unwrap_or(0),
@@ -584,7 +592,12 @@ fn lay_out(u: &mut Unit<'_>, i: usize) {
         error: find("SFCError").unwrap_or(0),
         error_step: find("SFCErrorStep").unwrap_or(0),
         current_step: find("SFCCurrentStep").unwrap_or(0),
-        reset: None,
+        reset: declared("SFCReset", &Type::Bool),
+        enable_limit: declared("SFCEnableLimit", &Type::Bool),
+        error_pou: declared("SFCErrorPOU", &Type::String { len: None }),
+        trans: declared("SFCTrans", &Type::Bool),
+        tip: declared("SFCTip", &Type::Bool),
+        tip_mode: declared("SFCTipMode", &Type::Bool),
     };
     let m = &mut u.pous[i];
     m.layout = Layout { vars, size: off };

@@ -344,10 +344,25 @@ impl Cx<'_, '_> {
             match (self.lookup(&id.text), m) {
                 (Some(Sym::Step(i)), Some(m)) => {
                     return match member.text.to_ascii_uppercase().as_str() {
-                        "X" => Ok(PlaceC::new(Loc::Static(Place::Local(m.step_x[i])), Type::Bool)),
-                        "T" => Ok(PlaceC::new(Loc::Static(Place::Local(m.step_t[i])), Type::Time)),
+                        "X" | "_X" => Ok(PlaceC::new(Loc::Static(Place::Local(m.step_x[i])), Type::Bool)),
+                        "T" | "_T" => Ok(PlaceC::new(Loc::Static(Place::Local(m.step_t[i])), Type::Time)),
                         _ => Err(self.error(member.span, format!("steps have no member `{}`", member.text))),
                     };
+                }
+                (None, Some(m)) if id.text.starts_with('_') => {
+                    // CODESYS's `_<action>.x` (executed: `A`) and `_<action>._x` (active: `Q`).
+                    if let Some(Sym::Action(i)) = self.lookup(&id.text[1..]) {
+                        if let (Some(&q), Some(&a)) = (m.action_q.get(i), m.action_a.get(i)) {
+                            return match member.text.to_ascii_uppercase().as_str() {
+                                "X" => Ok(PlaceC::new(Loc::Static(Place::Local(a)), Type::Bool)),
+                                "_X" => Ok(PlaceC::new(Loc::Static(Place::Local(q)), Type::Bool)),
+                                _ => {
+                                    Err(self
+                                        .error(member.span, format!("`{}` has no member `{}`", id.text, member.text)))
+                                }
+                            };
+                        }
+                    }
                 }
                 (Some(Sym::Action(i)), Some(m)) => {
                     // A POU that is no chart has no action control: its actions run when called.

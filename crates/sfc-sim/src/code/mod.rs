@@ -238,6 +238,17 @@ pub struct ControlSlots {
     /// `SFCReset : BOOL` (input) of the chart of an action written in SFC (CODESYS): back to
     /// the initial situation, which is then processed.
     pub reset: Option<u32>,
+    /// CODESYS's SFC flags that act only when the POU declares them ("SFC flags"):
+    /// `SFCEnableLimit : BOOL`, supervision only while TRUE;
+    pub enable_limit: Option<u32>,
+    /// `SFCErrorPOU : STRING`, the POU whose step timed out (set with `SFCError`);
+    pub error_pou: Option<u32>,
+    /// `SFCTrans : BOOL`, TRUE after a call in which a transition fired;
+    pub trans: Option<u32>,
+    /// `SFCTip`, `SFCTipMode : BOOL`, jogging: a rising edge of `SFCTip` fires the enabled
+    /// transitions whatever their conditions; while `SFCTipMode` is TRUE only that does.
+    pub tip: Option<u32>,
+    pub tip_mode: Option<u32>,
 }
 
 /// A guard the engine evaluates without calling its closure.

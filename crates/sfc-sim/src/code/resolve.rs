@@ -57,9 +57,26 @@ fn parse_path(path: &str) -> Option<Vec<Seg>> {
 
 /// Where resolution stands.
 enum Cur {
-    Val { slot: usize, ty: Type },
-    Step { pou: usize, base: usize, k: usize },
-    Action { pou: usize, base: usize, k: usize },
+    Val {
+        slot: usize,
+        ty: Type,
+    },
+    Step {
+        pou: usize,
+        base: usize,
+        k: usize,
+    },
+    Action {
+        pou: usize,
+        base: usize,
+        k: usize,
+    },
+    /// CODESYS's `_<action>`: `.x` (executed, `A`) and `._x` (active, `Q`).
+    Implicit {
+        pou: usize,
+        base: usize,
+        k: usize,
+    },
 }
 
 impl Program {
@@ -124,8 +141,16 @@ impl Program {
                 (Cur::Step { pou, base, k }, Seg::Name(n)) => {
                     let PouBody::Chart(cc) = &self.pous[pou].body else { return None };
                     match n.to_ascii_uppercase().as_str() {
-                        "X" => Cur::Val { slot: base + cc.step_x[k] as usize, ty: Type::Bool },
-                        "T" => Cur::Val { slot: base + cc.step_t[k] as usize, ty: Type::Time },
+                        "X" | "_X" => Cur::Val { slot: base + cc.step_x[k] as usize, ty: Type::Bool },
+                        "T" | "_T" => Cur::Val { slot: base + cc.step_t[k] as usize, ty: Type::Time },
+                        _ => return None,
+                    }
+                }
+                (Cur::Implicit { pou, base, k }, Seg::Name(n)) => {
+                    let PouBody::Chart(cc) = &self.pous[pou].body else { return None };
+                    match n.to_ascii_uppercase().as_str() {
+                        "X" => Cur::Val { slot: base + cc.action_a[k] as usize, ty: Type::Bool },
+                        "_X" => Cur::Val { slot: base + cc.action_q[k] as usize, ty: Type::Bool },
                         _ => return None,
                     }
                 }
@@ -158,6 +183,9 @@ impl Program {
             }
             if let Some(k) = cc.chart.action(name) {
                 return Some(Cur::Action { pou, base, k });
+            }
+            if let Some(k) = name.strip_prefix('_').and_then(|a| cc.chart.action(a)) {
+                return Some(Cur::Implicit { pou, base, k });
             }
         }
         // The steps of its actions written in SFC (one namespace with the body's).

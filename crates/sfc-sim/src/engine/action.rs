@@ -139,7 +139,7 @@ pub(crate) fn action_phase(ctx: &mut Ctx<'_>, chart: usize, code: &ChartCode, pl
     if st.entered.is_empty() && st.live.is_empty() {
         return Ok(()); // no action holds state and none was activated
     }
-    run_actions(ctx, chart, code, plan)
+    run_iec_actions(ctx, chart, code, plan)
 }
 
 /// CODESYS's step actions, before the IEC actions (CODESYS, "Processing order in SFC"): the
@@ -165,7 +165,13 @@ pub(crate) fn step_actions(ctx: &mut Ctx<'_>, chart: usize, code: &ChartCode) ->
     Ok(())
 }
 
-fn run_actions(ctx: &mut Ctx<'_>, chart: usize, code: &ChartCode, plan: &ChartPlan) -> Result<(), Fault> {
+/// Action control for every live entity, then the bodies with `A` TRUE (see [`action_phase`]).
+pub(crate) fn run_iec_actions(
+    ctx: &mut Ctx<'_>,
+    chart: usize,
+    code: &ChartCode,
+    plan: &ChartPlan,
+) -> Result<(), Fault> {
     let now = ctx.now;
     let profile = ctx.profile;
     let frame = ctx.charts[chart].frame;

@@ -37,8 +37,10 @@ pub(crate) fn code_of(prog: &Program, pou: usize) -> &ChartCode {
 pub fn run_chart(ctx: &mut Ctx<'_>, chart: usize) -> Result<(), Fault> {
     let prog = ctx.prog;
     let code = code_of(prog, ctx.charts[chart].pou);
-    if ctx.profile == Profile::Matiec {
-        return super::matiec::run(ctx, chart, code);
+    match ctx.profile {
+        Profile::Matiec => return super::matiec::run(ctx, chart, code),
+        Profile::Codesys => return super::codesys::run(ctx, chart, code),
+        Profile::Iec | Profile::Grafcet => {}
     }
     let plan = code.plan();
     let frame = ctx.charts[chart].frame;
@@ -47,49 +49,22 @@ pub fn run_chart(ctx: &mut Ctx<'_>, chart: usize) -> Result<(), Fault> {
     // Chart control: SFCInit resets and holds the initial situation.
     if read_bool(ctx.mem, frame + ctl.init as usize) {
         reset(ctx, chart, code);
+        set_trans(ctx, chart, code, false);
         return Ok(());
     }
-    // SFCReset (an action's chart, CODESYS): back to the initial situation, processed on.
+    // SFCReset (CODESYS; declared, or an action's chart): back to the initial situation,
+    // processed on.
     if ctl.reset.is_some_and(|r| read_bool(ctx.mem, frame + r as usize)) {
         reset(ctx, chart, code);
     }
     if read_bool(ctx.mem, frame + ctl.quit_error as usize) {
         ctx.mem[frame + ctl.error as usize] = Value::Bool(false);
     }
-    let st = &mut ctx.charts[chart];
-    if !st.started {
-        st.started = true;
-        st.last_time = now;
-        for &s in &plan.initial {
-            st.activate(s);
-        }
-        ctx.sink.starts.push((ctx.sink.fired.len() as u32, chart as u32));
-        ctx.sink.moved |= !plan.initial.is_empty();
-        for &e in &plan.variable_entities {
-            let c = &mut st.controls[e as usize];
-            if !c.live {
-                c.live = true;
-                st.live.push(e);
-            }
-        }
-        if ctx.profile == Profile::Matiec {
-            // No activation edge for the initial step: its edge memories start as if it had
-            // been active before.
-            for &s in &plan.initial {
-                for &e in plan.step_entities.get(s) {
-                    let c = &mut st.controls[e as usize];
-                    for a in plan.entities[e as usize].assocs.iter().filter(|a| a.step == s) {
-                        match a.qualifier {
-                            Qualifier::P => c.p_mem = true,
-                            Qualifier::P1 => c.p1_mem = true,
-                            _ => {}
-                        }
-                    }
-                }
-            }
-        }
+    if !ctx.charts[chart].started {
+        start(ctx, chart, plan);
         publish_initial(ctx, chart);
         action_phase(ctx, chart, code, plan)?;
+        set_trans(ctx, chart, code, false);
         finish_scan(ctx, chart, code, plan);
         return Ok(());
     }
@@ -107,28 +82,66 @@ pub fn run_chart(ctx: &mut Ctx<'_>, chart: usize) -> Result<(), Fault> {
             }
         }
     }
-    match ctx.profile {
-        Profile::Codesys => {
-            action_phase(ctx, chart, code, plan)?;
-            if !paused {
-                evolve(ctx, chart, code, plan)?;
-            }
-        }
-        Profile::Grafcet => {
-            if !paused {
-                evolve_until_stable(ctx, chart, code, plan)?;
-            }
-            action_phase(ctx, chart, code, plan)?;
-        }
-        Profile::Iec | Profile::Matiec => {
-            if !paused {
-                evolve(ctx, chart, code, plan)?;
-            }
-            action_phase(ctx, chart, code, plan)?;
+    let fired_before = ctx.sink.fired.len();
+    if !paused {
+        if ctx.profile == Profile::Grafcet {
+            evolve_until_stable(ctx, chart, code, plan)?;
+        } else {
+            evolve(ctx, chart, code, plan)?;
         }
     }
+    if code.control.trans.is_some() {
+        let fired = ctx.sink.fired[fired_before..].iter().any(|f| f.0 == chart as u32);
+        set_trans(ctx, chart, code, fired);
+    }
+    action_phase(ctx, chart, code, plan)?;
     finish_scan(ctx, chart, code, plan);
     Ok(())
+}
+
+/// The first call of an instance (or the first after SFCInit/SFCReset): its initial steps
+/// become active, the BOOL variables used as actions live.
+pub(super) fn start(ctx: &mut Ctx<'_>, chart: usize, plan: &ChartPlan) {
+    let now = ctx.now;
+    let st = &mut ctx.charts[chart];
+    st.started = true;
+    st.last_time = now;
+    for &s in &plan.initial {
+        st.activate(s);
+    }
+    ctx.sink.starts.push((ctx.sink.fired.len() as u32, chart as u32));
+    ctx.sink.moved |= !plan.initial.is_empty();
+    for &e in &plan.variable_entities {
+        let c = &mut st.controls[e as usize];
+        if !c.live {
+            c.live = true;
+            st.live.push(e);
+        }
+    }
+    if ctx.profile == Profile::Matiec {
+        // No activation edge for the initial step: its edge memories start as if it had
+        // been active before.
+        for &s in &plan.initial {
+            for &e in plan.step_entities.get(s) {
+                let c = &mut st.controls[e as usize];
+                for a in plan.entities[e as usize].assocs.iter().filter(|a| a.step == s) {
+                    match a.qualifier {
+                        Qualifier::P => c.p_mem = true,
+                        Qualifier::P1 => c.p1_mem = true,
+                        _ => {}
+                    }
+                }
+            }
+        }
+    }
+}
+
+/// `SFCTrans` (when declared): whether a transition of this instance fired in this call.
+#[inline]
+pub(super) fn set_trans(ctx: &mut Ctx<'_>, chart: usize, code: &ChartCode, fired: bool) {
+    if let Some(t) = code.control.trans {
+        put_bool(ctx.mem, ctx.charts[chart].frame + t as usize, fired);
+    }
 }
 
 /// Writes a BOOL slot in place (no drop glue for the old value on the hot path).
@@ -206,11 +219,14 @@ pub(crate) fn reset(ctx: &mut Ctx<'_>, chart: usize, code: &ChartCode) {
     }
     ctx.mem[frame + code.control.error as usize] = Value::Bool(false);
     ctx.mem[frame + code.control.error_step as usize] = Value::Str(Arc::from(""));
+    if let Some(p) = code.control.error_pou {
+        ctx.mem[frame + p as usize] = Value::Str(Arc::from(""));
+    }
     // SFCCurrentStep follows the initial situation while SFCInit holds it.
     let st = &mut ctx.charts[chart];
     if st.track_current {
         st.changed = false;
-        let first = st.active.iter().copied().min();
+        let first = current_step(ctx.profile, &st.active);
         st.current = first;
         ctx.mem[frame + code.control.current_step as usize] = match first {
             Some(s) => plan.step_values[s as usize].clone(),
@@ -250,7 +266,12 @@ fn first_fault(ctx: &mut Ctx<'_>, chart: usize, code: &ChartCode, plan: &ChartPl
 
 /// Steps 3–5: enabled and true transitions against one snapshot, conflicts, firing.
 /// Returns whether anything fired.
-fn evolve(ctx: &mut Ctx<'_>, chart: usize, code: &ChartCode, plan: &ChartPlan) -> Result<bool, Fault> {
+pub(super) fn evolve(ctx: &mut Ctx<'_>, chart: usize, code: &ChartCode, plan: &ChartPlan) -> Result<bool, Fault> {
+    if code.control.tip.is_some() || code.control.tip_mode.is_some() {
+        if let Some(fired) = jog(ctx, chart, code, plan) {
+            return Ok(fired);
+        }
+    }
     let frame = ctx.charts[chart].frame;
     // Pass 1 over the active steps: links with inline guards are tested and their targets
     // marked; links with compiled guards and the transitions of other steps are collected.
@@ -264,14 +285,15 @@ fn evolve(ctx: &mut Ctx<'_>, chart: usize, code: &ChartCode, plan: &ChartPlan) -
     code_links.clear();
     cand.clear();
     let mut complex = {
-        let ChartState { active, steps, stamp, .. } = st;
+        let ChartState { active, steps, stamp, clock, .. } = st;
+        let clock = *clock;
         let found = test_links(&plan.link, ctx.mem, frame, active, steps, epoch, &mut fire, &mut code_links);
         // The transitions of steps without link (their positions were noted in `cand`).
         if found.general {
             for k in 0..code_links.len() {
                 if code_links[k] & GENERAL != 0 {
                     let s = active[(code_links[k] & !GENERAL) as usize];
-                    collect_general(plan, steps, stamp, epoch, s, &mut cand);
+                    collect_general(plan, steps, stamp, epoch, clock, s, &mut cand);
                 }
             }
             code_links.retain(|&i| i & GENERAL == 0);
@@ -445,19 +467,24 @@ unsafe fn at_mut<T>(v: &mut [T], i: u32) -> &mut T {
 }
 
 /// The candidates of a step without link: its outgoing transitions that are enabled (a
-/// transition with one preceding step is met only from that, active, step).
+/// transition with one preceding step is met only from that, active, step), and whose preceding
+/// steps have all been active for their minimum time (`sfc.min_time`).
 #[inline(never)]
 fn collect_general(
     plan: &ChartPlan,
     steps: &[super::state::StepState],
     stamp: &mut [u32],
     epoch: u32,
+    clock: i64,
     s: u32,
     cand: &mut Vec<u32>,
 ) {
+    let waited = |p: u32| plan.min_times[p as usize].is_none_or(|m| clock - steps[p as usize].t >= m);
     for &t in plan.outgoing.get(s) {
         if plan.tr[t as usize].single_pre {
-            cand.push(t);
+            if waited(s) {
+                cand.push(t);
+            }
             continue;
         }
         let mark = &mut stamp[t as usize];
@@ -465,7 +492,7 @@ fn collect_general(
             continue;
         }
         *mark = epoch;
-        if plan.pre.get(t).iter().all(|&p| steps[p as usize].x) {
+        if plan.pre.get(t).iter().all(|&p| steps[p as usize].x && waited(p)) {
             cand.push(t);
         }
     }
@@ -759,44 +786,115 @@ pub(crate) fn publish_initial(ctx: &mut Ctx<'_>, chart: usize) {
 /// After the scan: supervision times, SFCError/SFCErrorStep, SFCCurrentStep.
 #[inline(always)]
 pub(crate) fn finish_scan(ctx: &mut Ctx<'_>, chart: usize, code: &ChartCode, plan: &ChartPlan) {
+    if plan.supervised {
+        check_times(ctx, chart, code, plan);
+    }
     let st = &ctx.charts[chart];
-    if plan.supervised || (st.changed && st.track_current) {
-        supervise(ctx, chart, code, plan);
+    if st.changed && st.track_current {
+        update_current_step(ctx, chart, code, plan);
     }
 }
 
-fn supervise(ctx: &mut Ctx<'_>, chart: usize, code: &ChartCode, plan: &ChartPlan) {
+/// Supervision: each activation of an active step whose time is over its `sfc.timeout` is
+/// noted once; the first (in declaration order) sets `SFCError`, `SFCErrorStep` and, when
+/// declared, `SFCErrorPOU`. With `SFCEnableLimit` declared, only while it is TRUE. Under
+/// `codesys` a timeout is registered only while `SFCError` is FALSE ("SFC flags": a second
+/// timeout is not registered until `SFCError` is reset).
+pub(super) fn check_times(ctx: &mut Ctx<'_>, chart: usize, code: &ChartCode, plan: &ChartPlan) {
     let frame = ctx.charts[chart].frame;
+    let ctl = code.control;
+    if ctl.enable_limit.is_some_and(|e| !read_bool(ctx.mem, frame + e as usize)) {
+        return;
+    }
+    let latched = ctx.profile == Profile::Codesys && read_bool(ctx.mem, frame + ctl.error as usize);
     let st = &mut ctx.charts[chart];
-    if plan.supervised {
-        let mut expired: Option<u32> = None;
-        let clock = st.clock;
-        for &s in &st.active {
-            if let Some(limit) = plan.timeouts[s as usize] {
-                let step = &mut st.steps[s as usize];
-                if clock - step.t > limit && !step.overdue {
-                    step.overdue = true;
-                    ctx.sink.overdue.push((chart as u32, s));
-                    if expired.is_none_or(|f| s < f) {
-                        expired = Some(s);
-                    }
+    let mut expired: Option<u32> = None;
+    let clock = st.clock;
+    for &s in &st.active {
+        if let Some(limit) = plan.timeouts[s as usize] {
+            let step = &mut st.steps[s as usize];
+            if clock - step.t > limit && !step.overdue {
+                step.overdue = true;
+                ctx.sink.overdue.push((chart as u32, s));
+                if expired.is_none_or(|f| s < f) {
+                    expired = Some(s);
                 }
             }
         }
-        if let Some(s) = expired {
-            ctx.mem[frame + code.control.error as usize] = Value::Bool(true);
-            ctx.mem[frame + code.control.error_step as usize] = plan.step_values[s as usize].clone();
+    }
+    if let Some(s) = expired.filter(|_| !latched) {
+        ctx.mem[frame + ctl.error as usize] = Value::Bool(true);
+        ctx.mem[frame + ctl.error_step as usize] = plan.step_values[s as usize].clone();
+        if let Some(p) = ctl.error_pou {
+            ctx.mem[frame + p as usize] = Value::Str(Arc::from(code.chart.pou.as_str()));
         }
     }
-    if st.changed && st.track_current {
-        st.changed = false;
-        let first = st.active.iter().copied().min();
-        if first != st.current {
-            st.current = first;
-            ctx.mem[frame + code.control.current_step as usize] = match first {
-                Some(s) => plan.step_values[s as usize].clone(),
-                None => Value::Str(Arc::from("")),
-            };
+}
+
+/// The step `SFCCurrentStep` names: the first active step in declaration order; under
+/// `codesys` the last ("SFC flags": in parallel branches, the step of the rightmost branch).
+pub(crate) fn current_step(profile: Profile, active: &[u32]) -> Option<u32> {
+    if profile == Profile::Codesys {
+        active.iter().copied().max()
+    } else {
+        active.iter().copied().min()
+    }
+}
+
+/// Writes `SFCCurrentStep` after the situation changed.
+pub(super) fn update_current_step(ctx: &mut Ctx<'_>, chart: usize, code: &ChartCode, plan: &ChartPlan) {
+    let frame = ctx.charts[chart].frame;
+    let st = &mut ctx.charts[chart];
+    st.changed = false;
+    let cur = current_step(ctx.profile, &st.active);
+    if cur != st.current {
+        st.current = cur;
+        ctx.mem[frame + code.control.current_step as usize] = match cur {
+            Some(s) => plan.step_values[s as usize].clone(),
+            None => Value::Str(Arc::from("")),
+        };
+    }
+}
+
+/// Jogging (CODESYS's `SFCTip`, `SFCTipMode`, when declared): a rising edge of `SFCTip` fires,
+/// for each active step in declaration order, its first enabled outgoing transition whatever
+/// its condition (a step consumed once); while `SFCTipMode` is TRUE the conditions are not
+/// evaluated and only that moves the chart. Returns `None` when the evolution is the normal one.
+fn jog(ctx: &mut Ctx<'_>, chart: usize, code: &ChartCode, plan: &ChartPlan) -> Option<bool> {
+    let frame = ctx.charts[chart].frame;
+    let ctl = code.control;
+    let tip = ctl.tip.is_some_and(|t| read_bool(ctx.mem, frame + t as usize));
+    let mode = ctl.tip_mode.is_some_and(|t| read_bool(ctx.mem, frame + t as usize));
+    let st = &mut ctx.charts[chart];
+    let edge = tip && !st.tip_prev;
+    st.tip_prev = tip;
+    if !edge {
+        return if mode { Some(false) } else { None };
+    }
+    let mut active = st.active.clone();
+    active.sort_unstable();
+    let mut accepted: Vec<u32> = Vec::new();
+    let mut consumed: Vec<u32> = Vec::new();
+    for s in active {
+        if consumed.contains(&s) {
+            continue;
+        }
+        let t = plan
+            .outgoing
+            .get(s)
+            .iter()
+            .copied()
+            .find(|&t| plan.pre.get(t).iter().all(|&p| st.steps[p as usize].x && !consumed.contains(&p)));
+        if let Some(t) = t {
+            consumed.extend_from_slice(plan.pre.get(t));
+            accepted.push(t);
         }
     }
+    if accepted.is_empty() {
+        return Some(false);
+    }
+    accepted.sort_unstable();
+    let epoch = st.next_epoch();
+    fire_general(ctx, chart, plan, &accepted, epoch);
+    Some(true)
 }

@@ -143,6 +143,8 @@ pub struct ChartPlan {
     pub(crate) is_initial: Vec<bool>,
     pub(crate) timeouts: Vec<Option<i64>>,
     pub(crate) supervised: bool,
+    /// Per step: its minimum time (`sfc.min_time`), which its outgoing transitions wait for.
+    pub(crate) min_times: Vec<Option<i64>>,
     pub(crate) entities: Vec<Entity>,
     /// Entities each step associates, without repetition.
     pub(crate) step_entities: Rows,
@@ -262,10 +264,13 @@ impl ChartPlan {
                 }
             })
             .collect();
+        let min_times: Vec<Option<i64>> = chart.steps.iter().map(|s| s.min_time.filter(|&m| m > 0)).collect();
         let link: Vec<Link> = outgoing
             .iter()
-            .map(|o| match o.as_slice() {
-                [t] if tr[*t as usize].is_link() => {
+            .enumerate()
+            .map(|(s, o)| match o.as_slice() {
+                // A step with a minimum time takes the general path, which waits for it.
+                [t] if tr[*t as usize].is_link() && min_times[s].is_none() => {
                     let info = tr[*t as usize];
                     let (kind, slot, neg) = match info.guard {
                         FastGuard::Local(o, neg) => (guard_kind::LOCAL, o, neg),
@@ -307,6 +312,7 @@ impl ChartPlan {
             initial: chart.steps.iter().enumerate().filter(|(_, s)| s.initial).map(|(i, _)| i as u32).collect(),
             is_initial: chart.steps.iter().map(|s| s.initial).collect(),
             supervised: timeouts.iter().any(Option::is_some),
+            min_times,
             timeouts,
             entities,
             step_entities: Rows::from_lists(step_entities.into_iter()),

@@ -129,6 +129,10 @@ pub struct ChartState {
     pub(crate) order: Vec<u32>,
     pub(crate) run: Vec<u32>,
     pub(crate) current: Option<u32>,
+    /// `SFCTip` in the previous call (its rising edge jogs the chart).
+    pub(crate) tip_prev: bool,
+    /// `SFCQuitError` in the previous call (`codesys`: its fall restarts the step times).
+    pub(crate) quit_prev: bool,
     /// The `matiec` profile's own state (`engine/matiec.rs`).
     pub(crate) matiec: Option<Box<super::matiec::State>>,
 }
@@ -175,6 +179,8 @@ impl ChartState {
             order: Vec::new(),
             run: Vec::new(),
             current: None,
+            tip_prev: false,
+            quit_prev: false,
             matiec: None,
             plan,
         }
