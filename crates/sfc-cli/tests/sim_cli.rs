@@ -736,3 +736,13 @@ fn codesys_rules_give_the_traces_derived_by_hand() {
     }
     assert!(failures.is_empty(), "{}", failures.join("\n"));
 }
+
+/// A machine in the shape of a CODESYS export (eleven function blocks whose SFC actions call
+/// each other's actions, step actions, N and R on an SFC action) driven through its modes under
+/// `codesys`, with expectations on steps of nested charts by path.
+#[test]
+fn the_bottling_line_runs_through_its_modes() {
+    let o = sfc(&["test", "tests/corpus/real/codesys/bottling_line_modes.scenario.toml"]);
+    assert!(o.status.success(), "{}", both(&o));
+    assert!(stdout(&o).contains("1 passed"), "{}", both(&o));
+}
