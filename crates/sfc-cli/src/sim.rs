@@ -97,6 +97,9 @@ fn transition_line(t: &TransitionReport) -> String {
         let _ =
             write!(line, "; waits for step{} {}", if t.missing.len() == 1 { "" } else { "s" }, t.missing.join(", "));
     }
+    if !t.dwell.is_empty() {
+        let _ = write!(line, "; waits for the minimum time of {}", t.dwell.join(", "));
+    }
     if let Some(m) = &t.masked_by {
         let _ = write!(line, "; masked by {m}, which takes precedence");
     }

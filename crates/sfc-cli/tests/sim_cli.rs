@@ -746,3 +746,25 @@ fn the_bottling_line_runs_through_its_modes() {
     assert!(o.status.success(), "{}", both(&o));
     assert!(stdout(&o).contains("1 passed"), "{}", both(&o));
 }
+
+/// `--explain` says when a TRUE transition waits for its step's minimum time (`sfc.min_time`).
+#[test]
+fn explain_names_a_minimum_time_being_waited_for() {
+    let o = sfc(&[
+        "sim",
+        "crates/sfc-sim/tests/codesys/10_minimum_time.st",
+        "--profile",
+        "codesys",
+        "--set",
+        "Go=TRUE",
+        "--scans",
+        "3",
+        "--explain",
+    ]);
+    assert!(o.status.success(), "{}", both(&o));
+    assert!(
+        both(&o).contains("T2 := Go is TRUE with Go = TRUE; waits for the minimum time of Hold (T#20ms of T#30ms)"),
+        "{}",
+        both(&o)
+    );
+}

@@ -28,6 +28,9 @@ pub struct TransitionReport {
     /// A transition that takes precedence (higher priority or earlier declaration) and is
     /// enabled and true, so this one would not fire anyway.
     pub masked_by: Option<String>,
+    /// Preceding steps still inside their minimum time (`sfc.min_time`), as
+    /// `Hold (T#20ms of T#30ms)`: the transition waits for them even when TRUE.
+    pub dwell: Vec<String>,
     /// The terminal of each operand wired to the machine, `(operand, "X12.3, %IX0.5")`
     /// (`sfc.terminal` label and AT address, an input of a block followed to its caller).
     pub terminals: Vec<(String, String)>,
@@ -106,6 +109,9 @@ impl StepReport {
                     t.missing.join(", ")
                 ));
             }
+            if !t.dwell.is_empty() {
+                line.push_str(&format!("; waits for the minimum time of {}", t.dwell.join(", ")));
+            }
             if let Some(m) = &t.masked_by {
                 line.push_str(&format!("; masked by {m}, which takes precedence"));
             }
@@ -136,6 +142,7 @@ impl StepReport {
                 "change": t.change,
                 "missing": t.missing,
                 "masked_by": t.masked_by,
+                "dwell": t.dwell,
             })).collect::<Vec<_>>(),
         })
     }
@@ -472,7 +479,25 @@ pub(crate) fn report(view: View<'_>, chart: usize, s: u32) -> StepReport {
             .filter(|&&o| o != t && precedes(o, t))
             .find(|&&o| plan.pre.get(o).iter().all(|&p| st.is_active(p)) && value_of(o) == Some(true))
             .map(|&o| st.qualify(&plan.transition_names[o as usize]));
+        let dwell: Vec<String> = plan
+            .pre
+            .get(t)
+            .iter()
+            .filter(|&&p| st.is_active(p))
+            .filter_map(|&p| {
+                let min = plan.min_times[p as usize]?;
+                (st.time(p) < min).then(|| {
+                    format!(
+                        "{} ({} of {})",
+                        st.qualify(&plan.step_names[p as usize]),
+                        format_time(st.time(p)),
+                        format_time(min)
+                    )
+                })
+            })
+            .collect();
         transitions.push(TransitionReport {
+            dwell,
             transition: st.qualify(&plan.transition_names[t as usize]),
             guard,
             value,
