@@ -120,6 +120,9 @@ pub fn describe(ix: &FileIndex, s: &Symbol) -> String {
             if let Some(t) = &st.timeout {
                 out.push_str(&format!("\n\nsupervision time `{t}`"));
             }
+            if let Some(t) = &st.min_time {
+                out.push_str(&format!("\n\nminimum time `{t}`"));
+            }
             if let Some(t) = &st.tag {
                 out.push_str(&format!("\n\nstate tag {t}"));
             }

@@ -81,6 +81,8 @@ pub struct StepDetail {
     pub is_final: bool,
     /// `sfc.timeout` as written.
     pub timeout: Option<String>,
+    /// `sfc.min_time` as written.
+    pub min_time: Option<String>,
     pub tag: Option<String>,
     pub associations: Vec<AssociationDetail>,
 }
@@ -609,6 +611,7 @@ impl Builder<'_> {
                         initial: s.initial,
                         is_final: attr("sfc.final").is_some_and(|v| v.eq_ignore_ascii_case("true")),
                         timeout: attr("sfc.timeout"),
+                        min_time: attr("sfc.min_time"),
                         tag: attr("sfc.tag"),
                         associations: s
                             .associations

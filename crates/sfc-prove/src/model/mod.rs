@@ -677,6 +677,37 @@ pub fn encode<'a>(
             c.pou, s.name
         ));
     }
+    if let Some((c, s)) = checked
+        .charts
+        .iter()
+        .filter(|c| uses.contains(&c.pou.to_ascii_uppercase()))
+        .flat_map(|c| c.steps.iter().map(move |s| (c, s)))
+        .find(|(_, s)| s.min_time.is_some())
+    {
+        return Err(format!(
+            "step `{}.{}` has a minimum time (`sfc.min_time`), which `prove` does not model yet",
+            c.pou, s.name
+        ));
+    }
+    // CODESYS's SFC flags that act only when declared (docs/sim.md, "Chart control variables").
+    for item in &checked.unit.items {
+        let Item::Pou(p) = item else { continue };
+        if !uses.contains(&p.name.text.to_ascii_uppercase()) || !checked.charts.iter().any(|c| p.name.is(&c.pou)) {
+            continue;
+        }
+        let flags = ["SFCReset", "SFCEnableLimit", "SFCErrorPOU", "SFCTrans", "SFCTip", "SFCTipMode"];
+        if let Some(f) = p
+            .var_blocks
+            .iter()
+            .flat_map(|b| b.decls.iter().flat_map(|d| d.names.iter()))
+            .find_map(|n| flags.iter().find(|f| n.is(f)))
+        {
+            return Err(format!(
+                "`{}` declares `{f}`, one of CODESYS's SFC flags, which `prove` does not model yet",
+                p.name.text
+            ));
+        }
+    }
     if let Some(c) = checked.action_charts.iter().find(|c| uses.contains(&c.pou.to_ascii_uppercase())) {
         return Err(format!(
             "`{}.{}` is an action written in SFC, which `prove` does not model yet",
