@@ -51,7 +51,7 @@ pub struct CheckArgs {
     #[arg(long)]
     no_analysis: bool,
     /// Also warn where the chart behaves differently under this profile than under `iec`
-    /// (`matiec`: SFC0901–SFC0908).
+    /// (`matiec`: SFC0901–SFC0908; `codesys`: SFC0911–SFC0913).
     #[arg(long, value_enum)]
     profile: Option<ProfileArg>,
     /// Print what a diagnostic code means and how to fix it.
@@ -83,14 +83,13 @@ pub fn check(a: CheckArgs) -> u8 {
         analysis: !a.no_analysis,
         ..CheckOptions::default()
     };
-    if let Some(p @ (ProfileArg::Iec | ProfileArg::Codesys | ProfileArg::Grafcet)) = a.profile {
-        // Said, not silently ignored: only `matiec` has warnings of its own.
-        let name = match p {
-            ProfileArg::Iec => "iec",
-            ProfileArg::Codesys => "codesys",
-            _ => "grafcet",
-        };
-        eprintln!("note: `--profile {name}` adds no warnings to `sfc check` (only `matiec` does: SFC0901–SFC0908)");
+    if let Some(p @ (ProfileArg::Iec | ProfileArg::Grafcet)) = a.profile {
+        // Said, not silently ignored: only `matiec` and `codesys` have warnings of their own.
+        let name = if matches!(p, ProfileArg::Iec) { "iec" } else { "grafcet" };
+        eprintln!(
+            "note: `--profile {name}` adds no warnings to `sfc check` (only `matiec` does: SFC0901–SFC0908, and \
+             `codesys`: SFC0911–SFC0913)"
+        );
     }
     let human = matches!(a.format, CheckFormat::Human);
     let mut files: Vec<SourceFile> = Vec::new();
@@ -122,6 +121,18 @@ pub fn check(a: CheckArgs) -> u8 {
             let mut extra = sfc_sim::matiec_check::differences(&checked.charts, &decoded.text);
             for d in &mut extra {
                 d.span.file = id;
+            }
+            found.extend(extra);
+            sfc_diagnostics::sort(&mut found);
+        }
+        if matches!(a.profile, Some(ProfileArg::Codesys)) && clean {
+            let mut extra = sfc_sim::codesys_check::differences(&checked.charts, &checked.action_charts);
+            for d in &mut extra {
+                d.span.file = id;
+            }
+            // In an export, located in the XML (as the check's own findings are).
+            if sfc_driver::is_xml(&shown, &decoded.text) {
+                extra = sfc_driver::locate_in_xml(id, &shown.display().to_string(), &decoded.text, &extra);
             }
             found.extend(extra);
             sfc_diagnostics::sort(&mut found);

@@ -768,3 +768,23 @@ fn explain_names_a_minimum_time_being_waited_for() {
         both(&o)
     );
 }
+
+/// `sfc check --profile codesys` warns where the chart behaves differently under CODESYS, or
+/// where CODESYS refuses it (SFC0911–SFC0913), located in the chart; without the profile, not.
+#[test]
+fn check_with_the_codesys_profile_warns_of_the_differences() {
+    let chart = "crates/sfc-cli/tests/codesys/differences.st";
+    let o = sfc(&["check", chart, "--profile", "codesys", "--color", "never"]);
+    assert!(o.status.success(), "warnings only: {}", both(&o));
+    let text = both(&o);
+    for expected in [
+        "warning[SFC0911]: the PRIORITY of TB is ignored under CODESYS",
+        "warning[SFC0912]: TA is already tested in the first call under CODESYS",
+        "warning[SFC0912]: TB is already tested in the first call under CODESYS",
+        "warning[SFC0913]: `Blink` is associated in `Cell`'s chart and in the chart of its action `Seq`",
+    ] {
+        assert!(text.contains(expected), "missing {expected:?}\n{text}");
+    }
+    let plain = both(&sfc(&["check", chart, "--color", "never"]));
+    assert!(!plain.contains("SFC091"), "{plain}");
+}

@@ -560,6 +560,23 @@ nanosecond-exact value (`T#4ms` → `>= T#5ms`), or avoid whole seconds.";
 scan on the activation (P1) or deactivation (P0) of the step. IEC runs P1/P0 with Q FALSE, so a \
 BOOL variable used as the action stays FALSE. Use an ACTION that sets the variable.";
 
+    "SFC0911" Warning "PRIORITY ignored under CODESYS"
+        "CODESYS, TwinCAT and e!COCKPIT have no transition priorities: of the alternatives leaving \
+a step, the first TRUE one from the left (declared first) fires (CODESYS's help, \"Processing \
+order in SFC\"). IEC fires the one with the smallest PRIORITY. Order the alternatives as they \
+should be tested, or make their conditions exclude each other.";
+    "SFC0912" Warning "transition tested in the first call under CODESYS"
+        "IEC tests no transition in scan 0: the initial steps' actions run once first. CODESYS \
+processes the first call like any other (\"In the first cycle after calling a POU in SFC, the \
+initial step is automatically activated and the step action is executed\", then the transitions \
+are tested), so an initial step whose transition is already TRUE is active for one call only. \
+Guard the transition with a step time (`Init.T >= T#…`) or a condition that starts FALSE.";
+    "SFC0913" Warning "IEC action used at two levels of a chart (CODESYS refuses it)"
+        "The action is associated in a POU's chart and in the chart of one of its actions written \
+in SFC. CODESYS reports an error for the same IEC action used at different levels of a chart \
+(\"Processing order in SFC\": unpredictable results); sfc runs it in each chart, with a control \
+block per chart. Use a separate action at each level.";
+
     "SFC1001" Error "error in the property file"
         "The property file (`<chart>.props.toml`) of `sfc prove` is not valid: TOML syntax, an \
 unknown key, a name the POU does not declare, or an ST condition that is not BOOL. The message \

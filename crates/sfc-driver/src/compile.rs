@@ -106,6 +106,13 @@ pub fn check_any(file_id: u32, path: &Path, text: &str, opts: &CheckOptions) -> 
     check_text(file_id, &path.display().to_string(), text, kind, opts)
 }
 
+/// Moves diagnostics of the IEC text a PLCopen file imports to (findings made on the checked
+/// charts after [`check_any`]) to the XML, as the check's own are.
+pub fn locate_in_xml(file_id: u32, name: &str, xml: &str, diags: &[Diagnostic]) -> Vec<Diagnostic> {
+    let imported = sfc_plcopen::import(file_id, name, xml);
+    diags.iter().map(|d| sfc_plcopen::relocate(d, &imported.map, file_id)).collect()
+}
+
 /// [`check_any`] for a text in memory (an editor buffer, a language server's document):
 /// `name` is how diagnostics name the file, `kind` says how to read it.
 pub fn check_text(

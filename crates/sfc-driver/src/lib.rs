@@ -18,7 +18,8 @@ mod disk;
 pub mod load;
 
 pub use compile::{
-    check_any, check_parsed_text, check_text, is_xml, BuildTarget, CompileError, CompileOptions, Compiled, IecText,
+    check_any, check_parsed_text, check_text, is_xml, locate_in_xml, BuildTarget, CompileError, CompileOptions,
+    Compiled, IecText,
 };
 pub use disk::{same_file, write_atomically};
 pub use load::{read_source, FileKind, LoadError};

@@ -5,6 +5,7 @@
 //! Nothing here prints, exits or reads the clock: time is virtual (`scan · period`).
 
 pub mod code;
+pub mod codesys_check;
 pub mod condition;
 pub mod coverage;
 pub mod engine;

@@ -298,7 +298,7 @@ fn sfc_sim_us(lit: &str) -> i64 {
 
 /// Whether a condition needs some step time above zero (`S.T >= T#20ms AND …`): FALSE in scan 0,
 /// where every step time is zero.
-fn waits_for_time(e: &Expr) -> bool {
+pub(crate) fn waits_for_time(e: &Expr) -> bool {
     match &e.kind {
         ExprKind::Paren(x) => waits_for_time(x),
         ExprKind::Binary { op: BinaryOp::And | BinaryOp::AndThen, lhs, rhs } => {
