@@ -452,6 +452,12 @@ pub fn sim(r: SimRequest) -> u8 {
     if let Some(import) = &scen.import {
         term::print_diagnostics(&import.1, std::slice::from_ref(&import.0));
     }
+    // The profile came from the file (a CODESYS, TwinCAT or e!COCKPIT export): said.
+    if let sfc_sim::ProfileSource::Vendor(v) = scen.profile_source {
+        let instead =
+            if r.scenario.is_some() { "--profile iec, or profile = \"iec\" in the scenario," } else { "--profile iec" };
+        term::note(&sfc_sim::vendor_profile_note("simulated", &scen.chart_name(), v, instead));
+    }
     // A chart that is not UTF-8 was read as Latin-1 / Windows-1252: said, as `check` says it.
     if let Ok(decoded) = sfc_driver::read_source(&scen.chart) {
         if let Some(w) = sfc_syntax::encoding::warning(0, &decoded) {

@@ -120,6 +120,16 @@ fn chart_path(s: &AppState, raw: &str) -> Result<PathBuf, ApiError> {
     }
 }
 
+/// The tool of the CODESYS family that wrote the chart file `raw` (a PLCopen XML export of
+/// CODESYS, TwinCAT or e!COCKPIT), `None` for any other file or one that no longer exists: what
+/// chooses the profile of the editor's simulations ([`sfc_sim::file_profile`]).
+pub(crate) fn file_vendor(s: &AppState, raw: &str) -> Result<Option<sfc_plcopen::Vendor>, ApiError> {
+    let path = chart_path(s, raw)?;
+    let Some(bytes) = read_existing(&path)? else { return Ok(None) };
+    let text = utf8(&path, bytes)?;
+    Ok(if compile::is_xml(&path, &text) { sfc_plcopen::vendor(&text) } else { None })
+}
+
 /// The file's bytes; `None` when it does not exist.
 fn read_existing(path: &Path) -> Result<Option<Vec<u8>>, ApiError> {
     match std::fs::metadata(path) {

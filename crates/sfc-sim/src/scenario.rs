@@ -25,7 +25,10 @@
 use crate::condition::Condition;
 use crate::coverage::Coverage;
 use crate::trace::{value_text, TraceHeader, TraceSink};
-use crate::{format_time, parse_time, Profile, RuntimeError, ScanRecord, SimOptions, Simulation, Value};
+use crate::{
+    file_profile, format_time, parse_time, Profile, ProfileSource, RuntimeError, ScanRecord, SimOptions, Simulation,
+    Value,
+};
 use sfc_diagnostics::{render_human, Diagnostic, RenderOptions, SourceFile};
 use sfc_st::Type;
 use std::fmt;
@@ -216,6 +219,10 @@ pub struct Scenario {
     /// The simulated POU, as declared.
     pub pou: String,
     pub options: SimOptions,
+    /// Who chose `options.profile`: the command line, the scenario, the tool that wrote the
+    /// chart file (a CODESYS, TwinCAT or e!COCKPIT export runs with `codesys`,
+    /// [`crate::file_profile`]), or nobody (`iec`). A command says so when it was the file.
+    pub profile_source: ProfileSource,
     pub length: RunLength,
     /// In time order.
     pub entries: Vec<Entry>,
@@ -1158,10 +1165,12 @@ fn load_parts(path: &Path, text: &str, o: &Overrides, given_chart: Option<&str>)
             _ => e,
         })?,
     };
-    let options = SimOptions {
-        period: o.period.or(parsed.period).unwrap_or(DEFAULT_PERIOD),
-        profile: o.profile.or(parsed.profile).unwrap_or_default(),
+    let (profile, profile_source) = match (o.profile, parsed.profile) {
+        (Some(p), _) => (p, ProfileSource::Option),
+        (None, Some(p)) => (p, ProfileSource::Scenario),
+        (None, None) => file_profile(imported.as_ref().and_then(|i| i.vendor)),
     };
+    let options = SimOptions { period: o.period.or(parsed.period).unwrap_or(DEFAULT_PERIOD), profile };
     let pou = o.pou.clone().or_else(|| parsed.pou.as_ref().map(|p| p.0.clone()));
     let chart_name = chart.display().to_string();
     let sim = compile_located(&chart_name, &chart_text, imported.as_ref(), pou.as_deref(), options).map_err(|e| {
@@ -1191,6 +1200,7 @@ fn load_parts(path: &Path, text: &str, o: &Overrides, given_chart: Option<&str>)
         scenario_chart,
         pou: sim.pou_name().to_string(),
         options,
+        profile_source,
         length: o.length.or(parsed.length).unwrap_or(RunLength::LastEntry),
         entries,
         forbid: parsed.forbid.iter().filter_map(|(n, _, _)| EventKind::from_name(n)).collect(),
@@ -1234,7 +1244,11 @@ pub fn for_chart(chart: &Path, o: &Overrides) -> Result<Scenario, ScenarioError>
     let chart = clean(chart);
     let chart_name = chart.display().to_string();
     let (chart_text, imported) = read_chart(&chart)?;
-    let options = SimOptions { period: o.period.unwrap_or(DEFAULT_PERIOD), profile: o.profile.unwrap_or_default() };
+    let (profile, profile_source) = match o.profile {
+        Some(p) => (p, ProfileSource::Option),
+        None => file_profile(imported.as_ref().and_then(|i| i.vendor)),
+    };
+    let options = SimOptions { period: o.period.unwrap_or(DEFAULT_PERIOD), profile };
     let sim = compile_located(&chart_name, &chart_text, imported.as_ref(), o.pou.as_deref(), options)
         .map_err(pou_choice_is_usage)?;
     let entries = command_line_sets(&sim, o)?.into_iter().collect();
@@ -1245,6 +1259,7 @@ pub fn for_chart(chart: &Path, o: &Overrides) -> Result<Scenario, ScenarioError>
         scenario_chart: None,
         pou: sim.pou_name().to_string(),
         options,
+        profile_source,
         length: o.length.unwrap_or(RunLength::Scans(DEFAULT_SCANS)),
         entries,
         forbid: Vec::new(),
