@@ -138,7 +138,7 @@ fn element_map(doc: &EditorDoc, sim: &Simulation) -> Value {
 }
 
 /// The profile of a simulation of the chart opened from `path` and why, as the answer's
-/// `profile`: `{"name":"codesys","source":"vendor","vendor":"TwinCAT"}` for an export of a tool
+/// `profile`: `{"name":"codesys","source":"vendor","vendor":"TwinCAT","file":"lift.xml"}` for an export of a tool
 /// of the CODESYS family, `{"name":"iec","source":"default"}` otherwise.
 fn profile_of(s: &AppState, path: Option<&str>) -> Result<(Profile, Value), Refused> {
     let vendor = match path {
@@ -147,7 +147,10 @@ fn profile_of(s: &AppState, path: Option<&str>) -> Result<(Profile, Value), Refu
     };
     let (profile, source) = sfc_sim::file_profile(vendor);
     let answer = match source {
-        sfc_sim::ProfileSource::Vendor(v) => json!({"name": profile.name(), "source": "vendor", "vendor": v.name()}),
+        sfc_sim::ProfileSource::Vendor(v) => {
+            let file = path.map(|p| std::path::Path::new(p).file_name().map_or(p.into(), |f| f.to_string_lossy()));
+            json!({"name": profile.name(), "source": "vendor", "vendor": v.name(), "file": file})
+        }
         _ => json!({"name": profile.name(), "source": "default"}),
     };
     Ok((profile, answer))

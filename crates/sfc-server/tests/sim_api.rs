@@ -198,3 +198,34 @@ async fn a_runaway_simulation_faults_at_its_loop_and_stops() {
     assert_eq!(a.status.as_u16(), 200, "{}", a.text);
     while next(&mut ws).await.is_some() {}
 }
+
+/// A chart opened from a TwinCAT export runs with profile codesys, and the answer says why; a
+/// chart of an IEC text file (or without a file) with iec. The runtime's `hello` names it too.
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn the_profile_comes_from_the_file() {
+    let dir = std::fs::canonicalize(Path::new(env!("CARGO_MANIFEST_DIR")).join("../sfc-cli/tests/profile")).unwrap();
+    let twincat = dir.join("final_scan.twincat.xml");
+    let s = state(&[dir.as_path()], None);
+    let a = post(&s, "/api/open", &json!({ "path": twincat.to_str().unwrap() })).await;
+    assert_eq!(a.status, 200, "{}", a.text);
+    let doc = a.body["charts"][0].clone();
+    let a = post(&s, "/api/sim/start", &json!({ "doc": doc, "halted": true, "path": twincat.to_str().unwrap() })).await;
+    assert_eq!(a.status, 200, "{}", a.text);
+    assert_eq!(
+        a.body["profile"],
+        json!({"name": "codesys", "source": "vendor", "vendor": "TwinCAT", "file": "final_scan.twincat.xml"})
+    );
+    let (mut ws, _) = tokio_tungstenite::connect_async(a.body["url"].as_str().unwrap()).await.unwrap();
+    assert_eq!(next(&mut ws).await.unwrap()["profile"], "codesys");
+    let id = a.body["id"].clone();
+    assert_eq!(post(&s, "/api/sim/stop", &json!({ "id": id })).await.status, 200);
+    // The same chart without its file (a new tab): iec.
+    let a = post(&s, "/api/sim/start", &json!({ "doc": doc, "halted": true })).await;
+    assert_eq!(a.status, 200, "{}", a.text);
+    assert_eq!(a.body["profile"], json!({"name": "iec", "source": "default"}));
+    let id = a.body["id"].clone();
+    assert_eq!(post(&s, "/api/sim/stop", &json!({ "id": id })).await.status, 200);
+    // A file the editor may not read is refused, as opening it would be.
+    let a = post(&s, "/api/sim/start", &json!({ "doc": doc, "path": "/etc/passwd" })).await;
+    assert_eq!(a.status, 403, "{}", a.text);
+}

@@ -3,6 +3,7 @@
 // menu and hit (orange frame, halted), the condition analysis of the halted step, stepping back
 // through the buffered states, an input forced, Continue, and the chart moving on. Real mouse and
 // keyboard; screenshots of each state in e2e/out/monitor-*.png.
+import fs from 'node:fs';
 import path from 'node:path';
 import { until as untilWithin } from '../helpers.mjs';
 
@@ -204,5 +205,50 @@ tests.push({
     await page.locator('.mon-banner').waitFor();
     await page.getByRole('button', { name: 'Detach' }).click();
     await until(page, 'the monitor to close', async () => (await page.locator('.mon-overlay').count()) === 0);
+  },
+});
+
+tests.push({
+  name: 'the monitor shows the profile it simulates with, and why',
+  run: async (t) => {
+    const { page } = t;
+    // A TwinCAT export (crates/sfc-cli/tests/profile): simulated by CODESYS's rules.
+    const here = path.dirname(new URL(import.meta.url).pathname);
+    const xml = path.join(t.scratch, 'final_scan.twincat.xml');
+    fs.copyFileSync(path.join(here, '..', '..', '..', 'crates', 'sfc-cli', 'tests', 'profile', 'final_scan.twincat.xml'), xml);
+    const s = await t.edit([xml]);
+    await page.goto(s.url);
+    await page.locator('.canvas-pane.active .djs-container').waitFor();
+    await page.getByRole('button', { name: 'Start simulation' }).click();
+    await page.locator('.mon-overlay').waitFor();
+    const badge = page.getByTestId('monitor-profile');
+    await until(page, 'the profile badge', async () => (await badge.textContent()) === 'Profile: codesys');
+    const why = await badge.getAttribute('title');
+    if (!why.includes('final_scan.twincat.xml, a TwinCAT export') || !why.includes('--profile iec')) throw new Error(`the badge does not say why: ${why}`);
+    for (const [lang, label] of [
+      ['cs', 'Profil: codesys'],
+      ['de', 'Profil: codesys'],
+    ]) {
+      await page.locator('.status-lang select').selectOption(lang);
+      await until(page, `the ${lang} profile badge`, async () => (await badge.textContent()) === label && (await badge.getAttribute('title')) !== why);
+      const h = await page.locator('.mon-toolbar').evaluate((e) => e.getBoundingClientRect().height);
+      if (h > 44) throw new Error(`the ${lang} monitor toolbar wraps (${h} px high)`);
+    }
+    await page.locator('.status-lang select').selectOption('en');
+    await page.screenshot({ path: OUT(t, '7-profile') });
+    await page.getByRole('button', { name: 'Stop simulation' }).click();
+    await until(page, 'the monitor to close', async () => (await page.locator('.mon-overlay').count()) === 0);
+    await s.stop();
+
+    // An IEC text file: iec, because it is no export of the CODESYS family.
+    const chart = path.join(t.scratch, 'examples', 'carwash', 'carwash.st');
+    const s2 = await t.edit([chart]);
+    await page.goto(s2.url);
+    await page.locator('.canvas-pane.active .djs-container').waitFor();
+    await page.getByRole('button', { name: 'Start simulation' }).click();
+    await until(page, 'the iec badge', async () => (await page.getByTestId('monitor-profile').textContent()) === 'Profile: iec');
+    const title = await page.getByTestId('monitor-profile').getAttribute('title');
+    if (!title.includes("IEC 61131-3's rules")) throw new Error(`the iec badge says: ${title}`);
+    await page.getByRole('button', { name: 'Stop simulation' }).click();
   },
 });

@@ -124,7 +124,7 @@ export function App({ api, createCanvas }: AppProps) {
     createCanvas,
     current: () => {
       const d = tab ? docOf(tab.id) : null;
-      return d && tab ? { doc: d, title: tabTitle(tab).replace(/\*$/, '') } : null;
+      return d && tab ? { doc: d, title: tabTitle(tab).replace(/\*$/, ''), path: tab.path } : null;
     },
     hasChart: !!canvas && !!tab,
     // A mechanism of another chart: its open tab becomes the one shown (and monitored).
