@@ -944,8 +944,19 @@ impl<'a> Binder<'a> {
         for s in &steps {
             names.push(format!("{s}.X"));
             names.push(format!("{s}.T"));
+            // A step of an action's chart is also read through its instance, as the POU's
+            // code reads it (`Lift.Gripping.X` for `Lift.ACT_Load.Gripping`).
+            if let Some(short) = without_action(s).filter(|a| sim.type_of(&format!("{a}.X")).is_some()) {
+                names.push(format!("{short}.X"));
+                names.push(format!("{short}.T"));
+            }
         }
         Binder { sim, file, chart, steps, names }
+    }
+    /// The step whose name without its action's is `name` (`Lift.ACT_Load.Gripping` for
+    /// `Lift.Gripping`): how `active` names the steps of an action's chart.
+    fn step_of_action(&self, name: &str) -> Option<&str> {
+        self.steps.iter().find(|s| without_action(s).is_some_and(|a| a.eq_ignore_ascii_case(name))).map(String::as_str)
     }
     fn err(&self, a: &RawAssign, message: String) -> ScenarioError {
         let mut e = ScenarioError::new(ErrorKind::Invalid, Some(self.file.to_string()), message);
@@ -1028,7 +1039,12 @@ impl<'a> Binder<'a> {
                 match self.step(s) {
                     Some(step) => steps.push(step.to_string()),
                     None => {
-                        let hint = did_you_mean(s, self.steps.iter().map(String::as_str));
+                        let hint = match self.step_of_action(s) {
+                            Some(full) => format!(
+                                "; did you mean `{full}`? (`active` names the steps of an action's chart with the action, as traces do)"
+                            ),
+                            None => did_you_mean(s, self.steps.iter().map(String::as_str)),
+                        };
                         return Err(
                             self.err(a, format!("unknown step `{s}` in `active` (POU {}){hint}", self.sim.pou_name()))
                         );
@@ -1062,6 +1078,16 @@ impl<'a> Binder<'a> {
         }
         Ok(out)
     }
+}
+
+/// A qualified step name without its next-to-last part (`Lift.ACT_Load.Gripping` →
+/// `Lift.Gripping`): the spelling of a step of an action's chart through its instance.
+fn without_action(step: &str) -> Option<String> {
+    let (rest, leaf) = step.rsplit_once('.')?;
+    Some(match rest.rsplit_once('.') {
+        Some((path, _action)) => format!("{path}.{leaf}"),
+        None => leaf.to_string(),
+    })
 }
 
 /// Loads a scenario file: parses it, reads and checks its chart, binds names and values.
