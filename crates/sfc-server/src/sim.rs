@@ -137,14 +137,11 @@ fn element_map(doc: &EditorDoc, sim: &Simulation) -> Value {
     Value::Object(map)
 }
 
-/// The profile of a simulation of the chart opened from `path` and why, as the answer's
-/// `profile`: `{"name":"codesys","source":"vendor","vendor":"TwinCAT","file":"lift.xml"}` for an export of a tool
-/// of the CODESYS family, `{"name":"iec","source":"default"}` otherwise.
-fn profile_of(s: &AppState, path: Option<&str>) -> Result<(Profile, Value), Refused> {
-    let vendor = match path {
-        Some(p) => crate::api::file_vendor(s, p).map_err(Refused::Api)?,
-        None => None,
-    };
+/// The profile of a simulation of the chart opened from `path` (whose `vendor` wrote it) and
+/// why, as the answer's `profile`:
+/// `{"name":"codesys","source":"vendor","vendor":"TwinCAT","file":"lift.xml"}` for an export of a
+/// tool of the CODESYS family, `{"name":"iec","source":"default"}` otherwise.
+fn profile_of(path: Option<&str>, vendor: Option<sfc_plcopen::Vendor>) -> (Profile, Value) {
     let (profile, source) = sfc_sim::file_profile(vendor);
     let answer = match source {
         sfc_sim::ProfileSource::Vendor(v) => {
@@ -153,7 +150,7 @@ fn profile_of(s: &AppState, path: Option<&str>) -> Result<(Profile, Value), Refu
         }
         _ => json!({"name": profile.name(), "source": "default"}),
     };
-    Ok((profile, answer))
+    (profile, answer)
 }
 
 /// Builds and starts the simulation of `req.doc`; `Err` is the answer to send instead.
@@ -194,9 +191,21 @@ fn start_simulation(state: &AppState, req: StartRequest, port: u16) -> Result<Va
     let mut diagnostics: Vec<Value> =
         written.problems.iter().map(|p| problem_json(p, &doc, &name, &written.text)).collect();
     let problems = written.problems.iter().any(|p| p.severity == sfc_diagnostics::Severity::Error);
-    let (profile, profile_answer) = profile_of(state, req.path.as_deref())?;
+    // The file the chart was opened from: its other POUs (the function blocks the chart
+    // instantiates, its globals) and its vendor, which chooses the profile.
+    let file = match req.path.as_deref() {
+        Some(p) => crate::api::file_for_simulation(state, p).map_err(Refused::Api)?,
+        None => None,
+    };
+    let (profile, profile_answer) = profile_of(req.path.as_deref(), file.as_ref().and_then(|f| f.1));
     let opts = SimOptions { period, profile };
-    let sim = match Simulation::from_source(&name, &written.text, Some(&doc.pou), opts) {
+    // The chart in its file (the document spliced in place of its POU), else on its own, whose
+    // errors are the ones shown.
+    let in_file = file.as_ref().filter(|_| !problems).and_then(|(text, _)| {
+        let spliced = sfc_doc::splice(text, &doc);
+        Simulation::from_source(&name, &spliced, Some(&doc.pou), opts).ok()
+    });
+    let sim = match in_file.map_or_else(|| Simulation::from_source(&name, &written.text, Some(&doc.pou), opts), Ok) {
         Ok(sim) if !problems => sim,
         Ok(_) => return Err(Refused::Chart(format!("the chart `{}` has errors", doc.pou), diagnostics)),
         Err((file, diags)) => {

@@ -280,7 +280,12 @@ impl Simulation {
         charts.extend(checked.action_charts);
         let prog = match Program::compile_with(&checked.unit, charts, &checked.expr_types, opts.profile) {
             Ok(p) => p,
-            Err(d) => return Err((source, d)),
+            Err(mut d) => {
+                // An action body compiled for several charts (the POU's and an action's chart)
+                // reports its error once.
+                d.dedup();
+                return Err((source, d));
+            }
         };
         let Some(top) = prog.pou(&top) else {
             let d = Diagnostic::error("SFC0321", Span::default(), format!("no POU named `{top}` to simulate"));

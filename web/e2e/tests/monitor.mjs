@@ -252,3 +252,45 @@ tests.push({
     await page.getByRole('button', { name: 'Stop simulation' }).click();
   },
 });
+
+tests.push({
+  name: 'the active steps of charts inside charts, on their own charts',
+  run: async (t) => {
+    // The loading station of crates/sfc-cli/tests/nested: Main runs the lift (LiftFB, an SFC
+    // body) and its action ACT_Load (written in SFC), which runs the gripper's ACT_Grip.
+    const { page } = t;
+    const errors = [];
+    page.on('pageerror', (e) => errors.push(e.message));
+    const here = path.dirname(new URL(import.meta.url).pathname);
+    const chart = path.join(t.scratch, 'machine.st');
+    fs.copyFileSync(path.join(here, '..', '..', '..', 'crates', 'sfc-cli', 'tests', 'nested', 'machine.st'), chart);
+    const s = await t.edit([chart]);
+    await page.goto(s.url);
+    await page.locator('.canvas-pane.active .djs-container').waitFor();
+    await page.locator('.tab', { hasText: 'Main' }).click();
+    await page.locator('.tab.active', { hasText: 'Main' }).waitFor();
+    await page.getByRole('button', { name: 'Start simulation' }).click();
+    await until(page, 'Idle framed green', async () => JSON.stringify(await active(page)) === '["Idle"]');
+    await writeBool(page, 'Start', true);
+    await until(page, 'Lifting framed green', async () => JSON.stringify(await active(page)) === '["Lifting"]');
+    // Every chart at a glance, with its active steps by path.
+    await page.getByRole('tab', { name: 'Mechanisms', exact: true }).click();
+    const row = (i) => page.locator(`.mon-mechanisms tr[data-instance="${i}"]`);
+    await until(page, 'the gripper holding', async () => /Lift\.Grip\.ACT_Grip\.Holding/.test(await row('Lift.Grip.ACT_Grip').textContent()));
+    await until(page, 'the lift raising', async () => /Lift\.Raise/.test(await row('Lift').textContent()));
+    // The gripper's action chart: the monitor moves to it in the gripper's tab.
+    await row('Lift.Grip.ACT_Grip').click();
+    await until(page, 'Holding framed green on ACT_Grip', async () => JSON.stringify(await active(page)) === '["Holding"]');
+    await page.locator('.mon-title', { hasText: 'GripperFB.ACT_Grip' }).waitFor();
+    await page.screenshot({ path: OUT(t, '8-action-chart') });
+    // The lift's action chart ACT_Load, and the lift's own chart.
+    await page.getByRole('tab', { name: 'Mechanisms', exact: true }).click();
+    await row('Lift.ACT_Load').click();
+    await until(page, 'Done framed green on ACT_Load', async () => JSON.stringify(await active(page)) === '["Done"]');
+    await page.getByRole('tab', { name: 'Mechanisms', exact: true }).click();
+    await row('Lift').click();
+    await until(page, 'Raise framed green on the lift', async () => JSON.stringify(await active(page)) === '["Raise"]');
+    await page.locator('.mon-title', { hasText: 'LiftFB' }).waitFor();
+    if (errors.length) throw new Error(`page errors: ${errors.join('; ')}`);
+  },
+});
