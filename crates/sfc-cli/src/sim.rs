@@ -590,6 +590,19 @@ pub fn sim(r: SimRequest) -> u8 {
             "events": events.json,
             "event_counts": events.counts.iter().map(|(k, n)| ((*k).to_string(), serde_json::json!(n))).collect::<serde_json::Map<_, _>>(),
         });
+        // The profile and who chose it: "option" (--profile), "scenario", "vendor" (the file is a
+        // CODESYS, TwinCAT or e!COCKPIT export, named in "vendor") or "default".
+        v["profile"] = scen.options.profile.name().into();
+        v["profile_source"] = match scen.profile_source {
+            sfc_sim::ProfileSource::Default => "default",
+            sfc_sim::ProfileSource::Option => "option",
+            sfc_sim::ProfileSource::Scenario => "scenario",
+            sfc_sim::ProfileSource::Vendor(_) => "vendor",
+        }
+        .into();
+        if let sfc_sim::ProfileSource::Vendor(vendor) = scen.profile_source {
+            v["vendor"] = vendor.name().into();
+        }
         if r.scenario.is_some() {
             v["scenario"] = outcome.name.clone().into();
             v["passed"] = outcome.passed().into();
