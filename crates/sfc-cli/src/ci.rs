@@ -204,7 +204,13 @@ struct Item {
 /// in the chart of the action the part before names).
 fn items(c: &Coverage) -> Vec<Item> {
     let text = std::fs::read_to_string(&c.chart).unwrap_or_default();
-    let checked = sfc_model::check_source(0, &c.chart, &text, &Default::default());
+    // A PLCopen XML chart is checked as the text it imports to; lines are the XML's.
+    let iec = sfc_driver::IecText::of(std::path::Path::new(&c.chart), &text);
+    let checked = sfc_model::check_source(0, &c.chart, &iec.text, &Default::default());
+    let line_at = |span: sfc_diagnostics::Span| match &iec.imported {
+        Some(i) => i.xml.line_col(i.map.span_to_xml(span, 0).start).line,
+        None => checked.file.line_col(span.start).line,
+    };
     let top = checked.charts.iter().position(|ch| ch.pou.eq_ignore_ascii_case(&c.pou));
     let line_of = |name: &str, step: bool| -> Option<u32> {
         let (nested, leaf) = match name.rsplit_once('.') {
@@ -227,7 +233,7 @@ fn items(c: &Coverage) -> Vec<Item> {
             } else {
                 ch.transitions.iter().find(|t| t.name.eq_ignore_ascii_case(leaf)).map(|t| t.header_span)
             }?;
-            Some(checked.file.line_col(span.start).line)
+            Some(line_at(span))
         };
         let action = name.rsplit('.').nth(1);
         let in_action = action.and_then(|a| {

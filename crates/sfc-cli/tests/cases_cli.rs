@@ -266,3 +266,25 @@ fn nested_coverage_files() {
     }
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// The coverage of a PLCopen XML chart (the CODESYS export) is located in the XML: each step at
+/// its `<step>`, each transition at its `<transition>` (was: no line, an empty lcov file).
+#[test]
+fn coverage_of_an_export_has_its_xml_lines() {
+    let dir = common::scratch("xml-coverage");
+    let out = dir.join("c.lcov");
+    let here = common::root().join("crates/sfc-cli/tests/profile");
+    let o = std::process::Command::new(env!("CARGO_BIN_EXE_sfc"))
+        .args(["test", "final_scan.scenario.toml", "--coverage", "lcov", "-o", out.to_str().unwrap()])
+        .current_dir(&here)
+        .output()
+        .unwrap();
+    assert_eq!(o.status.code(), Some(0), "{}", String::from_utf8_lossy(&o.stderr));
+    let got = std::fs::read_to_string(&out).unwrap();
+    let expected_path = here.join("final_scan.coverage.lcov");
+    if std::env::var_os("SFC_BLESS").is_some() {
+        std::fs::write(&expected_path, &got).unwrap();
+    }
+    assert_eq!(got, std::fs::read_to_string(&expected_path).unwrap());
+    let _ = std::fs::remove_dir_all(&dir);
+}
