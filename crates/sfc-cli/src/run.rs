@@ -433,12 +433,17 @@ fn start(a: &RunArgs) -> Result<(Runtime, TokenSource), String> {
         Runtime::start_atmt(model, source, opts)?
     } else {
         // The profile: `--profile`, else the rules of the tool that wrote the file (said).
-        let profile = match a.profile {
+        let profile = match a.profile.or(cfg.profile) {
             Some(p) => p,
             None => {
                 let (p, why) = sfc_sim::file_profile(iec.imported.as_ref().and_then(|i| i.vendor));
                 if let sfc_sim::ProfileSource::Vendor(v) = why {
-                    eprintln!("note: {}", sfc_sim::vendor_profile_note("running", &name, v, "--profile iec"));
+                    let instead = if a.config.is_some() {
+                        "--profile iec, or profile = \"iec\" in the configuration,"
+                    } else {
+                        "--profile iec"
+                    };
+                    eprintln!("note: {}", sfc_sim::vendor_profile_note("running", &name, v, instead));
                 }
                 p
             }

@@ -126,6 +126,18 @@ fn run_takes_the_profile_from_the_file() {
     let err = String::from_utf8_lossy(&out.stderr);
     assert_eq!(out.status.code(), Some(0), "{err}");
     assert!(!err.contains("note: running with profile"), "{err}");
+    // `profile` in a run configuration chooses too.
+    let dir = common::scratch("profile-config");
+    let config = dir.join("plant.toml");
+    let abs = common::root().join(chart);
+    std::fs::write(&config, format!("chart = {:?}\nprofile = \"iec\"\n", abs.to_str().unwrap())).unwrap();
+    let out = common::command(&["run", "--config", config.to_str().unwrap(), "--scans", "3", "--no-retain"])
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(0), "{err}");
+    assert!(!err.contains("note: running with profile"), "{err}");
+    let _ = std::fs::remove_dir_all(&dir);
     let out = common::command(&["run", chart, "--scans", "3", "--no-retain", "--profile", "cds"]).output().unwrap();
     assert_eq!(out.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&out.stderr).contains("unknown profile `cds`"));
