@@ -200,10 +200,17 @@ struct Item {
 
 /// The steps and transitions of a coverage with their lines: the chart file is read and
 /// checked again to find the declarations (nested instances `Rev.OpenKM1` by the last part,
-/// in the file's other charts).
+/// in the file's other charts; the steps of an action written in SFC, `Lift.ACT_Load.Waiting`,
+/// in the chart of the action the part before names).
 fn items(c: &Coverage) -> Vec<Item> {
     let text = std::fs::read_to_string(&c.chart).unwrap_or_default();
-    let checked = sfc_model::check_source(0, &c.chart, &text, &Default::default());
+    // A PLCopen XML chart is checked as the text it imports to; lines are the XML's.
+    let iec = sfc_driver::IecText::of(std::path::Path::new(&c.chart), &text);
+    let checked = sfc_model::check_source(0, &c.chart, &iec.text, &Default::default());
+    let line_at = |span: sfc_diagnostics::Span| match &iec.imported {
+        Some(i) => i.xml.line_col(i.map.span_to_xml(span, 0).start).line,
+        None => checked.file.line_col(span.start).line,
+    };
     let top = checked.charts.iter().position(|ch| ch.pou.eq_ignore_ascii_case(&c.pou));
     let line_of = |name: &str, step: bool| -> Option<u32> {
         let (nested, leaf) = match name.rsplit_once('.') {
@@ -220,14 +227,25 @@ fn items(c: &Coverage) -> Vec<Item> {
                 .map(|(_, ch)| ch)
                 .collect(),
         };
-        order.iter().find_map(|ch| {
+        let find = |ch: &&sfc_model::chart::Chart| {
             let span = if step {
                 ch.steps.iter().find(|s| s.name.eq_ignore_ascii_case(leaf)).map(|s| s.name_span)
             } else {
                 ch.transitions.iter().find(|t| t.name.eq_ignore_ascii_case(leaf)).map(|t| t.header_span)
             }?;
-            Some(checked.file.line_col(span.start).line)
-        })
+            Some(line_at(span))
+        };
+        let action = name.rsplit('.').nth(1);
+        let in_action = action.and_then(|a| {
+            checked
+                .action_charts
+                .iter()
+                .filter(|ch| ch.action.as_deref().is_some_and(|x| x.eq_ignore_ascii_case(a)))
+                .collect::<Vec<_>>()
+                .iter()
+                .find_map(find)
+        });
+        in_action.or_else(|| order.iter().find_map(find))
     };
     // Built on the coverage's public accessors: the names and which were never hit.
     let never_active = c.never_active();

@@ -29,6 +29,10 @@ pub struct RunArgs {
     /// Scan period (a TIME literal; default T#10ms).
     #[arg(long, value_name = "TIME")]
     pub period: Option<String>,
+    /// Whose execution rules to follow: iec, matiec, codesys or grafcet (default iec; codesys
+    /// for a CODESYS, TwinCAT or e!COCKPIT export, with a note saying so).
+    #[arg(long, value_name = "PROFILE", value_parser = parse_profile)]
+    pub profile: Option<Profile>,
     /// Stop a scan that runs longer than this (a TIME literal) and enter FAULT: outputs at
     /// their safe values until a monitor `reset`.
     #[arg(long, value_name = "TIME")]
@@ -428,7 +432,23 @@ fn start(a: &RunArgs) -> Result<(Runtime, TokenSource), String> {
         };
         Runtime::start_atmt(model, source, opts)?
     } else {
-        let sim_opts = SimOptions { period: period.as_micros() as i64, profile: Profile::Iec };
+        // The profile: `--profile`, else the rules of the tool that wrote the file (said).
+        let profile = match a.profile.or(cfg.profile) {
+            Some(p) => p,
+            None => {
+                let (p, why) = sfc_sim::file_profile(iec.imported.as_ref().and_then(|i| i.vendor));
+                if let sfc_sim::ProfileSource::Vendor(v) = why {
+                    let instead = if a.config.is_some() {
+                        "--profile iec, or profile = \"iec\" in the configuration,"
+                    } else {
+                        "--profile iec"
+                    };
+                    eprintln!("note: {}", sfc_sim::vendor_profile_note("running", &name, v, instead));
+                }
+                p
+            }
+        };
+        let sim_opts = SimOptions { period: period.as_micros() as i64, profile };
         let mut sim = Simulation::from_source(&name, text, pou, sim_opts).map_err(|(file, diags)| {
             let (file, diags) = iec.locate(file, diags);
             let mut out = render(&file, &diags);
@@ -527,4 +547,9 @@ fn supervise(rt: Runtime, a: &RunArgs, source: &TokenSource) -> u8 {
         RunState::Fault => 1,
         _ => 0,
     }
+}
+
+/// `--profile`: `iec`, `matiec`, `codesys` or `grafcet` (any case).
+pub fn parse_profile(s: &str) -> Result<Profile, String> {
+    Profile::from_name(s).ok_or_else(|| format!("unknown profile `{s}` (expected iec, matiec, codesys or grafcet)"))
 }

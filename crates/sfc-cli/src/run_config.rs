@@ -32,6 +32,8 @@ pub struct RunConfig {
     pub chart: Option<PathBuf>,
     pub pou: Option<String>,
     pub period: Option<String>,
+    /// The simulator's profile (`--profile`); without it the file's vendor chooses.
+    pub profile: Option<sfc_sim::Profile>,
     pub watchdog: Option<String>,
     pub realtime: Option<bool>,
     /// `wait` or `exit`.
@@ -154,7 +156,7 @@ const SECTIONS: &[Section] = &[
     ("opcua", &["endpoint", "allow_none", "anonymous_read", "pki_dir", "min_publish", "user"], opcua_section),
 ];
 
-const TOP_KEYS: &[&str] = &["chart", "pou", "period", "watchdog", "realtime", "on_fault"];
+const TOP_KEYS: &[&str] = &["chart", "pou", "period", "profile", "watchdog", "realtime", "on_fault"];
 
 fn modbus_section(src: &Src<'_>, t: &dyn TableLike, c: &mut RunConfig) -> R<()> {
     for (key, item) in t.iter() {
@@ -316,6 +318,12 @@ pub fn parse(text: &str, path: &Path) -> R<RunConfig> {
             "watchdog" => {
                 src.time(key, item)?;
                 c.watchdog = Some(src.string(key, item)?);
+            }
+            "profile" => {
+                let s = src.string(key, item)?;
+                c.profile = Some(sfc_sim::Profile::from_name(&s).ok_or_else(|| {
+                    src.err(item.span(), format!("unknown profile \"{s}\" (expected iec, matiec, codesys or grafcet)"))
+                })?);
             }
             "realtime" => c.realtime = Some(src.bool(key, item)?),
             "on_fault" => {

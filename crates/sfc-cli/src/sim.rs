@@ -455,6 +455,12 @@ pub fn sim(r: SimRequest) -> u8 {
     if let Some(import) = &scen.import {
         term::print_diagnostics(&import.1, std::slice::from_ref(&import.0));
     }
+    // The profile came from the file (a CODESYS, TwinCAT or e!COCKPIT export): said.
+    if let sfc_sim::ProfileSource::Vendor(v) = scen.profile_source {
+        let instead =
+            if r.scenario.is_some() { "--profile iec, or profile = \"iec\" in the scenario," } else { "--profile iec" };
+        term::note(&sfc_sim::vendor_profile_note("simulated", &scen.chart_name(), v, instead));
+    }
     // A chart that is not UTF-8 was read as Latin-1 / Windows-1252: said, as `check` says it.
     if let Ok(decoded) = sfc_driver::read_source(&scen.chart) {
         if let Some(w) = sfc_syntax::encoding::warning(0, &decoded) {
@@ -587,6 +593,19 @@ pub fn sim(r: SimRequest) -> u8 {
             "events": events.json,
             "event_counts": events.counts.iter().map(|(k, n)| ((*k).to_string(), serde_json::json!(n))).collect::<serde_json::Map<_, _>>(),
         });
+        // The profile and who chose it: "option" (--profile), "scenario", "vendor" (the file is a
+        // CODESYS, TwinCAT or e!COCKPIT export, named in "vendor") or "default".
+        v["profile"] = scen.options.profile.name().into();
+        v["profile_source"] = match scen.profile_source {
+            sfc_sim::ProfileSource::Default => "default",
+            sfc_sim::ProfileSource::Option => "option",
+            sfc_sim::ProfileSource::Scenario => "scenario",
+            sfc_sim::ProfileSource::Vendor(_) => "vendor",
+        }
+        .into();
+        if let sfc_sim::ProfileSource::Vendor(vendor) = scen.profile_source {
+            v["vendor"] = vendor.name().into();
+        }
         if r.scenario.is_some() {
             v["scenario"] = outcome.name.clone().into();
             v["passed"] = outcome.passed().into();

@@ -91,6 +91,11 @@ pub fn error(message: &str) {
     eprintln!("{}: {message}", paint(color_stderr(), "1;31", "error"));
 }
 
+/// `note: message` on stderr.
+pub fn note(message: &str) {
+    eprintln!("{}: {message}", paint(color_stderr(), "1;36", "note"));
+}
+
 /// `warning: message` on stderr.
 pub fn warning(message: &str) {
     eprintln!("{}: {message}", paint(color_stderr(), "1;33", "warning"));

@@ -134,6 +134,7 @@ pub fn test(a: TestArgs) -> u8 {
     let mut cases: Vec<TestCase> = Vec::new();
     let mut warnings_cache = HashMap::new();
     let mut imports_shown = std::collections::HashSet::new();
+    let mut vendors_shown = std::collections::HashSet::new();
     let started = Instant::now();
     let mut progress = Progress::new(files.len() as u64, "scenarios");
     let mut out = std::io::stdout().lock();
@@ -165,6 +166,15 @@ pub fn test(a: TestArgs) -> u8 {
         if let Some(import) = &s.import {
             if imports_shown.insert(std::fs::canonicalize(&s.chart).unwrap_or_else(|_| s.chart.clone())) {
                 progress.suspend(|| term::print_diagnostics(&import.1, std::slice::from_ref(&import.0)));
+            }
+        }
+        // A chart run with the profile its file's vendor chose (no `profile` in the scenario):
+        // said once per chart file.
+        if let sfc_sim::ProfileSource::Vendor(v) = s.profile_source {
+            if vendors_shown.insert(std::fs::canonicalize(&s.chart).unwrap_or_else(|_| s.chart.clone())) {
+                let note =
+                    sfc_sim::vendor_profile_note("simulated", &s.chart_name(), v, "profile = \"iec\" in the scenario");
+                progress.suspend(|| term::note(&note));
             }
         }
         let mut runtime_events: Vec<String> = Vec::new();

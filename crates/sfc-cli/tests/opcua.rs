@@ -882,3 +882,64 @@ fn an_open62541_client_as_a_user_over_sign_and_encrypt() {
     drop(run);
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// Charts inside charts two levels deep (crates/sfc-cli/tests/nested/machine.st): the lift (an
+/// SFC function block instance), the chart of its action ACT_Load and the chart of its gripper's
+/// action ACT_Grip are each a node of Main's `Chart` (SfcType, named by path) with its steps, and
+/// their X follow the run.
+#[test]
+fn nested_charts_are_nodes_with_their_steps() {
+    if !asyncua() {
+        return;
+    }
+    let dir = scratch("opcua-nested");
+    let chart = root().join("crates/sfc-cli/tests/nested/machine.st");
+    let mut run = open_run(&chart, &dir.join("pki"), &["--period", "T#10ms"]);
+    let url = opcua_url(&mut run);
+    let script = root().join("crates/sfc-cli/tests/opcua/nested_client.py");
+    let out = std::process::Command::new("python3").arg(script).arg(&url).output().expect("python3 runs");
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(out.status.success(), "the asyncua client failed:\n{stdout}\n{}", String::from_utf8_lossy(&out.stderr));
+    let r: serde_json::Value = serde_json::from_str(stdout.lines().last().unwrap_or("")).unwrap();
+    assert_eq!(
+        r["chart"],
+        serde_json::json!([
+            "Actions",
+            "ErrorCount",
+            "LastError",
+            "LastErrorCode",
+            "LastErrorStep",
+            "Lift",
+            "Lift.ACT_Load",
+            "Lift.Grip.ACT_Grip",
+            "Steps",
+            "Transitions"
+        ]),
+        "{r}"
+    );
+    assert_eq!(
+        r["steps"],
+        serde_json::json!({
+            "Main": ["Finished", "Idle", "Lifting", "Loading"],
+            "Lift": ["Home", "Raise", "Top"],
+            "Lift.ACT_Load": ["Done", "Gripping", "Waiting"],
+            "Lift.Grip.ACT_Grip": ["Closing", "Holding", "Open"]
+        }),
+        "{r}"
+    );
+    assert_eq!(
+        r["types"],
+        serde_json::json!({"Lift": "SfcType", "Lift.ACT_Load": "SfcType", "Lift.Grip.ACT_Grip": "SfcType"}),
+        "{r}"
+    );
+    assert_eq!(r["node_ids"]["Lift.Grip.ACT_Grip"], "Main/Chart/Lift.Grip.ACT_Grip", "{r}");
+    assert_eq!(r["holding_x_id"], "Main/Steps/Lift.Grip.ACT_Grip.Holding/X", "{r}");
+    assert_eq!(
+        r["active"],
+        serde_json::json!({"Lift.Raise": true, "Lift.Home": false, "Lift.ACT_Load.Done": true,
+            "Lift.Grip.ACT_Grip.Holding": true, "Lift.Grip.ACT_Grip.Open": false}),
+        "{r}"
+    );
+    drop(run);
+    let _ = std::fs::remove_dir_all(&dir);
+}

@@ -1458,8 +1458,16 @@ pub(crate) fn attr_xtext(cx: &Ctx, n: Node, name: &str) -> Option<XText> {
     Some(t)
 }
 
-/// Runs the whole import: XML text to IEC text, source map, diagnostics.
-pub(crate) fn run(file: u32, xml_text: &str) -> (String, SourceMap, Vec<Diagnostic>) {
+/// The tool of the CODESYS family that wrote the project `root` (`dialect::vendor`).
+pub(crate) fn vendor(root: Node) -> Option<crate::Vendor> {
+    dialect::vendor(root)
+}
+
+/// What [`run`] gives: IEC text, source map, diagnostics, and the tool that wrote the file.
+pub(crate) type Run = (String, SourceMap, Vec<Diagnostic>, Option<crate::Vendor>);
+
+/// Runs the whole import: XML text to IEC text, source map, diagnostics, vendor.
+pub(crate) fn run(file: u32, xml_text: &str) -> Run {
     let opts = roxmltree::ParsingOptions { allow_dtd: false, ..Default::default() };
     let doc = match roxmltree::Document::parse_with_options(xml_text, opts) {
         Ok(d) => d,
@@ -1468,10 +1476,11 @@ pub(crate) fn run(file: u32, xml_text: &str) -> (String, SourceMap, Vec<Diagnost
             let at = xml::offset_of(xml_text, pos.row, pos.col);
             let end = (at as usize + xml_text[at as usize..].chars().next().map_or(0, char::len_utf8)) as u32;
             let d = Diagnostic::new("SFC0701", Span::new(file, at, end), format!("malformed XML: {e}"));
-            return (String::new(), SourceMap::default(), vec![d]);
+            return (String::new(), SourceMap::default(), vec![d], None);
         }
     };
     let root = doc.root_element();
+    let vendor = if root.tag_name().name() == "project" { dialect::vendor(root) } else { None };
     let mut cx = Ctx {
         file,
         src: xml_text,
@@ -1522,7 +1531,7 @@ pub(crate) fn run(file: u32, xml_text: &str) -> (String, SourceMap, Vec<Diagnost
         project(&mut cx, root);
     }
     let (text, map) = cx.em.finish();
-    (text, map, cx.diags)
+    (text, map, cx.diags, vendor)
 }
 
 /// What to do with an XML file that is not a PLCopen project: the vendor formats users bring

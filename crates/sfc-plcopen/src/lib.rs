@@ -47,14 +47,56 @@ pub struct Imported {
     pub diagnostics: Vec<Diagnostic>,
     /// Where each part of `text` came from in the XML.
     pub map: SourceMap,
+    /// The tool of the CODESYS family that wrote the file (its header or CODESYS's `addData`
+    /// say so), `None` for any other (Beremiz, OpenPLC, sfc's own export of an IEC chart).
+    pub vendor: Option<Vendor>,
+}
+
+/// A tool of the CODESYS family whose PLCopen XML export sfc recognises ([`Imported::vendor`],
+/// [`vendor`]). They all run SFC by CODESYS's rules, which the simulator's `codesys` profile
+/// follows.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum Vendor {
+    /// CODESYS V3 (`productName="CODESYS"`, or only CODESYS's `addData`).
+    Codesys,
+    /// Beckhoff TwinCAT 3 (`TwinCAT PLC Control`, Beckhoff Automation).
+    TwinCat,
+    /// WAGO e!COCKPIT.
+    ECockpit,
+}
+
+impl Vendor {
+    /// The tool's name as its maker writes it.
+    pub fn name(self) -> &'static str {
+        match self {
+            Vendor::Codesys => "CODESYS",
+            Vendor::TwinCat => "TwinCAT",
+            Vendor::ECockpit => "e!COCKPIT",
+        }
+    }
+}
+
+impl std::fmt::Display for Vendor {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
+/// The tool of the CODESYS family that wrote a PLCopen XML file, without importing it (`None`
+/// for another tool's file, or text that is not a PLCopen project).
+pub fn vendor(xml: &str) -> Option<Vendor> {
+    let opts = roxmltree::ParsingOptions { allow_dtd: false, ..Default::default() };
+    let doc = roxmltree::Document::parse_with_options(xml, opts).ok()?;
+    let root = doc.root_element();
+    (root.tag_name().name() == "project").then(|| import::vendor(root)).flatten()
 }
 
 /// Imports a PLCopen XML file. `file_id` goes into the spans of the diagnostics (which point
 /// into `xml`). Never panics: malformed XML gives one located SFC0701 error and empty text.
 pub fn import(file_id: u32, name: &str, xml: &str) -> Imported {
-    let (text, map, mut diagnostics) = import::run(file_id, xml);
+    let (text, map, mut diagnostics, vendor) = import::run(file_id, xml);
     sfc_diagnostics::sort(&mut diagnostics);
-    Imported { xml: SourceFile::new(name, xml), text, diagnostics, map }
+    Imported { xml: SourceFile::new(name, xml), text, diagnostics, map, vendor }
 }
 
 /// Imports and checks a PLCopen XML file: returns the XML file, the check of the generated text,

@@ -169,6 +169,7 @@ impl AtmtModel {
         }));
         ChartInfo {
             runtime: "atmt",
+            profile: None,
             pou: self.pou.clone(),
             period: 0,
             steps: self.steps.iter().enumerate().map(|(i, s)| (s.clone(), i == 0)).collect(),

@@ -116,6 +116,9 @@ impl Section {
 pub struct ChartInfo {
     /// `sfc run` or `atmt`.
     pub runtime: &'static str,
+    /// The simulator's profile (`iec`, `codesys`, …); `None` for the ATMT adapter, which runs
+    /// no chart of its own.
+    pub profile: Option<&'static str>,
     pub pou: String,
     /// Scan period, µs (0 when the runtime does not scan on a grid: the ATMT adapter).
     pub period: i64,
@@ -808,6 +811,7 @@ mod tests {
             };
         ChartInfo {
             runtime: "sfc run",
+            profile: Some("iec"),
             pou: "P".into(),
             period: 10_000,
             steps: ["A0", "B0", "A1", "B1", "C1"].iter().map(|s| (s.to_string(), s.starts_with('A'))).collect(),

@@ -115,6 +115,11 @@ pub struct Hello {
     pub protocol: String,
     pub version: u32,
     pub runtime: String,
+    /// The simulator's profile (`iec`, `matiec`, `codesys`, `grafcet`; `docs/sim.md`,
+    /// "Profiles"); absent for the ATMT adapter.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    #[cfg_attr(test, ts(optional))]
+    pub profile: Option<String>,
     pub pou: String,
     pub period: String,
     /// False when the runtime can only be watched (no halt, step, force or set).

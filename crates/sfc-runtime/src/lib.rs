@@ -467,6 +467,7 @@ impl Runtime {
         let initial = steps.iter().enumerate().filter(|s| s.1 .1).map(|s| s.0 as u32).collect();
         let info = ChartInfo {
             runtime: "sfc run",
+            profile: Some(sim.options().profile.name()),
             pou: sim.pou_name().to_string(),
             period: sim.options().period,
             steps,

@@ -116,7 +116,7 @@ pub fn hello(
             o
         })
         .collect();
-    serde_json::json!({
+    let mut hello = serde_json::json!({
         "type": "hello",
         "protocol": "sfc-monitor",
         "version": VERSION,
@@ -133,7 +133,11 @@ pub fn hello(
         "state": state.name(),
         "fault": fault.cloned().unwrap_or(serde_json::Value::Null),
         "history": crate::board::HISTORY,
-    })
+    });
+    if let Some(p) = info.profile {
+        crate::board::put(&mut hello, "profile", serde_json::json!(p));
+    }
+    hello
 }
 
 /// The active steps in step order (the scan thread publishes them in the engine's order).

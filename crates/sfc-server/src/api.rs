@@ -120,6 +120,25 @@ fn chart_path(s: &AppState, raw: &str) -> Result<PathBuf, ApiError> {
     }
 }
 
+/// The chart file `raw` as the editor's simulations read it: its IEC text (a PLCopen XML file's
+/// imported text), which holds the other POUs a chart uses, and the tool of the CODESYS family
+/// that wrote it (a PLCopen XML export of CODESYS, TwinCAT or e!COCKPIT), which chooses the
+/// profile ([`sfc_sim::file_profile`]). `None` for a file that no longer exists.
+pub(crate) fn file_for_simulation(
+    s: &AppState,
+    raw: &str,
+) -> Result<Option<(String, Option<sfc_plcopen::Vendor>)>, ApiError> {
+    let path = chart_path(s, raw)?;
+    let Some(bytes) = read_existing(&path)? else { return Ok(None) };
+    let text = utf8(&path, bytes)?;
+    if compile::is_xml(&path, &text) {
+        let imported = sfc_plcopen::import(0, &path.display().to_string(), &text);
+        Ok(Some((imported.text, imported.vendor)))
+    } else {
+        Ok(Some((text, None)))
+    }
+}
+
 /// The file's bytes; `None` when it does not exist.
 fn read_existing(path: &Path) -> Result<Option<Vec<u8>>, ApiError> {
     match std::fs::metadata(path) {

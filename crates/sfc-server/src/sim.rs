@@ -72,6 +72,10 @@ struct StartRequest {
     /// Start halted: nothing scans until the monitor sends `continue` or `step`.
     #[serde(default)]
     halted: bool,
+    /// The file the chart was opened from: a CODESYS, TwinCAT or e!COCKPIT export runs with the
+    /// `codesys` profile, as `sfc sim` runs it.
+    #[serde(default)]
+    path: Option<String>,
 }
 
 #[derive(Deserialize)]
@@ -133,8 +137,25 @@ fn element_map(doc: &EditorDoc, sim: &Simulation) -> Value {
     Value::Object(map)
 }
 
+/// The profile of a simulation of the chart opened from `path` (whose `vendor` wrote it) and
+/// why, as the answer's `profile`:
+/// `{"name":"codesys","source":"vendor","vendor":"TwinCAT","file":"lift.xml"}` for an export of a
+/// tool of the CODESYS family, `{"name":"iec","source":"default"}` otherwise.
+fn profile_of(path: Option<&str>, vendor: Option<sfc_plcopen::Vendor>) -> (Profile, Value) {
+    let (profile, source) = sfc_sim::file_profile(vendor);
+    let answer = match source {
+        sfc_sim::ProfileSource::Vendor(v) => {
+            let file = path.map(|p| std::path::Path::new(p).file_name().map_or(p.into(), |f| f.to_string_lossy()));
+            json!({"name": profile.name(), "source": "vendor", "vendor": v.name(), "file": file})
+        }
+        _ => json!({"name": profile.name(), "source": "default"}),
+    };
+    (profile, answer)
+}
+
 /// Builds and starts the simulation of `req.doc`; `Err` is the answer to send instead.
-fn start_simulation(sims: &Simulations, req: StartRequest, port: u16) -> Result<Value, Refused> {
+fn start_simulation(state: &AppState, req: StartRequest, port: u16) -> Result<Value, Refused> {
+    let sims = &state.0.sims;
     let period = match &req.period {
         None => 10_000,
         Some(p) => match sfc_sim::parse_time(p) {
@@ -170,8 +191,21 @@ fn start_simulation(sims: &Simulations, req: StartRequest, port: u16) -> Result<
     let mut diagnostics: Vec<Value> =
         written.problems.iter().map(|p| problem_json(p, &doc, &name, &written.text)).collect();
     let problems = written.problems.iter().any(|p| p.severity == sfc_diagnostics::Severity::Error);
-    let opts = SimOptions { period, profile: Profile::Iec };
-    let sim = match Simulation::from_source(&name, &written.text, Some(&doc.pou), opts) {
+    // The file the chart was opened from: its other POUs (the function blocks the chart
+    // instantiates, its globals) and its vendor, which chooses the profile.
+    let file = match req.path.as_deref() {
+        Some(p) => crate::api::file_for_simulation(state, p).map_err(Refused::Api)?,
+        None => None,
+    };
+    let (profile, profile_answer) = profile_of(req.path.as_deref(), file.as_ref().and_then(|f| f.1));
+    let opts = SimOptions { period, profile };
+    // The chart in its file (the document spliced in place of its POU), else on its own, whose
+    // errors are the ones shown.
+    let in_file = file.as_ref().filter(|_| !problems).and_then(|(text, _)| {
+        let spliced = sfc_doc::splice(text, &doc);
+        Simulation::from_source(&name, &spliced, Some(&doc.pou), opts).ok()
+    });
+    let sim = match in_file.map_or_else(|| Simulation::from_source(&name, &written.text, Some(&doc.pou), opts), Ok) {
         Ok(sim) if !problems => sim,
         Ok(_) => return Err(Refused::Chart(format!("the chart `{}` has errors", doc.pou), diagnostics)),
         Err((file, diags)) => {
@@ -207,10 +241,16 @@ fn start_simulation(sims: &Simulations, req: StartRequest, port: u16) -> Result<
         return Err(too_many());
     }
     running.insert(id, rt);
-    Ok(json!({"id": id, "url": url, "period": sfc_sim::format_time(period), "elements": elements}))
+    Ok(json!({
+        "id": id,
+        "url": url,
+        "period": sfc_sim::format_time(period),
+        "elements": elements,
+        "profile": profile_answer,
+    }))
 }
 
-/// `POST /api/sim/start {"doc","period"?,"halted"?}` → `{"id","url","period","elements"}`.
+/// `POST /api/sim/start {"doc","period"?,"halted"?,"path"?}` → `{"id","url","period","elements","profile"}`.
 pub async fn start(State(s): State<AppState>, body: Result<Bytes, BytesRejection>) -> Response {
     let req: StartRequest = match parse(body) {
         Ok(r) => r,
@@ -218,7 +258,7 @@ pub async fn start(State(s): State<AppState>, body: Result<Bytes, BytesRejection
     };
     let state = s.clone();
     let port = state.port();
-    match tokio::task::spawn_blocking(move || start_simulation(&state.0.sims, req, port)).await {
+    match tokio::task::spawn_blocking(move || start_simulation(&state, req, port)).await {
         Ok(Ok(v)) => Json(v).into_response(),
         Ok(Err(r)) => r.into_response(),
         Err(_) => {

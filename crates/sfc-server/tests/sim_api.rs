@@ -198,3 +198,58 @@ async fn a_runaway_simulation_faults_at_its_loop_and_stops() {
     assert_eq!(a.status.as_u16(), 200, "{}", a.text);
     while next(&mut ws).await.is_some() {}
 }
+
+/// A chart opened from a TwinCAT export runs with profile codesys, and the answer says why; a
+/// chart of an IEC text file (or without a file) with iec. The runtime's `hello` names it too.
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn the_profile_comes_from_the_file() {
+    let dir = std::fs::canonicalize(Path::new(env!("CARGO_MANIFEST_DIR")).join("../sfc-cli/tests/profile")).unwrap();
+    let twincat = dir.join("final_scan.twincat.xml");
+    let s = state(&[dir.as_path()], None);
+    let a = post(&s, "/api/open", &json!({ "path": twincat.to_str().unwrap() })).await;
+    assert_eq!(a.status, 200, "{}", a.text);
+    let doc = a.body["charts"][0].clone();
+    let a = post(&s, "/api/sim/start", &json!({ "doc": doc, "halted": true, "path": twincat.to_str().unwrap() })).await;
+    assert_eq!(a.status, 200, "{}", a.text);
+    assert_eq!(
+        a.body["profile"],
+        json!({"name": "codesys", "source": "vendor", "vendor": "TwinCAT", "file": "final_scan.twincat.xml"})
+    );
+    let (mut ws, _) = tokio_tungstenite::connect_async(a.body["url"].as_str().unwrap()).await.unwrap();
+    assert_eq!(next(&mut ws).await.unwrap()["profile"], "codesys");
+    let id = a.body["id"].clone();
+    assert_eq!(post(&s, "/api/sim/stop", &json!({ "id": id })).await.status, 200);
+    // The same chart without its file (a new tab): iec.
+    let a = post(&s, "/api/sim/start", &json!({ "doc": doc, "halted": true })).await;
+    assert_eq!(a.status, 200, "{}", a.text);
+    assert_eq!(a.body["profile"], json!({"name": "iec", "source": "default"}));
+    let id = a.body["id"].clone();
+    assert_eq!(post(&s, "/api/sim/stop", &json!({ "id": id })).await.status, 200);
+    // A file the editor may not read is refused, as opening it would be.
+    let a = post(&s, "/api/sim/start", &json!({ "doc": doc, "path": "/etc/passwd" })).await;
+    assert_eq!(a.status, 403, "{}", a.text);
+}
+
+/// A chart that instantiates function blocks of its file (crates/sfc-cli/tests/nested: Main runs
+/// the lift, whose action charts run the gripper's) is simulated in its file when the page names
+/// it; alone, its document does not know those blocks (422).
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn a_chart_runs_with_the_blocks_of_its_file() {
+    let dir = std::fs::canonicalize(Path::new(env!("CARGO_MANIFEST_DIR")).join("../sfc-cli/tests/nested")).unwrap();
+    let file = dir.join("machine.st");
+    let s = state(&[dir.as_path()], None);
+    let a = post(&s, "/api/open", &json!({ "path": file.to_str().unwrap() })).await;
+    assert_eq!(a.status, 200, "{}", a.text);
+    let main = a.body["charts"].as_array().unwrap().iter().find(|c| c["pou"] == "Main").cloned().unwrap();
+    let a = post(&s, "/api/sim/start", &json!({ "doc": main, "halted": true })).await;
+    assert_eq!(a.status, 422, "{}", a.text);
+    let a = post(&s, "/api/sim/start", &json!({ "doc": main, "halted": true, "path": file.to_str().unwrap() })).await;
+    assert_eq!(a.status, 200, "{}", a.text);
+    assert_eq!(a.body["profile"]["name"], "iec");
+    let (mut ws, _) = tokio_tungstenite::connect_async(a.body["url"].as_str().unwrap()).await.unwrap();
+    let hello = next(&mut ws).await.unwrap();
+    let steps: Vec<&str> = hello["steps"].as_array().unwrap().iter().map(|s| s["name"].as_str().unwrap()).collect();
+    assert!(steps.contains(&"Lift.Grip.ACT_Grip.Holding"), "{steps:?}");
+    let id = a.body["id"].clone();
+    assert_eq!(post(&s, "/api/sim/stop", &json!({ "id": id })).await.status, 200);
+}

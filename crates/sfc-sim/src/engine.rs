@@ -219,7 +219,7 @@ fn chart_states(prog: &Program, instances: Vec<crate::code::ChartInstance>, mem:
         };
         let plan = code.plan_arc().clone();
         mem[inst.frame + code.chart_slot as usize] = Value::Int(i as i64);
-        charts.push(ChartState::new(inst.pou, plan, inst.frame, inst.path));
+        charts.push(ChartState::new(inst.pou, plan, inst.frame, inst.path, code.chart.action.as_deref()));
     }
     charts
 }
@@ -281,7 +281,12 @@ impl Simulation {
         charts.extend(checked.action_charts);
         let prog = match Program::compile_with(&checked.unit, charts, &checked.expr_types, opts.profile) {
             Ok(p) => p,
-            Err(d) => return Err((source, d)),
+            Err(mut d) => {
+                // An action body compiled for several charts (the POU's and an action's chart)
+                // reports its error once.
+                d.dedup();
+                return Err((source, d));
+            }
         };
         let Some(top) = prog.pou(&top) else {
             let d = Diagnostic::error("SFC0321", Span::default(), format!("no POU named `{top}` to simulate"));
@@ -682,7 +687,7 @@ impl Simulation {
     /// Reads a variable, `Step.X`, `Step.T`, `Action.Q`, `Action.A`, also inside nested
     /// instances (`Rev.Busy`, `Rev.OpenKM1.X`). Case-insensitive.
     pub fn get(&self, name: &str) -> Option<Value> {
-        let (slot, _) = self.prog.resolve(self.top, self.top_frame, name)?;
+        let (slot, _) = self.resolve_name(name)?;
         if let Some(v) = self.current_step_of(name).or_else(|| self.unmirrored_step_value(slot)) {
             return Some(v);
         }
@@ -735,7 +740,33 @@ impl Simulation {
     }
     /// The type of what [`Simulation::get`] reads.
     pub fn type_of(&self, name: &str) -> Option<Type> {
-        self.prog.resolve(self.top, self.top_frame, name).map(|(_, t)| t)
+        self.resolve_name(name).map(|(_, t)| t)
+    }
+
+    /// A name as the top POU's code resolves it, or the `X`/`T` of a step named as traces name
+    /// it: a step of the chart of an action written in SFC carries the action's name
+    /// (`Lift.ACT_Load.Gripping.X`, where the POU's code reads `Lift.Gripping.X`).
+    fn resolve_name(&self, name: &str) -> Option<(usize, Type)> {
+        self.prog.resolve(self.top, self.top_frame, name).or_else(|| self.step_flag(name))
+    }
+
+    /// The slot and type of `Path.Step.X` / `Path.Step.T`, `Path` a chart instance's path as
+    /// [`Simulation::step_names`] qualifies its steps.
+    fn step_flag(&self, name: &str) -> Option<(usize, Type)> {
+        let (base, member) = name.trim().rsplit_once('.')?;
+        let x = member.eq_ignore_ascii_case("X");
+        if !x && !member.eq_ignore_ascii_case("T") {
+            return None;
+        }
+        let (path, leaf) = base.rsplit_once('.').unwrap_or(("", base));
+        self.charts.iter().find_map(|c| {
+            if !c.path.eq_ignore_ascii_case(path) {
+                return None;
+            }
+            let s = c.plan.step_names.iter().position(|n| n.eq_ignore_ascii_case(leaf))?;
+            let (xs, ts) = *c.slots.get(s)?;
+            Some(if x { (xs as usize, Type::Bool) } else { (ts as usize, Type::Time) })
+        })
     }
 
     /// Active steps now, sorted by code points (nested instances as `Path.Step`).

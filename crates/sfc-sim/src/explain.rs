@@ -419,7 +419,8 @@ pub(crate) fn report(view: View<'_>, chart: usize, s: u32) -> StepReport {
             Condition::St(e) => {
                 let mut atoms = Atoms {
                     view: &view,
-                    path: &st.path,
+                    // The variables of an action's chart are its instance's.
+                    path: &st.var_path,
                     texts: Vec::new(),
                     values: Vec::new(),
                     operands: Vec::new(),

@@ -52,6 +52,49 @@ impl Profile {
     }
 }
 
+/// Where the profile of a run came from, so that a command can say why it runs with it.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum ProfileSource {
+    /// Nobody chose one and the file says nothing: `iec`.
+    #[default]
+    Default,
+    /// The command line (`--profile`), or the caller's own setting.
+    Option,
+    /// `profile =` in the scenario.
+    Scenario,
+    /// The chart file is an export of a tool of the CODESYS family, which runs SFC by
+    /// CODESYS's rules ([`file_profile`]).
+    Vendor(sfc_plcopen::Vendor),
+}
+
+/// The profile a chart file runs with when neither the command line nor a scenario names one:
+/// the rules of the tool that wrote it. A PLCopen XML export of CODESYS, TwinCAT or e!COCKPIT
+/// ([`sfc_plcopen::Imported::vendor`]) runs with `codesys`; any other file (IEC text, Beremiz,
+/// OpenPLC) with `iec`. `sfc sim`, `sfc test`, `sfc run` and the editor's simulations choose
+/// through this one function.
+pub fn file_profile(vendor: Option<sfc_plcopen::Vendor>) -> (Profile, ProfileSource) {
+    match vendor {
+        Some(v) => (Profile::Codesys, ProfileSource::Vendor(v)),
+        None => (Profile::Iec, ProfileSource::Default),
+    }
+}
+
+/// The text of the note (`note: …`) a command prints when it runs a chart with the profile its file's vendor chose
+/// ([`ProfileSource::Vendor`]): `doing` is what it did (`simulated`, `running`), `file` the chart
+/// file as shown, `instead` how to choose IEC 61131-3's rules instead (`--profile iec`).
+/// `simulated with profile codesys: lift.xml is a TwinCAT export, and TwinCAT runs SFC by
+/// CODESYS's rules (--profile iec to use IEC 61131-3's)`.
+pub fn vendor_profile_note(doing: &str, file: &str, vendor: sfc_plcopen::Vendor, instead: &str) -> String {
+    let why = match vendor {
+        sfc_plcopen::Vendor::Codesys => format!("{file} is a CODESYS export ({instead} to use IEC 61131-3's rules)"),
+        v => {
+            let a = if v.name().starts_with(['a', 'e', 'i', 'o', 'u', 'A', 'E', 'I', 'O', 'U']) { "an" } else { "a" };
+            format!("{file} is {a} {v} export, and {v} runs SFC by CODESYS's rules ({instead} to use IEC 61131-3's)")
+        }
+    };
+    format!("{doing} with profile codesys: {why}")
+}
+
 /// How to simulate.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct SimOptions {

@@ -25,7 +25,10 @@
 use crate::condition::Condition;
 use crate::coverage::Coverage;
 use crate::trace::{value_text, TraceHeader, TraceSink};
-use crate::{format_time, parse_time, Profile, RuntimeError, ScanRecord, SimOptions, Simulation, Value};
+use crate::{
+    file_profile, format_time, parse_time, Profile, ProfileSource, RuntimeError, ScanRecord, SimOptions, Simulation,
+    Value,
+};
 use sfc_diagnostics::{render_human, Diagnostic, RenderOptions, SourceFile};
 use sfc_st::Type;
 use std::fmt;
@@ -216,6 +219,10 @@ pub struct Scenario {
     /// The simulated POU, as declared.
     pub pou: String,
     pub options: SimOptions,
+    /// Who chose `options.profile`: the command line, the scenario, the tool that wrote the
+    /// chart file (a CODESYS, TwinCAT or e!COCKPIT export runs with `codesys`,
+    /// [`crate::file_profile`]), or nobody (`iec`). A command says so when it was the file.
+    pub profile_source: ProfileSource,
     pub length: RunLength,
     /// In time order.
     pub entries: Vec<Entry>,
@@ -937,8 +944,19 @@ impl<'a> Binder<'a> {
         for s in &steps {
             names.push(format!("{s}.X"));
             names.push(format!("{s}.T"));
+            // A step of an action's chart is also read through its instance, as the POU's
+            // code reads it (`Lift.Gripping.X` for `Lift.ACT_Load.Gripping`).
+            if let Some(short) = without_action(s).filter(|a| sim.type_of(&format!("{a}.X")).is_some()) {
+                names.push(format!("{short}.X"));
+                names.push(format!("{short}.T"));
+            }
         }
         Binder { sim, file, chart, steps, names }
+    }
+    /// The step whose name without its action's is `name` (`Lift.ACT_Load.Gripping` for
+    /// `Lift.Gripping`): how `active` names the steps of an action's chart.
+    fn step_of_action(&self, name: &str) -> Option<&str> {
+        self.steps.iter().find(|s| without_action(s).is_some_and(|a| a.eq_ignore_ascii_case(name))).map(String::as_str)
     }
     fn err(&self, a: &RawAssign, message: String) -> ScenarioError {
         let mut e = ScenarioError::new(ErrorKind::Invalid, Some(self.file.to_string()), message);
@@ -1021,7 +1039,12 @@ impl<'a> Binder<'a> {
                 match self.step(s) {
                     Some(step) => steps.push(step.to_string()),
                     None => {
-                        let hint = did_you_mean(s, self.steps.iter().map(String::as_str));
+                        let hint = match self.step_of_action(s) {
+                            Some(full) => format!(
+                                "; did you mean `{full}`? (`active` names the steps of an action's chart with the action, as traces do)"
+                            ),
+                            None => did_you_mean(s, self.steps.iter().map(String::as_str)),
+                        };
                         return Err(
                             self.err(a, format!("unknown step `{s}` in `active` (POU {}){hint}", self.sim.pou_name()))
                         );
@@ -1055,6 +1078,16 @@ impl<'a> Binder<'a> {
         }
         Ok(out)
     }
+}
+
+/// A qualified step name without its next-to-last part (`Lift.ACT_Load.Gripping` →
+/// `Lift.Gripping`): the spelling of a step of an action's chart through its instance.
+fn without_action(step: &str) -> Option<String> {
+    let (rest, leaf) = step.rsplit_once('.')?;
+    Some(match rest.rsplit_once('.') {
+        Some((path, _action)) => format!("{path}.{leaf}"),
+        None => leaf.to_string(),
+    })
 }
 
 /// Loads a scenario file: parses it, reads and checks its chart, binds names and values.
@@ -1158,10 +1191,12 @@ fn load_parts(path: &Path, text: &str, o: &Overrides, given_chart: Option<&str>)
             _ => e,
         })?,
     };
-    let options = SimOptions {
-        period: o.period.or(parsed.period).unwrap_or(DEFAULT_PERIOD),
-        profile: o.profile.or(parsed.profile).unwrap_or_default(),
+    let (profile, profile_source) = match (o.profile, parsed.profile) {
+        (Some(p), _) => (p, ProfileSource::Option),
+        (None, Some(p)) => (p, ProfileSource::Scenario),
+        (None, None) => file_profile(imported.as_ref().and_then(|i| i.vendor)),
     };
+    let options = SimOptions { period: o.period.or(parsed.period).unwrap_or(DEFAULT_PERIOD), profile };
     let pou = o.pou.clone().or_else(|| parsed.pou.as_ref().map(|p| p.0.clone()));
     let chart_name = chart.display().to_string();
     let sim = compile_located(&chart_name, &chart_text, imported.as_ref(), pou.as_deref(), options).map_err(|e| {
@@ -1191,6 +1226,7 @@ fn load_parts(path: &Path, text: &str, o: &Overrides, given_chart: Option<&str>)
         scenario_chart,
         pou: sim.pou_name().to_string(),
         options,
+        profile_source,
         length: o.length.or(parsed.length).unwrap_or(RunLength::LastEntry),
         entries,
         forbid: parsed.forbid.iter().filter_map(|(n, _, _)| EventKind::from_name(n)).collect(),
@@ -1234,7 +1270,11 @@ pub fn for_chart(chart: &Path, o: &Overrides) -> Result<Scenario, ScenarioError>
     let chart = clean(chart);
     let chart_name = chart.display().to_string();
     let (chart_text, imported) = read_chart(&chart)?;
-    let options = SimOptions { period: o.period.unwrap_or(DEFAULT_PERIOD), profile: o.profile.unwrap_or_default() };
+    let (profile, profile_source) = match o.profile {
+        Some(p) => (p, ProfileSource::Option),
+        None => file_profile(imported.as_ref().and_then(|i| i.vendor)),
+    };
+    let options = SimOptions { period: o.period.unwrap_or(DEFAULT_PERIOD), profile };
     let sim = compile_located(&chart_name, &chart_text, imported.as_ref(), o.pou.as_deref(), options)
         .map_err(pou_choice_is_usage)?;
     let entries = command_line_sets(&sim, o)?.into_iter().collect();
@@ -1245,6 +1285,7 @@ pub fn for_chart(chart: &Path, o: &Overrides) -> Result<Scenario, ScenarioError>
         scenario_chart: None,
         pou: sim.pou_name().to_string(),
         options,
+        profile_source,
         length: o.length.unwrap_or(RunLength::Scans(DEFAULT_SCANS)),
         entries,
         forbid: Vec::new(),

@@ -3,6 +3,7 @@
 // menu and hit (orange frame, halted), the condition analysis of the halted step, stepping back
 // through the buffered states, an input forced, Continue, and the chart moving on. Real mouse and
 // keyboard; screenshots of each state in e2e/out/monitor-*.png.
+import fs from 'node:fs';
 import path from 'node:path';
 import { until as untilWithin } from '../helpers.mjs';
 
@@ -204,5 +205,92 @@ tests.push({
     await page.locator('.mon-banner').waitFor();
     await page.getByRole('button', { name: 'Detach' }).click();
     await until(page, 'the monitor to close', async () => (await page.locator('.mon-overlay').count()) === 0);
+  },
+});
+
+tests.push({
+  name: 'the monitor shows the profile it simulates with, and why',
+  run: async (t) => {
+    const { page } = t;
+    // A TwinCAT export (crates/sfc-cli/tests/profile): simulated by CODESYS's rules.
+    const here = path.dirname(new URL(import.meta.url).pathname);
+    const xml = path.join(t.scratch, 'final_scan.twincat.xml');
+    fs.copyFileSync(path.join(here, '..', '..', '..', 'crates', 'sfc-cli', 'tests', 'profile', 'final_scan.twincat.xml'), xml);
+    const s = await t.edit([xml]);
+    await page.goto(s.url);
+    await page.locator('.canvas-pane.active .djs-container').waitFor();
+    await page.getByRole('button', { name: 'Start simulation' }).click();
+    await page.locator('.mon-overlay').waitFor();
+    const badge = page.getByTestId('monitor-profile');
+    await until(page, 'the profile badge', async () => (await badge.textContent()) === 'Profile: codesys');
+    const why = await badge.getAttribute('title');
+    if (!why.includes('final_scan.twincat.xml, a TwinCAT export') || !why.includes('--profile iec')) throw new Error(`the badge does not say why: ${why}`);
+    for (const [lang, label] of [
+      ['cs', 'Profil: codesys'],
+      ['de', 'Profil: codesys'],
+    ]) {
+      await page.locator('.status-lang select').selectOption(lang);
+      await until(page, `the ${lang} profile badge`, async () => (await badge.textContent()) === label && (await badge.getAttribute('title')) !== why);
+      const h = await page.locator('.mon-toolbar').evaluate((e) => e.getBoundingClientRect().height);
+      if (h > 44) throw new Error(`the ${lang} monitor toolbar wraps (${h} px high)`);
+    }
+    await page.locator('.status-lang select').selectOption('en');
+    await page.screenshot({ path: OUT(t, '7-profile') });
+    await page.getByRole('button', { name: 'Stop simulation' }).click();
+    await until(page, 'the monitor to close', async () => (await page.locator('.mon-overlay').count()) === 0);
+    await s.stop();
+
+    // An IEC text file: iec, because it is no export of the CODESYS family.
+    const chart = path.join(t.scratch, 'examples', 'carwash', 'carwash.st');
+    const s2 = await t.edit([chart]);
+    await page.goto(s2.url);
+    await page.locator('.canvas-pane.active .djs-container').waitFor();
+    await page.getByRole('button', { name: 'Start simulation' }).click();
+    await until(page, 'the iec badge', async () => (await page.getByTestId('monitor-profile').textContent()) === 'Profile: iec');
+    const title = await page.getByTestId('monitor-profile').getAttribute('title');
+    if (!title.includes("IEC 61131-3's rules")) throw new Error(`the iec badge says: ${title}`);
+    await page.getByRole('button', { name: 'Stop simulation' }).click();
+  },
+});
+
+tests.push({
+  name: 'the active steps of charts inside charts, on their own charts',
+  run: async (t) => {
+    // The loading station of crates/sfc-cli/tests/nested: Main runs the lift (LiftFB, an SFC
+    // body) and its action ACT_Load (written in SFC), which runs the gripper's ACT_Grip.
+    const { page } = t;
+    const errors = [];
+    page.on('pageerror', (e) => errors.push(e.message));
+    const here = path.dirname(new URL(import.meta.url).pathname);
+    const chart = path.join(t.scratch, 'machine.st');
+    fs.copyFileSync(path.join(here, '..', '..', '..', 'crates', 'sfc-cli', 'tests', 'nested', 'machine.st'), chart);
+    const s = await t.edit([chart]);
+    await page.goto(s.url);
+    await page.locator('.canvas-pane.active .djs-container').waitFor();
+    await page.locator('.tab', { hasText: 'Main' }).click();
+    await page.locator('.tab.active', { hasText: 'Main' }).waitFor();
+    await page.getByRole('button', { name: 'Start simulation' }).click();
+    await until(page, 'Idle framed green', async () => JSON.stringify(await active(page)) === '["Idle"]');
+    await writeBool(page, 'Start', true);
+    await until(page, 'Lifting framed green', async () => JSON.stringify(await active(page)) === '["Lifting"]');
+    // Every chart at a glance, with its active steps by path.
+    await page.getByRole('tab', { name: 'Mechanisms', exact: true }).click();
+    const row = (i) => page.locator(`.mon-mechanisms tr[data-instance="${i}"]`);
+    await until(page, 'the gripper holding', async () => /Lift\.Grip\.ACT_Grip\.Holding/.test(await row('Lift.Grip.ACT_Grip').textContent()));
+    await until(page, 'the lift raising', async () => /Lift\.Raise/.test(await row('Lift').textContent()));
+    // The gripper's action chart: the monitor moves to it in the gripper's tab.
+    await row('Lift.Grip.ACT_Grip').click();
+    await until(page, 'Holding framed green on ACT_Grip', async () => JSON.stringify(await active(page)) === '["Holding"]');
+    await page.locator('.mon-title', { hasText: 'GripperFB.ACT_Grip' }).waitFor();
+    await page.screenshot({ path: OUT(t, '8-action-chart') });
+    // The lift's action chart ACT_Load, and the lift's own chart.
+    await page.getByRole('tab', { name: 'Mechanisms', exact: true }).click();
+    await row('Lift.ACT_Load').click();
+    await until(page, 'Done framed green on ACT_Load', async () => JSON.stringify(await active(page)) === '["Done"]');
+    await page.getByRole('tab', { name: 'Mechanisms', exact: true }).click();
+    await row('Lift').click();
+    await until(page, 'Raise framed green on the lift', async () => JSON.stringify(await active(page)) === '["Raise"]');
+    await page.locator('.mon-title', { hasText: 'LiftFB' }).waitFor();
+    if (errors.length) throw new Error(`page errors: ${errors.join('; ')}`);
   },
 });

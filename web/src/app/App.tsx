@@ -124,16 +124,24 @@ export function App({ api, createCanvas }: AppProps) {
     createCanvas,
     current: () => {
       const d = tab ? docOf(tab.id) : null;
-      return d && tab ? { doc: d, title: tabTitle(tab).replace(/\*$/, '') } : null;
+      return d && tab ? { doc: d, title: tabTitle(tab).replace(/\*$/, ''), path: tab.path } : null;
     },
     hasChart: !!canvas && !!tab,
-    // A mechanism of another chart: its open tab becomes the one shown (and monitored).
+    // A mechanism of another chart: its open tab becomes the one shown (and monitored). The
+    // chart of an action written in SFC is `Pou.Action` (CODESYS's SFC action): the chart of
+    // that action in the POU's tab, named so.
     chartOf: (pou) => {
-      const x = store.tabs.find((y) => y.pou.toUpperCase() === pou.toUpperCase());
+      const dot = pou.indexOf('.');
+      const owner = dot < 0 ? pou : pou.slice(0, dot);
+      const action = dot < 0 ? null : pou.slice(dot + 1);
+      const x = store.tabs.find((y) => y.pou.toUpperCase() === owner.toUpperCase());
       const d = x ? docOf(x.id) : null;
       if (!x || !d) return null;
+      const chart = action ? actionChart(d, action) : d;
+      if (!chart) return null;
       store.activate(x.id);
-      return { doc: d, title: tabTitle(x).replace(/\*$/, '') };
+      const title = tabTitle(x).replace(/\*$/, '');
+      return action ? { doc: { ...chart, pou }, title: `${title} › ${action}` } : { doc: d, title };
     },
   });
 

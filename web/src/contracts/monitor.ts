@@ -38,7 +38,12 @@ scanUs?: number, watchdogUs?: number,
  */
 step?: string, steps?: Array<string>, action?: string, transition?: string, line?: number, column?: number, };
 
-export type Hello = { type: "hello", protocol: string, version: number, runtime: string, pou: string, period: string, 
+export type Hello = { type: "hello", protocol: string, version: number, runtime: string, 
+/**
+ * The simulator's profile (`iec`, `matiec`, `codesys`, `grafcet`; `docs/sim.md`,
+ * "Profiles"); absent for the ATMT adapter.
+ */
+profile?: string, pou: string, period: string, 
 /**
  * False when the runtime can only be watched (no halt, step, force or set).
  */

@@ -289,6 +289,20 @@ export function MonitorView({ target, createCanvas, onLeave, socket, onOpenChart
         ? { cls: 'paused', text: t('monitor.state.paused') }
         : { cls: 'running', text: t('monitor.state.running') };
 
+  // The profile the chart runs with, and why: the editor's simulation says (the file's vendor);
+  // an attached runtime names it in `hello`.
+  const profile: { name: string; why: string } | null = target.profile
+    ? {
+        name: target.profile.name,
+        why:
+          target.profile.source === 'vendor'
+            ? t('monitor.profile.vendor', { file: target.profile.file ?? target.title, vendor: target.profile.vendor ?? '' })
+            : t('monitor.profile.default'),
+      }
+    : client.info?.profile
+      ? { name: client.info.profile, why: t('monitor.profile.runtime', { profile: client.info.profile }) }
+      : null;
+
   return (
     <div class="mon-overlay" role="region" aria-label={t('monitor.title')}>
       <div class="mon-toolbar" role="toolbar" aria-label={t('monitor.toolbar')}>
@@ -302,6 +316,11 @@ export function MonitorView({ target, createCanvas, onLeave, socket, onOpenChart
         <span class={`mon-badge mon-${stateBadge.cls}`} role="status" data-testid="monitor-state" title={faulted ? client.fault?.message : undefined}>
           {stateBadge.text}
         </span>
+        {profile && (
+          <span class="mon-profile" data-testid="monitor-profile" title={profile.why} aria-description={profile.why}>
+            {t('monitor.profile.label', { profile: profile.name })}
+          </span>
+        )}
         <span class="tool-separator" />
         {faulted ? (
           <MonButton icon="run" label={t('monitor.reset')} title={t('monitor.resetTip')} disabled={!control} onClick={() => report(client.reset('warm'))} primary={control} />

@@ -22,7 +22,7 @@ export interface UseMonitorOptions {
   createCanvas: CreateCanvas;
   /** The open chart and its tab title, or null when no chart is open (called when monitoring
    *  starts: it copies the whole document). */
-  current: () => { doc: EditorDoc; title: string } | null;
+  current: () => { doc: EditorDoc; title: string; path?: string | null } | null;
   /** A chart is open (read on every render, so cheap). */
   hasChart: boolean;
   /** The open chart of POU `pou`, made the active tab; null when no tab shows it. */
@@ -84,8 +84,8 @@ export function useMonitor(opts: UseMonitorOptions): MonitorUi {
     setStarting(true);
     try {
       const doc = structuredClone(open.doc);
-      const r = await startSimulation(doc);
-      setTarget({ url: r.url, doc, elements: r.elements, simId: r.id, title: open.title });
+      const r = await startSimulation(doc, { path: open.path });
+      setTarget({ url: r.url, doc, elements: r.elements, simId: r.id, title: open.title, profile: r.profile });
     } catch (e) {
       const err = e as SimError;
       const first = (err.diagnostics?.[0] as { message?: string } | undefined)?.message;
@@ -102,8 +102,8 @@ export function useMonitor(opts: UseMonitorOptions): MonitorUi {
     setStarting(true);
     try {
       const doc = structuredClone(open.doc);
-      const r = await startSimulation(doc, { period: w.period, halted: true });
-      setTarget({ url: r.url, doc, elements: r.elements, simId: r.id, title: open.title, replay: w });
+      const r = await startSimulation(doc, { period: w.period, halted: true, path: open.path });
+      setTarget({ url: r.url, doc, elements: r.elements, simId: r.id, title: open.title, replay: w, profile: r.profile });
     } catch (e) {
       toasts.show('error', t('monitor.replayFailed', { message: (e as Error).message }));
     } finally {
@@ -117,7 +117,7 @@ export function useMonitor(opts: UseMonitorOptions): MonitorUi {
     const c = opts.chartOf?.(pou);
     if (!was || !c) return false;
     const doc = structuredClone(c.doc);
-    setTarget({ url: was.url, doc, elements: elementsByName(doc), simId: was.simId, title: c.title, instance });
+    setTarget({ url: was.url, doc, elements: elementsByName(doc), simId: was.simId, title: c.title, instance, profile: was.profile });
     return true;
   }
 

@@ -20,6 +20,19 @@ export interface MonitorTarget {
   replay?: Replay;
   /** The SFC instance to show at once (a mechanism selected on another chart's monitor). */
   instance?: string;
+  /** The simulator's profile and why the server chose it (simulations only; an attached
+   *  runtime names its profile in `hello`). */
+  profile?: SimProfile;
+}
+
+/** The profile a simulation runs with (`POST /api/sim/start`'s `profile`): `codesys` for an
+ *  export of CODESYS, TwinCAT or e!COCKPIT (`source: 'vendor'`), else `iec`. */
+export interface SimProfile {
+  name: string;
+  source: 'vendor' | 'default';
+  vendor?: string;
+  /** The file's name (for `source: 'vendor'`). */
+  file?: string;
 }
 
 /** An answer of the server that is not 2xx: its message and, for 422, the diagnostics. */
@@ -39,6 +52,7 @@ export interface SimStart {
   url: string;
   period: string;
   elements: Record<string, string[]>;
+  profile?: SimProfile;
 }
 
 type Fetch = (input: string, init?: RequestInit) => Promise<Response>;
@@ -67,9 +81,10 @@ async function post<T>(path: string, body: unknown, doFetch: Fetch): Promise<T> 
   return data as T;
 }
 
-/** Starts the simulator on `doc`. */
-export function startSimulation(doc: EditorDoc, opts: { period?: string; halted?: boolean } = {}, doFetch: Fetch = (i, r) => fetch(i, r)): Promise<SimStart> {
-  return post<SimStart>('/api/sim/start', { doc, ...(opts.period ? { period: opts.period } : {}), halted: !!opts.halted }, doFetch);
+/** Starts the simulator on `doc`; `path`, the file it was opened from, chooses the profile
+ *  (a CODESYS, TwinCAT or e!COCKPIT export runs with `codesys`). */
+export function startSimulation(doc: EditorDoc, opts: { period?: string; halted?: boolean; path?: string | null } = {}, doFetch: Fetch = (i, r) => fetch(i, r)): Promise<SimStart> {
+  return post<SimStart>('/api/sim/start', { doc, ...(opts.period ? { period: opts.period } : {}), halted: !!opts.halted, ...(opts.path ? { path: opts.path } : {}) }, doFetch);
 }
 
 export function stopSimulation(id: number, doFetch: Fetch = (i, r) => fetch(i, r)): Promise<unknown> {

@@ -232,14 +232,34 @@ pub(super) fn codesys_names(p: Node) -> bool {
 /// Whether the project `root` was written by CODESYS or a tool built on it (TwinCAT,
 /// e!COCKPIT): its file header names one, or it holds CODESYS's `addData`.
 pub(super) fn codesys_file(root: Node) -> bool {
+    vendor(root).is_some()
+}
+
+/// Which tool of the CODESYS family wrote the project `root`, if one did: the product or company
+/// its `fileHeader` names (TwinCAT's exports say `TwinCAT PLC Control` and `Beckhoff
+/// Automation GmbH`, e!COCKPIT's `e!COCKPIT` and `WAGO`, CODESYS's `CODESYS`), or else
+/// CODESYS's `addData` (`http://www.3s-software.com/plcopenxml/...`), which every tool built on
+/// CODESYS writes.
+pub(super) fn vendor(root: Node) -> Option<crate::Vendor> {
+    use crate::Vendor;
     let header = child(root, "fileHeader")
         .map(|h| format!("{} {}", attr(h, "productName").unwrap_or(""), attr(h, "companyName").unwrap_or("")))
         .unwrap_or_default()
         .to_ascii_uppercase();
-    ["CODESYS", "TWINCAT", "E!COCKPIT", "3S-SMART", "BECKHOFF"].iter().any(|k| header.contains(k))
-        || root.descendants().any(|d| {
+    if ["TWINCAT", "BECKHOFF"].iter().any(|k| header.contains(k)) {
+        return Some(Vendor::TwinCat);
+    }
+    if header.contains("E!COCKPIT") {
+        return Some(Vendor::ECockpit);
+    }
+    if ["CODESYS", "3S-SMART"].iter().any(|k| header.contains(k)) {
+        return Some(Vendor::Codesys);
+    }
+    root.descendants()
+        .any(|d| {
             d.is_element()
                 && d.tag_name().name() == "data"
                 && attr(d, "name").is_some_and(|n| n.contains("3s-software.com"))
         })
+        .then_some(Vendor::Codesys)
 }

@@ -580,10 +580,11 @@ impl super::Simulation {
     /// A variable of instance `c` by its declared name, qualified (`Rev.ErrorCode`).
     fn instance_var(&self, c: usize, name: &str) -> String {
         let st = &self.charts[c];
-        if st.path.is_empty() {
+        // The chart of an action written in SFC reads its instance's variables.
+        if st.var_path.is_empty() {
             name.to_string()
         } else {
-            format!("{}.{name}", st.path)
+            format!("{}.{name}", st.var_path)
         }
     }
 

@@ -77,8 +77,12 @@ pub struct ChartState {
     pub pou: usize,
     /// Absolute frame base.
     pub frame: usize,
-    /// Instance path, `""` for the top POU.
+    /// Instance path, `""` for the top POU; for the chart of an action written in SFC, the
+    /// instance's path and the action's name (`Lift.ACT_Load`, `ACT_Count`).
     pub path: String,
+    /// The path of the instance whose frame holds the chart's variables: `path` itself, or for
+    /// the chart of an action written in SFC `path` without the action (`Lift`, `""`).
+    pub(crate) var_path: String,
     pub(crate) plan: Arc<ChartPlan>,
     pub(crate) started: bool,
     pub(crate) last_time: i64,
@@ -138,7 +142,18 @@ pub struct ChartState {
 }
 
 impl ChartState {
-    pub(crate) fn new(pou: usize, plan: Arc<ChartPlan>, frame: usize, path: String) -> ChartState {
+    /// `action`: the action whose chart this is, for the chart of an action written in SFC.
+    pub(crate) fn new(
+        pou: usize,
+        plan: Arc<ChartPlan>,
+        frame: usize,
+        path: String,
+        action: Option<&str>,
+    ) -> ChartState {
+        let var_path = match action.and_then(|a| path.strip_suffix(a)) {
+            Some(p) => p.strip_suffix('.').unwrap_or(p).to_string(),
+            None => path.clone(),
+        };
         let n = plan.step_names.len();
         let m = plan.entities.len();
         let nt = plan.transition_names.len();
@@ -150,6 +165,7 @@ impl ChartState {
             pou,
             frame,
             path,
+            var_path,
             started: false,
             last_time: 0,
             clock: 0,
