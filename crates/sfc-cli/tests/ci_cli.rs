@@ -796,15 +796,22 @@ fn the_readme_ci_example_runs() {
     assert!(cobertura.contains("<coverage line-rate=\"1.0000\""), "{cobertura}");
 }
 
-/// `check --profile` with a profile that has no warnings of its own says so; `matiec` adds its
-/// SFC09xx warnings, which `--deny warnings` fails on.
+/// `check --profile` with a profile that has no warnings of its own says so; `matiec` and
+/// `codesys` add their SFC09xx warnings, which `--deny warnings` fails on.
 #[test]
 fn check_profiles_are_never_silent() {
     let d = temp_dir("check-profile");
     std::fs::write(d.join("clean.st"), CLEAN).unwrap();
-    let out = sfc_in(&d, &["check", "--profile", "codesys", "clean.st"]);
-    assert_eq!(out.status.code(), Some(0));
-    assert!(text(&out.stderr).contains("`--profile codesys` adds no warnings"), "{}", text(&out.stderr));
-    let out = sfc_in(&d, &["check", "--profile", "matiec", "clean.st"]);
-    assert!(!text(&out.stderr).contains("adds no warnings"), "{}", text(&out.stderr));
+    for p in ["iec", "grafcet"] {
+        let out = sfc_in(&d, &["check", "--profile", p, "clean.st"]);
+        assert_eq!(out.status.code(), Some(0));
+        assert!(text(&out.stderr).contains(&format!("`--profile {p}` adds no warnings")), "{}", text(&out.stderr));
+    }
+    for p in ["matiec", "codesys"] {
+        let out = sfc_in(&d, &["check", "--profile", p, "clean.st"]);
+        assert!(!text(&out.stderr).contains("adds no warnings"), "{}", text(&out.stderr));
+    }
+    let out = sfc_in(&d, &["check", "--profile", "codesys", "clean.st", "--deny", "warnings"]);
+    assert_eq!(out.status.code(), Some(1), "{}", text(&out.stderr));
+    assert!(text(&out.stderr).contains("SFC0912"), "{}", text(&out.stderr));
 }
