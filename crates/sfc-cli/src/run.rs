@@ -436,7 +436,7 @@ fn start(a: &RunArgs) -> Result<(Runtime, TokenSource), String> {
         let profile = match a.profile.or(cfg.profile) {
             Some(p) => p,
             None => {
-                let (p, why) = sfc_sim::file_profile(iec.imported.as_ref().and_then(|i| i.vendor));
+                let (p, why) = sfc_sim::file_profile(sfc_sim::chart_vendor(&iec.text, iec.imported.as_ref()));
                 if let sfc_sim::ProfileSource::Vendor(v) = why {
                     let instead = if a.config.is_some() {
                         "--profile iec, or profile = \"iec\" in the configuration,"

@@ -788,3 +788,28 @@ fn check_with_the_codesys_profile_warns_of_the_differences() {
     let plain = both(&sfc(&["check", chart, "--color", "never"]));
     assert!(!plain.contains("SFC091"), "{plain}");
 }
+
+/// A CODESYS export converted to text (`sfc build X.xml --target text`) still runs by CODESYS's
+/// rules, and says so; an IEC text written by hand does not.
+#[test]
+fn text_converted_from_a_codesys_export_runs_with_codesys() {
+    let d = temp_dir("converted");
+    let st = d.join("final_scan.st");
+    let o = sfc(&[
+        "build",
+        "crates/sfc-cli/tests/profile/final_scan.codesys.xml",
+        "--target",
+        "text",
+        "-o",
+        st.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", both(&o));
+    let o = sfc(&["sim", st.to_str().unwrap(), "--scans", "2"]);
+    assert!(o.status.success(), "{}", both(&o));
+    assert!(stderr(&o).contains("was converted from a CODESYS export (--profile iec"), "{}", both(&o));
+    assert!(stdout(&o).contains("profile codesys"), "{}", both(&o));
+    let o = sfc(&["sim", st.to_str().unwrap(), "--scans", "2", "--profile", "iec"]);
+    assert!(!stderr(&o).contains("converted from"), "{}", both(&o));
+    let o = sfc(&["sim", "examples/blinker/blinker.st", "--scans", "2"]);
+    assert!(stdout(&o).contains("profile iec") && !stderr(&o).contains("note: simulated with"), "{}", both(&o));
+}

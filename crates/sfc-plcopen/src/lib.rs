@@ -91,6 +91,21 @@ pub fn vendor(xml: &str) -> Option<Vendor> {
     (root.tag_name().name() == "project").then(|| import::vendor(root)).flatten()
 }
 
+/// The tool of the CODESYS family whose export an IEC text was converted from (`sfc build X.xml
+/// --target text` keeps the export's `fileHeader` as `{attribute 'sfc.fileheader' := …}` and
+/// marks its POUs `{attribute 'sfc.dialect' := 'codesys'}`); `None` for any other text.
+pub fn text_vendor(text: &str) -> Option<Vendor> {
+    const KEY: &str = "{attribute 'sfc.fileheader' := '";
+    if let Some(start) = text.find(KEY).map(|i| i + KEY.len()) {
+        let rest = &text[start..];
+        let end = rest.find("'}")?;
+        let header = sfc_syntax::attr_value::unescape(&rest[..end]);
+        return vendor(&format!("<project xmlns=\"http://www.plcopen.org/xml/tc6_0200\">{header}</project>"))
+            .or_else(|| text.contains("{attribute 'sfc.dialect' := 'codesys'}").then_some(Vendor::Codesys));
+    }
+    text.contains("{attribute 'sfc.dialect' := 'codesys'}").then_some(Vendor::Codesys)
+}
+
 /// Imports a PLCopen XML file. `file_id` goes into the spans of the diagnostics (which point
 /// into `xml`). Never panics: malformed XML gives one located SFC0701 error and empty text.
 pub fn import(file_id: u32, name: &str, xml: &str) -> Imported {

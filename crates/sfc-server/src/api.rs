@@ -135,7 +135,9 @@ pub(crate) fn file_for_simulation(
         let imported = sfc_plcopen::import(0, &path.display().to_string(), &text);
         Ok(Some((imported.text, imported.vendor)))
     } else {
-        Ok(Some((text, None)))
+        // A text converted from an export runs by its tool's rules too.
+        let vendor = sfc_plcopen::text_vendor(&text);
+        Ok(Some((text, vendor)))
     }
 }
 

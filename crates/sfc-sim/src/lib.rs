@@ -79,17 +79,30 @@ pub fn file_profile(vendor: Option<sfc_plcopen::Vendor>) -> (Profile, ProfileSou
     }
 }
 
+/// The vendor whose rules a chart file runs by: an export's ([`sfc_plcopen::Imported::vendor`]),
+/// or for IEC text, the export it was converted from ([`sfc_plcopen::text_vendor`]).
+pub fn chart_vendor(text: &str, imported: Option<&sfc_plcopen::Imported>) -> Option<sfc_plcopen::Vendor> {
+    match imported {
+        Some(i) => i.vendor,
+        None => sfc_plcopen::text_vendor(text),
+    }
+}
+
 /// The text of the note (`note: …`) a command prints when it runs a chart with the profile its file's vendor chose
 /// ([`ProfileSource::Vendor`]): `doing` is what it did (`simulated`, `running`), `file` the chart
 /// file as shown, `instead` how to choose IEC 61131-3's rules instead (`--profile iec`).
 /// `simulated with profile codesys: lift.xml is a TwinCAT export, and TwinCAT runs SFC by
 /// CODESYS's rules (--profile iec to use IEC 61131-3's)`.
 pub fn vendor_profile_note(doing: &str, file: &str, vendor: sfc_plcopen::Vendor, instead: &str) -> String {
+    // A text converted from an export (`sfc build X.xml --target text`) says where it came from.
+    let is = if file.to_ascii_lowercase().ends_with(".xml") { "is" } else { "was converted from" };
     let why = match vendor {
-        sfc_plcopen::Vendor::Codesys => format!("{file} is a CODESYS export ({instead} to use IEC 61131-3's rules)"),
+        sfc_plcopen::Vendor::Codesys => {
+            format!("{file} {is} a CODESYS export ({instead} to use IEC 61131-3's rules)")
+        }
         v => {
             let a = if v.name().starts_with(['a', 'e', 'i', 'o', 'u', 'A', 'E', 'I', 'O', 'U']) { "an" } else { "a" };
-            format!("{file} is {a} {v} export, and {v} runs SFC by CODESYS's rules ({instead} to use IEC 61131-3's)")
+            format!("{file} {is} {a} {v} export, and {v} runs SFC by CODESYS's rules ({instead} to use IEC 61131-3's)")
         }
     };
     format!("{doing} with profile codesys: {why}")

@@ -1194,7 +1194,7 @@ fn load_parts(path: &Path, text: &str, o: &Overrides, given_chart: Option<&str>)
     let (profile, profile_source) = match (o.profile, parsed.profile) {
         (Some(p), _) => (p, ProfileSource::Option),
         (None, Some(p)) => (p, ProfileSource::Scenario),
-        (None, None) => file_profile(imported.as_ref().and_then(|i| i.vendor)),
+        (None, None) => file_profile(crate::chart_vendor(&chart_text, imported.as_ref())),
     };
     let options = SimOptions { period: o.period.or(parsed.period).unwrap_or(DEFAULT_PERIOD), profile };
     let pou = o.pou.clone().or_else(|| parsed.pou.as_ref().map(|p| p.0.clone()));
@@ -1272,7 +1272,7 @@ pub fn for_chart(chart: &Path, o: &Overrides) -> Result<Scenario, ScenarioError>
     let (chart_text, imported) = read_chart(&chart)?;
     let (profile, profile_source) = match o.profile {
         Some(p) => (p, ProfileSource::Option),
-        None => file_profile(imported.as_ref().and_then(|i| i.vendor)),
+        None => file_profile(crate::chart_vendor(&chart_text, imported.as_ref())),
     };
     let options = SimOptions { period: o.period.unwrap_or(DEFAULT_PERIOD), profile };
     let sim = compile_located(&chart_name, &chart_text, imported.as_ref(), o.pou.as_deref(), options)
