@@ -1,5 +1,6 @@
 //! The chart and its ST/IL code compiled to a bit-level transition relation of one scan under
-//! the `iec` semantics of `semantics.md` (and the simulator's documented choices, `docs/sim.md`).
+//! the semantics of `semantics.md` in the `iec` or `codesys` profile (and the simulator's
+//! documented choices, `docs/sim.md`: step actions, actions written in SFC).
 //!
 //! The state is a list of registers: every variable of the simulated POU and of its nested
 //! instances (arrays and structures flattened), the hidden state of standard function blocks,
@@ -13,7 +14,7 @@
 //! proof; a violation found through such a value is caught by the witness replay in the
 //! simulator.
 
-pub(crate) mod chart;
+pub mod chart;
 pub(crate) mod expr;
 pub(crate) mod il;
 pub(crate) mod stmt;
@@ -160,6 +161,8 @@ pub struct Inst {
     pub vars: Vec<VarEntry>,
     /// The SFC state of the instance, when its POU is a chart.
     pub chart: Option<usize>,
+    /// The charts of its POU's actions written in SFC (in the file's order).
+    pub subs: Vec<usize>,
 }
 
 /// A POU of the file.
@@ -168,6 +171,8 @@ pub struct PouInfo<'a> {
     pub iface: sfc_st::PouInterface,
     /// Index into `Checked::charts` for an SFC POU.
     pub chart: Option<usize>,
+    /// Its actions written in SFC: indices of their charts ([`chart::chart_at`]).
+    pub subs: Vec<usize>,
 }
 
 /// Settings of the encoding that earlier passes found.
@@ -205,6 +210,8 @@ pub struct Setup {
     pub extra_inputs: Vec<String>,
     /// Value ranges from `[assume] ranges` by upper-case path.
     pub ranges: HashMap<String, (i128, i128)>,
+    /// `iec` or `codesys` (the others are refused before encoding).
+    pub profile: sfc_sim::Profile,
 }
 
 /// The encoder: builds the one-scan relation into an AIG.
@@ -249,6 +256,10 @@ pub struct Enc<'a> {
     pub guard_of: Option<(usize, usize)>,
     /// Implicit control inputs held FALSE (not read by the chart).
     pub held: std::cell::RefCell<Vec<String>>,
+    /// The charts whose call is being encoded (a chart that runs itself is refused).
+    pub running: Vec<usize>,
+    /// Why the chart cannot be proved, found while encoding.
+    pub refused: Option<String>,
 }
 
 /// The result of encoding: the transition system of one scan.
@@ -494,6 +505,7 @@ impl<'a> Enc<'a> {
             path: path.to_string(),
             vars: Vec::new(),
             chart: None,
+            subs: Vec::new(),
         });
         let mut vars = Vec::new();
         for (n, k, ty) in params {
@@ -537,7 +549,13 @@ impl<'a> Enc<'a> {
     /// An instance of user POU `p` (the top POU, or a FUNCTION_BLOCK) at `path`.
     pub fn instantiate_user(&mut self, p: usize, path: &str, depth: u32) -> usize {
         let idx = self.insts.len();
-        self.insts.push(Inst { kind: InstKind::User(p), path: path.to_string(), vars: Vec::new(), chart: None });
+        self.insts.push(Inst {
+            kind: InstKind::User(p),
+            path: path.to_string(),
+            vars: Vec::new(),
+            chart: None,
+            subs: Vec::new(),
+        });
         let top = path.is_empty();
         let iface_vars: Vec<VarInfo> = self.pous[p].iface.vars.clone();
         let mut vars = Vec::new();
@@ -566,6 +584,16 @@ impl<'a> Enc<'a> {
             let ch = chart::ChartEnc::new(self, idx, c, path);
             self.charts.push(ch);
             self.insts[idx].chart = Some(self.charts.len() - 1);
+        }
+        // The charts of its actions written in SFC, in the frame of this instance, named
+        // `path.Action` as the simulator names them.
+        for c in self.pous[p].subs.clone() {
+            let action = chart::chart_at(self.checked, c).action.clone().unwrap_or_default();
+            let cpath = if top { action } else { format!("{path}.{action}") };
+            let ch = chart::ChartEnc::new(self, idx, c, &cpath);
+            self.charts.push(ch);
+            let k = self.charts.len() - 1;
+            self.insts[idx].subs.push(k);
         }
         idx
     }
@@ -598,8 +626,9 @@ impl<'a> Enc<'a> {
         let Some(p) = top else { return false };
         let mut found = false;
         let mut visit = |id: &sfc_syntax::ast::Ident| found |= id.is(name);
-        if let Some(c) = self.pous[p].chart {
-            let chart = &self.checked.charts[c];
+        let charts = self.pous[p].chart.into_iter().chain(self.pous[p].subs.iter().copied());
+        for c in charts {
+            let chart = chart::chart_at(self.checked, c);
             for t in &chart.transitions {
                 match &t.condition {
                     sfc_syntax::ast::Condition::St(e) => names_in_expr(e, &mut visit),
@@ -660,30 +689,16 @@ pub fn encode<'a>(
         let Item::Pou(p) = item else { continue };
         let Some(iface) = env.interface_of(p).cloned() else { continue };
         let chart = checked.charts.iter().position(|c| c.item == i);
-        pous.push(PouInfo { ast: p, iface, chart });
+        let subs = (0..checked.action_charts.len())
+            .filter(|&k| checked.action_charts[k].item == i)
+            .map(|k| checked.charts.len() + k)
+            .collect();
+        pous.push(PouInfo { ast: p, iface, chart, subs });
     }
     let top_pou = pous
         .iter()
         .position(|p| p.ast.name.is(&setup.pou) && p.ast.kind != PouKind::Function)
         .ok_or_else(|| format!("no PROGRAM or FUNCTION_BLOCK named `{}`", setup.pou))?;
-    // A chart inside an action is not modelled yet: refused rather than proved without it.
-    let uses = sfc_model::dependencies(&checked.unit, &checked.file.text, &setup.pou);
-    let stepped = checked.charts.iter().filter(|c| uses.contains(&c.pou.to_ascii_uppercase()));
-    if let Some((c, s)) =
-        stepped.flat_map(|c| c.steps.iter().map(move |s| (c, s))).find(|(_, s)| !s.step_actions.is_empty())
-    {
-        return Err(format!(
-            "step `{}.{}` has step actions (CODESYS), which `prove` does not model yet",
-            c.pou, s.name
-        ));
-    }
-    if let Some(c) = checked.action_charts.iter().find(|c| uses.contains(&c.pou.to_ascii_uppercase())) {
-        return Err(format!(
-            "`{}.{}` is an action written in SFC, which `prove` does not model yet",
-            c.pou,
-            c.action.as_deref().unwrap_or_default()
-        ));
-    }
     let mut e = Enc {
         g: Aig::new(),
         checked,
@@ -713,6 +728,8 @@ pub fn encode<'a>(
         scanned: 0,
         guard_of: None,
         held: Default::default(),
+        running: Vec::new(),
+        refused: None,
     };
     // Globals of the file.
     let globals: Vec<VarInfo> = e.env.globals().to_vec();
@@ -733,6 +750,9 @@ pub fn encode<'a>(
     e.top = e.instantiate_user(top_pou, "", 0);
     let cur: Vec<Word> = e.mem.clone();
     e.scan(hooks)?;
+    if let Some(why) = e.refused.take() {
+        return Err(why);
+    }
     let scanned = e.scanned;
     e.set_reg(scanned, Word::constant(1, 1));
     // Range checks of the values computed in this scan.
@@ -829,7 +849,7 @@ impl<'a> Enc<'a> {
         self.tick_timers();
         let top = self.top;
         match self.insts[top].chart {
-            Some(c) => self.run_chart(c, true),
+            Some(c) => self.run_chart(c),
             None => self.run_body(top),
         }
         Ok(())
@@ -868,7 +888,7 @@ impl<'a> Enc<'a> {
     /// The POU the instance runs, and its chart in `Checked::charts`.
     pub fn chart_of(&self, c: usize) -> &'a Chart {
         let idx = self.charts[c].chart;
-        &self.checked.charts[idx]
+        chart::chart_at(self.checked, idx)
     }
 }
 

@@ -60,7 +60,7 @@ fn domain(sim: &Simulation, name: &str, file: &PropertyFile) -> Option<Vec<Value
     Some((lo..=hi).map(|v| Value::Int(v as i64)).collect())
 }
 
-/// Explores the chart's state space up to `depth` scans. `inputs`: the free inputs (as the
+/// Explores the chart's state space up to `depth` scans under `profile`. `inputs`: the free inputs (as the
 /// prover reports them). Returns one result per property of `names` (the prover's order:
 /// `no runtime error`, ranges, then the file's properties).
 pub fn explore(
@@ -73,8 +73,9 @@ pub fn explore(
     names: &[String],
     depth: usize,
     max_states: usize,
+    profile: sfc_sim::Profile,
 ) -> Vec<Found> {
-    let opts = sfc_sim::SimOptions { period, profile: sfc_sim::Profile::Iec };
+    let opts = sfc_sim::SimOptions { period, profile };
     let Ok(sim) = Simulation::from_source(chart_name, chart_text, Some(pou), opts) else {
         return vec![Found::Skipped; names.len()];
     };
