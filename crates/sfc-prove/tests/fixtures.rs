@@ -52,11 +52,48 @@ fn expected(path: &Path) -> Vec<Expected> {
 /// ran out of a 60 s budget on a loaded one. The budget only guards against a hang.
 const BUDGET_SECONDS: f64 = 900.0;
 
-/// How many verdicts the explorer confirmed, and how many it could not judge.
+/// How many verdicts the explorer confirmed (over the whole state space or to the depth asked
+/// for; `shallow` of them only to a smaller depth, the smallest `min_depth` scans, when its
+/// state budget ran out first), and how many it could not judge.
 #[derive(Default)]
 struct Tally {
     confirmed: usize,
+    shallow: usize,
+    min_depth: Option<usize>,
     not_judged: usize,
+}
+
+impl Tally {
+    fn count(&mut self, f: &Found, unknown: bool, depth: usize) {
+        match f {
+            Found::Skipped | Found::TooBig => self.not_judged += 1,
+            _ if unknown => self.not_judged += 1,
+            Found::NotWithin(d) if *d < depth => {
+                self.confirmed += 1;
+                self.shallow += 1;
+                self.min_depth = Some(self.min_depth.map_or(*d, |m| m.min(*d)));
+            }
+            _ => self.confirmed += 1,
+        }
+    }
+    fn add(&mut self, o: &Tally) {
+        self.confirmed += o.confirmed;
+        self.shallow += o.shallow;
+        self.not_judged += o.not_judged;
+        self.min_depth = match (self.min_depth, o.min_depth) {
+            (Some(a), Some(b)) => Some(a.min(b)),
+            (a, b) => a.or(b),
+        };
+    }
+    fn describe(&self) -> String {
+        format!(
+            "the explorer agreed with {} verdicts ({} of them only to a smaller depth, at least {} scans, where its state budget ran out); {} were beyond it (a kind it does not explore, too many input values, or an unknown)",
+            self.confirmed,
+            self.shallow,
+            self.min_depth.unwrap_or(0),
+            self.not_judged
+        )
+    }
 }
 
 /// Runs one fixture, and again under `codesys` when it has a `NAME.codesys.expected`;
@@ -162,17 +199,16 @@ fn run_fixture_as(st: &Path, profile: Option<sfc_sim::Profile>, exp_path: &Path,
         report.profile,
     );
     for (p, f) in report.properties.iter().zip(&found) {
-        if matches!(f, Found::Skipped | Found::TooBig) || p.verdict == Verdict::Unknown {
-            tally.not_judged += 1;
-        } else {
-            tally.confirmed += 1;
+        if std::env::var_os("SFC_PROVE_EXPLAIN").is_some() {
+            println!("{stem}: `{}`: the prover says {}, the explorer {f:?}", p.name, p.verdict.name());
         }
+        tally.count(f, p.verdict == Verdict::Unknown, depth);
         let agree = match (p.verdict, f) {
             (_, Found::Skipped | Found::TooBig) => true,
             (Verdict::Violated, Found::ViolatedAt(s)) => {
                 Some(*s) == p.witness.as_ref().map(|w| w.scans - 1) || p.witness.is_none()
             }
-            (Verdict::Violated, Found::NotWithin(_)) => p.witness.as_ref().is_none_or(|w| w.scans > depth),
+            (Verdict::Violated, Found::NotWithin(d)) => p.witness.as_ref().is_none_or(|w| w.scans > *d),
             (Verdict::Holds, Found::NotWithin(_)) => true,
             (Verdict::Holds, Found::ReachedAt(s)) => p.witness.as_ref().is_none_or(|w| w.scans - 1 == *s),
             (Verdict::Violated, Found::ReachedAt(_)) => false,
@@ -227,16 +263,10 @@ fn fixture_verdicts_agree_with_the_explorer() {
     let mut tally = Tally::default();
     for (f, t) in results {
         fails.extend(f);
-        tally.confirmed += t.confirmed;
-        tally.not_judged += t.not_judged;
+        tally.add(&t);
     }
     fails.sort();
-    println!(
-        "{} fixture charts: the explorer agreed with {} verdicts (up to 40 scans, or over the whole state space); {} were beyond it (too many states, or a kind it does not explore)",
-        all.len(),
-        tally.confirmed,
-        tally.not_judged
-    );
+    println!("{} fixture charts (up to 40 scans, or over the whole state space): {}", all.len(), tally.describe());
     assert!(fails.is_empty(), "{}", fails.join("\n"));
 }
 
@@ -370,8 +400,12 @@ fn random_charts_agree_with_the_explorer_under_codesys() {
 }
 
 fn random_charts(profile: sfc_sim::Profile, first: u64, rich: bool) {
-    let count: u64 = std::env::var("SFC_PROVE_RANDOM").ok().and_then(|v| v.parse().ok()).unwrap_or(8);
+    // The rich charts have more states: fewer of them, explored less far (the explorer takes
+    // most of the time).
+    let (default, max_states) = if rich { (4, 20_000) } else { (8, 20_000) };
+    let count: u64 = std::env::var("SFC_PROVE_RANDOM").ok().and_then(|v| v.parse().ok()).unwrap_or(default);
     let mut fails = Vec::new();
+    let mut tally = Tally::default();
     for seed in first..first + count {
         let (chart, props) = random_chart(seed, rich);
         let file = sfc_prove::props::parse("random.props.toml", &props).expect("props");
@@ -386,8 +420,9 @@ fn random_charts(profile: sfc_sim::Profile, first: u64, rich: bool) {
         };
         let names: Vec<String> = report.properties.iter().map(|p| p.name.clone()).collect();
         let found =
-            explore(&name, &chart, &report.pou, report.period, &file, &report.inputs, &names, 30, 20_000, profile);
+            explore(&name, &chart, &report.pou, report.period, &file, &report.inputs, &names, 30, max_states, profile);
         for (p, f) in report.properties.iter().zip(&found) {
+            tally.count(f, p.verdict == Verdict::Unknown, 30);
             let scans = p.witness.as_ref().map(|w| w.scans - 1);
             let ok = match (p.verdict, f) {
                 (_, Found::Skipped | Found::TooBig) => true,
@@ -413,5 +448,19 @@ fn random_charts(profile: sfc_sim::Profile, first: u64, rich: bool) {
             }
         }
     }
+    println!(
+        "{count} random charts ({}{}): {}",
+        profile.name(),
+        if rich { ", with step actions and an action written in SFC" } else { "" },
+        tally.describe()
+    );
     assert!(fails.is_empty(), "{}", fails.join("\n\n"));
+}
+
+/// Development aid: prints the rich random chart of `SFC_PROVE_SEED` with its properties.
+#[test]
+fn print_random_chart() {
+    let Some(seed) = std::env::var("SFC_PROVE_SEED").ok().and_then(|v| v.parse().ok()) else { return };
+    let (chart, props) = random_chart(seed, true);
+    println!("{chart}\n----\n{props}");
 }

@@ -392,8 +392,8 @@ impl<'a> Enc<'a> {
     pub(crate) fn havoc_stmt(&mut self, f: &Frame, s: &Stmt) {
         match &s.kind {
             StmtKind::Assign { target, .. } => self.havoc_target(f, target),
-            StmtKind::Call(e) => {
-                if let ExprKind::Call { callee, args } = &e.kind {
+            StmtKind::Call(e) => match &e.kind {
+                ExprKind::Call { callee, args } => {
                     for a in args {
                         if let (true, Some(v)) = (a.output, &a.value) {
                             self.havoc_target(f, v);
@@ -407,9 +407,26 @@ impl<'a> Enc<'a> {
                             let w = self.fresh(format!("{} (not modelled)", reg.name), reg.full, reg.signed, None);
                             self.write_reg(r, w);
                         }
+                    } else if sfc_st::stdlib::std_function(&callee.text).is_none() {
+                        // An action, a method of the instance, a user function: what it may
+                        // write is the instance's and the globals.
+                        self.havoc_instance(f.inst);
                     }
                 }
-            }
+                ExprKind::MemberCall { base, args, .. } => {
+                    for a in args {
+                        if let (true, Some(v)) = (a.output, &a.value) {
+                            self.havoc_target(f, v);
+                        }
+                    }
+                    // A method or action of the instance: the instance and the globals.
+                    match self.place(f, base) {
+                        Ok(PlaceRef::Slot(Slot::Fb(i), _)) => self.havoc_instance(i),
+                        _ => self.havoc_instance(f.inst),
+                    }
+                }
+                _ => {}
+            },
             StmtKind::If { branches, else_body } => {
                 for (_, b) in branches {
                     b.iter().for_each(|s| self.havoc_stmt(f, s));

@@ -14,13 +14,14 @@ use std::collections::HashSet;
 pub enum Found {
     /// First violated after this scan (a shortest run).
     ViolatedAt(usize),
-    /// Not violated within the explored depth.
+    /// Not violated within this many scans (the depth asked for, or less when the state budget
+    /// ran out first).
     NotWithin(usize),
     /// Reached (for `reachable … from_initial`) after this scan.
     ReachedAt(usize),
     /// This kind of property is not explored.
     Skipped,
-    /// Too many states.
+    /// Too many input values to try.
     TooBig,
 }
 
@@ -204,6 +205,12 @@ pub fn explore(
                 if sim.error().is_some() || left_range {
                     continue;
                 }
+                // The inputs' values after the scan do not matter (the next scan sets every one
+                // of them anew, and the properties have been evaluated): with a canonical value
+                // states that differ only there are one state.
+                for (name, d) in &doms {
+                    let _ = sim.set(name, d[0].clone());
+                }
                 let key = format!("{}{:?}", sim.state_key(), monitors);
                 if seen.insert(key) {
                     next.push(Node { sim_state: sim.snapshot(), monitors });
@@ -211,7 +218,9 @@ pub fn explore(
             }
         }
         if seen.len() > max_states {
-            return result.into_iter().map(|r| r.unwrap_or(Found::TooBig)).collect();
+            // Every state after scans 0..=scan was checked: what is not decided yet is not
+            // violated (reached) within scan + 1 scans.
+            return result.into_iter().map(|r| r.unwrap_or(Found::NotWithin(scan + 1))).collect();
         }
         frontier = next;
         if result.iter().all(Option::is_some) || frontier.is_empty() {
