@@ -25,6 +25,9 @@ use crate::word::Word;
 use sfc_model::{ActionTarget, Duration, Qualifier};
 use sfc_st::Type;
 
+/// How many runs of charts one scan's encoding may hold.
+const MAX_CHART_RUNS: usize = 4096;
+
 /// The five timed qualifiers, in the order of ACTION_CONTROL's duration array.
 const TIMED: [Qualifier; 5] = [Qualifier::L, Qualifier::D, Qualifier::SD, Qualifier::DS, Qualifier::SL];
 
@@ -408,6 +411,16 @@ impl Enc<'_> {
     /// its instance, an action's chart per run of the action), under the current path
     /// condition: the phases in the profile's order.
     pub(crate) fn run_chart(&mut self, c: usize) {
+        // Each run of a chart is encoded where it happens (calls, associations, and under
+        // `codesys` both body passes): bounded, so nested actions written in SFC cannot make the
+        // encoding grow without end.
+        self.chart_runs += 1;
+        if self.chart_runs > MAX_CHART_RUNS {
+            self.refused.get_or_insert(format!(
+                "the chart is run in more than {MAX_CHART_RUNS} places of one scan (actions written in SFC nested in each other), which `prove` does not encode"
+            ));
+            return;
+        }
         if self.running.contains(&c) {
             // The sim stops such a run with a fault at its 200th nested run.
             let name = self.charts[c].action.clone().unwrap_or_default();

@@ -260,6 +260,8 @@ pub struct Enc<'a> {
     pub running: Vec<usize>,
     /// Why the chart cannot be proved, found while encoding.
     pub refused: Option<String>,
+    /// Runs of charts encoded so far in this scan.
+    pub chart_runs: usize,
 }
 
 /// The result of encoding: the transition system of one scan.
@@ -730,6 +732,7 @@ pub fn encode<'a>(
         held: Default::default(),
         running: Vec::new(),
         refused: None,
+        chart_runs: 0,
     };
     // Globals of the file.
     let globals: Vec<VarInfo> = e.env.globals().to_vec();
