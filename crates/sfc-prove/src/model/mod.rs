@@ -496,7 +496,10 @@ impl<'a> Enc<'a> {
 
     /// A nested instance of function block type `name` at `path`.
     fn instantiate_fb(&mut self, name: &str, path: &str, depth: u32) -> Option<usize> {
-        if let Some(p) = self.pous.iter().position(|p| p.ast.kind == PouKind::FunctionBlock && p.ast.name.is(name)) {
+        // A PROGRAM is one instance, the global named after it (`Other.X` from any code; its
+        // body runs where code calls it).
+        let user = |p: &PouInfo<'_>| matches!(p.ast.kind, PouKind::FunctionBlock | PouKind::Program);
+        if let Some(p) = self.pous.iter().position(|p| user(p) && p.ast.name.is(name)) {
             return Some(self.instantiate_user(p, path, depth));
         }
         let kind = StdFb::from_name(name)?;
@@ -734,12 +737,24 @@ pub fn encode<'a>(
         refused: None,
         chart_runs: 0,
     };
-    // Globals of the file.
+    // Globals of the file. The simulated PROGRAM is the global named after it: that global is
+    // the top instance itself (`Main.X` in a function block is the top's `X`).
     let globals: Vec<VarInfo> = e.env.globals().to_vec();
+    let top_is_program = e.pous[top_pou].ast.kind == PouKind::Program;
+    let mut top_global = None;
     for v in &globals {
         let located_input = v.location.as_ref().is_some_and(|l| l.area.eq_ignore_ascii_case(&'I'));
         let extra = e.setup.extra_inputs.iter().any(|n| n.eq_ignore_ascii_case(&v.name));
-        let slot = e.layout(&v.name, &v.ty, Role::Var { input: located_input || extra }, 0);
+        let is_top = top_is_program
+            && top_global.is_none()
+            && v.name.eq_ignore_ascii_case(&e.pous[top_pou].ast.name.text)
+            && matches!(&v.ty, Type::FunctionBlock(n) if n.eq_ignore_ascii_case(&e.pous[top_pou].ast.name.text));
+        let slot = if is_top {
+            top_global = Some(e.globals.len());
+            Slot::Opaque(v.ty.clone())
+        } else {
+            e.layout(&v.name, &v.ty, Role::Var { input: located_input || extra }, 0)
+        };
         e.globals.push(VarEntry {
             name: v.name.clone(),
             kind: v.kind,
@@ -751,6 +766,9 @@ pub fn encode<'a>(
     }
     e.scanned = e.new_reg("(scan 0 done)".into(), Type::Bool, Role::Hidden, 0, None);
     e.top = e.instantiate_user(top_pou, "", 0);
+    if let Some(k) = top_global {
+        e.globals[k].slot = Slot::Fb(e.top);
+    }
     let cur: Vec<Word> = e.mem.clone();
     e.scan(hooks)?;
     if let Some(why) = e.refused.take() {
