@@ -575,24 +575,37 @@ impl<'a> Enc<'a> {
     /// a function.
     pub(crate) fn call_stmt(&mut self, f: &Frame, e: &Expr) -> R<()> {
         if let ExprKind::MemberCall { base, member, args } = &e.kind {
-            let Ok(PlaceRef::Slot(slot, _)) = self.place(f, base) else {
-                return Err(ExprError { span: base.span, message: "the instance of this call is not modelled".into() });
+            // The instance, or each instance a computed index may select (`Cells[i].Act()`).
+            let cands = match self.place(f, base) {
+                Ok(PlaceRef::Slot(slot, _)) => vec![(Lit::TRUE, slot)],
+                Ok(PlaceRef::Dyn(cands, _)) => cands,
+                _ => Vec::new(),
             };
-            let Slot::Fb(inst) = slot else {
+            let mut insts = Vec::new();
+            for (sel, slot) in cands {
+                let Slot::Fb(inst) = slot else {
+                    return Err(ExprError {
+                        span: base.span,
+                        message: "the instance of this call is not modelled".into(),
+                    });
+                };
+                insts.push((sel, inst));
+            }
+            if insts.is_empty() {
                 return Err(ExprError { span: base.span, message: "the instance of this call is not modelled".into() });
-            };
-            if let Some((name, body)) = self.action_of(inst, &member.text) {
-                return self.call_action(f, inst, &name, body, args, e.span);
             }
-            // `inst.Inner(…)`: the instance `Inner` inside `inst` is called.
-            let inner = self.insts[inst].vars.iter().find(|v| v.name.eq_ignore_ascii_case(&member.text)).cloned();
-            if let Some(v) = inner.filter(|v| matches!(v.ty, Type::FunctionBlock(_))) {
-                return self.fb_call(f, &v.slot, args, e.span, member);
+            let pc = self.pc;
+            for (sel, inst) in insts {
+                self.pc = self.g.and(pc, sel);
+                if self.pc == Lit::FALSE {
+                    continue;
+                }
+                let r = self.call_member(f, inst, member, args, e.span);
+                self.pc = pc;
+                r?;
             }
-            return Err(ExprError {
-                span: member.span,
-                message: format!("the call of `{}` of an instance cannot be modelled", member.text),
-            });
+            self.pc = pc;
+            return Ok(());
         }
         let ExprKind::Call { callee, args } = &e.kind else {
             self.eval(f, e, None)?;
@@ -608,6 +621,22 @@ impl<'a> Enc<'a> {
         }
         self.call_value(f, callee, args, e.span, None)?;
         Ok(())
+    }
+
+    /// `inst.Member(…)`: action `Member` of the instance, or the instance `Member` inside it.
+    fn call_member(&mut self, f: &Frame, inst: usize, member: &Ident, args: &[Arg], span: Span) -> R<()> {
+        if let Some((name, body)) = self.action_of(inst, &member.text) {
+            return self.call_action(f, inst, &name, body, args, span);
+        }
+        // `inst.Inner(…)`: the instance `Inner` inside `inst` is called.
+        let inner = self.insts[inst].vars.iter().find(|v| v.name.eq_ignore_ascii_case(&member.text)).cloned();
+        if let Some(v) = inner.filter(|v| matches!(v.ty, Type::FunctionBlock(_))) {
+            return self.fb_call(f, &v.slot, args, span, member);
+        }
+        Err(ExprError {
+            span: member.span,
+            message: format!("the call of `{}` of an instance cannot be modelled", member.text),
+        })
     }
 
     /// A call of action `name` of instance `inst` from code in frame `f`: the chart flags it
