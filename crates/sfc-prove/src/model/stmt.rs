@@ -643,7 +643,10 @@ impl<'a> Enc<'a> {
     /// sets (evaluated in the caller), then its body.
     fn call_action(&mut self, f: &Frame, inst: usize, name: &str, body: &ActionBody, args: &[Arg], span: Span) -> R<()> {
         if self.depth > MAX_DEPTH {
-            return Err(ExprError { span, message: "actions call each other too deeply".into() });
+            // Refused rather than made free: an action may move charts (its own, written in
+            // SFC, or those of instances it calls), which no free value stands for.
+            self.refused.get_or_insert(format!("actions call each other more than {MAX_DEPTH} deep (`{name}`)"));
+            return Ok(());
         }
         if !args.is_empty() {
             let Some(c) = self.action_chart(inst, name) else {
