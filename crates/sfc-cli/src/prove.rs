@@ -18,6 +18,10 @@ pub struct ProveArgs {
     /// Scan period: time is scans × period (default T#10ms, or the property file's `period`).
     #[arg(long, value_name = "TIME", value_parser = crate::sim::parse_period)]
     period: Option<i64>,
+    /// The profile whose scan rules to prove under: iec or codesys (default: the property
+    /// file's `profile`, else iec).
+    #[arg(long, value_name = "iec|codesys", value_parser = parse_profile)]
+    profile: Option<sfc_sim::Profile>,
     /// Output: a report per property (human) or one JSON object on stdout.
     #[arg(long, value_enum, default_value = "human")]
     format: crate::Format,
@@ -58,6 +62,17 @@ pub fn parse_budget(s: &str) -> Result<Budget, String> {
     match num.trim().parse::<f64>() {
         Ok(v) if v > 0.0 && v.is_finite() => Ok(Budget::Seconds(v * scale)),
         _ => Err(format!("`{s}`: expected seconds (`60s`, `2.5`) or states (`500000states`)")),
+    }
+}
+
+/// `--profile`: a profile `prove` models.
+pub fn parse_profile(s: &str) -> Result<sfc_sim::Profile, String> {
+    let Some(p) = sfc_sim::Profile::from_name(s.trim()) else {
+        return Err(format!("unknown profile `{s}` (expected iec or codesys)"));
+    };
+    match sfc_prove::unsupported_profile(p) {
+        Some(why) => Err(why),
+        None => Ok(p),
     }
 }
 
@@ -116,7 +131,7 @@ pub fn prove(a: ProveArgs) -> u8 {
     if file.properties.is_empty() {
         eprintln!("warning: `{shown_props}` declares no [[property]]: only ranges and runtime errors are checked");
     }
-    let mut opts = Options { pou: a.pou.clone(), period: a.period, ..Options::default() };
+    let mut opts = Options { pou: a.pou.clone(), period: a.period, profile: a.profile, ..Options::default() };
     match a.budget {
         Some(Budget::Seconds(s)) => opts.seconds = s,
         Some(Budget::States(n)) => opts.max_states = Some(n),
@@ -136,6 +151,10 @@ pub fn prove(a: ProveArgs) -> u8 {
         }
         Err(ProveError::Props(e)) => {
             eprintln!("error: {e}");
+            return 2;
+        }
+        Err(ProveError::Unsupported(why)) => {
+            eprintln!("error: {why}");
             return 2;
         }
     };
@@ -248,6 +267,9 @@ impl sfc_lsp::DiagnosticsProvider for PropertyDiagnostics {
             Ok(report) if analysis => sfc_prove::property_diagnostics(0, text, None, Some(&report)),
             Ok(_) => Vec::new(),
             Err(ProveError::Props(e)) => sfc_prove::property_diagnostics(0, text, Some(&e), None),
+            Err(ProveError::Unsupported(why)) => {
+                vec![sfc_diagnostics::Diagnostic::error("SFC1001", sfc_diagnostics::Span::new(0, 0, 0), why)]
+            }
             Err(ProveError::Chart(b)) => {
                 let first = b.1.iter().find(|d| d.is_error()).map_or_else(String::new, |d| d.message.clone());
                 vec![sfc_diagnostics::Diagnostic::error(

@@ -135,3 +135,95 @@ fn a_counter_invariant_is_proved_by_induction() {
     assert!(out.contains("HOLDS    no more rejects than parts\n    method: 1-induction"), "{out}");
     assert!(out.contains("2 held, 0 violated, 0 unknown"), "{out}");
 }
+
+/// `--profile codesys`: the chart is proved under CODESYS's scan (actions before the
+/// evolution, no priorities); the witness says `profile = "codesys"`, so `sfc test` replays it
+/// under that profile and fails on the property. The same chart holds under `iec`.
+#[test]
+fn codesys_profile_is_proved_and_its_witness_replays_under_codesys() {
+    let d = scratch("codesys", &["codesys_priority"]);
+    let o = sfc_in(&d, &["prove", "codesys_priority.st"]);
+    let out = text(&o);
+    assert_eq!(o.status.code(), Some(0), "{out}");
+    assert!(out.contains("profile iec"), "{out}");
+    let o = sfc_in(&d, &["prove", "codesys_priority.st", "--profile", "codesys"]);
+    let out = text(&o);
+    assert_eq!(o.status.code(), Some(1), "{out}");
+    assert!(out.contains("profile codesys"), "{out}");
+    assert!(out.contains("VIOLATED left is never taken"), "{out}");
+    assert!(out.contains("VIOLATED motor follows its step"), "{out}");
+    assert!(out.contains("HOLDS    motor within a scan of its step"), "{out}");
+    assert!(!out.contains("NOT reproduced"), "{out}");
+    let file = "codesys_priority.left-is-never-taken.witness.toml";
+    let scenario = std::fs::read_to_string(d.join(file)).unwrap_or_else(|e| panic!("{file}: {e}\n{out}"));
+    assert!(scenario.contains("profile = \"codesys\""), "{scenario}");
+    let t = sfc_in(&d, &["test", file]);
+    let tout = text(&t);
+    assert_eq!(t.status.code(), Some(1), "{tout}");
+    assert!(tout.contains("`GoLeft.X` is TRUE"), "{tout}");
+    // Under iec the same inputs take the right branch: the witness passes.
+    let iec = scenario.replace("profile = \"codesys\"\n", "");
+    std::fs::write(d.join("iec.witness.toml"), iec).unwrap();
+    let t = sfc_in(&d, &["test", "iec.witness.toml"]);
+    assert_eq!(t.status.code(), Some(0), "{}", text(&t));
+}
+
+/// The property file may name the profile; `--profile` takes precedence. Profiles `prove`
+/// does not model are refused (exit 2), on the command line and in the file.
+#[test]
+fn the_property_file_names_the_profile() {
+    let d = scratch("profile-file", &["codesys_priority"]);
+    let props = std::fs::read_to_string(d.join("codesys_priority.props.toml")).unwrap();
+    std::fs::write(d.join("codesys_priority.props.toml"), format!("profile = \"codesys\"\n{props}")).unwrap();
+    let o = sfc_in(&d, &["prove", "codesys_priority.st", "--format", "json", "--no-witness"]);
+    assert_eq!(o.status.code(), Some(1), "{}", text(&o));
+    let v: serde_json::Value = serde_json::from_slice(&o.stdout).expect("JSON on stdout");
+    assert_eq!(v["profile"], "codesys", "{v}");
+    let o = sfc_in(&d, &["prove", "codesys_priority.st", "--profile", "iec"]);
+    assert_eq!(o.status.code(), Some(0), "{}", text(&o));
+    let o = sfc_in(&d, &["prove", "codesys_priority.st", "--profile", "matiec"]);
+    let out = text(&o);
+    assert_eq!(o.status.code(), Some(2), "{out}");
+    assert!(out.contains("matiec profile is not modelled"), "{out}");
+    std::fs::write(d.join("g.props.toml"), format!("profile = \"grafcet\"\n{props}")).unwrap();
+    let o = sfc_in(&d, &["prove", "codesys_priority.st", "--properties", "g.props.toml"]);
+    let out = text(&o);
+    assert_eq!(o.status.code(), Some(2), "{out}");
+    assert!(out.contains("g.props.toml:1:"), "{out}");
+    assert!(out.contains("grafcet profile is not modelled"), "{out}");
+}
+
+/// Step actions and actions written in SFC are modelled: a function block's SFC action run by
+/// `Cyl.ACT_Extend(SFCReset := Abort)`, its steps read through the instance (`Cyl.Extend.X`);
+/// step actions (entry, step, exit) around an IEC action. Each violation's witness replays in
+/// `sfc test` under the profile it was found under.
+#[test]
+fn step_actions_and_sfc_actions_are_proved_under_both_profiles() {
+    let d = scratch("sfc-actions", &["sfc_action_fb", "step_actions"]);
+    for profile in ["iec", "codesys"] {
+        let w = format!("w-{profile}");
+        let o = sfc_in(&d, &["prove", "sfc_action_fb.st", "--profile", profile, "--witness-dir", &w]);
+        let out = text(&o);
+        assert_eq!(o.status.code(), Some(1), "{out}");
+        assert!(out.contains("HOLDS    one step of the action at a time"), "{out}");
+        assert!(out.contains("HOLDS    abort puts the action back"), "{out}");
+        assert!(out.contains("VIOLATED the valve follows the step"), "{out}");
+        assert!(!out.contains("NOT reproduced"), "{out}");
+        // No statement or step action left out of the model.
+        assert!(!out.contains("at line"), "{out}");
+        let t = sfc_in(&d.join(&w), &["test", "sfc_action_fb.the-valve-follows-the-step.witness.toml"]);
+        let tout = text(&t);
+        assert_eq!(t.status.code(), Some(1), "{tout}");
+        assert!(tout.contains("`Out = Cyl.Extend.X` is FALSE"), "{tout}");
+        let o = sfc_in(&d, &["prove", "step_actions.st", "--profile", profile, "--witness-dir", &w]);
+        let out = text(&o);
+        assert_eq!(o.status.code(), Some(1), "{out}");
+        let follows =
+            if profile == "iec" { "HOLDS    in fill follows the step" } else { "VIOLATED in fill follows the step" };
+        assert!(out.contains(follows), "{out}");
+        assert!(out.contains("HOLDS    step actions before the IEC actions"), "{out}");
+        assert!(!out.contains("NOT reproduced"), "{out}");
+        let t = sfc_in(&d.join(&w), &["test", "step_actions.the-pump-runs-only-in-drain.witness.toml"]);
+        assert_eq!(t.status.code(), Some(1), "{}", text(&t));
+    }
+}

@@ -1,5 +1,7 @@
 //! `sfc prove`: the engineer's requirements on an SFC chart — invariants, absence, bounded
-//! response, reachability — proved or refuted under the exact `iec` scan semantics.
+//! response, reachability — proved or refuted under the exact scan semantics of the `iec` or
+//! the `codesys` profile (`docs/sim.md`, "Profiles"), with CODESYS's step actions and actions
+//! written in SFC.
 //!
 //! The chart and its ST/IL code are compiled into a bit-level relation of one scan
 //! ([`model`]): the state is every variable, step flag, step time (in scans, bounded by the
@@ -56,6 +58,9 @@ pub struct Options {
     pub debug: bool,
     /// Only check the property file against the chart (names, types); prove nothing.
     pub check_only: bool,
+    /// `--profile`, over the property file's `profile`; `iec` when neither says. `iec` and
+    /// `codesys` are modelled; the others are refused ([`ProveError::Unsupported`]).
+    pub profile: Option<sfc_sim::Profile>,
 }
 
 impl Default for Options {
@@ -68,6 +73,7 @@ impl Default for Options {
             node_limit: 1_000_000,
             debug: false,
             check_only: false,
+            profile: None,
         }
     }
 }
@@ -79,6 +85,18 @@ pub enum ProveError {
     Chart(Box<(SourceFile, Vec<Diagnostic>)>),
     /// The property file is wrong.
     Props(PropsError),
+    /// What was asked is not modelled (a profile other than `iec` and `codesys`).
+    Unsupported(String),
+}
+
+/// The profiles `prove` models.
+pub const PROFILES: [sfc_sim::Profile; 2] = [sfc_sim::Profile::Iec, sfc_sim::Profile::Codesys];
+
+/// Why `profile` is refused, if it is.
+pub fn unsupported_profile(profile: sfc_sim::Profile) -> Option<String> {
+    (!PROFILES.contains(&profile)).then(|| {
+        format!("`sfc prove` models the iec and codesys profiles; the {} profile is not modelled yet", profile.name())
+    })
 }
 
 /// Proves the properties of `file` about the chart `chart_name` (its text `chart_text`).
@@ -91,8 +109,28 @@ pub fn prove(chart_name: &str, chart_text: &str, file: &PropertyFile, opts: &Opt
         return Err(ProveError::Chart(Box::new((checked.file.clone(), errors))));
     }
     let period = opts.period.or(file.period).unwrap_or(DEFAULT_PERIOD);
+    let profile = match (opts.profile, &file.profile) {
+        (Some(p), _) => {
+            if let Some(why) = unsupported_profile(p) {
+                return Err(ProveError::Unsupported(why));
+            }
+            p
+        }
+        (None, Some((p, l))) => {
+            if let Some(why) = unsupported_profile(*p) {
+                return Err(ProveError::Props(PropsError {
+                    file: file.path.clone(),
+                    line: l.line,
+                    column: l.column,
+                    message: why,
+                }));
+            }
+            *p
+        }
+        (None, None) => sfc_sim::Profile::Iec,
+    };
     let pou_req = opts.pou.clone().or_else(|| file.pou.as_ref().map(|p| p.text.clone()));
-    let sim_opts = sfc_sim::SimOptions { period, profile: sfc_sim::Profile::Iec };
+    let sim_opts = sfc_sim::SimOptions { period, profile };
     let sim = match sfc_sim::Simulation::from_source(chart_name, chart_text, pou_req.as_deref(), sim_opts) {
         Ok(s) => s,
         Err((src, diags)) => {
@@ -154,7 +192,7 @@ pub fn prove(chart_name: &str, chart_text: &str, file: &PropertyFile, opts: &Opt
         check_name(l).map_err(ProveError::Props)?;
         extra_inputs.push(l.text.to_ascii_uppercase());
     }
-    let setup = Setup { period, pou: pou.clone(), extra_inputs, ranges };
+    let setup = Setup { period, pou: pou.clone(), extra_inputs, ranges, profile };
     let initial = |path: &str| sim.get(path);
     // Pass 1: which variables does the code write? Pass 2: with the others constant, how far
     // must each counter count? Pass 3: the model.
@@ -170,6 +208,7 @@ pub fn prove(chart_name: &str, chart_text: &str, file: &PropertyFile, opts: &Opt
             chart: chart_name.to_string(),
             pou,
             period,
+            profile,
             properties_file: file.path.clone(),
             state_bits: 0,
             inputs: Vec::new(),
@@ -267,7 +306,7 @@ pub fn prove(chart_name: &str, chart_text: &str, file: &PropertyFile, opts: &Opt
                     let chart_file = std::path::Path::new(chart_name)
                         .file_name()
                         .map_or_else(|| chart_name.to_string(), |f| f.to_string_lossy().into_owned());
-                    let (scenario, own_line) = w.scenario(&chart_file, &pou, period, c, file, &own);
+                    let (scenario, own_line) = w.scenario(&chart_file, &pou, period, profile, c, file, &own);
                     let replay = witness::replay(chart_name, chart_text, &own, &scenario, own_line, expect);
                     let write = finding.verdict == Verdict::Violated;
                     rep.attach(w, own, scenario, replay, write);
@@ -296,6 +335,7 @@ pub fn prove(chart_name: &str, chart_text: &str, file: &PropertyFile, opts: &Opt
         chart: chart_name.to_string(),
         pou,
         period,
+        profile,
         properties_file: file.path.clone(),
         state_bits: full.state.len(),
         inputs,
@@ -346,7 +386,7 @@ fn pre_start_invariants(m: &model::Model) -> Vec<Vec<Lit>> {
 fn net_invariants(checked: &sfc_model::Checked, m: &model::Model) -> sat::Invariant {
     let mut out = sat::Invariant::default();
     for c in &m.charts {
-        let chart = &checked.charts[c.chart];
+        let chart = model::chart::chart_at(checked, c.chart);
         if chart.steps.len() > 400 {
             continue;
         }

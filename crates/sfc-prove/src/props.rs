@@ -5,6 +5,7 @@
 //! ```toml
 //! pou = "Door"                    # optional: the POU (as `--pou`)
 //! period = "T#10ms"               # optional: the scan period (as `--period`)
+//! profile = "codesys"             # optional: iec (default) or codesys (as `--profile`)
 //!
 //! [assume]
 //! always = ["NOT (LimitLeft AND LimitRight)"]
@@ -121,6 +122,8 @@ pub struct PropertyFile {
     pub pou: Option<Located>,
     /// µs.
     pub period: Option<i64>,
+    /// The profile (as `--profile`), with where it is written.
+    pub profile: Option<(sfc_sim::Profile, Located)>,
     pub assume: Vec<PropExpr>,
     pub ranges: Vec<RangeSpec>,
     pub inputs: Vec<Located>,
@@ -132,7 +135,7 @@ struct Src<'a> {
     text: &'a str,
 }
 
-const TOP_KEYS: [&str; 4] = ["pou", "period", "assume", "property"];
+const TOP_KEYS: [&str; 5] = ["pou", "period", "profile", "assume", "property"];
 const ASSUME_KEYS: [&str; 3] = ["always", "ranges", "inputs"];
 const PROPERTY_KEYS: [&str; 10] =
     ["name", "always", "never", "after", "expect", "within", "scans", "reachable", "from_initial", "description"];
@@ -237,6 +240,7 @@ pub fn parse(path: &str, text: &str) -> Result<PropertyFile, PropsError> {
         text: text.to_string(),
         pou: None,
         period: None,
+        profile: None,
         assume: Vec::new(),
         ranges: Vec::new(),
         inputs: Vec::new(),
@@ -253,6 +257,13 @@ pub fn parse(path: &str, text: &str) -> Result<PropertyFile, PropsError> {
                 }
                 out.period = Some(t);
             }
+            "profile" => {
+                let l = src.string(root, key, item, "a profile name such as \"codesys\"")?;
+                let Some(p) = sfc_sim::Profile::from_name(l.text.trim()) else {
+                    return Err(src.err(item.span(), format!("unknown profile `{}` (expected iec or codesys)", l.text)));
+                };
+                out.profile = Some((p, l));
+            }
             "assume" => {
                 let Some(t) = item.as_table_like() else {
                     return Err(
@@ -266,7 +277,7 @@ pub fn parse(path: &str, text: &str) -> Result<PropertyFile, PropsError> {
                 return Err(src.err(
                     span,
                     format!(
-                        "unknown key `{other}` (expected pou, period, [assume] or [[property]]){}",
+                        "unknown key `{other}` (expected pou, period, profile, [assume] or [[property]]){}",
                         did_you_mean(other, TOP_KEYS)
                     ),
                 ))

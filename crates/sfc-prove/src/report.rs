@@ -107,6 +107,8 @@ pub struct Report {
     pub chart: String,
     pub pou: String,
     pub period: i64,
+    /// The profile proved under (`iec` or `codesys`).
+    pub profile: sfc_sim::Profile,
     pub properties_file: String,
     pub state_bits: usize,
     /// The free inputs of every scan.
@@ -132,11 +134,12 @@ impl Report {
     /// The human report.
     pub fn human(&self, witness_dir: &str) -> String {
         let mut out = format!(
-            "proving {} (POU {}) with {}: period {}, {} state bits, inputs: {}\n",
+            "proving {} (POU {}) with {}: period {}, profile {}, {} state bits, inputs: {}\n",
             self.chart,
             self.pou,
             self.properties_file,
             sfc_sim::format_time(self.period),
+            self.profile.name(),
             self.state_bits,
             if self.inputs.is_empty() { "none".to_string() } else { self.inputs.join(", ") }
         );
@@ -250,6 +253,7 @@ impl Report {
             "pou": self.pou,
             "properties_file": self.properties_file,
             "period": sfc_sim::format_time(self.period),
+            "profile": self.profile.name(),
             "state_bits": self.state_bits,
             "inputs": self.inputs,
             "notes": self.notes,

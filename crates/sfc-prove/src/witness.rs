@@ -187,13 +187,13 @@ impl Witness {
             (Origin::User(_), Some(n)) => Some(last.saturating_sub(n as usize)),
             _ => None,
         };
+        // The active steps of every chart, named as the simulator names them (`Step`,
+        // `Rev.Step`, `Cyl.ACT_Extend.Step`).
         let mut active_end = Vec::new();
-        if let Some(ch) = m.charts.iter().find(|ch| ch.path.is_empty()) {
-            for (s, &r) in ch.x.iter().enumerate() {
+        for ch in &m.charts {
+            for &r in &ch.x {
                 if reg_value(m, full, &state, r) == Some(1) {
-                    let name = m.regs[r].name.trim_end_matches(".X").to_string();
-                    let _ = s;
-                    active_end.push(name);
+                    active_end.push(m.regs[r].name.trim_end_matches(".X").to_string());
                 }
             }
         }
@@ -208,6 +208,7 @@ impl Witness {
         chart: &str,
         pou: &str,
         period: i64,
+        profile: sfc_sim::Profile,
         c: &Compiled,
         file: &PropertyFile,
         own_name: &str,
@@ -230,6 +231,9 @@ impl Witness {
         head.push_str(&format!("chart = {}\n", toml_string(chart)));
         head.push_str(&format!("pou = {}\n", toml_string(pou)));
         head.push_str(&format!("period = \"{}\"\n", format_time(period)));
+        if profile != sfc_sim::Profile::Iec {
+            head.push_str(&format!("profile = \"{}\"\n", profile.name()));
+        }
         head.push_str(&format!("scans = {}\n", self.last + 1));
         // The property's entries: (scan, text); the last one is the property itself.
         let active = self.active_end.iter().map(|s| toml_string(s)).collect::<Vec<_>>().join(", ");

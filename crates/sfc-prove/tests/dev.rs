@@ -1,4 +1,5 @@
-//! Development driver: `SFC_PROVE_DEV=chart.st cargo test -p sfc-prove --test dev -- --nocapture`.
+//! Development driver: `SFC_PROVE_DEV=chart.st cargo test -p sfc-prove --test dev -- --nocapture`
+//! (`SFC_PROVE_PROFILE=codesys` for that profile).
 
 #[test]
 fn dev() {
@@ -7,8 +8,13 @@ fn dev() {
     let props_path = chart.replace(".st", ".props.toml");
     let props = std::fs::read_to_string(&props_path).unwrap();
     let file = sfc_prove::props::parse(&props_path, &props).unwrap();
-    let opts =
-        sfc_prove::Options { seconds: 20.0, debug: std::env::var("SFC_PROVE_DEBUG").is_ok(), ..Default::default() };
+    let profile = std::env::var("SFC_PROVE_PROFILE").ok().and_then(|p| sfc_sim::Profile::from_name(&p));
+    let opts = sfc_prove::Options {
+        seconds: 20.0,
+        debug: std::env::var("SFC_PROVE_DEBUG").is_ok(),
+        profile,
+        ..Default::default()
+    };
     match sfc_prove::prove(&chart, &text, &file, &opts) {
         Ok(r) => {
             println!("{}", r.human(""));

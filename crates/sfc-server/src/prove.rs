@@ -103,6 +103,10 @@ pub async fn prove(State(s): State<AppState>, body: Result<Bytes, BytesRejection
                 let d = diag("SFC1001", Severity::Error, e.message.clone(), None, at(&props_name, e.line, e.column));
                 return failed(&props_name, d);
             }
+            Err(ProveError::Unsupported(why)) => {
+                let d = diag("SFC1001", Severity::Error, why, None, at(&props_name, 1, 1));
+                return failed(&props_name, d);
+            }
             Err(ProveError::Chart(b)) => {
                 let (_, diags) = *b;
                 let first = diags.first().map_or_else(String::new, |d| d.message.clone());

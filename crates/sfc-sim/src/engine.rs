@@ -598,10 +598,12 @@ impl Simulation {
     }
 
     /// A canonical text of the run-time state — variables, active steps, step times,
-    /// supervision flags, action control blocks, chart bookkeeping — without history (time
-    /// analysis, firing log, scratch marks): two runs in the same state after the same scan have
-    /// equal keys. Used to explore state spaces with the simulator (the prover's independent
-    /// cross-check in the test suite).
+    /// supervision flags, action control blocks, chart bookkeeping (the steps active when the
+    /// step actions last ran; under `codesys` the steps the last evolution left) — without
+    /// history (time analysis, firing log, scratch marks): two runs in the same state after the
+    /// same scan have equal keys, and two runs with equal keys go on alike. Used to explore
+    /// state spaces with the simulator (the prover's independent cross-check in the test
+    /// suite).
     pub fn state_key(&self) -> String {
         use std::fmt::Write;
         let mut s = String::new();
@@ -610,6 +612,14 @@ impl Simulation {
             let mut active = c.active.clone();
             active.sort_unstable();
             let _ = write!(s, "{}:{}:{active:?}:{}{}:", c.started, c.last_time, c.tip_prev, c.quit_prev);
+            // What the next action phase reads besides the active steps: the steps active when
+            // the step actions last ran, and (`codesys`) the steps the last evolution left.
+            let _ = write!(s, "{:?}:", c.stepped);
+            if c.track_left {
+                let mut left = c.left.clone();
+                left.sort_unstable();
+                let _ = write!(s, "{left:?}:");
+            }
             for st in &c.steps {
                 let _ = write!(s, "{},{},{};", st.x, st.t, st.overdue);
             }

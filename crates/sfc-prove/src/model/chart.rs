@@ -1,13 +1,32 @@
-//! One scan of an SFC instance (`semantics.md` steps 2–8, `docs/sim.md` chart control
-//! variables), symbolically: step times, enabled and true transitions against one snapshot,
-//! conflict resolution by priority and declaration order, firing, ACTION_CONTROL of every action
-//! with its timers and the contention rule, action bodies in declaration order, supervision.
+//! One call of an SFC instance (`semantics.md` steps 2–8, `docs/sim.md` chart control
+//! variables, step actions, actions written in SFC and the profiles), symbolically.
+//!
+//! A call is a sequence of phases ([`Enc::run_chart`]), each a method of its own:
+//! 1. *control*: SFCInit (reset and hold), SFCReset (an action's chart: reset, then processed as
+//!    its scan 0), SFCQuitError;
+//! 2. *start*: the first call activates the initial steps (the chart's scan 0);
+//! 3. *clock*: later calls advance the step times of the active steps by the time since the
+//!    previous call, unless paused;
+//! 4. *evolution* (unless paused): enabled and true transitions against one snapshot, conflicts
+//!    (`iec`: explicit priorities, then declaration order; `codesys`: declaration order only),
+//!    firing;
+//! 5. *actions*: CODESYS's step actions (exit, entry, step action), then ACTION_CONTROL of every
+//!    action with its timers and the contention rule, then the bodies (`iec`: declaration order;
+//!    `codesys`: alphabetical, those of actions of steps left in the previous call first); a
+//!    body written in SFC runs one scan of its chart;
+//! 6. *supervision*.
+//!
+//! `iec` runs 4 before 5, `codesys` 5 before 4 ([`Enc::run_chart`] says the order in one
+//! place, so a profile's further rules are a phase more or a phase moved).
 
 use super::{Enc, Role, Slot};
 use crate::aig::Lit;
 use crate::word::Word;
 use sfc_model::{ActionTarget, Duration, Qualifier};
 use sfc_st::Type;
+
+/// How many runs of charts one scan's encoding may hold.
+const MAX_CHART_RUNS: usize = 4096;
 
 /// The five timed qualifiers, in the order of ACTION_CONTROL's duration array.
 const TIMED: [Qualifier; 5] = [Qualifier::L, Qualifier::D, Qualifier::SD, Qualifier::DS, Qualifier::SL];
@@ -67,13 +86,31 @@ pub struct EntityEnc {
     pub ctl: ControlRegs,
 }
 
+/// The registers of a chart's SFC flags (the instance's variables for a POU's chart, the
+/// chart's own hidden flags for an action written in SFC).
+#[derive(Debug, Clone, Default)]
+pub struct FlagRegs {
+    pub init: Option<usize>,
+    pub pause: Option<usize>,
+    pub quit: Option<usize>,
+    pub error: Option<usize>,
+    /// SFCReset (charts of actions only).
+    pub reset: Option<usize>,
+}
+
 /// The symbolic state of one SFC instance.
 #[derive(Debug, Clone)]
 pub struct ChartEnc {
     pub inst: usize,
-    /// Index into `Checked::charts`.
+    /// Index into the file's charts: `Checked::charts`, then `Checked::action_charts`
+    /// ([`chart_at`]).
     pub chart: usize,
+    /// The chart's path as the simulator names it: the instance path (`""` for the top POU,
+    /// `Rev`), and for an action written in SFC the action after it (`Cyl.ACT_Extend`).
     pub path: String,
+    /// The action whose chart this is.
+    pub action: Option<String>,
+    pub flags: FlagRegs,
     pub started: usize,
     pub x: Vec<usize>,
     /// Elapsed scans of each step whose time anything reads.
@@ -85,6 +122,21 @@ pub struct ChartEnc {
     /// Q and A of each action (by action index).
     pub q: Vec<usize>,
     pub a: Vec<usize>,
+    /// Per step with step actions: active when the step actions last ran.
+    pub stepped: Vec<Option<usize>>,
+    /// `codesys`: per step associated with an action, left by the previous call's evolution
+    /// (such actions' bodies run first).
+    pub left: Vec<Option<usize>>,
+    /// `codesys`: SFCQuitError in the previous call (its fall restarts the active steps' times).
+    pub quit_prev: Option<usize>,
+}
+
+/// Chart `idx` of the file: `Checked::charts`, then `Checked::action_charts`.
+pub fn chart_at(checked: &sfc_model::Checked, idx: usize) -> &sfc_model::Chart {
+    match checked.charts.get(idx) {
+        Some(c) => c,
+        None => &checked.action_charts[idx - checked.charts.len()],
+    }
 }
 
 impl ChartEnc {
@@ -93,8 +145,10 @@ impl ChartEnc {
         format!("{}{}#T", if path.is_empty() { String::new() } else { format!("{path}.") }, step).to_ascii_uppercase()
     }
 
+    /// The chart `chart_idx` ([`chart_at`]) of instance `inst`, named `path` (see
+    /// [`ChartEnc::path`]).
     pub(crate) fn new(e: &mut Enc<'_>, inst: usize, chart_idx: usize, path: &str) -> ChartEnc {
-        let chart = &e.checked.charts[chart_idx];
+        let chart = chart_at(e.checked, chart_idx);
         let qual = |n: &str| if path.is_empty() { n.to_string() } else { format!("{path}.{n}") };
         let started = e.new_reg(
             format!("{} (chart started)", if path.is_empty() { chart.pou.clone() } else { path.to_string() }),
@@ -103,6 +157,27 @@ impl ChartEnc {
             0,
             None,
         );
+        // The flags: the instance's variables, or the action chart's own.
+        let flags = match &chart.action {
+            None => FlagRegs {
+                init: e.instance_reg(inst, "SFCInit"),
+                pause: e.instance_reg(inst, "SFCPause"),
+                quit: e.instance_reg(inst, "SFCQuitError"),
+                error: e.instance_reg(inst, "SFCError"),
+                reset: None,
+            },
+            Some(_) => {
+                let mut flag =
+                    |n: &str| Some(e.new_reg(format!("{path}.{n} (flag)"), Type::Bool, Role::Hidden, 0, None));
+                FlagRegs {
+                    init: flag("SFCInit"),
+                    pause: flag("SFCPause"),
+                    quit: flag("SFCQuitError"),
+                    error: flag("SFCError"),
+                    reset: flag("SFCReset"),
+                }
+            }
+        };
         let mut x = Vec::new();
         let mut t = Vec::new();
         let mut overdue = Vec::new();
@@ -124,7 +199,7 @@ impl ChartEnc {
                 None
             });
         }
-        let gap = if path.is_empty() {
+        let gap = if path.is_empty() && chart.action.is_none() {
             None
         } else {
             let key = format!("{}#GAP", path.to_ascii_uppercase());
@@ -236,7 +311,53 @@ impl ChartEnc {
                 ctl: ControlRegs { s_ff, sd_ff, ds_ff, sl_ff, tmr, dur, p_mem, p1_mem, p0_mem, q: qr, a: ar },
             });
         }
-        ChartEnc { inst, chart: chart_idx, path: path.to_string(), started, x, t, overdue, gap, entities, q, a }
+        let mut stepped = Vec::new();
+        for s in &chart.steps {
+            stepped.push(if s.step_actions.is_empty() {
+                None
+            } else {
+                Some(e.new_reg(format!("{} (step actions ran)", qual(&s.name)), Type::Bool, Role::Hidden, 0, None))
+            });
+        }
+        // CODESYS's body order depends on the steps left only when two bodies may run.
+        let mut left = vec![None; chart.steps.len()];
+        if e.setup.profile == sfc_sim::Profile::Codesys && chart.actions.len() > 1 {
+            for en in entities.iter().filter(|en| en.action.is_some()) {
+                for asc in &en.assocs {
+                    if left[asc.step].is_none() {
+                        let name = format!("{} (left in the previous call)", qual(&chart.steps[asc.step].name));
+                        left[asc.step] = Some(e.new_reg(name, Type::Bool, Role::Hidden, 0, None));
+                    }
+                }
+            }
+        }
+        let quit_prev = (e.setup.profile == sfc_sim::Profile::Codesys && flags.quit.is_some()).then(|| {
+            e.new_reg(
+                format!("{} (SFCQuitError in the previous call)", qual("chart")),
+                Type::Bool,
+                Role::Hidden,
+                0,
+                None,
+            )
+        });
+        ChartEnc {
+            quit_prev,
+            inst,
+            chart: chart_idx,
+            path: path.to_string(),
+            action: chart.action.clone(),
+            flags,
+            started,
+            x,
+            t,
+            overdue,
+            gap,
+            entities,
+            q,
+            a,
+            stepped,
+            left,
+        }
     }
 }
 
@@ -294,80 +415,188 @@ impl Enc<'_> {
         }
     }
 
-    fn control_var(&self, c: usize, name: &str) -> Option<usize> {
-        self.instance_reg(self.charts[c].inst, name)
+    fn flag(&self, r: Option<usize>) -> Lit {
+        r.map_or(Lit::FALSE, |r| self.bool_reg(r))
     }
 
     /// One call of chart instance `c` (the top chart once per scan, a nested one per call of
-    /// its instance), under the current path condition.
-    pub(crate) fn run_chart(&mut self, c: usize, top: bool) {
-        let ch = self.charts[c].clone();
-        let chart = self.chart_of(c);
+    /// its instance, an action's chart per run of the action), under the current path
+    /// condition: the phases in the profile's order.
+    pub(crate) fn run_chart(&mut self, c: usize) {
+        // Each run of a chart is encoded where it happens (calls, associations, and under
+        // `codesys` both body passes): bounded, so nested actions written in SFC cannot make the
+        // encoding grow without end.
+        self.chart_runs += 1;
+        if self.chart_runs > MAX_CHART_RUNS {
+            self.refused.get_or_insert(format!(
+                "the chart is run in more than {MAX_CHART_RUNS} places of one scan (actions written in SFC nested in each other), which `prove` does not encode"
+            ));
+            return;
+        }
+        if self.running.contains(&c) {
+            // The sim stops such a run with a fault at its 200th nested run.
+            let name = self.charts[c].action.clone().unwrap_or_default();
+            self.refused.get_or_insert(format!(
+                "the chart of action `{name}` runs itself (through its steps' actions), which `prove` does not model"
+            ));
+            return;
+        }
+        self.running.push(c);
         let outer_pc = self.pc;
-        let init = self.control_var(c, "SFCInit").map_or(Lit::FALSE, |r| self.bool_reg(r));
-        let pause = self.control_var(c, "SFCPause").map_or(Lit::FALSE, |r| self.bool_reg(r));
-        let quit = self.control_var(c, "SFCQuitError").map_or(Lit::FALSE, |r| self.bool_reg(r));
-        let error = self.control_var(c, "SFCError");
-        // The time elapsed since the previous call, in scans.
-        let delta = match ch.gap {
+        let delta = self.call_gap(c);
+        let pause = self.flag(self.charts[c].flags.pause);
+        let pc_run = self.control_phase(c, outer_pc);
+        let started = self.bool_reg(self.charts[c].started);
+        let pc_first = self.g.and(pc_run, started.not());
+        self.start_phase(c, pc_first);
+        match self.setup.profile {
+            sfc_sim::Profile::Codesys => {
+                // docs/sim.md, "The `codesys` profile": SFCPause and SFCQuitError pause the whole
+                // call; the time check comes before the actions; the first call tests the
+                // transitions too.
+                let quit = self.flag(self.charts[c].flags.quit);
+                let paused = self.g.or(pause, quit);
+                let pc_go = self.g.and(pc_run, paused.not());
+                let pc_clock = self.g.and(pc_go, started);
+                self.clock_phase(c, pc_clock, &delta);
+                // SFCQuitError's fall: the times of the active steps restart (and their
+                // supervision with them).
+                if let Some(qp) = self.charts[c].quit_prev {
+                    let prev = self.bool_reg(qp);
+                    let fell = self.g.and(prev, quit.not());
+                    let pc_fell = self.g.and(pc_run, fell);
+                    if pc_fell != Lit::FALSE {
+                        let ch = self.charts[c].clone();
+                        self.pc = pc_fell;
+                        for s in 0..ch.x.len() {
+                            let x = self.bool_reg(ch.x[s]);
+                            if let Some(t) = ch.t[s] {
+                                let cw = self.mem[t].clone();
+                                let zero = Word::constant(0, cw.width());
+                                let w = self.ops().ite(x, &zero, &cw);
+                                self.write_reg(t, w);
+                            }
+                            if let Some(o) = ch.overdue[s] {
+                                let ov = self.bool_reg(o);
+                                let v = self.g.and(ov, x.not());
+                                self.write_reg(o, Word::from_bit(v, 1));
+                            }
+                        }
+                    }
+                    self.pc = pc_run;
+                    self.write_reg(qp, Word::from_bit(quit, 1));
+                }
+                self.pc = pc_go;
+                self.supervise(c);
+                self.pc = pc_go;
+                self.action_phase(c);
+                self.evolution_phase(c, pc_go);
+            }
+            _ => {
+                let pc_evolve = {
+                    let a = self.g.and(pc_run, started);
+                    self.g.and(a, pause.not())
+                };
+                self.clock_phase(c, pc_evolve, &delta);
+                self.evolution_phase(c, pc_evolve);
+                self.pc = pc_run;
+                self.action_phase(c);
+                self.pc = pc_run;
+                self.supervise(c);
+            }
+        }
+        self.pc = outer_pc;
+        self.running.pop();
+    }
+
+    /// The time elapsed since the previous call, in scans (1 for the top chart); the call
+    /// gap starts again.
+    fn call_gap(&mut self, c: usize) -> Word {
+        match self.charts[c].gap {
             Some(g) => {
                 let d = self.mem[g].clone();
                 self.write_reg(g, Word::constant(0, d.width()));
                 d
             }
             None => Word::constant(1, 2),
-        };
-        // SFCInit: back to the initial situation and hold it.
+        }
+    }
+
+    /// SFCInit (back to the initial situation and held there: the call ends), SFCReset (back
+    /// to it, and the call goes on as the chart's scan 0), SFCQuitError. Returns the path
+    /// condition under which the call goes on.
+    fn control_phase(&mut self, c: usize, outer_pc: Lit) -> Lit {
+        let flags = self.charts[c].flags.clone();
+        let init = self.flag(flags.init);
+        let reset = self.flag(flags.reset);
+        let quit = self.flag(flags.quit);
         let pc_init = self.g.and(outer_pc, init);
-        if pc_init != Lit::FALSE {
-            self.pc = pc_init;
-            let started = self.bool_reg(ch.started);
-            let any = self.g.or_all(ch.x.iter().map(|&r| self.mem[r].bits[0]));
-            let held = self.g.and(started.not(), any);
-            self.pc = self.g.and(pc_init, held.not());
-            self.reset_chart(c);
-        }
+        self.reset_unless_held(c, pc_init);
         let pc_run = self.g.and(outer_pc, init.not());
-        self.pc = pc_run;
-        if let Some(er) = error {
-            let p = self.g.and(pc_run, quit);
-            self.pc = p;
+        let pc_reset = self.g.and(pc_run, reset);
+        self.reset_unless_held(c, pc_reset);
+        if let Some(er) = flags.error {
+            self.pc = self.g.and(pc_run, quit);
             self.write_reg(er, Word::constant(0, 1));
-            self.pc = pc_run;
         }
+        self.pc = pc_run;
+        pc_run
+    }
+
+    /// Resets chart `c` under `pc`, unless it is held in its initial situation already (not
+    /// started, its initial steps active).
+    fn reset_unless_held(&mut self, c: usize, pc: Lit) {
+        if pc == Lit::FALSE {
+            return;
+        }
+        let ch = self.charts[c].clone();
+        self.pc = pc;
         let started = self.bool_reg(ch.started);
-        // First call: activate the initial steps.
-        let pc_first = self.g.and(pc_run, started.not());
-        if pc_first != Lit::FALSE {
-            self.pc = pc_first;
-            self.write_reg(ch.started, Word::constant(1, 1));
-            for (s, step) in chart.steps.iter().enumerate() {
-                if step.initial {
-                    self.write_reg(ch.x[s], Word::constant(1, 1));
-                    if let Some(t) = ch.t[s] {
-                        let w = self.mem[t].width();
-                        self.write_reg(t, Word::constant(0, w));
-                    }
-                    if let Some(o) = ch.overdue[s] {
-                        self.write_reg(o, Word::constant(0, 1));
-                    }
+        let any = self.g.or_all(ch.x.iter().map(|&r| self.mem[r].bits[0]));
+        let held = self.g.and(started.not(), any);
+        self.pc = self.g.and(pc, held.not());
+        self.reset_chart(c);
+    }
+
+    /// The first call (or the first after SFCInit, SFCReset): the initial steps become active.
+    fn start_phase(&mut self, c: usize, pc_first: Lit) {
+        if pc_first == Lit::FALSE {
+            return;
+        }
+        let ch = self.charts[c].clone();
+        let chart = self.chart_of(c);
+        self.pc = pc_first;
+        self.write_reg(ch.started, Word::constant(1, 1));
+        for (s, step) in chart.steps.iter().enumerate() {
+            if step.initial {
+                self.write_reg(ch.x[s], Word::constant(1, 1));
+                if let Some(t) = ch.t[s] {
+                    let w = self.mem[t].width();
+                    self.write_reg(t, Word::constant(0, w));
+                }
+                if let Some(o) = ch.overdue[s] {
+                    self.write_reg(o, Word::constant(0, 1));
                 }
             }
         }
-        // Later calls: the evolution, unless paused.
-        let pc_evolve = {
-            let a = self.g.and(pc_run, started);
-            self.g.and(a, pause.not())
-        };
-        if pc_evolve != Lit::FALSE {
-            self.pc = pc_evolve;
-            self.evolve(c, &delta, top);
+    }
+
+    /// Later calls, unless paused: the active steps' times advance by `delta` scans.
+    fn clock_phase(&mut self, c: usize, pc_evolve: Lit, delta: &Word) {
+        if pc_evolve == Lit::FALSE {
+            return;
         }
-        self.pc = pc_run;
-        self.action_phase(c);
-        self.pc = pc_run;
-        self.supervise(c, error);
-        self.pc = outer_pc;
+        let ch = self.charts[c].clone();
+        self.pc = pc_evolve;
+        for s in 0..ch.x.len() {
+            if let Some(t) = ch.t[s] {
+                let x = self.bool_reg(ch.x[s]);
+                let cw = self.mem[t].clone();
+                let inc = self.sat_inc(&cw, delta, t);
+                let w = self.ops().ite(x, &inc, &cw);
+                self.write_reg(t, w);
+            }
+        }
     }
 
     fn reset_chart(&mut self, c: usize) {
@@ -382,6 +611,9 @@ impl Enc<'_> {
             if let Some(o) = ch.overdue[s] {
                 self.write_reg(o, Word::constant(0, 1));
             }
+        }
+        for r in ch.stepped.iter().chain(&ch.left).flatten() {
+            self.write_reg(*r, Word::constant(0, 1));
         }
         for en in &ch.entities {
             let k = &en.ctl;
@@ -401,27 +633,20 @@ impl Enc<'_> {
                 self.write_reg(v, Word::constant(0, 1));
             }
         }
-        if let Some(er) = self.control_var(c, "SFCError") {
+        if let Some(er) = ch.flags.error {
             self.write_reg(er, Word::constant(0, 1));
         }
         self.write_reg(ch.started, Word::constant(0, 1));
     }
 
-    /// Steps 2–5 of a scan under the current path condition.
-    fn evolve(&mut self, c: usize, delta: &Word, _top: bool) {
+    /// Steps 3–5 under `pc`: enabled and true transitions, conflicts, firing.
+    fn evolution_phase(&mut self, c: usize, pc: Lit) {
+        if pc == Lit::FALSE {
+            return;
+        }
+        self.pc = pc;
         let ch = self.charts[c].clone();
         let chart = self.chart_of(c);
-        let pc = self.pc;
-        // Step times advance for the active steps.
-        for s in 0..chart.steps.len() {
-            if let Some(t) = ch.t[s] {
-                let x = self.bool_reg(ch.x[s]);
-                let cw = self.mem[t].clone();
-                let inc = self.sat_inc(&cw, delta, t);
-                let w = self.ops().ite(x, &inc, &cw);
-                self.write_reg(t, w);
-            }
-        }
         // Enabled and true transitions, against one snapshot.
         let n = chart.transitions.len();
         let mut e_true = vec![Lit::FALSE; n];
@@ -441,12 +666,15 @@ impl Enc<'_> {
             e_true[t] = self.g.and(enabled, g);
         }
         self.pc = pc;
-        // Conflicts: explicit priorities first (ascending), then declaration order.
+        // Conflicts: explicit priorities first (ascending), then declaration order; CODESYS has
+        // no priorities: declaration order (the leftmost alternative).
         let mut order: Vec<usize> = (0..n).collect();
-        order.sort_by_key(|&t| match chart.transitions[t].priority {
-            Some(p) => (0u8, p, t),
-            None => (1u8, 0, t),
-        });
+        if self.setup.profile != sfc_sim::Profile::Codesys {
+            order.sort_by_key(|&t| match chart.transitions[t].priority {
+                Some(p) => (0u8, p, t),
+                None => (1u8, 0, t),
+            });
+        }
         let mut consumed = vec![Lit::FALSE; chart.steps.len()];
         let mut accepted = vec![Lit::FALSE; n];
         for &t in &order {
@@ -511,10 +739,61 @@ impl Enc<'_> {
                 self.write_reg(o, Word::from_bit(nov, 1));
             }
         }
+        // CODESYS: the steps this evolution left order the next call's bodies.
+        for (s, l) in ch.left.iter().enumerate() {
+            if let Some(l) = *l {
+                self.write_reg(l, Word::from_bit(d[s], 1));
+            }
+        }
     }
 
-    /// Steps 6–7: ACTION_CONTROL of every entity, then the bodies with `A` in declaration order.
+    /// CODESYS's step actions, before the IEC actions: the exit actions of the steps left since
+    /// the step actions last ran, the entry actions of the steps entered since, then the step
+    /// action of every active step; each group in step order; no action control (the
+    /// simulator's `engine/action.rs::step_actions`).
+    fn step_actions(&mut self, c: usize) {
+        use sfc_syntax::ast::StepActionKind as K;
+        let ch = self.charts[c].clone();
+        if ch.stepped.iter().all(Option::is_none) {
+            return;
+        }
+        let chart = self.chart_of(c);
+        let pc = self.pc;
+        let now: Vec<(usize, Lit, Lit)> = ch
+            .stepped
+            .iter()
+            .enumerate()
+            .filter_map(|(s, r)| r.map(|r| (s, self.bool_reg(ch.x[s]), self.bool_reg(r))))
+            .collect();
+        for kind in [K::Exit, K::Entry, K::Main] {
+            for &(s, x, before) in &now {
+                let cond = match kind {
+                    K::Exit => self.g.and(before, x.not()),
+                    K::Entry => self.g.and(x, before.not()),
+                    K::Main => x,
+                };
+                for sa in chart.steps[s].step_actions.iter().filter(|a| a.kind == kind) {
+                    self.pc = self.g.and(pc, cond);
+                    if self.pc == Lit::FALSE {
+                        continue;
+                    }
+                    self.run_step_action(ch.inst, sa);
+                }
+            }
+        }
+        self.pc = pc;
+        for &(s, x, _) in &now {
+            if let Some(r) = ch.stepped[s] {
+                self.write_reg(r, Word::from_bit(x, 1));
+            }
+        }
+    }
+
+    /// Steps 6–7: the step actions, ACTION_CONTROL of every entity, then the bodies with `A`
+    /// (`iec`: in declaration order; `codesys`: alphabetically, those of actions of steps left
+    /// in the previous call first).
     fn action_phase(&mut self, c: usize) {
+        self.step_actions(c);
         let ch = self.charts[c].clone();
         let chart = self.chart_of(c);
         let period = self.setup.period;
@@ -635,16 +914,42 @@ impl Enc<'_> {
                 run.push((act, a));
             }
         }
-        // Bodies in declaration order of the actions.
-        run.sort_by_key(|r| r.0);
         let pc = self.pc;
-        for (act, a) in run {
-            if a == Lit::FALSE {
-                continue;
+        if self.setup.profile == sfc_sim::Profile::Codesys {
+            // Alphabetical order (the simulator's `alpha_rank`), in two passes when some step
+            // may have been left: first the actions of steps left in the previous call.
+            run.sort_by_cached_key(|r| (chart.actions[r.0].name.to_ascii_uppercase(), r.0));
+            let left_of = |e: &mut Enc<'_>, act: usize| -> Lit {
+                let Some(en) = ch.entities.iter().find(|en| en.action == Some(act)) else { return Lit::FALSE };
+                let ls: Vec<Lit> = en.assocs.iter().filter_map(|a| ch.left[a.step]).map(|r| e.bool_reg(r)).collect();
+                e.g.or_all(ls)
+            };
+            let lefts: Vec<Lit> = run.iter().map(|&(act, _)| left_of(self, act)).collect();
+            for first in [true, false] {
+                for (&(act, a), &l) in run.iter().zip(&lefts) {
+                    let group = if first { l } else { l.not() };
+                    let cond = self.g.and(a, group);
+                    if cond == Lit::FALSE {
+                        continue;
+                    }
+                    self.pc = self.g.and(pc, cond);
+                    self.run_action(ch.inst, &chart.actions[act].name, &chart.actions[act].body);
+                }
             }
-            self.pc = self.g.and(pc, a);
-            let body = &chart.actions[act].body;
-            self.run_action_body(ch.inst, body);
+            self.pc = pc;
+            for r in ch.left.iter().flatten() {
+                self.write_reg(*r, Word::constant(0, 1));
+            }
+        } else {
+            // Bodies in declaration order of the actions.
+            run.sort_by_key(|r| r.0);
+            for (act, a) in run {
+                if a == Lit::FALSE {
+                    continue;
+                }
+                self.pc = self.g.and(pc, a);
+                self.run_action(ch.inst, &chart.actions[act].name, &chart.actions[act].body);
+            }
         }
         self.pc = pc;
     }
@@ -727,7 +1032,8 @@ impl Enc<'_> {
     }
 
     /// Step 8's supervision: `S.T > timeout` of an active step sets SFCError once per activation.
-    fn supervise(&mut self, c: usize, error: Option<usize>) {
+    fn supervise(&mut self, c: usize) {
+        let error = self.charts[c].flags.error;
         let ch = self.charts[c].clone();
         let chart = self.chart_of(c);
         let period = self.setup.period;

@@ -342,11 +342,11 @@ impl<'a> Enc<'a> {
             let p = PlaceRef::Slot(p.slot.clone(), p.ty.clone());
             return self.read_place(&p, e.span);
         }
+        if self.find_step(f.inst, &id.text).is_some() {
+            return err(id.span, format!("`{}` is a step; read `{0}.X`", id.text));
+        }
         if let Some(c) = self.insts[f.inst].chart {
             let chart = self.chart_of(c);
-            if chart.step(&id.text).is_some() {
-                return err(id.span, format!("`{}` is a step; read `{0}.X`", id.text));
-            }
             if chart.action(&id.text).is_some() {
                 return err(id.span, format!("`{}` is an action; read `{0}.Q`", id.text));
             }
@@ -441,18 +441,26 @@ impl<'a> Enc<'a> {
         }
     }
 
+    /// Step `name` of instance `inst`, as the simulator finds it in the POU's namespace: a step
+    /// of its chart, else of the charts of its actions written in SFC in the file's order
+    /// (`(chart, step)`).
+    pub fn find_step(&self, inst: usize, name: &str) -> Option<(usize, usize)> {
+        let i = &self.insts[inst];
+        i.chart.into_iter().chain(i.subs.iter().copied()).find_map(|c| self.chart_of(c).step(name).map(|s| (c, s)))
+    }
+
     fn member_place(&mut self, f: &Frame, base: &Expr, member: &Ident) -> R<PlaceRef> {
         if let ExprKind::Name(id) = &base.kind {
             if self.lookup_var(f, &id.text).is_none() {
+                if let Some((c, s)) = self.find_step(f.inst, &id.text) {
+                    return match member.text.to_ascii_uppercase().as_str() {
+                        "X" => Ok(PlaceRef::StepX(c, s)),
+                        "T" => Ok(PlaceRef::StepT(c, s)),
+                        _ => err(member.span, format!("steps have no member `{}` (X or T)", member.text)),
+                    };
+                }
                 if let Some(c) = self.insts[f.inst].chart {
                     let chart = self.chart_of(c);
-                    if let Some(s) = chart.step(&id.text) {
-                        return match member.text.to_ascii_uppercase().as_str() {
-                            "X" => Ok(PlaceRef::StepX(c, s)),
-                            "T" => Ok(PlaceRef::StepT(c, s)),
-                            _ => err(member.span, format!("steps have no member `{}` (X or T)", member.text)),
-                        };
-                    }
                     if let Some(a) = chart.action(&id.text) {
                         return match member.text.to_ascii_uppercase().as_str() {
                             "Q" => Ok(PlaceRef::ActQ(c, a)),
@@ -466,16 +474,16 @@ impl<'a> Enc<'a> {
         // `Inst.Step.X` / `Inst.Action.Q` of a nested chart instance (readable by properties).
         if let ExprKind::Member { base: inner, member: elem } = &base.kind {
             if let Ok(PlaceRef::Slot(Slot::Fb(i), _)) = self.place(f, inner) {
+                let m = member.text.to_ascii_uppercase();
+                if let Some((c, s)) = self.find_step(i, &elem.text) {
+                    match m.as_str() {
+                        "X" => return Ok(PlaceRef::StepX(c, s)),
+                        "T" => return Ok(PlaceRef::StepT(c, s)),
+                        _ => {}
+                    }
+                }
                 if let Some(c) = self.insts[i].chart {
                     let chart = self.chart_of(c);
-                    let m = member.text.to_ascii_uppercase();
-                    if let Some(s) = chart.step(&elem.text) {
-                        match m.as_str() {
-                            "X" => return Ok(PlaceRef::StepX(c, s)),
-                            "T" => return Ok(PlaceRef::StepT(c, s)),
-                            _ => {}
-                        }
-                    }
                     if let Some(a) = chart.action(&elem.text) {
                         match m.as_str() {
                             "Q" => return Ok(PlaceRef::ActQ(c, a)),

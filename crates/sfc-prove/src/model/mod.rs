@@ -1,5 +1,6 @@
 //! The chart and its ST/IL code compiled to a bit-level transition relation of one scan under
-//! the `iec` semantics of `semantics.md` (and the simulator's documented choices, `docs/sim.md`).
+//! the semantics of `semantics.md` in the `iec` or `codesys` profile (and the simulator's
+//! documented choices, `docs/sim.md`: step actions, actions written in SFC).
 //!
 //! The state is a list of registers: every variable of the simulated POU and of its nested
 //! instances (arrays and structures flattened), the hidden state of standard function blocks,
@@ -13,7 +14,7 @@
 //! proof; a violation found through such a value is caught by the witness replay in the
 //! simulator.
 
-pub(crate) mod chart;
+pub mod chart;
 pub(crate) mod expr;
 pub(crate) mod il;
 pub(crate) mod stmt;
@@ -160,6 +161,8 @@ pub struct Inst {
     pub vars: Vec<VarEntry>,
     /// The SFC state of the instance, when its POU is a chart.
     pub chart: Option<usize>,
+    /// The charts of its POU's actions written in SFC (in the file's order).
+    pub subs: Vec<usize>,
 }
 
 /// A POU of the file.
@@ -168,6 +171,8 @@ pub struct PouInfo<'a> {
     pub iface: sfc_st::PouInterface,
     /// Index into `Checked::charts` for an SFC POU.
     pub chart: Option<usize>,
+    /// Its actions written in SFC: indices of their charts ([`chart::chart_at`]).
+    pub subs: Vec<usize>,
 }
 
 /// Settings of the encoding that earlier passes found.
@@ -205,6 +210,8 @@ pub struct Setup {
     pub extra_inputs: Vec<String>,
     /// Value ranges from `[assume] ranges` by upper-case path.
     pub ranges: HashMap<String, (i128, i128)>,
+    /// `iec` or `codesys` (the others are refused before encoding).
+    pub profile: sfc_sim::Profile,
 }
 
 /// The encoder: builds the one-scan relation into an AIG.
@@ -249,6 +256,12 @@ pub struct Enc<'a> {
     pub guard_of: Option<(usize, usize)>,
     /// Implicit control inputs held FALSE (not read by the chart).
     pub held: std::cell::RefCell<Vec<String>>,
+    /// The charts whose call is being encoded (a chart that runs itself is refused).
+    pub running: Vec<usize>,
+    /// Why the chart cannot be proved, found while encoding.
+    pub refused: Option<String>,
+    /// Runs of charts encoded so far in this scan.
+    pub chart_runs: usize,
 }
 
 /// The result of encoding: the transition system of one scan.
@@ -483,7 +496,10 @@ impl<'a> Enc<'a> {
 
     /// A nested instance of function block type `name` at `path`.
     fn instantiate_fb(&mut self, name: &str, path: &str, depth: u32) -> Option<usize> {
-        if let Some(p) = self.pous.iter().position(|p| p.ast.kind == PouKind::FunctionBlock && p.ast.name.is(name)) {
+        // A PROGRAM is one instance, the global named after it (`Other.X` from any code; its
+        // body runs where code calls it).
+        let user = |p: &PouInfo<'_>| matches!(p.ast.kind, PouKind::FunctionBlock | PouKind::Program);
+        if let Some(p) = self.pous.iter().position(|p| user(p) && p.ast.name.is(name)) {
             return Some(self.instantiate_user(p, path, depth));
         }
         let kind = StdFb::from_name(name)?;
@@ -494,6 +510,7 @@ impl<'a> Enc<'a> {
             path: path.to_string(),
             vars: Vec::new(),
             chart: None,
+            subs: Vec::new(),
         });
         let mut vars = Vec::new();
         for (n, k, ty) in params {
@@ -537,7 +554,13 @@ impl<'a> Enc<'a> {
     /// An instance of user POU `p` (the top POU, or a FUNCTION_BLOCK) at `path`.
     pub fn instantiate_user(&mut self, p: usize, path: &str, depth: u32) -> usize {
         let idx = self.insts.len();
-        self.insts.push(Inst { kind: InstKind::User(p), path: path.to_string(), vars: Vec::new(), chart: None });
+        self.insts.push(Inst {
+            kind: InstKind::User(p),
+            path: path.to_string(),
+            vars: Vec::new(),
+            chart: None,
+            subs: Vec::new(),
+        });
         let top = path.is_empty();
         let iface_vars: Vec<VarInfo> = self.pous[p].iface.vars.clone();
         let mut vars = Vec::new();
@@ -566,6 +589,16 @@ impl<'a> Enc<'a> {
             let ch = chart::ChartEnc::new(self, idx, c, path);
             self.charts.push(ch);
             self.insts[idx].chart = Some(self.charts.len() - 1);
+        }
+        // The charts of its actions written in SFC, in the frame of this instance, named
+        // `path.Action` as the simulator names them.
+        for c in self.pous[p].subs.clone() {
+            let action = chart::chart_at(self.checked, c).action.clone().unwrap_or_default();
+            let cpath = if top { action } else { format!("{path}.{action}") };
+            let ch = chart::ChartEnc::new(self, idx, c, &cpath);
+            self.charts.push(ch);
+            let k = self.charts.len() - 1;
+            self.insts[idx].subs.push(k);
         }
         idx
     }
@@ -598,8 +631,9 @@ impl<'a> Enc<'a> {
         let Some(p) = top else { return false };
         let mut found = false;
         let mut visit = |id: &sfc_syntax::ast::Ident| found |= id.is(name);
-        if let Some(c) = self.pous[p].chart {
-            let chart = &self.checked.charts[c];
+        let charts = self.pous[p].chart.into_iter().chain(self.pous[p].subs.iter().copied());
+        for c in charts {
+            let chart = chart::chart_at(self.checked, c);
             for t in &chart.transitions {
                 match &t.condition {
                     sfc_syntax::ast::Condition::St(e) => names_in_expr(e, &mut visit),
@@ -660,26 +694,22 @@ pub fn encode<'a>(
         let Item::Pou(p) = item else { continue };
         let Some(iface) = env.interface_of(p).cloned() else { continue };
         let chart = checked.charts.iter().position(|c| c.item == i);
-        pous.push(PouInfo { ast: p, iface, chart });
+        let subs = (0..checked.action_charts.len())
+            .filter(|&k| checked.action_charts[k].item == i)
+            .map(|k| checked.charts.len() + k)
+            .collect();
+        pous.push(PouInfo { ast: p, iface, chart, subs });
     }
     let top_pou = pous
         .iter()
         .position(|p| p.ast.name.is(&setup.pou) && p.ast.kind != PouKind::Function)
         .ok_or_else(|| format!("no PROGRAM or FUNCTION_BLOCK named `{}`", setup.pou))?;
-    // A chart inside an action is not modelled yet: refused rather than proved without it.
+    // What the model does not encode yet is refused rather than proved without it.
     let uses = sfc_model::dependencies(&checked.unit, &checked.file.text, &setup.pou);
-    let stepped = checked.charts.iter().filter(|c| uses.contains(&c.pou.to_ascii_uppercase()));
-    if let Some((c, s)) =
-        stepped.flat_map(|c| c.steps.iter().map(move |s| (c, s))).find(|(_, s)| !s.step_actions.is_empty())
-    {
-        return Err(format!(
-            "step `{}.{}` has step actions (CODESYS), which `prove` does not model yet",
-            c.pou, s.name
-        ));
-    }
     if let Some((c, s)) = checked
         .charts
         .iter()
+        .chain(&checked.action_charts)
         .filter(|c| uses.contains(&c.pou.to_ascii_uppercase()))
         .flat_map(|c| c.steps.iter().map(move |s| (c, s)))
         .find(|(_, s)| s.min_time.is_some())
@@ -707,13 +737,6 @@ pub fn encode<'a>(
                 p.name.text
             ));
         }
-    }
-    if let Some(c) = checked.action_charts.iter().find(|c| uses.contains(&c.pou.to_ascii_uppercase())) {
-        return Err(format!(
-            "`{}.{}` is an action written in SFC, which `prove` does not model yet",
-            c.pou,
-            c.action.as_deref().unwrap_or_default()
-        ));
     }
     let mut e = Enc {
         g: Aig::new(),
@@ -744,13 +767,28 @@ pub fn encode<'a>(
         scanned: 0,
         guard_of: None,
         held: Default::default(),
+        running: Vec::new(),
+        refused: None,
+        chart_runs: 0,
     };
-    // Globals of the file.
+    // Globals of the file. The simulated PROGRAM is the global named after it: that global is
+    // the top instance itself (`Main.X` in a function block is the top's `X`).
     let globals: Vec<VarInfo> = e.env.globals().to_vec();
+    let top_is_program = e.pous[top_pou].ast.kind == PouKind::Program;
+    let mut top_global = None;
     for v in &globals {
         let located_input = v.location.as_ref().is_some_and(|l| l.area.eq_ignore_ascii_case(&'I'));
         let extra = e.setup.extra_inputs.iter().any(|n| n.eq_ignore_ascii_case(&v.name));
-        let slot = e.layout(&v.name, &v.ty, Role::Var { input: located_input || extra }, 0);
+        let is_top = top_is_program
+            && top_global.is_none()
+            && v.name.eq_ignore_ascii_case(&e.pous[top_pou].ast.name.text)
+            && matches!(&v.ty, Type::FunctionBlock(n) if n.eq_ignore_ascii_case(&e.pous[top_pou].ast.name.text));
+        let slot = if is_top {
+            top_global = Some(e.globals.len());
+            Slot::Opaque(v.ty.clone())
+        } else {
+            e.layout(&v.name, &v.ty, Role::Var { input: located_input || extra }, 0)
+        };
         e.globals.push(VarEntry {
             name: v.name.clone(),
             kind: v.kind,
@@ -762,8 +800,14 @@ pub fn encode<'a>(
     }
     e.scanned = e.new_reg("(scan 0 done)".into(), Type::Bool, Role::Hidden, 0, None);
     e.top = e.instantiate_user(top_pou, "", 0);
+    if let Some(k) = top_global {
+        e.globals[k].slot = Slot::Fb(e.top);
+    }
     let cur: Vec<Word> = e.mem.clone();
     e.scan(hooks)?;
+    if let Some(why) = e.refused.take() {
+        return Err(why);
+    }
     let scanned = e.scanned;
     e.set_reg(scanned, Word::constant(1, 1));
     // Range checks of the values computed in this scan.
@@ -860,7 +904,7 @@ impl<'a> Enc<'a> {
         self.tick_timers();
         let top = self.top;
         match self.insts[top].chart {
-            Some(c) => self.run_chart(c, true),
+            Some(c) => self.run_chart(c),
             None => self.run_body(top),
         }
         Ok(())
@@ -899,7 +943,7 @@ impl<'a> Enc<'a> {
     /// The POU the instance runs, and its chart in `Checked::charts`.
     pub fn chart_of(&self, c: usize) -> &'a Chart {
         let idx = self.charts[c].chart;
-        &self.checked.charts[idx]
+        chart::chart_at(self.checked, idx)
     }
 }
 

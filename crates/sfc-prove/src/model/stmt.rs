@@ -34,25 +34,88 @@ impl<'a> Enc<'a> {
             sfc_syntax::ast::Body::Il(il) => self.exec_il(&f, il),
             sfc_syntax::ast::Body::Sfc(_) => {
                 if let Some(c) = self.insts[inst].chart {
-                    self.run_chart(c, false);
+                    self.run_chart(c);
                 }
             }
         }
         self.returned = saved_ret;
     }
 
-    /// Runs an action body in its chart's instance.
-    pub(crate) fn run_action_body(&mut self, inst: usize, body: &ActionBody) {
+    /// Runs the body of action `name` on instance `inst`: its statements, or for an action
+    /// written in SFC one scan of its chart.
+    pub(crate) fn run_action(&mut self, inst: usize, name: &str, body: &ActionBody) {
         let f = self.frame(inst);
         let saved_ret = self.returned;
         self.returned = Lit::FALSE;
         match body {
             ActionBody::St(stmts) => self.exec_list(&f, stmts),
             ActionBody::Il(il) => self.exec_il(&f, il),
-            // Refused before encoding (`encode`).
-            ActionBody::Sfc(_) => {}
+            ActionBody::Sfc(_) => match self.action_chart(inst, name) {
+                Some(c) => self.run_chart(c),
+                None => {
+                    self.refused.get_or_insert(format!("the chart of action `{name}` is missing"));
+                }
+            },
         }
         self.returned = saved_ret;
+    }
+
+    /// The chart of action `name` (written in SFC) of instance `inst`.
+    pub(crate) fn action_chart(&self, inst: usize, name: &str) -> Option<usize> {
+        self.insts[inst]
+            .subs
+            .iter()
+            .copied()
+            .find(|&c| self.charts[c].action.as_deref().is_some_and(|a| a.eq_ignore_ascii_case(name)))
+    }
+
+    /// Action `name` of instance `inst`: the actions of its POU's chart, or for a POU whose
+    /// body is not a chart, the POU's actions.
+    pub(crate) fn action_of(&self, inst: usize, name: &str) -> Option<(String, &'a ActionBody)> {
+        if let Some(c) = self.insts[inst].chart {
+            let chart = self.chart_of(c);
+            return chart.action(name).map(|a| (chart.actions[a].name.clone(), &chart.actions[a].body));
+        }
+        let super::InstKind::User(p) = self.insts[inst].kind else { return None };
+        let ast: &'a sfc_syntax::ast::Pou = self.pous[p].ast;
+        ast.actions.iter().find(|a| a.name.is(name)).map(|a| (a.name.text.clone(), &a.body))
+    }
+
+    /// Runs a step action (`ENTRY_ACTION := A;`, …) as the call `A();` or `inst.A();`. What
+    /// cannot be modelled makes what the instance holds free.
+    pub(crate) fn run_step_action(&mut self, inst: usize, sa: &sfc_syntax::ast::StepAction) {
+        let f = self.frame(inst);
+        let r = match sa.call() {
+            Some(call) => self.call_stmt(&f, &call),
+            None => Err(ExprError { span: sa.span, message: "the step action names no action".into() }),
+        };
+        if let Err(e) = r {
+            let (line, _) = line_col(&self.checked.file.text, sa.span.start as usize);
+            self.note(format!(
+                "the step action at line {line} is not modelled ({}); the variables of its POU instance and the globals are free after it",
+                e.message
+            ));
+            self.havoc_instance(inst);
+        }
+    }
+
+    /// Makes every variable of instance `inst` (nested instances included) and every global
+    /// free.
+    pub(crate) fn havoc_instance(&mut self, inst: usize) {
+        let mut leaves = Vec::new();
+        for v in self.insts[inst].vars.clone().iter().chain(self.globals.clone().iter()) {
+            self.slot_leaves_deep(&v.slot, &mut leaves);
+        }
+        leaves.sort_unstable();
+        leaves.dedup();
+        for r in leaves {
+            let reg = self.regs[r].clone();
+            if reg.role == Role::Temp {
+                continue;
+            }
+            let w = self.fresh(format!("{} (not modelled)", reg.name), reg.full, reg.signed, None);
+            self.write_reg(r, w);
+        }
     }
 
     /// A transition condition; what the model cannot evaluate becomes a free condition.
@@ -329,8 +392,8 @@ impl<'a> Enc<'a> {
     pub(crate) fn havoc_stmt(&mut self, f: &Frame, s: &Stmt) {
         match &s.kind {
             StmtKind::Assign { target, .. } => self.havoc_target(f, target),
-            StmtKind::Call(e) => {
-                if let ExprKind::Call { callee, args } = &e.kind {
+            StmtKind::Call(e) => match &e.kind {
+                ExprKind::Call { callee, args } => {
                     for a in args {
                         if let (true, Some(v)) = (a.output, &a.value) {
                             self.havoc_target(f, v);
@@ -344,9 +407,26 @@ impl<'a> Enc<'a> {
                             let w = self.fresh(format!("{} (not modelled)", reg.name), reg.full, reg.signed, None);
                             self.write_reg(r, w);
                         }
+                    } else if sfc_st::stdlib::std_function(&callee.text).is_none() {
+                        // An action, a method of the instance, a user function: what it may
+                        // write is the instance's and the globals.
+                        self.havoc_instance(f.inst);
                     }
                 }
-            }
+                ExprKind::MemberCall { base, args, .. } => {
+                    for a in args {
+                        if let (true, Some(v)) = (a.output, &a.value) {
+                            self.havoc_target(f, v);
+                        }
+                    }
+                    // A method or action of the instance: the instance and the globals.
+                    match self.place(f, base) {
+                        Ok(PlaceRef::Slot(Slot::Fb(i), _)) => self.havoc_instance(i),
+                        _ => self.havoc_instance(f.inst),
+                    }
+                }
+                _ => {}
+            },
             StmtKind::If { branches, else_body } => {
                 for (_, b) in branches {
                     b.iter().for_each(|s| self.havoc_stmt(f, s));
@@ -490,8 +570,43 @@ impl<'a> Enc<'a> {
         }
     }
 
-    /// A call used as a statement: a function block instance, an action, or a function.
-    fn call_stmt(&mut self, f: &Frame, e: &Expr) -> R<()> {
+    /// A call used as a statement: a function block instance, an action (`A();`,
+    /// `inst.A();`, with the chart flags of an action written in SFC: `A(SFCReset := x)`), or
+    /// a function.
+    pub(crate) fn call_stmt(&mut self, f: &Frame, e: &Expr) -> R<()> {
+        if let ExprKind::MemberCall { base, member, args } = &e.kind {
+            // The instance, or each instance a computed index may select (`Cells[i].Act()`).
+            let cands = match self.place(f, base) {
+                Ok(PlaceRef::Slot(slot, _)) => vec![(Lit::TRUE, slot)],
+                Ok(PlaceRef::Dyn(cands, _)) => cands,
+                _ => Vec::new(),
+            };
+            let mut insts = Vec::new();
+            for (sel, slot) in cands {
+                let Slot::Fb(inst) = slot else {
+                    return Err(ExprError {
+                        span: base.span,
+                        message: "the instance of this call is not modelled".into(),
+                    });
+                };
+                insts.push((sel, inst));
+            }
+            if insts.is_empty() {
+                return Err(ExprError { span: base.span, message: "the instance of this call is not modelled".into() });
+            }
+            let pc = self.pc;
+            for (sel, inst) in insts {
+                self.pc = self.g.and(pc, sel);
+                if self.pc == Lit::FALSE {
+                    continue;
+                }
+                let r = self.call_member(f, inst, member, args, e.span);
+                self.pc = pc;
+                r?;
+            }
+            self.pc = pc;
+            return Ok(());
+        }
         let ExprKind::Call { callee, args } = &e.kind else {
             self.eval(f, e, None)?;
             return Ok(());
@@ -501,20 +616,77 @@ impl<'a> Enc<'a> {
                 return self.fb_call(f, &v.slot, args, e.span, callee);
             }
         }
-        if let Some(c) = self.insts[f.inst].chart {
-            let chart = self.chart_of(c);
-            if let Some(a) = chart.action(&callee.text) {
-                let inst = f.inst;
-                if self.depth > MAX_DEPTH {
-                    return Err(ExprError { span: e.span, message: "actions call each other too deeply".into() });
-                }
-                self.depth += 1;
-                self.run_action_body(inst, &chart.actions[a].body);
-                self.depth -= 1;
-                return Ok(());
-            }
+        if let Some((name, body)) = self.action_of(f.inst, &callee.text) {
+            return self.call_action(f, f.inst, &name, body, args, e.span);
         }
         self.call_value(f, callee, args, e.span, None)?;
+        Ok(())
+    }
+
+    /// `inst.Member(…)`: action `Member` of the instance, or the instance `Member` inside it.
+    fn call_member(&mut self, f: &Frame, inst: usize, member: &Ident, args: &[Arg], span: Span) -> R<()> {
+        if let Some((name, body)) = self.action_of(inst, &member.text) {
+            return self.call_action(f, inst, &name, body, args, span);
+        }
+        // `inst.Inner(…)`: the instance `Inner` inside `inst` is called.
+        let inner = self.insts[inst].vars.iter().find(|v| v.name.eq_ignore_ascii_case(&member.text)).cloned();
+        if let Some(v) = inner.filter(|v| matches!(v.ty, Type::FunctionBlock(_))) {
+            return self.fb_call(f, &v.slot, args, span, member);
+        }
+        Err(ExprError {
+            span: member.span,
+            message: format!("the call of `{}` of an instance cannot be modelled", member.text),
+        })
+    }
+
+    /// A call of action `name` of instance `inst` from code in frame `f`: the chart flags it
+    /// sets (evaluated in the caller), then its body.
+    fn call_action(
+        &mut self,
+        f: &Frame,
+        inst: usize,
+        name: &str,
+        body: &ActionBody,
+        args: &[Arg],
+        span: Span,
+    ) -> R<()> {
+        if self.depth > MAX_DEPTH {
+            // Refused rather than made free: an action may move charts (its own, written in
+            // SFC, or those of instances it calls), which no free value stands for.
+            self.refused.get_or_insert(format!("actions call each other more than {MAX_DEPTH} deep (`{name}`)"));
+            return Ok(());
+        }
+        if !args.is_empty() {
+            let Some(c) = self.action_chart(inst, name) else {
+                return Err(ExprError { span, message: format!("action `{name}` takes no arguments") });
+            };
+            let flags = self.charts[c].flags.clone();
+            let mut sets = Vec::new();
+            for a in args {
+                let flag = a.name.as_ref().map(|n| n.text.to_ascii_uppercase()).unwrap_or_default();
+                let r = match flag.as_str() {
+                    "SFCINIT" => flags.init,
+                    "SFCRESET" => flags.reset,
+                    "SFCPAUSE" => flags.pause,
+                    "SFCQUITERROR" => flags.quit,
+                    _ => None,
+                };
+                let (Some(r), Some(v), false) = (r, &a.value, a.output) else {
+                    return Err(ExprError {
+                        span: a.span,
+                        message: format!("a call of action `{name}` sets only its chart's flags"),
+                    });
+                };
+                let l = self.eval_bool(f, v)?;
+                sets.push((r, l));
+            }
+            for (r, l) in sets {
+                self.write_reg(r, Word::from_bit(l, 1));
+            }
+        }
+        self.depth += 1;
+        self.run_action(inst, name, body);
+        self.depth -= 1;
         Ok(())
     }
 

@@ -14,13 +14,14 @@ use std::collections::HashSet;
 pub enum Found {
     /// First violated after this scan (a shortest run).
     ViolatedAt(usize),
-    /// Not violated within the explored depth.
+    /// Not violated within this many scans (the depth asked for, or less when the state budget
+    /// ran out first).
     NotWithin(usize),
     /// Reached (for `reachable … from_initial`) after this scan.
     ReachedAt(usize),
     /// This kind of property is not explored.
     Skipped,
-    /// Too many states.
+    /// Too many input values to try.
     TooBig,
 }
 
@@ -60,7 +61,7 @@ fn domain(sim: &Simulation, name: &str, file: &PropertyFile) -> Option<Vec<Value
     Some((lo..=hi).map(|v| Value::Int(v as i64)).collect())
 }
 
-/// Explores the chart's state space up to `depth` scans. `inputs`: the free inputs (as the
+/// Explores the chart's state space up to `depth` scans under `profile`. `inputs`: the free inputs (as the
 /// prover reports them). Returns one result per property of `names` (the prover's order:
 /// `no runtime error`, ranges, then the file's properties).
 pub fn explore(
@@ -73,8 +74,9 @@ pub fn explore(
     names: &[String],
     depth: usize,
     max_states: usize,
+    profile: sfc_sim::Profile,
 ) -> Vec<Found> {
-    let opts = sfc_sim::SimOptions { period, profile: sfc_sim::Profile::Iec };
+    let opts = sfc_sim::SimOptions { period, profile };
     let Ok(sim) = Simulation::from_source(chart_name, chart_text, Some(pou), opts) else {
         return vec![Found::Skipped; names.len()];
     };
@@ -203,6 +205,12 @@ pub fn explore(
                 if sim.error().is_some() || left_range {
                     continue;
                 }
+                // The inputs' values after the scan do not matter (the next scan sets every one
+                // of them anew, and the properties have been evaluated): with a canonical value
+                // states that differ only there are one state.
+                for (name, d) in &doms {
+                    let _ = sim.set(name, d[0].clone());
+                }
                 let key = format!("{}{:?}", sim.state_key(), monitors);
                 if seen.insert(key) {
                     next.push(Node { sim_state: sim.snapshot(), monitors });
@@ -210,7 +218,9 @@ pub fn explore(
             }
         }
         if seen.len() > max_states {
-            return result.into_iter().map(|r| r.unwrap_or(Found::TooBig)).collect();
+            // Every state after scans 0..=scan was checked: what is not decided yet is not
+            // violated (reached) within scan + 1 scans.
+            return result.into_iter().map(|r| r.unwrap_or(Found::NotWithin(scan + 1))).collect();
         }
         frontier = next;
         if result.iter().all(Option::is_some) || frontier.is_empty() {
