@@ -206,7 +206,13 @@ fn step_actions_and_sfc_actions_are_proved_under_both_profiles() {
         let out = text(&o);
         assert_eq!(o.status.code(), Some(1), "{out}");
         assert!(out.contains("HOLDS    one step of the action at a time"), "{out}");
-        assert!(out.contains("HOLDS    abort puts the action back"), "{out}");
+        // Under codesys a call with SFCReset goes on processing the initial situation, whose
+        // transitions are tested in that same call (docs/sim.md, "The `codesys` profile").
+        if profile == "iec" {
+            assert!(out.contains("HOLDS    abort puts the action back"), "{out}");
+        } else {
+            assert!(out.contains("VIOLATED abort puts the action back"), "{out}");
+        }
         assert!(out.contains("VIOLATED the valve follows the step"), "{out}");
         assert!(!out.contains("NOT reproduced"), "{out}");
         // No statement or step action left out of the model.
