@@ -83,21 +83,29 @@ pub fn default_properties(chart: &Path) -> PathBuf {
 }
 
 pub fn prove(a: ProveArgs) -> u8 {
-    if a.file.extension().is_some_and(|e| e.eq_ignore_ascii_case("xml")) {
-        eprintln!(
-            "error: `{}` is PLCopen XML: convert it to textual SFC first (`sfc build {} --target text -o chart.st`) and prove that",
-            a.file.display(),
-            a.file.display()
-        );
-        return 2;
-    }
-    let chart_text = match sfc_driver::read_source(&a.file) {
+    let raw = match sfc_driver::read_source(&a.file) {
         Ok(d) => d.text,
         Err(e) => {
             eprintln!("error: {e}");
             return 2;
         }
     };
+    // A PLCopen XML file is proved as the IEC text it imports to (as `sim` runs it); an import
+    // error stops it, located in the XML.
+    let iec = sfc_driver::IecText::of(&a.file, &raw);
+    if let Some(imported) = &iec.imported {
+        let errors: Vec<_> = imported.diagnostics.iter().filter(|d| d.is_error()).collect();
+        if !errors.is_empty() {
+            let color = std::io::stderr().is_terminal();
+            for d in errors {
+                eprintln!("{}", render_human(d, std::slice::from_ref(&imported.xml), RenderOptions { color }));
+            }
+            eprintln!("error: `{}` cannot be proved until these errors are fixed", a.file.display());
+            return 2;
+        }
+    }
+    let vendor = sfc_sim::chart_vendor(&iec.text, iec.imported.as_ref());
+    let chart_text = iec.text;
     let props_path = a.properties.clone().unwrap_or_else(|| default_properties(&a.file));
     let props_text = match std::fs::read(&props_path) {
         Ok(b) => match String::from_utf8(b) {
@@ -132,6 +140,17 @@ pub fn prove(a: ProveArgs) -> u8 {
         eprintln!("warning: `{shown_props}` declares no [[property]]: only ranges and runtime errors are checked");
     }
     let mut opts = Options { pou: a.pou.clone(), period: a.period, profile: a.profile, ..Options::default() };
+    // Without --profile or the property file's `profile`, the rules of the tool that wrote the
+    // file (said, as `sim` says it).
+    if opts.profile.is_none() && file.profile.is_none() {
+        if let (sfc_sim::Profile::Codesys, sfc_sim::ProfileSource::Vendor(v)) = sfc_sim::file_profile(vendor) {
+            opts.profile = Some(sfc_sim::Profile::Codesys);
+            eprintln!(
+                "note: {}",
+                sfc_sim::vendor_profile_note("proved", &a.file.display().to_string(), v, "--profile iec")
+            );
+        }
+    }
     match a.budget {
         Some(Budget::Seconds(s)) => opts.seconds = s,
         Some(Budget::States(n)) => opts.max_states = Some(n),

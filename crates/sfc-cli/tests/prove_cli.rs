@@ -233,3 +233,50 @@ fn step_actions_and_sfc_actions_are_proved_under_both_profiles() {
         assert_eq!(t.status.code(), Some(1), "{}", text(&t));
     }
 }
+
+/// The machine project in the shape of a CODESYS export (the bottling line: eleven function
+/// blocks whose SFC actions call each other's actions, with step actions): `sfc prove` takes
+/// the XML itself, chooses `codesys` from its vendor (said in a note), decides every property of
+/// `bottling_line.props.toml` (mutual exclusion of modes and of two actuators, modes reachable,
+/// responses within a time), and each violation's witness replays in `sfc test`, failing on the
+/// property.
+#[test]
+fn the_bottling_line_export_is_proved_under_codesys() {
+    let src = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../tests/corpus/real/codesys");
+    let d = std::env::temp_dir().join(format!("sfc-prove-bottling-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&d);
+    std::fs::create_dir_all(&d).unwrap();
+    for f in ["bottling_line_eleven_blocks.xml", "bottling_line.props.toml"] {
+        std::fs::copy(src.join(f), d.join(f)).unwrap();
+    }
+    let o = sfc_in(&d, &["prove", "bottling_line_eleven_blocks.xml", "--properties", "bottling_line.props.toml"]);
+    let out = text(&o);
+    assert_eq!(o.status.code(), Some(1), "{out}");
+    assert!(
+        out.contains("note: proved with profile codesys: bottling_line_eleven_blocks.xml is a CODESYS export"),
+        "{out}"
+    );
+    assert!(out.contains("4 held, 3 violated, 0 unknown"), "{out}");
+    for held in [
+        "production and stopping exclude each other",
+        "init and production exclude each other",
+        "the line can be stopped",
+        "rinsing and capping run in parallel",
+    ] {
+        assert!(out.contains(&format!("HOLDS    {held}")), "{held}\n{out}");
+    }
+    let witnesses = [
+        "the-conveyor-drive-and-the-capping-head-are-never-on-together",
+        "a-stop-is-answered-within-10-ms",
+        "the-run-lamp-is-off-while-stopping",
+    ];
+    for w in witnesses {
+        let file = format!("bottling_line_eleven_blocks.{w}.witness.toml");
+        assert!(d.join(&file).exists(), "{file}\n{out}");
+        let t = sfc_in(&d, &["test", &file]);
+        let tout = text(&t);
+        assert_eq!(t.status.code(), Some(1), "the witness fails on its property: {tout}");
+        assert!(tout.contains("0 passed, 1 failed"), "{tout}");
+    }
+    assert!(!out.contains("NOT reproduced"), "{out}");
+}
