@@ -5,7 +5,6 @@
 
 use sfc_diagnostics::Diagnostic;
 use sfc_model::{ActionTarget, Chart};
-use sfc_syntax::ast::{Condition, Expr, ExprKind, LiteralKind};
 
 /// The differences of the charts of a checked file: `charts` are the POUs' charts,
 /// `action_charts` the charts of their actions written in SFC.
@@ -51,10 +50,7 @@ fn chart(c: &Chart, out: &mut Vec<Diagnostic>) {
     }
     // SFC0912: the first call tests the initial steps' transitions.
     for t in &c.transitions {
-        let literal_false = matches!(&t.condition, Condition::St(Expr { kind: ExprKind::Literal(l), .. })
-            if matches!(l.kind, LiteralKind::Bool(false)));
-        let waits = matches!(&t.condition, Condition::St(e) if crate::matiec_check::waits_for_time(e));
-        if !literal_false && !waits && t.from.iter().all(|&s| c.steps[s].initial) {
+        if crate::matiec_check::tested_at_start(c, t) {
             let steps: Vec<&str> = t.from.iter().map(|&s| c.steps[s].name.as_str()).collect();
             out.push(
                 Diagnostic::warning(

@@ -28,10 +28,7 @@ fn chart(c: &Chart, _source: &str, out: &mut Vec<Diagnostic>) {
     let step_name = |s: usize| c.steps[s].name.as_str();
     // SFC0901: scan 0 tests the transitions of the initial steps.
     for t in &c.transitions {
-        let literal_false = matches!(&t.condition, Condition::St(Expr { kind: ExprKind::Literal(l), .. })
-            if matches!(l.kind, LiteralKind::Bool(false)));
-        let waits = matches!(&t.condition, Condition::St(e) if waits_for_time(e));
-        if !literal_false && !waits && t.from.iter().all(|&s| c.steps[s].initial) {
+        if tested_at_start(c, t) {
             let steps: Vec<&str> = t.from.iter().map(|&s| step_name(s)).collect();
             out.push(
                 Diagnostic::warning(
@@ -298,7 +295,17 @@ fn sfc_sim_us(lit: &str) -> i64 {
 
 /// Whether a condition needs some step time above zero (`S.T >= T#20ms AND …`): FALSE in scan 0,
 /// where every step time is zero.
-pub(crate) fn waits_for_time(e: &Expr) -> bool {
+/// A transition that leaves initial steps only and may be TRUE from the start (not a literal
+/// FALSE, not waiting for a step time): a profile that tests transitions in the first scan may
+/// fire it there.
+pub(crate) fn tested_at_start(c: &Chart, t: &sfc_model::TransitionNode) -> bool {
+    let literal_false = matches!(&t.condition, Condition::St(Expr { kind: ExprKind::Literal(l), .. })
+        if matches!(l.kind, LiteralKind::Bool(false)));
+    let waits = matches!(&t.condition, Condition::St(e) if waits_for_time(e));
+    !literal_false && !waits && t.from.iter().all(|&s| c.steps[s].initial)
+}
+
+fn waits_for_time(e: &Expr) -> bool {
     match &e.kind {
         ExprKind::Paren(x) => waits_for_time(x),
         ExprKind::Binary { op: BinaryOp::And | BinaryOp::AndThen, lhs, rhs } => {

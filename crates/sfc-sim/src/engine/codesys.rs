@@ -27,7 +27,9 @@
 //! is automatically activated and the step action is executed").
 
 use super::action::{run_iec_actions, step_actions};
-use super::evolve::{check_times, evolve, publish_initial, read_bool, reset, set_trans, start, update_current_step};
+use super::evolve::{
+    check_times, evolve, held_or_reset, publish_initial, read_bool, set_trans, start, update_current_step,
+};
 use crate::code::{ChartCode, Ctx, Fault};
 use crate::value::Value;
 use std::sync::Arc;
@@ -39,13 +41,8 @@ pub(super) fn run(ctx: &mut Ctx<'_>, chart: usize, code: &ChartCode) -> Result<(
     let now = ctx.now;
     let ctl = code.control;
     // 1. SFCInit holds the initial situation; SFCReset resets it and goes on.
-    if read_bool(ctx.mem, frame + ctl.init as usize) {
-        reset(ctx, chart, code);
-        set_trans(ctx, chart, code, false);
+    if held_or_reset(ctx, chart, code) {
         return Ok(());
-    }
-    if ctl.reset.is_some_and(|r| read_bool(ctx.mem, frame + r as usize)) {
-        reset(ctx, chart, code);
     }
     // 2. SFCQuitError: while TRUE the error is cleared and the chart paused; its fall restarts
     // the times of the active steps.

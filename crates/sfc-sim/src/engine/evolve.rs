@@ -46,16 +46,8 @@ pub fn run_chart(ctx: &mut Ctx<'_>, chart: usize) -> Result<(), Fault> {
     let frame = ctx.charts[chart].frame;
     let now = ctx.now;
     let ctl = code.control;
-    // Chart control: SFCInit resets and holds the initial situation.
-    if read_bool(ctx.mem, frame + ctl.init as usize) {
-        reset(ctx, chart, code);
-        set_trans(ctx, chart, code, false);
+    if held_or_reset(ctx, chart, code) {
         return Ok(());
-    }
-    // SFCReset (CODESYS; declared, or an action's chart): back to the initial situation,
-    // processed on.
-    if ctl.reset.is_some_and(|r| read_bool(ctx.mem, frame + r as usize)) {
-        reset(ctx, chart, code);
     }
     if read_bool(ctx.mem, frame + ctl.quit_error as usize) {
         ctx.mem[frame + ctl.error as usize] = Value::Bool(false);
@@ -97,6 +89,23 @@ pub fn run_chart(ctx: &mut Ctx<'_>, chart: usize) -> Result<(), Fault> {
     action_phase(ctx, chart, code, plan)?;
     finish_scan(ctx, chart, code, plan);
     Ok(())
+}
+
+/// Chart control at the start of a call: SFCInit puts the chart back into its initial situation
+/// and holds it there (returns TRUE: the call ends); SFCReset (CODESYS; declared, or an
+/// action's chart) puts it back and the call goes on processing it.
+pub(super) fn held_or_reset(ctx: &mut Ctx<'_>, chart: usize, code: &ChartCode) -> bool {
+    let frame = ctx.charts[chart].frame;
+    let ctl = code.control;
+    if read_bool(ctx.mem, frame + ctl.init as usize) {
+        reset(ctx, chart, code);
+        set_trans(ctx, chart, code, false);
+        return true;
+    }
+    if ctl.reset.is_some_and(|r| read_bool(ctx.mem, frame + r as usize)) {
+        reset(ctx, chart, code);
+    }
+    false
 }
 
 /// The first call of an instance (or the first after SFCInit/SFCReset): its initial steps
