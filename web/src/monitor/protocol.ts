@@ -48,6 +48,8 @@ export interface TransitionReport {
   /** The operands that must change, in words with terminals and values: `KM2Fb (X12.3, %IX0.5) is FALSE; needs TRUE`. */
   needs?: string[];
   missing: string[];
+  /** Preceding steps still inside their minimum time (`sfc.min_time`): `Hold (T#20ms of T#30ms)`. */
+  dwell?: string[];
   masked_by: string | null;
 }
 
