@@ -579,3 +579,27 @@ fn codesys_rules() {
         assert!(outcome.passed(), "{}: {:?} {:?}", path.display(), outcome.failures, outcome.error);
     }
 }
+
+/// `codesys`: a call with SFCPause TRUE processes nothing, the first one included (it only
+/// activates the initial steps); the first call after the pause runs the actions and tests the
+/// transitions (docs/sim.md, "The `codesys` profile", "SFC flags").
+#[test]
+fn codesys_pause_holds_the_first_call_too() {
+    let text = "PROGRAM P\nVAR_INPUT SFCPause : BOOL; END_VAR\nVAR_OUTPUT Runs : INT; END_VAR\n\
+                INITIAL_STEP S: Count(N); END_STEP\nTRANSITION FROM S TO T := TRUE; END_TRANSITION\n\
+                STEP T: END_STEP\nTRANSITION FROM T TO S := FALSE; END_TRANSITION\n\
+                ACTION Count: Runs := Runs + 1; END_ACTION\nEND_PROGRAM\n";
+    let opts = SimOptions { period: 10_000, profile: sfc_sim::Profile::Codesys };
+    let mut sim = Simulation::from_source("p.st", text, None, opts).map_err(|(_, d)| d).unwrap();
+    sim.set("SFCPause", Value::Bool(true)).unwrap();
+    for _ in 0..2 {
+        let r = sim.scan();
+        assert_eq!(r.active, vec!["S".to_string()]);
+        assert!(r.fired.is_empty());
+        assert_eq!(sim.get("Runs"), Some(Value::Int(0)));
+    }
+    sim.set("SFCPause", Value::Bool(false)).unwrap();
+    let r = sim.scan();
+    assert_eq!(r.active, vec!["T".to_string()]);
+    assert_eq!(sim.get("Runs"), Some(Value::Int(1)));
+}

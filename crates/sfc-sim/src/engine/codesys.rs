@@ -84,8 +84,13 @@ pub(super) fn run(ctx: &mut Ctx<'_>, chart: usize, code: &ChartCode) -> Result<(
             st.publish_t(ctx.mem, s);
         }
     }
-    if paused && !first {
+    if paused {
+        // Nothing is processed; a first call has only activated the initial steps.
         set_trans(ctx, chart, code, false);
+        let st = &ctx.charts[chart];
+        if first && st.changed && st.track_current {
+            update_current_step(ctx, chart, code, plan);
+        }
         return Ok(());
     }
     // 3. The time check, on the steps active in this call.
@@ -100,11 +105,9 @@ pub(super) fn run(ctx: &mut Ctx<'_>, chart: usize, code: &ChartCode) -> Result<(
     if !st.entered.is_empty() || !st.live.is_empty() {
         run_iec_actions(ctx, chart, code, plan)?;
     }
-    // 6. The transitions (not on a paused first call: it only activates the initial steps).
+    // 6. The transitions.
     let fired_before = ctx.sink.fired.len();
-    if !paused {
-        evolve(ctx, chart, code, plan)?;
-    }
+    evolve(ctx, chart, code, plan)?;
     let fired = ctx.sink.fired[fired_before..].iter().any(|f| f.0 == chart as u32);
     set_trans(ctx, chart, code, fired);
     let st = &ctx.charts[chart];
