@@ -7,6 +7,7 @@ use crate::Status;
 use sfc_driver::compile::{self, CompileError, CompileOptions};
 use std::path::PathBuf;
 
+pub use sfc_codegen::st::StDialect;
 pub use sfc_codegen::stl::StlMethod;
 pub use sfc_driver::compile::BuildTarget;
 
@@ -22,11 +23,17 @@ pub struct BuildRequest {
     pub stl_method: Option<StlMethod>,
     /// `--symbols OUT.csv` (STL only).
     pub symbols: Option<PathBuf>,
+    /// `--st-dialect` (ST only).
+    pub st_dialect: Option<StDialect>,
 }
 
 pub fn build(r: BuildRequest) -> u8 {
     if r.target != BuildTarget::Stl && (r.stl_method.is_some() || r.symbols.is_some()) {
         term::error("--stl-method and --symbols apply to --target stl");
+        return Status::Usage.code();
+    }
+    if r.target != BuildTarget::St && r.st_dialect.is_some() {
+        term::error("--st-dialect applies to --target st");
         return Status::Usage.code();
     }
     for out in r.out.iter().chain(&r.symbols) {
@@ -85,6 +92,7 @@ pub fn build(r: BuildRequest) -> u8 {
         nstep: r.nstep,
         ntr: r.ntr,
         stl_method: r.stl_method.unwrap_or_default(),
+        st_dialect: r.st_dialect.unwrap_or_default(),
         original: compile::is_xml(&r.file, &decoded.text).then_some(decoded.text.as_str()),
     };
     // A conversion writes its output whatever the file's errors (reported above), and then

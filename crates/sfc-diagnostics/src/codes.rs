@@ -458,6 +458,12 @@ step actions (`ENTRY_ACTION`, `STEP_ACTION`, `EXIT_ACTION`), as CODESYS, TwinCAT
 write them. The ST, STL, ATMT and EATMT targets do not generate them yet, and leaving them out \
 would give a program that does something else. `sfc sim`, `sfc check`, `--target text` and \
 `--target plcopen` handle them.";
+    "SFC0807" Error "duration finer than the dialect's TIME"
+        "`--st-dialect codesys` writes ST for CODESYS and TwinCAT, whose TIME counts milliseconds \
+(durations below the millisecond are LTIME's). A duration of the chart with a part below the \
+millisecond (`T#2ms500us`, or a supervision time like it) would be rounded there, and the \
+program would not behave as the chart: it is refused where it is written. Write whole \
+milliseconds, or build with `--st-dialect iec` for a compiler whose TIME holds microseconds.";
     "SFC0810" Error "not expressible in the S7-200 program"
         "The S7-200 statement-list target (`--target stl`) turns conditions into bit logic over \
 inputs, outputs, memory, step, timer and counter bits, and into compare contacts (`LDW>=`, \

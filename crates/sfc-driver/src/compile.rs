@@ -188,6 +188,8 @@ pub struct CompileOptions<'a> {
     pub ntr: Option<u32>,
     /// STL: set/reset or SCR.
     pub stl_method: sfc_codegen::stl::StlMethod,
+    /// ST: the compiler it is written for.
+    pub st_dialect: sfc_codegen::st::StDialect,
     /// PLCopen: the PLCopen file the checked text was imported from, whose element a POU with
     /// errors is written as (`sfc_plcopen::export_with`).
     pub original: Option<&'a str>,
@@ -255,6 +257,20 @@ pub fn compile(checked: &Checked, target: BuildTarget, opts: &CompileOptions) ->
                 .map(|(text, notes)| Compiled { text, notes, flattened: None, symbols: None })
                 .map_err(CompileError::Diagnostics)
         }
+        BuildTarget::St => {
+            // Every chart of the file unless one is named, so a chart function block and the
+            // chart program calling it both become plain ST.
+            if checked.charts.is_empty() {
+                return Err(CompileError::Chart("the file has no SFC POU to build".to_string()));
+            }
+            if let Some(p) = opts.pou {
+                pick_chart(checked, Some(p)).map_err(CompileError::Chart)?;
+            }
+            let st = sfc_codegen::st::StOptions { dialect: opts.st_dialect };
+            return sfc_codegen::st::build_st_file(checked, opts.pou, &st)
+                .map(|text| Compiled { text, notes: codesys_actions(checked), flattened: None, symbols: None })
+                .map_err(CompileError::Diagnostics);
+        }
         _ => {}
     }
     let chart = pick_chart(checked, opts.pou).map_err(CompileError::Chart)?;
@@ -277,12 +293,6 @@ pub fn compile(checked: &Checked, target: BuildTarget, opts: &CompileOptions) ->
                 symbols: None,
             })
         }
-        (BuildTarget::St, _) => sfc_codegen::st::build_st(checked, chart).map(|text| Compiled {
-            text,
-            notes: codesys_actions(checked),
-            flattened: None,
-            symbols: None,
-        }),
         (BuildTarget::Stl, _) => {
             let opts = sfc_codegen::stl::StlOptions { method: opts.stl_method };
             sfc_codegen::stl::build_stl(checked, chart, opts).map(|p| Compiled {
