@@ -101,8 +101,12 @@ pub struct StOptions {
 /// after the other (so a chart function block and the chart program calling it both become
 /// plain ST), then the dialect's passes over the whole file (IEC order, located variables in
 /// their own blocks, what the compiler needs: `dialect.rs`). Errors are located in `checked`'s
-/// text: every chart is tried against it first.
-pub fn build_st_file(checked: &Checked, pou: Option<&str>, opts: &StOptions) -> Result<String, Vec<Diagnostic>> {
+/// text: every chart is tried against it first. Notes: what was added (SFC0808).
+pub fn build_st_file(
+    checked: &Checked,
+    pou: Option<&str>,
+    opts: &StOptions,
+) -> Result<(String, Vec<Diagnostic>), Vec<Diagnostic>> {
     if checked.has_errors() {
         return Err(checked.diagnostics.iter().filter(|d| d.is_error()).cloned().collect());
     }
@@ -146,7 +150,16 @@ pub fn build_st_file(checked: &Checked, pou: Option<&str>, opts: &StOptions) -> 
             text = build_st_with(checked, charts[0], opts)?;
         }
     }
-    Ok(dialect::finish(&text, opts.dialect))
+    let (text, configured) = dialect::finish(&text, opts.dialect);
+    let mut notes = Vec::new();
+    if configured {
+        notes.push(Diagnostic::note_diag(
+            "SFC0808",
+            charts[0].name_span,
+            "added `CONFIGURATION Config0` at the end: OpenPLC v3 needs one; its task runs every PROGRAM every 20 ms (set INTERVAL to your scan period)",
+        ));
+    }
+    Ok((text, notes))
 }
 
 /// [`build_st_with`] in the `iec` dialect, without the whole-file passes of [`build_st_file`].

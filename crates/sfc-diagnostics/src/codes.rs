@@ -464,6 +464,12 @@ would give a program that does something else. `sfc sim`, `sfc check`, `--target
 millisecond (`T#2ms500us`, or a supervision time like it) would be rounded there, and the \
 program would not behave as the chart: it is refused where it is written. Write whole \
 milliseconds, or build with `--st-dialect iec` for a compiler whose TIME holds microseconds.";
+    "SFC0808" Note "configuration added for MatIEC"
+        "`--st-dialect matiec` writes ST for MatIEC, the compiler of Beremiz and OpenPLC v3. OpenPLC \
+v3 compiles an uploaded `.st` file together with its `CONFIGURATION` (its editor writes one), so \
+a file without one gets `CONFIGURATION Config0` at the end: one resource, one task `task0` every \
+20 ms (OpenPLC v3's default), and one instance of every PROGRAM of the file. Set `INTERVAL` to \
+the scan period the chart was written for. A file with a configuration is left as it is.";
     "SFC0810" Error "not expressible in the S7-200 program"
         "The S7-200 statement-list target (`--target stl`) turns conditions into bit logic over \
 inputs, outputs, memory, step, timer and counter bits, and into compare contacts (`LDW>=`, \

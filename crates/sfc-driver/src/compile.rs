@@ -268,7 +268,10 @@ pub fn compile(checked: &Checked, target: BuildTarget, opts: &CompileOptions) ->
             }
             let st = sfc_codegen::st::StOptions { dialect: opts.st_dialect };
             return sfc_codegen::st::build_st_file(checked, opts.pou, &st)
-                .map(|text| Compiled { text, notes: codesys_actions(checked), flattened: None, symbols: None })
+                .map(|(text, mut notes)| {
+                    notes.extend(codesys_actions(checked));
+                    Compiled { text, notes, flattened: None, symbols: None }
+                })
                 .map_err(CompileError::Diagnostics);
         }
         _ => {}

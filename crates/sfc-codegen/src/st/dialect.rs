@@ -17,18 +17,60 @@ use sfc_syntax::ast;
 use sfc_syntax::lexer::{lex, TokenKind};
 use std::collections::HashSet;
 
-/// The dialect's passes over a translated file.
-pub(crate) fn finish(text: &str, dialect: StDialect) -> String {
+/// The dialect's passes over a translated file, and whether a CONFIGURATION was added.
+pub(crate) fn finish(text: &str, dialect: StDialect) -> (String, bool) {
     let mut t = if dialect == StDialect::Codesys { text.to_string() } else { pragmas_to_comments(text) };
     t = split_located(&t);
     if dialect == StDialect::Matiec {
         t = one_instance_per_declaration(&t);
     }
     t = iec_order(&t);
+    let mut configured = false;
     if dialect == StDialect::Matiec {
-        t = matiec_time_literals(&t);
+        if let Some(c) = configuration(&t) {
+            t.push_str(&c);
+            configured = true;
+        }
+        let exact = matiec_time_literals(&t);
+        if exact != t {
+            t = format!("{MATIEC_LITERALS}{exact}");
+        }
     }
-    t
+    (t, configured)
+}
+
+const MATIEC_LITERALS: &str =
+    "(* Written by sfc for MatIEC (--st-dialect matiec). A duration such as T#8.0000005ms is T#8ms:\n   \
+MatIEC computes a TIME literal in floating point and truncates it to whole nanoseconds, so T#8ms\n   \
+would be 7.999999 ms; the half nanosecond more is truncated away. *)\n";
+
+/// OpenPLC v3 compiles an uploaded `.st` file with its CONFIGURATION (its editor writes one):
+/// for a file without one, a configuration that runs every PROGRAM every 20 ms, OpenPLC v3's
+/// default task. `None` when the file has a configuration or no program.
+fn configuration(text: &str) -> Option<String> {
+    let (unit, _) = sfc_syntax::parse(0, text);
+    let mut programs = Vec::new();
+    for item in &unit.items {
+        match item {
+            ast::Item::Verbatim(v) if v.keyword.eq_ignore_ascii_case("CONFIGURATION") => return None,
+            ast::Item::Pou(p) if p.kind == ast::PouKind::Program => programs.push(p.name.text.clone()),
+            _ => {}
+        }
+    }
+    if programs.is_empty() {
+        return None;
+    }
+    let mut c = String::from(
+        "\n(* Added by sfc for MatIEC: OpenPLC v3 compiles a program with its configuration. This one\n   \
+         runs every PROGRAM of the file every 20 ms (OpenPLC v3's default task): set INTERVAL to the\n   \
+         scan period the chart was written for. *)\nCONFIGURATION Config0\n    RESOURCE Res0 ON PLC\n        \
+         TASK task0(INTERVAL := T#20ms, PRIORITY := 0);\n",
+    );
+    for (k, p) in programs.iter().enumerate() {
+        c.push_str(&format!("        PROGRAM instance{k} WITH task0 : {p};\n"));
+    }
+    c.push_str("    END_RESOURCE\nEND_CONFIGURATION\n");
+    Some(c)
 }
 
 /// `codesys`: CODESYS's and TwinCAT's TIME counts milliseconds (finer durations are LTIME's),
