@@ -133,6 +133,21 @@ pub fn build(r: BuildRequest) -> u8 {
             return Status::Findings.code();
         }
     };
+    // `--target st -o OUT.xml`: the plain ST POUs as PLCopen XML, which CODESYS, TwinCAT and
+    // Beremiz import (a text file of several POUs is not something they open).
+    let xml_out = r.out.as_ref().and_then(|p| p.extension()).is_some_and(|e| e.eq_ignore_ascii_case("xml"));
+    let text = if r.target == BuildTarget::St && xml_out {
+        let st = sfc_model::check_source(0, &checked.file.name, &text, &Default::default());
+        match compile::compile(&st, BuildTarget::Plcopen, &CompileOptions::default()) {
+            Ok(xml) if !st.has_errors() => xml.text,
+            Ok(_) | Err(_) => {
+                term::error("the Structured Text could not be written as PLCopen XML (an internal error: please report it); write it to a .st file instead");
+                return Status::Usage.code();
+            }
+        }
+    } else {
+        text
+    };
     finish(write_out(&r, &text), status_after)
 }
 
