@@ -77,3 +77,69 @@ fn the_readme_commands_run_on_openplc_v4_openplc_v3_and_codesys() {
     assert!(text.contains("FUNCTION_BLOCK SfcActionControl") && text.contains("PROGRAM CarWash"), "{text}");
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// The way back: the ST that `sfc build --target st` writes is an sfc input. For every example
+/// scenario: `sfc check` of the ST prints nothing the chart's check does not, and `sfc sim` of
+/// it with the scenario gives the chart's variables the values `sfc sim` of the chart gives
+/// them, scan by scan.
+#[test]
+fn the_st_reads_back_and_simulates_like_the_chart() {
+    let root = common::root();
+    let dir = common::scratch("st-back");
+    let sfc = |args: &[&str]| {
+        let out = Command::new(env!("CARGO_BIN_EXE_sfc")).args(args).current_dir(&root).output().unwrap();
+        (
+            out.status.code(),
+            String::from_utf8_lossy(&out.stdout).to_string(),
+            String::from_utf8_lossy(&out.stderr).to_string(),
+        )
+    };
+    let mut n = 0;
+    for ex in ["blinker/blinker", "carwash/carwash", "spindle/spindle", "traffic/traffic"] {
+        let chart = format!("examples/{ex}.st");
+        let st = dir.join(format!("{}.plain.st", ex.replace('/', "_")));
+        let (code, _, err) = sfc(&["build", &chart, "--target", "st", "-o", st.to_str().unwrap()]);
+        assert_eq!(code, Some(0), "{chart}: {err}");
+        let (_, _, chart_check) = sfc(&["check", &chart]);
+        let (code, _, st_check) = sfc(&["check", st.to_str().unwrap()]);
+        assert_eq!(code, Some(0), "{chart}: the ST does not check:\n{st_check}");
+        let codes = |s: &str| -> Vec<String> {
+            s.lines().filter(|l| l.contains("[SFC")).map(|l| l.split(']').next().unwrap_or("").to_string()).collect()
+        };
+        for c in codes(&st_check) {
+            assert!(codes(&chart_check).contains(&c), "{chart}: the ST has {c}, the chart has not:\n{st_check}");
+        }
+        let base = root.join("examples").join(ex);
+        let scenarios: Vec<PathBuf> = std::fs::read_dir(base.parent().unwrap())
+            .unwrap()
+            .map(|e| e.unwrap().path())
+            .filter(|p| p.to_string_lossy().ends_with(".scenario.toml"))
+            .collect();
+        for s in scenarios {
+            // The scenario's inputs without its expectations (the ST has no steps to expect).
+            // (the examples write each expectation on one line)
+            let text = std::fs::read_to_string(&s).unwrap();
+            let kept: Vec<&str> =
+                text.lines().filter(|l| !l.starts_with("expect") && !l.starts_with("chart")).collect();
+            let inputs = dir.join(s.file_name().unwrap());
+            std::fs::write(&inputs, kept.join("\n")).unwrap();
+            let trace = |file: &str| -> Vec<serde_json::Value> {
+                let (_, out, err) = sfc(&["sim", file, "--scenario", inputs.to_str().unwrap(), "--trace", "-"]);
+                let rows: Vec<serde_json::Value> = out.lines().filter_map(|l| serde_json::from_str(l).ok()).collect();
+                assert!(!rows.is_empty(), "{file} with {}: no trace\n{err}", s.display());
+                rows
+            };
+            let a = trace(&chart);
+            let b = trace(st.to_str().unwrap());
+            assert_eq!(a.len(), b.len(), "{chart} {}: scans", s.display());
+            for (ra, rb) in a.iter().zip(&b) {
+                for (k, v) in ra["vars"].as_object().unwrap() {
+                    assert_eq!(Some(v), rb["vars"].get(k), "{chart} {}: scan {}: {k}", s.display(), ra["scan"]);
+                }
+            }
+            n += 1;
+        }
+    }
+    assert!(n >= 6, "{n} scenarios");
+    let _ = std::fs::remove_dir_all(&dir);
+}
