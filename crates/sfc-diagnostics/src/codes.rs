@@ -446,12 +446,13 @@ again, or store it in a variable and load that.";
 a transition condition or a parenthesised operand, an operator without the operand it needs, or \
 a jump to a label that does not exist.";
 
-    "SFC0805" Warning "actions outside a chart kept as CODESYS writes them"
-        "The file has actions of a function block or program that is no chart (`ACTION … \
-END_ACTION` after the POU's statements, called `inst.Act();`), as CODESYS, TwinCAT and \
-e!COCKPIT write them. The Structured Text target copies them as they are: CODESYS and its family \
-compile the result, IEC 61131-3 compilers that know actions only inside a chart (MatIEC, which \
-Beremiz and OpenPLC v3 use) do not.";
+    "SFC0805" Warning "CODESYS extension kept as CODESYS writes it"
+        "The file has what CODESYS, TwinCAT and e!COCKPIT add to IEC 61131-3: actions of a function \
+block or program that is no chart (`ACTION … END_ACTION` after the POU's statements, called \
+`inst.Act();`), methods, properties, `EXTENDS`, `IMPLEMENTS` or interfaces. The Structured Text \
+target copies them as they are: CODESYS and its family compile the result, the IEC 61131-3 \
+compilers of Beremiz and OpenPLC v3 (MatIEC) and of OpenPLC v4 (STruC++) do not. \
+`--st-dialect codesys` says nothing about them.";
     "SFC0806" Error "CODESYS action not generated for this target"
         "The chart's POU has an action written in SFC (a chart inside an action) or a step with \
 step actions (`ENTRY_ACTION`, `STEP_ACTION`, `EXIT_ACTION`), as CODESYS, TwinCAT and e!COCKPIT \

@@ -217,29 +217,51 @@ pub enum CompileError {
     Diagnostics(Vec<Diagnostic>),
 }
 
-/// SFC0805 for each POU with actions outside a chart, which the ST target copies as CODESYS
-/// writes them.
-fn codesys_actions(checked: &Checked) -> Vec<Diagnostic> {
-    checked
-        .unit
-        .items
-        .iter()
-        .filter_map(|i| match i {
-            sfc_syntax::ast::Item::Pou(p) => p.actions.first().map(|a| (p, a)),
-            _ => None,
-        })
-        .map(|(p, a)| {
-            Diagnostic::warning(
-                "SFC0805",
-                a.name.span,
-                format!(
-                    "`{}` has actions outside a chart: the ST output keeps them as CODESYS writes them, which \
-                     MatIEC (Beremiz, OpenPLC v3) does not compile",
-                    p.name.text
-                ),
-            )
-        })
-        .collect()
+/// SFC0805 for what the ST target copies as CODESYS writes it and IEC 61131-3 compilers such as
+/// MatIEC (Beremiz, OpenPLC v3) and STruC++ (OpenPLC v4) do not take: actions outside a chart,
+/// methods, properties, `EXTENDS`/`IMPLEMENTS` and interfaces (not for `--st-dialect codesys`).
+fn codesys_extensions(checked: &Checked, dialect: sfc_codegen::st::StDialect) -> Vec<Diagnostic> {
+    if dialect == sfc_codegen::st::StDialect::Codesys {
+        return Vec::new();
+    }
+    let warn = |span, what: String| {
+        Diagnostic::warning(
+            "SFC0805",
+            span,
+            format!(
+                "{what}: the ST output keeps it as CODESYS writes it, which MatIEC (Beremiz, OpenPLC v3) and \
+                 STruC++ (OpenPLC v4) do not compile"
+            ),
+        )
+    };
+    let mut out = Vec::new();
+    for item in &checked.unit.items {
+        match item {
+            sfc_syntax::ast::Item::Pou(p) => {
+                let name = &p.name.text;
+                if let Some(a) = p.actions.first() {
+                    out.push(warn(a.name.span, format!("`{name}` has actions outside a chart")));
+                }
+                if let Some(m) = p.methods.first() {
+                    out.push(warn(m.name.span, format!("`{name}` has methods")));
+                }
+                if let Some(pr) = p.properties.first() {
+                    out.push(warn(pr.name.span, format!("`{name}` has properties")));
+                }
+                if let Some(e) = &p.extends {
+                    out.push(warn(e.span, format!("`{name}` extends `{}`", e.text)));
+                }
+                if let Some(i) = p.implements.first() {
+                    out.push(warn(i.span, format!("`{name}` implements `{}`", i.text)));
+                }
+            }
+            sfc_syntax::ast::Item::Interface(i) => {
+                out.push(warn(i.name.span, format!("`{}` is an interface", i.name.text)));
+            }
+            _ => {}
+        }
+    }
+    out
 }
 
 /// Compiles a checked file (without errors) for `target`.
@@ -269,7 +291,7 @@ pub fn compile(checked: &Checked, target: BuildTarget, opts: &CompileOptions) ->
             let st = sfc_codegen::st::StOptions { dialect: opts.st_dialect };
             return sfc_codegen::st::build_st_file(checked, opts.pou, &st)
                 .map(|(text, mut notes)| {
-                    notes.extend(codesys_actions(checked));
+                    notes.extend(codesys_extensions(checked, opts.st_dialect));
                     Compiled { text, notes, flattened: None, symbols: None }
                 })
                 .map_err(CompileError::Diagnostics);
