@@ -116,6 +116,7 @@ pub fn build_st_file(
     if opts.dialect == StDialect::Codesys {
         errors.extend(dialect::codesys_limits(checked, &charts));
     }
+    errors.extend(dialect::short_circuits(checked, opts.dialect));
     for chart in &charts {
         if let Err(d) = build_st_with(checked, chart, opts) {
             errors.extend(d);
@@ -150,8 +151,9 @@ pub fn build_st_file(
             text = build_st_with(checked, charts[0], opts)?;
         }
     }
-    let (text, configured) = dialect::finish(&text, opts.dialect);
-    let mut notes = Vec::new();
+    let (text, configured, renamed) = dialect::finish(&text, opts.dialect);
+    let mut notes: Vec<Diagnostic> =
+        renamed.into_iter().map(|m| Diagnostic::note_diag("SFC0818", charts[0].name_span, m)).collect();
     if configured {
         notes.push(Diagnostic::note_diag(
             "SFC0808",

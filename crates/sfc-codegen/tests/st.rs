@@ -343,6 +343,8 @@ fn examples_and_semantics_scenarios_behave_identically() {
             // CODESYS's SFC actions and step actions are refused by the ST target (SFC0806):
             // refused, not translated wrongly.
             Err(e) if e.contains("SFC0806") => continue,
+            // AND_THEN/OR_ELSE over a call: IEC ST has no short-circuit operator (SFC0809).
+            Err(e) if e.contains("SFC0809") => continue,
             Err(e) => {
                 failures.push(format!("{}: not translated:\n{e}", s.name));
                 continue;

@@ -471,6 +471,13 @@ v3 compiles an uploaded `.st` file together with its `CONFIGURATION` (its editor
 a file without one gets `CONFIGURATION Config0` at the end: one resource, one task `task0` every \
 20 ms (OpenPLC v3's default), and one instance of every PROGRAM of the file. Set `INTERVAL` to \
 the scan period the chart was written for. A file with a configuration is left as it is.";
+    "SFC0809" Error "short-circuit operator without an IEC form"
+        "`AND_THEN` and `OR_ELSE` (CODESYS) skip their right operand when the left one decides. \
+IEC 61131-3 Structured Text as MatIEC and STruC++ read it has no such operator, so the ST target \
+writes them as `AND` and `OR`, which give the same value when the right operand cannot fault. \
+When it may (a division or `MOD`, an array index, a call), the plain operator would evaluate it \
+where the chart does not, and could stop the program: the translation is refused there. Write \
+the condition as an `IF`, or build with `--st-dialect codesys`, which keeps them.";
     "SFC0810" Error "not expressible in the S7-200 program"
         "The S7-200 statement-list target (`--target stl`) turns conditions into bit logic over \
 inputs, outputs, memory, step, timer and counter bits, and into compare contacts (`LDW>=`, \
@@ -526,6 +533,13 @@ variable at run time has no effect on the PLC. Declare it CONSTANT to state that
 initial value and build again. The same warning marks a RETAIN variable with a non-zero initial \
 value, which the program does not set in the first scan (the retentive memory keeps its value).";
 
+    "SFC0818" Note "name renamed for the compiler"
+        "MatIEC reserves the names of its standard functions and keywords (`LEFT`, `LOG`, `ADD_INT`, \
+`DT`…): `iec2c` refuses a variable, step or POU so named. STruC++ reads a call `Inc(…)` of a \
+function block instance named like a function of its libraries (`INC`, `CMP`…) as a call of the \
+function. For `--st-dialect matiec` and `strucpp` such a name is renamed in the whole output \
+(`Left` becomes `Left_1`), and this note says so: the program's variable has the new name in \
+the PLC.";
     "SFC0901" Warning "transition tested in scan 0 under MatIEC"
         "MatIEC's generated code has no first-scan guard: a transition leaving an initial step is \
 tested in the very first scan, so when its condition already holds the initial step is left \

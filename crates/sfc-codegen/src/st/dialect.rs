@@ -18,8 +18,33 @@ use sfc_syntax::lexer::{lex, TokenKind};
 use std::collections::HashSet;
 
 /// The dialect's passes over a translated file, and whether a CONFIGURATION was added.
-pub(crate) fn finish(text: &str, dialect: StDialect) -> (String, bool) {
+pub(crate) fn finish(text: &str, dialect: StDialect) -> (String, bool, Vec<String>) {
     let mut t = if dialect == StDialect::Codesys { text.to_string() } else { pragmas_to_comments(text) };
+    let mut notes = Vec::new();
+    if dialect != StDialect::Codesys {
+        t = short_circuit_as_plain(&t);
+    }
+    if dialect == StDialect::Strucpp {
+        for _ in 0..10_000 {
+            match not_of_comparisons(&t) {
+                Some(n) => t = n,
+                None => break,
+            }
+        }
+    }
+    if dialect == StDialect::Matiec {
+        for _ in 0..10_000 {
+            match for_as_while(&t) {
+                Some(n) => t = n,
+                None => break,
+            }
+        }
+    }
+    if matches!(dialect, StDialect::Matiec | StDialect::Strucpp) {
+        let (renamed, n) = rename_reserved(&t, dialect);
+        t = renamed;
+        notes = n;
+    }
     t = split_located(&t);
     if dialect == StDialect::Matiec {
         t = one_instance_per_declaration(&t);
@@ -36,7 +61,7 @@ pub(crate) fn finish(text: &str, dialect: StDialect) -> (String, bool) {
             t = format!("{MATIEC_LITERALS}{exact}");
         }
     }
-    (t, configured)
+    (t, configured, notes)
 }
 
 const MATIEC_LITERALS: &str =
@@ -388,6 +413,460 @@ pub fn matiec_time_literal(us: i64) -> String {
             }
         } else {
             out.push_str(&format!("{ms}.{frac:03}0005ms"));
+        }
+    }
+    out
+}
+
+// ---------------------------------------------------------------------------------------------
+// Names the compilers reserve
+
+/// MatIEC's standard functions (its `lib/`), which `iec2c` reserves: a variable, step or POU of
+/// that name is "an invalid declaration". Their typed forms (`ADD_INT`, `LEFT_STRING`…) and the
+/// conversions (`INT_TO_REAL`) are reserved too; see [`matiec_reserved`].
+const MATIEC_FUNCTIONS: &str = "ABS ACOS ADD AND ASIN ATAN CONCAT COS DELETE DIV DIVTIME EQ EXP EXPT FIND GE GT \
+INSERT LE LEFT LEN LIMIT LN LOG LT MAX MID MIN MOD MOVE MUL MULTIME MUX NE NOT OR REPLACE RIGHT ROL ROR SEL \
+SHL SHR SIN SQRT SUB TAN TRUNC XOR";
+
+/// What `iec2c` reads as keywords that sfc reads as names.
+const MATIEC_KEYWORDS: &str = "DT TOD DATE_AND_TIME TIME_OF_DAY EN ENO";
+
+const IEC_TYPES: &str =
+    "BOOL BYTE WORD DWORD LWORD SINT INT DINT LINT USINT UINT UDINT ULINT REAL LREAL TIME DATE TOD DT STRING";
+
+/// The functions of STruC++'s bundled libraries (0.6.1: `iec-std-functions` and OSCAT Basic
+/// 3.35, which it loads by default): an instance of a function block called `Name(…)` whose name
+/// is one of them is read as a call of the function ("'INC' is missing required inputs").
+const STRUCPP_FUNCTIONS: &str =
+    "ABS ACOS ACOSH ACOTH ADD ADR AGDF AIN AND AOUT AOUT1 ARRAY_AVG ARRAY_GAV ARRAY_HAV ARRAY_MAX \
+ARRAY_MIN ARRAY_SDV ARRAY_SPR ARRAY_SUM ARRAY_TREND ARRAY_VAR ASIN ASINH ATAN ATAN2 ATANH \
+BAND_B BCDC_TO_INT BETA BFT_TO_MS BINOM BIN_TO_BYTE BIN_TO_DWORD BIT_COUNT BIT_LOAD_B \
+BIT_LOAD_B2 BIT_LOAD_DW BIT_LOAD_DW2 BIT_LOAD_W BIT_LOAD_W2 BIT_OF_DWORD BIT_TOGGLE_B \
+BIT_TOGGLE_DW BIT_TOGGLE_W BUFFER_COMP BUFFER_SEARCH BUFFER_TO_STRING BYTE_OF_BIT \
+BYTE_OF_DWORD BYTE_TO_GRAY BYTE_TO_RANGE BYTE_TO_STRB BYTE_TO_STRH CABS CACOS CACOSH CADD \
+CAPITALIZE CARG CASIN CASINH CATAN CATANH CAUCHY CAUCHYCD CCON CCOS CCOSH CDIV CEIL CEIL2 \
+CEXP CHARCODE CHARNAME CHECK_PARITY CHK_REAL CHR_TO_STRING CINV CIRCLE_A CIRCLE_C CIRCLE_SEG \
+CLEAN CLOG CMP CMUL CODE CONCAT CONE_V COS COSH COTH COUNT_CHAR COUNT_SUBSTRING CPOL CPOW \
+CRC_GEN CSET CSIN CSINH CSQRT CSUB CTAN CTANH CTRL_IN CURRENT_DT C_TO_F C_TO_K DATE_ADD \
+DAYS_DELTA DAYS_IN_MONTH DAYS_IN_YEAR DAY_OF_DATE DAY_OF_MONTH DAY_OF_WEEK DAY_OF_YEAR \
+DAY_TO_TIME DEAD_BAND DEAD_ZONE DEC1 DEC_TO_BYTE DEC_TO_DWORD DEC_TO_INT DEG DEG_TO_DIR \
+DELETE DEL_CHARS DIFFER DIR_TO_DEG DIV DST DT2_TO_SDT DT_TO_SDT DT_TO_STRF DWORD_OF_BYTE \
+DWORD_OF_WORD DWORD_TO_STRB DWORD_TO_STRF DWORD_TO_STRH DW_TO_REAL D_TRUNC EASTER ELLIPSE_A \
+ELLIPSE_C EQ ERF ERFC EVEN EXEC EXP EXP10 EXPN EXPT FACT FIB FILL FIND FINDB FINDB_NONUM \
+FINDB_NUM FINDP FIND_CHAR FIND_CTRL FIND_NONUM FIND_NUM FIX FLOAT_TO_REAL FLOOR FLOOR2 FRACT \
+FRMP_B FSTRING_TO_BYTE FSTRING_TO_DT FSTRING_TO_DWORD FSTRING_TO_MONTH FSTRING_TO_WEEK \
+FSTRING_TO_WEEKDAY F_LIN F_LIN2 F_POLY F_POWER F_QUAD F_TO_C F_TO_OM F_TO_PT GAMMA GAUSS \
+GAUSSCD GCD GDF GE GEO_TO_DEG GOLD GRAY_TO_BYTE GT HEX_TO_BYTE HEX_TO_DWORD HOUR HOUR_OF_DT \
+HOUR_TO_TIME HOUR_TO_TOD HYPOT INC INC1 INC2 INSERT INT_TO_BCDC INV ISC_ALPHA ISC_CTRL \
+ISC_HEX ISC_LOWER ISC_NUM ISC_UPPER IS_ALNUM IS_ALPHA IS_CC IS_CTRL IS_HEX IS_LOWER IS_NCC \
+IS_NUM IS_SORTED IS_UPPER JD2000 KMH_TO_MS K_TO_C LAMBERT_W LANGEVIN LE LEAP_DAY \
+LEAP_OF_DATE LEAP_YEAR LEFT LEN LIMIT LINEAR_INT LIST_ADD LIST_CLEAN LIST_GET LIST_INSERT \
+LIST_LEN LIST_RETRIEVE LIST_RETRIEVE_LAST LN LOG LOWERCASE LOWER_BOUND LT LTIME_TO_UTC \
+MANUAL MAX MAX3 MEMCPY MID MID3 MIN MIN3 MINUTE MINUTE_OF_DT MINUTE_TO_TIME MIRROR MIX MOD \
+MODR MONTH_BEGIN MONTH_END MONTH_OF_DATE MONTH_TO_STRING MOVE MS_TO_BFT MS_TO_KMH MUL \
+MULTIME MULTI_IN MUL_ADD MUX MUX_2 MUX_4 MUX_R2 MUX_R4 NE NEG NEGX NOT OCT_TO_BYTE \
+OCT_TO_DWORD OFFSET OFFSET2 OM_TO_F OR OSCAT_VERSION OVERRIDE PARITY PERIOD PERIOD2 \
+POLYNOM_INT PT_TO_F R2_ABS R2_ADD R2_ADD2 R2_MUL R2_SET RAD RANGE_TO_BYTE RANGE_TO_WORD RDM \
+RDM2 RDMDW REAL_TO_DW REAL_TO_FRAC REAL_TO_STRF REFLECT REFRACTION REF_LINK REPLACE \
+REPLACE_ALL REPLACE_CHARS REPLACE_UML RES_NI RES_NTC RES_PT RES_SI REVERSE RIGHT RND ROL ROR \
+ROUND SCALE SCALE_B SCALE_B2 SCALE_B4 SCALE_B8 SCALE_D SCALE_R SCALE_X2 SCALE_X4 SCALE_X8 \
+SDT_TO_DATE SDT_TO_DT SDT_TO_TOD SECOND SECOND_OF_DT SECOND_TO_TIME SEL SENSOR_INT SET_DATE \
+SET_DT SET_TOD SGN SHL SHL1 SHR SHR1 SIGMOID SIGN_I SIGN_R SIN SINC SINH SIZEOF SPHERE_V \
+SQRT SQRTN STAIR STATUS_TO_ESR SUB SUN_MIDDAY SWAP_BYTE SWAP_BYTE2 TAN TANC TANH TEMP_NI \
+TEMP_NTC TEMP_PT TEMP_SI TIME TIMECHECK TIME_FROM_MS TIME_FROM_S TIME_TO_MS TIME_TO_S \
+TO_BOOL TO_BYTE TO_DATE TO_DINT TO_DT TO_DWORD TO_INT TO_LINT TO_LOWER TO_LREAL TO_LWORD \
+TO_REAL TO_SINT TO_STRING TO_TIME TO_TOD TO_UDINT TO_UINT TO_ULINT TO_UML TO_UPPER TO_USINT \
+TO_WORD TRIANGLE_A TRIM TRIM1 TRIME TRUNC T_PLC_MS T_PLC_US UPPERCASE UPPER_BOUND \
+UTC_TO_LTIME V3_ABS V3_ADD V3_ANG V3_DPRO V3_NORM V3_NUL V3_PAR V3_REV V3_SMUL V3_SUB \
+V3_XANG V3_XPRO V3_YANG V3_ZANG WEEKDAY_TO_STRING WINDOW WINDOW2 WORD_OF_BYTE WORD_OF_DWORD \
+WORD_TO_RANGE WORK_WEEK XOR YEAR_BEGIN YEAR_END YEAR_OF_DATE _ARRAY_ABS _ARRAY_ADD \
+_ARRAY_INIT _ARRAY_MEDIAN _ARRAY_MUL _ARRAY_SHUFFLE _ARRAY_SORT _BUFFER_CLEAR _BUFFER_INIT \
+_BUFFER_INSERT _BUFFER_UPPERCASE _STRING_TO_BUFFER";
+
+fn matiec_reserved(upper: &str) -> bool {
+    let types: Vec<&str> = IEC_TYPES.split(' ').collect();
+    if MATIEC_FUNCTIONS.split(' ').any(|f| f == upper) || MATIEC_KEYWORDS.split(' ').any(|k| k == upper) {
+        return true;
+    }
+    // ADD_INT, MUX_DINT_BOOL, INT_TO_REAL
+    if let Some((a, b)) = upper.split_once("_TO_") {
+        return types.contains(&a) && types.contains(&b);
+    }
+    let mut parts = upper.split('_');
+    let base = parts.next().unwrap_or("");
+    let rest: Vec<&str> = parts.collect();
+    !rest.is_empty()
+        && (MATIEC_FUNCTIONS.split(' ').any(|f| f == base) || base == "DIVTIME" || base == "MULTIME")
+        && rest.iter().all(|r| types.contains(r))
+}
+
+/// Declared names (upper-case) with whether a call `Name(…)` of them is possible (a function
+/// block instance, a POU), each once.
+fn declared_names(unit: &ast::SourceUnit) -> Vec<(String, bool)> {
+    let mut out: Vec<(String, bool)> = Vec::new();
+    let mut add = |n: &str, callable: bool| {
+        let u = n.to_ascii_uppercase();
+        match out.iter_mut().find(|(x, _)| *x == u) {
+            Some(e) => e.1 |= callable,
+            None => out.push((u, callable)),
+        }
+    };
+    // (a variable of a structure or enumeration of the file is not called)
+    let types: HashSet<String> = unit
+        .items
+        .iter()
+        .filter_map(|i| match i {
+            ast::Item::Types(t) => Some(t.decls.iter().map(|d| d.name.text.to_ascii_uppercase())),
+            _ => None,
+        })
+        .flatten()
+        .collect();
+    let decls = |blocks: &[ast::VarBlock], add: &mut dyn FnMut(&str, bool)| {
+        for d in blocks.iter().flat_map(|b| &b.decls) {
+            let callable = matches!(&d.ty.kind, ast::TypeSpecKind::Named(id)
+                if sfc_st::Type::elementary(&id.text).is_none() && !types.contains(&id.text.to_ascii_uppercase()));
+            for n in &d.names {
+                add(&n.text, callable);
+            }
+        }
+    };
+    for item in &unit.items {
+        match item {
+            ast::Item::Pou(p) => {
+                add(&p.name.text, true);
+                decls(&p.var_blocks, &mut add);
+            }
+            ast::Item::Globals(b) => decls(std::slice::from_ref(b), &mut add),
+            ast::Item::Types(t) => {
+                for d in &t.decls {
+                    add(&d.name.text, false);
+                    if let ast::TypeSpecKind::Struct(fields) = &d.spec.kind {
+                        for f in fields.iter().flat_map(|f| &f.names) {
+                            add(&f.text, false);
+                        }
+                    }
+                }
+            }
+            _ => {}
+        }
+    }
+    out
+}
+
+/// Renames, everywhere in the file, every declared name the compiler reserves (`Left` →
+/// `Left_1`): each identifier of that spelling, but for a call `NAME(` of a name that cannot be
+/// called (the standard function itself). The messages say what was renamed and why.
+fn rename_reserved(text: &str, dialect: StDialect) -> (String, Vec<String>) {
+    let (unit, _) = sfc_syntax::parse(0, text);
+    let (tokens, _) = lex(0, text);
+    let mut taken: HashSet<String> = tokens
+        .iter()
+        .filter(|t| t.kind == TokenKind::Ident)
+        .map(|t| text[t.start as usize..t.end as usize].to_ascii_uppercase())
+        .collect();
+    let mut renames: Vec<(String, bool, String)> = Vec::new();
+    let mut notes = Vec::new();
+    for (name, callable) in declared_names(&unit) {
+        let (reserved, why) = match dialect {
+            StDialect::Matiec => {
+                (matiec_reserved(&name), "MatIEC reserves it (a standard function or keyword of iec2c)")
+            }
+            StDialect::Strucpp => (
+                callable && STRUCPP_FUNCTIONS.split_whitespace().any(|f| f == name),
+                "STruC++ reads a call of it as a call of the function of its library",
+            ),
+            _ => (false, ""),
+        };
+        if !reserved {
+            continue;
+        }
+        let spelled = tokens
+            .iter()
+            .map(|t| &text[t.start as usize..t.end as usize])
+            .find(|s| s.eq_ignore_ascii_case(&name))
+            .unwrap_or(&name)
+            .to_string();
+        let mut k = 1;
+        while taken.contains(&format!("{name}_{k}")) {
+            k += 1;
+        }
+        let new = format!("{spelled}_{k}");
+        taken.insert(new.to_ascii_uppercase());
+        notes.push(format!("renamed `{spelled}` to `{new}` in the whole file: {why}"));
+        renames.push((name, callable, new));
+    }
+    if renames.is_empty() {
+        return (text.to_string(), notes);
+    }
+    let mut edits = Vec::new();
+    for (i, t) in tokens.iter().enumerate() {
+        if t.kind != TokenKind::Ident {
+            continue;
+        }
+        let word = &text[t.start as usize..t.end as usize];
+        let Some((_, callable, new)) = renames.iter().find(|(n, _, _)| word.eq_ignore_ascii_case(n)) else { continue };
+        let next = tokens[i + 1..]
+            .iter()
+            .find(|n| !matches!(n.kind, TokenKind::Whitespace | TokenKind::BlockComment | TokenKind::LineComment));
+        // After a `.` the name is a member (a field, an output): renamed with the declaration.
+        let called = next.is_some_and(|n| n.kind == TokenKind::LParen);
+        if called && !callable {
+            continue;
+        }
+        edits.push((t.start as usize, t.end as usize, new.clone()));
+    }
+    (apply(text, edits), notes)
+}
+
+// ---------------------------------------------------------------------------------------------
+// Statements and expressions the compilers read otherwise
+
+/// Every statement list of the file's POUs (bodies, actions), outermost first.
+fn stmt_lists<'u>(unit: &'u ast::SourceUnit, f: &mut dyn FnMut(&'u [ast::Stmt])) {
+    fn walk<'u>(list: &'u [ast::Stmt], f: &mut dyn FnMut(&'u [ast::Stmt])) {
+        f(list);
+        for s in list {
+            match &s.kind {
+                ast::StmtKind::If { branches, else_body } => {
+                    branches.iter().for_each(|(_, b)| walk(b, f));
+                    if let Some(b) = else_body {
+                        walk(b, f);
+                    }
+                }
+                ast::StmtKind::Case { arms, else_body, .. } => {
+                    arms.iter().for_each(|a| walk(&a.body, f));
+                    if let Some(b) = else_body {
+                        walk(b, f);
+                    }
+                }
+                ast::StmtKind::For { body, .. }
+                | ast::StmtKind::While { body, .. }
+                | ast::StmtKind::Repeat { body, .. } => walk(body, f),
+                _ => {}
+            }
+        }
+    }
+    for item in &unit.items {
+        if let ast::Item::Pou(p) = item {
+            if let ast::Body::St(list) = &p.body {
+                walk(list, f);
+            }
+            for a in &p.actions {
+                if let ast::ActionBody::St(list) = &a.body {
+                    walk(list, f);
+                }
+            }
+        }
+    }
+}
+
+/// An integer literal (with its sign), as written.
+fn int_literal(e: &ast::Expr, text: &str) -> Option<i64> {
+    let t = text[e.span.start as usize..e.span.end as usize].replace(['_', ' ', '(', ')'], "");
+    t.parse().ok()
+}
+
+/// `matiec`: `iec2c` compiles `FOR i := a TO b` into a loop that stops with `i = b` (sfc: one
+/// step past it) and runs no iteration when `a = b`. Each FOR becomes the loop sfc runs:
+/// `i := a; WHILE i <= b DO … i := i + step; END_WHILE;` (end and step computed once, into
+/// variables declared for it when they are not literals). One loop per pass, outermost first.
+fn for_as_while(text: &str) -> Option<String> {
+    let (unit, _) = sfc_syntax::parse(0, text);
+    let mut found: Option<&ast::Stmt> = None;
+    stmt_lists(&unit, &mut |list| {
+        if found.is_none() {
+            found = list.iter().find(|s| matches!(s.kind, ast::StmtKind::For { .. }));
+        }
+    });
+    let s = found?;
+    let ast::StmtKind::For { var, from, to, by, body } = &s.kind else { return None };
+    let src = |e: &ast::Expr| text[e.span.start as usize..e.span.end as usize].to_string();
+    let pou = unit.items.iter().find_map(|i| match i {
+        ast::Item::Pou(p) if p.span.start <= s.span.start && s.span.end <= p.span.end => Some(p),
+        _ => None,
+    })?;
+    let var_type = pou
+        .var_blocks
+        .iter()
+        .flat_map(|b| &b.decls)
+        .find(|d| d.names.iter().any(|n| n.text.eq_ignore_ascii_case(&var.text)))
+        .map(|d| text[d.ty.span.start as usize..d.ty.span.end as usize].to_string())
+        .unwrap_or_else(|| "DINT".to_string());
+    let (tokens, _) = lex(0, text);
+    let taken: HashSet<String> = tokens
+        .iter()
+        .filter(|t| t.kind == TokenKind::Ident)
+        .map(|t| text[t.start as usize..t.end as usize].to_ascii_uppercase())
+        .collect();
+    let fresh = |base: &str| {
+        let mut k = 1;
+        while taken.contains(&format!("{base}{k}").to_ascii_uppercase()) {
+            k += 1;
+        }
+        format!("{base}{k}")
+    };
+    let ls = line_start(text, s.span.start as usize);
+    let indent: String = text[ls..s.span.start as usize].chars().take_while(|c| *c == ' ' || *c == '\t').collect();
+    let i = &var.text;
+    let mut head = Vec::new();
+    let mut temps = Vec::new();
+    let end = match int_literal(to, text) {
+        Some(v) => v.to_string(),
+        None => {
+            let n = fresh("SfcForEnd");
+            head.push(format!("{n} := {};", src(to)));
+            temps.push(n.clone());
+            n
+        }
+    };
+    let step_lit = match by {
+        None => Some(1),
+        Some(b) => int_literal(b, text),
+    };
+    let step = match (step_lit, by) {
+        (Some(v), _) => v.to_string(),
+        (None, Some(b)) => {
+            let n = fresh(if temps.is_empty() { "SfcForBy" } else { "SfcForBy" });
+            head.push(format!("{n} := {};", src(b)));
+            temps.push(n.clone());
+            n
+        }
+        (None, None) => "1".to_string(),
+    };
+    let cond = match step_lit {
+        Some(v) if v >= 0 => format!("{i} <= {end}"),
+        Some(_) => format!("{i} >= {end}"),
+        None => format!("({step} >= 0 AND {i} <= {end}) OR ({step} < 0 AND {i} >= {end})"),
+    };
+    let plus = if step.starts_with('-') { format!("({step})") } else { step.clone() };
+    let body_text = match (body.first(), body.last()) {
+        (Some(a), Some(b)) => text[line_start(text, a.span.start as usize)..b.span.end as usize].to_string(),
+        _ => String::new(),
+    };
+    let mut out = String::new();
+    out.push_str(&format!(
+        "(* FOR {i} := {} TO {}{} DO, as sfc runs it: MatIEC's FOR stops at the end value *)\n",
+        src(from),
+        src(to),
+        by.as_ref().map(|b| format!(" BY {}", src(b))).unwrap_or_default()
+    ));
+    for h in &head {
+        out.push_str(&format!("{indent}{h}\n"));
+    }
+    out.push_str(&format!("{indent}{i} := {};\n{indent}WHILE {cond} DO\n", src(from)));
+    if !body_text.is_empty() {
+        out.push_str(&body_text);
+        out.push('\n');
+    }
+    out.push_str(&format!("{indent}    {i} := {i} + {plus};\n{indent}END_WHILE"));
+    // `END_FOR` is followed by `;` in the statement's text or right after it.
+    let mut edits = vec![(s.span.start as usize, s.span.end as usize, out)];
+    let stmt_text = &text[s.span.start as usize..s.span.end as usize];
+    if stmt_text.trim_end().ends_with(';') {
+        edits[0].2.push(';');
+    }
+    if !temps.is_empty() {
+        let last = pou.var_blocks.last()?;
+        let decl: String = temps.iter().map(|t| format!("        {t} : {var_type};\n")).collect();
+        edits.push((last.span.end as usize, last.span.end as usize, format!("\n    VAR\n{decl}    END_VAR")));
+    }
+    Some(apply(text, edits))
+}
+
+/// The outermost `NOT x` whose operand is an AND/OR/XOR of comparisons (so BOOL), as
+/// `(x = FALSE)`: STruC++ writes `NOT((a >= b) & (c > d))`, whose operand C++ makes an `int`,
+/// for which its runtime has no NOT. One per pass.
+fn not_of_comparisons(text: &str) -> Option<String> {
+    fn logic_of_comparisons(e: &ast::Expr) -> bool {
+        match &e.kind {
+            ast::ExprKind::Paren(i) => logic_of_comparisons(i),
+            ast::ExprKind::Binary { op, lhs, rhs } => match op {
+                ast::BinaryOp::And | ast::BinaryOp::Or | ast::BinaryOp::Xor => {
+                    let cmp = |x: &ast::Expr| {
+                        let mut x = x;
+                        while let ast::ExprKind::Paren(i) = &x.kind {
+                            x = i;
+                        }
+                        matches!(&x.kind, ast::ExprKind::Binary { op, .. } if matches!(op, ast::BinaryOp::Eq | ast::BinaryOp::Ne | ast::BinaryOp::Lt | ast::BinaryOp::Gt | ast::BinaryOp::Le | ast::BinaryOp::Ge))
+                    };
+                    cmp(lhs) || cmp(rhs) || logic_of_comparisons(lhs) || logic_of_comparisons(rhs)
+                }
+                _ => false,
+            },
+            _ => false,
+        }
+    }
+    let (unit, _) = sfc_syntax::parse(0, text);
+    let mut found: Option<(usize, usize, String)> = None;
+    for item in &unit.items {
+        if let ast::Item::Pou(p) = item {
+            sfc_syntax::visit::pou_exprs(p, &mut |e| {
+                if found.is_some() {
+                    return;
+                }
+                if let ast::ExprKind::Unary { op: ast::UnaryOp::Not, operand } = &e.kind {
+                    if logic_of_comparisons(operand) {
+                        let inner = &text[operand.span.start as usize..operand.span.end as usize];
+                        found = Some((e.span.start as usize, e.span.end as usize, format!("({inner} = FALSE)")));
+                    }
+                }
+            });
+        }
+    }
+    found.map(|(s, e, r)| apply(text, vec![(s, e, r)]))
+}
+
+/// `AND_THEN` and `OR_ELSE` (CODESYS's short-circuit operators) as `AND` and `OR`, which give
+/// the same value when the right operand cannot fault ([`short_circuits`] refuses the others).
+fn short_circuit_as_plain(text: &str) -> String {
+    let (tokens, _) = lex(0, text);
+    let edits = tokens
+        .iter()
+        .filter(|t| t.kind == TokenKind::Ident)
+        .filter_map(|t| {
+            let w = &text[t.start as usize..t.end as usize];
+            if w.eq_ignore_ascii_case("AND_THEN") {
+                Some((t.start as usize, t.end as usize, "AND".to_string()))
+            } else if w.eq_ignore_ascii_case("OR_ELSE") {
+                Some((t.start as usize, t.end as usize, "OR".to_string()))
+            } else {
+                None
+            }
+        })
+        .collect();
+    apply(text, edits)
+}
+
+/// SFC0809 for `a AND_THEN b` / `a OR_ELSE b` whose `b` may fault (a division, an index, a
+/// call): written as `AND`/`OR` for a compiler without them, `b` would be evaluated where the
+/// chart skips it.
+pub(crate) fn short_circuits(checked: &sfc_model::Checked, dialect: StDialect) -> Vec<Diagnostic> {
+    if dialect == StDialect::Codesys {
+        return Vec::new();
+    }
+    let mut out = Vec::new();
+    // (a fresh parse: the checked unit lent its action bodies and conditions to the charts)
+    let file = checked.charts.first().map_or(0, |c| c.file);
+    let (unit, _) = sfc_syntax::parse(file, &checked.file.text);
+    for item in &unit.items {
+        if let ast::Item::Pou(p) = item {
+            sfc_syntax::visit::pou_exprs(p, &mut |e| {
+                if let ast::ExprKind::Binary {
+                    op: op @ (ast::BinaryOp::AndThen | ast::BinaryOp::OrElse), rhs, ..
+                } = &e.kind
+                {
+                    if !super::il::cannot_fault(rhs) {
+                        let name = if *op == ast::BinaryOp::AndThen { "AND_THEN" } else { "OR_ELSE" };
+                        out.push(Diagnostic::error(
+                            "SFC0809",
+                            e.span,
+                            format!(
+                                "`{name}` whose right operand is a call, a division or an index (it may act or fault) has no form in IEC 61131-3 ST that skips it: write it as an IF, or build with --st-dialect codesys"
+                            ),
+                        ));
+                    }
+                }
+            });
         }
     }
     out
