@@ -7,6 +7,7 @@ use crate::Status;
 use sfc_driver::compile::{self, CompileError, CompileOptions};
 use std::path::PathBuf;
 
+pub use sfc_codegen::st::StDialect;
 pub use sfc_codegen::stl::StlMethod;
 pub use sfc_driver::compile::BuildTarget;
 
@@ -22,11 +23,17 @@ pub struct BuildRequest {
     pub stl_method: Option<StlMethod>,
     /// `--symbols OUT.csv` (STL only).
     pub symbols: Option<PathBuf>,
+    /// `--st-dialect` (ST only).
+    pub st_dialect: Option<StDialect>,
 }
 
 pub fn build(r: BuildRequest) -> u8 {
     if r.target != BuildTarget::Stl && (r.stl_method.is_some() || r.symbols.is_some()) {
         term::error("--stl-method and --symbols apply to --target stl");
+        return Status::Usage.code();
+    }
+    if r.target != BuildTarget::St && r.st_dialect.is_some() {
+        term::error("--st-dialect applies to --target st");
         return Status::Usage.code();
     }
     for out in r.out.iter().chain(&r.symbols) {
@@ -85,6 +92,7 @@ pub fn build(r: BuildRequest) -> u8 {
         nstep: r.nstep,
         ntr: r.ntr,
         stl_method: r.stl_method.unwrap_or_default(),
+        st_dialect: r.st_dialect.unwrap_or_default(),
         original: compile::is_xml(&r.file, &decoded.text).then_some(decoded.text.as_str()),
     };
     // A conversion writes its output whatever the file's errors (reported above), and then
@@ -124,6 +132,21 @@ pub fn build(r: BuildRequest) -> u8 {
             term::error(&format!("`{}` cannot be built for this target", r.file.display()));
             return Status::Findings.code();
         }
+    };
+    // `--target st -o OUT.xml`: the plain ST POUs as PLCopen XML, which CODESYS, TwinCAT and
+    // Beremiz import (a text file of several POUs is not something they open).
+    let xml_out = r.out.as_ref().and_then(|p| p.extension()).is_some_and(|e| e.eq_ignore_ascii_case("xml"));
+    let text = if r.target == BuildTarget::St && xml_out {
+        let st = sfc_model::check_source(0, &checked.file.name, &text, &Default::default());
+        match compile::compile(&st, BuildTarget::Plcopen, &CompileOptions::default()) {
+            Ok(xml) if !st.has_errors() => xml.text,
+            Ok(_) | Err(_) => {
+                term::error("the Structured Text could not be written as PLCopen XML (an internal error: please report it); write it to a .st file instead");
+                return Status::Usage.code();
+            }
+        }
+    } else {
+        text
     };
     finish(write_out(&r, &text), status_after)
 }

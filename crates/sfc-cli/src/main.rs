@@ -174,6 +174,18 @@ struct BuildArgs {
     /// STL: also write STEP 7-Micro/WIN's symbol table (CSV: Symbol,Address,Comment) here.
     #[arg(long, value_name = "OUT.csv")]
     symbols: Option<PathBuf>,
+    /// ST: the compiler the Structured Text is written for: IEC 61131-3 as written (default),
+    /// MatIEC (Beremiz, OpenPLC v3), STruC++ (OpenPLC v4), or CODESYS/TwinCAT.
+    #[arg(long, value_enum, value_name = "DIALECT")]
+    st_dialect: Option<StDialectArg>,
+}
+
+#[derive(Clone, Copy, ValueEnum)]
+enum StDialectArg {
+    Iec,
+    Matiec,
+    Strucpp,
+    Codesys,
 }
 
 #[derive(Clone, Copy, ValueEnum)]
@@ -248,6 +260,12 @@ fn run() -> u8 {
                 StlMethodArg::Scr => build::StlMethod::Scr,
             }),
             symbols: a.symbols,
+            st_dialect: a.st_dialect.map(|d| match d {
+                StDialectArg::Iec => build::StDialect::Iec,
+                StDialectArg::Matiec => build::StDialect::Matiec,
+                StDialectArg::Strucpp => build::StDialect::Strucpp,
+                StDialectArg::Codesys => build::StDialect::Codesys,
+            }),
         }),
         Command::Sim(a) => sim::sim(sim::SimRequest {
             file: a.file,

@@ -49,7 +49,10 @@
 //! with a located diagnostic (SFC0802–SFC0804).
 
 mod body;
+mod dialect;
 mod il;
+
+pub use dialect::matiec_time_literal;
 
 use sfc_diagnostics::{Diagnostic, Span};
 use sfc_model::{condition_input, ActionTarget, Chart, Checked, Duration, Qualifier, StepId, Target};
@@ -57,9 +60,117 @@ use sfc_st::Type;
 use sfc_syntax::ast;
 use std::collections::{HashMap, HashSet};
 
-/// Builds the ST translation of `chart`, a chart of `checked` (see the module doc). Errors:
-/// the check's own errors, or why the chart cannot be translated (SFC0801–SFC0804).
+/// The compiler the ST is written for (`--st-dialect`, docs/targets.md).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum StDialect {
+    /// IEC 61131-3 as written, nothing outside the standard.
+    #[default]
+    Iec,
+    /// MatIEC's `iec2c` (Beremiz, OpenPLC v3).
+    Matiec,
+    /// STruC++ (OpenPLC v4).
+    Strucpp,
+    /// CODESYS and TwinCAT (pragmas kept; TIME counts milliseconds).
+    Codesys,
+}
+
+impl StDialect {
+    pub const ALL: [StDialect; 4] = [StDialect::Iec, StDialect::Matiec, StDialect::Strucpp, StDialect::Codesys];
+
+    pub fn name(self) -> &'static str {
+        match self {
+            StDialect::Iec => "iec",
+            StDialect::Matiec => "matiec",
+            StDialect::Strucpp => "strucpp",
+            StDialect::Codesys => "codesys",
+        }
+    }
+
+    pub fn parse(s: &str) -> Option<StDialect> {
+        StDialect::ALL.into_iter().find(|d| d.name().eq_ignore_ascii_case(s))
+    }
+}
+
+/// How to write the ST.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct StOptions {
+    pub dialect: StDialect,
+}
+
+/// The ST translation of the file of `checked`: the chart `pou`, or every chart of the file one
+/// after the other (so a chart function block and the chart program calling it both become
+/// plain ST), then the dialect's passes over the whole file (IEC order, located variables in
+/// their own blocks, what the compiler needs: `dialect.rs`). Errors are located in `checked`'s
+/// text: every chart is tried against it first. Notes: what was added (SFC0808).
+pub fn build_st_file(
+    checked: &Checked,
+    pou: Option<&str>,
+    opts: &StOptions,
+) -> Result<(String, Vec<Diagnostic>), Vec<Diagnostic>> {
+    if checked.has_errors() {
+        return Err(checked.diagnostics.iter().filter(|d| d.is_error()).cloned().collect());
+    }
+    let charts: Vec<&Chart> =
+        checked.charts.iter().filter(|c| pou.is_none_or(|p| c.pou.eq_ignore_ascii_case(p))).collect();
+    let mut errors = Vec::new();
+    if opts.dialect == StDialect::Codesys {
+        errors.extend(dialect::codesys_limits(checked, &charts));
+    }
+    for chart in &charts {
+        if let Err(d) = build_st_with(checked, chart, opts) {
+            errors.extend(d);
+        }
+    }
+    if !errors.is_empty() {
+        sfc_diagnostics::sort(&mut errors);
+        errors.dedup_by(|a, b| a.code == b.code && a.span == b.span && a.message == b.message);
+        return Err(errors);
+    }
+    let names: Vec<String> = charts.iter().map(|c| c.pou.clone()).collect();
+    let mut text = checked.file.text.clone();
+    for (k, name) in names.iter().enumerate() {
+        if k > 0 {
+            let again = sfc_model::check_source(charts[k].file, &checked.file.name, &text, &Default::default());
+            let chart = again.charts.iter().find(|c| c.pou.eq_ignore_ascii_case(name));
+            let built = match chart {
+                Some(c) if !again.has_errors() => build_st_with(&again, c, opts).ok(),
+                _ => None,
+            };
+            let Some(t) = built else {
+                return Err(vec![Diagnostic::error(
+                    "SFC0801",
+                    charts[k].name_span,
+                    format!(
+                        "`{name}` could not be translated after the charts before it (an internal error of the ST target: please report it)"
+                    ),
+                )]);
+            };
+            text = t;
+        } else {
+            text = build_st_with(checked, charts[0], opts)?;
+        }
+    }
+    let (text, configured) = dialect::finish(&text, opts.dialect);
+    let mut notes = Vec::new();
+    if configured {
+        notes.push(Diagnostic::note_diag(
+            "SFC0808",
+            charts[0].name_span,
+            "added `CONFIGURATION Config0` at the end: OpenPLC v3 needs one; its task runs every PROGRAM every 20 ms (set INTERVAL to your scan period)",
+        ));
+    }
+    Ok((text, notes))
+}
+
+/// [`build_st_with`] in the `iec` dialect, without the whole-file passes of [`build_st_file`].
 pub fn build_st(checked: &Checked, chart: &Chart) -> Result<String, Vec<Diagnostic>> {
+    build_st_with(checked, chart, &StOptions::default())
+}
+
+/// Builds the ST translation of `chart`, a chart of `checked` (see the module doc), without
+/// the whole-file passes of [`build_st_file`]. Errors: the check's own errors, or why the chart
+/// cannot be translated (SFC0801–SFC0804).
+pub fn build_st_with(checked: &Checked, chart: &Chart, opts: &StOptions) -> Result<String, Vec<Diagnostic>> {
     if checked.has_errors() {
         return Err(checked.diagnostics.iter().filter(|d| d.is_error()).cloned().collect());
     }
@@ -100,7 +211,7 @@ pub fn build_st(checked: &Checked, chart: &Chart) -> Result<String, Vec<Diagnost
     } else {
         &checked.expr_types
     };
-    let mut g = Gen::new(chart, pou, src, types);
+    let mut g = Gen::new(chart, pou, src, types, opts.dialect);
     let text = g.generate();
     if !g.diags.is_empty() {
         sfc_diagnostics::sort(&mut g.diags);
@@ -168,7 +279,7 @@ impl Names {
     /// The name of a helper declaration: `base` (or `base_1`, …) whose declaration `text(name)`
     /// the file already holds from an earlier translation (`false`: nothing to add), else the
     /// first free one (`true`: to be added).
-    fn helper(&mut self, src: &str, base: &str, text: fn(&str) -> String) -> (String, bool) {
+    fn helper(&mut self, src: &str, base: &str, text: &dyn Fn(&str) -> String) -> (String, bool) {
         let mut k = 0;
         loop {
             let name = if k == 0 { base.to_string() } else { format!("{base}_{k}") };
@@ -229,6 +340,7 @@ impl Out {
 }
 
 struct Gen<'a> {
+    dialect: StDialect,
     chart: &'a Chart,
     pou: &'a ast::Pou,
     src: &'a str,
@@ -274,7 +386,13 @@ fn identifiers(text: &str, out: &mut HashSet<String>) {
 }
 
 impl<'a> Gen<'a> {
-    fn new(chart: &'a Chart, pou: &'a ast::Pou, src: &'a str, types: &'a HashMap<Span, Type>) -> Gen<'a> {
+    fn new(
+        chart: &'a Chart,
+        pou: &'a ast::Pou,
+        src: &'a str,
+        types: &'a HashMap<Span, Type>,
+        dialect: StDialect,
+    ) -> Gen<'a> {
         let mut taken = HashSet::new();
         identifiers(src, &mut taken);
         let mut outside = HashSet::new();
@@ -282,8 +400,10 @@ impl<'a> Gen<'a> {
         identifiers(src.get(..ps).unwrap_or(""), &mut outside);
         identifiers(src.get(pe..).unwrap_or(""), &mut outside);
         let mut names = Names { taken };
-        let (step_type, new_step_type) = names.helper(src, "SfcStep", step_type_text);
-        let (control_type, new_control_type) = names.helper(src, "SfcActionControl", control_type_text);
+        let (step_type, new_step_type) = names.helper(src, "SfcStep", &step_type_text);
+        let add = |a: &str, b: &str| add_time(dialect, a, b);
+        let (control_type, new_control_type) =
+            names.helper(src, "SfcActionControl", &|n: &str| control_type_text(n, &add));
         let fired = chart
             .transitions
             .iter()
@@ -296,6 +416,7 @@ impl<'a> Gen<'a> {
             })
             .collect();
         let mut g = Gen {
+            dialect,
             chart,
             pou,
             src,
@@ -572,6 +693,7 @@ impl<'a> Gen<'a> {
         o.line(format!("{}(IN := FALSE);", self.clock));
         o.line(format!("{}(IN := TRUE, PT := T#1d);", self.clock));
         o.line(format!("{} := T#0s;", self.last));
+        o.line(format!("{} := T#0s;", self.delta));
         for s in self.chart.initial_steps() {
             self.enter(&mut o, s);
         }
@@ -632,6 +754,11 @@ impl<'a> Gen<'a> {
         v
     }
 
+    /// `a + b` for TIME values, in the dialect's form.
+    fn add_time(&self, a: &str, b: &str) -> String {
+        add_time(self.dialect, a, b)
+    }
+
     /// Activation of step `s`: flag, time, supervision.
     fn enter(&self, o: &mut Out, s: StepId) {
         let name = &self.chart.steps[s].name;
@@ -674,7 +801,8 @@ impl<'a> Gen<'a> {
         let chart = self.chart;
         o.line("(* step times *)");
         for s in &chart.steps {
-            o.line(format!("IF {0}.X THEN {0}.T := {0}.T + {1}; END_IF;", s.name, self.delta));
+            let sum = self.add_time(&format!("{}.T", s.name), &self.delta);
+            o.line(format!("IF {0}.X THEN {0}.T := {sum}; END_IF;", s.name));
         }
         o.line("(* enabled transitions with a true guard, all against the same snapshot *)");
         for (t, tr) in chart.transitions.iter().enumerate() {
@@ -853,6 +981,11 @@ impl<'a> Gen<'a> {
                     args.push(format!("TD := {}", self.win_d));
                 }
             }
+            args.push(format!("DeltaT := {}", self.delta));
+            if !self.held.is_empty() {
+                // (the chart has control variables: SFCInit resets the block)
+                args.push("Reset := FALSE".to_string());
+            }
             o.line(format!("{instance}({});", args.join(", ")));
             if let Some(v) = &self.entities[k].variable {
                 o.line(format!("{v} := {instance}.Q;"));
@@ -1002,7 +1135,8 @@ impl<'a> Gen<'a> {
                 s.push('\n');
             }
             s.push_str(CONTROL_COMMENT);
-            s.push_str(&control_type_text(&self.control_type));
+            let dialect = self.dialect;
+            s.push_str(&control_type_text(&self.control_type, &|a: &str, b: &str| add_time(dialect, a, b)));
             s.push('\n');
         }
         s
@@ -1024,14 +1158,28 @@ fn step_type_text(name: &str) -> String {
     format!("TYPE\n    {name} : STRUCT\n        X : BOOL;\n        T : TIME;\n    END_STRUCT;\nEND_TYPE")
 }
 
-/// ACTION_CONTROL as a function block, as declared.
-fn control_type_text(name: &str) -> String {
+/// ACTION_CONTROL as a function block, as declared. Its timers are its own (the time since
+/// each timer input rose, summed from `DeltaT`), not the library's `TON`, whose first call on a
+/// rising input never switches on: `D T#0s` acts at once (`semantics.md`). `add` writes a TIME
+/// sum (the dialect's form).
+fn control_type_text(name: &str, add: &dyn Fn(&str, &str) -> String) -> String {
+    let timer = |input: &str, t: &str| {
+        format!(
+            "    IF {input} THEN\n        IF {t}_IN THEN\n            {t}_ET := {};\n        ELSE\n            {t}_ET := T#0s;\n        END_IF;\n    END_IF;\n    {t}_IN := {input};\n",
+            add(&format!("{t}_ET"), "DeltaT")
+        )
+    };
+    let timers: String = [("L", "L"), ("D", "D"), ("SD_FF", "SD"), ("DS", "DS"), ("SL_FF", "SL")]
+        .iter()
+        .map(|(i, t)| timer(i, t))
+        .collect();
     format!(
-        r#"FUNCTION_BLOCK {}
+        r#"FUNCTION_BLOCK {name}
     VAR_INPUT
         N, R, S, L, D, P, SD, DS, SL, P1, P0 : BOOL;
         TQ : INT;
         TD : TIME;
+        DeltaT : TIME; (* the time since the previous call *)
         Reset : BOOL;
     END_VAR
     VAR_OUTPUT
@@ -1041,7 +1189,8 @@ fn control_type_text(name: &str) -> String {
     VAR
         S_FF, SD_FF, DS_FF, SL_FF : BOOL;
         P_MEM, P1_MEM, P0_MEM : BOOL;
-        L_TMR, D_TMR, SD_TMR, DS_TMR, SL_TMR : TON;
+        L_IN, D_IN, SD_IN, DS_IN, SL_IN : BOOL;
+        L_ET, D_ET, SD_ET, DS_ET, SL_ET : TIME;
         T_L, T_D, T_SD, T_DS, T_SL : TIME;
         P_Q, NEW_Q : BOOL;
     END_VAR
@@ -1054,11 +1203,11 @@ fn control_type_text(name: &str) -> String {
         P_MEM := FALSE;
         P1_MEM := FALSE;
         P0_MEM := FALSE;
-        L_TMR(IN := FALSE);
-        D_TMR(IN := FALSE);
-        SD_TMR(IN := FALSE);
-        DS_TMR(IN := FALSE);
-        SL_TMR(IN := FALSE);
+        L_IN := FALSE;
+        D_IN := FALSE;
+        SD_IN := FALSE;
+        DS_IN := FALSE;
+        SL_IN := FALSE;
         T_L := T#0s;
         T_D := T#0s;
         T_SD := T#0s;
@@ -1066,7 +1215,6 @@ fn control_type_text(name: &str) -> String {
         T_SL := T#0s;
         Q := FALSE;
         A := FALSE;
-        Reset := FALSE;
         RETURN;
     END_IF;
     CASE TQ OF
@@ -1077,25 +1225,31 @@ fn control_type_text(name: &str) -> String {
         5: T_SL := TD;
     END_CASE;
     S_FF := NOT R AND (S_FF OR S);
-    L_TMR(IN := L, PT := T_L);
-    D_TMR(IN := D, PT := T_D);
-    P_Q := P AND NOT P_MEM;
-    P_MEM := P;
     SD_FF := NOT R AND (SD_FF OR SD);
-    SD_TMR(IN := SD_FF, PT := T_SD);
-    DS_TMR(IN := DS, PT := T_DS);
-    DS_FF := NOT R AND (DS_FF OR DS_TMR.Q);
     SL_FF := NOT R AND (SL_FF OR SL);
-    SL_TMR(IN := SL_FF, PT := T_SL);
-    NEW_Q := NOT R AND (N OR (L AND NOT L_TMR.Q) OR D_TMR.Q OR P_Q OR S_FF OR SD_TMR.Q OR DS_FF
-        OR (SL_FF AND NOT SL_TMR.Q));
+    (* the timers: the time since the input rose, from the call it was first seen TRUE *)
+{timers}    P_Q := P AND NOT P_MEM;
+    P_MEM := P;
+    DS_FF := NOT R AND (DS_FF OR (DS AND DS_ET >= T_DS));
+    NEW_Q := NOT R AND (N OR (L AND NOT (L_ET >= T_L)) OR (D AND D_ET >= T_D) OR P_Q OR S_FF
+        OR (SD_FF AND SD_ET >= T_SD) OR DS_FF OR (SL_FF AND NOT (SL_ET >= T_SL)));
     A := NEW_Q OR (Q AND NOT NEW_Q) OR (P1 AND NOT P1_MEM) OR (P0_MEM AND NOT P0);
     Q := NEW_Q;
     P1_MEM := P1;
     P0_MEM := P0;
-END_FUNCTION_BLOCK"#,
-        name
+END_FUNCTION_BLOCK"#
     )
+}
+
+/// The sum of two TIME values. MatIEC does not carry a whole second when an addition makes
+/// exactly 10⁹ ns (`T#990ms + T#10ms` compares below `T#1s`); its multiplication does, so the
+/// `matiec` dialect writes `(a + b) * 1`.
+fn add_time(dialect: StDialect, a: &str, b: &str) -> String {
+    if dialect == StDialect::Matiec {
+        format!("({a} + {b}) * 1")
+    } else {
+        format!("{a} + {b}")
+    }
 }
 
 /// `C3` for ATMT, `c3` for EATMT.

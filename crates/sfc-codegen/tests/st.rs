@@ -23,7 +23,7 @@
 //! `SFC_ST_CASES=N` changes the number of random charts (default 200); `SFC_ST_CASE=K` runs
 //! case `K` alone and prints both texts.
 
-use sfc_codegen::st::build_st;
+use sfc_codegen::st::{build_st_file, StDialect, StOptions};
 use sfc_diagnostics::Diagnostic;
 use sfc_model::{check_source, CheckOptions, Checked};
 use sfc_sim::scenario::{self, Scenario};
@@ -43,29 +43,36 @@ fn check(name: &str, text: &str) -> Checked {
     check_source(0, name, text, &CheckOptions::default())
 }
 
-/// Translates every chart of `text`, one after the other; the errors rendered as text.
+/// Translates every chart of `text` as `sfc build --target st` does (`build_st_file`: one after
+/// the other, then the `iec` dialect's passes); the errors rendered as text. The result must
+/// read back without errors and without warnings of its own, and hold no chart.
 fn translate_all(name: &str, text: &str) -> Result<String, String> {
     let first = check(name, text);
     if first.has_errors() {
         return Err(render(&first, &first.diagnostics));
     }
-    let pous: Vec<String> = first.charts.iter().map(|c| c.pou.clone()).collect();
-    let mut cur = text.to_string();
-    for pou in pous {
-        let c = check(name, &cur);
-        let Some(chart) = c.charts.iter().find(|ch| ch.pou == pou) else {
-            return Err(format!("chart {pou} disappeared"));
-        };
-        match build_st(&c, chart) {
-            Ok(t) => cur = t,
-            Err(d) => return Err(render(&c, &d)),
-        }
-        let after = check(name, &cur);
-        let errors: Vec<Diagnostic> = after.diagnostics.iter().filter(|d| d.is_error()).cloned().collect();
-        assert!(errors.is_empty(), "the translation of {pou} does not check:\n{}\n{cur}", render(&after, &errors));
-        assert!(after.charts.iter().all(|c| c.pou != pou), "{pou} is still a chart");
-    }
+    let (cur, _) = build_st_file(&first, None, &StOptions::default()).map_err(|d| render(&first, &d))?;
+    let after = check(name, &cur);
+    // (a warning the chart has already, such as an unused variable, may stay)
+    let had = |d: &Diagnostic| first.diagnostics.iter().any(|f| f.code == d.code && f.message == d.message);
+    let shown: Vec<Diagnostic> = after
+        .diagnostics
+        .iter()
+        .filter(|d| d.is_error() || (d.severity == sfc_diagnostics::Severity::Warning && !had(d)))
+        .cloned()
+        .collect();
+    assert!(shown.is_empty(), "the translation does not read back cleanly:\n{}\n{cur}", render_all(&after, &shown));
+    assert!(after.charts.is_empty(), "charts are left: {:?}", after.charts.iter().map(|c| &c.pou).collect::<Vec<_>>());
     Ok(cur)
+}
+
+fn render_all(c: &Checked, diags: &[Diagnostic]) -> String {
+    let mut out = String::new();
+    for d in diags {
+        let lc = c.file.line_col(d.span.start);
+        writeln!(out, "{} {}:{} {}", d.code, lc.line, lc.column, d.message).unwrap();
+    }
+    out
 }
 
 fn render(c: &Checked, diags: &[Diagnostic]) -> String {
@@ -124,6 +131,83 @@ fn time_literals_are_canonical() {
     assert_eq!(time_literal(2_500), "T#2ms500us");
     assert_eq!(time_literal(-200_000), "T#-200ms");
     assert_eq!(time_literal(90_061_001_001), "T#1d1h1m1s1ms1us");
+}
+
+/// `tests/st/dialects/NAME.st`: the file as each `--st-dialect` writes it, equal to
+/// `NAME.st.DIALECT.expected` (`UPDATE_EXPECT=1` rewrites them).
+#[test]
+fn dialects_match_expected() {
+    let update = std::env::var_os("UPDATE_EXPECT").is_some();
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/st/dialects");
+    let mut failures = Vec::new();
+    let mut n = 0;
+    for e in std::fs::read_dir(&dir).unwrap() {
+        let path = e.unwrap().path();
+        if path.extension().is_none_or(|e| e != "st") {
+            continue;
+        }
+        let text = std::fs::read_to_string(&path).unwrap();
+        let c = check(&path.display().to_string(), &text);
+        assert!(!c.has_errors(), "{}: {}", path.display(), render(&c, &c.diagnostics));
+        for dialect in StDialect::ALL {
+            n += 1;
+            let got = match build_st_file(&c, None, &StOptions { dialect }) {
+                Ok((t, notes)) => {
+                    let notes: Vec<String> =
+                        notes.iter().map(|d| format!("(* {}: {} *)\n", d.code, d.message)).collect();
+                    format!("{}{t}", notes.concat())
+                }
+                Err(d) => format!("(* refused *)\n{}", render(&c, &d)),
+            };
+            let exp = PathBuf::from(format!("{}.{}.expected", path.display(), dialect.name()));
+            if update {
+                std::fs::write(&exp, &got).unwrap();
+            } else if std::fs::read_to_string(&exp).unwrap_or_default() != got {
+                failures.push(format!("{}: differs from {}\n{got}", path.display(), exp.display()));
+            }
+        }
+    }
+    assert!(n >= 4, "no dialect fixtures");
+    assert!(failures.is_empty(), "{}", failures.join("\n\n"));
+}
+
+#[test]
+fn matiec_literals_are_exact_in_floating_point() {
+    use sfc_codegen::st::matiec_time_literal;
+    assert_eq!(matiec_time_literal(0), "T#0s");
+    assert_eq!(matiec_time_literal(8_000), "T#8.0000005ms");
+    assert_eq!(matiec_time_literal(1_008_000), "T#1s8.0000005ms");
+    assert_eq!(matiec_time_literal(533_333), "T#533.3330005ms");
+    assert_eq!(matiec_time_literal(-8_000), "T#-8.0000005ms");
+    // whole units and 1/64 s steps are exact in binary: written as they are
+    assert_eq!(matiec_time_literal(90_000_000), "T#1m30s");
+    assert_eq!(matiec_time_literal(1_250_000), "T#1s250ms");
+    assert_eq!(matiec_time_literal(15_625), "T#15.625ms");
+    assert_eq!(matiec_time_literal(86_400_500_000), "T#1d500ms");
+    // The value MatIEC computes: seconds + milliseconds / 1000 in floating point (here f64, the
+    // coarsest of the types it is compiled with), times 10^9, truncated: exact for every value.
+    for us in (0..3_000_000i64).step_by(997).chain([8_000, 1_000, 2_000, 4_000, 16_000, 1_008_000, 999_999]) {
+        let lit = matiec_time_literal(us);
+        let body = lit.trim_start_matches("T#");
+        let (mut secs, mut ms) = (0f64, 0f64);
+        let mut rest = body;
+        for (unit, scale) in [("d", 86_400.0), ("h", 3_600.0), ("m", 60.0)] {
+            if let Some(i) = rest.find(unit).filter(|&i| !rest[i..].starts_with("ms")) {
+                secs += rest[..i].parse::<f64>().unwrap() * scale;
+                rest = &rest[i + unit.len()..];
+            }
+        }
+        if let Some(i) = rest.find('s').filter(|&i| !rest[..i].ends_with('m')) {
+            secs += rest[..i].parse::<f64>().unwrap();
+            rest = &rest[i + 1..];
+        }
+        if let Some(v) = rest.strip_suffix("ms") {
+            ms = v.parse().unwrap();
+        }
+        let total = secs + ms / 1e3;
+        let ns = ((total - total.trunc()) * 1e9) as i64 + total.trunc() as i64 * 1_000_000_000;
+        assert_eq!(ns, us * 1000, "{lit}");
+    }
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -400,7 +484,7 @@ fn a_large_chart_translates() {
     t.push_str("    ACTION Tick: Count := Count + 1; END_ACTION\nEND_PROGRAM\n");
     let c = check("big.st", &t);
     let started = std::time::Instant::now();
-    let direct = build_st(&c, &c.charts[0]).unwrap();
+    let (direct, _) = build_st_file(&c, None, &StOptions::default()).unwrap();
     let took = started.elapsed();
     let out = translate_all("big.st", &t).unwrap();
     assert_eq!(direct, out);

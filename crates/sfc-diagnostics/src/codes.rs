@@ -446,18 +446,31 @@ again, or store it in a variable and load that.";
 a transition condition or a parenthesised operand, an operator without the operand it needs, or \
 a jump to a label that does not exist.";
 
-    "SFC0805" Warning "actions outside a chart kept as CODESYS writes them"
-        "The file has actions of a function block or program that is no chart (`ACTION … \
-END_ACTION` after the POU's statements, called `inst.Act();`), as CODESYS, TwinCAT and \
-e!COCKPIT write them. The Structured Text target copies them as they are: CODESYS and its family \
-compile the result, IEC 61131-3 compilers that know actions only inside a chart (MatIEC, which \
-Beremiz and OpenPLC v3 use) do not.";
+    "SFC0805" Warning "CODESYS extension kept as CODESYS writes it"
+        "The file has what CODESYS, TwinCAT and e!COCKPIT add to IEC 61131-3: actions of a function \
+block or program that is no chart (`ACTION … END_ACTION` after the POU's statements, called \
+`inst.Act();`), methods, properties, `EXTENDS`, `IMPLEMENTS` or interfaces. The Structured Text \
+target copies them as they are: CODESYS and its family compile the result, the IEC 61131-3 \
+compilers of Beremiz and OpenPLC v3 (MatIEC) and of OpenPLC v4 (STruC++) do not. \
+`--st-dialect codesys` says nothing about them.";
     "SFC0806" Error "CODESYS action not generated for this target"
         "The chart's POU has an action written in SFC (a chart inside an action) or a step with \
 step actions (`ENTRY_ACTION`, `STEP_ACTION`, `EXIT_ACTION`), as CODESYS, TwinCAT and e!COCKPIT \
 write them. The ST, STL, ATMT and EATMT targets do not generate them yet, and leaving them out \
 would give a program that does something else. `sfc sim`, `sfc check`, `--target text` and \
 `--target plcopen` handle them.";
+    "SFC0807" Error "duration finer than the dialect's TIME"
+        "`--st-dialect codesys` writes ST for CODESYS and TwinCAT, whose TIME counts milliseconds \
+(durations below the millisecond are LTIME's). A duration of the chart with a part below the \
+millisecond (`T#2ms500us`, or a supervision time like it) would be rounded there, and the \
+program would not behave as the chart: it is refused where it is written. Write whole \
+milliseconds, or build with `--st-dialect iec` for a compiler whose TIME holds microseconds.";
+    "SFC0808" Note "configuration added for MatIEC"
+        "`--st-dialect matiec` writes ST for MatIEC, the compiler of Beremiz and OpenPLC v3. OpenPLC \
+v3 compiles an uploaded `.st` file together with its `CONFIGURATION` (its editor writes one), so \
+a file without one gets `CONFIGURATION Config0` at the end: one resource, one task `task0` every \
+20 ms (OpenPLC v3's default), and one instance of every PROGRAM of the file. Set `INTERVAL` to \
+the scan period the chart was written for. A file with a configuration is left as it is.";
     "SFC0810" Error "not expressible in the S7-200 program"
         "The S7-200 statement-list target (`--target stl`) turns conditions into bit logic over \
 inputs, outputs, memory, step, timer and counter bits, and into compare contacts (`LDW>=`, \

@@ -188,6 +188,8 @@ pub struct CompileOptions<'a> {
     pub ntr: Option<u32>,
     /// STL: set/reset or SCR.
     pub stl_method: sfc_codegen::stl::StlMethod,
+    /// ST: the compiler it is written for.
+    pub st_dialect: sfc_codegen::st::StDialect,
     /// PLCopen: the PLCopen file the checked text was imported from, whose element a POU with
     /// errors is written as (`sfc_plcopen::export_with`).
     pub original: Option<&'a str>,
@@ -215,29 +217,51 @@ pub enum CompileError {
     Diagnostics(Vec<Diagnostic>),
 }
 
-/// SFC0805 for each POU with actions outside a chart, which the ST target copies as CODESYS
-/// writes them.
-fn codesys_actions(checked: &Checked) -> Vec<Diagnostic> {
-    checked
-        .unit
-        .items
-        .iter()
-        .filter_map(|i| match i {
-            sfc_syntax::ast::Item::Pou(p) => p.actions.first().map(|a| (p, a)),
-            _ => None,
-        })
-        .map(|(p, a)| {
-            Diagnostic::warning(
-                "SFC0805",
-                a.name.span,
-                format!(
-                    "`{}` has actions outside a chart: the ST output keeps them as CODESYS writes them, which \
-                     MatIEC (Beremiz, OpenPLC v3) does not compile",
-                    p.name.text
-                ),
-            )
-        })
-        .collect()
+/// SFC0805 for what the ST target copies as CODESYS writes it and IEC 61131-3 compilers such as
+/// MatIEC (Beremiz, OpenPLC v3) and STruC++ (OpenPLC v4) do not take: actions outside a chart,
+/// methods, properties, `EXTENDS`/`IMPLEMENTS` and interfaces (not for `--st-dialect codesys`).
+fn codesys_extensions(checked: &Checked, dialect: sfc_codegen::st::StDialect) -> Vec<Diagnostic> {
+    if dialect == sfc_codegen::st::StDialect::Codesys {
+        return Vec::new();
+    }
+    let warn = |span, what: String| {
+        Diagnostic::warning(
+            "SFC0805",
+            span,
+            format!(
+                "{what}: the ST output keeps it as CODESYS writes it, which MatIEC (Beremiz, OpenPLC v3) and \
+                 STruC++ (OpenPLC v4) do not compile"
+            ),
+        )
+    };
+    let mut out = Vec::new();
+    for item in &checked.unit.items {
+        match item {
+            sfc_syntax::ast::Item::Pou(p) => {
+                let name = &p.name.text;
+                if let Some(a) = p.actions.first() {
+                    out.push(warn(a.name.span, format!("`{name}` has actions outside a chart")));
+                }
+                if let Some(m) = p.methods.first() {
+                    out.push(warn(m.name.span, format!("`{name}` has methods")));
+                }
+                if let Some(pr) = p.properties.first() {
+                    out.push(warn(pr.name.span, format!("`{name}` has properties")));
+                }
+                if let Some(e) = &p.extends {
+                    out.push(warn(e.span, format!("`{name}` extends `{}`", e.text)));
+                }
+                if let Some(i) = p.implements.first() {
+                    out.push(warn(i.span, format!("`{name}` implements `{}`", i.text)));
+                }
+            }
+            sfc_syntax::ast::Item::Interface(i) => {
+                out.push(warn(i.name.span, format!("`{}` is an interface", i.name.text)));
+            }
+            _ => {}
+        }
+    }
+    out
 }
 
 /// Compiles a checked file (without errors) for `target`.
@@ -254,6 +278,23 @@ pub fn compile(checked: &Checked, target: BuildTarget, opts: &CompileOptions) ->
             return sfc_plcopen::export_with(checked, opts.original)
                 .map(|(text, notes)| Compiled { text, notes, flattened: None, symbols: None })
                 .map_err(CompileError::Diagnostics)
+        }
+        BuildTarget::St => {
+            // Every chart of the file unless one is named, so a chart function block and the
+            // chart program calling it both become plain ST.
+            if checked.charts.is_empty() {
+                return Err(CompileError::Chart("the file has no SFC POU to build".to_string()));
+            }
+            if let Some(p) = opts.pou {
+                pick_chart(checked, Some(p)).map_err(CompileError::Chart)?;
+            }
+            let st = sfc_codegen::st::StOptions { dialect: opts.st_dialect };
+            return sfc_codegen::st::build_st_file(checked, opts.pou, &st)
+                .map(|(text, mut notes)| {
+                    notes.extend(codesys_extensions(checked, opts.st_dialect));
+                    Compiled { text, notes, flattened: None, symbols: None }
+                })
+                .map_err(CompileError::Diagnostics);
         }
         _ => {}
     }
@@ -277,12 +318,6 @@ pub fn compile(checked: &Checked, target: BuildTarget, opts: &CompileOptions) ->
                 symbols: None,
             })
         }
-        (BuildTarget::St, _) => sfc_codegen::st::build_st(checked, chart).map(|text| Compiled {
-            text,
-            notes: codesys_actions(checked),
-            flattened: None,
-            symbols: None,
-        }),
         (BuildTarget::Stl, _) => {
             let opts = sfc_codegen::stl::StlOptions { method: opts.stl_method };
             sfc_codegen::stl::build_stl(checked, chart, opts).map(|p| Compiled {
