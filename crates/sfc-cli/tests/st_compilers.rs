@@ -15,11 +15,13 @@
 //!   the trace must equal `sfc sim --profile iec`'s: the active steps (a step is active when its
 //!   `X` is TRUE, steps of chart instances as `inst.Step`), every elementary variable of the
 //!   simulated POU (TIME in µs, REAL to single precision).
-//!   With `--st-dialect` (when `sfc build` has it) MatIEC gets `--st-dialect matiec`, STruC++
-//!   `--st-dialect strucpp`. MatIEC's output must be accepted with Beremiz's options
+//!   MatIEC compiles the ST of `--st-dialect matiec`, STruC++ that of `--st-dialect strucpp`
+//!   (the CONFIGURATION the former adds to each case becomes one with every case's program).
+//!   MatIEC's output must be accepted with Beremiz's options
 //!   (`-f -l -p`) and with OpenPLC v3's (`-f -l -p -r -R -a`); the C of the former runs.
 //!   Charts `sfc build --target st` refuses as CODESYS-only (SFC0806) and files without an SFC
 //!   POU to build are counted and listed, not compared.
+//!   Located variables get addresses of their own per case (`%IX0.1` → `%IX17000.1`).
 //!   `SFC_ST_COMPILERS_CASES=N` sets the number of random charts (default 40;
 //!   `SFC_ST_COMPILERS_FULL=1`: 300), `SFC_ST_COMPILERS_ONLY=text` keeps the cases whose name
 //!   contains it, `SFC_ST_COMPILERS_SCENARIOS=dir,…` adds the scenarios of other directories
@@ -124,11 +126,6 @@ fn sfc() -> Command {
     let mut c = Command::new(env!("CARGO_BIN_EXE_sfc"));
     c.env("NO_COLOR", "1");
     c
-}
-
-/// Whether `sfc build` has `--st-dialect`.
-fn has_dialects() -> bool {
-    sh(sfc().args(["build", "--help"])).map(|h| h.contains("--st-dialect")).unwrap_or(false)
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -710,104 +707,10 @@ enum Prepared {
     Failed(String),
 }
 
-/// `sfc build --target st` of every chart POU of `text`, one after the other (a chart FB and
-/// the program calling it both end up plain ST).
-fn translate(
-    text_path: &Path,
-    pous: &[String],
-    dialect: Option<&str>,
-    dir: &Path,
-    tag: &str,
-) -> Result<String, String> {
-    let mut cur = text_path.to_path_buf();
-    for (k, pou) in pous.iter().enumerate() {
-        let out = dir.join(format!("{tag}.{k}.st"));
-        let mut cmd = sfc();
-        cmd.arg("build").arg(&cur).args(["--target", "st", "--pou", pou]);
-        if let Some(d) = dialect {
-            cmd.args(["--st-dialect", d]);
-        }
-        cmd.arg("-o").arg(&out);
-        sh(&mut cmd)?;
-        cur = out;
-    }
-    Ok(std::fs::read_to_string(&cur).unwrap())
-}
-
-/// MatIEC, until `--st-dialect matiec` exists: located variables in their own VAR blocks (MatIEC
-/// refuses a VAR block mixing located and unlocated variables).
-fn split_located(st: &str) -> String {
-    let mut out = String::new();
-    let mut block: Option<(String, Vec<String>, Vec<String>)> = None;
-    for line in st.split_inclusive('\n') {
-        let t = line.trim();
-        let up = t.to_ascii_uppercase();
-        match &mut block {
-            None => {
-                let head = up.split_whitespace().next().unwrap_or("");
-                if head.starts_with("VAR") && !up.contains("END_VAR") {
-                    block = Some((line.to_string(), Vec::new(), Vec::new()));
-                } else {
-                    out.push_str(line);
-                }
-            }
-            Some((head, plain, located)) => {
-                if up.starts_with("END_VAR") {
-                    let mixed = !located.is_empty() && plain.iter().any(|l| l.contains(':'));
-                    out.push_str(head);
-                    for l in plain.iter() {
-                        out.push_str(l);
-                    }
-                    if mixed {
-                        out.push_str(line);
-                        out.push_str(head);
-                    }
-                    for l in located.iter() {
-                        out.push_str(l);
-                    }
-                    out.push_str(line);
-                    block = None;
-                } else if up.contains(" AT %") {
-                    located.push(line.to_string());
-                } else {
-                    plain.push(line.to_string());
-                }
-            }
-        }
-    }
-    out
-}
-
-/// Until `--st-dialect` exists: pragmas (`{attribute 'sfc.timeout' := 'T#60s'}`, kept from the
-/// chart) as comments; neither compiler reads them (MatIEC refuses them in declarations,
-/// STruC++'s lexer refuses `{`).
-fn pragmas_as_comments(st: &str) -> String {
-    let mut out = String::with_capacity(st.len());
-    let mut last = 0;
-    let b = st.as_bytes();
-    let mut i = 0;
-    while i < b.len() {
-        if b[i] == b'(' && b.get(i + 1) == Some(&b'*') {
-            i = st[i + 2..].find("*)").map(|e| i + 2 + e + 2).unwrap_or(b.len());
-        } else if b[i] == b'\'' || b[i] == b'"' {
-            let q = b[i];
-            i += 1;
-            while i < b.len() && b[i] != q {
-                i += if b[i] == b'$' { 2 } else { 1 };
-            }
-            i += 1;
-        } else if b[i] == b'{' {
-            let e = st[i..].find('}').map(|e| i + e + 1).unwrap_or(b.len());
-            out.push_str(&st[last..i]);
-            write!(out, "(* pragma {} *)", &st[i..e]).unwrap();
-            last = e;
-            i = e;
-        } else {
-            i += 1;
-        }
-    }
-    out.push_str(&st[last.min(st.len())..]);
-    out
+/// `sfc build --target st --st-dialect DIALECT` of the chart file (every chart of it).
+fn translate(chart: &Path, dialect: &str, out: &Path) -> Result<String, String> {
+    sh(sfc().arg("build").arg(chart).args(["--target", "st", "--st-dialect", dialect, "-o"]).arg(out))?;
+    Ok(std::fs::read_to_string(out).unwrap())
 }
 
 /// Whether `chart` is a fixture of `sfc-codegen/tests/st/` whose expected translation is a
@@ -839,7 +742,7 @@ fn relocate(st: &str, idx: usize) -> String {
     out
 }
 
-fn prepare(idx: usize, case: &Case, work: &Path, dialects: bool) -> Prepared {
+fn prepare(idx: usize, case: &Case, work: &Path) -> Prepared {
     let dir = work.join(case.name.replace('/', "_"));
     let _ = std::fs::remove_dir_all(&dir);
     std::fs::create_dir_all(&dir).unwrap();
@@ -859,48 +762,26 @@ fn prepare(idx: usize, case: &Case, work: &Path, dialects: bool) -> Prepared {
     let renamed = rename(&case.text, &names, &suffix);
     let chart = dir.join("chart.st");
     std::fs::write(&chart, &renamed).unwrap();
-    let pous: Vec<String> = pous.iter().map(|p| format!("{p}{suffix}")).collect();
-    let built = |dialect: Option<&str>, tag: &str| -> Result<String, Prepared> {
-        translate(&chart, &pous, dialect, &dir, tag).map_err(|e| {
+    let built = |dialect: &str| -> Result<String, Prepared> {
+        translate(&chart, dialect, &dir.join(format!("{dialect}.built.st"))).map_err(|e| {
+            let first = |code: &str| e.lines().find(|l| l.contains(code)).unwrap_or("").trim().to_string();
             if e.contains("SFC0806") {
-                let first = e.lines().find(|l| l.contains("SFC0806")).unwrap_or("").trim().to_string();
-                Prepared::Skipped(format!("refused by sfc build --target st (CODESYS features): {first}"))
-            } else if e.contains("no SFC POU to build") || e.contains("is not an SFC POU") {
-                Prepared::Skipped(format!(
-                    "no SFC POU for sfc build: {}",
-                    e.lines().find(|l| l.contains("error")).unwrap_or("").trim()
-                ))
+                Prepared::Skipped(format!("refused by sfc build --target st (CODESYS features): {}", first("SFC0806")))
+            } else if e.contains("no SFC POU to build") {
+                Prepared::Skipped(format!("no SFC POU for sfc build: {}", first("error")))
             } else if refused_fixture(&case.chart) {
-                let first = e.lines().find(|l| l.contains("error")).unwrap_or("").trim().to_string();
-                Prepared::Skipped(format!("a fixture the ST target refuses (its .expected says so): {first}"))
+                Prepared::Skipped(format!(
+                    "a fixture the ST target refuses (its .expected says so): {}",
+                    first("error")
+                ))
             } else {
-                let d = dialect.map(|d| format!(" --st-dialect {d}")).unwrap_or_default();
-                Prepared::Failed(format!("sfc build --target st{d} fails:\n{e}"))
+                Prepared::Failed(format!("sfc build --target st --st-dialect {dialect} fails:\n{e}"))
             }
         })
     };
-    let st = if dialects {
-        let m = match built(Some("matiec"), "matiec") {
-            Ok(t) => t,
-            Err(p) => return p,
-        };
-        let s = match built(Some("strucpp"), "strucpp") {
-            Ok(t) => t,
-            Err(p) => return p,
-        };
-        [m, s]
-    } else {
-        let t = match built(None, "st") {
-            Ok(t) => t,
-            Err(p) => return p,
-        };
-        // SFC_ST_COMPILERS_NO_WORKAROUNDS=1 shows what the compilers say of the ST as it is
-        if std::env::var("SFC_ST_COMPILERS_NO_WORKAROUNDS").is_ok_and(|v| v == "1") {
-            [t.clone(), t]
-        } else {
-            let t = pragmas_as_comments(&t);
-            [split_located(&t), t]
-        }
+    let st = match (built("matiec"), built("strucpp")) {
+        (Ok(m), Ok(s)) => [m, s],
+        (Err(p), _) | (_, Err(p)) => return p,
     };
     // Located variables of different cases at different addresses (%IX0.1 → %IX17000.1): STruC++
     // refuses two variables at one address, MatIEC would share their storage.
@@ -928,9 +809,15 @@ fn concat(parts: &[(usize, &str)]) -> (String, Vec<Vec<(usize, usize)>>, Vec<(us
     let mut owners: Vec<Vec<(usize, usize)>> = Vec::new();
     let mut helpers: Vec<(String, String, usize, usize)> = Vec::new(); // (name, body, first line, lines)
     let mut conflicts = Vec::new();
+    // (case, its CONFIGURATION unit)
+    let mut configs: Vec<(usize, Unit)> = Vec::new();
     for &(idx, st) in parts {
         let suffix = format!("_{idx}");
         for u in units(st) {
+            if u.kind == "CONFIGURATION" {
+                configs.push((idx, u));
+                continue;
+            }
             let own = u.kind.is_empty()
                 || u.name.split(',').all(|n| n.to_ascii_uppercase().ends_with(&suffix.to_ascii_uppercase()));
             if !own {
@@ -956,6 +843,45 @@ fn concat(parts: &[(usize, &str)]) -> (String, Vec<Vec<(usize, usize)>>, Vec<(us
             if !own {
                 helpers.push((u.name.clone(), body(&u).to_string(), first, n));
             }
+        }
+    }
+    // One configuration: the first case's, with the program instances of every case
+    // (`PROGRAM instance0 WITH task0 : Main_17;` → `PROGRAM instance0_17 WITH …`).
+    if let Some((first_idx, first)) = configs.first() {
+        let is_program = |l: &str| {
+            let w: Vec<&str> = l.split_whitespace().collect();
+            w.len() >= 4 && w[0].eq_ignore_ascii_case("PROGRAM") && w[2].eq_ignore_ascii_case("WITH")
+        };
+        let mut programs: Vec<(usize, usize, String)> = Vec::new(); // (case, line in its ST, text)
+        for (idx, u) in &configs {
+            for (i, l) in u.text.lines().enumerate() {
+                if is_program(l) {
+                    let w: Vec<&str> = l.split_whitespace().collect();
+                    let renamed = l.replacen(&format!(" {} ", w[1]), &format!(" {}_{idx} ", w[1]), 1);
+                    programs.push((*idx, u.line + i, renamed));
+                }
+            }
+        }
+        let all: Vec<(usize, usize)> = configs.iter().map(|(k, u)| (*k, u.line)).collect();
+        let mut emitted = false;
+        for (i, l) in first.text.lines().enumerate() {
+            if is_program(l) {
+                if !emitted {
+                    for (k, line, p) in &programs {
+                        text.push_str(p);
+                        text.push('\n');
+                        owners.push(vec![(*k, *line)]);
+                    }
+                    emitted = true;
+                }
+                continue;
+            }
+            text.push_str(l);
+            text.push('\n');
+            // (the configurations differ only in their programs: a line is every case's)
+            let mut o: Vec<(usize, usize)> = all.iter().map(|(k, start)| (*k, start + i)).collect();
+            o.sort_by_key(|(k, _)| (*k != *first_idx) as u8);
+            owners.push(o);
         }
     }
     (text, owners, conflicts)
@@ -1550,7 +1476,6 @@ const CHART_FEATURES: &[(&str, Compiler, &str, &str)] = &[
 fn generated_st_runs_like_the_chart() {
     let started = Instant::now();
     let tools = tools();
-    let dialects = has_dialects();
     let work = work_dir("st-compilers");
     let cases_dir = work.join("cases");
     std::fs::create_dir_all(&cases_dir).unwrap();
@@ -1566,12 +1491,7 @@ fn generated_st_runs_like_the_chart() {
     if let Ok(only) = std::env::var("SFC_ST_COMPILERS_ONLY") {
         cases.retain(|c| only.split(',').any(|o| c.name.contains(o)));
     }
-    println!(
-        "{} cases ({} random); sfc build {} --st-dialect",
-        cases.len(),
-        n,
-        if dialects { "has" } else { "does not have yet: no" }
-    );
+    println!("{} cases ({n} random)", cases.len());
 
     // sfc build and sfc sim of every case, on two threads
     let prepared: Mutex<Vec<(usize, Prepared)>> = Mutex::new(Vec::new());
@@ -1585,7 +1505,7 @@ fn generated_st_runs_like_the_chart() {
                     *n - 1
                 };
                 let Some(case) = cases.get(k) else { break };
-                let p = prepare(k, case, &cases_dir, dialects);
+                let p = prepare(k, case, &cases_dir);
                 prepared.lock().unwrap().push((k, p));
             });
         }
@@ -1757,7 +1677,7 @@ fn matiec_sfc_bug_is_gone_through_st() {
     println!("MatIEC compiling the SFC itself: like --profile matiec, unlike --profile iec from scan {k} ({what})");
 
     // The same chart through `sfc build --target st --st-dialect matiec` and iec2c
-    let ready = match prepare(1, &case, &work.join("cases"), has_dialects()) {
+    let ready = match prepare(1, &case, &work.join("cases")) {
         Prepared::Ready(r) => r,
         Prepared::Skipped(why) | Prepared::Failed(why) => panic!("{why}"),
     };
