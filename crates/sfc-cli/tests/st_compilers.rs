@@ -5,8 +5,9 @@
 //!   ST to C, compiled by gcc) and STruC++ (OpenPLC v4; ST to C++17, compiled by g++), built from
 //!   the snapshots in `../shared/tools` into `target/tools/` by their scripts (the first time takes
 //!   a few minutes; a tool that cannot be built fails the test with the script's message). The
-//!   cases: every scenario of `examples/` and of the simulator's semantics fixtures whose profile
-//!   is `iec`, the fixtures of `sfc-codegen/tests/st/` with random inputs, and random charts (the
+//!   cases: every scenario of `examples/`, of the simulator's semantics fixtures and of
+//!   `tests/st_compilers/` (a chart for each problem this test found) whose profile is `iec`,
+//!   the fixtures of `sfc-codegen/tests/st/` with random inputs, and random charts (the
 //!   generator of `sfc-codegen/tests/st.rs`, shared through
 //!   `sfc-codegen/tests/support/random_chart.rs`). Each case's POUs are renamed (`Chart` →
 //!   `Chart_17`) so that all cases make one ST file per compiler (one copy of the helper
@@ -357,7 +358,12 @@ fn scenario_files(dir: &Path) -> Vec<PathBuf> {
 /// The scenarios of `examples/` and of the semantics fixtures whose profile is `iec`.
 fn scenario_cases(work: &Path) -> Vec<Case> {
     let mut out = Vec::new();
-    let mut dirs = vec![root().join("examples"), root().join("crates/sfc-sim/tests/semantics")];
+    let mut dirs = vec![
+        root().join("examples"),
+        root().join("crates/sfc-sim/tests/semantics"),
+        // the reproductions of what this test found (one chart per problem)
+        root().join("crates/sfc-cli/tests/st_compilers"),
+    ];
     // more scenarios (a reproduction being minimised): SFC_ST_COMPILERS_SCENARIOS=dir,dir
     if let Ok(more) = std::env::var("SFC_ST_COMPILERS_SCENARIOS") {
         dirs.extend(more.split(',').map(PathBuf::from));
@@ -372,6 +378,7 @@ fn scenario_cases(work: &Path) -> Vec<Case> {
             let name = rel
                 .trim_end_matches(".scenario.toml")
                 .replace("crates/sfc-sim/tests/", "")
+                .replace("crates/sfc-cli/tests/", "")
                 .trim_start_matches('/')
                 .to_string();
             let scans = sc.total_scans() as usize;
