@@ -761,7 +761,7 @@ fn prepare(idx: usize, case: &Case, work: &Path) -> Prepared {
         }
     }
     if pous.is_empty() {
-        return Prepared::Skipped("no SFC in the file".into());
+        return Prepared::Skipped("no chart in a POU body: nothing for sfc build --target st to translate".into());
     }
     // Every POU and type of the file gets the case's suffix.
     let suffix = format!("_{idx}");
