@@ -10,6 +10,10 @@
 #   unzip lists the VS Code extension's .vsix (scripts/test-vscode.sh checks what it holds).
 #   python3 counts the steps, transitions and actions of the PLCopen corpus independently of the
 #   importer (tests/corpus/real/count.py, standard library only).
+#   MatIEC's iec2c and STruC++ (../shared/tools: source snapshots and their build scripts, which
+#   install what they need) compile the ST of `sfc build --target st` in
+#   crates/sfc-cli/tests/st_compilers.rs; built once into target/tools/ (a few minutes the
+#   first time; the test builds them the same way when they are missing).
 # Part of the README's test command, so a fresh machine needs no manual step.
 set -euo pipefail
 root="$(cd "$(dirname "$0")/.." && pwd)"
@@ -48,3 +52,11 @@ bash "$root/scripts/asyncua-deps.sh" || echo "test-deps: asyncua could not be in
 # pymodbus and o6 (PyPI): a Modbus client, and the OPC UA client on open62541 (the second stack).
 bash "$root/scripts/pymodbus-deps.sh" || echo "test-deps: pymodbus could not be installed: the Modbus client tests will skip" >&2
 bash "$root/scripts/o6-deps.sh" || echo "test-deps: o6 could not be installed: the open62541 OPC UA tests will skip" >&2
+# The compilers of crates/sfc-cli/tests/st_compilers.rs: MatIEC (needs autoconf, bison, flex,
+# g++: its script installs them) and STruC++ (npm packages from the registry).
+shared="$root/../shared/tools"
+[ -d "$shared" ] || { echo "test-deps: $shared is missing: the ST compiler test needs MatIEC and STruC++ from it" >&2; exit 1; }
+bash "$shared/build-matiec.sh" "$root/target/tools/matiec" >/dev/null ||
+    { echo "test-deps: MatIEC could not be built (see above)" >&2; exit 1; }
+bash "$shared/build-strucpp.sh" "$root/target/tools/strucpp" >/dev/null ||
+    { echo "test-deps: STruC++ could not be built (see above)" >&2; exit 1; }

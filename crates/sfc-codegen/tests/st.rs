@@ -17,6 +17,9 @@
 //!     times, SFCInit/SFCPause/SFCQuitError; sometimes the chart is a FUNCTION_BLOCK called by
 //!     a PROGRAM only in some scans).
 //!
+//! The random charts come from `tests/support/random_chart.rs` (shared with
+//! `sfc-cli/tests/st_compilers.rs`, which compiles them with MatIEC and STruC++).
+//!
 //! `SFC_ST_CASES=N` changes the number of random charts (default 200); `SFC_ST_CASE=K` runs
 //! case `K` alone and prints both texts.
 
@@ -27,6 +30,10 @@ use sfc_sim::scenario::{self, Scenario};
 use sfc_sim::{SimOptions, Simulation, Value};
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
+
+#[path = "support/random_chart.rs"]
+mod random_chart;
+use random_chart::{random_chart, RandomInputs, Rng};
 
 fn root() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("../..")
@@ -371,29 +378,6 @@ fn examples_and_semantics_scenarios_behave_identically() {
     assert!(failures.is_empty(), "{}", failures.join("\n\n"));
 }
 
-struct Rng(u64);
-
-impl Rng {
-    fn next(&mut self) -> u64 {
-        let mut x = self.0;
-        x ^= x << 13;
-        x ^= x >> 7;
-        x ^= x << 17;
-        self.0 = x;
-        x
-    }
-    fn below(&mut self, n: usize) -> usize {
-        (self.next() % n.max(1) as u64) as usize
-    }
-    fn chance(&mut self, percent: usize) -> bool {
-        self.below(100) < percent
-    }
-    fn pick<T: Clone>(&mut self, v: &[T]) -> T {
-        v[self.below(v.len())].clone()
-    }
-}
-
-/// The BOOL inputs of the top POU of `text` (VAR_INPUT and VAR declarations of BOOL variables
 /// not written by the chart are flipped at random).
 fn random_inputs(sim: &Simulation, checked: &Checked) -> Vec<String> {
     let written: Vec<String> = checked
@@ -446,282 +430,6 @@ fn fixtures_behave_identically_on_random_inputs() {
 // ---------------------------------------------------------------------------------------------
 // Random charts
 
-const INPUTS: usize = 6;
-const DURATIONS_MS: [i64; 7] = [0, 10, 20, 25, 30, 50, 80];
-const GUARD_MS: [i64; 6] = [0, 10, 20, 30, 40, 60];
-const QUALS: [&str; 11] = ["N", "R", "S", "L", "D", "P", "SD", "DS", "SL", "P1", "P0"];
-const VAR_QUALS: [&str; 9] = ["N", "R", "S", "L", "D", "P", "SD", "DS", "SL"];
-
-struct Tr {
-    from: Vec<usize>,
-    to: Vec<usize>,
-    priority: Option<u32>,
-    guard: String,
-    il: Option<String>,
-}
-
-struct Gen<'r> {
-    rng: &'r mut Rng,
-    steps: Vec<(bool, usize)>,
-    trs: Vec<Tr>,
-    actions: usize,
-    max_steps: usize,
-}
-
-impl Gen<'_> {
-    fn step(&mut self, initial: bool, network: usize) -> usize {
-        self.steps.push((initial, network));
-        self.steps.len() - 1
-    }
-
-    fn atom(&mut self, from: &[usize]) -> String {
-        match self.rng.below(14) {
-            0 => "TRUE".into(),
-            1..=3 => format!("S{}.T >= T#{}ms", self.rng.pick(from), self.rng.pick(&GUARD_MS)),
-            4 => format!("S{}.X", self.rng.below(self.steps.len())),
-            5 if self.actions > 0 => {
-                format!("a{}.{}", self.rng.below(self.actions), if self.rng.chance(50) { "Q" } else { "A" })
-            }
-            6 => format!("o{}", self.rng.below(3)),
-            7 => format!("n{} > {}", self.rng.below(2), self.rng.below(6)),
-            8 => format!("n{} / 2 >= {}", self.rng.below(2), self.rng.below(3)),
-            _ => format!("i{}", self.rng.below(INPUTS)),
-        }
-    }
-
-    fn guard(&mut self, from: &[usize], depth: u32) -> String {
-        if depth < 2 && self.rng.chance(35) {
-            let a = self.guard(from, depth + 1);
-            return match self.rng.below(4) {
-                0 => format!("NOT ({a})"),
-                1 => format!("({a}) AND ({})", self.guard(from, depth + 1)),
-                2 => format!("({a}) XOR ({})", self.guard(from, depth + 1)),
-                _ => format!("({a}) OR ({})", self.guard(from, depth + 1)),
-            };
-        }
-        self.atom(from)
-    }
-
-    fn il_guard(&mut self) -> String {
-        let mut s = format!("        LD{} i{}\n", if self.rng.chance(30) { "N" } else { "" }, self.rng.below(INPUTS));
-        for _ in 0..self.rng.below(3) {
-            let op = self.rng.pick(&["AND", "ANDN", "OR", "ORN", "XOR"]);
-            if self.rng.chance(25) {
-                s.push_str(&format!(
-                    "        {op}( i{}\n        OR o{}\n        )\n",
-                    self.rng.below(INPUTS),
-                    self.rng.below(3)
-                ));
-            } else {
-                s.push_str(&format!("        {op} i{}\n", self.rng.below(INPUTS)));
-            }
-        }
-        s
-    }
-
-    fn transition(&mut self, from: Vec<usize>, to: Vec<usize>) {
-        let (guard, il) =
-            if self.rng.chance(15) { (String::new(), Some(self.il_guard())) } else { (self.guard(&from, 0), None) };
-        let key = |t: &Tr| (t.from.clone(), t.to.clone(), t.guard.clone(), t.il.clone());
-        let tr = Tr { from, to, priority: None, guard, il };
-        if self.trs.iter().any(|t| key(t) == key(&tr)) {
-            return;
-        }
-        self.trs.push(tr);
-    }
-
-    fn sequence(&mut self, entry: usize, depth: u32, net: usize) -> usize {
-        let mut cur = entry;
-        let mut chain = vec![entry];
-        for _ in 0..1 + self.rng.below(3) {
-            if self.steps.len() >= self.max_steps {
-                break;
-            }
-            match self.rng.below(10) {
-                4 | 5 if depth < 2 => {
-                    let join = self.step(false, net);
-                    let mut ends = Vec::new();
-                    for b in 0..2 + self.rng.below(2) {
-                        if b > 0 && self.rng.chance(15) {
-                            self.transition(vec![cur], vec![join]);
-                            continue;
-                        }
-                        let first = self.step(false, net);
-                        self.transition(vec![cur], vec![first]);
-                        ends.push(self.sequence(first, depth + 1, net));
-                    }
-                    for e in ends {
-                        self.transition(vec![e], vec![join]);
-                    }
-                    cur = join;
-                    chain.push(join);
-                }
-                6 | 7 if depth < 2 => {
-                    let firsts: Vec<usize> = (0..2 + self.rng.below(2)).map(|_| self.step(false, net)).collect();
-                    self.transition(vec![cur], firsts.clone());
-                    let ends: Vec<usize> = firsts.iter().map(|&f| self.sequence(f, depth + 1, net)).collect();
-                    let join = self.step(false, net);
-                    self.transition(ends, vec![join]);
-                    cur = join;
-                    chain.push(join);
-                }
-                8 | 9 if chain.len() >= 2 => {
-                    let target = self.rng.pick(&chain);
-                    self.transition(vec![cur], vec![target]);
-                }
-                _ => {
-                    let next = self.step(false, net);
-                    self.transition(vec![cur], vec![next]);
-                    cur = next;
-                    chain.push(next);
-                }
-            }
-        }
-        cur
-    }
-}
-
-/// Action bodies: counters, copies of flags, RETURN inside and outside loops, IL with jumps.
-fn action_body(rng: &mut Rng, a: usize) -> String {
-    match rng.below(6) {
-        0 => format!(
-            "        n{a2} := n{a2} + 1;\n        q{a} := a{a}.Q;\n        IF i{i} THEN\n            RETURN;\n        END_IF;\n        n2 := n2 + 1;\n",
-            a2 = a % 2,
-            i = rng.below(INPUTS)
-        ),
-        1 => format!(
-            "        FOR k := 1 TO 3 DO\n            IF i{i} AND k = 2 THEN\n                RETURN; (* leaves the action *)\n            END_IF;\n            n2 := n2 + 1;\n        END_FOR;\n        q{a} := a{a}.Q;\n",
-            i = rng.below(INPUTS)
-        ),
-        2 => format!(
-            "        LD n{a2}\n        ADD 1\n        ST n{a2}\n        GT 4\n        JMPC Big\n        LD a{a}.Q\n        ST q{a}\n        RET\nBig:    LD 0\n        ST n{a2}\n        LD i{i}\n        ANDN q{a}\n        ST q{a}\n",
-            a2 = a % 2,
-            i = rng.below(INPUTS)
-        ),
-        3 => format!("        LD i{i}\n        OR( a{a}.Q\n        AND S{s}.X\n        )\n        ST q{a}\n        S o{o}\n        LD n2\n        ADD 2\n        ST n2\n", i = rng.below(INPUTS), s = 0, o = rng.below(3)),
-        _ => format!(
-            "        n{a2} := n{a2} + 1;\n        q{a} := a{a}.Q AND NOT a{a}.A OR S0.X;\n        IF S0.T > T#20ms THEN\n            n2 := n2 + 10;\n        END_IF;\n        IF i3 THEN\n            d0 := d0 + T#10ms; (* a duration that changes while its timer runs *)\n        ELSE\n            d0 := T#20ms;\n        END_IF;\n",
-            a2 = a % 2
-        ),
-    }
-}
-
-/// A random chart as IEC text, and whether it is a FUNCTION_BLOCK called by `Main`.
-fn random_chart(rng: &mut Rng, max_steps: usize) -> (String, bool) {
-    let actions = rng.below(4);
-    let mut g = Gen { rng, steps: Vec::new(), trs: Vec::new(), actions, max_steps };
-    let networks = if g.rng.chance(20) { 2 } else { 1 };
-    for net in 0..networks {
-        let init = g.step(true, net);
-        let last = g.sequence(init, 0, net);
-        g.transition(vec![last], vec![init]);
-    }
-    if g.rng.chance(20) {
-        let from = g.rng.below(g.steps.len());
-        let same: Vec<usize> = (0..g.steps.len()).filter(|&s| g.steps[s].1 == g.steps[from].1).collect();
-        let to = g.rng.pick(&same);
-        g.transition(vec![from], vec![to]);
-    }
-    if g.rng.chance(40) {
-        for t in 0..g.trs.len() {
-            if g.rng.chance(50) {
-                g.trs[t].priority = Some(g.rng.below(4) as u32);
-            }
-        }
-    }
-    let supervised = g.rng.chance(30);
-    let control = supervised || g.rng.chance(20);
-    let fb = g.rng.chance(30);
-    let rng = g.rng;
-    let mut t = String::new();
-    let kind = if fb { "FUNCTION_BLOCK" } else { "PROGRAM" };
-    writeln!(t, "{kind} Chart").unwrap();
-    writeln!(t, "    VAR_INPUT").unwrap();
-    for i in 0..INPUTS {
-        writeln!(t, "        i{i} : BOOL;").unwrap();
-    }
-    writeln!(t, "    END_VAR").unwrap();
-    writeln!(t, "    VAR_OUTPUT\n        o0, o1, o2 : BOOL;\n        n0, n1 : INT;\n    END_VAR").unwrap();
-    writeln!(t, "    VAR\n        n2 : INT;\n        k : INT;\n        d0 : TIME := T#30ms;").unwrap();
-    for a in 0..actions {
-        writeln!(t, "        q{a} : BOOL;").unwrap();
-    }
-    writeln!(t, "    END_VAR").unwrap();
-    if control {
-        writeln!(t, "    (* driven through SFCInit, SFCPause and SFCQuitError; SFCError reports timeouts *)").unwrap();
-    }
-    for (s, (initial, _)) in g.steps.iter().enumerate() {
-        if supervised && rng.chance(40) {
-            writeln!(t, "    {{attribute 'sfc.timeout' := 'T#{}ms'}}", rng.pick(&[20, 40, 70])).unwrap();
-        }
-        writeln!(t, "    {} S{s}:", if *initial { "INITIAL_STEP" } else { "STEP" }).unwrap();
-        let mut used = Vec::new();
-        for _ in 0..rng.pick(&[0, 0, 1, 1, 2, 3]) {
-            let target = rng.below(actions + 3);
-            if used.contains(&target) {
-                continue;
-            }
-            used.push(target);
-            let (name, q) = if target < actions {
-                (format!("a{target}"), rng.pick(&QUALS))
-            } else {
-                (format!("o{}", target - actions), rng.pick(&VAR_QUALS))
-            };
-            let timed = matches!(q, "L" | "D" | "SD" | "DS" | "SL");
-            if timed {
-                let d = if rng.chance(20) { "d0".to_string() } else { format!("T#{}ms", rng.pick(&DURATIONS_MS)) };
-                writeln!(t, "        {name}({q}, {d});").unwrap();
-            } else {
-                writeln!(t, "        {name}({q});").unwrap();
-            }
-        }
-        writeln!(t, "    END_STEP").unwrap();
-    }
-    for (k, tr) in g.trs.iter().enumerate() {
-        let list = |v: &[usize]| {
-            let n: Vec<String> = v.iter().map(|s| format!("S{s}")).collect();
-            if n.len() > 1 {
-                format!("({})", n.join(", "))
-            } else {
-                n[0].clone()
-            }
-        };
-        let prio = tr.priority.map(|p| format!(" (PRIORITY := {p})")).unwrap_or_default();
-        let guard = if supervised && rng.chance(15) { format!("({}) OR SFCError", tr.guard) } else { tr.guard.clone() };
-        match &tr.il {
-            Some(il) => writeln!(
-                t,
-                "    TRANSITION Tr{k}{prio} FROM {} TO {}:\n{il}    END_TRANSITION",
-                list(&tr.from),
-                list(&tr.to)
-            )
-            .unwrap(),
-            None => writeln!(
-                t,
-                "    TRANSITION Tr{k}{prio} FROM {} TO {} := {guard}; END_TRANSITION",
-                list(&tr.from),
-                list(&tr.to)
-            )
-            .unwrap(),
-        }
-    }
-    for a in 0..actions {
-        writeln!(t, "    ACTION a{a}:\n{}    END_ACTION", action_body(rng, a)).unwrap();
-    }
-    writeln!(t, "END_{kind}").unwrap();
-    if fb {
-        let ins: Vec<String> = (0..INPUTS).map(|i| format!("i{i} := i{i}")).collect();
-        let ctl = if control { ", SFCInit := init, SFCPause := pause, SFCQuitError := quit" } else { "" };
-        writeln!(
-            t,
-            "\nPROGRAM Main\n    VAR_INPUT\n        i0, i1, i2, i3, i4, i5, run, init, pause, quit : BOOL;\n    END_VAR\n    VAR\n        c : Chart;\n        busy : BOOL;\n        m0 : INT;\n    END_VAR\n    IF run THEN\n        c({}{ctl});\n    END_IF;\n    busy := c.o0;\n    m0 := c.n0;\nEND_PROGRAM",
-            ins.join(", ")
-        )
-        .unwrap();
-    }
-    (t, fb)
-}
-
 #[test]
 fn random_charts_behave_identically() {
     let cases: usize = std::env::var("SFC_ST_CASES").ok().and_then(|v| v.parse().ok()).unwrap_or(200);
@@ -731,7 +439,7 @@ fn random_charts_behave_identically() {
         if only.is_some_and(|o| o != case) {
             continue;
         }
-        let mut rng = Rng((case as u64 + 1).wrapping_mul(0x2545_F491_4F6C_DD1D) ^ 0x5DEE_CE66_D1CE_5EED);
+        let mut rng = Rng::for_case(case);
         let (text, fb) = random_chart(&mut rng, 14);
         let c = check("random.st", &text);
         if c.has_errors() {
@@ -749,39 +457,9 @@ fn random_charts_behave_identically() {
         if only.is_some() {
             println!("{text}\n----\n{translated}");
         }
-        let control = text.contains("SFCInit");
-        let mut names: Vec<String> = (0..INPUTS).map(|i| format!("i{i}")).collect();
-        if fb {
-            names.push("run".into());
-            if control {
-                names.extend(["init", "pause", "quit"].map(String::from));
-            }
-        } else if control {
-            names.extend(["SFCInit", "SFCPause", "SFCQuitError"].map(String::from));
-        }
-        let mut values = vec![false; names.len()];
-        let mut inputs = |scan: u64| {
-            let mut w = Vec::new();
-            for (k, v) in values.iter_mut().enumerate() {
-                let n = &names[k];
-                let p = match n.as_str() {
-                    "run" => 25,
-                    "init" | "pause" | "quit" | "SFCInit" | "SFCPause" | "SFCQuitError" => {
-                        if *v {
-                            50
-                        } else {
-                            4
-                        }
-                    }
-                    _ => 20,
-                };
-                if scan == 0 && n == "run" || rng.chance(p) {
-                    *v = !*v;
-                    w.push((n.clone(), Value::Bool(*v)));
-                }
-            }
-            w
-        };
+        let mut schedule = RandomInputs::new(&text, fb);
+        let mut inputs =
+            |scan: u64| schedule.next(&mut rng, scan).into_iter().map(|(n, b)| (n, Value::Bool(b))).collect::<Vec<_>>();
         let pou = if fb { "Main" } else { "Chart" };
         if let Err(e) = run_pair("random.st", &text, &translated, Some(pou), SimOptions::default(), 120, &mut inputs) {
             failures.push(format!("case {case}: {e}\n{text}\n----\n{translated}"));
