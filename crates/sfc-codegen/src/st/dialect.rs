@@ -146,6 +146,27 @@ pub(crate) fn codesys_limits(checked: &sfc_model::Checked, charts: &[&sfc_model:
     out
 }
 
+/// Every `VAR…END_VAR` block of the POUs and the file's globals.
+fn var_blocks(unit: &ast::SourceUnit, f: &mut dyn FnMut(&ast::VarBlock)) {
+    for item in &unit.items {
+        match item {
+            ast::Item::Pou(p) => p.var_blocks.iter().for_each(&mut *f),
+            ast::Item::Globals(b) => f(b),
+            _ => {}
+        }
+    }
+}
+
+/// Every identifier of `text`, upper-case (names a new one must not take).
+fn identifiers(text: &str) -> HashSet<String> {
+    let (tokens, _) = lex(0, text);
+    tokens
+        .iter()
+        .filter(|t| t.kind == TokenKind::Ident)
+        .map(|t| text[t.start as usize..t.end as usize].to_ascii_uppercase())
+        .collect()
+}
+
 /// `(start, end, replacement)` edits applied from the last to the first.
 fn apply(text: &str, mut edits: Vec<(usize, usize, String)>) -> String {
     edits.sort_by_key(|e| std::cmp::Reverse(e.0));
@@ -214,13 +235,7 @@ fn split_located(text: &str) -> String {
         }
         edits.push((bs, be, out));
     };
-    for item in &unit.items {
-        match item {
-            ast::Item::Pou(p) => p.var_blocks.iter().for_each(&mut block),
-            ast::Item::Globals(b) => block(b),
-            _ => {}
-        }
-    }
+    var_blocks(&unit, &mut block);
     apply(text, edits)
 }
 
@@ -281,13 +296,7 @@ fn one_instance_per_declaration(text: &str) -> String {
             edits.push((ds, de, format!("{lead}{}", parts.join(&format!("\n{indent}")))));
         }
     };
-    for item in &unit.items {
-        match item {
-            ast::Item::Pou(p) => p.var_blocks.iter().for_each(&mut block),
-            ast::Item::Globals(b) => block(b),
-            _ => {}
-        }
-    }
+    var_blocks(&unit, &mut block);
     apply(text, edits)
 }
 
@@ -560,11 +569,7 @@ fn declared_names(unit: &ast::SourceUnit) -> Vec<(String, bool)> {
 fn rename_reserved(text: &str, dialect: StDialect) -> (String, Vec<String>) {
     let (unit, _) = sfc_syntax::parse(0, text);
     let (tokens, _) = lex(0, text);
-    let mut taken: HashSet<String> = tokens
-        .iter()
-        .filter(|t| t.kind == TokenKind::Ident)
-        .map(|t| text[t.start as usize..t.end as usize].to_ascii_uppercase())
-        .collect();
+    let mut taken = identifiers(text);
     let mut renames: Vec<(String, bool, String)> = Vec::new();
     let mut notes = Vec::new();
     for (name, callable) in declared_names(&unit) {
@@ -693,12 +698,7 @@ fn for_as_while(text: &str) -> Option<String> {
         .find(|d| d.names.iter().any(|n| n.text.eq_ignore_ascii_case(&var.text)))
         .map(|d| text[d.ty.span.start as usize..d.ty.span.end as usize].to_string())
         .unwrap_or_else(|| "DINT".to_string());
-    let (tokens, _) = lex(0, text);
-    let taken: HashSet<String> = tokens
-        .iter()
-        .filter(|t| t.kind == TokenKind::Ident)
-        .map(|t| text[t.start as usize..t.end as usize].to_ascii_uppercase())
-        .collect();
+    let taken = identifiers(text);
     let fresh = |base: &str| {
         let mut k = 1;
         while taken.contains(&format!("{base}{k}").to_ascii_uppercase()) {
@@ -727,7 +727,7 @@ fn for_as_while(text: &str) -> Option<String> {
     let step = match (step_lit, by) {
         (Some(v), _) => v.to_string(),
         (None, Some(b)) => {
-            let n = fresh(if temps.is_empty() { "SfcForBy" } else { "SfcForBy" });
+            let n = fresh("SfcForBy");
             head.push(format!("{n} := {};", src(b)));
             temps.push(n.clone());
             n
