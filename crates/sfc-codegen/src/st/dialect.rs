@@ -103,28 +103,17 @@ fn configuration(text: &str) -> Option<String> {
 /// not rounded.
 pub(crate) fn codesys_limits(checked: &sfc_model::Checked, charts: &[&sfc_model::Chart]) -> Vec<Diagnostic> {
     let text = checked.file.text.as_str();
-    let (tokens, _) = lex(0, text);
     let file = charts.first().map_or(0, |c| c.file);
     let mut out = Vec::new();
-    for t in tokens.iter().filter(|t| t.kind == TokenKind::Typed) {
-        let (s, e) = (t.start as usize, t.end as usize);
+    for (s, e, us) in time_literals(text).into_iter().filter(|l| l.2 % 1000 != 0) {
         let lit = &text[s..e];
-        let Some((prefix, body)) = lit.split_once('#') else { continue };
-        if !prefix.eq_ignore_ascii_case("T") && !prefix.eq_ignore_ascii_case("TIME") {
-            continue;
-        }
-        let span = Span::new(file, t.start, t.end);
-        if let Ok(us) = sfc_syntax::literal::decode_duration(body, span) {
-            if us % 1000 != 0 {
-                out.push(Diagnostic::error(
-                    "SFC0807",
-                    span,
-                    format!(
-                        "`{lit}` has a part below the millisecond, which CODESYS's and TwinCAT's TIME cannot hold (it counts milliseconds): write whole milliseconds for --st-dialect codesys"
-                    ),
-                ));
-            }
-        }
+        out.push(Diagnostic::error(
+            "SFC0807",
+            Span::new(file, s as u32, e as u32),
+            format!(
+                "`{lit}` has a part below the millisecond, which CODESYS's and TwinCAT's TIME cannot hold (it counts milliseconds): write whole milliseconds for --st-dialect codesys"
+            ),
+        ));
     }
     for c in charts {
         for s in &c.steps {
@@ -367,23 +356,30 @@ fn iec_order(text: &str) -> String {
     out
 }
 
-fn matiec_time_literals(text: &str) -> String {
+/// The TIME literals of `text` (`T#…`, `TIME#…`): where, and their value in µs.
+fn time_literals(text: &str) -> Vec<(usize, usize, i64)> {
     let (tokens, _) = lex(0, text);
-    let mut edits = Vec::new();
-    for t in tokens.iter().filter(|t| t.kind == TokenKind::Typed) {
-        let (s, e) = (t.start as usize, t.end as usize);
-        let lit = &text[s..e];
-        let Some((prefix, body)) = lit.split_once('#') else { continue };
-        if !prefix.eq_ignore_ascii_case("T") && !prefix.eq_ignore_ascii_case("TIME") {
-            continue;
-        }
-        if let Ok(us) = sfc_syntax::literal::decode_duration(body, Span::new(0, 0, 0)) {
-            let written = matiec_time_literal(us);
-            if written != lit {
-                edits.push((s, e, written));
+    tokens
+        .iter()
+        .filter(|t| t.kind == TokenKind::Typed)
+        .filter_map(|t| {
+            let (s, e) = (t.start as usize, t.end as usize);
+            let (prefix, body) = text[s..e].split_once('#')?;
+            if !prefix.eq_ignore_ascii_case("T") && !prefix.eq_ignore_ascii_case("TIME") {
+                return None;
             }
-        }
-    }
+            let us = sfc_syntax::literal::decode_duration(body, Span::new(0, 0, 0)).ok()?;
+            Some((s, e, us))
+        })
+        .collect()
+}
+
+fn matiec_time_literals(text: &str) -> String {
+    let edits = time_literals(text)
+        .into_iter()
+        .map(|(s, e, us)| (s, e, matiec_time_literal(us)))
+        .filter(|(s, e, written)| *written != text[*s..*e])
+        .collect();
     apply(text, edits)
 }
 
