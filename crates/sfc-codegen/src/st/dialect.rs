@@ -105,7 +105,7 @@ pub(crate) fn codesys_limits(checked: &sfc_model::Checked, charts: &[&sfc_model:
     let text = checked.file.text.as_str();
     let file = charts.first().map_or(0, |c| c.file);
     let mut out = Vec::new();
-    for (s, e, us) in time_literals(text).into_iter().filter(|l| l.2 % 1000 != 0) {
+    for (s, e, _) in time_literals(text).into_iter().filter(|l| l.2 % 1000 != 0) {
         let lit = &text[s..e];
         out.push(Diagnostic::error(
             "SFC0807",
