@@ -72,6 +72,10 @@ export const tests = [
       await select(page, 'transition:Go');
       await setField(page, '#p-tag', '5');
       await page.waitForFunction(() => window.__sfc.doc().elements.find((e) => e.id === 'transition:Go')?.condition === 'C5');
+      // (the Properties panel follows the document in its next render: wait for it, then check)
+      await page
+        .waitForFunction(() => document.querySelector('.side-panel .code-editor textarea')?.value === 'C5', null, { timeout: 5000 })
+        .catch(() => {});
       assert((await page.locator('.side-panel .code-editor textarea').inputValue()) === 'C5', 'Properties show C5');
       // A new transition takes the next free input.
       const id = await dropFromPalette(page, 'transition', { x: 300, y: 260 });
