@@ -143,3 +143,76 @@ fn the_st_reads_back_and_simulates_like_the_chart() {
     assert!(n >= 6, "{n} scenarios");
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// The public corpus (`../shared/corpus`: Beremiz's projects, MatIEC's SFC test) through the ST
+/// target, compiled by the real compilers: `--st-dialect matiec` by `iec2c -f -l -p` (as
+/// Beremiz runs it), `--st-dialect strucpp` by STruC++ and g++ (syntax only).
+#[test]
+fn the_public_corpus_compiles_with_matiec_and_strucpp() {
+    let root = common::root();
+    let iec2c = PathBuf::from(tool("build-matiec.sh", "matiec"));
+    let strucpp = tool("build-strucpp.sh", "strucpp");
+    let runtime = root.join("target/tools/strucpp/src/runtime/include");
+    let dir = common::scratch("st-corpus");
+    let corpus = root.join("../shared/corpus");
+    let files: Vec<PathBuf> =
+        ["beremiz/first_steps.plc.xml", "beremiz/svghmi_traffic_light.plc.xml", "matiec/SFC_TEST.xml"]
+            .iter()
+            .map(|f| corpus.join(f))
+            .collect();
+    let mut failures = Vec::new();
+    for f in &files {
+        let name = f.file_name().unwrap().to_string_lossy().to_string();
+        for dialect in ["matiec", "strucpp"] {
+            let out = dir.join(format!("{name}.{dialect}.st"));
+            let b = Command::new(env!("CARGO_BIN_EXE_sfc"))
+                .args(["build", f.to_str().unwrap(), "--target", "st", "--st-dialect", dialect, "-o"])
+                .arg(&out)
+                .output()
+                .unwrap();
+            if !b.status.success() {
+                failures.push(format!("{name} {dialect}: sfc build: {}", String::from_utf8_lossy(&b.stderr)));
+                continue;
+            }
+            let compiled = if dialect == "matiec" {
+                let c = dir.join(format!("{name}.c"));
+                std::fs::create_dir_all(&c).unwrap();
+                Command::new("timeout")
+                    .arg("60")
+                    .arg(&iec2c)
+                    .args(["-f", "-l", "-p", "-I"])
+                    .arg(root.join("target/tools/matiec/lib"))
+                    .arg("-T")
+                    .arg(&c)
+                    .arg(&out)
+                    .output()
+                    .unwrap()
+            } else {
+                let cpp = dir.join(format!("{name}.cpp"));
+                let mut args: Vec<String> = strucpp.split_whitespace().map(String::from).collect();
+                let program = args.remove(0);
+                let s = Command::new(program).args(&args).arg(&out).arg("-o").arg(&cpp).output().unwrap();
+                if !s.status.success() {
+                    s
+                } else {
+                    Command::new("g++")
+                        .args(["-std=c++17", "-fsyntax-only", "-I"])
+                        .arg(&runtime)
+                        .arg(&cpp)
+                        .output()
+                        .unwrap()
+                }
+            };
+            if !compiled.status.success() {
+                failures.push(format!(
+                    "{name} {dialect}: the compiler refuses it:\n{}{}",
+                    String::from_utf8_lossy(&compiled.stdout),
+                    String::from_utf8_lossy(&compiled.stderr)
+                ));
+            }
+        }
+    }
+    assert!(failures.is_empty(), "{}", failures.join("\n\n"));
+    println!("{} corpus files, each compiled by MatIEC and by STruC++", files.len());
+    let _ = std::fs::remove_dir_all(&dir);
+}

@@ -56,6 +56,15 @@ pub(crate) fn finish(text: &str, dialect: StDialect) -> (String, bool, Vec<Strin
             t.push_str(&c);
             configured = true;
         }
+    }
+    if matches!(dialect, StDialect::Matiec | StDialect::Strucpp) {
+        // (`iec` keeps them where sfc reads them back: it does not analyse a configuration)
+        t = globals_into_configuration(&t);
+    }
+    if dialect == StDialect::Strucpp {
+        t = external_not_constant(&t);
+    }
+    if dialect == StDialect::Matiec {
         let exact = matiec_time_literals(&t);
         if exact != t {
             t = format!("{MATIEC_LITERALS}{exact}");
@@ -68,6 +77,68 @@ const MATIEC_LITERALS: &str =
     "(* Written by sfc for MatIEC (--st-dialect matiec). A duration such as T#8.0000005ms is T#8ms:\n   \
 MatIEC computes a TIME literal in floating point and truncates it to whole nanoseconds, so T#8ms\n   \
 would be 7.999999 ms; the half nanosecond more is truncated away. *)\n";
+
+/// IEC 61131-3 declares global variables in a CONFIGURATION or RESOURCE (a file-level
+/// `VAR_GLOBAL`, as a PLCopen import of a configuration's globals or CODESYS's global variable
+/// lists give, is CODESYS's): the file's `VAR_GLOBAL` blocks are moved to the start of its
+/// first CONFIGURATION, where MatIEC and STruC++ find them. A file without one keeps them.
+fn globals_into_configuration(text: &str) -> String {
+    let (unit, _) = sfc_syntax::parse(0, text);
+    let Some(config) = unit.items.iter().find_map(|i| match i {
+        ast::Item::Verbatim(v) if v.keyword.eq_ignore_ascii_case("CONFIGURATION") => Some(v),
+        _ => None,
+    }) else {
+        return text.to_string();
+    };
+    let globals: Vec<&ast::VarBlock> = unit
+        .items
+        .iter()
+        .filter_map(|i| match i {
+            ast::Item::Globals(b) => Some(b),
+            _ => None,
+        })
+        .collect();
+    if globals.is_empty() {
+        return text.to_string();
+    }
+    let at = line_end(text, config.span.start as usize);
+    let mut moved = String::new();
+    let mut edits = Vec::new();
+    for b in &globals {
+        let (s, e) = (b.span.start as usize, (b.span.end as usize).min(text.len()));
+        for l in text[s..e].lines() {
+            moved.push_str(&format!("    {l}\n"));
+        }
+        edits.push((s, line_end(text, e.saturating_sub(1)).max(e), String::new()));
+    }
+    edits.push((at, at, moved));
+    apply(text, edits)
+}
+
+/// STruC++ asks an initial value of a `VAR_EXTERNAL CONSTANT` declaration, which IEC 61131-3
+/// forbids there (the value is the global's): `CONSTANT` is dropped from those blocks (a chart
+/// that wrote the constant would not have checked).
+fn external_not_constant(text: &str) -> String {
+    let (unit, _) = sfc_syntax::parse(0, text);
+    let (tokens, _) = lex(0, text);
+    let mut edits = Vec::new();
+    var_blocks(&unit, &mut |b| {
+        if b.kind != ast::VarKind::External || !b.constant {
+            return;
+        }
+        let (s, e) = (b.span.start as usize, b.span.end as usize);
+        if let Some(t) = tokens.iter().find(|t| {
+            t.start as usize >= s
+                && (t.end as usize) <= e
+                && text[t.start as usize..t.end as usize].eq_ignore_ascii_case("CONSTANT")
+        }) {
+            // the keyword and the space before it
+            let from = text[..t.start as usize].trim_end_matches([' ', '\t']).len();
+            edits.push((from, t.end as usize, String::new()));
+        }
+    });
+    apply(text, edits)
+}
 
 /// OpenPLC v3 compiles an uploaded `.st` file with its CONFIGURATION (its editor writes one):
 /// for a file without one, a configuration that runs every PROGRAM every 20 ms, OpenPLC v3's
