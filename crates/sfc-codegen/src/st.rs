@@ -19,7 +19,9 @@
 //! * the implicit condition inputs `C0…`/`c0…` of an ATMT/EATMT chart, as VAR_INPUT;
 //! * bookkeeping variables, all named `Sfc…` (made unique against every name of the file).
 //!
-//! `SfcStep` and `SfcActionControl` are declared at the end of the file.
+//! `SfcStep` and `SfcActionControl` are declared at the end of the file; [`build_st_file`] then
+//! puts the file in IEC order (they move before their first use) and applies the dialect's
+//! passes (`dialect.rs`).
 //!
 //! **Behaviour.** One call of the POU is one scan of the chart under `iec`: the first call
 //! (and the first after `SFCInit` falls) activates the initial steps and runs only the action
@@ -36,7 +38,8 @@
 //! (`SfcClock`, `PT` one day): `ET − ET of the previous call`, restarted every 12 hours so it
 //! never saturates. On a PLC that is the controller's clock; in the simulator, whose standard
 //! blocks read virtual time, it is exactly the virtual time, so a step's `T` and the timed
-//! qualifiers (again standard `TON`s inside `SfcActionControl`) match the chart scan for scan.
+//! qualifiers (timers of `SfcActionControl` summing the same time, `DeltaT`: the library `TON`
+//! switches on one call late, which `D T#0s` must not) match the chart scan for scan.
 //! A POU not called for more than 12 hours loses the excess of that gap from its step times.
 //!
 //! Guards are copied as one line (comments dropped). ST action bodies are copied as written;
@@ -112,6 +115,13 @@ pub fn build_st_file(
     }
     let charts: Vec<&Chart> =
         checked.charts.iter().filter(|c| pou.is_none_or(|p| c.pou.eq_ignore_ascii_case(p))).collect();
+    if let (true, Some(p)) = (charts.is_empty(), pou) {
+        return Err(vec![Diagnostic::error(
+            "SFC0801",
+            Span::new(0, 0, 0),
+            format!("`{p}` is not a chart of the file"),
+        )]);
+    }
     let mut errors = Vec::new();
     if opts.dialect == StDialect::Codesys {
         errors.extend(dialect::codesys_limits(checked, &charts));
@@ -151,13 +161,14 @@ pub fn build_st_file(
             text = build_st_with(checked, charts[0], opts)?;
         }
     }
+    // (a file without a chart goes through the dialect's passes as it is)
     let (text, configured, renamed) = dialect::finish(&text, opts.dialect);
-    let mut notes: Vec<Diagnostic> =
-        renamed.into_iter().map(|m| Diagnostic::note_diag("SFC0818", charts[0].name_span, m)).collect();
+    let at = charts.first().map_or(Span::new(0, 0, 0), |c| c.name_span);
+    let mut notes: Vec<Diagnostic> = renamed.into_iter().map(|m| Diagnostic::note_diag("SFC0818", at, m)).collect();
     if configured {
         notes.push(Diagnostic::note_diag(
             "SFC0808",
-            charts[0].name_span,
+            at,
             "added `CONFIGURATION Config0` at the end: OpenPLC v3 needs one; its task runs every PROGRAM every 20 ms (set INTERVAL to your scan period)",
         ));
     }
@@ -1150,7 +1161,8 @@ const CONTROL_COMMENT: &str =
     "(* ACTION_CONTROL (IEC 61131-3 2nd ed. 2.6.4.5) as sfc's iec semantics settle it: one instance per
    action. Each qualifier input is the OR of the flags of the steps that associate the action
    with that qualifier; TQ/TD give the timed qualifier (1 L, 2 D, 3 SD, 4 DS, 5 SL) that won this
-   call and its duration, which that qualifier's timer keeps. R overrides everything and
+   call and its duration, which that qualifier's timer keeps; DeltaT the time since the previous
+   call, which the timers add up. R overrides everything and
    cancels pending SD/SL timers and DS flags. A is Q, plus one call after Q falls (the final
    scan) and the P1/P0 pulses. Reset clears the block (SFCInit). *)
 ";
