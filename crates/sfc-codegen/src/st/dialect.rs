@@ -807,8 +807,24 @@ fn for_as_while(text: &str) -> Option<String> {
         None => format!("({step} >= 0 AND {i} <= {end}) OR ({step} < 0 AND {i} >= {end})"),
     };
     let plus = if step.starts_with('-') { format!("({step})") } else { step.clone() };
+    // `END_FOR` alone on its line: the body is every line before it (its comments too)
+    let stmt_text = &text[s.span.start as usize..s.span.end as usize];
+    let end_for = stmt_text.to_ascii_uppercase().rfind("END_FOR").map(|i| s.span.start as usize + i);
     let body_text = match (body.first(), body.last()) {
-        (Some(a), Some(b)) => text[line_start(text, a.span.start as usize)..b.span.end as usize].to_string(),
+        // the body's own lines, or (a loop written on one line) its statements, indented
+        (Some(a), Some(b)) if line_start(text, a.span.start as usize) > s.span.start as usize => {
+            let from = line_start(text, a.span.start as usize);
+            let to = match end_for {
+                Some(e)
+                    if text[line_start(text, e)..e].trim().is_empty() && line_start(text, e) > b.span.end as usize =>
+                {
+                    line_start(text, e) - 1
+                }
+                _ => b.span.end as usize,
+            };
+            text[from..to].trim_end().to_string()
+        }
+        (Some(a), Some(b)) => format!("{indent}    {}", &text[a.span.start as usize..b.span.end as usize]),
         _ => String::new(),
     };
     let mut out = String::new();
@@ -827,12 +843,13 @@ fn for_as_while(text: &str) -> Option<String> {
         out.push('\n');
     }
     out.push_str(&format!("{indent}    {i} := {i} + {plus};\n{indent}END_WHILE"));
-    // `END_FOR` is followed by `;` in the statement's text or right after it.
-    let mut edits = vec![(s.span.start as usize, s.span.end as usize, out)];
-    let stmt_text = &text[s.span.start as usize..s.span.end as usize];
-    if stmt_text.trim_end().ends_with(';') {
-        edits[0].2.push(';');
+    // IEC ends every statement with `;` (sfc does not insist on the last one): one after
+    // END_WHILE, whether the FOR had it inside its text, right after it, or not at all.
+    let after_has_semi = text[s.span.end as usize..].trim_start().starts_with(';');
+    if stmt_text.trim_end().ends_with(';') || !after_has_semi {
+        out.push(';');
     }
+    let mut edits = vec![(s.span.start as usize, s.span.end as usize, out)];
     if !temps.is_empty() {
         let last = pou.var_blocks.last()?;
         let decl: String = temps.iter().map(|t| format!("        {t} : {var_type};\n")).collect();
