@@ -14,6 +14,8 @@
 #[path = "matiec/gen.rs"]
 mod gen;
 
+mod common;
+
 use serde_json::{json, Map, Value as Json};
 use sfc_sim::{format_time, timespec::Timespec, Profile, SimOptions, Simulation, Value};
 use std::collections::BTreeMap;
@@ -71,16 +73,6 @@ fn value_of(j: &Json) -> Value {
     }
 }
 
-fn toml_value(v: &Value) -> String {
-    match v {
-        Value::Bool(b) => b.to_string(),
-        Value::Int(i) => i.to_string(),
-        Value::Real(r) => format!("{r:?}"),
-        Value::Time(t) => format!("\"{}\"", format_time(*t)),
-        Value::Str(s) => format!("{:?}", s.as_ref()),
-    }
-}
-
 /// Runs `sfc sim --profile matiec` on a case and returns its rows.
 fn run_sfc(case: &Case, work: &Path) -> Result<Vec<Row>, String> {
     let mut sc = String::new();
@@ -90,14 +82,7 @@ fn run_sfc(case: &Case, work: &Path) -> Result<Vec<Row>, String> {
         writeln!(sc, "pou = {p:?}").unwrap();
     }
     writeln!(sc, "period = \"{}\"\nprofile = \"matiec\"\nscans = {}", format_time(case.period), case.scans).unwrap();
-    for (k, set) in case.sets.iter().enumerate() {
-        if set.is_empty() {
-            continue;
-        }
-        let items: Vec<String> = set.iter().map(|(n, v)| format!("{n} = {}", toml_value(v))).collect();
-        writeln!(sc, "\n[[at]]\ntime = \"{}\"\nset = {{ {} }}", format_time(k as i64 * case.period), items.join(", "))
-            .unwrap();
-    }
+    sc.push_str(&common::scenario_entries(case.period, &case.sets));
     std::fs::create_dir_all(work).unwrap();
     let path = work.join(format!("{}.scenario.toml", case.name));
     std::fs::write(&path, sc).unwrap();

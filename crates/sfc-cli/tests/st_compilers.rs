@@ -36,6 +36,8 @@
 #[path = "../../sfc-codegen/tests/support/random_chart.rs"]
 mod random_chart;
 
+mod common;
+
 use serde_json::Value as Json;
 use sfc_sim::{format_time, parse_time, Profile, SimOptions, Simulation, Value};
 use std::collections::{BTreeMap, BTreeSet};
@@ -337,24 +339,6 @@ struct Case {
     sets: Vec<Vec<(String, Value)>>,
 }
 
-/// Every `*.scenario.toml` under `dir`, sorted.
-fn scenario_files(dir: &Path) -> Vec<PathBuf> {
-    let mut out = Vec::new();
-    let mut stack = vec![dir.to_path_buf()];
-    while let Some(d) = stack.pop() {
-        for e in std::fs::read_dir(&d).unwrap() {
-            let p = e.unwrap().path();
-            if p.is_dir() {
-                stack.push(p);
-            } else if p.to_string_lossy().ends_with(".scenario.toml") {
-                out.push(p);
-            }
-        }
-    }
-    out.sort();
-    out
-}
-
 /// The scenarios of `examples/` and of the semantics fixtures whose profile is `iec`.
 fn scenario_cases(work: &Path) -> Vec<Case> {
     let mut out = Vec::new();
@@ -369,7 +353,7 @@ fn scenario_cases(work: &Path) -> Vec<Case> {
         dirs.extend(more.split(',').map(PathBuf::from));
     }
     for dir in &dirs {
-        for path in scenario_files(dir) {
+        for path in random_chart::scenario_files(dir) {
             let sc = sfc_sim::scenario::load(&path).unwrap_or_else(|e| panic!("{}: {}", path.display(), e.message));
             if sc.options.profile != Profile::Iec {
                 continue;
@@ -504,16 +488,6 @@ struct Row {
     vars: BTreeMap<String, Json>,
 }
 
-fn toml_value(v: &Value) -> String {
-    match v {
-        Value::Bool(b) => b.to_string(),
-        Value::Int(i) => i.to_string(),
-        Value::Real(r) => format!("{r:?}"),
-        Value::Time(t) => format!("\"{}\"", format_time(*t)),
-        Value::Str(s) => format!("{:?}", s.as_ref()),
-    }
-}
-
 /// The case's inputs as a scenario file for `sfc sim` (written to `path`).
 fn write_scenario(case: &Case, path: &Path, profile: &str) {
     let mut sc = String::new();
@@ -521,14 +495,7 @@ fn write_scenario(case: &Case, path: &Path, profile: &str) {
     writeln!(sc, "chart = {:?}", case.chart.display().to_string()).unwrap();
     writeln!(sc, "pou = {:?}", case.pou).unwrap();
     writeln!(sc, "period = \"{}\"\nprofile = \"{profile}\"\nscans = {}", format_time(case.period), case.scans).unwrap();
-    for (k, set) in case.sets.iter().enumerate() {
-        if set.is_empty() {
-            continue;
-        }
-        let items: Vec<String> = set.iter().map(|(n, v)| format!("{n} = {}", toml_value(v))).collect();
-        writeln!(sc, "\n[[at]]\ntime = \"{}\"\nset = {{ {} }}", format_time(k as i64 * case.period), items.join(", "))
-            .unwrap();
-    }
+    sc.push_str(&common::scenario_entries(case.period, &case.sets));
     std::fs::write(path, sc).unwrap();
 }
 

@@ -316,20 +316,7 @@ fn run_pair(
 
 /// Every `*.scenario.toml` under `dir` whose profile is `iec`.
 fn scenarios(dir: &Path) -> Vec<Scenario> {
-    let mut paths = Vec::new();
-    let mut stack = vec![dir.to_path_buf()];
-    while let Some(d) = stack.pop() {
-        for e in std::fs::read_dir(&d).unwrap() {
-            let p = e.unwrap().path();
-            if p.is_dir() {
-                stack.push(p);
-            } else if p.to_string_lossy().ends_with(".scenario.toml") {
-                paths.push(p);
-            }
-        }
-    }
-    paths.sort();
-    paths
+    random_chart::scenario_files(dir)
         .into_iter()
         .map(|p| scenario::load(&p).unwrap_or_else(|e| panic!("{}: {}", p.display(), e.message)))
         .filter(|s| s.options.profile == sfc_sim::Profile::Iec)

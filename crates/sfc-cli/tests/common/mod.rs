@@ -362,3 +362,30 @@ pub fn pymodbus() -> bool {
 pub fn o6() -> bool {
     python_deps("o6")
 }
+
+/// A value as a scenario file writes it (`true`, `3`, `"T#1s500ms"`, `"text"`).
+pub fn toml_value(v: &sfc_sim::Value) -> String {
+    use sfc_sim::Value;
+    match v {
+        Value::Bool(b) => b.to_string(),
+        Value::Int(i) => i.to_string(),
+        Value::Real(r) => format!("{r:?}"),
+        Value::Time(t) => format!("\"{}\"", sfc_sim::format_time(*t)),
+        Value::Str(s) => format!("{:?}", s.as_ref()),
+    }
+}
+
+/// The `[[at]]` entries of a scenario file: `sets[k]`, the values written before scan `k`, at
+/// `k · period`.
+pub fn scenario_entries(period: i64, sets: &[Vec<(String, sfc_sim::Value)>]) -> String {
+    let mut sc = String::new();
+    for (k, set) in sets.iter().enumerate().filter(|(_, s)| !s.is_empty()) {
+        let items: Vec<String> = set.iter().map(|(n, v)| format!("{n} = {}", toml_value(v))).collect();
+        sc.push_str(&format!(
+            "\n[[at]]\ntime = \"{}\"\nset = {{ {} }}\n",
+            sfc_sim::format_time(k as i64 * period),
+            items.join(", ")
+        ));
+    }
+    sc
+}

@@ -364,3 +364,21 @@ impl RandomInputs {
         w
     }
 }
+
+/// Every `*.scenario.toml` under `dir`, sorted (the scenarios both tests run the ST on).
+pub fn scenario_files(dir: &std::path::Path) -> Vec<std::path::PathBuf> {
+    let mut out = Vec::new();
+    let mut stack = vec![dir.to_path_buf()];
+    while let Some(d) = stack.pop() {
+        for e in std::fs::read_dir(&d).unwrap() {
+            let p = e.unwrap().path();
+            if p.is_dir() {
+                stack.push(p);
+            } else if p.to_string_lossy().ends_with(".scenario.toml") {
+                out.push(p);
+            }
+        }
+    }
+    out.sort();
+    out
+}
