@@ -78,11 +78,12 @@ pub fn read_source(path: &Path) -> Result<Decoded, LoadError> {
     Ok(sfc_syntax::encoding::decode(&bytes))
 }
 
-/// Whether a file found in a directory is a chart file: `.st` or `.xml` (any case).
+/// Whether a file found in a directory is a chart file: `.st`, `.xml` or `.l5x` (Studio 5000
+/// exports), any case.
 pub fn is_chart_file(path: &Path) -> bool {
     path.extension()
         .and_then(|e| e.to_str())
-        .is_some_and(|e| e.eq_ignore_ascii_case("st") || e.eq_ignore_ascii_case("xml"))
+        .is_some_and(|e| ["st", "xml", "l5x"].iter().any(|x| e.eq_ignore_ascii_case(x)))
 }
 
 /// Where to look for chart files.
@@ -123,7 +124,7 @@ pub fn collect(paths: &[PathBuf], accept: impl Fn(&Path) -> bool) -> Vec<Found> 
             if found.is_empty() {
                 out.push(Found::Missing(LoadError {
                     path: p.clone(),
-                    message: format!("no chart files (`*.st`, `*.xml`) under `{}`", p.display()),
+                    message: format!("no chart files (`*.st`, `*.xml`, `*.l5x`) under `{}`", p.display()),
                 }));
             }
             for f in found {

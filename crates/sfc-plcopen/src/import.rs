@@ -1468,18 +1468,20 @@ pub(crate) type Run = (String, SourceMap, Vec<Diagnostic>, Option<crate::Vendor>
 
 /// Runs the whole import: XML text to IEC text, source map, diagnostics, vendor.
 pub(crate) fn run(file: u32, xml_text: &str) -> Run {
-    let opts = roxmltree::ParsingOptions { allow_dtd: false, ..Default::default() };
-    let doc = match roxmltree::Document::parse_with_options(xml_text, opts) {
+    let doc = match sfc_xmlmap::parse(file, xml_text) {
         Ok(d) => d,
-        Err(e) => {
-            let pos = e.pos();
-            let at = xml::offset_of(xml_text, pos.row, pos.col);
-            let end = (at as usize + xml_text[at as usize..].chars().next().map_or(0, char::len_utf8)) as u32;
-            let d = Diagnostic::new("SFC0701", Span::new(file, at, end), format!("malformed XML: {e}"));
-            return (String::new(), SourceMap::default(), vec![d], None);
-        }
+        Err(d) => return (String::new(), SourceMap::default(), vec![d], None),
     };
     let root = doc.root_element();
+    // The other vendors' exports are read by their own crates, into the same text.
+    if sfc_l5x::is_l5x(root) {
+        let out = sfc_l5x::import(file, xml_text);
+        return (out.text, out.map, out.diagnostics, None);
+    }
+    if sfc_simaticml::is_simaticml(root) {
+        let out = sfc_simaticml::import(file, xml_text);
+        return (out.text, out.map, out.diagnostics, None);
+    }
     let vendor = if root.tag_name().name() == "project" { dialect::vendor(root) } else { None };
     let mut cx = Ctx {
         file,

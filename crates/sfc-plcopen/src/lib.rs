@@ -17,7 +17,7 @@
 //! same charts.
 
 pub mod attrs;
-mod emit;
+pub(crate) use sfc_xmlmap::emit;
 // Export writes a chart that has been checked, through tables it builds itself (elements by
 // position, found through its own id maps); the workspace lints apply to it except unchecked
 // indexing, about 120 places not yet rewritten with `get`. The import, which reads other
@@ -26,7 +26,7 @@ mod emit;
 mod export;
 mod import;
 mod splice;
-mod xml;
+pub(crate) use sfc_xmlmap::xml;
 
 pub use emit::{MapEntry, SourceMap};
 pub use export::{export, export_pou, export_with, fmt_duration, SOURCE_DATA};

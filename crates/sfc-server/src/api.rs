@@ -102,11 +102,9 @@ fn path_string(p: &Path) -> String {
     p.to_string_lossy().into_owned()
 }
 
-/// `.st` or `.xml`.
+/// `.st`, `.xml` or `.l5x` (the driver's rule).
 fn is_chart_file(p: &Path) -> bool {
-    p.extension()
-        .and_then(|e| e.to_str())
-        .is_some_and(|e| e.eq_ignore_ascii_case("st") || e.eq_ignore_ascii_case("xml"))
+    sfc_driver::load::is_chart_file(p)
 }
 
 /// `path` from the page: one of the files named on the command line, or a chart file under a
@@ -116,7 +114,7 @@ fn chart_path(s: &AppState, raw: &str) -> Result<PathBuf, ApiError> {
     if is_chart_file(&path) || s.0.open.contains(&path) {
         Ok(path)
     } else {
-        Err(ApiError::new(StatusCode::FORBIDDEN, format!("`{raw}` is not a chart file (.st or .xml)")))
+        Err(ApiError::new(StatusCode::FORBIDDEN, format!("`{raw}` is not a chart file (.st, .xml or .l5x)")))
     }
 }
 
@@ -317,7 +315,7 @@ fn list_files(roots: &[PathBuf], named: &[PathBuf]) -> Vec<Value> {
     found
         .into_iter()
         .map(|p| {
-            let xml = p.extension().is_some_and(|e| e.eq_ignore_ascii_case("xml"));
+            let xml = p.extension().is_some_and(|e| e.eq_ignore_ascii_case("xml") || e.eq_ignore_ascii_case("l5x"));
             json!({ "path": path_string(&p), "format": if xml { "xml" } else { "st" } })
         })
         .collect()

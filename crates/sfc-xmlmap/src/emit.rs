@@ -86,7 +86,7 @@ impl SourceMap {
 
 /// A piece of generated text with the locations of its parts (offsets relative to the piece).
 #[derive(Debug, Clone, Default)]
-pub(crate) struct Frag {
+pub struct Frag {
     pub text: String,
     pub marks: Vec<MapEntry>,
     /// A name, literal, member access or call: needs no parentheses as an operand.
@@ -169,7 +169,7 @@ impl Frag {
 }
 
 /// The generated text being written, with its source map and a stack of enclosing elements.
-pub(crate) struct Emitter {
+pub struct Emitter {
     pub out: String,
     entries: Vec<MapEntry>,
     /// Open elements: the XML anchor and the text offset where each began.
@@ -279,7 +279,7 @@ impl Emitter {
 
 /// The lines of a block of text without common indentation and blank lines at either end, each
 /// line without its line break (and without trailing white space).
-pub(crate) fn block_lines(t: &XText) -> Vec<XText> {
+pub fn block_lines(t: &XText) -> Vec<XText> {
     let text = &t.text;
     let mut lines: Vec<(usize, usize)> = Vec::new();
     let mut start = 0;

@@ -6,27 +6,27 @@ use roxmltree::Node;
 use std::ops::Range;
 
 /// The element children of `n` with local name `name`.
-pub(crate) fn children<'a, 'i: 'a>(n: Node<'a, 'i>, name: &'a str) -> impl Iterator<Item = Node<'a, 'i>> + 'a {
+pub fn children<'a, 'i: 'a>(n: Node<'a, 'i>, name: &'a str) -> impl Iterator<Item = Node<'a, 'i>> + 'a {
     n.children().filter(move |c| c.is_element() && c.tag_name().name() == name)
 }
 
 /// The first element child of `n` with local name `name`.
-pub(crate) fn child<'a, 'i: 'a>(n: Node<'a, 'i>, name: &str) -> Option<Node<'a, 'i>> {
+pub fn child<'a, 'i: 'a>(n: Node<'a, 'i>, name: &str) -> Option<Node<'a, 'i>> {
     n.children().find(|c| c.is_element() && c.tag_name().name() == name)
 }
 
 /// All element children.
-pub(crate) fn elements<'a, 'i: 'a>(n: Node<'a, 'i>) -> impl Iterator<Item = Node<'a, 'i>> {
+pub fn elements<'a, 'i: 'a>(n: Node<'a, 'i>) -> impl Iterator<Item = Node<'a, 'i>> {
     n.children().filter(|c| c.is_element())
 }
 
 /// An attribute without namespace, by local name.
-pub(crate) fn attr<'a>(n: Node<'a, '_>, name: &str) -> Option<&'a str> {
+pub fn attr<'a>(n: Node<'a, '_>, name: &str) -> Option<&'a str> {
     n.attributes().find(|a| a.name() == name && a.namespace().is_none()).map(|a| a.value())
 }
 
 /// The byte range of an attribute's value in the source.
-pub(crate) fn attr_range(n: Node, name: &str) -> Option<Range<u32>> {
+pub fn attr_range(n: Node, name: &str) -> Option<Range<u32>> {
     n.attributes().find(|a| a.name() == name && a.namespace().is_none()).map(|a| {
         let r = a.range_value();
         r.start as u32..r.end as u32
@@ -34,28 +34,28 @@ pub(crate) fn attr_range(n: Node, name: &str) -> Option<Range<u32>> {
 }
 
 /// An attribute read as a number.
-pub(crate) fn num(n: Node, name: &str) -> Option<f64> {
+pub fn num(n: Node, name: &str) -> Option<f64> {
     attr(n, name).and_then(|v| v.trim().parse::<f64>().ok()).filter(|v| v.is_finite())
 }
 
 /// `true`/`1` (XML Schema boolean).
-pub(crate) fn flag(n: Node, name: &str) -> bool {
+pub fn flag(n: Node, name: &str) -> bool {
     matches!(attr(n, name).map(str::trim), Some("true") | Some("1"))
 }
 
 /// The `x`, `y` of a `position` or `relPosition` element.
-pub(crate) fn xy(n: Node) -> Option<(f64, f64)> {
+pub fn xy(n: Node) -> Option<(f64, f64)> {
     Some((num(n, "x")?, num(n, "y")?))
 }
 
 /// The `position` child of an element.
-pub(crate) fn position(n: Node) -> Option<(f64, f64)> {
+pub fn position(n: Node) -> Option<(f64, f64)> {
     child(n, "position").and_then(xy)
 }
 
 /// The range of an element's start tag name, `<step` (what diagnostics about the element point
 /// at: one line, the element's start).
-pub(crate) fn anchor(n: Node) -> Range<u32> {
+pub fn anchor(n: Node) -> Range<u32> {
     let r = n.range();
     let len = 1 + n.tag_name().name().len() + prefix_len(n);
     r.start as u32..(r.start + len).min(r.end) as u32
@@ -72,7 +72,7 @@ fn prefix_len(n: Node) -> usize {
 }
 
 /// The byte range of an element's content: between its start tag and its end tag.
-pub(crate) fn content_range(n: Node) -> Option<Range<usize>> {
+pub fn content_range(n: Node) -> Option<Range<usize>> {
     let src = n.document().input_text();
     let r = n.range();
     let raw = src.get(r.clone())?;
@@ -101,7 +101,7 @@ pub(crate) fn content_range(n: Node) -> Option<Range<usize>> {
 
 /// One stretch of decoded text that is a byte-for-byte copy of the source.
 #[derive(Debug, Clone, Copy)]
-pub(crate) struct Run {
+pub struct Run {
     pub text: u32,
     pub raw: u32,
     pub len: u32,
@@ -110,7 +110,7 @@ pub(crate) struct Run {
 /// Text read from the XML, with where each byte came from: bytes inside `runs` are exact copies
 /// of the source; any other byte (an entity, a normalised line break) maps to `anchor`.
 #[derive(Debug, Clone, Default)]
-pub(crate) struct XText {
+pub struct XText {
     pub text: String,
     pub runs: Vec<Run>,
     pub anchor: Range<u32>,
@@ -160,7 +160,7 @@ impl XText {
 /// The text content of an element: its text and CDATA children (comments and processing
 /// instructions skipped; the text of nested elements included), decoded from the source so that
 /// every copied stretch is located exactly.
-pub(crate) fn text_of(n: Node) -> XText {
+pub fn text_of(n: Node) -> XText {
     let anchor = anchor(n);
     let Some(range) = content_range(n) else {
         return XText { text: String::new(), runs: Vec::new(), anchor };
@@ -287,7 +287,7 @@ fn push_literal(out: &mut XText, body: &str, at: usize, base: u32) {
 /// The text of a `formattedText` element (`documentation`, `ST`, `IL`, `content`): XHTML
 /// paragraphs (`xhtml:p`, `div`, …) joined by line breaks, `br` as a line break, or plain text
 /// (PLCopen v1.0 writes `<ST>IX1 = FALSE</ST>`).
-pub(crate) fn formatted_text(n: Node) -> XText {
+pub fn formatted_text(n: Node) -> XText {
     formatted(n, 0)
 }
 
@@ -315,7 +315,7 @@ fn formatted(n: Node, depth: usize) -> XText {
 }
 
 /// Byte offset of a 1-based row and column (columns count characters) in `src`.
-pub(crate) fn offset_of(src: &str, row: u32, col: u32) -> u32 {
+pub fn offset_of(src: &str, row: u32, col: u32) -> u32 {
     let mut line = 1u32;
     let mut start = 0usize;
     if row > 1 {
@@ -349,12 +349,12 @@ pub(crate) fn offset_of(src: &str, row: u32, col: u32) -> u32 {
 ///
 /// The element itself is written without a namespace declaration: it takes the namespace of
 /// the place it is written to (a PLCopen `addData/data` element, in whichever PLCopen version).
-pub(crate) fn serialize(n: Node) -> String {
+pub fn serialize(n: Node) -> String {
     serialize_without(n, &|_| false)
 }
 
 /// [`serialize`] leaving out the elements `skip` names (and what they hold).
-pub(crate) fn serialize_without(n: Node, skip: &dyn Fn(Node) -> bool) -> String {
+pub fn serialize_without(n: Node, skip: &dyn Fn(Node) -> bool) -> String {
     let mut out = String::new();
     ser(n, n.tag_name().namespace(), &mut out, 0, skip);
     out
@@ -410,10 +410,10 @@ fn ser(n: Node, parent_ns: Option<&str>, out: &mut String, depth: usize, skip: &
     out.push('>');
 }
 
-pub(crate) fn escape_text(s: &str) -> String {
+pub fn escape_text(s: &str) -> String {
     s.replace('&', "&amp;").replace('<', "&lt;").replace('>', "&gt;")
 }
 
-pub(crate) fn escape_attr(s: &str) -> String {
+pub fn escape_attr(s: &str) -> String {
     escape_text(s).replace('"', "&quot;").replace('\n', "&#10;").replace('\r', "&#13;").replace('\t', "&#9;")
 }
