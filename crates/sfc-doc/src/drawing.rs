@@ -67,6 +67,22 @@ fn ceil_to(v: f64, step: f64) -> f64 {
     (v / step).ceil() * step
 }
 
+/// The S7-GRAPH conditions drawn on a step's left side, as S7-GRAPH shows them: `C` for the
+/// interlock (`sfc.s7graph.interlock`), `V` for the supervision (`sfc.s7graph.supervision`),
+/// each with its condition (ST) for the tooltip. Steps of other charts have none.
+pub fn step_marks(e: &Element) -> Vec<(&'static str, String)> {
+    [("C", "sfc.s7graph.interlock"), ("V", "sfc.s7graph.supervision")]
+        .into_iter()
+        .filter_map(|(mark, name)| {
+            let a = e.attributes.iter().rev().find(|a| a.name.eq_ignore_ascii_case(name))?;
+            Some((mark, crate::pragma::unescape(a.value.as_deref().unwrap_or(""))))
+        })
+        .collect()
+}
+
+/// The side of a step mark's box, and the gap between it and the step.
+pub const MARK: f64 = 14.0;
+
 /// A step box wide enough for its name (bold) with its tag and its timeout line: at least
 /// 80 × 40, widths in steps of 20 so the axis stays on the grid of 10.
 pub fn step_size(e: &Element) -> (f64, f64) {

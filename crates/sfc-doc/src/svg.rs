@@ -163,6 +163,25 @@ fn block(out: &mut String, doc: &EditorDoc, e: &Element, i: usize) {
                 let attrs = format!(r#"text-anchor="middle" font-size="10" opacity="0.75" fill="{}""#, esc(fg));
                 text(out, e.x + e.w / 2.0, cy + 12.0, t, &attrs);
             }
+            // S7-GRAPH's interlock (C) and supervision (V), on the step's left side.
+            for (k, (mark, condition)) in drawing::step_marks(e).into_iter().enumerate() {
+                let (x, y) = (e.x - drawing::MARK - 2.0, e.y + 2.0 + k as f64 * (drawing::MARK + 2.0));
+                let _ = writeln!(
+                    out,
+                    r#"<g><title>{}: {}</title><rect x="{}" y="{}" width="{}" height="{}" fill="{}" stroke="{}" stroke-width="1"/>"#,
+                    if mark == "C" { "interlock" } else { "supervision" },
+                    esc(&condition),
+                    n(x),
+                    n(y),
+                    n(drawing::MARK),
+                    n(drawing::MARK),
+                    PAPER,
+                    esc(fg)
+                );
+                let attrs = format!(r#"text-anchor="middle" font-size="10" font-weight="600" fill="{}""#, esc(fg));
+                text(out, x + drawing::MARK / 2.0, y + drawing::MARK / 2.0, mark, &attrs);
+                out.push_str("</g>\n");
+            }
         }
         Some(ElementKind::Transition) => {
             let (cx, cy) = (e.x + e.w / 2.0, e.y + e.h / 2.0);

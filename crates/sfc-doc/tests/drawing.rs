@@ -166,3 +166,32 @@ fn imported_real_files_laid_out_draw_cleanly() {
     }
     assert!(all.is_empty(), "{} faults:\n{}", all.len(), all.join("\n"));
 }
+
+/// A step with S7-GRAPH's interlock and supervision (imported from SimaticML) shows them as
+/// S7-GRAPH does, a `C` and a `V` box on its left side, with the condition as the tooltip; a
+/// step without them has none.
+#[test]
+fn graph_interlock_and_supervision_are_drawn_on_the_step() {
+    let text = "FUNCTION_BLOCK Drill\nVAR_INPUT Clamped, Down : BOOL; END_VAR\nVAR_OUTPUT Motor : BOOL; END_VAR\n\
+        INITIAL_STEP Idle : END_STEP\n\
+        {attribute 'sfc.s7graph.interlock' := 'Clamped AND NOT Down'}\n\
+        {attribute 'sfc.s7graph.supervision' := 'Drilling.T > T#10s'}\n\
+        STEP Drilling : Motor(N); END_STEP\n\
+        TRANSITION FROM Idle TO Drilling := Clamped; END_TRANSITION\n\
+        TRANSITION FROM Drilling TO Idle := Down; END_TRANSITION\n\
+        END_FUNCTION_BLOCK\n";
+    let opened = open(0, "drill.st", text);
+    let doc = opened.charts.first().expect("one chart");
+    let step = |name: &str| doc.elements.iter().find(|e| e.name == name).expect(name).clone();
+    let marks = sfc_doc::drawing::step_marks(&step("Drilling"));
+    assert_eq!(
+        marks,
+        vec![("C", "Clamped AND NOT Down".to_string()), ("V", "Drilling.T > T#10s".to_string())]
+    );
+    assert!(sfc_doc::drawing::step_marks(&step("Idle")).is_empty());
+    let svg = sfc_doc::svg(doc);
+    assert!(svg.contains("<title>interlock: Clamped AND NOT Down</title>"), "{svg}");
+    assert!(svg.contains("<title>supervision: Drilling.T &gt; T#10s</title>"), "{svg}");
+    assert_eq!(svg.matches(">C</text>").count(), 1, "{svg}");
+    assert_eq!(svg.matches(">V</text>").count(), 1, "{svg}");
+}

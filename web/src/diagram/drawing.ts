@@ -52,6 +52,29 @@ export function stepSize(e: Pick<Element, 'name' | 'tag' | 'timeout' | 'initial'
   return { w: Math.max(80, ceilTo(inner, 20)), h: 40 };
 }
 
+/** A pragma value as written (IEC string escapes `$$ $27 $N $R $T $7D`) read back. */
+export function unescapePragma(v: string): string {
+  const map: Record<string, string> = { $: '$', '27': "'", N: '\n', R: '\r', T: '\t', '7D': '}', '7d': '}' };
+  return v.replace(/\$(\$|27|7D|7d|N|R|T|n|r|t)/g, (_, k: string) => map[k] ?? map[k.toUpperCase()] ?? `$${k}`);
+}
+
+/** The side of a step mark's box (S7-GRAPH's interlock `C`, supervision `V`). */
+export const MARK = 14;
+
+/**
+ * The S7-GRAPH conditions drawn on a step's left side, as S7-GRAPH shows them: `C` for the
+ * interlock (`sfc.s7graph.interlock`), `V` for the supervision (`sfc.s7graph.supervision`), each
+ * with its condition for the tooltip (the same as sfc-doc's `step_marks`).
+ */
+export function stepMarks(e: Pick<Element, 'attributes'>): { mark: 'C' | 'V'; condition: string }[] {
+  const out: { mark: 'C' | 'V'; condition: string }[] = [];
+  for (const [mark, name] of [['C', 'sfc.s7graph.interlock'], ['V', 'sfc.s7graph.supervision']] as const) {
+    const a = [...(e.attributes ?? [])].reverse().find((x) => x.name.toLowerCase() === name);
+    if (a) out.push({ mark, condition: unescapePragma(a.value ?? '') });
+  }
+  return out;
+}
+
 export function qualifierText(a: Association): string {
   return a.duration ? `${a.qualifier}, ${a.duration}` : a.qualifier;
 }

@@ -120,6 +120,27 @@ describe('exportSvg', () => {
     const svg = m.canvas.exportSvg();
     expect(svg).toContain('<title>Waiting for start</title>');
   });
+
+  it("draws S7-GRAPH's interlock (C) and supervision (V) on the step's left side, the condition as tooltip", () => {
+    const m = mount();
+    const doc = conveyorDoc();
+    const run = doc.elements.find((e) => e.id === 'step:Run')!;
+    run.attributes = [
+      { name: 'sfc.s7graph.interlock', value: 'start AND NOT stop' },
+      { name: 'sfc.s7graph.supervision', value: 'Run.T > T#10s AND box = $27x$27' },
+    ];
+    m.canvas.load(doc);
+    const svg = m.canvas.exportSvg();
+    const parsed = new DOMParser().parseFromString(svg, 'image/svg+xml');
+    const step = parsed.querySelector('g[data-id="step:Run"]')!;
+    const marks = [...step.querySelectorAll('text')].map((t) => t.textContent).filter((t) => t === 'C' || t === 'V');
+    expect(marks).toEqual(['C', 'V']);
+    const titles = [...step.querySelectorAll('title')].map((t) => t.textContent);
+    expect(titles).toContain('interlock: start AND NOT stop');
+    expect(titles).toContain("supervision: Run.T > T#10s AND box = 'x'");
+    const init = parsed.querySelector('g[data-id="step:Init"]')!;
+    expect([...init.querySelectorAll('text')].some((t) => t.textContent === 'C')).toBe(false);
+  });
 });
 
 describe('transition labels', () => {

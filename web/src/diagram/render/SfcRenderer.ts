@@ -5,7 +5,7 @@ import { inputPin, outputPin, type Box } from '../geometry';
 import { isConnection, type Service, type SfcConnection, type SfcShape } from '../model';
 import type { Highlights } from '../highlight/Highlights';
 import type { HighlightKind } from '../types';
-import { actionColumns, BAR_HALF, LINE_H, labelsOf, nameWithTag, qualifierText, wrapCondition } from '../drawing';
+import { actionColumns, BAR_HALF, LINE_H, labelsOf, MARK, nameWithTag, qualifierText, stepMarks, wrapCondition } from '../drawing';
 import { el, fit, MONO, points, text, wrap } from './svg';
 
 export const INK = '#1e293b';
@@ -135,6 +135,16 @@ export class SfcRenderer extends BaseRenderer {
     if (e.timeout) {
       text(g, s.width / 2, cy + 12, fit(e.timeout, SMALL, room), { 'font-size': SMALL, 'text-anchor': 'middle', fill: fg, opacity: 0.75 });
     }
+    // S7-GRAPH's interlock (C) and supervision (V), on the step's left side.
+    stepMarks(e).forEach(({ mark, condition }, k) => {
+      const m = el('g', {}, g);
+      const title = el('title', {}, m);
+      title.textContent = `${mark === 'C' ? 'interlock' : 'supervision'}: ${condition}`;
+      const x = -MARK - 2;
+      const y = 2 + k * (MARK + 2);
+      el('rect', { x, y, width: MARK, height: MARK, fill: PAPER, stroke: fg, 'stroke-width': 1 }, m);
+      text(m, x + MARK / 2, y + MARK / 2, mark, { 'font-size': SMALL, 'text-anchor': 'middle', fill: fg, 'font-weight': 600 });
+    });
   }
 
   private drawTransition(g: SVGElement, s: SfcShape, e: Element, enabled: boolean) {
