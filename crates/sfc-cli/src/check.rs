@@ -83,9 +83,13 @@ pub fn check(a: CheckArgs) -> u8 {
         analysis: !a.no_analysis,
         ..CheckOptions::default()
     };
-    if let Some(p @ (ProfileArg::Iec | ProfileArg::Grafcet)) = a.profile {
+    if let Some(p @ (ProfileArg::Iec | ProfileArg::Grafcet | ProfileArg::Logix)) = a.profile {
         // Said, not silently ignored: only `matiec` and `codesys` have warnings of their own.
-        let name = if matches!(p, ProfileArg::Iec) { "iec" } else { "grafcet" };
+        let name = match p {
+            ProfileArg::Iec => "iec",
+            ProfileArg::Grafcet => "grafcet",
+            _ => "logix",
+        };
         eprintln!(
             "note: `--profile {name}` adds no warnings to `sfc check` (only `matiec` does: SFC0901–SFC0908, and \
              `codesys`: SFC0911–SFC0913)"

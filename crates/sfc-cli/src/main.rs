@@ -83,6 +83,7 @@ enum ProfileArg {
     Matiec,
     Codesys,
     Grafcet,
+    Logix,
 }
 
 #[derive(clap::Args)]
@@ -279,6 +280,7 @@ fn run() -> u8 {
                 ProfileArg::Matiec => sfc_sim::Profile::Matiec,
                 ProfileArg::Codesys => sfc_sim::Profile::Codesys,
                 ProfileArg::Grafcet => sfc_sim::Profile::Grafcet,
+                ProfileArg::Logix => sfc_sim::Profile::Logix,
             }),
             pou: a.pou,
             stats: a.stats || a.stats_full,

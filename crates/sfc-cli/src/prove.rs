@@ -143,12 +143,24 @@ pub fn prove(a: ProveArgs) -> u8 {
     // Without --profile or the property file's `profile`, the rules of the tool that wrote the
     // file (said, as `sim` says it).
     if opts.profile.is_none() && file.profile.is_none() {
-        if let (sfc_sim::Profile::Codesys, sfc_sim::ProfileSource::Vendor(v)) = sfc_sim::file_profile(vendor) {
-            opts.profile = Some(sfc_sim::Profile::Codesys);
-            eprintln!(
-                "note: {}",
-                sfc_sim::vendor_profile_note("proved", &a.file.display().to_string(), v, "--profile iec")
-            );
+        match sfc_sim::file_profile(vendor) {
+            (sfc_sim::Profile::Codesys, sfc_sim::ProfileSource::Vendor(v)) => {
+                opts.profile = Some(sfc_sim::Profile::Codesys);
+                eprintln!(
+                    "note: {}",
+                    sfc_sim::vendor_profile_note("proved", &a.file.display().to_string(), v, "--profile iec")
+                );
+            }
+            (p, sfc_sim::ProfileSource::Vendor(v)) if sfc_prove::unsupported_profile(p).is_some() => {
+                // Said, not silently replaced: the file's own rules are not modelled yet.
+                eprintln!(
+                    "note: proved with profile iec: {} is a {v} export, whose rules (profile {}) `sfc prove` does \
+                     not model yet; `sfc sim` and `sfc test` follow them",
+                    a.file.display(),
+                    p.name()
+                );
+            }
+            _ => {}
         }
     }
     match a.budget {

@@ -699,15 +699,26 @@ fn pointer_arithmetic_says_it_is_not_simulated() {
 /// online help and written beside it (`*.trace.csv`), and its scenario passes.
 #[test]
 fn codesys_rules_give_the_traces_derived_by_hand() {
-    let dir = root().join("crates/sfc-sim/tests/codesys");
-    let out_dir = temp_dir("codesys-rules");
+    rules_give_the_traces_derived_by_hand("codesys", 12);
+}
+
+/// The `logix` profile, rule by rule (`crates/sfc-sim/tests/logix/`): the same, with the traces
+/// derived by hand from Rockwell's SFC manual (1756-PM006) and Logix Designer's help.
+#[test]
+fn logix_rules_give_the_traces_derived_by_hand() {
+    rules_give_the_traces_derived_by_hand("logix", 9);
+}
+
+fn rules_give_the_traces_derived_by_hand(profile: &str, at_least: usize) {
+    let dir = root().join("crates/sfc-sim/tests").join(profile);
+    let out_dir = temp_dir(&format!("{profile}-rules"));
     let mut charts: Vec<PathBuf> = std::fs::read_dir(&dir)
         .unwrap()
         .map(|e| e.unwrap().path())
         .filter(|p| p.extension().is_some_and(|e| e == "st"))
         .collect();
     charts.sort();
-    assert!(charts.len() >= 12, "the codesys fixtures: {}", charts.len());
+    assert!(charts.len() >= at_least, "the {profile} fixtures: {}", charts.len());
     let readme = std::fs::read_to_string(dir.join("README.md")).unwrap();
     let mut failures = Vec::new();
     for chart in &charts {
@@ -735,6 +746,27 @@ fn codesys_rules_give_the_traces_derived_by_hand() {
         }
     }
     assert!(failures.is_empty(), "{}", failures.join("\n"));
+}
+
+/// A chart file marked `sfc.dialect 'logix'` (imported or converted from an L5X export) runs
+/// with `logix` when neither the command line nor the scenario names a profile, and says so;
+/// `--profile iec` runs IEC 61131-3's rules instead, which differ in the first call.
+#[test]
+fn a_logix_chart_runs_with_logix_and_says_so() {
+    let chart = root().join("crates/sfc-sim/tests/logix/09_file_chooses_logix.st");
+    let o = sfc(&["sim", chart.to_str().unwrap(), "--scans", "2", "--set", "Start=TRUE", "--trace", "-"]);
+    assert!(o.status.success(), "{}", both(&o));
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        err.contains("simulated with profile logix:") && err.contains("was converted from a Studio 5000 export"),
+        "{err}"
+    );
+    let out = String::from_utf8_lossy(&o.stdout);
+    assert!(out.lines().next().unwrap().contains(r#""active":["Running"]"#), "first call fires: {out}");
+    let o = sfc(&["sim", chart.to_str().unwrap(), "--scans", "2", "--set", "Start=TRUE", "--trace", "-", "--profile", "iec"]);
+    let out = String::from_utf8_lossy(&o.stdout);
+    assert!(out.lines().next().unwrap().contains(r#""active":["Stopped"]"#), "IEC's scan 0 fires nothing: {out}");
+    assert!(!String::from_utf8_lossy(&o.stderr).contains("profile logix"));
 }
 
 /// A machine in the shape of a CODESYS export (eleven function blocks whose SFC actions call

@@ -201,6 +201,41 @@ pub struct Adjacency {
     pub incoming: Vec<Vec<TransitionId>>,
 }
 
+/// Studio 5000's SFC execution settings, which are the controller's in Logix (its Controller
+/// Properties, "SFC Execution" tab) and which the L5X import writes on each chart's POU
+/// (`sfc.logix.exec`, `sfc.logix.lastscan`); the simulator's `logix` profile follows them.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub struct LogixSettings {
+    /// "Execute until FALSE transition" (`UntilFalse`); the default is "Execute current active
+    /// steps only" (`CurrentActive`).
+    pub until_false: bool,
+    /// "Last Scan of Active Steps".
+    pub last_scan: LastScan,
+}
+
+/// What a step's actions do in the step's last scan (Logix's "Last Scan of Active Steps").
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum LastScan {
+    /// "Don't scan" (`DontScan`, Studio 5000's default): only P and P0 actions execute.
+    #[default]
+    DontScan,
+    /// "Programmatic reset" (`ProgrammaticReset`): every action executes, its Q bit off.
+    ProgrammaticReset,
+    /// "Automatic reset" (`AutomaticReset`): actions execute in postscan mode.
+    AutomaticReset,
+}
+
+impl LastScan {
+    /// The value as L5X and the `sfc.logix.lastscan` attribute write it.
+    pub fn name(self) -> &'static str {
+        match self {
+            LastScan::DontScan => "DontScan",
+            LastScan::ProgrammaticReset => "ProgrammaticReset",
+            LastScan::AutomaticReset => "AutomaticReset",
+        }
+    }
+}
+
 /// The chart of one POU.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Chart {
@@ -218,6 +253,8 @@ pub struct Chart {
     pub actions: Vec<ActionNode>,
     pub name_span: Span,
     pub span: Span,
+    /// The POU's Studio 5000 execution settings (defaults when it has none).
+    pub logix: LogixSettings,
 }
 
 impl Chart {

@@ -90,6 +90,10 @@ const KNOWN_ATTRIBUTES: &[&str] = &[
     "sfc.build",
 ];
 
+/// Prefixes of the attributes in which an import keeps what IEC text cannot hold of a vendor's
+/// format: Studio 5000 L5X (`sfc-l5x`) and TIA Portal S7-GRAPH (`sfc-simaticml`).
+pub const VENDOR_PREFIXES: &[&str] = &["sfc.logix.", "sfc.s7graph."];
+
 /// The values `sfc.build` may take: the outputs `sfc build` makes of a blank chart.
 const BUILD_OUTPUTS: &[&str] = &["st", "stl", "plcopen", "svg", "text"];
 
@@ -111,7 +115,10 @@ pub fn check_attributes(attrs: &[ast::Attribute], allowed: &[&str], what: &str, 
             | "sfc.error_code" | "sfc.activation" => allowed.contains(&lname.as_str()),
             _ => true,
         };
-        if !KNOWN_ATTRIBUTES.contains(&lname.as_str()) {
+        // What an import keeps of a vendor's format for its export (`sfc.logix.*` of an L5X
+        // file, `sfc.s7graph.*` of a TIA Portal file) is known by its prefix.
+        let vendor = VENDOR_PREFIXES.iter().any(|p| lname.starts_with(p));
+        if !vendor && !KNOWN_ATTRIBUTES.contains(&lname.as_str()) {
             diags.push(Diagnostic::warning("SFC0602", a.span, format!("unknown attribute `{}`", a.name)));
         } else if !meaningful {
             diags.push(Diagnostic::warning(
@@ -608,7 +615,40 @@ pub fn lower_chart(
         actions,
         name_span: of.spans.map_or(pou.name.span, |s| s.0),
         span: of.spans.map_or(pou.span, |s| s.1),
+        logix: logix_settings(&pou.attributes, diags),
     }
+}
+
+/// The Studio 5000 execution settings of a POU (`sfc.logix.exec`, `sfc.logix.lastscan`, as the
+/// L5X import writes them), with SFC0601 for a value Logix does not have.
+fn logix_settings(attrs: &[ast::Attribute], diags: &mut Vec<Diagnostic>) -> crate::LogixSettings {
+    let mut out = crate::LogixSettings::default();
+    if let Some(a) = attr(attrs, "sfc.logix.exec") {
+        match a.value.as_deref().map(str::trim) {
+            Some(v) if v.eq_ignore_ascii_case("CurrentActive") => out.until_false = false,
+            Some(v) if v.eq_ignore_ascii_case("UntilFalse") => out.until_false = true,
+            v => diags.push(Diagnostic::error(
+                "SFC0601",
+                a.span,
+                format!("`sfc.logix.exec` is 'CurrentActive' or 'UntilFalse', found {:?}", v.unwrap_or("")),
+            )),
+        }
+    }
+    if let Some(a) = attr(attrs, "sfc.logix.lastscan") {
+        let v = a.value.as_deref().map(str::trim).unwrap_or("");
+        match [crate::LastScan::DontScan, crate::LastScan::ProgrammaticReset, crate::LastScan::AutomaticReset]
+            .into_iter()
+            .find(|l| l.name().eq_ignore_ascii_case(v))
+        {
+            Some(l) => out.last_scan = l,
+            None => diags.push(Diagnostic::error(
+                "SFC0601",
+                a.span,
+                format!("`sfc.logix.lastscan` is 'DontScan', 'ProgrammaticReset' or 'AutomaticReset', found {v:?}"),
+            )),
+        }
+    }
+    out
 }
 
 fn lower_association(

@@ -1476,7 +1476,7 @@ pub(crate) fn run(file: u32, xml_text: &str) -> Run {
     // The other vendors' exports are read by their own crates, into the same text.
     if sfc_l5x::is_l5x(root) {
         let out = sfc_l5x::import(file, xml_text);
-        return (out.text, out.map, out.diagnostics, None);
+        return (out.text, out.map, out.diagnostics, Some(crate::Vendor::Studio5000));
     }
     if sfc_simaticml::is_simaticml(root) {
         let out = sfc_simaticml::import(file, xml_text);

@@ -52,9 +52,9 @@ pub struct Imported {
     pub vendor: Option<Vendor>,
 }
 
-/// A tool of the CODESYS family whose PLCopen XML export sfc recognises ([`Imported::vendor`],
-/// [`vendor`]). They all run SFC by CODESYS's rules, which the simulator's `codesys` profile
-/// follows.
+/// A tool whose export sfc recognises ([`Imported::vendor`], [`vendor`]) and whose rules for
+/// running SFC one of the simulator's profiles follows: the CODESYS family (CODESYS, TwinCAT,
+/// e!COCKPIT: PLCopen XML, profile `codesys`) and Studio 5000 (L5X, profile `logix`).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
 pub enum Vendor {
     /// CODESYS V3 (`productName="CODESYS"`, or only CODESYS's `addData`).
@@ -63,6 +63,9 @@ pub enum Vendor {
     TwinCat,
     /// WAGO e!COCKPIT.
     ECockpit,
+    /// Rockwell Studio 5000 Logix Designer (an L5X export, or text converted from one: its
+    /// POUs are marked `{attribute 'sfc.dialect' := 'logix'}`).
+    Studio5000,
 }
 
 impl Vendor {
@@ -72,7 +75,13 @@ impl Vendor {
             Vendor::Codesys => "CODESYS",
             Vendor::TwinCat => "TwinCAT",
             Vendor::ECockpit => "e!COCKPIT",
+            Vendor::Studio5000 => "Studio 5000",
         }
+    }
+
+    /// Whether the tool is of the CODESYS family (it runs SFC by CODESYS's rules).
+    pub fn is_codesys_family(self) -> bool {
+        !matches!(self, Vendor::Studio5000)
     }
 }
 
@@ -93,8 +102,13 @@ pub fn vendor(xml: &str) -> Option<Vendor> {
 
 /// The tool of the CODESYS family whose export an IEC text was converted from (`sfc build X.xml
 /// --target text` keeps the export's `fileHeader` as `{attribute 'sfc.fileheader' := …}` and
-/// marks its POUs `{attribute 'sfc.dialect' := 'codesys'}`); `None` for any other text.
+/// marks its POUs `{attribute 'sfc.dialect' := 'codesys'}`), or of Studio 5000 for a text
+/// converted from an L5X export (POUs marked `{attribute 'sfc.dialect' := 'logix'}`); `None` for
+/// any other text.
 pub fn text_vendor(text: &str) -> Option<Vendor> {
+    if text.contains("{attribute 'sfc.dialect' := 'logix'}") {
+        return Some(Vendor::Studio5000);
+    }
     const KEY: &str = "{attribute 'sfc.fileheader' := '";
     if let Some(start) = text.find(KEY).map(|i| i + KEY.len()) {
         let rest = &text[start..];

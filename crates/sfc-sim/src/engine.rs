@@ -22,6 +22,7 @@ use std::sync::Arc;
 
 mod action;
 mod codesys;
+mod logix;
 mod evolve;
 mod matiec;
 mod mechanism;

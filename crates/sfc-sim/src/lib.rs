@@ -34,11 +34,14 @@ pub enum Profile {
     Matiec,
     Codesys,
     Grafcet,
+    /// Studio 5000 (Logix 5000) SFC, as Rockwell's manual 1756-PM006 and the Logix Designer
+    /// help describe it (docs/sim.md, "The `logix` profile").
+    Logix,
 }
 
 impl Profile {
-    pub const ALL: [Profile; 4] = [Profile::Iec, Profile::Matiec, Profile::Codesys, Profile::Grafcet];
-    /// Parses `iec`, `matiec`, `codesys`, `grafcet` (any case).
+    pub const ALL: [Profile; 5] = [Profile::Iec, Profile::Matiec, Profile::Codesys, Profile::Grafcet, Profile::Logix];
+    /// Parses `iec`, `matiec`, `codesys`, `grafcet`, `logix` (any case).
     pub fn from_name(s: &str) -> Option<Profile> {
         Profile::ALL.into_iter().find(|p| p.name().eq_ignore_ascii_case(s))
     }
@@ -48,6 +51,7 @@ impl Profile {
             Profile::Matiec => "matiec",
             Profile::Codesys => "codesys",
             Profile::Grafcet => "grafcet",
+            Profile::Logix => "logix",
         }
     }
 }
@@ -74,6 +78,7 @@ pub enum ProfileSource {
 /// through this one function.
 pub fn file_profile(vendor: Option<sfc_plcopen::Vendor>) -> (Profile, ProfileSource) {
     match vendor {
+        Some(v @ sfc_plcopen::Vendor::Studio5000) => (Profile::Logix, ProfileSource::Vendor(v)),
         Some(v) => (Profile::Codesys, ProfileSource::Vendor(v)),
         None => (Profile::Iec, ProfileSource::Default),
     }
@@ -95,10 +100,17 @@ pub fn chart_vendor(text: &str, imported: Option<&sfc_plcopen::Imported>) -> Opt
 /// CODESYS's rules (--profile iec to use IEC 61131-3's)`.
 pub fn vendor_profile_note(doing: &str, file: &str, vendor: sfc_plcopen::Vendor, instead: &str) -> String {
     // A text converted from an export (`sfc build X.xml --target text`) says where it came from.
-    let is = if file.to_ascii_lowercase().ends_with(".xml") { "is" } else { "was converted from" };
+    let lower = file.to_ascii_lowercase();
+    let is = if lower.ends_with(".xml") || lower.ends_with(".l5x") { "is" } else { "was converted from" };
     let why = match vendor {
         sfc_plcopen::Vendor::Codesys => {
             format!("{file} {is} a CODESYS export ({instead} to use IEC 61131-3's rules)")
+        }
+        sfc_plcopen::Vendor::Studio5000 => {
+            return format!(
+                "{doing} with profile logix: {file} {is} a Studio 5000 export, and Logix controllers run SFC by \
+                 Rockwell's rules ({instead} to use IEC 61131-3's)"
+            );
         }
         v => {
             let a = if v.name().starts_with(['a', 'e', 'i', 'o', 'u', 'A', 'E', 'I', 'O', 'U']) { "an" } else { "a" };

@@ -566,18 +566,51 @@ END_PROGRAM
 /// scenarios; their hand-derived traces are compared through the binary (sfc-cli's sim_cli).
 #[test]
 fn codesys_rules() {
-    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/codesys");
+    profile_rules("codesys", 12);
+}
+
+/// The `logix` profile's fixtures (`tests/logix/`), likewise.
+#[test]
+fn logix_rules() {
+    profile_rules("logix", 9);
+}
+
+fn profile_rules(profile: &str, at_least: usize) {
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests").join(profile);
     let mut files: Vec<PathBuf> = std::fs::read_dir(&dir)
         .unwrap()
         .map(|e| e.unwrap().path())
         .filter(|p| p.to_string_lossy().ends_with(".scenario.toml"))
         .collect();
     files.sort();
-    assert!(files.len() >= 12);
+    assert!(files.len() >= at_least);
     for path in &files {
         let outcome = run_path(path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
         assert!(outcome.passed(), "{}: {:?} {:?}", path.display(), outcome.failures, outcome.error);
     }
+}
+
+/// `logix` with "Execute until FALSE transition": a chart that can advance for ever in one call
+/// is stopped with an error, where the controller's watchdog would fault.
+#[test]
+fn logix_until_false_without_a_false_transition_stops_like_a_watchdog() {
+    let text = "{attribute 'sfc.dialect' := 'logix'}
+{attribute 'sfc.logix.exec' := 'UntilFalse'}
+PROGRAM Spin
+INITIAL_STEP A: END_STEP
+TRANSITION FROM A TO B := TRUE; END_TRANSITION
+STEP B: END_STEP
+TRANSITION FROM B TO A := TRUE; END_TRANSITION
+END_PROGRAM
+";
+    let opts = SimOptions { profile: sfc_sim::Profile::Logix, ..SimOptions::default() };
+    let mut sim = match Simulation::from_source("spin.st", text, None, opts) {
+        Ok(s) => s,
+        Err((_, d)) => panic!("{d:#?}"),
+    };
+    sim.scan();
+    let err = sim.error().expect("the call never ends").clone();
+    assert!(err.message.contains("Execute until FALSE transition"), "{err:?}");
 }
 
 /// `codesys`: a call with SFCPause TRUE processes nothing, the first one included (it only

@@ -45,8 +45,20 @@ pub(crate) struct Control {
     /// step was left.
     t: [i64; 5],
     pub(crate) q: bool,
+    /// `logix`: Q without a P association's pulse, whose fall is the end of the action's
+    /// activity (a P action's second execution comes when its step is left, not when its pulse
+    /// ends).
+    core: bool,
     pub(crate) a: bool,
     pub(crate) live: bool,
+}
+
+/// What the action control does beyond IEC 61131-3 for the profile of the run.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) struct Rules {
+    pub(crate) profile: Profile,
+    /// `logix`: the chart's "Last Scan of Active Steps" setting.
+    pub(crate) last_scan: sfc_model::LastScan,
 }
 
 /// TON on virtual time: `Q = elapsed ≥ PT`, elapsed counted from the scan the input rose.
@@ -61,7 +73,8 @@ fn ton(mem: &mut Option<i64>, input: bool, pt: i64, now: i64) -> bool {
 
 impl Control {
     /// One execution of the block on the input mask `i`; returns `(Q, A)`.
-    fn update(&mut self, i: u16, now: i64, profile: Profile) -> (bool, bool) {
+    fn update(&mut self, i: u16, now: i64, rules: Rules) -> (bool, bool) {
+        let profile = rules.profile;
         let on = |b: u16| i & b != 0;
         let [t_l, t_d, t_sd, t_ds, t_sl] = self.t;
         let r = on(R);
@@ -69,6 +82,7 @@ impl Control {
         let l_q = ton(&mut self.l_tmr, on(L), t_l, now);
         let d_q = ton(&mut self.d_tmr, on(D), t_d, now);
         let p_q = on(P) && !self.p_mem;
+        let p_fell = !on(P) && self.p_mem;
         self.p_mem = on(P);
         // MatIEC does not let R cancel a pending SD.
         let sd_reset = r && profile != Profile::Matiec;
@@ -78,34 +92,47 @@ impl Control {
         self.ds_ff = !r && (self.ds_ff || ds_q);
         self.sl_ff = !r && (self.sl_ff || on(SL));
         let sl_q = ton(&mut self.sl_tmr, self.sl_ff, t_sl, now);
-        let q =
-            !r && (on(N) || (on(L) && !l_q) || d_q || p_q || self.s_ff || sd_q || self.ds_ff || (self.sl_ff && !sl_q));
-        self.edges(i, q, profile)
+        let core = !r && (on(N) || (on(L) && !l_q) || d_q || self.s_ff || sd_q || self.ds_ff || (self.sl_ff && !sl_q));
+        self.edges(i, core, core || (!r && p_q), p_fell, rules)
     }
 
     /// [`Control::update`] of a block without timed associations: its timers never run and its
     /// SD/DS/SL flip-flops are never set.
     #[inline]
-    fn update_untimed(&mut self, i: u16, profile: Profile) -> (bool, bool) {
+    fn update_untimed(&mut self, i: u16, rules: Rules) -> (bool, bool) {
         let r = i & R != 0;
         self.s_ff = !r && (self.s_ff || i & S != 0);
         let p = i & P != 0;
         let p_q = p && !self.p_mem;
+        let p_fell = !p && self.p_mem;
         self.p_mem = p;
-        let q = !r && (i & N != 0 || p_q || self.s_ff);
-        self.edges(i, q, profile)
+        let core = !r && (i & N != 0 || self.s_ff);
+        self.edges(i, core, core || (!r && p_q), p_fell, rules)
     }
 
-    /// P1/P0 edges, the final scan, and the outputs.
+    /// P1/P0 edges, the final scan, and the outputs. `core` is Q without a P pulse; `p_fell`
+    /// says a P association's step was left.
     #[inline(always)]
-    fn edges(&mut self, i: u16, q: bool, profile: Profile) -> (bool, bool) {
+    fn edges(&mut self, i: u16, core: bool, q: bool, p_fell: bool, rules: Rules) -> (bool, bool) {
         let (i1, i0) = (i & P1 != 0, i & P0 != 0);
         let p1 = i1 && !self.p1_mem;
         let p0 = !i0 && self.p0_mem;
         self.p1_mem = i1;
         self.p0_mem = i0;
-        let fell = self.q && !q && profile != Profile::Matiec;
+        let fell = match rules.profile {
+            Profile::Matiec => false,
+            // Logix: a P action executes when its step is activated and when it is left
+            // ("Assign a qualifier to an action"); the last scan of the others is the
+            // controller's setting: under "Don't scan" only P and P0 actions execute, under
+            // "Programmatic reset" every action executes once more with its Q bit off.
+            Profile::Logix => {
+                let last = self.core && !core && rules.last_scan == sfc_model::LastScan::ProgrammaticReset;
+                last || p_fell
+            }
+            _ => self.q && !q,
+        };
         self.q = q;
+        self.core = core;
         self.a = q || fell || p1 || p0;
         (self.q, self.a)
     }
@@ -174,6 +201,7 @@ pub(crate) fn run_iec_actions(
 ) -> Result<(), Fault> {
     let now = ctx.now;
     let profile = ctx.profile;
+    let rules = Rules { profile, last_scan: code.chart.logix.last_scan };
     let frame = ctx.charts[chart].frame;
     let st = &mut ctx.charts[chart];
     // Entities of newly active steps become live; they stay live while one of their steps is
@@ -211,7 +239,7 @@ pub(crate) fn run_iec_actions(
                     inputs = (inputs & !a.bit) | if active { a.bit } else { 0 };
                 }
             }
-            st.controls[e].update_untimed(inputs, profile)
+            st.controls[e].update_untimed(inputs, rules)
         } else {
             let mut winner: Option<(u32, Qualifier, i64)> = None;
             let mut contenders: Vec<(u32, Qualifier)> = Vec::new();
@@ -266,7 +294,7 @@ pub(crate) fn run_iec_actions(
                     ctx.sink.events.push(Event::Contention { action: st.qualify(&ent.name), steps, qualifiers: quals });
                 }
             }
-            st.controls[e].update(inputs, now, profile)
+            st.controls[e].update(inputs, now, rules)
         };
         match (ent.action, ent.variable) {
             (Some(id), _) => {

@@ -40,6 +40,7 @@ pub fn run_chart(ctx: &mut Ctx<'_>, chart: usize) -> Result<(), Fault> {
     match ctx.profile {
         Profile::Matiec => return super::matiec::run(ctx, chart, code),
         Profile::Codesys => return super::codesys::run(ctx, chart, code),
+        Profile::Logix => return super::logix::run(ctx, chart, code),
         Profile::Iec | Profile::Grafcet => {}
     }
     let plan = code.plan();

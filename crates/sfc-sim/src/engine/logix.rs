@@ -1,0 +1,80 @@
+//! The `logix` profile: one call of an SFC routine as a Logix 5000 controller executes it
+//! (Studio 5000 Logix Designer; Rockwell's "Logix 5000 Controllers Sequential Function Charts"
+//! programming manual, 1756-PM006).
+//!
+//! docs/sim.md, "The `logix` profile", cites the page of each rule, and
+//! `crates/sfc-sim/tests/logix/` holds a fixture per rule with its trace derived by hand.
+//!
+//! One call ("Controller Properties dialog box - SFC Execution tab"):
+//! 1. The actions of the active steps execute ("Execute the currently active step(s)"): first
+//!    the last scan of the steps left in the previous call, whose actions execute as the
+//!    controller's "Last Scan of Active Steps" setting says ([`super::action`], `Rules`), then
+//!    the first or a later scan of the others.
+//! 2. The transitions below the active steps are tested on what the actions left, and fire; a
+//!    step activated here executes in the next call.
+//! 3. "Execute until FALSE transition" (`sfc.logix.exec` `UntilFalse`): while a transition
+//!    fired, 1 and 2 are repeated in the same call; a chart that never stops advancing would
+//!    trip the controller's watchdog, here an error after [`MAX_EVOLUTIONS`] evolutions.
+//!
+//! The first call activates the initial steps and executes them like any call.
+
+use super::action::run_iec_actions;
+use super::evolve::{evolve, held_or_reset, publish_initial, set_trans, start, update_current_step};
+use crate::code::{ChartCode, Ctx, Fault};
+
+/// Evolutions one call of a chart set to "Execute until FALSE transition" may make before the
+/// simulator stops it as the controller's watchdog would.
+pub(crate) const MAX_EVOLUTIONS: usize = 10_000;
+
+/// One call of the SFC instance `chart` under the `logix` profile.
+pub(super) fn run(ctx: &mut Ctx<'_>, chart: usize, code: &ChartCode) -> Result<(), Fault> {
+    let plan = code.plan();
+    let now = ctx.now;
+    if held_or_reset(ctx, chart, code) {
+        return Ok(());
+    }
+    if !ctx.charts[chart].started {
+        start(ctx, chart, plan);
+        publish_initial(ctx, chart);
+    }
+    let st = &mut ctx.charts[chart];
+    let delta = now - st.last_time;
+    st.last_time = now;
+    if delta != 0 {
+        st.clock += delta;
+        if st.any_mirror_t {
+            for &s in &st.active {
+                st.publish_t(ctx.mem, s);
+            }
+        }
+    }
+    let fired_before = ctx.sink.fired.len();
+    let mut evolutions = 0;
+    loop {
+        let st = &ctx.charts[chart];
+        if !st.entered.is_empty() || !st.live.is_empty() {
+            run_iec_actions(ctx, chart, code, plan)?;
+        }
+        let fired = evolve(ctx, chart, code, plan)?;
+        if !(fired && code.chart.logix.until_false) {
+            break;
+        }
+        evolutions += 1;
+        if evolutions >= MAX_EVOLUTIONS {
+            return Err(Fault {
+                message: format!(
+                    "\"Execute until FALSE transition\": the chart was still advancing after {MAX_EVOLUTIONS} \
+                     evolutions in one call (a controller's watchdog would fault)"
+                ),
+                span: code.chart.name_span,
+            });
+        }
+    }
+    let fired = ctx.sink.fired[fired_before..].iter().any(|f| f.0 == chart as u32);
+    set_trans(ctx, chart, code, fired);
+    let st = &ctx.charts[chart];
+    if st.changed && st.track_current {
+        update_current_step(ctx, chart, code, plan);
+    }
+    Ok(())
+}
