@@ -83,16 +83,12 @@ pub fn check(a: CheckArgs) -> u8 {
         analysis: !a.no_analysis,
         ..CheckOptions::default()
     };
-    if let Some(p @ (ProfileArg::Iec | ProfileArg::Grafcet | ProfileArg::Logix)) = a.profile {
-        // Said, not silently ignored: only `matiec` and `codesys` have warnings of their own.
-        let name = match p {
-            ProfileArg::Iec => "iec",
-            ProfileArg::Grafcet => "grafcet",
-            _ => "logix",
-        };
+    if let Some(p @ (ProfileArg::Iec | ProfileArg::Grafcet)) = a.profile {
+        // Said, not silently ignored: only `matiec`, `codesys` and `logix` have warnings of their own.
+        let name = if matches!(p, ProfileArg::Iec) { "iec" } else { "grafcet" };
         eprintln!(
-            "note: `--profile {name}` adds no warnings to `sfc check` (only `matiec` does: SFC0901–SFC0908, and \
-             `codesys`: SFC0911–SFC0913)"
+            "note: `--profile {name}` adds no warnings to `sfc check` (only `matiec` does: SFC0901–SFC0908, \
+             `codesys`: SFC0911–SFC0913, and `logix`: SFC0921–SFC0923)"
         );
     }
     let human = matches!(a.format, CheckFormat::Human);
@@ -129,8 +125,12 @@ pub fn check(a: CheckArgs) -> u8 {
             found.extend(extra);
             sfc_diagnostics::sort(&mut found);
         }
-        if matches!(a.profile, Some(ProfileArg::Codesys)) && clean {
-            let mut extra = sfc_sim::codesys_check::differences(&checked.charts, &checked.action_charts);
+        if matches!(a.profile, Some(ProfileArg::Codesys | ProfileArg::Logix)) && clean {
+            let mut extra = if matches!(a.profile, Some(ProfileArg::Logix)) {
+                sfc_sim::logix_check::differences(&checked.charts, &checked.action_charts)
+            } else {
+                sfc_sim::codesys_check::differences(&checked.charts, &checked.action_charts)
+            };
             for d in &mut extra {
                 d.span.file = id;
             }

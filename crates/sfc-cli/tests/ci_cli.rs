@@ -807,7 +807,7 @@ fn check_profiles_are_never_silent() {
         assert_eq!(out.status.code(), Some(0));
         assert!(text(&out.stderr).contains(&format!("`--profile {p}` adds no warnings")), "{}", text(&out.stderr));
     }
-    for p in ["matiec", "codesys"] {
+    for p in ["matiec", "codesys", "logix"] {
         let out = sfc_in(&d, &["check", "--profile", p, "clean.st"]);
         assert!(!text(&out.stderr).contains("adds no warnings"), "{}", text(&out.stderr));
     }

@@ -748,6 +748,43 @@ fn rules_give_the_traces_derived_by_hand(profile: &str, at_least: usize) {
     assert!(failures.is_empty(), "{}", failures.join("\n"));
 }
 
+/// `sfc check --profile logix` warns where a Logix controller behaves differently from IEC
+/// 61131-3: the first call's transitions (SFC0921), P (SFC0922), and under "Don't scan" the
+/// missing final run of N, L and D actions (SFC0923), which "Programmatic reset" keeps; a chart
+/// set to "Automatic reset" is told that its postscan is not simulated (SFC0604).
+#[test]
+fn check_profile_logix_lists_the_differences() {
+    let dir = root().join("crates/sfc-sim/tests/logix");
+    let codes = |file: &str| -> Vec<String> {
+        let o = sfc(&["check", "--profile", "logix", "--format", "json", dir.join(file).to_str().unwrap()]);
+        let out = String::from_utf8_lossy(&o.stdout).into_owned();
+        let mut codes: Vec<String> = out
+            .split("\"code\": \"")
+            .skip(1)
+            .map(|s| s.split('"').next().unwrap().to_string())
+            .collect();
+        codes.sort();
+        codes.dedup();
+        codes
+    };
+    assert_eq!(codes("02_dont_scan.st"), ["SFC0921", "SFC0922", "SFC0923"]);
+    let programmatic = codes("03_programmatic_reset.st");
+    assert!(programmatic.contains(&"SFC0922".to_string()) && !programmatic.contains(&"SFC0923".to_string()), "{programmatic:?}");
+    let text = "{attribute 'sfc.dialect' := 'logix'}\n{attribute 'sfc.logix.lastscan' := 'AutomaticReset'}\n\
+        PROGRAM P\nVAR_INPUT Go : BOOL; END_VAR\nINITIAL_STEP A: END_STEP\n\
+        TRANSITION FROM A TO B := Go; END_TRANSITION\nSTEP B: END_STEP\n\
+        TRANSITION FROM B TO A := NOT Go; END_TRANSITION\nEND_PROGRAM\n";
+    let d = temp_dir("logix-auto");
+    std::fs::write(d.join("auto.st"), text).unwrap();
+    let o = sfc(&["check", d.join("auto.st").to_str().unwrap()]);
+    let err = both(&o);
+    assert!(err.contains("warning[SFC0604]") && err.contains("simulated as \"Don't scan\""), "{err}");
+    std::fs::write(d.join("bad.st"), text.replace("AutomaticReset", "Automatic")).unwrap();
+    let o = sfc(&["check", d.join("bad.st").to_str().unwrap()]);
+    assert_eq!(o.status.code(), Some(1), "{}", both(&o));
+    assert!(both(&o).contains("error[SFC0601]"), "{}", both(&o));
+}
+
 /// A chart file marked `sfc.dialect 'logix'` (imported or converted from an L5X export) runs
 /// with `logix` when neither the command line nor the scenario names a profile, and says so;
 /// `--profile iec` runs IEC 61131-3's rules instead, which differ in the first call.

@@ -342,6 +342,11 @@ a duration, `sfc.target` one of blank, atmt, eatmt.";
         "The attribute is in the `sfc.` namespace but sfc does not know it; check its spelling.";
     "SFC0603" Warning "misplaced attribute"
         "The attribute pragma is not directly before an element it can describe.";
+    "SFC0604" Warning "setting not simulated"
+        "The chart sets a vendor's execution option that the simulator does not follow yet (for \
+example Studio 5000's \"Automatic reset\" last scan, `sfc.logix.lastscan 'AutomaticReset'`, whose \
+postscan mode is not simulated). The message says what runs instead; docs/sim.md gives the \
+details.";
 
     "SFC0701" Error "malformed XML"
         "The file is not well-formed XML (an unclosed element, a stray `<` or `&`, a mismatched end \
@@ -603,6 +608,21 @@ Guard the transition with a step time (`Init.T >= T#…`) or a condition that st
 in SFC. CODESYS reports an error for the same IEC action used at different levels of a chart \
 (\"Processing order in SFC\": unpredictable results); sfc runs it in each chart, with a control \
 block per chart. Use a separate action at each level.";
+    "SFC0921" Warning "transition tested in the first call on Logix"
+        "A Logix 5000 controller executes the initial step in the first call of the routine and \
+then tests its transitions in the same call; IEC 61131-3 tests no transition in scan 0. The \
+initial step may be active for one call only (docs/sim.md, \"The `logix` profile\").";
+    "SFC0922" Warning "P executes on activation and on deactivation on Logix"
+        "Logix's P qualifier executes the action once when its step is activated and once when it \
+is deactivated (Logix Designer help, \"Assign a qualifier to an action\"); IEC's P executes it in \
+the scan its step is entered and once more, with Q FALSE, in the next scan. Use P1 for once on \
+activation, P0 for once on deactivation.";
+    "SFC0923" Warning "no final run of a stopping action on Logix"
+        "IEC 61131-3 runs an action once more, with Q FALSE, after it stops (its final run), which \
+charts use to switch off what the action switched on. A Logix controller set to \"Don't scan\" \
+(Studio 5000's default \"Last Scan of Active Steps\") executes only P and P0 actions in a step's \
+last scan, and an action stopped by its time does not execute again either. Clear in a P0 action, \
+or set the controller (and `sfc.logix.lastscan`) to \"Programmatic reset\".";
 
     "SFC1001" Error "error in the property file"
         "The property file (`<chart>.props.toml`) of `sfc prove` is not valid: TOML syntax, an \

@@ -640,7 +640,23 @@ fn logix_settings(attrs: &[ast::Attribute], diags: &mut Vec<Diagnostic>) -> crat
             .into_iter()
             .find(|l| l.name().eq_ignore_ascii_case(v))
         {
-            Some(l) => out.last_scan = l,
+            Some(l) => {
+                out.last_scan = l;
+                if l == crate::LastScan::AutomaticReset {
+                    diags.push(
+                        Diagnostic::warning(
+                            "SFC0604",
+                            a.span,
+                            "\"Automatic reset\" is simulated as \"Don't scan\": its postscan mode is not simulated",
+                        )
+                        .with_note(
+                            "in a step's last scan only P and P0 actions execute, and the tags on the left of \
+                             non-retentive assignments `[:=]` are not cleared; for ST bodies without `[:=]` the two \
+                             settings agree",
+                        ),
+                    );
+                }
+            }
             None => diags.push(Diagnostic::error(
                 "SFC0601",
                 a.span,

@@ -6,6 +6,7 @@
 
 pub mod code;
 pub mod codesys_check;
+pub mod logix_check;
 pub mod condition;
 pub mod coverage;
 pub mod engine;
