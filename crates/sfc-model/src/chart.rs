@@ -139,6 +139,11 @@ pub struct StepNode {
     pub min_time: Option<i64>,
     /// `sfc.final`: intentionally without a way out.
     pub is_final: bool,
+    /// S7-GRAPH's interlock (`sfc.s7graph.interlock`): the step's interlock-dependent actions
+    /// run only while it is TRUE.
+    pub interlock: Option<ast::Expr>,
+    /// S7-GRAPH's supervision (`sfc.s7graph.supervision`): TRUE is a supervision error.
+    pub supervision: Option<ast::Expr>,
     pub attributes: Vec<ast::Attribute>,
     /// Span of the name.
     pub name_span: Span,

@@ -426,6 +426,8 @@ pub fn lower_chart(
                     timeout: duration_attr(&s.attributes, "sfc.timeout", diags),
                     min_time: duration_attr(&s.attributes, "sfc.min_time", diags),
                     is_final: final_attr(&s.attributes, diags),
+                    interlock: step_condition(s, "sfc.s7graph.interlock"),
+                    supervision: step_condition(s, "sfc.s7graph.supervision"),
                     attributes: s.attributes.clone(),
                     name_span: s.name.span,
                     span: s.span,
@@ -665,6 +667,11 @@ fn logix_settings(attrs: &[ast::Attribute], diags: &mut Vec<Diagnostic>) -> crat
         }
     }
     out
+}
+
+/// The last condition `name` of a step ([`ast::STEP_CONDITIONS`]).
+fn step_condition(s: &ast::Step, name: &str) -> Option<ast::Expr> {
+    s.conditions.iter().rev().find(|c| c.attribute.eq_ignore_ascii_case(name)).map(|c| c.expr.clone())
 }
 
 fn lower_association(

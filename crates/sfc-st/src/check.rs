@@ -63,12 +63,20 @@ pub struct Checker<'s, 'e> {
     /// integer is its bitwise complement; an integer argument of another integer type is
     /// converted implicitly).
     pub(crate) codesys: bool,
+    /// The POU is an S7-GRAPH block's (`{attribute 'sfc.dialect' := 'graph'}`): its steps have
+    /// `U` besides `X` and `T`.
+    pub(crate) graph: bool,
 }
 
 impl<'s, 'e> Checker<'s, 'e> {
     /// Applies CODESYS's typing rules (see [`Checker::codesys`]'s field).
     pub fn set_codesys(&mut self, on: bool) {
         self.codesys = on;
+    }
+
+    /// Gives steps S7-GRAPH's `U` (see [`Checker::graph`]'s field).
+    pub fn set_graph(&mut self, on: bool) {
+        self.graph = on;
     }
 
     /// A checker for code in `scope`.
@@ -85,6 +93,7 @@ impl<'s, 'e> Checker<'s, 'e> {
             types: HashMap::new(),
             keep_types: false,
             codesys: false,
+            graph: false,
         }
     }
 
@@ -159,6 +168,19 @@ impl<'s, 'e> Checker<'s, 'e> {
         if !ty.is_bool() && !ty.is_error() {
             let what = self.phrase(expr, &ty);
             self.error("SFC0303", expr.span, format!("transition condition is {what}, expected `BOOL`"));
+        }
+        ty
+    }
+
+    /// Checks a condition attached to a step (S7-GRAPH's interlock or supervision): a BOOL
+    /// expression (SFC0303) without side effects (SFC0305).
+    pub fn check_step_condition(&mut self, c: &sfc_syntax::ast::StepCondition) -> Type {
+        let was = std::mem::replace(&mut self.in_guard, true);
+        let ty = self.check_expr(&c.expr, Some(&Type::Bool));
+        self.in_guard = was;
+        if !ty.is_bool() && !ty.is_error() {
+            let what = self.phrase(&c.expr, &ty);
+            self.error("SFC0303", c.expr.span, format!("the step condition `{}` is {what}, expected `BOOL`", c.attribute));
         }
         ty
     }
@@ -1191,7 +1213,13 @@ impl<'s, 'e> Checker<'s, 'e> {
                 Some(sym @ Sym::Step(_)) => {
                     self.scope.mark(sym, false);
                     let step = self.scope.chart_name(sym).to_string();
-                    return self.chart_member(&step, "step", member, &[("X", Type::Bool), ("T", Type::Time)], write);
+                    // S7-GRAPH's steps also have `U`, their time without disturbance.
+                    let members: &[(&str, Type)] = if self.graph {
+                        &[("X", Type::Bool), ("T", Type::Time), ("U", Type::Time)]
+                    } else {
+                        &[("X", Type::Bool), ("T", Type::Time)]
+                    };
+                    return self.chart_member(&step, "step", member, members, write);
                 }
                 Some(sym @ Sym::Action(_)) => {
                     self.scope.mark(sym, false);

@@ -127,6 +127,14 @@ pub fn is_codesys(pou: &Pou) -> bool {
     })
 }
 
+/// Whether `pou` is marked `{attribute 'sfc.dialect' := 'graph'}` (imported from an S7-GRAPH
+/// block): its steps have S7-GRAPH's `U`.
+pub fn is_graph(pou: &Pou) -> bool {
+    pou.attributes.iter().any(|a| {
+        a.name.eq_ignore_ascii_case("sfc.dialect") && a.value.as_deref().is_some_and(|v| v.eq_ignore_ascii_case("graph"))
+    })
+}
+
 /// Type-checks one POU of the file `env` was built from (see [`check_unit`]).
 pub fn check_pou(env: &TypeEnv, pou: &Pou) -> Vec<Diagnostic> {
     check_pou_with(env, pou, &mut |_, _| {})
@@ -168,6 +176,7 @@ fn check_pou_inner(
     prepare(&mut scope, pou);
     let mut ck = Checker::new(&mut scope);
     ck.set_codesys(is_codesys(pou));
+    ck.set_graph(is_graph(pou));
     if types.is_some() {
         ck.keep_types();
     }
@@ -247,6 +256,9 @@ fn check_chart(ck: &mut Checker<'_, '_>, elements: &[SfcElement]) {
                 ck.set_element(Some(s.name.text.clone()));
                 for a in &s.associations {
                     ck.check_association(a);
+                }
+                for c in &s.conditions {
+                    ck.check_step_condition(c);
                 }
                 // A step action is checked as the call that runs it.
                 for call in s.step_actions.iter().filter_map(|a| a.call()) {

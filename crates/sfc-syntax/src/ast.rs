@@ -495,7 +495,23 @@ pub struct Step {
     /// beside the IEC associations.
     pub step_actions: Vec<StepAction>,
     pub attributes: Vec<Attribute>,
+    /// Conditions a vendor attaches to a step, written as attributes whose value is an ST
+    /// expression ([`STEP_CONDITIONS`]: S7-GRAPH's interlock and supervision), parsed where
+    /// they stand in the text.
+    pub conditions: Vec<StepCondition>,
     pub span: Span,
+}
+
+/// The attributes of a step whose value is a BOOL condition in ST: S7-GRAPH's interlock (the
+/// step's interlock-dependent actions run only while it is TRUE) and supervision (TRUE is a
+/// supervision error that holds the step), kept by the SimaticML import.
+pub const STEP_CONDITIONS: &[&str] = &["sfc.s7graph.interlock", "sfc.s7graph.supervision"];
+
+/// A step condition ([`STEP_CONDITIONS`]): the attribute's name as written and its expression.
+#[derive(Debug, Clone, PartialEq)]
+pub struct StepCondition {
+    pub attribute: String,
+    pub expr: Expr,
 }
 
 /// Which step action: CODESYS runs the entry action when the step becomes active, the step

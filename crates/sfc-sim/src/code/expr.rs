@@ -345,7 +345,9 @@ impl Cx<'_, '_> {
                 (Some(Sym::Step(i)), Some(m)) => {
                     return match member.text.to_ascii_uppercase().as_str() {
                         "X" | "_X" => Ok(PlaceC::new(Loc::Static(Place::Local(m.step_x[i])), Type::Bool)),
-                        "T" | "_T" => Ok(PlaceC::new(Loc::Static(Place::Local(m.step_t[i])), Type::Time)),
+                        // S7-GRAPH's `U` (a POU marked `sfc.dialect 'graph'`): no profile simulates
+                        // disturbances yet, so it is `T`.
+                        "T" | "_T" | "U" => Ok(PlaceC::new(Loc::Static(Place::Local(m.step_t[i])), Type::Time)),
                         _ => Err(self.error(member.span, format!("steps have no member `{}`", member.text))),
                     };
                 }

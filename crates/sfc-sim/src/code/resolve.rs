@@ -142,7 +142,7 @@ impl Program {
                     let PouBody::Chart(cc) = &self.pous[pou].body else { return None };
                     match n.to_ascii_uppercase().as_str() {
                         "X" | "_X" => Cur::Val { slot: base + cc.step_x[k] as usize, ty: Type::Bool },
-                        "T" | "_T" => Cur::Val { slot: base + cc.step_t[k] as usize, ty: Type::Time },
+                        "T" | "_T" | "U" => Cur::Val { slot: base + cc.step_t[k] as usize, ty: Type::Time },
                         _ => return None,
                     }
                 }

@@ -637,6 +637,57 @@ impl<'a> Parser<'a> {
         out
     }
 
+    /// The value of attribute `a` parsed as an ST expression, located where it stands in the
+    /// text (a value holding `$` escapes is parsed unescaped, located from where the value
+    /// starts).
+    fn attribute_expr(&mut self, a: &Attribute) -> Expr {
+        let raw = a.value.as_deref().unwrap_or("");
+        let whole = self.text.get(a.span.start as usize..a.span.end as usize).unwrap_or("");
+        // The value is the quoted text after `:=`.
+        let at = whole.find(":=").and_then(|i| whole.get(i..)?.find('\'').map(|j| i + j + 1)).unwrap_or(0);
+        let off = a.span.start + at as u32;
+        if raw.trim().is_empty() {
+            self.diags.push(Diagnostic::error(
+                "SFC0601",
+                a.span,
+                format!("`{}` holds no condition (an ST expression)", a.name),
+            ));
+            let lit = Literal { kind: LiteralKind::Bool(true), type_prefix: None, text: "TRUE".into() };
+            return Expr { kind: ExprKind::Literal(lit), span: a.span };
+        }
+        let exact = !raw.contains('$') && whole.get(at..at + raw.len()) == Some(raw);
+        // Tokens at their places in the file: lexed alone and moved (the parser reads their
+        // text from the file); an escaped value is lexed unescaped behind padding instead.
+        let padded;
+        let (source, text) = if exact {
+            (self.text, raw.to_string())
+        } else {
+            padded = format!("{}{}", " ".repeat(off as usize), crate::attr_value::unescape(raw));
+            (padded.as_str(), String::new())
+        };
+        let (toks, diags) = if exact {
+            let (mut toks, mut diags) = lex(self.file, &text);
+            for t in &mut toks {
+                t.start += off;
+                t.end += off;
+            }
+            for d in &mut diags {
+                d.span = Span::new(d.span.file, d.span.start + off, d.span.end + off);
+            }
+            (toks, diags)
+        } else {
+            lex(self.file, source)
+        };
+        self.diags.extend(diags);
+        let mut p = Parser::new(self.file, source, &toks);
+        let e = p.expr();
+        if !p.at(TokenKind::Eof) {
+            p.error_here("expected the end of the condition");
+        }
+        self.diags.append(&mut p.diags);
+        e
+    }
+
     /// Attribute pragmas left inside an element that just ended are misplaced.
     fn drop_attrs_before(&mut self, end: u32) {
         while let Some(a) = self.attrs.get(self.attr_cursor).filter(|a| a.span.start < end) {

@@ -101,7 +101,12 @@ impl Parser<'_> {
             }
         }
         self.expect_end("END_STEP", self.span_of(kw));
-        Step { initial, name, associations, step_actions, attributes, span: self.span_from(start) }
+        let conditions = attributes
+            .iter()
+            .filter(|a| crate::ast::STEP_CONDITIONS.iter().any(|n| a.name.eq_ignore_ascii_case(n)))
+            .map(|a| crate::ast::StepCondition { attribute: a.name.clone(), expr: self.attribute_expr(a) })
+            .collect();
+        Step { initial, name, associations, step_actions, attributes, conditions, span: self.span_from(start) }
     }
 
     /// `ENTRY_ACTION := Name;` or `… := instance.Action;` (the current token is the word).
