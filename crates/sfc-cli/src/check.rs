@@ -83,9 +83,13 @@ pub fn check(a: CheckArgs) -> u8 {
         analysis: !a.no_analysis,
         ..CheckOptions::default()
     };
-    if let Some(p @ (ProfileArg::Iec | ProfileArg::Grafcet)) = a.profile {
+    if let Some(p @ (ProfileArg::Iec | ProfileArg::Grafcet | ProfileArg::Graph)) = a.profile {
         // Said, not silently ignored: only `matiec`, `codesys` and `logix` have warnings of their own.
-        let name = if matches!(p, ProfileArg::Iec) { "iec" } else { "grafcet" };
+        let name = match p {
+            ProfileArg::Iec => "iec",
+            ProfileArg::Grafcet => "grafcet",
+            _ => "graph",
+        };
         eprintln!(
             "note: `--profile {name}` adds no warnings to `sfc check` (only `matiec` does: SFC0901–SFC0908, \
              `codesys`: SFC0911–SFC0913, and `logix`: SFC0921–SFC0923)"

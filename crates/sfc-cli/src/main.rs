@@ -84,6 +84,7 @@ enum ProfileArg {
     Codesys,
     Grafcet,
     Logix,
+    Graph,
 }
 
 #[derive(clap::Args)]
@@ -281,6 +282,7 @@ fn run() -> u8 {
                 ProfileArg::Codesys => sfc_sim::Profile::Codesys,
                 ProfileArg::Grafcet => sfc_sim::Profile::Grafcet,
                 ProfileArg::Logix => sfc_sim::Profile::Logix,
+                ProfileArg::Graph => sfc_sim::Profile::Graph,
             }),
             pou: a.pou,
             stats: a.stats || a.stats_full,

@@ -29,7 +29,7 @@ pub struct RunArgs {
     /// Scan period (a TIME literal; default T#10ms).
     #[arg(long, value_name = "TIME")]
     pub period: Option<String>,
-    /// Whose execution rules to follow: iec, matiec, codesys, grafcet or logix (default iec; codesys
+    /// Whose execution rules to follow: iec, matiec, codesys, grafcet, logix or graph (default iec; codesys
     /// for a CODESYS, TwinCAT or e!COCKPIT export, with a note saying so).
     #[arg(long, value_name = "PROFILE", value_parser = parse_profile)]
     pub profile: Option<Profile>,
@@ -551,5 +551,5 @@ fn supervise(rt: Runtime, a: &RunArgs, source: &TokenSource) -> u8 {
 
 /// `--profile`: `iec`, `matiec`, `codesys` or `grafcet` (any case).
 pub fn parse_profile(s: &str) -> Result<Profile, String> {
-    Profile::from_name(s).ok_or_else(|| format!("unknown profile `{s}` (expected iec, matiec, codesys, grafcet or logix)"))
+    Profile::from_name(s).ok_or_else(|| format!("unknown profile `{s}` (expected iec, matiec, codesys, grafcet, logix or graph)"))
 }

@@ -709,6 +709,13 @@ fn logix_rules_give_the_traces_derived_by_hand() {
     rules_give_the_traces_derived_by_hand("logix", 9);
 }
 
+/// The `graph` profile, rule by rule (`crates/sfc-sim/tests/graph/`): the traces derived by hand
+/// from the S7-GRAPH manual.
+#[test]
+fn graph_rules_give_the_traces_derived_by_hand() {
+    rules_give_the_traces_derived_by_hand("graph", 6);
+}
+
 fn rules_give_the_traces_derived_by_hand(profile: &str, at_least: usize) {
     let dir = root().join("crates/sfc-sim/tests").join(profile);
     let out_dir = temp_dir(&format!("{profile}-rules"));

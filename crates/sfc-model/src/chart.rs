@@ -218,6 +218,22 @@ pub struct LogixSettings {
     pub last_scan: LastScan,
 }
 
+/// The S7-GRAPH block settings the simulator's `graph` profile follows, kept by the SimaticML
+/// import on the block's POU.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct GraphSettings {
+    /// "Acknowledge errors" (`sfc.s7graph.ack_required`, TIA's `AcknowledgeErrorsRequired`,
+    /// on by default): a supervision error holds its step until it is gone and acknowledged
+    /// with `ACK_EF`; off, until it is gone.
+    pub ack_required: bool,
+}
+
+impl Default for GraphSettings {
+    fn default() -> Self {
+        GraphSettings { ack_required: true }
+    }
+}
+
 /// What a step's actions do in the step's last scan (Logix's "Last Scan of Active Steps").
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub enum LastScan {
@@ -260,6 +276,8 @@ pub struct Chart {
     pub span: Span,
     /// The POU's Studio 5000 execution settings (defaults when it has none).
     pub logix: LogixSettings,
+    /// The POU's S7-GRAPH block settings (defaults when it has none).
+    pub s7graph: GraphSettings,
 }
 
 impl Chart {

@@ -506,7 +506,9 @@ pub fn lower_chart(
         let mut mentioned = mentioned_actions(elements);
         mentioned.extend(of.mentioned);
         for action in &actions {
-            if !mentioned.contains(&action.name.to_ascii_uppercase()) {
+            // S7-GRAPH's permanent instructions run in every call without a step.
+            let permanent = attr(&action.attributes, "sfc.s7graph.permanent").is_some();
+            if !permanent && !mentioned.contains(&action.name.to_ascii_uppercase()) {
                 diags.push(
                     Diagnostic::warning("SFC0214", action.name_span, format!("action `{}` is never used", action.name))
                         .with_element(&action.name),
@@ -618,7 +620,26 @@ pub fn lower_chart(
         name_span: of.spans.map_or(pou.name.span, |s| s.0),
         span: of.spans.map_or(pou.span, |s| s.1),
         logix: logix_settings(&pou.attributes, diags),
+        s7graph: graph_settings(&pou.attributes, diags),
     }
+}
+
+/// The S7-GRAPH block settings of a POU (`sfc.s7graph.ack_required`), with SFC0601 for a value
+/// that is not a Boolean.
+fn graph_settings(attrs: &[ast::Attribute], diags: &mut Vec<Diagnostic>) -> crate::GraphSettings {
+    let mut out = crate::GraphSettings::default();
+    if let Some(a) = attr(attrs, "sfc.s7graph.ack_required") {
+        match a.value.as_deref().map(str::trim) {
+            Some(v) if v.eq_ignore_ascii_case("true") => out.ack_required = true,
+            Some(v) if v.eq_ignore_ascii_case("false") => out.ack_required = false,
+            v => diags.push(Diagnostic::error(
+                "SFC0601",
+                a.span,
+                format!("`sfc.s7graph.ack_required` is 'true' or 'false', found {:?}", v.unwrap_or("")),
+            )),
+        }
+    }
+    out
 }
 
 /// The Studio 5000 execution settings of a POU (`sfc.logix.exec`, `sfc.logix.lastscan`, as the

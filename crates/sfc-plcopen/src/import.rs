@@ -1480,7 +1480,7 @@ pub(crate) fn run(file: u32, xml_text: &str) -> Run {
     }
     if sfc_simaticml::is_simaticml(root) {
         let out = sfc_simaticml::import(file, xml_text);
-        return (out.text, out.map, out.diagnostics, None);
+        return (out.text, out.map, out.diagnostics, Some(crate::Vendor::TiaPortal));
     }
     let vendor = if root.tag_name().name() == "project" { dialect::vendor(root) } else { None };
     let mut cx = Ctx {

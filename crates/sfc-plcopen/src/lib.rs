@@ -54,7 +54,8 @@ pub struct Imported {
 
 /// A tool whose export sfc recognises ([`Imported::vendor`], [`vendor`]) and whose rules for
 /// running SFC one of the simulator's profiles follows: the CODESYS family (CODESYS, TwinCAT,
-/// e!COCKPIT: PLCopen XML, profile `codesys`) and Studio 5000 (L5X, profile `logix`).
+/// e!COCKPIT: PLCopen XML, profile `codesys`), Studio 5000 (L5X, profile `logix`) and TIA
+/// Portal (SimaticML S7-GRAPH blocks, profile `graph`).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
 pub enum Vendor {
     /// CODESYS V3 (`productName="CODESYS"`, or only CODESYS's `addData`).
@@ -66,6 +67,9 @@ pub enum Vendor {
     /// Rockwell Studio 5000 Logix Designer (an L5X export, or text converted from one: its
     /// POUs are marked `{attribute 'sfc.dialect' := 'logix'}`).
     Studio5000,
+    /// Siemens TIA Portal (a SimaticML export of an S7-GRAPH block, or text converted from one:
+    /// its POUs are marked `{attribute 'sfc.dialect' := 'graph'}`).
+    TiaPortal,
 }
 
 impl Vendor {
@@ -76,12 +80,13 @@ impl Vendor {
             Vendor::TwinCat => "TwinCAT",
             Vendor::ECockpit => "e!COCKPIT",
             Vendor::Studio5000 => "Studio 5000",
+            Vendor::TiaPortal => "TIA Portal",
         }
     }
 
     /// Whether the tool is of the CODESYS family (it runs SFC by CODESYS's rules).
     pub fn is_codesys_family(self) -> bool {
-        !matches!(self, Vendor::Studio5000)
+        !matches!(self, Vendor::Studio5000 | Vendor::TiaPortal)
     }
 }
 
@@ -108,6 +113,9 @@ pub fn vendor(xml: &str) -> Option<Vendor> {
 pub fn text_vendor(text: &str) -> Option<Vendor> {
     if text.contains("{attribute 'sfc.dialect' := 'logix'}") {
         return Some(Vendor::Studio5000);
+    }
+    if text.contains("{attribute 'sfc.dialect' := 'graph'}") {
+        return Some(Vendor::TiaPortal);
     }
     const KEY: &str = "{attribute 'sfc.fileheader' := '";
     if let Some(start) = text.find(KEY).map(|i| i + KEY.len()) {

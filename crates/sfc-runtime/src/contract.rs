@@ -115,7 +115,7 @@ pub struct Hello {
     pub protocol: String,
     pub version: u32,
     pub runtime: String,
-    /// The simulator's profile (`iec`, `matiec`, `codesys`, `grafcet`, `logix`; `docs/sim.md`,
+    /// The simulator's profile (`iec`, `matiec`, `codesys`, `grafcet`, `logix`, `graph`; `docs/sim.md`,
     /// "Profiles"); absent for the ATMT adapter.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     #[cfg_attr(test, ts(optional))]

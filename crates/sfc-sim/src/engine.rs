@@ -22,6 +22,7 @@ use std::sync::Arc;
 
 mod action;
 mod codesys;
+mod graph;
 mod logix;
 mod evolve;
 mod matiec;

@@ -38,11 +38,15 @@ pub enum Profile {
     /// Studio 5000 (Logix 5000) SFC, as Rockwell's manual 1756-PM006 and the Logix Designer
     /// help describe it (docs/sim.md, "The `logix` profile").
     Logix,
+    /// Siemens S7-GRAPH (TIA Portal), as the S7-GRAPH manual describes it (docs/sim.md, "The
+    /// `graph` profile").
+    Graph,
 }
 
 impl Profile {
-    pub const ALL: [Profile; 5] = [Profile::Iec, Profile::Matiec, Profile::Codesys, Profile::Grafcet, Profile::Logix];
-    /// Parses `iec`, `matiec`, `codesys`, `grafcet`, `logix` (any case).
+    pub const ALL: [Profile; 6] =
+        [Profile::Iec, Profile::Matiec, Profile::Codesys, Profile::Grafcet, Profile::Logix, Profile::Graph];
+    /// Parses `iec`, `matiec`, `codesys`, `grafcet`, `logix`, `graph` (any case).
     pub fn from_name(s: &str) -> Option<Profile> {
         Profile::ALL.into_iter().find(|p| p.name().eq_ignore_ascii_case(s))
     }
@@ -53,6 +57,7 @@ impl Profile {
             Profile::Codesys => "codesys",
             Profile::Grafcet => "grafcet",
             Profile::Logix => "logix",
+            Profile::Graph => "graph",
         }
     }
 }
@@ -80,6 +85,7 @@ pub enum ProfileSource {
 pub fn file_profile(vendor: Option<sfc_plcopen::Vendor>) -> (Profile, ProfileSource) {
     match vendor {
         Some(v @ sfc_plcopen::Vendor::Studio5000) => (Profile::Logix, ProfileSource::Vendor(v)),
+        Some(v @ sfc_plcopen::Vendor::TiaPortal) => (Profile::Graph, ProfileSource::Vendor(v)),
         Some(v) => (Profile::Codesys, ProfileSource::Vendor(v)),
         None => (Profile::Iec, ProfileSource::Default),
     }
@@ -111,6 +117,12 @@ pub fn vendor_profile_note(doing: &str, file: &str, vendor: sfc_plcopen::Vendor,
             return format!(
                 "{doing} with profile logix: {file} {is} a Studio 5000 export, and Logix controllers run SFC by \
                  Rockwell's rules ({instead} to use IEC 61131-3's)"
+            );
+        }
+        sfc_plcopen::Vendor::TiaPortal => {
+            return format!(
+                "{doing} with profile graph: {file} {is} a TIA Portal export of an S7-GRAPH block, which runs by \
+                 S7-GRAPH's rules ({instead} to use IEC 61131-3's)"
             );
         }
         v => {

@@ -527,9 +527,9 @@ fn parse_text(file: &str, text: &str) -> Result<Parsed, ScenarioError> {
                 p.period = Some(t);
             }
             "profile" => {
-                let s = src.string(root, key, item, "iec, matiec, codesys, grafcet or logix")?;
+                let s = src.string(root, key, item, "iec, matiec, codesys, grafcet, logix or graph")?;
                 p.profile = Some(Profile::from_name(&s).ok_or_else(|| {
-                    src.err(item.span(), format!("unknown profile `{s}` (expected iec, matiec, codesys, grafcet or logix)"))
+                    src.err(item.span(), format!("unknown profile `{s}` (expected iec, matiec, codesys, grafcet, logix or graph)"))
                 })?);
             }
             "until" | "scans" => {
@@ -1668,7 +1668,7 @@ Speed = 1.5
         assert!(err("period = \"T#0s\"\n").contains("`period` must be positive"));
         assert!(err("period = \"T#1ns\"\n").contains("not a TIME literal"));
         assert!(err("profile = \"beckhoff\"\n")
-            .contains("unknown profile `beckhoff` (expected iec, matiec, codesys, grafcet or logix)"));
+            .contains("unknown profile `beckhoff` (expected iec, matiec, codesys, grafcet, logix or graph)"));
         assert!(err("scans = \"3\"\n").contains("`scans` must be an integer, found a string"));
         assert!(err("scans = -3\n").contains("`scans` must not be negative"));
         assert!(err("chart = 3\n").contains("`chart` must be a string"));

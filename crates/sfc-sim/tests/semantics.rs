@@ -575,6 +575,12 @@ fn logix_rules() {
     profile_rules("logix", 9);
 }
 
+/// The `graph` profile's fixtures (`tests/graph/`), likewise.
+#[test]
+fn graph_rules() {
+    profile_rules("graph", 6);
+}
+
 fn profile_rules(profile: &str, at_least: usize) {
     let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests").join(profile);
     let mut files: Vec<PathBuf> = std::fs::read_dir(&dir)

@@ -40,7 +40,7 @@ step?: string, steps?: Array<string>, action?: string, transition?: string, line
 
 export type Hello = { type: "hello", protocol: string, version: number, runtime: string, 
 /**
- * The simulator's profile (`iec`, `matiec`, `codesys`, `grafcet`, `logix`; `docs/sim.md`,
+ * The simulator's profile (`iec`, `matiec`, `codesys`, `grafcet`, `logix`, `graph`; `docs/sim.md`,
  * "Profiles"); absent for the ATMT adapter.
  */
 profile?: string, pou: string, period: string, 

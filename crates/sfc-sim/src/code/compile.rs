@@ -598,6 +598,10 @@ fn lay_out(u: &mut Unit<'_>, i: usize) {
         trans: declared("SFCTrans", &Type::Bool),
         tip: declared("SFCTip", &Type::Bool),
         tip_mode: declared("SFCTipMode", &Type::Bool),
+        ack_ef: declared("ACK_EF", &Type::Bool),
+        init_sq: declared("INIT_SQ", &Type::Bool),
+        off_sq: declared("OFF_SQ", &Type::Bool),
+        err_flt: declared("ERR_FLT", &Type::Bool),
     };
     let m = &mut u.pous[i];
     m.layout = Layout { vars, size: off };
@@ -1164,6 +1168,8 @@ fn chart_code(chart: Chart, x: &[u32], t: &[u32], q: Vec<u32>, a: Vec<u32>, p: C
         guards: p.guards,
         fast: p.fast,
         bodies: p.bodies,
+        interlocks: p.interlocks,
+        supervisions: p.supervisions,
         associations: p.associations,
         step_actions: p.step_actions,
         control: ControlSlots::default(),
@@ -1218,6 +1224,8 @@ struct ChartParts {
     guards: Vec<Guard>,
     fast: Vec<FastGuard>,
     bodies: Vec<Block>,
+    interlocks: Vec<Option<Guard>>,
+    supervisions: Vec<Option<Guard>>,
     associations: Vec<Vec<AssocCode>>,
     step_actions: Vec<Vec<(sfc_syntax::ast::StepActionKind, Block)>>,
 }
@@ -1300,7 +1308,20 @@ fn compile_chart(cx: &Cx<'_, '_>, ch: &Chart) -> ChartParts {
                 .collect()
         })
         .collect();
-    ChartParts { guards, fast, bodies, associations, step_actions }
+    // S7-GRAPH's step conditions, as guards (only the `graph` profile evaluates them).
+    let condition = |e: &Option<sfc_syntax::ast::Expr>| -> Option<Guard> {
+        let e = e.as_ref()?;
+        match guard(cx, &Condition::St(e.clone())) {
+            Ok((g, _)) => Some(g),
+            Err(d) => {
+                u.report(d);
+                None
+            }
+        }
+    };
+    let interlocks = ch.steps.iter().map(|s| condition(&s.interlock)).collect();
+    let supervisions = ch.steps.iter().map(|s| condition(&s.supervision)).collect();
+    ChartParts { guards, fast, bodies, interlocks, supervisions, associations, step_actions }
 }
 
 fn guard(cx: &Cx<'_, '_>, cond: &Condition) -> C<(Guard, FastGuard)> {

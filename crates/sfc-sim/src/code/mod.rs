@@ -249,6 +249,14 @@ pub struct ControlSlots {
     /// transitions whatever their conditions; while `SFCTipMode` is TRUE only that does.
     pub tip: Option<u32>,
     pub tip_mode: Option<u32>,
+    /// S7-GRAPH's block parameters that the `graph` profile follows when the POU declares them
+    /// (the SimaticML import declares the standard interface): `ACK_EF` acknowledges
+    /// supervision errors, `INIT_SQ` holds the sequence at its initial steps, `OFF_SQ` switches
+    /// it off, `ERR_FLT` (output) is the group error.
+    pub ack_ef: Option<u32>,
+    pub init_sq: Option<u32>,
+    pub off_sq: Option<u32>,
+    pub err_flt: Option<u32>,
 }
 
 /// A guard the engine evaluates without calling its closure.
@@ -280,6 +288,10 @@ pub struct ChartCode {
     pub fast: Vec<FastGuard>,
     /// Per action, in the chart's order.
     pub bodies: Vec<Block>,
+    /// Per step: S7-GRAPH's interlock and supervision (`sfc.s7graph.interlock`,
+    /// `.supervision`), compiled as guards.
+    pub interlocks: Vec<Option<Guard>>,
+    pub supervisions: Vec<Option<Guard>>,
     /// Per step, per association (same order as `chart.steps[s].associations`).
     pub associations: Vec<Vec<AssocCode>>,
     /// Per step: its step actions (CODESYS's entry, step and exit actions), in the order

@@ -120,7 +120,9 @@ impl Control {
         self.p1_mem = i1;
         self.p0_mem = i0;
         let fell = match rules.profile {
-            Profile::Matiec => false,
+            // S7-GRAPH executes an action while it is active and not after (manual 13.5: an
+            // N action's assignment "is executed in every cycle while the step is active").
+            Profile::Matiec | Profile::Graph => false,
             // Logix: a P action executes when its step is activated and when it is left
             // ("Assign a qualifier to an action"); the last scan of the others is the
             // controller's setting: under "Don't scan" only P and P0 actions execute, under
@@ -229,10 +231,14 @@ pub(crate) fn run_iec_actions(
         let ent = &plan.entities[e];
         let mut inputs = 0u16;
         let mut any_active = false;
+        // `graph`: an action that depends on the interlock is off while its step's is open.
+        let gated = profile == Profile::Graph && ent.action.is_some_and(|id| plan.interlocked[id]);
         let (q, a) = if ent.untimed {
             for a in &ent.assocs {
-                let active = st.steps[a.step as usize].x;
-                any_active |= active;
+                let step = &st.steps[a.step as usize];
+                let active = step.x && !(gated && step.interlock_open);
+                // Kept live while its step is active, so it comes back when the interlock closes.
+                any_active |= step.x;
                 if or {
                     inputs |= if active { a.bit } else { 0 };
                 } else {
@@ -244,8 +250,10 @@ pub(crate) fn run_iec_actions(
             let mut winner: Option<(u32, Qualifier, i64)> = None;
             let mut contenders: Vec<(u32, Qualifier)> = Vec::new();
             for a in &ent.assocs {
-                let active = st.steps[a.step as usize].x;
-                any_active |= active;
+                let step = &st.steps[a.step as usize];
+                let active = step.x && !(gated && step.interlock_open);
+                // Kept live while its step is active, so it comes back when the interlock closes.
+                any_active |= step.x;
                 if a.qualifier.is_timed() {
                     if !active {
                         if !or {

@@ -41,6 +41,7 @@ pub fn run_chart(ctx: &mut Ctx<'_>, chart: usize) -> Result<(), Fault> {
         Profile::Matiec => return super::matiec::run(ctx, chart, code),
         Profile::Codesys => return super::codesys::run(ctx, chart, code),
         Profile::Logix => return super::logix::run(ctx, chart, code),
+        Profile::Graph => return super::graph::run(ctx, chart, code),
         Profile::Iec | Profile::Grafcet => {}
     }
     let plan = code.plan();
@@ -201,6 +202,8 @@ pub(crate) fn reset(ctx: &mut Ctx<'_>, chart: usize, code: &ChartCode) {
     for step in st.steps.iter_mut() {
         step.t = 0;
         step.overdue = false;
+        step.held = false;
+        step.interlock_open = false;
     }
     for &s in &plan.initial {
         let clock = st.clock;
@@ -489,7 +492,9 @@ fn collect_general(
     s: u32,
     cand: &mut Vec<u32>,
 ) {
-    let waited = |p: u32| plan.min_times[p as usize].is_none_or(|m| clock - steps[p as usize].t >= m);
+    let waited = |p: u32| {
+        !steps[p as usize].held && plan.min_times[p as usize].is_none_or(|m| clock - steps[p as usize].t >= m)
+    };
     for &t in plan.outgoing.get(s) {
         if plan.tr[t as usize].single_pre {
             if waited(s) {

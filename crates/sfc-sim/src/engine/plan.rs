@@ -162,6 +162,13 @@ pub struct ChartPlan {
     pub(crate) step_values: Vec<Value>,
     pub(crate) transition_names: Vec<String>,
     pub(crate) action_names: Vec<String>,
+    /// S7-GRAPH (`graph` profile): per action, whether it depends on its step's interlock (the
+    /// "C" flag, action attribute `sfc.s7graph.interlock`), and the permanent instructions run
+    /// before and after the sequencer in every call (actions marked `sfc.s7graph.permanent`
+    /// 'pre' or 'post'), in declaration order.
+    pub(crate) interlocked: Vec<bool>,
+    pub(crate) permanent_pre: Vec<usize>,
+    pub(crate) permanent_post: Vec<usize>,
 }
 
 impl ChartPlan {
@@ -269,8 +276,9 @@ impl ChartPlan {
             .iter()
             .enumerate()
             .map(|(s, o)| match o.as_slice() {
-                // A step with a minimum time takes the general path, which waits for it.
-                [t] if tr[*t as usize].is_link() && min_times[s].is_none() => {
+                // A step with a minimum time takes the general path, which waits for it; so
+                // does a step with an S7-GRAPH supervision, whose error holds it.
+                [t] if tr[*t as usize].is_link() && min_times[s].is_none() && code.supervisions[s].is_none() => {
                     let info = tr[*t as usize];
                     let (kind, slot, neg) = match info.guard {
                         FastGuard::Local(o, neg) => (guard_kind::LOCAL, o, neg),
@@ -324,6 +332,22 @@ impl ChartPlan {
             step_values: chart.steps.iter().map(|s| Value::Str(Arc::from(s.name.as_str()))).collect(),
             transition_names: chart.transitions.iter().map(|t| t.name.clone()).collect(),
             action_names: chart.actions.iter().map(|a| a.name.clone()).collect(),
+            interlocked: chart.actions.iter().map(|a| attribute_is(&a.attributes, "sfc.s7graph.interlock", "true")).collect(),
+            permanent_pre: (0..chart.actions.len())
+                .filter(|&i| attribute_is(&chart.actions[i].attributes, "sfc.s7graph.permanent", "pre"))
+                .collect(),
+            permanent_post: (0..chart.actions.len())
+                .filter(|&i| attribute_is(&chart.actions[i].attributes, "sfc.s7graph.permanent", "post"))
+                .collect(),
         }
     }
+}
+
+/// Whether the last attribute `name` of a list has the value `value` (any case).
+fn attribute_is(attrs: &[sfc_syntax::ast::Attribute], name: &str, value: &str) -> bool {
+    attrs
+        .iter()
+        .rev()
+        .find(|a| a.name.eq_ignore_ascii_case(name))
+        .is_some_and(|a| a.value.as_deref().is_some_and(|v| v.trim().eq_ignore_ascii_case(value)))
 }

@@ -53,6 +53,10 @@ pub(crate) struct StepState {
     /// (otherwise [`crate::Simulation::get`] answers from the step state).
     pub(crate) mirror_x: bool,
     pub(crate) mirror_t: bool,
+    /// `graph`: an S7-GRAPH supervision error holds the step (its transitions wait).
+    pub(crate) held: bool,
+    /// `graph`: the step's S7-GRAPH interlock is not satisfied (its "C" actions do not run).
+    pub(crate) interlock_open: bool,
     /// Time analysis: activations and active times.
     pub(crate) tally: StepTally,
 }

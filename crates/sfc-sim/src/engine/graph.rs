@@ -1,0 +1,137 @@
+//! The `graph` profile: one call of an S7-GRAPH function block as the S7-GRAPH manual
+//! describes it (Siemens, "S7-GRAPH for S7-300/400, Programming Sequential Control Systems",
+//! C79000-G7076-C526-01, read for TIA Portal's GRAPH with the block interface TIA exports).
+//!
+//! docs/sim.md, "The `graph` profile", cites the page of each rule, and
+//! `crates/sfc-sim/tests/graph/` holds a fixture per rule with its trace derived by hand.
+//!
+//! One call:
+//! 1. `INIT_SQ` TRUE puts the sequence back to its initial steps and holds it there (14.2).
+//! 2. The permanent instructions before the sequencer (actions marked `sfc.s7graph.permanent`
+//!    'pre'), every call (6.3).
+//! 3. The supervisions of the active steps: TRUE is a supervision error, which holds the step
+//!    (its transitions do not switch) until the condition is gone and, with "Acknowledge
+//!    errors" (`sfc.s7graph.ack_required`, on by default), `ACK_EF` acknowledged it (7.10).
+//! 4. The transitions switch (as IEC's evolution; 6.1, 6.7).
+//! 5. The interlocks of the active steps, the entered ones included: while a step's interlock
+//!    is not satisfied, its interlock-dependent actions ("C", action attribute
+//!    `sfc.s7graph.interlock`) do not run; the transitions do not depend on it (14.2). The
+//!    supervisions of the entered steps too.
+//! 6. The actions (IEC action control, the "C" ones gated by 5).
+//! 7. The permanent instructions after the sequencer ('post').
+//! 8. `ERR_FLT`, when declared: some active step has an interlock or supervision error (15.12).
+//!
+//! The first call activates the initial steps and runs 5–8 (no transition switches in it, as in
+//! IEC's scan 0).
+
+use super::action::run_iec_actions;
+use super::evolve::{evolve, held_or_reset, publish_initial, put_bool, read_bool, reset, set_trans, start, update_current_step};
+use super::plan::ChartPlan;
+use crate::code::{ChartCode, Ctx, Fault};
+
+/// One call of the S7-GRAPH block instance `chart` under the `graph` profile.
+pub(super) fn run(ctx: &mut Ctx<'_>, chart: usize, code: &ChartCode) -> Result<(), Fault> {
+    let plan = code.plan();
+    let frame = ctx.charts[chart].frame;
+    let now = ctx.now;
+    let ctl = code.control;
+    // 1. INIT_SQ holds the initial situation (and so does a declared SFCInit).
+    if ctl.init_sq.is_some_and(|s| read_bool(ctx.mem, frame + s as usize)) {
+        reset(ctx, chart, code);
+        set_trans(ctx, chart, code, false);
+        group_error(ctx, chart, code);
+        return Ok(());
+    }
+    if held_or_reset(ctx, chart, code) {
+        group_error(ctx, chart, code);
+        return Ok(());
+    }
+    let first = !ctx.charts[chart].started;
+    if first {
+        start(ctx, chart, plan);
+        publish_initial(ctx, chart);
+    }
+    let st = &mut ctx.charts[chart];
+    let delta = now - st.last_time;
+    st.last_time = now;
+    if delta != 0 {
+        st.clock += delta;
+        if st.any_mirror_t {
+            for &s in &st.active {
+                st.publish_t(ctx.mem, s);
+            }
+        }
+    }
+    // 2. Permanent instructions before the sequencer.
+    for &a in &plan.permanent_pre {
+        (code.bodies[a])(ctx, frame)?;
+    }
+    let fired_before = ctx.sink.fired.len();
+    if !first {
+        // 3–4. Supervision errors hold their steps; then the transitions.
+        conditions(ctx, chart, code, plan, false)?;
+        evolve(ctx, chart, code, plan)?;
+    }
+    // 5. Interlocks (and the supervisions of the steps just entered).
+    conditions(ctx, chart, code, plan, true)?;
+    let fired = ctx.sink.fired[fired_before..].iter().any(|f| f.0 == chart as u32);
+    set_trans(ctx, chart, code, fired);
+    // 6. Actions.
+    let st = &ctx.charts[chart];
+    if !st.entered.is_empty() || !st.live.is_empty() {
+        run_iec_actions(ctx, chart, code, plan)?;
+    }
+    // 7. Permanent instructions after the sequencer.
+    for &a in &plan.permanent_post {
+        (code.bodies[a])(ctx, frame)?;
+    }
+    // 8. The group error.
+    group_error(ctx, chart, code);
+    let st = &ctx.charts[chart];
+    if st.changed && st.track_current {
+        update_current_step(ctx, chart, code, plan);
+    }
+    Ok(())
+}
+
+/// Evaluates the supervisions of the active steps (a supervision error holds its step until it
+/// is gone and, when required, acknowledged), and with `interlocks` their interlocks too.
+fn conditions(ctx: &mut Ctx<'_>, chart: usize, code: &ChartCode, plan: &ChartPlan, interlocks: bool) -> Result<(), Fault> {
+    let _ = plan;
+    let frame = ctx.charts[chart].frame;
+    let ack = code.control.ack_ef.is_some_and(|s| read_bool(ctx.mem, frame + s as usize));
+    let needs_ack = code.chart.s7graph.ack_required;
+    let mut k = 0;
+    while let Some(&s) = ctx.charts[chart].active.get(k) {
+        k += 1;
+        let s = s as usize;
+        if let Some(g) = &code.supervisions[s] {
+            let error = g(ctx, frame)?;
+            let step = &mut ctx.charts[chart].steps[s];
+            if error {
+                step.held = true;
+            } else if step.held && (ack || !needs_ack) {
+                step.held = false;
+            }
+        }
+        if interlocks {
+            if let Some(g) = &code.interlocks[s] {
+                let satisfied = g(ctx, frame)?;
+                ctx.charts[chart].steps[s].interlock_open = !satisfied;
+            }
+        }
+    }
+    Ok(())
+}
+
+/// `ERR_FLT` (when declared): some active step has an interlock or a supervision error.
+fn group_error(ctx: &mut Ctx<'_>, chart: usize, code: &ChartCode) {
+    let Some(slot) = code.control.err_flt else { return };
+    let st = &ctx.charts[chart];
+    let error = st.active.iter().any(|&s| {
+        let step = &st.steps[s as usize];
+        step.held || step.interlock_open
+    });
+    let frame = st.frame;
+    put_bool(ctx.mem, frame + slot as usize, error);
+}
