@@ -90,6 +90,10 @@ const KNOWN_ATTRIBUTES: &[&str] = &[
     "sfc.build",
 ];
 
+/// Families of attributes an importer writes for what IEC text cannot hold, kept for the export
+/// and the dialect's simulation profile: `sfc.graph.*` (TIA Portal S7-GRAPH, `sfc-simaticml`).
+const KNOWN_PREFIXES: &[&str] = &["sfc.graph."];
+
 /// The values `sfc.build` may take: the outputs `sfc build` makes of a blank chart.
 const BUILD_OUTPUTS: &[&str] = &["st", "stl", "plcopen", "svg", "text"];
 
@@ -111,7 +115,7 @@ pub fn check_attributes(attrs: &[ast::Attribute], allowed: &[&str], what: &str, 
             | "sfc.error_code" | "sfc.activation" => allowed.contains(&lname.as_str()),
             _ => true,
         };
-        if !KNOWN_ATTRIBUTES.contains(&lname.as_str()) {
+        if !KNOWN_ATTRIBUTES.contains(&lname.as_str()) && !KNOWN_PREFIXES.iter().any(|p| lname.starts_with(p)) {
             diags.push(Diagnostic::warning("SFC0602", a.span, format!("unknown attribute `{}`", a.name)));
         } else if !meaningful {
             diags.push(Diagnostic::warning(
