@@ -277,8 +277,9 @@ fn check_reports_a_runaway_witness_replay_at_its_loop() {
     let _ = std::fs::remove_dir_all(&dir);
 }
 
-/// A Studio 5000 L5X export and a TIA Portal export are not read yet: one located error that
-/// says what the file is and how many charts it holds (SFC routines, GRAPH blocks).
+/// A Studio 5000 L5X export is not read yet: one located error that says what the file is and
+/// how many charts it holds (SFC routines). A TIA Portal export is read by `sfc-simaticml`; one
+/// that holds no GRAPH block is one located error naming what it holds.
 #[test]
 fn logix_and_tia_exports_are_named_with_their_charts() {
     let dir = temp_dir("vendors");
@@ -291,17 +292,17 @@ fn logix_and_tia_exports_are_named_with_their_charts() {
     let tia = dir.join("Sequence.xml");
     std::fs::write(
         &tia,
-        "<?xml version=\"1.0\" encoding=\"utf-8\"?>\n<Document>\n  <Engineering version=\"V17\" />\n  <SW.Blocks.FB ID=\"0\"><AttributeList><ProgrammingLanguage>GRAPH</ProgrammingLanguage></AttributeList></SW.Blocks.FB>\n</Document>\n",
+        "<?xml version=\"1.0\" encoding=\"utf-8\"?>\n<Document>\n  <Engineering version=\"V17\" />\n  <SW.Blocks.FB ID=\"0\"><AttributeList><Name>Motor</Name><ProgrammingLanguage>LAD</ProgrammingLanguage></AttributeList></SW.Blocks.FB>\n</Document>\n",
     )
     .unwrap();
-    for (path, says) in [
-        (&l5x, "Studio 5000 (Logix) L5X export holding 2 SFC routine(s)"),
-        (&tia, "TIA Portal (Openness) export (it holds 1 GRAPH block(s))"),
+    for (path, code, says) in [
+        (&l5x, "error[SFC0702]", "Studio 5000 (Logix) L5X export holding 2 SFC routine(s)"),
+        (&tia, "error[SFC0740]", "holds no S7-GRAPH block: it holds the LAD FB \"Motor\""),
     ] {
         let out = sfc(&["check", path.to_str().unwrap()]);
         let err = String::from_utf8_lossy(&out.stderr);
         assert_eq!(out.status.code(), Some(1), "{err}");
-        assert!(err.contains("error[SFC0702]") && err.contains(":2:1"), "{err}");
+        assert!(err.contains(code) && err.contains(":2:1"), "{err}");
         assert!(err.contains(says), "{err}");
     }
     let _ = std::fs::remove_dir_all(&dir);

@@ -1512,22 +1512,10 @@ pub(crate) fn run(file: u32, xml_text: &str) -> Run {
 /// by mistake are named, with the export that gives PLCopen XML.
 fn not_a_project_note(root: Node) -> String {
     let name = root.tag_name().name();
-    let child = |n: &str| root.children().any(|c| c.is_element() && c.tag_name().name() == n);
     if name == "TcPlcObject" {
         "this is a TwinCAT 3 source file (.TcPOU, .TcGVL, .TcDUT), not PLCopen XML; in TwinCAT, \
          right-click the POU or its folder, choose `Export PLCopenXML...`, and give sfc that file"
             .to_string()
-    } else if name == "Document" && (child("Engineering") || child("DocumentInfo")) {
-        let graph = root
-            .descendants()
-            .filter(|n| n.is_element() && n.tag_name().name() == "ProgrammingLanguage")
-            .filter(|n| n.text().is_some_and(|t| t.trim() == "GRAPH"))
-            .count();
-        let held = if graph > 0 { format!(" (it holds {graph} GRAPH block(s))") } else { String::new() };
-        format!(
-            "this is a TIA Portal (Openness) export{held}; sfc does not read S7-GRAPH sequences yet: \
-             write the chart in IEC 61131-3 text or export PLCopen XML from a tool that has it"
-        )
     } else if name == "RSLogix5000Content" {
         let sfc = root
             .descendants()

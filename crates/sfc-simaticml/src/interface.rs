@@ -149,7 +149,7 @@ fn type_of(cx: &mut Cx, m: Node, fb: &str, name: &str) -> Frag {
             line.push_str(";\n");
             t.push(&line.locate(anchor(sub)));
         }
-        t.push_str("END_STRUCT\nEND_TYPE\n");
+        t.push_str("END_STRUCT;\nEND_TYPE\n");
         cx.file_names.insert(tname.to_ascii_uppercase());
         cx.types.push(t);
         return Frag::located(tname, at);

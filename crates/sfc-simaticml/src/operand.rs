@@ -378,6 +378,20 @@ pub(crate) fn tokens_to_st(cx: &mut Cx, text: &str, at: Range<u32>, ty: &str, wh
                 };
                 out.push_str(&text);
             }
+            c if c.is_alphanumeric() || c == '_' => {
+                // A word, or a typed literal (`T#5S`, `16#FF`, `INT#3`): copied as it is.
+                let start = i;
+                while chars.get(i).is_some_and(|c| c.is_alphanumeric() || *c == '_') {
+                    i += 1;
+                }
+                if chars.get(i) == Some(&'#') {
+                    i += 1;
+                    while chars.get(i).is_some_and(|c| c.is_alphanumeric() || matches!(*c, '_' | '.' | ':' | '-')) {
+                        i += 1;
+                    }
+                }
+                out.extend(chars.get(start..i).unwrap_or_default());
+            }
             _ => {
                 out.push(c);
                 i += 1;
