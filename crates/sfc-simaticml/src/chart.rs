@@ -165,7 +165,13 @@ pub(crate) fn block(cx: &mut Cx, b: Node, engineering: Option<&str>) -> Emitter 
     }
 
     // The POU's attributes.
-    let fb_base = if is_ident(&raw_name) { raw_name.clone() } else { sanitize(&raw_name) };
+    let fb_base = if is_ident(&raw_name) {
+        raw_name.clone()
+    } else if raw_name.trim().is_empty() {
+        format!("GRAPH_FB{}", text("Number").unwrap_or_default().trim())
+    } else {
+        sanitize(&raw_name)
+    };
     let fb = fb_base.clone();
     cx.file_names.insert(fb.to_ascii_uppercase());
     let mut attrs: Attrs = vec![("sfc.dialect".into(), "graph".into())];

@@ -101,7 +101,13 @@ fn sub_start(m: Node, name: &str) -> Option<String> {
 fn member(cx: &mut Cx, m: Node, fb: &str, em: &mut Emitter, indent: &str) {
     let at = anchor(m);
     let raw = m.attribute("Name").unwrap_or("");
-    let base = if is_ident(raw) { raw.to_string() } else { sanitize(raw) };
+    let base = if is_ident(raw) {
+        raw.to_string()
+    } else if raw.trim().is_empty() {
+        "Unnamed".to_string()
+    } else {
+        sanitize(raw)
+    };
     let name = cx.fresh(&base);
     if name != raw {
         cx.diag("SFC0753", crate::chart::attr_or(m, "Name"), format!("the variable `{raw}` is imported as `{name}`, and so are its uses"));

@@ -27,8 +27,26 @@ pub fn sanitize(s: &str) -> String {
     while out.ends_with('_') {
         out.pop();
     }
-    if out.is_empty() || out.as_bytes().first().is_some_and(u8::is_ascii_digit) || cannot_name(&out) {
+    if out.is_empty() {
+        // Nothing usable (`""`, `"_"`, `"()"`): `X`, not `X_`, which is no identifier.
+        return "X".to_string();
+    }
+    if out.as_bytes().first().is_some_and(u8::is_ascii_digit) || cannot_name(&out) {
         out.insert_str(0, "X_");
     }
     out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn repaired_names_are_identifiers() {
+        for raw in ["", "_", "()", "Z-Achse MA05 Pos1", "1st step", "STEP", "a__b_", "Größe"] {
+            let s = sanitize(raw);
+            assert!(is_ident(&s), "{raw:?} gave {s:?}");
+        }
+        assert_eq!(sanitize("Z-Achse MA05 Pos1"), "Z_Achse_MA05_Pos1");
+    }
 }
