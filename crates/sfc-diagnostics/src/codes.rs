@@ -455,6 +455,10 @@ says so when it reads such a POU.";
     "SFC0753" Note "GRAPH name imported as an IEC name"
         "GRAPH names steps, transitions, variables and blocks freely (`Z-Achse MA05 Pos1`, `compr. air release 1`); IEC names are letters, digits and single underscores. The name is repaired (`Z_Achse_MA05_Pos1`, numbered if two names give the same one), its uses follow, and the original is kept in `sfc.graph.name` for the export.";
 
+    "SFC0754" Note "GRAPH transition without a network"
+        "The transition has no LAD or FBD network (`FlgNet`): GRAPH treats an empty transition as \
+fulfilled, so it is imported as `TRUE`, and the step before it is left in the next cycle.";
+
     "SFC0801" Error "chart cannot be translated to ST"
         "The Structured Text target (`--target st`) replaces the chart's POU by a plain ST POU of \
 the same kind and name. It needs an error-free file, a PROGRAM or FUNCTION_BLOCK (a FUNCTION \

@@ -353,7 +353,14 @@ pub(crate) fn block(cx: &mut Cx, b: Node, engineering: Option<&str>) -> Emitter 
                 Some(None) => Frag::located("TRUE", anchor(f)),
                 None => Frag::located("FALSE", anchor(f)),
             },
-            None => Frag::located("TRUE", anchor(t.node)),
+            None if matches!(lang, "LAD" | "FBD") => {
+                cx.diag("SFC0754", anchor(t.node), format!("the transition `{}` has no network: imported as TRUE, as GRAPH's empty transition", t.name));
+                Frag::located("TRUE", anchor(t.node))
+            }
+            None => {
+                cx.diag("SFC0743", anchor(t.node), format!("the transition `{}` is written in {lang}, which sfc does not read: imported as FALSE", t.name));
+                Frag::located("FALSE", anchor(t.node))
+            }
         };
         em.open(anchor(t.node));
         write_attrs(&mut em, &ta, "    ");
@@ -704,7 +711,13 @@ fn step(cx: &mut Cx, em: &mut Emitter, s: &StepI, kept: &mut Kept, actions: &mut
         [("Interlocks", "Interlock", "IlCoil", "sfc.graph.interlock"), ("Supervisions", "Supervision", "SvCoil", "sfc.graph.supervision")]
     {
         let Some(net) = child(n, outer).and_then(|x| child(x, inner)) else { continue };
-        let Some(flg) = child(net, "FlgNet") else { continue };
+        let Some(flg) = child(net, "FlgNet") else {
+            let lang = net.attribute("ProgrammingLanguage").unwrap_or("LAD");
+            if !matches!(lang, "LAD" | "FBD") {
+                cx.diag("SFC0743", anchor(net), format!("the {} is written in {lang}, which sfc does not read: it is not imported", inner.to_ascii_lowercase()));
+            }
+            continue;
+        };
         if let Some(Some(f)) = flgnet::condition(cx, flg, coil, Place::Kept) {
             let (_, errs) = sfc_syntax::parse_expression(cx.file, &f.text);
             if errs.iter().any(|d| d.is_error()) {

@@ -107,8 +107,8 @@ fn describe_block(b: Node) -> String {
     let kind = b.tag_name().name().trim_start_matches("SW.Blocks.");
     let name = child(b, "AttributeList").and_then(|a| child(a, "Name")).and_then(|n| n.text()).unwrap_or("");
     match block_language(b) {
-        Some(l) => format!("the {l} {kind} \"{name}\""),
-        None => format!("the {kind} \"{name}\""),
+        Some(l) if !l.is_empty() && l != "DB" => format!("the {l} {kind} \"{name}\""),
+        _ => format!("the {kind} \"{name}\""),
     }
 }
 
