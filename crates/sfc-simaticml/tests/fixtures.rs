@@ -196,7 +196,7 @@ fn a_supervision_that_is_not_st_is_a_located_error() {
     let xml = std::fs::read_to_string(path).unwrap().replacen("<ConstantValue>T#5S</ConstantValue>", "<ConstantValue>T#5S)</ConstantValue>", 1);
     let out = sfc_simaticml::import(0, &xml);
     let d = out.diagnostics.iter().find(|d| d.code == "SFC0750").expect("SFC0750");
-    let step = xml.find("Name=\"Work\"").unwrap();
+    let step = xml.find("Init=\"false\" Name=\"Work\"").unwrap();
     let at = (step + xml[step..].find("<Supervision ").unwrap()) as u32;
     assert_eq!(d.span.start, at, "{d:?}");
 }
