@@ -62,7 +62,8 @@ pub(crate) fn global(cx: &mut Cx, origin: &str, parts: &[String], ty: &str, why:
     let base = sanitize(&parts.join("_"));
     let mut name = base.clone();
     let mut k = 0;
-    while cx.file_names.contains(&name.to_ascii_uppercase()) {
+    // Not the name of a global already, nor of a variable, step or action of the block.
+    while cx.file_names.contains(&name.to_ascii_uppercase()) || cx.used.contains(&name.to_ascii_uppercase()) {
         k += 1;
         name = format!("{base}_{k}");
     }

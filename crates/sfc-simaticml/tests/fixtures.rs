@@ -200,3 +200,18 @@ fn a_supervision_that_is_not_st_is_a_located_error() {
     let at = (step + xml[step..].find("<Supervision ").unwrap()) as u32;
     assert_eq!(d.span.start, at, "{d:?}");
 }
+
+#[test]
+fn a_tag_named_like_a_variable_of_the_block_gets_its_own_name() {
+    let path = fixture_dir().join("conveyor_handover_v6.xml");
+    // The PLC tag "PartAtEnd" beside the block's input PartAtEnd.
+    let xml = std::fs::read_to_string(path).unwrap().replacen(
+        "<Component Name=\"HandoverDB\" /><Component Name=\"Override\" />",
+        "<Component Name=\"PartAtEnd\" />",
+        1,
+    );
+    let out = sfc_simaticml::import(0, &xml);
+    assert!(out.text.contains("PartAtEnd_1 : BOOL; (* \"PartAtEnd\" *)"), "{}", out.text);
+    let (_, errs) = sfc_syntax::parse(0, &out.text);
+    assert!(errs.iter().all(|d| !d.is_error()), "{errs:?}");
+}
