@@ -451,7 +451,7 @@ says so when it reads such a POU.";
     "SFC0751" Warning "GRAPH runtime data in a transition condition"
         "A transition condition reads GRAPH runtime data of a step or transition (`U`, `S1`, `LA`, `TT`, …) that an IEC step does not have; IEC steps have `.X` and `.T`. `Step.U`, the step time without disturbance, is read as `Step.T` (an IEC step is never disturbed); any other member is kept as written and the check reports it.";
     "SFC0752" Warning "SIMATIC declaration imported approximately"
-        "A member of the block interface is declared in a way IEC text cannot say exactly: a data type that is not in the export (a PLC data type, a system type) is written under its name and must be declared for sfc to check the block; `IEC_TIMER` becomes `TON`; the start values of array elements are not imported; an unknown interface section is left out.";
+        "A member of the block interface is declared in a way IEC text cannot say exactly: a data type that is not in the export (a PLC data type, a system type) is written under its name and must be declared for sfc to check the block; `IEC_TIMER` becomes `TON`; the start values of elements (`Subelement`) are imported only for a one-dimensional array of an elementary type; an unknown interface section is left out.";
     "SFC0753" Note "GRAPH name imported as an IEC name"
         "GRAPH names steps, transitions, variables and blocks freely (`Z-Achse MA05 Pos1`, `compr. air release 1`); IEC names are letters, digits and single underscores. The name is repaired (`Z_Achse_MA05_Pos1`, numbered if two names give the same one), its uses follow, and the original is kept in `sfc.graph.name` for the export.";
 

@@ -126,7 +126,21 @@ fn member(cx: &mut Cx, m: Node, fb: &str, em: &mut Emitter, indent: &str) {
         }
     }
     if children(m, "Subelement").any(|s| child(s, "StartValue").is_some()) {
-        cx.diag("SFC0752", anchor(m), format!("the start values of elements of `{raw}` are not imported (the elements start at their type's default)"));
+        match array_start(m) {
+            Some(init) if child(m, "StartValue").is_none() => {
+                em.str(" := ");
+                em.str(&init);
+            }
+            _ => {
+                cx.diag(
+                    "SFC0752",
+                    anchor(m),
+                    format!("the start values of elements of `{raw}` are not imported (the elements start at their type's default)"),
+                )
+                .notes
+                .push("sfc writes the start values of a one-dimensional array of an elementary type; this member is another kind".into());
+            }
+        }
     }
     em.str(";");
     if let Some(c) = child(m, "Comment").and_then(crate::first_text) {
@@ -134,6 +148,47 @@ fn member(cx: &mut Cx, m: Node, fb: &str, em: &mut Emitter, indent: &str) {
     }
     em.str("\n");
     em.close();
+}
+
+/// The longest array whose element start values are written (`[v1, v2, …]`).
+const MAX_ARRAY_INIT: i64 = 4096;
+
+/// `[10, 20, 0, 40]` from the `Subelement` start values of a one-dimensional array of an
+/// elementary type (`Array[1..4] of Int`, paths `1`, `2`, `4`): elements without a value get
+/// their type's zero, up to the last one given.
+fn array_start(m: Node) -> Option<String> {
+    let dt = m.attribute("Datatype")?.trim();
+    let inner = dt.strip_prefix("Array[").or_else(|| dt.strip_prefix("array["))?;
+    let (dims, rest) = inner.split_once(']')?;
+    let (lo, hi) = dims.split_once("..")?;
+    let (lo, hi) = (lo.trim().parse::<i64>().ok()?, hi.trim().parse::<i64>().ok()?);
+    if dims.contains(',') || hi < lo || hi - lo >= MAX_ARRAY_INIT {
+        return None;
+    }
+    let elem = rest.trim().strip_prefix("of ").or_else(|| rest.trim().strip_prefix("Of "))?.trim();
+    let ty = iec_elementary(elem)?;
+    let zero = match ty {
+        "BOOL" => "FALSE",
+        "REAL" | "LREAL" => "0.0",
+        "TIME" => "T#0s",
+        "LTIME" => "LTIME#0s",
+        t if t.contains("INT") || t.ends_with("WORD") || t == "BYTE" => "0",
+        _ => return None,
+    };
+    let mut values: Vec<String> = Vec::new();
+    for sub in children(m, "Subelement") {
+        let Some(v) = child(sub, "StartValue").and_then(|v| v.text()) else { continue };
+        let i = sub.attribute("Path")?.trim().parse::<i64>().ok()?;
+        if i < lo || i > hi {
+            return None;
+        }
+        let at = usize::try_from(i - lo).ok()?;
+        if values.len() <= at {
+            values.resize(at + 1, zero.to_string());
+        }
+        *values.get_mut(at)? = literal(v.trim(), elem);
+    }
+    Some(format!("[{}]", values.join(", ")))
 }
 
 /// The IEC type of a member (a STRUCT member gets a TYPE of its own, `<FB>_<member>`).
