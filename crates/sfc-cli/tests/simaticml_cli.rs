@@ -76,7 +76,10 @@ fn build_writes_the_text_and_draws_the_chart() {
     let out = sfc(&["build", p.to_str().unwrap(), "--target", "text"]);
     let stdout = String::from_utf8_lossy(&out.stdout);
     assert!(out.status.success(), "{}", text(&out));
-    assert!(stdout.contains("{attribute 'sfc.dialect' := 'graph'}") && stdout.contains("FUNCTION_BLOCK DrillingStation"), "{stdout}");
+    assert!(
+        stdout.contains("{attribute 'sfc.dialect' := 'graph'}") && stdout.contains("FUNCTION_BLOCK DrillingStation"),
+        "{stdout}"
+    );
     assert!(stdout.contains("TRANSITION T1 FROM Idle TO (Clamp_part, Spin_up)"), "{stdout}");
     let dir = std::env::temp_dir().join(format!("sfc-simaticml-svg-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();

@@ -154,7 +154,11 @@ pub(crate) fn block(cx: &mut Cx, b: Node, engineering: Option<&str>) -> Emitter 
                 continue;
             };
             if !seen_trans.insert(number) {
-                cx.diag("SFC0748", anchor(t), format!("transition number {number} is used twice; this transition is not imported"));
+                cx.diag(
+                    "SFC0748",
+                    anchor(t),
+                    format!("transition number {number} is used twice; this transition is not imported"),
+                );
                 continue;
             }
             let raw = t.attribute("Name").unwrap_or("").to_string();
@@ -209,14 +213,21 @@ pub(crate) fn block(cx: &mut Cx, b: Node, engineering: Option<&str>) -> Emitter 
         cx.diag(
             "SFC0741",
             anchor(al),
-            format!("the export does not give the GRAPH block properties {}: TIA Portal's defaults are assumed", assumed.join(", ")),
+            format!(
+                "the export does not give the GRAPH block properties {}: TIA Portal's defaults are assumed",
+                assumed.join(", ")
+            ),
         )
         .notes
         .push("an export made with `ExportOptions.WithDefaults` writes them".into());
     }
     if let Some(c) = b
         .descendants()
-        .find(|d| d.is_element() && d.tag_name().name() == "MultilingualText" && d.attribute("CompositionName") == Some("Title"))
+        .find(|d| {
+            d.is_element()
+                && d.tag_name().name() == "MultilingualText"
+                && d.attribute("CompositionName") == Some("Title")
+        })
         .and_then(crate::first_text)
     {
         attrs.push(("sfc.graph.title".into(), c));
@@ -306,7 +317,11 @@ pub(crate) fn block(cx: &mut Cx, b: Node, engineering: Option<&str>) -> Emitter 
     // Transitions.
     for t in &trans {
         let Some(l) = links.get(&t.number) else {
-            cx.diag("SFC0748", anchor(t.node), format!("the transition `{}` is connected to nothing; it is not imported", t.name));
+            cx.diag(
+                "SFC0748",
+                anchor(t.node),
+                format!("the transition `{}` is connected to nothing; it is not imported", t.name),
+            );
             continue;
         };
         if !l.ok {
@@ -354,11 +369,25 @@ pub(crate) fn block(cx: &mut Cx, b: Node, engineering: Option<&str>) -> Emitter 
                 None => Frag::located("FALSE", anchor(f)),
             },
             None if matches!(lang, "LAD" | "FBD") => {
-                cx.diag("SFC0754", anchor(t.node), format!("the transition `{}` has no network: imported as TRUE, as GRAPH's empty transition", t.name));
+                cx.diag(
+                    "SFC0754",
+                    anchor(t.node),
+                    format!(
+                        "the transition `{}` has no network: imported as TRUE, as GRAPH's empty transition",
+                        t.name
+                    ),
+                );
                 Frag::located("TRUE", anchor(t.node))
             }
             None => {
-                cx.diag("SFC0743", anchor(t.node), format!("the transition `{}` is written in {lang}, which sfc does not read: imported as FALSE", t.name));
+                cx.diag(
+                    "SFC0743",
+                    anchor(t.node),
+                    format!(
+                        "the transition `{}` is written in {lang}, which sfc does not read: imported as FALSE",
+                        t.name
+                    ),
+                );
                 Frag::located("FALSE", anchor(t.node))
             }
         };
@@ -372,7 +401,11 @@ pub(crate) fn block(cx: &mut Cx, b: Node, engineering: Option<&str>) -> Emitter 
     }
     for (end, at, after) in &end_steps {
         em.open(at.clone());
-        write_attrs(&mut em, &vec![("sfc.graph.end".into(), after.clone()), ("sfc.final".into(), "true".into())], "    ");
+        write_attrs(
+            &mut em,
+            &vec![("sfc.graph.end".into(), after.clone()), ("sfc.final".into(), "true".into())],
+            "    ",
+        );
         em.str(&format!("    STEP {end}: END_STEP\n\n"));
         em.close();
     }
@@ -445,9 +478,10 @@ fn iec_name(cx: &mut Cx, n: Node, raw: &str, what: &str, fallback: &str) -> Stri
     };
     let name = cx.fresh(&base);
     if name != raw {
-        cx.diag("SFC0753", attr_or(n, "Name"), format!("the {what} `{raw}` is imported as `{name}`"))
-            .notes
-            .push("GRAPH names may hold spaces and punctuation, IEC names may not; the original is kept in `sfc.graph.name`".into());
+        cx.diag("SFC0753", attr_or(n, "Name"), format!("the {what} `{raw}` is imported as `{name}`")).notes.push(
+            "GRAPH names may hold spaces and punctuation, IEC names may not; the original is kept in `sfc.graph.name`"
+                .into(),
+        );
     }
     name
 }
@@ -482,7 +516,10 @@ fn compare_system(cx: &mut Cx, sys: &interface::System, steps: &[StepI], trans: 
                 cx.diag(
                     "SFC0749",
                     at.clone(),
-                    format!("the transition structure `{raw}` has TNO = {tno}, but the transition is number {}", t.number),
+                    format!(
+                        "the transition structure `{raw}` has TNO = {tno}, but the transition is number {}",
+                        t.number
+                    ),
                 );
             }
         }
@@ -494,20 +531,34 @@ fn compare_system(cx: &mut Cx, sys: &interface::System, steps: &[StepI], trans: 
         .collect();
     for (n, (_, _, _, at)) in &sys.steps {
         if !names.contains(n.as_str()) {
-            cx.diag("SFC0749", at.clone(), format!("the step structure `{n}` belongs to no step of the graph; it is not imported"));
+            cx.diag(
+                "SFC0749",
+                at.clone(),
+                format!("the step structure `{n}` belongs to no step of the graph; it is not imported"),
+            );
         }
     }
     let numbers: HashSet<String> = trans.iter().map(|t| t.number.to_string()).collect();
     for (n, (tno, at)) in &sys.transitions {
         // TIA V14 writes some structures without the name's blanks: the number still tells.
         if !names.contains(n.as_str()) && !tno.as_ref().is_some_and(|t| numbers.contains(t.trim())) {
-            cx.diag("SFC0749", at.clone(), format!("the transition structure `{n}` belongs to no transition of the graph; it is not imported"));
+            cx.diag(
+                "SFC0749",
+                at.clone(),
+                format!("the transition structure `{n}` belongs to no transition of the graph; it is not imported"),
+            );
         }
     }
 }
 
 /// Connections naming steps, transitions or branches that do not exist.
-fn check_refs(cx: &mut Cx, conns: &[Conn], steps: &HashSet<i64>, trans: &HashSet<i64>, branches: &HashMap<i64, (String, Range<u32>)>) {
+fn check_refs(
+    cx: &mut Cx,
+    conns: &[Conn],
+    steps: &HashSet<i64>,
+    trans: &HashSet<i64>,
+    branches: &HashMap<i64, (String, Range<u32>)>,
+) {
     for c in conns {
         for r in [c.from, c.to] {
             let missing = match r {
@@ -559,7 +610,14 @@ fn topology(cx: &mut Cx, t: &TransI, conns: &[Conn], branches: &HashMap<i64, (St
     l
 }
 
-fn back(r: Ref, conns: &[Conn], branches: &HashMap<i64, (String, Range<u32>)>, l: &mut Links, problems: &mut Vec<String>, depth: usize) {
+fn back(
+    r: Ref,
+    conns: &[Conn],
+    branches: &HashMap<i64, (String, Range<u32>)>,
+    l: &mut Links,
+    problems: &mut Vec<String>,
+    depth: usize,
+) {
     if depth > MAX_DEPTH {
         problems.push("its branches nest too deep or form a cycle".into());
         return;
@@ -590,7 +648,14 @@ fn back(r: Ref, conns: &[Conn], branches: &HashMap<i64, (String, Range<u32>)>, l
     }
 }
 
-fn fwd(r: Ref, conns: &[Conn], branches: &HashMap<i64, (String, Range<u32>)>, l: &mut Links, problems: &mut Vec<String>, depth: usize) {
+fn fwd(
+    r: Ref,
+    conns: &[Conn],
+    branches: &HashMap<i64, (String, Range<u32>)>,
+    l: &mut Links,
+    problems: &mut Vec<String>,
+    depth: usize,
+) {
     if depth > MAX_DEPTH {
         problems.push("its branches nest too deep or form a cycle".into());
         return;
@@ -707,21 +772,33 @@ fn step(cx: &mut Cx, em: &mut Emitter, s: &StepI, kept: &mut Kept, actions: &mut
     if let Some(c) = child(n, "Actions").and_then(|x| child(x, "Title")).and_then(all_texts) {
         a.push(("sfc.graph.actions_title".into(), c));
     }
-    for (outer, inner, coil, key) in
-        [("Interlocks", "Interlock", "IlCoil", "sfc.graph.interlock"), ("Supervisions", "Supervision", "SvCoil", "sfc.graph.supervision")]
-    {
+    for (outer, inner, coil, key) in [
+        ("Interlocks", "Interlock", "IlCoil", "sfc.graph.interlock"),
+        ("Supervisions", "Supervision", "SvCoil", "sfc.graph.supervision"),
+    ] {
         let Some(net) = child(n, outer).and_then(|x| child(x, inner)) else { continue };
         let Some(flg) = child(net, "FlgNet") else {
             let lang = net.attribute("ProgrammingLanguage").unwrap_or("LAD");
             if !matches!(lang, "LAD" | "FBD") {
-                cx.diag("SFC0743", anchor(net), format!("the {} is written in {lang}, which sfc does not read: it is not imported", inner.to_ascii_lowercase()));
+                cx.diag(
+                    "SFC0743",
+                    anchor(net),
+                    format!(
+                        "the {} is written in {lang}, which sfc does not read: it is not imported",
+                        inner.to_ascii_lowercase()
+                    ),
+                );
             }
             continue;
         };
         if let Some(Some(f)) = flgnet::condition(cx, flg, coil, Place::Kept) {
             let (_, errs) = sfc_syntax::parse_expression(cx.file, &f.text);
             if errs.iter().any(|d| d.is_error()) {
-                cx.diag("SFC0750", anchor(net), format!("the {} `{}` is not a valid ST expression", inner.to_ascii_lowercase(), f.text));
+                cx.diag(
+                    "SFC0750",
+                    anchor(net),
+                    format!("the {} `{}` is not a valid ST expression", inner.to_ascii_lowercase(), f.text),
+                );
             }
             if key.ends_with("interlock") {
                 kept.interlocks += 1;
@@ -846,7 +923,9 @@ fn action(
                 return;
             }
             if timed {
-                let Ok(t) = tokens_to_st(cx, time, at.clone(), "TIME", &format!("TIME from the time of a GRAPH {q} action")) else {
+                let Ok(t) =
+                    tokens_to_st(cx, time, at.clone(), "TIME", &format!("TIME from the time of a GRAPH {q} action"))
+                else {
                     cx.diag("SFC0746", at, format!("the time of action `{text}` cannot be read"));
                     return;
                 };
@@ -862,7 +941,13 @@ fn action(
     // Everything else is a named action with an ST body.
     let (body, iec) = match q.as_str() {
         "N" if is_call => {
-            cx.diag("SFC0745", at.clone(), format!("the block call `{text}` is kept but not executed: its instance and block are not in the export"));
+            cx.diag(
+                "SFC0745",
+                at.clone(),
+                format!(
+                    "the block call `{text}` is kept but not executed: its instance and block are not in the export"
+                ),
+            );
             kept.unsimulated += 1;
             (format!("(* {} *)", comment_safe(text)), "N")
         }
@@ -897,7 +982,11 @@ fn action(
             (body, "N")
         }
         "D" | "L" => {
-            cx.diag("SFC0746", at.clone(), format!("the {q} action `{text}` needs an operand and a time (`operand , T#5S`) and no event"));
+            cx.diag(
+                "SFC0746",
+                at.clone(),
+                format!("the {q} action `{text}` needs an operand and a time (`operand , T#5S`) and no event"),
+            );
             return;
         }
         "CU" | "CD" | "CR" | "CS" => {
@@ -906,7 +995,8 @@ fn action(
                 cx.diag("SFC0746", at, format!("the counter action `{text}` cannot be read"));
                 return;
             };
-            let v = tokens_to_st(cx, v, at.clone(), "INT", "INT from a counter's preset").unwrap_or_else(|_| "0".into());
+            let v =
+                tokens_to_st(cx, v, at.clone(), "INT", "INT from a counter's preset").unwrap_or_else(|_| "0".into());
             let body = match q.as_str() {
                 "CU" => format!("{o} := {o} + 1;"),
                 "CD" => format!("{o} := {o} - 1;"),
@@ -924,7 +1014,11 @@ fn action(
         }
         "ON" | "OFF" | "TD" | "TF" | "TL" | "TR" => {
             let what = if q == "ON" || q == "OFF" { "activates or deactivates a step" } else { "runs a GRAPH timer" };
-            cx.diag("SFC0745", at.clone(), format!("the {q} action `{text}` {what}, which IEC actions cannot do: it is kept but not executed"));
+            cx.diag(
+                "SFC0745",
+                at.clone(),
+                format!("the {q} action `{text}` {what}, which IEC actions cannot do: it is kept but not executed"),
+            );
             kept.unsimulated += 1;
             (format!("(* {q} {} *)", comment_safe(text)), "N")
         }

@@ -66,7 +66,9 @@ struct Net<'a, 'i> {
 }
 
 fn is_output_pin(pin: &str) -> bool {
-    pin == "out" || pin == "eno" || (pin.starts_with("out") && pin.get(3..).is_some_and(|d| d.bytes().all(|b| b.is_ascii_digit())))
+    pin == "out"
+        || pin == "eno"
+        || (pin.starts_with("out") && pin.get(3..).is_some_and(|d| d.bytes().all(|b| b.is_ascii_digit())))
 }
 
 impl<'a, 'i> Net<'a, 'i> {
@@ -125,7 +127,11 @@ impl<'a, 'i> Net<'a, 'i> {
                 let Some(src) = src else { continue };
                 for (uid, pin, e) in sinks {
                     if !net.parts.contains_key(&uid) {
-                        cx.diag("SFC0743", anchor(e), format!("the wire goes to UId {uid}, which is no part of the network"));
+                        cx.diag(
+                            "SFC0743",
+                            anchor(e),
+                            format!("the wire goes to UId {uid}, which is no part of the network"),
+                        );
                         net.failed = true;
                         continue;
                     }
@@ -170,14 +176,22 @@ impl<'a, 'i> Net<'a, 'i> {
             Src::Rail => Some(Val::rail()),
             Src::Ident(uid, at) => {
                 let Some(a) = self.accesses.get(uid).copied() else {
-                    cx.diag("SFC0743", at.clone(), format!("the wire comes from UId {uid}, which is no operand of the network"));
+                    cx.diag(
+                        "SFC0743",
+                        at.clone(),
+                        format!("the wire comes from UId {uid}, which is no operand of the network"),
+                    );
                     return None;
                 };
                 access(cx, a, ty, why, self.place).map(Val::of)
             }
             Src::Out(uid, at) => {
                 if !self.parts.contains_key(uid) {
-                    cx.diag("SFC0743", at.clone(), format!("the wire comes from UId {uid}, which is no part of the network"));
+                    cx.diag(
+                        "SFC0743",
+                        at.clone(),
+                        format!("the wire comes from UId {uid}, which is no part of the network"),
+                    );
                     return None;
                 }
                 self.part(cx, uid)
@@ -191,9 +205,9 @@ impl<'a, 'i> Net<'a, 'i> {
         }
         let p = *self.parts.get(uid)?;
         if !self.visiting.insert(uid.to_string()) {
-            cx.diag("SFC0743", anchor(p), "the network's wires form a cycle through this part")
-                .notes
-                .push("a LAD or FBD condition is evaluated from the power rail to the coil; a loop has no value".into());
+            cx.diag("SFC0743", anchor(p), "the network's wires form a cycle through this part").notes.push(
+                "a LAD or FBD condition is evaluated from the power rail to the coil; a loop has no value".into(),
+            );
             return None;
         }
         let v = self.part_value(cx, uid, p);
@@ -260,7 +274,8 @@ impl<'a, 'i> Net<'a, 'i> {
                     "Lt" => "<",
                     _ => "<=",
                 };
-                let pre = self.input(cx, uid, "pre", "BOOL", "BOOL from a comparator's enable")?.unwrap_or_else(Val::rail);
+                let pre =
+                    self.input(cx, uid, "pre", "BOOL", "BOOL from a comparator's enable")?.unwrap_or_else(Val::rail);
                 let a = self.required(cx, uid, "in1", ty, &why)?;
                 let b = self.required(cx, uid, "in2", ty, &why)?;
                 let cmp = Val::of(Frag::infix(op, vec![a.f, b.f]));
@@ -270,10 +285,10 @@ impl<'a, 'i> Net<'a, 'i> {
                 cx.diag("SFC0743", at, format!("the LAD/FBD part `{name}` cannot be imported into a condition"))
                     .notes
                     .push(
-                        "sfc reads contacts (negated too), O/A/X boxes, the comparators Eq Ne Gt Ge Lt Le and wired ORs; \
+                    "sfc reads contacts (negated too), O/A/X boxes, the comparators Eq Ne Gt Ge Lt Le and wired ORs; \
                          edge contacts, timers and boxes with EN/ENO are not read yet"
-                            .into(),
-                    );
+                        .into(),
+                );
                 None
             }
         }
@@ -311,13 +326,17 @@ fn or(vals: Vec<Val>) -> Val {
     let shortest = lists.iter().map(Vec::len).min().unwrap_or(0);
     let mut common = 0;
     while common + 1 < shortest.max(1)
-        && lists.iter().all(|l| l.get(common).map(|f| &f.text) == lists.first().and_then(|f| f.get(common)).map(|f| &f.text))
+        && lists
+            .iter()
+            .all(|l| l.get(common).map(|f| &f.text) == lists.first().and_then(|f| f.get(common)).map(|f| &f.text))
     {
         common += 1;
     }
     if common > 0 {
-        let prefix: Vec<Val> = lists.first().map(|l| l.iter().take(common).cloned().map(Val::of).collect()).unwrap_or_default();
-        let rests: Vec<Val> = lists.iter().map(|l| and(l.iter().skip(common).cloned().map(Val::of).collect())).collect();
+        let prefix: Vec<Val> =
+            lists.first().map(|l| l.iter().take(common).cloned().map(Val::of).collect()).unwrap_or_default();
+        let rests: Vec<Val> =
+            lists.iter().map(|l| and(l.iter().skip(common).cloned().map(Val::of).collect())).collect();
         let mut all = prefix;
         all.push(or(rests));
         return and(all);
@@ -332,12 +351,8 @@ pub(crate) fn condition(cx: &mut Cx, flg: Node, coil: &str, place: Place) -> Opt
     if net.failed {
         return None;
     }
-    let coils: Vec<String> = net
-        .parts
-        .iter()
-        .filter(|(_, p)| p.attribute("Name") == Some(coil))
-        .map(|(u, _)| u.clone())
-        .collect();
+    let coils: Vec<String> =
+        net.parts.iter().filter(|(_, p)| p.attribute("Name") == Some(coil)).map(|(u, _)| u.clone()).collect();
     let [uid] = coils.as_slice() else {
         cx.diag("SFC0743", anchor(flg), format!("the network has {} `{coil}` parts; it needs one", coils.len()));
         return None;
@@ -351,7 +366,11 @@ pub(crate) fn condition(cx: &mut Cx, flg: Node, coil: &str, place: Place) -> Opt
         .map(|(_, p)| *p)
         .min_by_key(|p| p.range().start);
     if let Some(p) = unused {
-        cx.diag("SFC0743", anchor(p), format!("the `{}` part is not on the path to the coil", p.attribute("Name").unwrap_or("")));
+        cx.diag(
+            "SFC0743",
+            anchor(p),
+            format!("the `{}` part is not on the path to the coil", p.attribute("Name").unwrap_or("")),
+        );
         return None;
     }
     Some(if v.rail { None } else { Some(v.f) })
@@ -412,7 +431,11 @@ pub(crate) fn statements(cx: &mut Cx, flg: Node, place: Place) -> Option<Vec<Fra
         .map(|(_, p)| *p)
         .min_by_key(|p| p.range().start);
     if let Some(p) = unused {
-        cx.diag("SFC0743", anchor(p), format!("the `{}` part is not on the path to a coil", p.attribute("Name").unwrap_or("")));
+        cx.diag(
+            "SFC0743",
+            anchor(p),
+            format!("the `{}` part is not on the path to a coil", p.attribute("Name").unwrap_or("")),
+        );
         return None;
     }
     Some(out)

@@ -58,7 +58,8 @@ pub(crate) fn write(cx: &mut Cx, iface: Node, fb: &str, em: &mut Emitter, indent
             let ty = m.attribute("Datatype").unwrap_or("");
             let mname = m.attribute("Name").unwrap_or("").to_string();
             if ty.starts_with("G7_StepPlus") {
-                sys.steps.insert(mname, (sub_start(m, "SNO"), sub_start(m, "T_MAX"), sub_start(m, "T_WARN"), anchor(m)));
+                sys.steps
+                    .insert(mname, (sub_start(m, "SNO"), sub_start(m, "T_MAX"), sub_start(m, "T_WARN"), anchor(m)));
                 continue;
             }
             if ty.starts_with("G7_TransitionPlus") {
@@ -110,7 +111,11 @@ fn member(cx: &mut Cx, m: Node, fb: &str, em: &mut Emitter, indent: &str) {
     };
     let name = cx.fresh(&base);
     if name != raw {
-        cx.diag("SFC0753", crate::chart::attr_or(m, "Name"), format!("the variable `{raw}` is imported as `{name}`, and so are its uses"));
+        cx.diag(
+            "SFC0753",
+            crate::chart::attr_or(m, "Name"),
+            format!("the variable `{raw}` is imported as `{name}`, and so are its uses"),
+        );
     }
     cx.vars.insert(raw.to_string(), name.clone());
     let ty = type_of(cx, m, fb, &name);
@@ -253,7 +258,11 @@ fn type_text(cx: &mut Cx, dt: &str, at: Range<u32>) -> String {
         return k.to_string();
     }
     if dt.eq_ignore_ascii_case("IEC_TIMER") {
-        cx.diag("SFC0752", at, "the SIMATIC type `IEC_TIMER` is imported as `TON` (the instance's calls tell TON, TOF or TP apart)");
+        cx.diag(
+            "SFC0752",
+            at,
+            "the SIMATIC type `IEC_TIMER` is imported as `TON` (the instance's calls tell TON, TOF or TP apart)",
+        );
         return "TON".into();
     }
     let name = sanitize(dt.trim_matches('"'));

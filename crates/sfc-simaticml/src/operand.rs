@@ -51,7 +51,15 @@ pub(crate) fn iec_elementary(t: &str) -> Option<&'static str> {
 }
 
 /// A global operand by its TIA spelling: its IEC name, declared on first use.
-pub(crate) fn global(cx: &mut Cx, origin: &str, parts: &[String], ty: &str, why: &str, at: Range<u32>, constant: bool) -> String {
+pub(crate) fn global(
+    cx: &mut Cx,
+    origin: &str,
+    parts: &[String],
+    ty: &str,
+    why: &str,
+    at: Range<u32>,
+    constant: bool,
+) -> String {
     if let Some(&i) = cx.global_index.get(origin) {
         if !cx.pou_globals.contains(&i) {
             cx.pou_globals.push(i);
@@ -104,7 +112,10 @@ pub(crate) fn write_globals(cx: &mut Cx, em: &mut Emitter) {
         if g.constant {
             d.notes.push("its value is not in the export: it starts at its type's default value".into());
         } else {
-            d.notes.push("its data block or tag table is not in the export; declare it in the PLC tags to be sure of its type".into());
+            d.notes.push(
+                "its data block or tag table is not in the export; declare it in the PLC tags to be sure of its type"
+                    .into(),
+            );
         }
     }
     em.str("END_VAR\n\n");
@@ -271,7 +282,8 @@ fn local(cx: &mut Cx, parts: &[(String, Vec<String>)], at: Range<u32>, place: Pl
         }
         return Some(Frag::located(format!("{tr}.{m}"), at));
     }
-    let mut s = cx.vars.get(first).cloned().unwrap_or_else(|| if is_ident(first) { first.clone() } else { sanitize(first) });
+    let mut s =
+        cx.vars.get(first).cloned().unwrap_or_else(|| if is_ident(first) { first.clone() } else { sanitize(first) });
     push_index(&mut s, idx0);
     for (n, idx) in parts.iter().skip(1) {
         s.push('.');

@@ -34,7 +34,10 @@ fn snapshot(path: &Path, actual: &str) -> Result<(), String> {
     if expected == actual {
         Ok(())
     } else {
-        Err(format!("{} differs (SFC_BLESS=1 rewrites it):\n--- expected\n{expected}\n--- actual\n{actual}", path.display()))
+        Err(format!(
+            "{} differs (SFC_BLESS=1 rewrites it):\n--- expected\n{expected}\n--- actual\n{actual}",
+            path.display()
+        ))
     }
 }
 
@@ -153,14 +156,24 @@ fn the_fixtures_cover_the_namespaces_and_versions() {
     for ev in ["S1", "S0", "V1", "V0", "L1", "L0", "A1", "R1"] {
         assert!(all.contains(&format!("Event=\"{ev}\"")), "no action with event {ev}");
     }
-    for t in ["AltBegin", "AltEnd", "SimBegin", "SimEnd", "<EndConnection />", ">Jump<", "Interlock=\"true\"", "ProgrammingLanguage=\"FBD\""] {
+    for t in [
+        "AltBegin",
+        "AltEnd",
+        "SimBegin",
+        "SimEnd",
+        "<EndConnection />",
+        ">Jump<",
+        "Interlock=\"true\"",
+        "ProgrammingLanguage=\"FBD\"",
+    ] {
         assert!(all.contains(t), "no fixture with {t}");
     }
 }
 
 #[test]
 fn malformed_xml_is_one_located_error() {
-    let out = sfc_simaticml::import(2, "<Document>\n  <Engineering version=\"V20\" />\n  <SW.Blocks.FB>\n</Document>\n");
+    let out =
+        sfc_simaticml::import(2, "<Document>\n  <Engineering version=\"V20\" />\n  <SW.Blocks.FB>\n</Document>\n");
     assert_eq!(out.diagnostics.len(), 1);
     let d = &out.diagnostics[0];
     assert_eq!((d.code, d.span.file), ("SFC0701", 2));
@@ -187,13 +200,21 @@ fn a_cycle_in_a_network_is_an_error_not_a_hang() {
     let uid: String = xml[at + pat.len()..].chars().take_while(|c| c.is_ascii_digit()).collect();
     let cyc = xml.replacen("<IdentCon UId=\"21\" />", &format!("<NameCon UId=\"{uid}\" Name=\"out\" />"), 1);
     let out = sfc_simaticml::import(0, &cyc);
-    assert!(out.diagnostics.iter().any(|d| d.code == "SFC0743" && d.message.contains("cycle")), "{:?}", out.diagnostics);
+    assert!(
+        out.diagnostics.iter().any(|d| d.code == "SFC0743" && d.message.contains("cycle")),
+        "{:?}",
+        out.diagnostics
+    );
 }
 
 #[test]
 fn a_supervision_that_is_not_st_is_a_located_error() {
     let path = fixture_dir().join("action_events_v5.xml");
-    let xml = std::fs::read_to_string(path).unwrap().replacen("<ConstantValue>T#5S</ConstantValue>", "<ConstantValue>T#5S)</ConstantValue>", 1);
+    let xml = std::fs::read_to_string(path).unwrap().replacen(
+        "<ConstantValue>T#5S</ConstantValue>",
+        "<ConstantValue>T#5S)</ConstantValue>",
+        1,
+    );
     let out = sfc_simaticml::import(0, &xml);
     let d = out.diagnostics.iter().find(|d| d.code == "SFC0750").expect("SFC0750");
     let step = xml.find("Init=\"false\" Name=\"Work\"").unwrap();

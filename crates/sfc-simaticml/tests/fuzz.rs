@@ -60,7 +60,8 @@ fn mutation() -> impl Strategy<Value = Mutation> {
         any::<usize>().prop_map(Mutation::DeleteLine),
         any::<usize>().prop_map(Mutation::DoubleLine),
         (any::<usize>(), any::<usize>()).prop_map(|(a, b)| Mutation::MoveLine(a, b)),
-        (any::<usize>(), prop_oneof![Just(0u32), Just(1), Just(21), Just(u32::MAX), 0u32..100]).prop_map(|(a, n)| Mutation::Renumber(a, n)),
+        (any::<usize>(), prop_oneof![Just(0u32), Just(1), Just(21), Just(u32::MAX), 0u32..100])
+            .prop_map(|(a, n)| Mutation::Renumber(a, n)),
         any::<usize>().prop_map(Mutation::RailToOut),
         (any::<usize>(), any::<usize>()).prop_map(|(a, k)| Mutation::Splice(a, k)),
         any::<usize>().prop_map(Mutation::Truncate),
@@ -91,7 +92,12 @@ fn mutate(src: &str, ms: &[Mutation]) -> String {
             }
             Mutation::Renumber(a, v) => {
                 // Replace the value of one `UId="…"` or `Number="…"` attribute.
-                let hits: Vec<usize> = lines.iter().enumerate().filter(|(_, l)| l.contains("UId=\"") || l.contains("Number=\"")).map(|(i, _)| i).collect();
+                let hits: Vec<usize> = lines
+                    .iter()
+                    .enumerate()
+                    .filter(|(_, l)| l.contains("UId=\"") || l.contains("Number=\""))
+                    .map(|(i, _)| i)
+                    .collect();
                 if let Some(&i) = hits.get(a % hits.len().max(1)) {
                     let l = &lines[i];
                     let key = if l.contains("UId=\"") { "UId=\"" } else { "Number=\"" };
@@ -101,7 +107,8 @@ fn mutate(src: &str, ms: &[Mutation]) -> String {
                 }
             }
             Mutation::RailToOut(a) => {
-                let hits: Vec<usize> = lines.iter().enumerate().filter(|(_, l)| l.contains("<Powerrail />")).map(|(i, _)| i).collect();
+                let hits: Vec<usize> =
+                    lines.iter().enumerate().filter(|(_, l)| l.contains("<Powerrail />")).map(|(i, _)| i).collect();
                 if let Some(&i) = hits.get(a % hits.len().max(1)) {
                     lines[i] = lines[i].replace("<Powerrail />", "<NameCon UId=\"22\" Name=\"out\" />");
                 }
@@ -182,7 +189,11 @@ proptest! {
 
 #[test]
 fn hostile_inputs_do_not_panic() {
-    let deep = format!("<Document><Engineering/>{}{}</Document>", "<SW.Blocks.FB>".repeat(3000), "</SW.Blocks.FB>".repeat(3000));
+    let deep = format!(
+        "<Document><Engineering/>{}{}</Document>",
+        "<SW.Blocks.FB>".repeat(3000),
+        "</SW.Blocks.FB>".repeat(3000)
+    );
     let wide_or = {
         let mut s = String::from("<Document><Engineering version=\"V20\"/><SW.Blocks.FB><AttributeList><Name>X</Name><ProgrammingLanguage>GRAPH</ProgrammingLanguage></AttributeList><ObjectList><SW.Blocks.CompileUnit><AttributeList><NetworkSource><Graph xmlns=\"http://www.siemens.com/automation/Openness/SW/NetworkSource/Graph/v5\"><Sequence><Steps><Step Number=\"1\" Init=\"true\" Name=\"A\"/></Steps><Transitions><Transition Number=\"1\" Name=\"T\"><FlgNet><Parts>");
         // A ladder of 200 O boxes each fed twice by the previous one: an exponential expression.
@@ -196,7 +207,16 @@ fn hostile_inputs_do_not_panic() {
         s.push_str("<Wire><NameCon UId=\"299\" Name=\"out\"/><NameCon UId=\"1\" Name=\"in\"/></Wire></Wires></FlgNet></Transition></Transitions><Branches/><Connections><Connection><NodeFrom><StepRef Number=\"1\"/></NodeFrom><NodeTo><TransitionRef Number=\"1\"/></NodeTo><LinkType>Direct</LinkType></Connection><Connection><NodeFrom><TransitionRef Number=\"1\"/></NodeFrom><NodeTo><StepRef Number=\"1\"/></NodeTo><LinkType>Jump</LinkType></Connection></Connections></Sequence></Graph></NetworkSource></AttributeList></SW.Blocks.CompileUnit></ObjectList></SW.Blocks.FB></Document>");
         s
     };
-    for x in ["", "<", "<Document", "<Document/>", "<Document><Engineering/></Document>", "\u{feff}<Document><DocumentInfo/><SW.Blocks.FB/></Document>", deep.as_str(), wide_or.as_str()] {
+    for x in [
+        "",
+        "<",
+        "<Document",
+        "<Document/>",
+        "<Document><Engineering/></Document>",
+        "\u{feff}<Document><DocumentInfo/><SW.Blocks.FB/></Document>",
+        deep.as_str(),
+        wide_or.as_str(),
+    ] {
         run_limited(x.to_string()).unwrap_or_else(|e| panic!("{e}: {}", &x[..x.len().min(200)]));
     }
 }
