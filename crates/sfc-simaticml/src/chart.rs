@@ -146,7 +146,7 @@ pub(crate) fn block(cx: &mut Cx, b: Node, engineering: Option<&str>) -> Emitter 
             let raw = s.attribute("Name").unwrap_or("").to_string();
             let name = iec_name(cx, s, &raw, "step", &format!("S{number}"));
             cx.steps.insert(raw, name.clone());
-            steps.push(StepI { node: s, number, name, init: s.attribute("Init") == Some("true") });
+            steps.push(StepI { node: s, number, name, init: sfc_xmlmap::xml::flag(s, "Init") });
         }
         for t in child(*seq, "Transitions").into_iter().flat_map(|s| children(s, "Transition")) {
             let Some(number) = int_attr(t, "Number") else {
@@ -884,7 +884,7 @@ fn action(
     let q = act.attribute("Qualifier").unwrap_or("").trim().to_ascii_uppercase();
     let q = if q.is_empty() { "N".to_string() } else { q };
     let event = act.attribute("Event").unwrap_or("").trim().to_ascii_uppercase();
-    let c_flag = act.attribute("Interlock") == Some("true");
+    let c_flag = sfc_xmlmap::xml::flag(act, "Interlock");
     // The association's qualifier for the event, or None when IEC has no such event.
     let iec_event = match event.as_str() {
         "" => Some(None),

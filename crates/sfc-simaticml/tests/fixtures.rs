@@ -8,22 +8,9 @@
 use sfc_diagnostics::SourceFile;
 use sfc_syntax::ast::{Body, Item, SfcElement};
 use std::collections::HashSet;
-use std::path::{Path, PathBuf};
-
-fn fixture_dir() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/fixtures")
-}
-
-fn fixtures() -> Vec<PathBuf> {
-    let mut paths: Vec<PathBuf> = std::fs::read_dir(fixture_dir())
-        .unwrap()
-        .flatten()
-        .map(|e| e.path())
-        .filter(|p| p.extension().is_some_and(|x| x == "xml"))
-        .collect();
-    paths.sort();
-    paths
-}
+mod common;
+use common::{fixture_dir, fixtures};
+use std::path::Path;
 
 fn snapshot(path: &Path, actual: &str) -> Result<(), String> {
     if std::env::var_os("SFC_BLESS").is_some() {

@@ -8,22 +8,14 @@
 //! 64); `SFC_FUZZ_CASES=20000` for a long run.
 #![allow(clippy::unwrap_used, clippy::expect_used, clippy::indexing_slicing)] // test code: a panic is a failed test
 
+mod common;
 use proptest::prelude::*;
-use std::path::Path;
 use std::time::Duration;
 
 const TIME_LIMIT: Duration = Duration::from_secs(20);
 
 fn seeds() -> Vec<String> {
-    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/fixtures");
-    let mut paths: Vec<_> = std::fs::read_dir(dir)
-        .unwrap()
-        .flatten()
-        .map(|e| e.path())
-        .filter(|p| p.extension().is_some_and(|x| x == "xml"))
-        .collect();
-    paths.sort();
-    paths.iter().map(|p| std::fs::read_to_string(p).unwrap()).collect()
+    common::fixtures().iter().map(|p| std::fs::read_to_string(p).unwrap()).collect()
 }
 
 const SNIPPETS: &[&str] = &[
