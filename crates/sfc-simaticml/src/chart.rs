@@ -83,6 +83,8 @@ struct Links {
     out: i64,
     /// The branch pins passed, for the export (`alt 1 out 0`).
     path: Vec<String>,
+    /// Why it cannot be imported.
+    problems: Vec<String>,
     ok: bool,
 }
 
@@ -580,28 +582,28 @@ const MAX_DEPTH: usize = 64;
 /// The steps before and after transition `t`, through branches.
 fn topology(cx: &mut Cx, t: &TransI, conns: &[Conn], branches: &HashMap<i64, (String, Range<u32>)>) -> Links {
     let mut l = Links { ok: true, ..Links::default() };
+    let topo = Topo { conns, branches };
     let me = Ref::Trans(t.number);
-    let mut problems = Vec::new();
     for c in conns.iter().filter(|c| c.to == me) {
-        back(c.from, conns, branches, &mut l, &mut problems, 0);
+        topo.back(c.from, &mut l, 0);
     }
     for c in conns.iter().filter(|c| c.from == me) {
         if c.jump {
             l.jump = true;
         }
-        fwd(c.to, conns, branches, &mut l, &mut problems, 0);
+        topo.fwd(c.to, &mut l, 0);
     }
     l.from.sort();
     l.from.dedup();
     l.to.sort();
     l.to.dedup();
     if l.from.is_empty() {
-        problems.push("no step leads to it".to_string());
+        l.problems.push("no step leads to it".to_string());
     }
     if l.to.is_empty() && l.ends == 0 {
-        problems.push("it leads to no step".to_string());
+        l.problems.push("it leads to no step".to_string());
     }
-    if let Some(p) = problems.first() {
+    if let Some(p) = l.problems.first().cloned() {
         l.ok = false;
         cx.diag("SFC0748", anchor(t.node), format!("the transition `{}` cannot be imported: {p}", t.name))
             .notes
@@ -610,78 +612,82 @@ fn topology(cx: &mut Cx, t: &TransI, conns: &[Conn], branches: &HashMap<i64, (St
     l
 }
 
-fn back(
-    r: Ref,
-    conns: &[Conn],
-    branches: &HashMap<i64, (String, Range<u32>)>,
-    l: &mut Links,
-    problems: &mut Vec<String>,
-    depth: usize,
-) {
-    if depth > MAX_DEPTH {
-        problems.push("its branches nest too deep or form a cycle".into());
-        return;
-    }
-    match r {
-        Ref::Step(s) => l.from.push(s),
-        Ref::Branch(b, Pin::Out(o)) => {
-            let ty = branches.get(&b).map(|x| x.0.as_str()).unwrap_or("");
-            match ty {
-                "AltBegin" => {
-                    if depth == 0 {
-                        l.out = o;
-                    }
-                    l.path.push(format!("alt {b} out {o}"));
-                }
-                "SimEnd" => l.path.push(format!("simend {b}")),
-                other => {
-                    problems.push(format!("it follows a branch of type `{other}` (branch {b})"));
-                    return;
-                }
-            }
-            for c in conns.iter().filter(|c| matches!(c.to, Ref::Branch(x, Pin::In(_)) if x == b)) {
-                back(c.from, conns, branches, l, problems, depth + 1);
-            }
-        }
-        Ref::Trans(n) => problems.push(format!("it follows transition {n} directly")),
-        Ref::End | Ref::Branch(_, Pin::In(_)) => problems.push("a connection into it starts at no step".into()),
-    }
+/// The connections and branches of one sequence, followed from a transition.
+struct Topo<'c> {
+    conns: &'c [Conn],
+    branches: &'c HashMap<i64, (String, Range<u32>)>,
 }
 
-fn fwd(
-    r: Ref,
-    conns: &[Conn],
-    branches: &HashMap<i64, (String, Range<u32>)>,
-    l: &mut Links,
-    problems: &mut Vec<String>,
-    depth: usize,
-) {
-    if depth > MAX_DEPTH {
-        problems.push("its branches nest too deep or form a cycle".into());
-        return;
+impl Topo<'_> {
+    fn kind(&self, b: i64) -> &str {
+        self.branches.get(&b).map(|x| x.0.as_str()).unwrap_or("")
     }
-    match r {
-        Ref::Step(s) => l.to.push(s),
-        Ref::End => l.ends += 1,
-        Ref::Branch(b, Pin::In(i)) => {
-            let ty = branches.get(&b).map(|x| x.0.as_str()).unwrap_or("");
-            match ty {
-                "AltEnd" => l.path.push(format!("altend {b} in {i}")),
-                "SimBegin" => l.path.push(format!("sim {b}")),
-                other => {
-                    problems.push(format!("it leads into a branch of type `{other}` (branch {b})"));
-                    return;
-                }
-            }
-            for c in conns.iter().filter(|c| matches!(c.from, Ref::Branch(x, Pin::Out(_)) if x == b)) {
-                if c.jump {
-                    l.jump = true;
-                }
-                fwd(c.to, conns, branches, l, problems, depth + 1);
-            }
+
+    /// Whether the walk may go one branch deeper (else the problem is recorded).
+    fn deeper(l: &mut Links, depth: usize) -> bool {
+        if depth > MAX_DEPTH {
+            l.problems.push("its branches nest too deep or form a cycle".into());
         }
-        Ref::Trans(n) => problems.push(format!("it leads to transition {n} directly")),
-        Ref::Branch(_, Pin::Out(_)) => problems.push("a connection from it ends at no step".into()),
+        depth <= MAX_DEPTH
+    }
+
+    /// The steps before a transition, through AltBegin and SimEnd.
+    fn back(&self, r: Ref, l: &mut Links, depth: usize) {
+        if !Topo::deeper(l, depth) {
+            return;
+        }
+        match r {
+            Ref::Step(s) => l.from.push(s),
+            Ref::Branch(b, Pin::Out(o)) => {
+                match self.kind(b) {
+                    "AltBegin" => {
+                        if depth == 0 {
+                            l.out = o;
+                        }
+                        l.path.push(format!("alt {b} out {o}"));
+                    }
+                    "SimEnd" => l.path.push(format!("simend {b}")),
+                    other => {
+                        l.problems.push(format!("it follows a branch of type `{other}` (branch {b})"));
+                        return;
+                    }
+                }
+                for c in self.conns.iter().filter(|c| matches!(c.to, Ref::Branch(x, Pin::In(_)) if x == b)) {
+                    self.back(c.from, l, depth + 1);
+                }
+            }
+            Ref::Trans(n) => l.problems.push(format!("it follows transition {n} directly")),
+            Ref::End | Ref::Branch(_, Pin::In(_)) => l.problems.push("a connection into it starts at no step".into()),
+        }
+    }
+
+    /// The steps after a transition, through AltEnd and SimBegin, and the sequence ends.
+    fn fwd(&self, r: Ref, l: &mut Links, depth: usize) {
+        if !Topo::deeper(l, depth) {
+            return;
+        }
+        match r {
+            Ref::Step(s) => l.to.push(s),
+            Ref::End => l.ends += 1,
+            Ref::Branch(b, Pin::In(i)) => {
+                match self.kind(b) {
+                    "AltEnd" => l.path.push(format!("altend {b} in {i}")),
+                    "SimBegin" => l.path.push(format!("sim {b}")),
+                    other => {
+                        l.problems.push(format!("it leads into a branch of type `{other}` (branch {b})"));
+                        return;
+                    }
+                }
+                for c in self.conns.iter().filter(|c| matches!(c.from, Ref::Branch(x, Pin::Out(_)) if x == b)) {
+                    if c.jump {
+                        l.jump = true;
+                    }
+                    self.fwd(c.to, l, depth + 1);
+                }
+            }
+            Ref::Trans(n) => l.problems.push(format!("it leads to transition {n} directly")),
+            Ref::Branch(_, Pin::Out(_)) => l.problems.push("a connection from it ends at no step".into()),
+        }
     }
 }
 

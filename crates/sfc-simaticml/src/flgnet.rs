@@ -142,6 +142,25 @@ impl<'a, 'i> Net<'a, 'i> {
         net
     }
 
+    /// Reports the first part (in the file's order) that no coil's value used: a second output
+    /// or a dangling branch would be lost. `coil` tells the coils.
+    fn off_path(&self, cx: &mut Cx, coil: &dyn Fn(&str) -> bool) -> bool {
+        let unused = self
+            .parts
+            .iter()
+            .filter(|(u, p)| !self.memo.contains_key(*u) && !coil(p.attribute("Name").unwrap_or("")))
+            .map(|(_, p)| *p)
+            .min_by_key(|p| p.range().start);
+        if let Some(p) = unused {
+            cx.diag(
+                "SFC0743",
+                anchor(p),
+                format!("the `{}` part is not on the path to the coil", p.attribute("Name").unwrap_or("")),
+            );
+        }
+        unused.is_some()
+    }
+
     fn negated(p: Node, pin: &str) -> bool {
         children(p, "Negated").any(|n| n.attribute("Name") == Some(pin))
     }
@@ -359,18 +378,7 @@ pub(crate) fn condition(cx: &mut Cx, flg: Node, coil: &str, place: Place) -> Opt
     };
     // Every other part must lie on the coil's path (a second output would be lost).
     let v = net.required(cx, uid, "in", "BOOL", "BOOL from a contact")?;
-    let unused = net
-        .parts
-        .iter()
-        .filter(|(u, p)| *u != uid && !net.memo.contains_key(*u) && p.attribute("Name") != Some(coil))
-        .map(|(_, p)| *p)
-        .min_by_key(|p| p.range().start);
-    if let Some(p) = unused {
-        cx.diag(
-            "SFC0743",
-            anchor(p),
-            format!("the `{}` part is not on the path to the coil", p.attribute("Name").unwrap_or("")),
-        );
+    if net.off_path(cx, &|name| name == coil) {
         return None;
     }
     Some(if v.rail { None } else { Some(v.f) })
@@ -424,18 +432,7 @@ pub(crate) fn statements(cx: &mut Cx, flg: Node, place: Place) -> Option<Vec<Fra
         }
         out.push(s.locate(anchor(p)));
     }
-    let unused = net
-        .parts
-        .iter()
-        .filter(|(u, p)| !net.memo.contains_key(*u) && !matches!(p.attribute("Name"), Some("Coil" | "SCoil" | "RCoil")))
-        .map(|(_, p)| *p)
-        .min_by_key(|p| p.range().start);
-    if let Some(p) = unused {
-        cx.diag(
-            "SFC0743",
-            anchor(p),
-            format!("the `{}` part is not on the path to a coil", p.attribute("Name").unwrap_or("")),
-        );
+    if net.off_path(cx, &|name| matches!(name, "Coil" | "SCoil" | "RCoil")) {
         return None;
     }
     Some(out)
