@@ -277,10 +277,10 @@ fn check_reports_a_runaway_witness_replay_at_its_loop() {
     let _ = std::fs::remove_dir_all(&dir);
 }
 
-/// A Studio 5000 L5X export and a TIA Portal export are not read yet: one located error that
-/// says what the file is and how many charts it holds (SFC routines, GRAPH blocks).
+/// A Studio 5000 L5X export is not read yet: one located error that says what the file is and
+/// how many charts it holds (SFC routines).
 #[test]
-fn logix_and_tia_exports_are_named_with_their_charts() {
+fn logix_exports_are_named_with_their_charts() {
     let dir = temp_dir("vendors");
     let l5x = dir.join("Main.L5X");
     std::fs::write(
@@ -288,22 +288,30 @@ fn logix_and_tia_exports_are_named_with_their_charts() {
         "<?xml version=\"1.0\" encoding=\"UTF-8\" standalone=\"yes\"?>\n<RSLogix5000Content SchemaRevision=\"1.0\" SoftwareRevision=\"32.01\">\n<Controller Use=\"Context\" Name=\"Demo\"><Programs><Program Name=\"Main\"><Routines>\n<Routine Name=\"Fill\" Type=\"SFC\"><SFCContent/></Routine>\n<Routine Name=\"Logic\" Type=\"RLL\"/>\n<Routine Name=\"Drain\" Type=\"SFC\"><SFCContent/></Routine>\n</Routines></Program></Programs></Controller>\n</RSLogix5000Content>\n",
     )
     .unwrap();
+    let out = sfc(&["check", l5x.to_str().unwrap()]);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(1), "{err}");
+    assert!(err.contains("error[SFC0702]") && err.contains(":2:1"), "{err}");
+    assert!(err.contains("Studio 5000 (Logix) L5X export holding 2 SFC routine(s)"), "{err}");
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// A TIA Portal export is read by `sfc-simaticml`; one that holds no GRAPH block is one located
+/// error (SFC0740) naming what it holds.
+#[test]
+fn a_tia_export_without_graph_blocks_is_named_with_what_it_holds() {
+    let dir = temp_dir("tia");
     let tia = dir.join("Sequence.xml");
     std::fs::write(
         &tia,
-        "<?xml version=\"1.0\" encoding=\"utf-8\"?>\n<Document>\n  <Engineering version=\"V17\" />\n  <SW.Blocks.FB ID=\"0\"><AttributeList><ProgrammingLanguage>GRAPH</ProgrammingLanguage></AttributeList></SW.Blocks.FB>\n</Document>\n",
+        "<?xml version=\"1.0\" encoding=\"utf-8\"?>\n<Document>\n  <Engineering version=\"V17\" />\n  <SW.Blocks.FB ID=\"0\"><AttributeList><Name>Motor</Name><ProgrammingLanguage>LAD</ProgrammingLanguage></AttributeList></SW.Blocks.FB>\n</Document>\n",
     )
     .unwrap();
-    for (path, says) in [
-        (&l5x, "Studio 5000 (Logix) L5X export holding 2 SFC routine(s)"),
-        (&tia, "TIA Portal (Openness) export (it holds 1 GRAPH block(s))"),
-    ] {
-        let out = sfc(&["check", path.to_str().unwrap()]);
-        let err = String::from_utf8_lossy(&out.stderr);
-        assert_eq!(out.status.code(), Some(1), "{err}");
-        assert!(err.contains("error[SFC0702]") && err.contains(":2:1"), "{err}");
-        assert!(err.contains(says), "{err}");
-    }
+    let out = sfc(&["check", tia.to_str().unwrap()]);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(1), "{err}");
+    assert!(err.contains("error[SFC0740]") && err.contains(":2:1"), "{err}");
+    assert!(err.contains("holds no S7-GRAPH block: it holds the LAD FB \"Motor\""), "{err}");
     let _ = std::fs::remove_dir_all(&dir);
 }
 

@@ -431,6 +431,39 @@ timed qualifier without duration, …) is written as it was read from the PLCope
 textual input, with its text kept in its `addData`, which `sfc` reads back as it was. The import \
 says so when it reads such a POU.";
 
+    "SFC0740" Error "no S7-GRAPH block in the TIA Portal export"
+        "The TIA Portal (Openness, SimaticML) export holds no function block whose `ProgrammingLanguage` is GRAPH (a LAD or SCL block, a data block, a tag table), so there is no chart to import; the message names what it holds. A GRAPH block without a `Graph` network source is reported the same way. Export the GRAPH FB itself from TIA Portal.";
+    "SFC0741" Note "GRAPH block properties assumed"
+        "The export does not give the GRAPH block properties that decide how the sequence runs (`AcknowledgeErrorsRequired`, `SkipSteps`, `LockOperatingMode`, `PermanentILProcessingInMANMode`, `WithAlarmHandling`): minimal exports leave them out. TIA Portal's defaults are assumed and written into the `sfc.s7graph.*` attributes of the FUNCTION_BLOCK. An export made with defaults (`ExportOptions.WithDefaults`) writes them.";
+    "SFC0742" Warning "GRAPH behaviour kept but not simulated"
+        "Interlocks, supervisions, actions bound to the events V1, V0, L1, L0, A1 and R1, interlock-dependent (C) actions and the permanent pre/post instructions of a GRAPH block are imported into `sfc.s7graph.*` attributes and unassociated actions, so an export writes them back, but the IEC simulation does not run them: it runs the steps, the transitions and the plain actions. The `graph` simulation profile will run them. The message counts what the file holds; an interlock-dependent action runs as if its interlock were satisfied.";
+    "SFC0743" Error "GRAPH network cannot be read"
+        "A LAD or FBD network of a transition, an interlock, a supervision or a permanent instruction could not be turned into ST: a part sfc does not read (edge contacts, timers, boxes with EN/ENO), a pin wired to nothing, a wire from or to a UId that is no part or operand of the network, wires that form a cycle, two coils, a part off the path to the coil, an operand of an absolute address. The location is the offending `Part`, `Access` or wire end; the transition's condition is imported as `FALSE`.";
+    "SFC0744" Warning "global operand declared from its use"
+        "A network or an action uses a global operand (`\"DB\".a.b`, a PLC tag, a global constant) whose data block or tag table is not in the export. It is declared in a file-level `VAR_GLOBAL` under a flat name (the path's parts joined by `_`: `DB_a_b`), with the type its first use implies (BOOL from a contact or an N action, the comparator's `SrcType`, INT from an assignment of an integer, TIME from the time of a D or L action). The message says which; a global constant starts at its type's default value, since its value is not exported.";
+    "SFC0745" Warning "GRAPH action imported approximately"
+        "The GRAPH action has no exact IEC counterpart and is imported as the message says: a counter (CS, CU, CD, CR) counts an INT; a block call (CALL), a step activation (ON, OFF) or a GRAPH timer (TD, TF, TL, TR) is kept as a comment in a named action, which does nothing in the IEC simulation; an S or R action with an assignment runs the assignment while the step is active. The original tokens are kept in `sfc.s7graph.tokens`.";
+    "SFC0746" Error "GRAPH action cannot be imported"
+        "The GRAPH action cannot be read: an unknown qualifier, a D or L action without `operand , time` or bound to an event, tokens that do not form operands (an unclosed quote or index), an array index that is not a constant on a DB operand. It is not imported.";
+    "SFC0747" Note "sequence end imported as a final step"
+        "A GRAPH transition may end its sequence path (`EndConnection`, a branch stop); an IEC transition must lead to a step. The transition leads to a step of its own, named after it (`T4_End`), marked `{attribute 'sfc.s7graph.end' := '<transition>'}` (an export writes it back as the sequence end) and `sfc.final` (no way out, intended).";
+    "SFC0748" Error "broken GRAPH sequence"
+        "The sequence's `Connections` do not link steps and transitions as GRAPH does: a connection names a step, transition or branch the sequence lacks, a transition has no step before or after it, a transition follows a transition, a branch is entered the wrong way (a transition into an AltBegin, a step into an AltEnd), two steps or transitions share a number. The element is not imported.";
+    "SFC0749" Warning "GRAPH system data disagrees with the chart"
+        "The interface's system members (`G7_StepPlus_Vn` per step, `G7_TransitionPlus_Vn` per transition) are the chart's runtime data and are not imported as variables: TIA Portal writes them from the steps and transitions (`SNO` and `TNO` their numbers, `T_MAX` and `T_WARN` the step's `MaximumStepTime` and `WarningTime`). Here they disagree with the chart, or belong to no step or transition; the chart's values are imported.";
+    "SFC0750" Error "GRAPH condition or action is not valid ST"
+        "An interlock, a supervision or an action body, as imported into ST, does not parse (checked with sfc's own ST parser). The text is kept as it came; correct it in TIA Portal.";
+    "SFC0751" Warning "GRAPH runtime data in a transition condition"
+        "A transition condition reads GRAPH runtime data of a step or transition (`U`, `S1`, `LA`, `TT`, …) that an IEC step does not have; IEC steps have `.X` and `.T`. `Step.U`, the step time without disturbance, is read as `Step.T` (an IEC step is never disturbed); any other member is kept as written and the check reports it.";
+    "SFC0752" Warning "SIMATIC declaration imported approximately"
+        "A member of the block interface is declared in a way IEC text cannot say exactly: a data type that is not in the export (a PLC data type, a system type) is written under its name and must be declared for sfc to check the block; `IEC_TIMER` becomes `TON`; the start values of elements (`Subelement`) are imported only for a one-dimensional array of an elementary type; an unknown interface section is left out.";
+    "SFC0753" Note "GRAPH name imported as an IEC name"
+        "GRAPH names steps, transitions, variables and blocks freely (`Z-Achse MA05 Pos1`, `compr. air release 1`); IEC names are letters, digits and single underscores. The name is repaired (`Z_Achse_MA05_Pos1`, numbered if two names give the same one), its uses follow, and the original is kept in `sfc.s7graph.name` for the export.";
+
+    "SFC0754" Note "GRAPH transition without a network"
+        "The transition has no LAD or FBD network (`FlgNet`): GRAPH treats an empty transition as \
+fulfilled, so it is imported as `TRUE`, and the step before it is left in the next cycle.";
+
     "SFC0801" Error "chart cannot be translated to ST"
         "The Structured Text target (`--target st`) replaces the chart's POU by a plain ST POU of \
 the same kind and name. It needs an error-free file, a PROGRAM or FUNCTION_BLOCK (a FUNCTION \

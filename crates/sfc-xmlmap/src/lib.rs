@@ -7,6 +7,7 @@
 //! (TIA Portal SimaticML), which each write sfc text from their format.
 
 pub mod emit;
+pub mod names;
 pub mod xml;
 
 pub use emit::{Emitter, Frag, MapEntry, SourceMap};

@@ -231,12 +231,12 @@ pub(crate) fn run_iec_actions(
         let ent = &plan.entities[e];
         let mut inputs = 0u16;
         let mut any_active = false;
-        // `graph`: an action that depends on the interlock is off while its step's is open.
-        let gated = profile == Profile::Graph && ent.action.is_some_and(|id| plan.interlocked[id]);
+        // `graph`: an association that depends on the interlock is off while its step's is open.
+        let gated = profile == Profile::Graph;
         let (q, a) = if ent.untimed {
             for a in &ent.assocs {
                 let step = &st.steps[a.step as usize];
-                let active = step.x && !(gated && step.interlock_open);
+                let active = step.x && !(gated && a.interlocked && step.interlock_open);
                 // Kept live while its step is active, so it comes back when the interlock closes.
                 any_active |= step.x;
                 if or {
@@ -251,7 +251,7 @@ pub(crate) fn run_iec_actions(
             let mut contenders: Vec<(u32, Qualifier)> = Vec::new();
             for a in &ent.assocs {
                 let step = &st.steps[a.step as usize];
-                let active = step.x && !(gated && step.interlock_open);
+                let active = step.x && !(gated && a.interlocked && step.interlock_open);
                 // Kept live while its step is active, so it comes back when the interlock closes.
                 any_active |= step.x;
                 if a.qualifier.is_timed() {

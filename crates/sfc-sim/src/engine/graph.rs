@@ -14,8 +14,8 @@
 //!    errors" (`sfc.s7graph.ack_required`, on by default), `ACK_EF` acknowledged it (7.10).
 //! 4. The transitions switch (as IEC's evolution; 6.1, 6.7).
 //! 5. The interlocks of the active steps, the entered ones included: while a step's interlock
-//!    is not satisfied, its interlock-dependent actions ("C", action attribute
-//!    `sfc.s7graph.interlock`) do not run; the transitions do not depend on it (14.2). The
+//!    is not satisfied, its interlock-dependent actions ("C", named in the step's attribute
+//!    `sfc.s7graph.interlocked`) do not run; the transitions do not depend on it (14.2). The
 //!    supervisions of the entered steps too.
 //! 6. The actions (IEC action control, the "C" ones gated by 5).
 //! 7. The permanent instructions after the sequencer ('post').

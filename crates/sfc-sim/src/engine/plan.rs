@@ -27,6 +27,9 @@ pub(crate) struct Assoc {
     /// `1 << qualifier_bit(qualifier)`.
     pub(crate) bit: u16,
     pub(crate) duration: Option<DurationCode>,
+    /// `graph`: the association depends on its step's interlock (GRAPH's "C": the step's
+    /// `sfc.s7graph.interlocked` names it).
+    pub(crate) interlocked: bool,
 }
 
 /// Bit of each qualifier in an input mask of ACTION_CONTROL.
@@ -162,11 +165,9 @@ pub struct ChartPlan {
     pub(crate) step_values: Vec<Value>,
     pub(crate) transition_names: Vec<String>,
     pub(crate) action_names: Vec<String>,
-    /// S7-GRAPH (`graph` profile): per action, whether it depends on its step's interlock (the
-    /// "C" flag, action attribute `sfc.s7graph.interlock`), and the permanent instructions run
-    /// before and after the sequencer in every call (actions marked `sfc.s7graph.permanent`
-    /// 'pre' or 'post'), in declaration order.
-    pub(crate) interlocked: Vec<bool>,
+    /// S7-GRAPH (`graph` profile): the permanent instructions run before and after the
+    /// sequencer in every call (actions marked `sfc.s7graph.permanent` 'pre' or 'post'), in
+    /// declaration order.
     pub(crate) permanent_pre: Vec<usize>,
     pub(crate) permanent_post: Vec<usize>,
 }
@@ -244,11 +245,18 @@ impl ChartPlan {
                     }
                 };
                 entities[e].untimed &= !a.qualifier.is_timed();
+                let interlocked = step
+                    .attributes
+                    .iter()
+                    .filter(|x| x.name.eq_ignore_ascii_case("sfc.s7graph.interlocked"))
+                    .filter_map(|x| x.value.as_deref())
+                    .any(|v| v.split(',').any(|n| n.trim().eq_ignore_ascii_case(&a.action)));
                 entities[e].assocs.push(Assoc {
                     step: s as u32,
                     qualifier: a.qualifier,
                     bit: qualifier_bit(a.qualifier),
                     duration: assoc_code.and_then(|c| c.duration),
+                    interlocked,
                 });
                 if !step_entities[s].contains(&(e as u32)) {
                     step_entities[s].push(e as u32);
@@ -332,7 +340,6 @@ impl ChartPlan {
             step_values: chart.steps.iter().map(|s| Value::Str(Arc::from(s.name.as_str()))).collect(),
             transition_names: chart.transitions.iter().map(|t| t.name.clone()).collect(),
             action_names: chart.actions.iter().map(|a| a.name.clone()).collect(),
-            interlocked: chart.actions.iter().map(|a| attribute_is(&a.attributes, "sfc.s7graph.interlock", "true")).collect(),
             permanent_pre: (0..chart.actions.len())
                 .filter(|&i| attribute_is(&chart.actions[i].attributes, "sfc.s7graph.permanent", "pre"))
                 .collect(),
