@@ -506,8 +506,10 @@ pub fn lower_chart(
         let mut mentioned = mentioned_actions(elements);
         mentioned.extend(of.mentioned);
         for action in &actions {
-            // S7-GRAPH's permanent instructions run in every call without a step.
-            let permanent = attr(&action.attributes, "sfc.s7graph.permanent").is_some();
+            // S7-GRAPH's permanent instructions run in every call without a step, and its event
+            // actions when their step's event occurs.
+            let permanent = attr(&action.attributes, "sfc.s7graph.permanent").is_some()
+                || attr(&action.attributes, "sfc.s7graph.event").is_some();
             if !permanent && !mentioned.contains(&action.name.to_ascii_uppercase()) {
                 diags.push(
                     Diagnostic::warning("SFC0214", action.name_span, format!("action `{}` is never used", action.name))

@@ -737,9 +737,9 @@ impl Kept {
         .notes
         .push(
             "the chart runs with the `graph` profile unless another is chosen: it simulates the interlocks, the \
-             supervisions, the interlock-dependent actions and the permanent instructions (docs/sim.md, \"The `graph` \
-             profile\"); the actions bound to V1 V0 L1 L0 A1 R1 and GRAPH's CALL, ON/OFF and timer instructions are \
-             kept and not run by any profile yet; under another profile (iec) none of them act"
+             supervisions, the interlock-dependent actions, the actions bound to V1 V0 L1 L0 A1 and the permanent \
+             instructions (docs/sim.md, \"The `graph` profile\"); R1 actions and GRAPH's CALL, ON/OFF and timer \
+             instructions are kept and not run by any profile yet; under another profile (iec) none of them act"
                 .into(),
         );
     }

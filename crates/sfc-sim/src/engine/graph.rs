@@ -17,7 +17,11 @@
 //!    is not satisfied, its interlock-dependent actions ("C", named in the step's attribute
 //!    `sfc.s7graph.interlocked`) do not run; the transitions do not depend on it (14.2). The
 //!    supervisions of the entered steps too.
-//! 6. The actions (IEC action control, the "C" ones gated by 5).
+//! 6. The actions (IEC action control, the "C" ones gated by 5), then once each the event
+//!    actions (`sfc.s7graph.step`, `sfc.s7graph.event`) of the step events of this call: V1 a
+//!    supervision error comes (or is there when the step is activated), V0 it goes, A1 it is
+//!    acknowledged, L1 the interlock stops being satisfied (or is not at activation), L0 it is
+//!    satisfied again (13.3, 13.5).
 //! 7. The permanent instructions after the sequencer ('post').
 //! 8. `ERR_FLT`, when declared: some active step has an interlock or supervision error (15.12).
 //!
@@ -26,7 +30,7 @@
 
 use super::action::run_iec_actions;
 use super::evolve::{evolve, held_or_reset, publish_initial, put_bool, read_bool, reset, set_trans, start, update_current_step};
-use super::plan::ChartPlan;
+use super::plan::{ChartPlan, GraphEvent};
 use crate::code::{ChartCode, Ctx, Fault};
 
 /// One call of the S7-GRAPH block instance `chart` under the `graph` profile.
@@ -67,13 +71,14 @@ pub(super) fn run(ctx: &mut Ctx<'_>, chart: usize, code: &ChartCode) -> Result<(
         (code.bodies[a])(ctx, frame)?;
     }
     let fired_before = ctx.sink.fired.len();
+    let mut events = Vec::new();
     if !first {
         // 3–4. Supervision errors hold their steps; then the transitions.
-        conditions(ctx, chart, code, plan, false)?;
+        conditions(ctx, chart, code, false, &mut events)?;
         evolve(ctx, chart, code, plan)?;
     }
     // 5. Interlocks (and the supervisions of the steps just entered).
-    conditions(ctx, chart, code, plan, true)?;
+    conditions(ctx, chart, code, true, &mut events)?;
     let fired = ctx.sink.fired[fired_before..].iter().any(|f| f.0 == chart as u32);
     set_trans(ctx, chart, code, fired);
     // 6. Actions.
@@ -81,6 +86,8 @@ pub(super) fn run(ctx: &mut Ctx<'_>, chart: usize, code: &ChartCode) -> Result<(
     if !st.entered.is_empty() || !st.live.is_empty() {
         run_iec_actions(ctx, chart, code, plan)?;
     }
+    // The actions of the step events raised in this call.
+    event_actions(ctx, chart, code, plan, &events)?;
     // 7. Permanent instructions after the sequencer.
     for &a in &plan.permanent_post {
         (code.bodies[a])(ctx, frame)?;
@@ -95,31 +102,74 @@ pub(super) fn run(ctx: &mut Ctx<'_>, chart: usize, code: &ChartCode) -> Result<(
 }
 
 /// Evaluates the supervisions of the active steps (a supervision error holds its step until it
-/// is gone and, when required, acknowledged), and with `interlocks` their interlocks too.
-fn conditions(ctx: &mut Ctx<'_>, chart: usize, code: &ChartCode, plan: &ChartPlan, interlocks: bool) -> Result<(), Fault> {
-    let _ = plan;
+/// is gone and, when required, acknowledged), and with `interlocks` their interlocks too; the
+/// step events this raises (V1, V0, A1, L1, L0) are added to `events`.
+fn conditions(
+    ctx: &mut Ctx<'_>,
+    chart: usize,
+    code: &ChartCode,
+    interlocks: bool,
+    events: &mut Vec<(u32, GraphEvent)>,
+) -> Result<(), Fault> {
     let frame = ctx.charts[chart].frame;
     let ack = code.control.ack_ef.is_some_and(|s| read_bool(ctx.mem, frame + s as usize));
     let needs_ack = code.chart.s7graph.ack_required;
     let mut k = 0;
     while let Some(&s) = ctx.charts[chart].active.get(k) {
         k += 1;
-        let s = s as usize;
-        if let Some(g) = &code.supervisions[s] {
+        let fresh = ctx.charts[chart].entered.contains(&s);
+        let su = s as usize;
+        if let Some(g) = &code.supervisions[su] {
             let error = g(ctx, frame)?;
-            let step = &mut ctx.charts[chart].steps[s];
+            let step = &mut ctx.charts[chart].steps[su];
+            let was = step.held && !fresh;
             if error {
                 step.held = true;
-            } else if step.held && (ack || !needs_ack) {
+                if !was {
+                    events.push((s, GraphEvent::V1));
+                }
+            } else if was && (ack || !needs_ack) {
+                step.held = false;
+                events.push((s, GraphEvent::V0));
+                if needs_ack {
+                    events.push((s, GraphEvent::A1));
+                }
+            } else if fresh {
                 step.held = false;
             }
         }
         if interlocks {
-            if let Some(g) = &code.interlocks[s] {
+            if let Some(g) = &code.interlocks[su] {
                 let satisfied = g(ctx, frame)?;
-                ctx.charts[chart].steps[s].interlock_open = !satisfied;
+                let step = &mut ctx.charts[chart].steps[su];
+                let was_open = step.interlock_open && !fresh;
+                step.interlock_open = !satisfied;
+                match (was_open, !satisfied) {
+                    (false, true) => events.push((s, GraphEvent::L1)),
+                    (true, false) => events.push((s, GraphEvent::L0)),
+                    _ => {}
+                }
             }
         }
+    }
+    Ok(())
+}
+
+/// Runs, once each, the event actions of the events raised in this call, in declaration order;
+/// an interlock-dependent one only while its step's interlock is satisfied.
+fn event_actions(ctx: &mut Ctx<'_>, chart: usize, code: &ChartCode, plan: &ChartPlan, events: &[(u32, GraphEvent)]) -> Result<(), Fault> {
+    if events.is_empty() {
+        return Ok(());
+    }
+    let frame = ctx.charts[chart].frame;
+    for &(step, event, action, interlocked) in &plan.event_actions {
+        if !events.contains(&(step, event)) {
+            continue;
+        }
+        if interlocked && ctx.charts[chart].steps[step as usize].interlock_open {
+            continue;
+        }
+        (code.bodies[action])(ctx, frame)?;
     }
     Ok(())
 }

@@ -170,6 +170,24 @@ pub struct ChartPlan {
     /// declaration order.
     pub(crate) permanent_pre: Vec<usize>,
     pub(crate) permanent_post: Vec<usize>,
+    /// `graph`: S7-GRAPH's event actions (`sfc.s7graph.step` names the step,
+    /// `sfc.s7graph.event` the event): `(step, event, action, interlocked)`.
+    pub(crate) event_actions: Vec<(u32, GraphEvent, usize, bool)>,
+}
+
+/// An S7-GRAPH step event that runs an action once (manual 13.3, 13.5).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) enum GraphEvent {
+    /// V1: a supervision error comes.
+    V1,
+    /// V0: it goes.
+    V0,
+    /// L1: the interlock stops being satisfied (or is not when the step is activated).
+    L1,
+    /// L0: it is satisfied again.
+    L0,
+    /// A1: the step's error is acknowledged.
+    A1,
 }
 
 impl ChartPlan {
@@ -345,6 +363,26 @@ impl ChartPlan {
                 .collect(),
             permanent_post: (0..chart.actions.len())
                 .filter(|&i| attribute_is(&chart.actions[i].attributes, "sfc.s7graph.permanent", "post"))
+                .collect(),
+            event_actions: chart
+                .actions
+                .iter()
+                .enumerate()
+                .filter_map(|(i, a)| {
+                    let value = |n: &str| {
+                        a.attributes.iter().rev().find(|x| x.name.eq_ignore_ascii_case(n)).and_then(|x| x.value.clone())
+                    };
+                    let step = chart.step(value("sfc.s7graph.step")?.trim())? as u32;
+                    let event = match value("sfc.s7graph.event")?.trim().to_ascii_uppercase().as_str() {
+                        "V1" => GraphEvent::V1,
+                        "V0" => GraphEvent::V0,
+                        "L1" => GraphEvent::L1,
+                        "L0" => GraphEvent::L0,
+                        "A1" => GraphEvent::A1,
+                        _ => return None,
+                    };
+                    Some((step, event, i, attribute_is(&a.attributes, "sfc.s7graph.interlock", "true")))
+                })
                 .collect(),
         }
     }
