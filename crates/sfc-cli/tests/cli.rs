@@ -277,8 +277,10 @@ fn check_reports_a_runaway_witness_replay_at_its_loop() {
     let _ = std::fs::remove_dir_all(&dir);
 }
 
-/// A Studio 5000 L5X export and a TIA Portal export are not read yet: one located error that
-/// says what the file is and how many charts it holds (SFC routines, GRAPH blocks).
+/// A TIA Portal export is not read yet: one located error that says what the file is and how
+/// many charts it holds (GRAPH blocks). A Studio 5000 L5X export is read (`sfc-l5x`): its two
+/// SFC routines, drawn empty, are two charts without an initial step, each reported on its
+/// `SFCContent`.
 #[test]
 fn logix_and_tia_exports_are_named_with_their_charts() {
     let dir = temp_dir("vendors");
@@ -294,10 +296,13 @@ fn logix_and_tia_exports_are_named_with_their_charts() {
         "<?xml version=\"1.0\" encoding=\"utf-8\"?>\n<Document>\n  <Engineering version=\"V17\" />\n  <SW.Blocks.FB ID=\"0\"><AttributeList><ProgrammingLanguage>GRAPH</ProgrammingLanguage></AttributeList></SW.Blocks.FB>\n</Document>\n",
     )
     .unwrap();
-    for (path, says) in [
-        (&l5x, "Studio 5000 (Logix) L5X export holding 2 SFC routine(s)"),
-        (&tia, "TIA Portal (Openness) export (it holds 1 GRAPH block(s))"),
-    ] {
+    let out = sfc(&["check", l5x.to_str().unwrap()]);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(1), "{err}");
+    assert!(!err.contains("SFC0702"), "{err}");
+    assert_eq!(err.matches("error[SFC0725]: the chart has no initial step").count(), 2, "{err}");
+    assert!(err.contains("Main.L5X:4:") && err.contains("Main.L5X:6:"), "{err}");
+    for (path, says) in [(&tia, "TIA Portal (Openness) export (it holds 1 GRAPH block(s))")] {
         let out = sfc(&["check", path.to_str().unwrap()]);
         let err = String::from_utf8_lossy(&out.stderr);
         assert_eq!(out.status.code(), Some(1), "{err}");

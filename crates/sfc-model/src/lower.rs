@@ -111,7 +111,10 @@ pub fn check_attributes(attrs: &[ast::Attribute], allowed: &[&str], what: &str, 
             | "sfc.error_code" | "sfc.activation" => allowed.contains(&lname.as_str()),
             _ => true,
         };
-        if !KNOWN_ATTRIBUTES.contains(&lname.as_str()) {
+        // What a vendor import keeps for the way back to its format (`sfc.logix.*`: the L5X
+        // import, `sfc-l5x`), meaningful wherever the import writes it.
+        let vendor = lname.starts_with("sfc.logix.");
+        if !KNOWN_ATTRIBUTES.contains(&lname.as_str()) && !vendor {
             diags.push(Diagnostic::warning("SFC0602", a.span, format!("unknown attribute `{}`", a.name)));
         } else if !meaningful {
             diags.push(Diagnostic::warning(

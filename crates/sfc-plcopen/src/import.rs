@@ -23,16 +23,7 @@ pub const NAMESPACES: &[&str] = &[
     "http://www.plcopen.org/xml/tc6.xsd",
 ];
 
-/// Whether `s` is an IEC identifier (letters, digits, single underscores, not a keyword).
-pub(crate) fn is_ident(s: &str) -> bool {
-    let b = s.as_bytes();
-    !b.is_empty()
-        && b.first().is_some_and(|c| c.is_ascii_alphabetic() || *c == b'_')
-        && b.iter().all(|c| c.is_ascii_alphanumeric() || *c == b'_')
-        && !s.contains("__")
-        && !s.ends_with('_')
-        && !cannot_name(s)
-}
+pub(crate) use sfc_syntax::keywords::{is_identifier as is_ident, sanitize_identifier as sanitize};
 
 /// A name CODESYS and TwinCAT accept and IEC 61131-3 does not: a letter, then letters, digits
 /// and underscores, with a doubled or trailing underscore (`Move_Forwards__Pos3`). A leading
@@ -43,25 +34,6 @@ pub(crate) fn is_codesys_ident(s: &str) -> bool {
         && b.iter().all(|c| c.is_ascii_alphanumeric() || *c == b'_')
         && (s.contains("__") || s.ends_with('_'))
         && !cannot_name(s)
-}
-
-/// A usable identifier made from `s` (invalid characters become `_`).
-pub(crate) fn sanitize(s: &str) -> String {
-    let mut out = String::new();
-    for c in s.chars() {
-        let c = if c.is_ascii_alphanumeric() { c } else { '_' };
-        if c == '_' && (out.is_empty() || out.ends_with('_')) {
-            continue;
-        }
-        out.push(c);
-    }
-    while out.ends_with('_') {
-        out.pop();
-    }
-    if out.is_empty() || out.as_bytes().first().is_some_and(u8::is_ascii_digit) || cannot_name(&out) {
-        out.insert_str(0, "X_");
-    }
-    out
 }
 
 /// The state of one import: the XML, the text being written, the diagnostics.
@@ -1555,15 +1527,6 @@ fn not_a_project_note(root: Node) -> String {
         format!(
             "this is a TIA Portal (Openness) export{held}; sfc does not read S7-GRAPH sequences yet: \
              write the chart in IEC 61131-3 text or export PLCopen XML from a tool that has it"
-        )
-    } else if name == "RSLogix5000Content" {
-        let sfc = root
-            .descendants()
-            .filter(|n| n.is_element() && n.tag_name().name() == "Routine" && n.attribute("Type") == Some("SFC"))
-            .count();
-        format!(
-            "this is a Studio 5000 (Logix) L5X export holding {sfc} SFC routine(s); sfc does not read \
-             L5X yet: write the chart in IEC 61131-3 text or export PLCopen XML from a tool that has it"
         )
     } else {
         "sfc reads PLCopen TC6 XML, whose document element is `<project \
