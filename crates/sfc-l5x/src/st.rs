@@ -282,6 +282,20 @@ pub(crate) fn map(x: &XText, el: &Elements) -> Mapped {
                 }
                 if word(next) == "(" {
                     if INSTRUCTIONS.contains(&up.as_str()) {
+                        // Its operands are the instruction's (a routine, a storage bit): not tags
+                        // to declare from their use.
+                        let mut depth = 0i32;
+                        for u in sig.get(si + 1..).unwrap_or_default() {
+                            match text.get(u.range.clone()) {
+                                Some("(") => depth += 1,
+                                Some(")") => depth -= 1,
+                                _ => {}
+                            }
+                            skip_until = u.range.end;
+                            if depth <= 0 {
+                                break;
+                            }
+                        }
                         m.problems.push((
                             "SFC0724",
                             xml_range(x, t.range.clone()),
