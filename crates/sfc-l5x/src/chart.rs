@@ -78,6 +78,9 @@ struct Branch {
     anchor: Range<u32>,
 }
 
+/// A branch a walk went through: selection?, divergence?, where.
+type Via = (bool, bool, Range<u32>);
+
 /// Bound on the walk through branches (a file may link them in cycles).
 const MAX_WALK: usize = 100_000;
 
@@ -322,7 +325,7 @@ pub(crate) fn read(cx: &mut Ctx, content: Node, tags: &SfcTags) -> ChartOut {
     let step_like = |id: u64| matches!(kinds.get(&id), Some((Kind::Step | Kind::Stop, _)));
     let is_trans = |id: u64| matches!(kinds.get(&id), Some((Kind::Transition, _)));
     // Walks through junctions from `id` (forward or backward) to the steps and transitions.
-    let walk = |id: u64, fwd: bool| -> (Vec<u64>, Vec<(bool, bool, Range<u32>)>) {
+    let walk = |id: u64, fwd: bool| -> (Vec<u64>, Vec<Via>) {
         let edges = if fwd { &succ } else { &pred };
         let mut found = Vec::new();
         let mut via = Vec::new();
@@ -595,9 +598,8 @@ fn action(
     }
     line.push_str(");");
     let line = line.locate(anchor(a));
-    if q == "P" {
-        attrs.push(("sfc.logix.qualifier".into(), q_raw.to_string()));
-    } else if q_raw.len() <= 2 {
+    // The spelling an export writes back: Logix's P (two executions) and the short spellings.
+    if q == "P" || q_raw.len() <= 2 {
         attrs.push(("sfc.logix.qualifier".into(), q_raw.to_string()));
     }
     if let Some(l) = tags.l5k.get(&up) {

@@ -191,7 +191,7 @@ fn struct_members(types: &Types, base: &str) -> Vec<(String, String)> {
 impl Types {
     /// Reads the `<DataTypes>` of the controller: user-defined structures (their names first, so
     /// members may name each other).
-    pub(crate) fn read(cx: &mut Ctx, dts: Option<Node>) -> Vec<(String, Range<u32>, Vec<(String, String)>)> {
+    pub(crate) fn read(cx: &mut Ctx, dts: Option<Node>) -> Vec<Udt> {
         let list: Vec<Node> = dts.into_iter().flat_map(|d| children(d, "DataType")).collect();
         for d in &list {
             if let Some(n) = attr(*d, "Name") {
@@ -240,6 +240,9 @@ impl Types {
         out
     }
 }
+
+/// A user-defined structure: name, where, members (name, IEC type).
+pub(crate) type Udt = (String, Range<u32>, Vec<(String, String)>);
 
 /// What a `<Tag>` is.
 pub(crate) enum TagKind {
