@@ -277,23 +277,15 @@ fn check_reports_a_runaway_witness_replay_at_its_loop() {
     let _ = std::fs::remove_dir_all(&dir);
 }
 
-/// A TIA Portal export is not read yet: one located error that says what the file is and how
-/// many charts it holds (GRAPH blocks). A Studio 5000 L5X export is read (`sfc-l5x`): its two
-/// SFC routines, drawn empty, are two charts without an initial step, each reported on its
-/// `SFCContent`.
+/// A Studio 5000 L5X export is read (`sfc-l5x`): its two SFC routines, drawn empty, are two
+/// charts without an initial step, each reported on its `SFCContent`.
 #[test]
-fn logix_and_tia_exports_are_named_with_their_charts() {
-    let dir = temp_dir("vendors");
+fn a_logix_export_is_read_with_its_sfc_routines() {
+    let dir = temp_dir("logix");
     let l5x = dir.join("Main.L5X");
     std::fs::write(
         &l5x,
         "<?xml version=\"1.0\" encoding=\"UTF-8\" standalone=\"yes\"?>\n<RSLogix5000Content SchemaRevision=\"1.0\" SoftwareRevision=\"32.01\">\n<Controller Use=\"Context\" Name=\"Demo\"><Programs><Program Name=\"Main\"><Routines>\n<Routine Name=\"Fill\" Type=\"SFC\"><SFCContent/></Routine>\n<Routine Name=\"Logic\" Type=\"RLL\"/>\n<Routine Name=\"Drain\" Type=\"SFC\"><SFCContent/></Routine>\n</Routines></Program></Programs></Controller>\n</RSLogix5000Content>\n",
-    )
-    .unwrap();
-    let tia = dir.join("Sequence.xml");
-    std::fs::write(
-        &tia,
-        "<?xml version=\"1.0\" encoding=\"utf-8\"?>\n<Document>\n  <Engineering version=\"V17\" />\n  <SW.Blocks.FB ID=\"0\"><AttributeList><ProgrammingLanguage>GRAPH</ProgrammingLanguage></AttributeList></SW.Blocks.FB>\n</Document>\n",
     )
     .unwrap();
     let out = sfc(&["check", l5x.to_str().unwrap()]);
@@ -302,6 +294,20 @@ fn logix_and_tia_exports_are_named_with_their_charts() {
     assert!(!err.contains("SFC0702"), "{err}");
     assert_eq!(err.matches("error[SFC0725]: the chart has no initial step").count(), 2, "{err}");
     assert!(err.contains("Main.L5X:4:") && err.contains("Main.L5X:6:"), "{err}");
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// A TIA Portal export is not read yet: one located error that says what the file is and how
+/// many charts it holds (GRAPH blocks).
+#[test]
+fn tia_exports_are_named_with_their_charts() {
+    let dir = temp_dir("vendors");
+    let tia = dir.join("Sequence.xml");
+    std::fs::write(
+        &tia,
+        "<?xml version=\"1.0\" encoding=\"utf-8\"?>\n<Document>\n  <Engineering version=\"V17\" />\n  <SW.Blocks.FB ID=\"0\"><AttributeList><ProgrammingLanguage>GRAPH</ProgrammingLanguage></AttributeList></SW.Blocks.FB>\n</Document>\n",
+    )
+    .unwrap();
     for (path, says) in [(&tia, "TIA Portal (Openness) export (it holds 1 GRAPH block(s))")] {
         let out = sfc(&["check", path.to_str().unwrap()]);
         let err = String::from_utf8_lossy(&out.stderr);

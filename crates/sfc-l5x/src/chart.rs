@@ -277,7 +277,7 @@ pub(crate) fn read(cx: &mut Ctx, content: Node, tags: &SfcTags) -> ChartOut {
         out.attrs.push(("sfc.logix.links".into(), link_list.join(",")));
     }
     // Names of steps, stops, actions (for the ST mapping and the text).
-    let mut el = Elements::default();
+    let mut el = Elements { renamed: cx.renamed.clone(), ..Elements::default() };
     let mut names_by_id: HashMap<u64, String> = HashMap::new();
     let mut x_of: HashMap<u64, f64> = HashMap::new();
     for &(id, k, e) in &ordered {

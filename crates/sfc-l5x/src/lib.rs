@@ -56,6 +56,7 @@ pub fn import(file: u32, xml: &str) -> Output {
         diags: Vec::new(),
         types: Types::default(),
         names: HashMap::new(),
+        renamed: HashMap::new(),
     };
     l5x(&mut cx, root);
     let (text, map) = cx.em.finish();
@@ -70,6 +71,8 @@ pub(crate) struct Ctx {
     pub types: Types,
     /// Names read from `Operand` attributes, by the attribute's position (each reported once).
     names: HashMap<u32, Frag>,
+    /// Tags imported under another name (upper-case Logix name → name in text).
+    pub renamed: HashMap<String, String>,
 }
 
 impl Ctx {
@@ -277,6 +280,12 @@ fn l5x(cx: &mut Ctx, root: Node) {
             if let Some(rev) = attr(root, "SoftwareRevision") {
                 attrs.push(("sfc.logix.rev".into(), rev.to_string()));
             }
+            if let Some(d) = child(r, "Description") {
+                let text = sfc_xmlmap::xml::text_of(d).text.trim().to_string();
+                if !text.is_empty() {
+                    attrs.push(("sfc.description".into(), text));
+                }
+            }
             if attr(*p, "MainRoutineName") == Some(rname.as_str()) {
                 attrs.push(("sfc.logix.main".into(), "true".into()));
             }
@@ -320,7 +329,7 @@ fn l5x(cx: &mut Ctx, root: Node) {
     if !globals.vars.is_empty() {
         cx.em.str("VAR_GLOBAL\n");
         for v in &globals.vars {
-            var_decl(cx, v);
+            var_decl(cx, v, "    ");
         }
         cx.em.str("END_VAR\n\n");
     }
@@ -411,10 +420,10 @@ fn pou_vars(cx: &mut Ctx, scope: &Scope, globals: &Scope, chart: &chart::ChartOu
     vars
 }
 
-fn var_decl(cx: &mut Ctx, v: &Var) {
+fn var_decl(cx: &mut Ctx, v: &Var, indent: &str) {
     cx.em.open(v.anchor.clone());
-    cx.attributes(&v.attrs, "        ");
-    cx.em.str("        ");
+    cx.attributes(&v.attrs, indent);
+    cx.em.str(indent);
     let name = Frag::located(v.name.clone(), v.name_at.clone());
     cx.em.frag(&name);
     cx.em.str(&format!(" : {}", v.ty));
@@ -432,30 +441,14 @@ fn pou(cx: &mut Ctx, p: Pou) {
     if !p.vars.is_empty() {
         cx.em.str("    VAR\n");
         for v in &p.vars {
-            var_decl(cx, v);
+            var_decl(cx, v, "        ");
         }
         cx.em.str("    END_VAR\n");
     }
     let c = p.chart;
     for s in &c.steps {
-        cx.em.str("\n");
-        cx.em.open(s.anchor.clone());
-        cx.attributes(&s.attrs, "    ");
-        cx.em.str(if s.initial { "    INITIAL_STEP " } else { "    STEP " });
-        cx.em.frag(&s.name);
-        cx.em.str(":");
-        if s.assoc.is_empty() {
-            cx.em.str(" END_STEP\n");
-        } else {
-            cx.em.str("\n");
-            for a in &s.assoc {
-                cx.em.str("        ");
-                cx.em.frag(a);
-                cx.em.str("\n");
-            }
-            cx.em.str("    END_STEP\n");
-        }
-        cx.em.close();
+        let kw = if s.initial { "INITIAL_STEP" } else { "STEP" };
+        block(cx, s.anchor.clone(), &s.attrs, kw, &s.name, &s.assoc, "END_STEP");
     }
     for t in &c.transitions {
         cx.em.str("\n");
@@ -478,29 +471,35 @@ fn pou(cx: &mut Ctx, p: Pou) {
         cx.em.close();
     }
     for a in &c.actions {
-        cx.em.str("\n");
-        cx.em.open(a.anchor.clone());
-        cx.attributes(&a.attrs, "    ");
-        cx.em.str("    ACTION ");
-        cx.em.frag(&a.name);
-        cx.em.str(":");
-        if a.body.iter().all(|l| l.text.trim().is_empty()) {
-            cx.em.str(" END_ACTION\n");
-        } else {
-            cx.em.str("\n");
-            for l in &a.body {
-                if l.text.trim().is_empty() {
-                    cx.em.str("\n");
-                } else {
-                    cx.em.str("        ");
-                    cx.em.frag(l);
-                    cx.em.str("\n");
-                }
-            }
-            cx.em.str("    END_ACTION\n");
-        }
-        cx.em.close();
+        block(cx, a.anchor.clone(), &a.attrs, "ACTION", &a.name, &a.body, "END_ACTION");
     }
     cx.em.str("END_PROGRAM\n\n");
+    cx.em.close();
+}
+
+/// A step or an action: its attributes, `KEYWORD name:`, its lines (an association or a line of
+/// code each; blank lines kept inside), `END_KEYWORD`, all standing for the element at `anchor`.
+fn block(cx: &mut Ctx, anchor: Range<u32>, attrs: &[(String, String)], kw: &str, name: &Frag, lines: &[Frag], end: &str) {
+    cx.em.str("\n");
+    cx.em.open(anchor);
+    cx.attributes(attrs, "    ");
+    cx.em.str(&format!("    {kw} "));
+    cx.em.frag(name);
+    cx.em.str(":");
+    if lines.iter().all(|l| l.text.trim().is_empty()) {
+        cx.em.str(&format!(" {end}\n"));
+    } else {
+        cx.em.str("\n");
+        for l in lines {
+            if l.text.trim().is_empty() {
+                cx.em.str("\n");
+            } else {
+                cx.em.str("        ");
+                cx.em.frag(l);
+                cx.em.str("\n");
+            }
+        }
+        cx.em.str(&format!("    {end}\n"));
+    }
     cx.em.close();
 }

@@ -143,6 +143,8 @@ pub(crate) struct Elements {
     pub steps: HashMap<String, StepInfo>,
     /// Actions by upper-case operand → name in text.
     pub actions: HashMap<String, String>,
+    /// Tags imported under another name: upper-case Logix name → name in text.
+    pub renamed: HashMap<String, String>,
     /// Upper-case names of the actions that are not Reset actions (those a Reset action may name).
     pub stored: std::collections::HashSet<String>,
     /// Stops by upper-case operand → name in text.
@@ -248,7 +250,14 @@ pub(crate) fn map(x: &XText, el: &Elements) -> Mapped {
             Tok::Ident => {
                 let name = word(Some(t));
                 let up = name.to_ascii_uppercase();
-                if word(prev) == "." || KEYWORDS.contains(&up.as_str()) {
+                if word(prev) == "." {
+                    continue;
+                }
+                if let Some(new) = el.renamed.get(&up) {
+                    w.replace_text(t.range.clone(), new.clone());
+                    continue;
+                }
+                if KEYWORDS.contains(&up.as_str()) {
                     continue;
                 }
                 let member = next2.filter(|m| word(next) == "." && m.kind == Tok::Ident);

@@ -287,10 +287,24 @@ pub(crate) fn tag(cx: &mut Ctx, t: Node) -> TagKind {
             );
         }
     }
-    if !sfc_syntax::keywords::is_identifier(&name) {
+    let logix_name = name.bytes().next().is_some_and(|c| c.is_ascii_alphabetic() || c == b'_')
+        && name.bytes().all(|c| c.is_ascii_alphanumeric() || c == b'_');
+    if !sfc_syntax::keywords::is_identifier(&name) && !logix_name {
         cx.diag("SFC0722", name_at, format!("the tag `{name}` is not imported: its name is no IEC 61131-3 identifier"));
         return TagKind::Skipped { name };
     }
+    let name = if sfc_syntax::keywords::is_identifier(&name) {
+        name
+    } else {
+        // A Logix name IEC reserves (`Constant`, `Step`) or spells otherwise (`A__B`): renamed,
+        // and its uses in the chart alike.
+        let fixed = sfc_syntax::keywords::sanitize_identifier(&name);
+        let d = cx.diag("SFC0704", name_at.clone(), format!("`{name}` is not an IEC 61131-3 identifier; the tag is imported as `{fixed}`, and so are its uses in the chart"));
+        d.severity = sfc_diagnostics::Severity::Warning;
+        d.notes.push("identifiers are letters, digits and single underscores, start with a letter, and are not keywords".into());
+        cx.renamed.insert(name.to_ascii_uppercase(), fixed.clone());
+        fixed
+    };
     let Some(base) = iec_type(&mut cx.types, dt) else {
         cx.diag(
             "SFC0722",
