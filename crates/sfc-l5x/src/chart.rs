@@ -142,7 +142,13 @@ fn id_of(cx: &mut Ctx, n: Node) -> Option<u64> {
     id
 }
 
-fn register<'a, 'i>(cx: &mut Ctx, kinds: &mut HashMap<u64, (Kind, Node<'a, 'i>)>, id: u64, k: Kind, n: Node<'a, 'i>) -> bool {
+fn register<'a, 'i>(
+    cx: &mut Ctx,
+    kinds: &mut HashMap<u64, (Kind, Node<'a, 'i>)>,
+    id: u64,
+    k: Kind,
+    n: Node<'a, 'i>,
+) -> bool {
     if kinds.contains_key(&id) {
         cx.diag(
             "SFC0725",
@@ -194,7 +200,11 @@ pub(crate) fn read(cx: &mut Ctx, content: Node, tags: &SfcTags) -> ChartOut {
                 };
                 out.attrs.push((key.into(), serialize(e)));
                 if name == "SbrRet" {
-                    cx.diag("SFC0722", anchor(e), "the SFC subroutine parameters (`SbrRet`) are kept for the way back, not simulated");
+                    cx.diag(
+                        "SFC0722",
+                        anchor(e),
+                        "the SFC subroutine parameters (`SbrRet`) are kept for the way back, not simulated",
+                    );
                 }
                 continue;
             }
@@ -208,7 +218,14 @@ pub(crate) fn read(cx: &mut Ctx, content: Node, tags: &SfcTags) -> ChartOut {
             let bt = attr(e, "BranchType").unwrap_or("");
             let bf = attr(e, "BranchFlow").unwrap_or("");
             if !matches!(bt, "Selection" | "Simultaneous") || !matches!(bf, "Diverge" | "Converge") {
-                cx.diag("SFC0727", anchor(e), format!("a branch of type `{bt}` and flow `{bf}` is not known; read as a selection {}", if bf == "Converge" { "convergence" } else { "divergence" }));
+                cx.diag(
+                    "SFC0727",
+                    anchor(e),
+                    format!(
+                        "a branch of type `{bt}` and flow `{bf}` is not known; read as a selection {}",
+                        if bf == "Converge" { "convergence" } else { "divergence" }
+                    ),
+                );
             }
             if !register(cx, &mut kinds, id, kind, e) {
                 continue;
@@ -220,11 +237,22 @@ pub(crate) fn read(cx: &mut Ctx, content: Node, tags: &SfcTags) -> ChartOut {
                     legs.push(lid);
                 }
                 if attr(l, "Force").is_some_and(|f| f != "NoForce") {
-                    cx.diag("SFC0722", attr_range(l, "Force").unwrap_or_else(|| anchor(l)), "a forced leg is imported without its force");
+                    cx.diag(
+                        "SFC0722",
+                        attr_range(l, "Force").unwrap_or_else(|| anchor(l)),
+                        "a forced leg is imported without its force",
+                    );
                 }
             }
             let user_priority = attr(e, "Priority") == Some("UserDefined");
-            branches.push(Branch { selection: bt != "Simultaneous", diverge: bf != "Converge", user_priority, legs, id, anchor: anchor(e) });
+            branches.push(Branch {
+                selection: bt != "Simultaneous",
+                diverge: bf != "Converge",
+                user_priority,
+                legs,
+                id,
+                anchor: anchor(e),
+            });
             out.attrs.push((
                 "sfc.logix.branch".into(),
                 format!(
@@ -253,7 +281,11 @@ pub(crate) fn read(cx: &mut Ctx, content: Node, tags: &SfcTags) -> ChartOut {
         };
         for (end, which) in [(f, "FromID"), (t, "ToID")] {
             if !kinds.contains_key(&end) {
-                cx.diag("SFC0725", attr_range(l, which).unwrap_or_else(|| anchor(l)), format!("the link names ID {end}, which no element of the routine has"));
+                cx.diag(
+                    "SFC0725",
+                    attr_range(l, which).unwrap_or_else(|| anchor(l)),
+                    format!("the link names ID {end}, which no element of the routine has"),
+                );
             }
         }
         if !kinds.contains_key(&f) || !kinds.contains_key(&t) {
@@ -290,7 +322,11 @@ pub(crate) fn read(cx: &mut Ctx, content: Node, tags: &SfcTags) -> ChartOut {
         let name = cx.operand_name(e, if k == Kind::Transition { "transition" } else { "step" });
         let up = name.text.to_ascii_uppercase();
         if !out.names.insert(up.clone()) {
-            cx.diag("SFC0725", attr_range(e, "Operand").unwrap_or_else(|| anchor(e)), format!("`{}` names two elements of the chart", name.text));
+            cx.diag(
+                "SFC0725",
+                attr_range(e, "Operand").unwrap_or_else(|| anchor(e)),
+                format!("`{}` names two elements of the chart", name.text),
+            );
         }
         names_by_id.insert(id, name.text.clone());
         if k == Kind::Transition {
@@ -304,7 +340,17 @@ pub(crate) fn read(cx: &mut Ctx, content: Node, tags: &SfcTags) -> ChartOut {
                 } else {
                     None
                 };
-                el.steps.insert(up.clone(), StepInfo { name: name.text.clone(), pre: tags.pre.get(&up).copied(), pre_expr: pre_expr.map(|x| Frag::from_xtext(&x.trim())) });
+                // The expression is Logix ST too (tags renamed; tags it reads declared from use).
+                let pre_expr = pre_expr.map(|x| {
+                    let m = st::map(&x.trim(), &Elements { renamed: cx.renamed.clone(), ..Elements::default() });
+                    cx.problems(&m.problems);
+                    out.idents.extend(m.idents);
+                    m.frag
+                });
+                el.steps.insert(
+                    up.clone(),
+                    StepInfo { name: name.text.clone(), pre: tags.pre.get(&up).copied(), pre_expr },
+                );
             }
             Kind::Stop => {
                 el.stops.insert(up, name.text.clone());
@@ -365,17 +411,32 @@ pub(crate) fn read(cx: &mut Ctx, content: Node, tags: &SfcTags) -> ChartOut {
         let from: Vec<u64> = before.iter().copied().filter(|&v| step_like(v)).collect();
         let to: Vec<u64> = after.iter().copied().filter(|&v| step_like(v)).collect();
         if before.iter().chain(&after).any(|&v| is_trans(v)) {
-            cx.diag("SFC0725", here.clone(), format!("the transition `{}` is linked to another transition without a step between them", names_by_id.get(&id).map_or("", String::as_str)));
+            cx.diag(
+                "SFC0725",
+                here.clone(),
+                format!(
+                    "the transition `{}` is linked to another transition without a step between them",
+                    names_by_id.get(&id).map_or("", String::as_str)
+                ),
+            );
         }
         if via_b.iter().any(|(sel, div, _)| *sel && !*div && from.len() > 1) {
-            cx.diag("SFC0725", here.clone(), "a selection convergence above a transition: its legs are read as one simultaneous convergence")
-                .notes
-                .push("Studio places a selection convergence between the last transitions of its legs and a step".into());
+            cx.diag(
+                "SFC0725",
+                here.clone(),
+                "a selection convergence above a transition: its legs are read as one simultaneous convergence",
+            )
+            .notes
+            .push("Studio places a selection convergence between the last transitions of its legs and a step".into());
         }
         if via_a.iter().any(|(sel, div, _)| *sel && *div && to.len() > 1) {
-            cx.diag("SFC0725", here.clone(), "a selection divergence below a transition: its legs are read as one simultaneous divergence")
-                .notes
-                .push("Studio places a selection divergence between a step and the first transitions of its legs".into());
+            cx.diag(
+                "SFC0725",
+                here.clone(),
+                "a selection divergence below a transition: its legs are read as one simultaneous divergence",
+            )
+            .notes
+            .push("Studio places a selection divergence between a step and the first transitions of its legs".into());
         }
         // The leg order of a selection divergence the transition hangs on, for ties.
         let leg_index = pred.get(&id).into_iter().flatten().find_map(|p| match kinds.get(p) {
@@ -383,7 +444,11 @@ pub(crate) fn read(cx: &mut Ctx, content: Node, tags: &SfcTags) -> ChartOut {
             _ => None,
         });
         for &s in &from {
-            outgoing.entry(s).or_default().push((id, x_of.get(&id).copied().unwrap_or(0.0), leg_index.unwrap_or(usize::MAX)));
+            outgoing.entry(s).or_default().push((
+                id,
+                x_of.get(&id).copied().unwrap_or(0.0),
+                leg_index.unwrap_or(usize::MAX),
+            ));
         }
         trans_ends.insert(id, (from, to));
     }
@@ -451,7 +516,11 @@ pub(crate) fn read(cx: &mut Ctx, content: Node, tags: &SfcTags) -> ChartOut {
             }
         }
         if k == Kind::Stop && succ.get(&id).is_some_and(|v| !v.is_empty()) {
-            cx.diag("SFC0725", anchor(e), format!("the stop `{}` has a link below it; a stop ends its path", name.text));
+            cx.diag(
+                "SFC0725",
+                anchor(e),
+                format!("the stop `{}` has a link below it; a stop ends its path", name.text),
+            );
         }
         let mut assoc = Vec::new();
         for a in children(e, "Action") {
@@ -484,7 +553,11 @@ pub(crate) fn read(cx: &mut Ctx, content: Node, tags: &SfcTags) -> ChartOut {
         }
         attrs.push(("sfc.logix.attrs".into(), attrs_of(e)));
         if attr(e, "Force").is_some_and(|f| f != "NoForce") {
-            cx.diag("SFC0722", attr_range(e, "Force").unwrap_or_else(|| anchor(e)), "a forced transition is imported without its force");
+            cx.diag(
+                "SFC0722",
+                attr_range(e, "Force").unwrap_or_else(|| anchor(e)),
+                "a forced transition is imported without its force",
+            );
         }
         let content_node = child(e, "Condition").and_then(|c| child(c, "STContent"));
         let (x, numbers) = st_lines(content_node);
@@ -494,7 +567,11 @@ pub(crate) fn read(cx: &mut Ctx, content: Node, tags: &SfcTags) -> ChartOut {
         }
         if from.is_empty() || to.is_empty() {
             let side = if from.is_empty() { "no step above it" } else { "no step below it" };
-            cx.diag("SFC0725", anchor(e), format!("the transition `{}` has {side}: it is kept in `sfc.loose`, not in the chart", name.text));
+            cx.diag(
+                "SFC0725",
+                anchor(e),
+                format!("the transition `{}` has {side}: it is kept in `sfc.loose`, not in the chart", name.text),
+            );
             let loose = sfc_syntax::attr_value::Loose {
                 rect: None,
                 from: from.clone(),
@@ -505,7 +582,15 @@ pub(crate) fn read(cx: &mut Ctx, content: Node, tags: &SfcTags) -> ChartOut {
             out.attrs.push((sfc_syntax::attr_value::LOOSE.into(), loose.write()));
             continue;
         }
-        out.transitions.push(TransOut { name, priority: priority.get(&id).copied(), from, to, cond, anchor: anchor(e), attrs });
+        out.transitions.push(TransOut {
+            name,
+            priority: priority.get(&id).copied(),
+            from,
+            to,
+            cond,
+            anchor: anchor(e),
+            attrs,
+        });
     }
     out
 }
@@ -539,9 +624,13 @@ fn condition(cx: &mut Ctx, e: Node, x: &XText, el: &Elements, out: &mut ChartOut
     }
     let m: Mapped = st::map(&cond_x.trim(), el);
     if let Some(a) = m.assigns.first() {
-        cx.diag("SFC0729", a.clone(), "a transition's condition is a BOOL expression, not an assignment: imported as FALSE")
-            .notes
-            .push("Studio's verification refuses this condition too".into());
+        cx.diag(
+            "SFC0729",
+            a.clone(),
+            "a transition's condition is a BOOL expression, not an assignment: imported as FALSE",
+        )
+        .notes
+        .push("Studio's verification refuses this condition too".into());
         return Frag::located("FALSE", anchor(e));
     }
     cx.problems(&m.problems);
@@ -567,7 +656,11 @@ fn action(
     let (q, timed) = match qualifier(q_raw) {
         Some(q) => q,
         None => {
-            cx.diag("SFC0727", attr_range(a, "Qualifier").unwrap_or_else(|| anchor(a)), format!("the qualifier `{q_raw}` is not known: read as N (NonStored)"));
+            cx.diag(
+                "SFC0727",
+                attr_range(a, "Qualifier").unwrap_or_else(|| anchor(a)),
+                format!("the qualifier `{q_raw}` is not known: read as N (NonStored)"),
+            );
             ("N", false)
         }
     };
@@ -589,7 +682,14 @@ fn action(
             match tags.pre.get(&up) {
                 Some(p) => *p,
                 None => {
-                    cx.diag("SFC0721", attr_range(a, "Operand").unwrap_or_else(|| anchor(a)), format!("the {q} action `{}` has no SFC_ACTION tag in the file: its preset is taken as 0 ms", name.text));
+                    cx.diag(
+                        "SFC0721",
+                        attr_range(a, "Operand").unwrap_or_else(|| anchor(a)),
+                        format!(
+                            "the {q} action `{}` has no SFC_ACTION tag in the file: its preset is taken as 0 ms",
+                            name.text
+                        ),
+                    );
                     0
                 }
             }
@@ -613,7 +713,14 @@ fn action(
         return Some((line, None));
     }
     if seen.contains_key(&up) {
-        cx.diag("SFC0727", attr_range(a, "Operand").unwrap_or_else(|| anchor(a)), format!("a second action of the chart is `{}`: its body is written once, and this association runs it", name.text));
+        cx.diag(
+            "SFC0727",
+            attr_range(a, "Operand").unwrap_or_else(|| anchor(a)),
+            format!(
+                "a second action of the chart is `{}`: its body is written once, and this association runs it",
+                name.text
+            ),
+        );
         return Some((line, None));
     }
     if q == "R" {
@@ -623,7 +730,11 @@ fn action(
     }
     seen.insert(up.clone(), seen.len());
     if !out.names.insert(up) {
-        cx.diag("SFC0725", attr_range(a, "Operand").unwrap_or_else(|| anchor(a)), format!("`{}` names an action and another element of the chart", name.text));
+        cx.diag(
+            "SFC0725",
+            attr_range(a, "Operand").unwrap_or_else(|| anchor(a)),
+            format!("`{}` names an action and another element of the chart", name.text),
+        );
     }
     let mut body = Vec::new();
     if !boolean {
@@ -632,7 +743,8 @@ fn action(
         cx.problems(&m.problems);
         out.idents.extend(m.idents);
         if !m.nra_lines.is_empty() {
-            let lines: Vec<String> = m.nra_lines.iter().map(|i| numbers.get(*i).cloned().unwrap_or_else(|| i.to_string())).collect();
+            let lines: Vec<String> =
+                m.nra_lines.iter().map(|i| numbers.get(*i).cloned().unwrap_or_else(|| i.to_string())).collect();
             attrs.push(("sfc.logix.nra".into(), lines.join(",")));
         }
         // One line of text per line of the body; blank lines at the end dropped.
@@ -642,7 +754,14 @@ fn action(
         }
         body = lines;
     } else if child(a, "Body").is_some_and(|b| !text_of(b).text.trim().is_empty()) {
-        cx.diag("SFC0722", anchor(a), format!("the Boolean action `{}` has a body: a Boolean action only sets its Q bit, the body is not imported", name.text));
+        cx.diag(
+            "SFC0722",
+            anchor(a),
+            format!(
+                "the Boolean action `{}` has a body: a Boolean action only sets its Q bit, the body is not imported",
+                name.text
+            ),
+        );
     }
     Some((line, Some(ActionOut { name, anchor: anchor(a), attrs, body })))
 }
@@ -665,7 +784,11 @@ fn split_lines(f: &Frag) -> Vec<Frag> {
                 } else {
                     m.xml.clone()
                 };
-                part.marks.push(sfc_xmlmap::MapEntry { text: (a - start) as u32..(b - start) as u32, xml, exact: m.exact });
+                part.marks.push(sfc_xmlmap::MapEntry {
+                    text: (a - start) as u32..(b - start) as u32,
+                    xml,
+                    exact: m.exact,
+                });
             }
         }
         out.push(part);

@@ -114,9 +114,16 @@ impl Ctx {
             Frag::located(fixed, at.clone())
         } else {
             let fixed = sfc_syntax::keywords::sanitize_identifier(raw);
-            self.diag("SFC0704", at.clone(), format!("`{raw}` is not an IEC 61131-3 identifier; the {what} is imported as `{fixed}`"))
-                .notes
-                .push("identifiers are letters, digits and single underscores, start with a letter, and are not keywords".into());
+            self.diag(
+                "SFC0704",
+                at.clone(),
+                format!("`{raw}` is not an IEC 61131-3 identifier; the {what} is imported as `{fixed}`"),
+            )
+            .notes
+            .push(
+                "identifiers are letters, digits and single underscores, start with a letter, and are not keywords"
+                    .into(),
+            );
             Frag::located(fixed, at.clone())
         };
         self.names.insert(at.start, f.clone());
@@ -183,7 +190,11 @@ struct Pou {
 
 fn l5x(cx: &mut Ctx, root: Node) {
     if !is_l5x(root) {
-        cx.diag("SFC0731", anchor(root), format!("the document element is `{}`, not `RSLogix5000Content`", root.tag_name().name()));
+        cx.diag(
+            "SFC0731",
+            anchor(root),
+            format!("the document element is `{}`, not `RSLogix5000Content`", root.tag_name().name()),
+        );
         return;
     }
     let Some(ctrl) = child(root, "Controller") else {
@@ -215,7 +226,11 @@ fn l5x(cx: &mut Ctx, root: Node) {
         };
         if !known {
             let xml_name = DEFAULT_SETTINGS.iter().find(|d| d.1 == key).map_or("", |d| d.0);
-            cx.diag("SFC0727", attr_range(ctrl, xml_name).unwrap_or_else(|| anchor(ctrl)), format!("the SFC setting `{xml_name}=\"{v}\"` is not known; kept as written"));
+            cx.diag(
+                "SFC0727",
+                attr_range(ctrl, xml_name).unwrap_or_else(|| anchor(ctrl)),
+                format!("the SFC setting `{xml_name}=\"{v}\"` is not known; kept as written"),
+            );
         }
     }
     let programs: Vec<Node> = child(ctrl, "Programs").into_iter().flat_map(|p| children(p, "Program")).collect();
@@ -227,11 +242,17 @@ fn l5x(cx: &mut Ctx, root: Node) {
             .push("the settings belong to the controller; change `sfc.logix.exec`, `sfc.logix.restart` and `sfc.logix.lastscan` if the project's differ".into());
     }
     let udts = Types::read(cx, child(ctrl, "DataTypes"));
-    for aoi in child(ctrl, "AddOnInstructionDefinitions").into_iter().flat_map(|a| children(a, "AddOnInstructionDefinition")) {
+    for aoi in
+        child(ctrl, "AddOnInstructionDefinitions").into_iter().flat_map(|a| children(a, "AddOnInstructionDefinition"))
+    {
         let n = attr(aoi, "Name").unwrap_or("");
-        cx.diag("SFC0722", attr_range(aoi, "Name").unwrap_or_else(|| anchor(aoi)), format!("the Add-On Instruction `{n}` is not imported"))
-            .notes
-            .push("sfc imports SFC routines; tags of this type are not declared".into());
+        cx.diag(
+            "SFC0722",
+            attr_range(aoi, "Name").unwrap_or_else(|| anchor(aoi)),
+            format!("the Add-On Instruction `{n}` is not imported"),
+        )
+        .notes
+        .push("sfc imports SFC routines; tags of this type are not declared".into());
     }
     let globals = read_tags(cx, child(ctrl, "Tags"));
     // Routine names shared by programs are written `Program_Routine`.
@@ -270,11 +291,22 @@ fn l5x(cx: &mut Ctx, root: Node) {
                 name = format!("{}_{k}", sfc_syntax::keywords::sanitize_identifier(&wanted));
             }
             if name != rname {
-                let why = if shared { "another program has an SFC routine of the same name" } else { "its name is no IEC 61131-3 identifier or is taken" };
-                cx.diag("SFC0720", attr_range(r, "Name").unwrap_or_else(|| anchor(r)), format!("the SFC routine `{pname}/{rname}` is imported as the PROGRAM `{name}`: {why}"));
+                let why = if shared {
+                    "another program has an SFC routine of the same name"
+                } else {
+                    "its name is no IEC 61131-3 identifier or is taken"
+                };
+                cx.diag(
+                    "SFC0720",
+                    attr_range(r, "Name").unwrap_or_else(|| anchor(r)),
+                    format!("the SFC routine `{pname}/{rname}` is imported as the PROGRAM `{name}`: {why}"),
+                );
             }
             let chart = chart::read(cx, content, &sfc_tags);
-            let mut attrs = vec![("sfc.dialect".to_string(), "logix".to_string()), ("sfc.logix.routine".to_string(), format!("{pname}/{rname}"))];
+            let mut attrs = vec![
+                ("sfc.dialect".to_string(), "logix".to_string()),
+                ("sfc.logix.routine".to_string(), format!("{pname}/{rname}")),
+            ];
             attrs.extend(settings.iter().cloned());
             attrs.extend(chart.attrs.iter().cloned());
             if let Some(rev) = attr(root, "SoftwareRevision") {
@@ -296,7 +328,16 @@ fn l5x(cx: &mut Ctx, root: Node) {
     if pous.is_empty() {
         let found: Vec<String> = programs
             .iter()
-            .flat_map(|p| routines(*p).into_iter().map(move |r| format!("{}/{} ({})", attr(*p, "Name").unwrap_or(""), attr(r, "Name").unwrap_or(""), attr(r, "Type").unwrap_or("?"))))
+            .flat_map(|p| {
+                routines(*p).into_iter().map(move |r| {
+                    format!(
+                        "{}/{} ({})",
+                        attr(*p, "Name").unwrap_or(""),
+                        attr(r, "Name").unwrap_or(""),
+                        attr(r, "Type").unwrap_or("?")
+                    )
+                })
+            })
             .collect();
         let d = cx.diag("SFC0730", anchor(root), "the L5X file holds no SFC routine: there is no chart to import");
         if !found.is_empty() {
@@ -363,9 +404,21 @@ fn pou_vars(cx: &mut Ctx, scope: &Scope, globals: &Scope, chart: &chart::ChartOu
         vars.push(v.clone());
     }
     if !transition_tags.is_empty() {
-        let first = scope.vars.iter().find(|v| transition_tags.first() == Some(&v.name)).map(|v| v.name_at.clone()).unwrap_or_default();
-        cx.diag("SFC0728", first, format!("the transitions' BOOL tags ({}) are not declared: in sfc's text the transitions have their names", transition_tags.join(", ")))
-            .severity = sfc_diagnostics::Severity::Note;
+        let first = scope
+            .vars
+            .iter()
+            .find(|v| transition_tags.first() == Some(&v.name))
+            .map(|v| v.name_at.clone())
+            .unwrap_or_default();
+        cx.diag(
+            "SFC0728",
+            first,
+            format!(
+                "the transitions' BOOL tags ({}) are not declared: in sfc's text the transitions have their names",
+                transition_tags.join(", ")
+            ),
+        )
+        .severity = sfc_diagnostics::Severity::Note;
     }
     let mut declared: HashSet<String> = scope.known.iter().chain(&globals.known).cloned().collect();
     declared.extend(chart.names.iter().cloned());
@@ -388,7 +441,9 @@ fn pou_vars(cx: &mut Ctx, scope: &Scope, globals: &Scope, chart: &chart::ChartOu
         declared.insert(up.clone());
         let u = uses.get(&up).unwrap_or(&st::Use::Bool);
         let alias = scope.aliases.get(&up).or_else(|| globals.aliases.get(&up));
-        let bit = alias.is_some_and(|(_, t, _)| t.rsplit('.').next().is_some_and(|b| !b.is_empty() && b.bytes().all(|c| c.is_ascii_digit())));
+        let bit = alias.is_some_and(|(_, t, _)| {
+            t.rsplit('.').next().is_some_and(|b| !b.is_empty() && b.bytes().all(|c| c.is_ascii_digit()))
+        });
         let ty = match (bit, u) {
             (true, _) | (false, st::Use::Bool) => "BOOL",
             (false, st::Use::Dint) => "DINT",
@@ -403,16 +458,39 @@ fn pou_vars(cx: &mut Ctx, scope: &Scope, globals: &Scope, chart: &chart::ChartOu
         match alias {
             Some((aname, target, aat)) => {
                 attrs.push(("sfc.logix.alias".into(), target.clone()));
-                cx.diag("SFC0722", aat.clone(), format!("the alias `{aname}` for `{target}` is declared as a {ty} variable of its own"))
-                    .notes
-                    .push(if bit { "the alias names a bit of a module's data".to_string() } else { "its type is inferred from how the chart uses it".to_string() });
-                vars.push(Var { name: aname.clone(), name_at: aat.clone(), anchor: aat.clone(), ty: ty.into(), init: None, attrs });
+                cx.diag(
+                    "SFC0722",
+                    aat.clone(),
+                    format!("the alias `{aname}` for `{target}` is declared as a {ty} variable of its own"),
+                )
+                .notes
+                .push(if bit {
+                    "the alias names a bit of a module's data".to_string()
+                } else {
+                    "its type is inferred from how the chart uses it".to_string()
+                });
+                vars.push(Var {
+                    name: aname.clone(),
+                    name_at: aat.clone(),
+                    anchor: aat.clone(),
+                    ty: ty.into(),
+                    init: None,
+                    attrs,
+                });
             }
             None => {
                 attrs.push(("sfc.logix.inferred".into(), "true".into()));
-                cx.diag("SFC0721", at.clone(), format!("`{name}` is not declared in the file: declared as {ty} from its use"))
-                    .notes
-                    .push(if ty == "BOOL" { "it is read as a condition or written 0/1".to_string() } else { "it takes part in arithmetic or comparisons with numbers".to_string() });
+                cx.diag(
+                    "SFC0721",
+                    at.clone(),
+                    format!("`{name}` is not declared in the file: declared as {ty} from its use"),
+                )
+                .notes
+                .push(if ty == "BOOL" {
+                    "it is read as a condition or written 0/1".to_string()
+                } else {
+                    "it takes part in arithmetic or comparisons with numbers".to_string()
+                });
                 vars.push(Var { name: name.clone(), name_at, anchor: at.clone(), ty: ty.into(), init: None, attrs });
             }
         }
@@ -464,7 +542,9 @@ fn pou(cx: &mut Ctx, p: Pou) {
         cx.em.frag(&t.cond);
         // A condition ending in a `//` comment: the `;` on a line of its own.
         let last = st::tokens(&t.cond.text).into_iter().rev().find(|k| k.kind != st::Tok::Space);
-        if last.is_some_and(|k| k.kind == st::Tok::Comment && t.cond.text.get(k.range.clone()).is_some_and(|c| c.starts_with("//"))) {
+        if last.is_some_and(|k| {
+            k.kind == st::Tok::Comment && t.cond.text.get(k.range.clone()).is_some_and(|c| c.starts_with("//"))
+        }) {
             cx.em.str("\n        ");
         }
         cx.em.str(";\n    END_TRANSITION\n");
@@ -479,7 +559,15 @@ fn pou(cx: &mut Ctx, p: Pou) {
 
 /// A step or an action: its attributes, `KEYWORD name:`, its lines (an association or a line of
 /// code each; blank lines kept inside), `END_KEYWORD`, all standing for the element at `anchor`.
-fn block(cx: &mut Ctx, anchor: Range<u32>, attrs: &[(String, String)], kw: &str, name: &Frag, lines: &[Frag], end: &str) {
+fn block(
+    cx: &mut Ctx,
+    anchor: Range<u32>,
+    attrs: &[(String, String)],
+    kw: &str,
+    name: &Frag,
+    lines: &[Frag],
+    end: &str,
+) {
     cx.em.str("\n");
     cx.em.open(anchor);
     cx.attributes(attrs, "    ");

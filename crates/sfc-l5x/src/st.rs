@@ -81,7 +81,9 @@ pub(crate) fn tokens(s: &str) -> Vec<Token> {
                 Tok::Ident
             }
         } else if c.is_ascii_digit() {
-            while at(i).is_ascii_alphanumeric() || matches!(at(i), b'_' | b'#') || (at(i) == b'.' && at(i + 1).is_ascii_digit())
+            while at(i).is_ascii_alphanumeric()
+                || matches!(at(i), b'_' | b'#')
+                || (at(i) == b'.' && at(i + 1).is_ascii_digit())
             {
                 // An exponent's sign: `1.5e+002`.
                 let e = matches!(at(i), b'e' | b'E') && matches!(at(i + 1), b'+' | b'-');
@@ -99,23 +101,47 @@ pub(crate) fn tokens(s: &str) -> Vec<Token> {
 
 /// IEC 61131-3 words that are not tags.
 const KEYWORDS: &[&str] = &[
-    "AND", "OR", "XOR", "NOT", "MOD", "TRUE", "FALSE", "IF", "THEN", "ELSE", "ELSIF", "END_IF", "CASE", "OF",
-    "END_CASE", "FOR", "TO", "BY", "DO", "END_FOR", "WHILE", "END_WHILE", "REPEAT", "UNTIL", "END_REPEAT",
-    "RETURN", "EXIT",
+    "AND",
+    "OR",
+    "XOR",
+    "NOT",
+    "MOD",
+    "TRUE",
+    "FALSE",
+    "IF",
+    "THEN",
+    "ELSE",
+    "ELSIF",
+    "END_IF",
+    "CASE",
+    "OF",
+    "END_CASE",
+    "FOR",
+    "TO",
+    "BY",
+    "DO",
+    "END_FOR",
+    "WHILE",
+    "END_WHILE",
+    "REPEAT",
+    "UNTIL",
+    "END_REPEAT",
+    "RETURN",
+    "EXIT",
 ];
 
 /// Logix instructions callable from ST that sfc's ST does not have (or has with another
 /// meaning: Logix's `TON(T)` runs a FBD_TIMER tag, IEC's TON is a function block type).
 pub(crate) const INSTRUCTIONS: &[&str] = &[
     "JSR", "JXR", "SBR", "RET", "TND", "SFR", "SFP", "EVENT", "ONS", "OSRI", "OSFI", "TON", "TOF", "RTO", "TONR",
-    "TOFR", "RTOR", "CTU", "CTD", "CTUD", "MSG", "GSV", "SSV", "IOT", "UID", "UIE", "AFI", "NOP", "COP", "CPS",
-    "FLL", "SIZE", "BTD", "BTDT", "ALMD", "ALMA", "PID", "PIDE", "MAVE", "MAXC", "MINC", "SCL", "SCRV", "LDLG",
-    "LDL2", "HPF", "LPF", "NTCH", "DEDT", "FGEN", "TOT", "RMPS", "SETD", "DFF", "JKFF", "SRT", "STD", "DDT", "DTR",
-    "MSO", "MSF", "MAS", "MAJ", "MAM", "MAG", "MCD", "MCCD", "MCS", "MRP", "MCT", "MAH", "MAFR", "MASD", "MASR",
-    "MDF", "MDO", "MDOC", "MGS", "MGSD", "MGSR", "MGSP", "STOD", "STOR", "DTOS", "RTOS", "UPPER", "LOWER", "DTOT",
-    "TOD", "FRD", "CMP", "CPT", "DEG", "RAD", "TRN", "SWPB", "POVR", "PCMD", "PCLF", "PXRQ", "PATT", "PDET",
-    "PPD", "PRNP", "PRDA", "PFL", "PSCAL", "SEL", "ESEL", "SSUM", "SNEG", "HLL", "RLIM", "SOC", "INTG", "PI",
-    "UPDN", "MUX", "LDL", "ALM", "SEQ", "ATN", "XPY",
+    "TOFR", "RTOR", "CTU", "CTD", "CTUD", "MSG", "GSV", "SSV", "IOT", "UID", "UIE", "AFI", "NOP", "COP", "CPS", "FLL",
+    "SIZE", "BTD", "BTDT", "ALMD", "ALMA", "PID", "PIDE", "MAVE", "MAXC", "MINC", "SCL", "SCRV", "LDLG", "LDL2", "HPF",
+    "LPF", "NTCH", "DEDT", "FGEN", "TOT", "RMPS", "SETD", "DFF", "JKFF", "SRT", "STD", "DDT", "DTR", "MSO", "MSF",
+    "MAS", "MAJ", "MAM", "MAG", "MCD", "MCCD", "MCS", "MRP", "MCT", "MAH", "MAFR", "MASD", "MASR", "MDF", "MDO",
+    "MDOC", "MGS", "MGSD", "MGSR", "MGSP", "STOD", "STOR", "DTOS", "RTOS", "UPPER", "LOWER", "DTOT", "TOD", "FRD",
+    "CMP", "CPT", "DEG", "RAD", "TRN", "SWPB", "POVR", "PCMD", "PCLF", "PXRQ", "PATT", "PDET", "PPD", "PRNP", "PRDA",
+    "PFL", "PSCAL", "SEL", "ESEL", "SSUM", "SNEG", "HLL", "RLIM", "SOC", "INTG", "PI", "UPDN", "MUX", "LDL", "ALM",
+    "SEQ", "ATN", "XPY",
 ];
 
 /// The members of an SFC_STEP tag that sfc's IEC text cannot say yet.
@@ -189,7 +215,8 @@ pub(crate) struct Mapped {
 /// The XML range of the text range `r` of `x`.
 pub(crate) fn xml_range(x: &XText, r: Range<usize>) -> Range<u32> {
     let (s, e) = (r.start as u32, r.end as u32);
-    let find = |o: u32| x.runs.iter().find(|run| run.text <= o && o < run.text + run.len).map(|run| run.raw + (o - run.text));
+    let find =
+        |o: u32| x.runs.iter().find(|run| run.text <= o && o < run.text + run.len).map(|run| run.raw + (o - run.text));
     match (find(s), find(e.saturating_sub(1).max(s))) {
         (Some(a), Some(b)) if b >= a => a..b + 1,
         (Some(a), _) => a..a + (e - s),
@@ -334,7 +361,15 @@ pub(crate) fn map(x: &XText, el: &Elements) -> Mapped {
 
 /// `S.X` stays, `S.T` is a DINT of ms, `S.DN` the preset reached, `S.PRE` the preset; the
 /// other members are the `logix` profile's.
-fn member_of_step(m: &mut Mapped, w: &mut Writer, s: &StepInfo, mup: &str, member: &str, whole: Range<usize>, at: Range<u32>) {
+fn member_of_step(
+    m: &mut Mapped,
+    w: &mut Writer,
+    s: &StepInfo,
+    mup: &str,
+    member: &str,
+    whole: Range<usize>,
+    at: Range<u32>,
+) {
     let n = &s.name;
     match (mup, &s.pre_expr) {
         ("X", _) => w.replace_text(whole, format!("{n}.X")),
@@ -377,8 +412,12 @@ fn logix_member(at: Range<u32>, element: &str, member: &str, ty: &str) -> Proble
 
 fn instruction_note(up: &str) -> String {
     match up {
-        "JSR" | "JXR" | "SBR" | "RET" => "sfc imports SFC routines only; a routine called with JSR is not part of the chart".into(),
-        "SFR" | "SFP" => "resetting (SFR) and pausing (SFP) a chart belong to the `logix` profile, which is not there yet".into(),
+        "JSR" | "JXR" | "SBR" | "RET" => {
+            "sfc imports SFC routines only; a routine called with JSR is not part of the chart".into()
+        }
+        "SFR" | "SFP" => {
+            "resetting (SFR) and pausing (SFP) a chart belong to the `logix` profile, which is not there yet".into()
+        }
         "TON" | "TOF" | "RTO" | "TONR" | "TOFR" | "RTOR" | "CTU" | "CTD" | "CTUD" => {
             "Logix's timers and counters run a tag with the instruction's own members; write the IEC function \
              block (`T1(IN := …, PT := T#…)`) or use the step's own timer (`Step.T`)"
@@ -401,7 +440,8 @@ fn guess(sig: &[&Token], si: usize, text: &str) -> Use {
         }
         // `X := Y + 1;`: the right-hand side.
         if w == ":=" && p > si {
-            let rhs = sig.get(p + 1..).unwrap_or_default().iter().take_while(|t| text.get(t.range.clone()) != Some(";"));
+            let rhs =
+                sig.get(p + 1..).unwrap_or_default().iter().take_while(|t| text.get(t.range.clone()) != Some(";"));
             let dint = rhs.enumerate().any(|(k, t)| {
                 let tw = text.get(t.range.clone()).unwrap_or("");
                 ARITH.contains(&tw) || tw.eq_ignore_ascii_case("MOD") || number(p + 1 + k)

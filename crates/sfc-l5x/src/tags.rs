@@ -9,15 +9,25 @@ use std::collections::BTreeSet;
 use std::ops::Range;
 
 /// Logix's elementary types that IEC 61131-3 has under the same name.
-const ELEMENTARY: &[&str] =
-    &["BOOL", "SINT", "INT", "DINT", "LINT", "USINT", "UINT", "UDINT", "ULINT", "REAL", "LREAL", "BYTE", "WORD", "DWORD", "LWORD"];
+const ELEMENTARY: &[&str] = &[
+    "BOOL", "SINT", "INT", "DINT", "LINT", "USINT", "UINT", "UDINT", "ULINT", "REAL", "LREAL", "BYTE", "WORD", "DWORD",
+    "LWORD",
+];
 
 /// Logix's predefined structures sfc declares in a TYPE block, with their members.
 pub(crate) const STRUCTS: &[(&str, &[(&str, &str)])] = &[
     ("TIMER", &[("PRE", "DINT"), ("ACC", "DINT"), ("EN", "BOOL"), ("TT", "BOOL"), ("DN", "BOOL")]),
     (
         "COUNTER",
-        &[("PRE", "DINT"), ("ACC", "DINT"), ("CU", "BOOL"), ("CD", "BOOL"), ("DN", "BOOL"), ("OV", "BOOL"), ("UN", "BOOL")],
+        &[
+            ("PRE", "DINT"),
+            ("ACC", "DINT"),
+            ("CU", "BOOL"),
+            ("CD", "BOOL"),
+            ("DN", "BOOL"),
+            ("OV", "BOOL"),
+            ("UN", "BOOL"),
+        ],
     ),
     (
         "CONTROL",
@@ -203,7 +213,11 @@ impl Types {
             let name = attr(d, "Name").unwrap_or("").trim().to_string();
             let at = attr_range(d, "Name").unwrap_or_else(|| anchor(d));
             if !sfc_syntax::keywords::is_identifier(&name) {
-                cx.diag("SFC0722", at, format!("the data type `{name}` is not imported: its name is no IEC 61131-3 identifier"));
+                cx.diag(
+                    "SFC0722",
+                    at,
+                    format!("the data type `{name}` is not imported: its name is no IEC 61131-3 identifier"),
+                );
                 cx.types.udts.remove(&name.to_ascii_uppercase());
                 continue;
             }
@@ -261,7 +275,8 @@ pub(crate) fn tag(cx: &mut Ctx, t: Node) -> TagKind {
     let name = attr(t, "Name").unwrap_or("").trim().to_string();
     let name_at = attr_range(t, "Name").unwrap_or_else(|| anchor(t));
     let dt = attr(t, "DataType").unwrap_or("");
-    let l5k = children(t, "Data").find(|d| attr(*d, "Format") == Some("L5K")).map(|d| text_of(d).text.trim().to_string());
+    let l5k =
+        children(t, "Data").find(|d| attr(*d, "Format") == Some("L5K")).map(|d| text_of(d).text.trim().to_string());
     if SFC_TYPES.iter().any(|s| s.eq_ignore_ascii_case(dt)) {
         let pre = decorated(t)
             .and_then(|d| elements(d).next())
@@ -301,7 +316,9 @@ pub(crate) fn tag(cx: &mut Ctx, t: Node) -> TagKind {
         let fixed = sfc_syntax::keywords::sanitize_identifier(&name);
         let d = cx.diag("SFC0704", name_at.clone(), format!("`{name}` is not an IEC 61131-3 identifier; the tag is imported as `{fixed}`, and so are its uses in the chart"));
         d.severity = sfc_diagnostics::Severity::Warning;
-        d.notes.push("identifiers are letters, digits and single underscores, start with a letter, and are not keywords".into());
+        d.notes.push(
+            "identifiers are letters, digits and single underscores, start with a letter, and are not keywords".into(),
+        );
         cx.renamed.insert(name.to_ascii_uppercase(), fixed.clone());
         fixed
     };
@@ -316,7 +333,11 @@ pub(crate) fn tag(cx: &mut Ctx, t: Node) -> TagKind {
         return TagKind::Skipped { name };
     };
     let Some(ty) = with_dims(&base, attr(t, "Dimensions")) else {
-        cx.diag("SFC0722", attr_range(t, "Dimensions").unwrap_or(name_at), format!("the dimensions of the tag `{name}` are not imported"));
+        cx.diag(
+            "SFC0722",
+            attr_range(t, "Dimensions").unwrap_or(name_at),
+            format!("the dimensions of the tag `{name}` are not imported"),
+        );
         return TagKind::Skipped { name };
     };
     let mut attrs = Vec::new();
@@ -330,7 +351,11 @@ pub(crate) fn tag(cx: &mut Ctx, t: Node) -> TagKind {
         Some(d) => match initial(&cx.types, &base, d) {
             Ok(v) => v,
             Err(()) => {
-                cx.diag("SFC0722", anchor(d), format!("the initial value of `{name}` is not imported: it is not a simple literal"));
+                cx.diag(
+                    "SFC0722",
+                    anchor(d),
+                    format!("the initial value of `{name}` is not imported: it is not a simple literal"),
+                );
                 None
             }
         },

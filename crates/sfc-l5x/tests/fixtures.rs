@@ -108,7 +108,9 @@ fn one(path: &Path, errors_expected: bool) -> Result<(), String> {
     }
     let (a, b) = (count_xml(&xml), count_text(&checked, &out.text));
     if a != b {
-        return Err(format!("{name}: [routines, steps, transitions, actions, stops] in the XML {a:?}, in the text {b:?}"));
+        return Err(format!(
+            "{name}: [routines, steps, transitions, actions, stops] in the XML {a:?}, in the text {b:?}"
+        ));
     }
     Ok(())
 }
@@ -119,12 +121,8 @@ fn every_fixture_imports_as_expected_and_counts_match() {
     assert!(main.len() >= 12, "fixtures missing: {main:?}");
     let errors = l5x_files(&dir().join("errors"));
     assert!(errors.len() >= 3, "error fixtures missing: {errors:?}");
-    let failures: Vec<String> = main
-        .iter()
-        .map(|p| one(p, false))
-        .chain(errors.iter().map(|p| one(p, true)))
-        .filter_map(Result::err)
-        .collect();
+    let failures: Vec<String> =
+        main.iter().map(|p| one(p, false)).chain(errors.iter().map(|p| one(p, true))).filter_map(Result::err).collect();
     assert!(failures.is_empty(), "{}", failures.join("\n\n"));
 }
 
@@ -137,7 +135,8 @@ fn conditions_map_onto_their_cdata() {
         let out = sfc_l5x::import(0, &xml);
         for (at, _) in out.text.match_indices("\n        := ") {
             let start = at + "\n        := ".len();
-            let word: String = out.text[start..].chars().take_while(|c| c.is_ascii_alphanumeric() || *c == '_').collect();
+            let word: String =
+                out.text[start..].chars().take_while(|c| c.is_ascii_alphanumeric() || *c == '_').collect();
             if word.is_empty() || word == "FALSE" {
                 continue;
             }

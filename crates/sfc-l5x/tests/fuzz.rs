@@ -30,8 +30,27 @@ fn seeds() -> Vec<String> {
 }
 
 const VALUES: &[&str] = &[
-    "", "0", "-1", "99999999999999999999999", "18446744073709551615", "abc", "1e308", "NaN", "Step_000", "&amp;", "\u{feff}",
-    "Selection", "Simultaneous", "Diverge", "Converge", "UserDefined", "true", "false", "SFC_STEP", "TIMER", "[:=]",
+    "",
+    "0",
+    "-1",
+    "99999999999999999999999",
+    "18446744073709551615",
+    "abc",
+    "1e308",
+    "NaN",
+    "Step_000",
+    "&amp;",
+    "\u{feff}",
+    "Selection",
+    "Simultaneous",
+    "Diverge",
+    "Converge",
+    "UserDefined",
+    "true",
+    "false",
+    "SFC_STEP",
+    "TIMER",
+    "[:=]",
 ];
 
 const SNIPPETS: &[&str] = &[
@@ -122,7 +141,11 @@ fn mutate(src: &str, ms: &[Mutation]) -> Vec<u8> {
 fn front_end(input: &[u8]) -> Result<(), String> {
     let text = String::from_utf8_lossy(input).to_string();
     let out = sfc_l5x::import(0, &text);
-    let malformed = roxmltree::Document::parse_with_options(&text, roxmltree::ParsingOptions { allow_dtd: false, ..Default::default() }).is_err();
+    let malformed = roxmltree::Document::parse_with_options(
+        &text,
+        roxmltree::ParsingOptions { allow_dtd: false, ..Default::default() },
+    )
+    .is_err();
     if malformed {
         let ok = out.diagnostics.len() == 1
             && out.diagnostics[0].code == "SFC0701"
