@@ -199,6 +199,16 @@ pub(crate) fn read(cx: &mut Ctx, content: Node, tags: &SfcTags) -> ChartOut {
                     _ => "sfc.logix.sbrret",
                 };
                 out.attrs.push((key.into(), serialize(e)));
+                if name == "TextBox" {
+                    // The editor draws it as a text label where Studio had it.
+                    let num = |k: &str| attr(e, k).and_then(|v| v.trim().parse::<f64>().ok()).filter(|v| v.is_finite());
+                    let text = child(e, "Text").map(|t| text_of(t).text.trim().to_string()).unwrap_or_default();
+                    if let (Some(x), Some(y)) = (num("X"), num("Y")) {
+                        let w = num("Width").filter(|w| *w > 0.0).unwrap_or(200.0);
+                        let h = 20.0 * (text.lines().count().max(1) as f64 + 1.0);
+                        out.attrs.push(("sfc.comment".into(), format!("{x} {y} {w} {h}\n{text}")));
+                    }
+                }
                 if name == "SbrRet" {
                     cx.diag(
                         "SFC0722",
