@@ -81,8 +81,9 @@ struct Branch {
 /// A branch a walk went through: selection?, divergence?, where.
 type Via = (bool, bool, Range<u32>);
 
-/// Bound on the walk through branches (a file may link them in cycles).
-const MAX_WALK: usize = 100_000;
+/// Bound on the walks through branches and legs of one routine (a file may link them in cycles
+/// or make every transition's walk long): past it the links are not followed further.
+const MAX_WALK: usize = 2_000_000;
 
 fn qualifier(q: &str) -> Option<(&'static str, bool)> {
     // (IEC qualifier, needs a time)
@@ -380,6 +381,7 @@ pub(crate) fn read(cx: &mut Ctx, content: Node, tags: &SfcTags) -> ChartOut {
     }
     let step_like = |id: u64| matches!(kinds.get(&id), Some((Kind::Step | Kind::Stop, _)));
     let is_trans = |id: u64| matches!(kinds.get(&id), Some((Kind::Transition, _)));
+    let budget = std::cell::Cell::new(MAX_WALK);
     // Walks through junctions from `id` (forward or backward) to the steps and transitions.
     let walk = |id: u64, fwd: bool| -> (Vec<u64>, Vec<Via>) {
         let edges = if fwd { &succ } else { &pred };
@@ -387,10 +389,13 @@ pub(crate) fn read(cx: &mut Ctx, content: Node, tags: &SfcTags) -> ChartOut {
         let mut via = Vec::new();
         let mut seen = HashSet::new();
         let mut stack: Vec<u64> = edges.get(&id).cloned().unwrap_or_default().into_iter().rev().collect();
-        let mut n = 0;
         while let Some(v) = stack.pop() {
-            n += 1;
-            if n > MAX_WALK || !seen.insert(v) {
+            // One budget for the whole routine: a file can make every walk long.
+            if budget.get() == 0 {
+                break;
+            }
+            budget.set(budget.get() - 1);
+            if !seen.insert(v) {
                 continue;
             }
             match kinds.get(&v) {
@@ -461,6 +466,9 @@ pub(crate) fn read(cx: &mut Ctx, content: Node, tags: &SfcTags) -> ChartOut {
             ));
         }
         trans_ends.insert(id, (from, to));
+    }
+    if budget.get() == 0 {
+        cx.diag("SFC0725", anchor(content), "the routine's branches and links are too many to follow: some transitions are imported without their steps");
     }
     // Selection priorities: left to right by X, ties by leg order; a user order is the legs'.
     let mut priority: HashMap<u64, usize> = HashMap::new();

@@ -213,6 +213,18 @@ fn hostile_inputs_do_not_panic() {
         (0..2000).map(|i| format!("<Branch ID=\"{i}\" Y=\"0\" BranchType=\"Simultaneous\" BranchFlow=\"Converge\"><Leg ID=\"{}\"/></Branch>", i + 100_000)).collect::<String>(),
         (0..2000).map(|i| format!("<DirectedLink FromID=\"{}\" ToID=\"{}\"/>", i, (i + 1) % 2000)).collect::<String>(),
     );
+    // Every transition's walk goes through one convergence of 2000 legs: the walks share one
+    // budget, so this stays fast.
+    let n = 2000;
+    let wide = format!(
+        "<RSLogix5000Content><Controller><Programs><Program Name=\"P\"><Routines><Routine Name=\"R\" Type=\"SFC\"><SFCContent><Step ID=\"0\" Operand=\"S\" InitialStep=\"true\"/>{}<Branch ID=\"1\" Y=\"0\" BranchType=\"Simultaneous\" BranchFlow=\"Converge\">{}</Branch>{}</SFCContent></Routine></Routines></Program></Programs></Controller></RSLogix5000Content>",
+        (0..n).map(|i| format!("<Transition ID=\"{}\" Operand=\"T{i}\"/>", 10 + i)).collect::<String>(),
+        (0..n).map(|i| format!("<Leg ID=\"{}\"/>", 100_000 + i)).collect::<String>(),
+        (0..n).map(|i| format!("<DirectedLink FromID=\"1\" ToID=\"{}\"/><DirectedLink FromID=\"{}\" ToID=\"{}\"/>", 10 + i, 10 + i, 100_000 + i)).collect::<String>(),
+    );
+    let started = std::time::Instant::now();
+    assert!(run_limited(wide.into_bytes()).is_ok());
+    assert!(started.elapsed() < Duration::from_secs(10), "{:?}", started.elapsed());
     let inputs = [
         "",
         "<",
