@@ -359,7 +359,23 @@ pub(crate) fn tag(cx: &mut Ctx, t: Node) -> TagKind {
                 None
             }
         },
-        None => l5k.as_deref().and_then(|v| literal(&base, v)).filter(|_| base == ty),
+        None => {
+            // A STRING's value is its own `Data Format="String"`; a scalar's, the L5K data.
+            let string = children(t, "Data").find(|d| attr(*d, "Format") == Some("String"));
+            let (data, at) = match string {
+                Some(d) => (Some(text_of(d).text.trim().to_string()), anchor(d)),
+                None => (l5k.clone(), anchor(t)),
+            };
+            let value = data.as_deref().filter(|v| !v.is_empty()).map(|v| literal(&base, v).filter(|_| base == ty));
+            if value.as_ref().is_some_and(Option::is_none) {
+                cx.diag(
+                    "SFC0722",
+                    at,
+                    format!("the initial value of `{name}` is not imported: it is not a simple literal"),
+                );
+            }
+            value.flatten()
+        }
     };
     TagKind::Var(Var { name, name_at, anchor: anchor(t), ty, init, attrs })
 }
