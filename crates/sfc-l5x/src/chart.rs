@@ -199,7 +199,9 @@ pub(crate) fn read(cx: &mut Ctx, content: Node, tags: &SfcTags) -> ChartOut {
                     "Attachment" => "sfc.logix.attachment",
                     _ => "sfc.logix.sbrret",
                 };
-                out.attrs.push((key.into(), serialize(e)));
+                // As written in the file (CDATA and line breaks included), for the way back.
+                let raw = e.document().input_text().get(e.range()).map_or_else(|| serialize(e), str::to_string);
+                out.attrs.push((key.into(), raw));
                 if name == "TextBox" {
                     // The editor draws it as a text label where Studio had it.
                     let num = |k: &str| attr(e, k).and_then(|v| v.trim().parse::<f64>().ok()).filter(|v| v.is_finite());
