@@ -181,3 +181,42 @@ fn step_members_are_rewritten_with_the_tag_presets() {
     assert!(text.contains("Tank1.Level >= Tank1.HighLimit OR (Filling.T >= T#5000ms)"), "{text}");
     assert!(text.contains("TIME_TO_DINT(Settle.T) >= 2000"), "{text}");
 }
+
+#[test]
+fn every_qualifier_and_the_boolean_action() {
+    let xml = std::fs::read_to_string(dir().join("qualifiers.L5X")).unwrap();
+    let text = sfc_l5x::import(0, &xml).text;
+    for q in [
+        "(N)",
+        "(S)",
+        "(R)",
+        "(L, T#500ms)",
+        "(D, T#500ms)",
+        "(P)",
+        "(P1)",
+        "(P0)",
+        "(SL, T#700ms)",
+        "(SD, T#300ms)",
+        "(DS, T#400ms)",
+    ] {
+        assert!(text.contains(q), "{q} missing:\n{text}");
+    }
+    assert!(text.contains("{attribute 'sfc.logix.boolean' := 'true'}\n    ACTION Action_010: END_ACTION"), "{text}");
+    assert!(text.contains("Action_001(R);"), "{text}");
+}
+
+#[test]
+fn programs_routines_and_controller_settings() {
+    let xml = std::fs::read_to_string(dir().join("two_programs.L5X")).unwrap();
+    let out = sfc_l5x::import(0, &xml);
+    assert!(out.text.contains("PROGRAM Line1_Sequence") && out.text.contains("PROGRAM Line2_Sequence"), "{}", out.text);
+    assert!(out.text.contains("{attribute 'sfc.logix.routine' := 'Line2/Sequence'}"), "{}", out.text);
+    assert_eq!(out.diagnostics.iter().filter(|d| d.code == "SFC0720").count(), 2);
+    // A program export has no controller settings: Studio's defaults, one note for the file.
+    let xml = std::fs::read_to_string(dir().join("selection.L5X")).unwrap();
+    let out = sfc_l5x::import(0, &xml);
+    assert!(out.text.contains("{attribute 'sfc.logix.exec' := 'CurrentActive'}"), "{}", out.text);
+    let notes: Vec<_> = out.diagnostics.iter().filter(|d| d.code == "SFC0720").collect();
+    assert_eq!(notes.len(), 1, "{notes:?}");
+    assert!(notes[0].message.contains("Program export carries no controller SFC settings"), "{notes:?}");
+}
