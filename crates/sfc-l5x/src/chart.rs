@@ -14,6 +14,8 @@ use std::ops::Range;
 pub(crate) struct SfcTags {
     pub pre: HashMap<String, i64>,
     pub l5k: HashMap<String, String>,
+    /// The tags' descriptions (of every tag: a transition's is its BOOL tag's).
+    pub desc: HashMap<String, String>,
 }
 
 /// One step (or stop) as written.
@@ -519,6 +521,9 @@ pub(crate) fn read(cx: &mut Ctx, content: Node, tags: &SfcTags) -> ChartOut {
         if let Some(l) = tags.l5k.get(&up) {
             attrs.push(("sfc.logix.tag".into(), l.clone()));
         }
+        if let Some(d) = tags.desc.get(&up) {
+            attrs.push(("sfc.description".into(), d.clone()));
+        }
         if let Some(p) = tags.pre.get(&up).filter(|p| **p != 0) {
             attrs.push(("sfc.logix.preset".into(), p.to_string()));
         }
@@ -572,6 +577,9 @@ pub(crate) fn read(cx: &mut Ctx, content: Node, tags: &SfcTags) -> ChartOut {
             }
         }
         attrs.push(("sfc.logix.attrs".into(), attrs_of(e)));
+        if let Some(d) = tags.desc.get(&name.text.to_ascii_uppercase()) {
+            attrs.push(("sfc.description".into(), d.clone()));
+        }
         if attr(e, "Force").is_some_and(|f| f != "NoForce") {
             cx.diag(
                 "SFC0722",
@@ -727,6 +735,9 @@ fn action(
     }
     if boolean {
         attrs.push(("sfc.logix.boolean".into(), "true".into()));
+    }
+    if let Some(d) = tags.desc.get(&up) {
+        attrs.push(("sfc.description".into(), d.clone()));
     }
     if q == "R" && el.stored.contains(&up) {
         // IEC's reading: the Reset action names the stored action it resets.

@@ -156,10 +156,16 @@ fn read_tags(cx: &mut Ctx, list: Option<Node>) -> Scope {
         match tags::tag(cx, t) {
             TagKind::Var(v) => {
                 s.known.insert(v.name.to_ascii_uppercase());
+                if let Some((_, d)) = v.attrs.iter().find(|(k, _)| k == "sfc.description") {
+                    s.sfc.desc.insert(v.name.to_ascii_uppercase(), d.clone());
+                }
                 s.vars.push(v);
             }
-            TagKind::Sfc { name, ty, pre, l5k } => {
+            TagKind::Sfc { name, ty, pre, l5k, desc } => {
                 let up = name.to_ascii_uppercase();
+                if let Some(d) = desc {
+                    s.sfc.desc.insert(up.clone(), d);
+                }
                 if let Some(p) = pre.filter(|_| ty != "SFC_STOP") {
                     s.sfc.pre.insert(up.clone(), p);
                 }
@@ -275,6 +281,7 @@ fn l5x(cx: &mut Ctx, root: Node) {
         for src in [&globals.sfc, &scope.sfc] {
             sfc_tags.pre.extend(src.pre.iter().map(|(k, v)| (k.clone(), *v)));
             sfc_tags.l5k.extend(src.l5k.iter().map(|(k, v)| (k.clone(), v.clone())));
+            sfc_tags.desc.extend(src.desc.iter().map(|(k, v)| (k.clone(), v.clone())));
         }
         for r in sfc {
             let rname = attr(r, "Name").unwrap_or("").to_string();
@@ -312,11 +319,8 @@ fn l5x(cx: &mut Ctx, root: Node) {
             if let Some(rev) = attr(root, "SoftwareRevision") {
                 attrs.push(("sfc.logix.rev".into(), rev.to_string()));
             }
-            if let Some(d) = child(r, "Description") {
-                let text = sfc_xmlmap::xml::text_of(d).text.trim().to_string();
-                if !text.is_empty() {
-                    attrs.push(("sfc.description".into(), text));
-                }
+            if let Some(text) = tags::description(r) {
+                attrs.push(("sfc.description".into(), text));
             }
             if attr(*p, "MainRoutineName") == Some(rname.as_str()) {
                 attrs.push(("sfc.logix.main".into(), "true".into()));
@@ -324,6 +328,29 @@ fn l5x(cx: &mut Ctx, root: Node) {
             let vars = pou_vars(cx, &scope, &globals, &chart);
             pous.push(Pou { name, anchor: anchor(r), attrs, vars, chart });
         }
+    }
+    let others: Vec<String> = programs
+        .iter()
+        .flat_map(|p| {
+            routines(*p).into_iter().filter(|r| !is_sfc(r)).map(move |r| {
+                format!(
+                    "{}/{} ({})",
+                    attr(*p, "Name").unwrap_or(""),
+                    attr(r, "Name").unwrap_or(""),
+                    attr(r, "Type").unwrap_or("?")
+                )
+            })
+        })
+        .collect();
+    if !pous.is_empty() && !others.is_empty() {
+        let at = child(ctrl, "Programs").map(anchor).unwrap_or_else(|| anchor(ctrl));
+        let d = cx.diag(
+            "SFC0722",
+            at,
+            format!("{} routine(s) of other languages are not imported: {}", others.len(), others.join(", ")),
+        );
+        d.severity = sfc_diagnostics::Severity::Note;
+        d.notes.push("sfc reads the SFC routines; ladder, ST and FBD routines that the chart calls or that drive its tags are not simulated".into());
     }
     if pous.is_empty() {
         let found: Vec<String> = programs

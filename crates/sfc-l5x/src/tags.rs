@@ -263,7 +263,7 @@ pub(crate) enum TagKind {
     /// A variable to declare.
     Var(Var),
     /// A tag of the chart's own elements (SFC_STEP, SFC_ACTION, SFC_STOP): its data.
-    Sfc { name: String, ty: String, pre: Option<i64>, l5k: Option<String> },
+    Sfc { name: String, ty: String, pre: Option<i64>, l5k: Option<String>, desc: Option<String> },
     /// An alias: declared from its use.
     Alias { name: String, target: String, at: Range<u32> },
     /// Not declared (reported).
@@ -286,7 +286,7 @@ pub(crate) fn tag(cx: &mut Ctx, t: Node) -> TagKind {
             .and_then(|m| attr(m, "Value"))
             .and_then(|v| v.trim().parse::<i64>().ok())
             .or_else(|| l5k_pre(l5k.as_deref()));
-        return TagKind::Sfc { name, ty: dt.to_ascii_uppercase(), pre, l5k };
+        return TagKind::Sfc { name, ty: dt.to_ascii_uppercase(), pre, l5k, desc: description(t) };
     }
     match attr(t, "TagType").unwrap_or("Base") {
         "Alias" => {
@@ -341,11 +341,8 @@ pub(crate) fn tag(cx: &mut Ctx, t: Node) -> TagKind {
         return TagKind::Skipped { name };
     };
     let mut attrs = Vec::new();
-    if let Some(d) = child(t, "Description") {
-        let text = text_of(d).text.trim().to_string();
-        if !text.is_empty() {
-            attrs.push(("sfc.description".to_string(), text));
-        }
+    if let Some(text) = description(t) {
+        attrs.push(("sfc.description".to_string(), text));
     }
     let init = match decorated(t) {
         Some(d) => match initial(&cx.types, &base, d) {
@@ -388,4 +385,10 @@ fn decorated<'a, 'i>(t: Node<'a, 'i>) -> Option<Node<'a, 'i>> {
 fn l5k_pre(l5k: Option<&str>) -> Option<i64> {
     let inner = l5k?.trim().strip_prefix('[')?.strip_suffix(']')?;
     inner.split(',').nth(1)?.trim().parse().ok()
+}
+
+/// The text of an element's `<Description>`, when it has one.
+pub(crate) fn description(n: Node) -> Option<String> {
+    let text = text_of(child(n, "Description")?).text.trim().to_string();
+    (!text.is_empty()).then_some(text)
 }
