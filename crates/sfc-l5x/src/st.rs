@@ -380,6 +380,16 @@ fn member_of_step(
             f.push_str(")");
             w.replace(whole, f.locate(at));
         }
+        ("DN" | "PRE", None) if s.pre.is_none() => {
+            m.problems.push((
+                "SFC0721",
+                at,
+                format!("the step `{n}` has no SFC_STEP tag in the file: its preset is taken as 0 ms"),
+                Some("export the program with its tags so that the steps' presets come along".into()),
+            ));
+            let text = if mup == "DN" { format!("({n}.T >= T#0ms)") } else { "0".to_string() };
+            w.replace_text(whole, text);
+        }
         ("DN", None) => w.replace_text(whole, format!("({n}.T >= T#{}ms)", s.pre.unwrap_or(0))),
         ("PRE", Some(e)) => {
             let mut f = Frag::plain("(");
