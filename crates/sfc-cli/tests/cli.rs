@@ -277,11 +277,11 @@ fn check_reports_a_runaway_witness_replay_at_its_loop() {
     let _ = std::fs::remove_dir_all(&dir);
 }
 
-/// A Studio 5000 L5X export is not read yet: one located error that says what the file is and
-/// how many charts it holds (SFC routines).
+/// A Studio 5000 L5X export is read (`sfc-l5x`): its two SFC routines, drawn empty, are two
+/// charts without an initial step, each reported on its `SFCContent`.
 #[test]
-fn logix_exports_are_named_with_their_charts() {
-    let dir = temp_dir("vendors");
+fn a_logix_export_is_read_with_its_sfc_routines() {
+    let dir = temp_dir("logix");
     let l5x = dir.join("Main.L5X");
     std::fs::write(
         &l5x,
@@ -291,8 +291,9 @@ fn logix_exports_are_named_with_their_charts() {
     let out = sfc(&["check", l5x.to_str().unwrap()]);
     let err = String::from_utf8_lossy(&out.stderr);
     assert_eq!(out.status.code(), Some(1), "{err}");
-    assert!(err.contains("error[SFC0702]") && err.contains(":2:1"), "{err}");
-    assert!(err.contains("Studio 5000 (Logix) L5X export holding 2 SFC routine(s)"), "{err}");
+    assert!(!err.contains("SFC0702"), "{err}");
+    assert_eq!(err.matches("error[SFC0725]: the chart has no initial step").count(), 2, "{err}");
+    assert!(err.contains("Main.L5X:4:") && err.contains("Main.L5X:6:"), "{err}");
     let _ = std::fs::remove_dir_all(&dir);
 }
 

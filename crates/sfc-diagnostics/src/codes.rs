@@ -431,6 +431,41 @@ timed qualifier without duration, …) is written as it was read from the PLCope
 textual input, with its text kept in its `addData`, which `sfc` reads back as it was. The import \
 says so when it reads such a POU.";
 
+    "SFC0720" Note "L5X import note"
+        "Something the L5X import decided that changes nothing of the chart's behaviour but is worth knowing: a program or routine export carries no controller SFC settings, so Studio's defaults (`CurrentActive`, `MostRecent`, `DontScan`) are written in `sfc.logix.exec`, `sfc.logix.restart` and `sfc.logix.lastscan`; an SFC routine is imported under another name (`Program_Routine` when two programs have routines of the same name); a selection divergence with user-defined priorities is read in the order of its legs.";
+
+    "SFC0721" Warning "tag declared from its use"
+        "The chart uses a tag that the L5X file does not declare (a program export leaves the controller's tags out). The import declares it in the POU from how the chart uses it: BOOL when it is read as a condition or written 0 or 1, DINT when it takes part in arithmetic or is compared with other numbers. A tag used as a structure or an array cannot be declared this way. Export the controller, or the program with its context, to get the real types.\n\n    Tank_Level > 80   (* Tank_Level : DINT *)";
+
+    "SFC0722" Warning "L5X content not imported"
+        "Part of the L5X file has no place in sfc's text and is left out or reduced, never silently: an alias tag (declared as a variable of its own), a produced or consumed tag (a plain variable), a tag of an Add-On Instruction or a module type, an initial value that is not a simple literal, a forced transition or leg (imported without the force), SFC subroutine parameters (`SbrRet`, kept in an attribute).";
+
+    "SFC0723" Error "Logix tag member without IEC equivalent"
+        "A condition or an action reads a member of an SFC_STEP, SFC_ACTION or SFC_STOP tag that sfc's IEC text cannot express: `FS`, `SA`, `LS`, `OV`, `TMax`, `Count`, the alarm bits and limits of a step, `T`, `PRE` and `Count` of an action, `Count` of a stop. The `logix` simulation profile that will give them their Logix meaning is not there yet. The import reads `.X`, `.T` (as `TIME_TO_DINT(S.T)`, milliseconds), `.DN` (as `S.T >= T#<PRE>ms`) and `.PRE` of a step, `.Q` and `.A` of an action and `.X` of a stop.";
+
+    "SFC0724" Error "Logix instruction not in sfc's ST"
+        "The Structured Text of a condition or an action calls a Logix instruction that sfc's ST does not have, or has with another meaning: `JSR`, `SFR`, `SFP`, `ONS`, `TONR`, Logix's `TON(Timer)` on a FBD_TIMER tag, `MSG`, `GSV`, `COP`… Write the IEC equivalent (a function block instance such as `T1(IN := Run, PT := T#5s)`, or the step's own timer `Step.T`).";
+
+    "SFC0725" Error "SFC routine links do not make a chart"
+        "The steps, transitions, branches and directed links of the SFC routine do not make a chart sfc can hold: a transition with no step above or below it (kept in `sfc.loose`, drawn but not part of the chart), a step no transition leads to, a link naming an ID no element has, an ID used twice, two transitions linked without a step between them, a selection branch where Studio places a simultaneous one. Studio exports charts that do not verify; fix the chart in Studio or in sfc.";
+
+    "SFC0726" Warning "preset from an expression"
+        "A step's or an action's preset is an expression (`PresetUsesExpr=\"true\"`) instead of the tag's `PRE`. A step's `.DN` is imported as the comparison of its time with the expression in every scan; a timed action's duration is written `T#0ms` (an IEC association takes a literal or a TIME variable). The expression is kept in `sfc.logix.preset_expr`.";
+
+    "SFC0727" Warning "unknown L5X value"
+        "An attribute of the L5X file has a value the import does not know (a qualifier, a branch type, a controller SFC setting) or an element lacks its tag name (`Operand`). The import says how it read it; the value is kept as written for the way back.";
+
+    "SFC0728" Warning "tag named like a chart element"
+        "A program tag has the name of one of the chart's steps, transitions or actions (Studio gives every transition a BOOL tag of its name). In sfc's text an element and a variable of the same POU cannot share a name: the element keeps it and the tag is not declared.";
+
+    "SFC0729" Error "transition condition is not an expression"
+        "A transition's condition is empty, or is an assignment instead of a BOOL expression (`Done := Level > 80;`). Studio's verification refuses it too; the import writes `FALSE` in its place.\n\n    Level > 80;";
+
+    "SFC0730" Warning "no SFC routine in the L5X file"
+        "The L5X file imports, but none of its programs has a routine of type SFC, so there is no chart to check, simulate, build or edit. The note lists the routines found.";
+
+    "SFC0731" Error "not an L5X export sfc can read"
+        "The file's document element is not `RSLogix5000Content`, it has no `Controller`, or an SFC routine has no `SFCContent`. Export the controller, program or routine again from Studio 5000 (File > Save As > L5X, or Export Routine).";
     "SFC0740" Error "no S7-GRAPH block in the TIA Portal export"
         "The TIA Portal (Openness, SimaticML) export holds no function block whose `ProgrammingLanguage` is GRAPH (a LAD or SCL block, a data block, a tag table), so there is no chart to import; the message names what it holds. A GRAPH block without a `Graph` network source is reported the same way. Export the GRAPH FB itself from TIA Portal.";
     "SFC0741" Note "GRAPH block properties assumed"

@@ -1516,15 +1516,6 @@ fn not_a_project_note(root: Node) -> String {
         "this is a TwinCAT 3 source file (.TcPOU, .TcGVL, .TcDUT), not PLCopen XML; in TwinCAT, \
          right-click the POU or its folder, choose `Export PLCopenXML...`, and give sfc that file"
             .to_string()
-    } else if name == "RSLogix5000Content" {
-        let sfc = root
-            .descendants()
-            .filter(|n| n.is_element() && n.tag_name().name() == "Routine" && n.attribute("Type") == Some("SFC"))
-            .count();
-        format!(
-            "this is a Studio 5000 (Logix) L5X export holding {sfc} SFC routine(s); sfc does not read \
-             L5X yet: write the chart in IEC 61131-3 text or export PLCopen XML from a tool that has it"
-        )
     } else {
         "sfc reads PLCopen TC6 XML, whose document element is `<project \
          xmlns=\"http://www.plcopen.org/xml/tc6_0201\">` (or tc6_0200, tc6_0100); export the POU \

@@ -81,3 +81,39 @@ pub const CHART_WORDS: &[&str] =
 pub fn cannot_name(s: &str) -> bool {
     RESERVED.iter().chain(NOT_NAMES).any(|k| k.eq_ignore_ascii_case(s))
 }
+
+/// Whether `s` is an IEC identifier (letters, digits, single underscores, not a keyword): what
+/// an importer may copy into text as a name.
+pub fn is_identifier(s: &str) -> bool {
+    let b = s.as_bytes();
+    !b.is_empty()
+        && b.first().is_some_and(|c| c.is_ascii_alphabetic() || *c == b'_')
+        && b.iter().all(|c| c.is_ascii_alphanumeric() || *c == b'_')
+        && !s.contains("__")
+        && !s.ends_with('_')
+        && !cannot_name(s)
+}
+
+/// A usable identifier made from `s` (invalid characters become `_`; a name that cannot be one
+/// gets the prefix `X_`).
+pub fn sanitize_identifier(s: &str) -> String {
+    let mut out = String::new();
+    for c in s.chars() {
+        let c = if c.is_ascii_alphanumeric() { c } else { '_' };
+        if c == '_' && (out.is_empty() || out.ends_with('_')) {
+            continue;
+        }
+        out.push(c);
+    }
+    while out.ends_with('_') {
+        out.pop();
+    }
+    if out.is_empty() {
+        // Nothing usable (`""`, `"_"`, `"()"`): `X`, not `X_`, which is no identifier.
+        return "X".to_string();
+    }
+    if out.as_bytes().first().is_some_and(u8::is_ascii_digit) || cannot_name(&out) {
+        out.insert_str(0, "X_");
+    }
+    out
+}
