@@ -412,8 +412,8 @@ fn logix_member(at: Range<u32>, element: &str, member: &str, ty: &str) -> Proble
         at,
         format!("`{element}.{member}` is a member of Logix's {ty} tag that sfc's IEC text has no equivalent for"),
         Some(
-            "the `logix` simulation profile that will give the SFC_STEP, SFC_ACTION and SFC_STOP members their \
-             Logix meaning is not there yet; sfc reads `.X`, `.T` (as DINT ms), `.DN` and `.PRE` of a step, \
+            "the `logix` simulation profile does not simulate these SFC_STEP, SFC_ACTION and SFC_STOP members \
+             yet; sfc reads `.X`, `.T` (as DINT ms), `.DN` and `.PRE` of a step, \
              `.Q` and `.A` of an action and `.X` of a stop; the member is replaced by a constant in the text"
                 .into(),
         ),
@@ -426,7 +426,7 @@ fn instruction_note(up: &str) -> String {
             "sfc imports SFC routines only; a routine called with JSR is not part of the chart".into()
         }
         "SFR" | "SFP" => {
-            "resetting (SFR) and pausing (SFP) a chart belong to the `logix` profile, which is not there yet".into()
+            "resetting (SFR) and pausing (SFP) a chart are not simulated yet, by the `logix` profile either".into()
         }
         "TON" | "TOF" | "RTO" | "TONR" | "TOFR" | "RTOR" | "CTU" | "CTD" | "CTUD" => {
             "Logix's timers and counters run a tag with the instruction's own members; write the IEC function \
