@@ -145,6 +145,8 @@ enum BuildTargetArg {
     Plcopen,
     Svg,
     Text,
+    L5x,
+    Simaticml,
 }
 
 #[derive(clap::Args)]
@@ -251,6 +253,8 @@ fn run() -> u8 {
                 BuildTargetArg::Plcopen => build::BuildTarget::Plcopen,
                 BuildTargetArg::Svg => build::BuildTarget::Svg,
                 BuildTargetArg::Text => build::BuildTarget::Text,
+                BuildTargetArg::L5x => build::BuildTarget::L5x,
+                BuildTargetArg::Simaticml => build::BuildTarget::Simaticml,
             },
             out: a.out,
             pou: a.pou,

@@ -613,6 +613,22 @@ function block instance named like a function of its libraries (`INC`, `CMP`…)
 function. For `--st-dialect matiec` and `strucpp` such a name is renamed in the whole output \
 (`Left` becomes `Left_1`), and this note says so: the program's variable has the new name in \
 the PLC.";
+    "SFC0820" Error "not expressible in an L5X SFC routine"
+        "The chart uses something a Studio 5000 SFC routine cannot hold (the message says what and \
+where): `sfc build --target l5x` writes nothing rather than a routine that behaves otherwise.";
+    "SFC0821" Warning "behaves differently in Studio 5000"
+        "The chart is written as an L5X SFC routine, but a Logix controller runs this element \
+differently from the chart's own rules (the message says how; docs/sim.md, \"The `logix` \
+profile\"). The routine is written; check the behaviour, or change the chart.";
+    "SFC0830" Error "not expressible in an S7-GRAPH block"
+        "The chart uses something an S7-GRAPH function block cannot hold (the message says what and \
+where): `sfc build --target simaticml` writes nothing rather than a block that behaves \
+otherwise.";
+    "SFC0831" Warning "behaves differently in S7-GRAPH"
+        "The chart is written as an S7-GRAPH block, but S7-GRAPH runs this element differently from \
+the chart's own rules (the message says how; docs/sim.md, \"The `graph` profile\"). The block \
+is written; check the behaviour, or change the chart.";
+
     "SFC0901" Warning "transition tested in scan 0 under MatIEC"
         "MatIEC's generated code has no first-scan guard: a transition leaving an initial step is \
 tested in the very first scan, so when its condition already holds the initial step is left \

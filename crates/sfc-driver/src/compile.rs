@@ -16,11 +16,15 @@ pub enum BuildTarget {
     Plcopen,
     Svg,
     Text,
+    /// Studio 5000: an L5X file with the chart as an SFC routine (`sfc-l5x`).
+    L5x,
+    /// TIA Portal: a SimaticML file with the chart as an S7-GRAPH block (`sfc-simaticml`).
+    Simaticml,
 }
 
 impl BuildTarget {
     /// Every target, in the order the documentation lists them.
-    pub const ALL: [BuildTarget; 7] = [
+    pub const ALL: [BuildTarget; 9] = [
         BuildTarget::Atmt,
         BuildTarget::Eatmt,
         BuildTarget::St,
@@ -28,6 +32,8 @@ impl BuildTarget {
         BuildTarget::Plcopen,
         BuildTarget::Svg,
         BuildTarget::Text,
+        BuildTarget::L5x,
+        BuildTarget::Simaticml,
     ];
 
     /// The name used on the command line and in the HTTP API (`atmt`, `st`, …).
@@ -40,6 +46,8 @@ impl BuildTarget {
             BuildTarget::Plcopen => "plcopen",
             BuildTarget::Svg => "svg",
             BuildTarget::Text => "text",
+            BuildTarget::L5x => "l5x",
+            BuildTarget::Simaticml => "simaticml",
         }
     }
 
@@ -278,6 +286,22 @@ pub fn compile(checked: &Checked, target: BuildTarget, opts: &CompileOptions) ->
             return sfc_plcopen::export_with(checked, opts.original)
                 .map(|(text, notes)| Compiled { text, notes, flattened: None, symbols: None })
                 .map_err(CompileError::Diagnostics)
+        }
+        BuildTarget::L5x | BuildTarget::Simaticml => {
+            if checked.charts.is_empty() {
+                return Err(CompileError::Chart("the file has no SFC POU to build".to_string()));
+            }
+            if let Some(p) = opts.pou {
+                pick_chart(checked, Some(p)).map_err(CompileError::Chart)?;
+            }
+            let out = if target == BuildTarget::L5x {
+                sfc_l5x::export::export(checked, opts.pou)
+            } else {
+                sfc_simaticml::export::export(checked, opts.pou)
+            };
+            return out
+                .map(|(text, notes)| Compiled { text, notes, flattened: None, symbols: None })
+                .map_err(CompileError::Diagnostics);
         }
         BuildTarget::St => {
             // Every chart of the file unless one is named, so a chart function block and the

@@ -7,6 +7,7 @@
 //! later export. `docs/dev/logix-sfc.md` holds the research this is built on; the user's view
 //! is in `docs/targets.md`, "Studio 5000 (Logix) L5X".
 
+pub mod export;
 mod chart;
 mod st;
 mod tags;
