@@ -41,6 +41,8 @@ fn mk_chart(n: usize, initial: &[usize], trans: &[(Vec<usize>, Vec<usize>)]) -> 
                 timeout: None,
                 min_time: None,
                 is_final: false,
+                interlock: None,
+                supervision: None,
                 attributes: Vec::new(),
                 name_span: span,
                 span,
@@ -65,6 +67,8 @@ fn mk_chart(n: usize, initial: &[usize], trans: &[(Vec<usize>, Vec<usize>)]) -> 
         actions: Vec::new(),
         name_span: span,
         span,
+        logix: Default::default(),
+        s7graph: Default::default(),
     }
 }
 
