@@ -68,6 +68,20 @@ pub fn export(checked: &Checked, pou: Option<&str>) -> Result<(String, Vec<Diagn
             ),
         );
     }
+    if pou.is_none() {
+        for (i, item) in checked.unit.items.iter().enumerate() {
+            let Item::Pou(p) = item else { continue };
+            if !checked.charts.iter().any(|c| c.item == i) {
+                let mut d = Diagnostic::error(
+                    "SFC0830",
+                    p.name.span,
+                    format!("`{}` is not a chart: an S7-GRAPH export holds GRAPH blocks only", p.name.text),
+                );
+                d.notes.push("`--pou NAME` writes one chart of the file".into());
+                out.errors.push(d);
+            }
+        }
+    }
     let globals = file_globals(checked);
     let pous: Vec<&ast::Pou> = charts
         .iter()
@@ -327,7 +341,7 @@ pub(crate) fn interface(
     w.close("Sections");
     w.close("Interface");
     if !added.is_empty() && attr(&p.attributes, "sfc.dialect").as_deref() != Some("graph") {
-        out.notes.push(Diagnostic::note_diag(
+        out.notes.push(Diagnostic::warning(
             "SFC0831",
             p.name.span,
             format!("GRAPH's standard parameters are added to the interface: {}", added.join(", ")),
@@ -405,9 +419,15 @@ fn start_value(e: &ast::Expr) -> String {
 }
 
 fn member(w: &mut W, out: &mut Out, checked: &Checked, d: &ast::VarDecl, retain: bool) {
-    if d.location.is_some() {
-        out.error(d.span, "a located variable (AT %…) cannot be written in a GRAPH block's interface");
-        return;
+    if let Some(l) = &d.location {
+        out.warn(
+            d.span,
+            format!(
+                "a GRAPH block's interface has no addresses: `{}` is written without `AT {}` (connect the block's parameter or a PLC tag to it)",
+                d.names.iter().map(|n| n.text.as_str()).collect::<Vec<_>>().join(", "),
+                l.text
+            ),
+        );
     }
     let (dt, members) = match datatype(checked, &d.ty) {
         Ok(x) => x,

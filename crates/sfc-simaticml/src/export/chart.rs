@@ -74,12 +74,16 @@ pub(crate) fn block(
     id: &mut u32,
 ) {
     let pa = &p.attributes;
-    let graph_dialect = attr(pa, "sfc.dialect").as_deref() == Some("graph");
+    // A chart the import wrote numbers every step and transition; its topology and action rows
+    // are in its attributes. Any other chart (also one written by hand in the graph dialect) is
+    // laid out from its structure.
+    let imported = chart.transitions.iter().any(|t| number(&t.attributes).is_some())
+        || chart.steps.iter().any(|s| number(&s.attributes).is_some());
     if p.kind == ast::PouKind::Program {
-        out.notes.push(sfc_diagnostics::Diagnostic::note_diag(
+        out.notes.push(sfc_diagnostics::Diagnostic::warning(
             "SFC0831",
             p.name.span,
-            format!("the PROGRAM `{}` is written as a GRAPH function block (S7-GRAPH blocks are FBs)", p.name.text),
+            format!("the PROGRAM `{}` is written as a GRAPH function block (S7-GRAPH blocks are FBs): it runs when an instance of it is called", p.name.text),
         ));
     } else if p.kind != ast::PouKind::FunctionBlock {
         out.error(p.name.span, "only a PROGRAM or FUNCTION_BLOCK chart can be written as an S7-GRAPH block");
@@ -115,7 +119,7 @@ pub(crate) fn block(
     }
 
     // Topology.
-    let (back, fwd) = if graph_dialect { topology_kept(out, chart, &end) } else { topology_iec(out, chart) };
+    let (back, fwd) = if imported { topology_kept(out, chart, &end) } else { topology_iec(out, chart) };
 
     // Sequences: the steps joined by transitions, in the order of their first step.
     let n = chart.steps.len();
@@ -215,11 +219,25 @@ pub(crate) fn block(
     let mut events: HashMap<String, Vec<Row>> = HashMap::new();
     for a in &chart.actions {
         if let Some(s) = attr(&a.attributes, "sfc.s7graph.step") {
+            // Written by hand (no tokens kept): the body's assignments are the row.
+            let tokens = match attr(&a.attributes, "sfc.s7graph.tokens") {
+                Some(t) => t,
+                None => match assignments(ops, &a.body) {
+                    Ok(t) => t,
+                    Err(m) => {
+                        out.error(
+                            a.name_span,
+                            format!("the event action `{}` cannot be written as a GRAPH action row: {m}", a.name),
+                        );
+                        continue;
+                    }
+                },
+            };
             events.entry(s.to_ascii_uppercase()).or_default().push(Row {
                 qualifier: attr(&a.attributes, "sfc.s7graph.qualifier").unwrap_or_else(|| "N".into()),
                 event: attr(&a.attributes, "sfc.s7graph.event"),
                 interlock: attr(&a.attributes, "sfc.s7graph.interlock").as_deref() == Some("true"),
-                tokens: attr(&a.attributes, "sfc.s7graph.tokens").unwrap_or_default(),
+                tokens,
             });
         }
     }
@@ -253,7 +271,9 @@ pub(crate) fn block(
             if let Some(t) = attr(&s.attributes, "sfc.s7graph.actions_title") {
                 w.texts("Title", &t);
             }
-            let rows = if graph_dialect {
+            let kept = s.attributes.iter().any(|a| a.name.starts_with("sfc.s7graph.action"))
+                || events.contains_key(&s.name.to_ascii_uppercase());
+            let rows = if kept {
                 kept_rows(s, events.remove(&s.name.to_ascii_uppercase()).unwrap_or_default())
             } else {
                 iec_rows(out, chart, s, ops)
@@ -637,9 +657,15 @@ fn assignments(ops: &Operands, body: &ActionBody) -> Result<String, String> {
     Ok(lines.join("\n"))
 }
 
+fn push(rows: &mut Vec<Row>, names: &mut Vec<String>, name: &str, r: Row) {
+    rows.push(r);
+    names.push(name.to_string());
+}
+
 /// The rows of a step of an IEC chart, from its associations.
 fn iec_rows(out: &mut Out, chart: &Chart, s: &sfc_model::chart::StepNode, ops: &Operands) -> Vec<Row> {
     let mut rows = Vec::new();
+    let mut assoc_of_rows: Vec<String> = Vec::new();
     let row = |q: &str, ev: Option<&str>, t: String| Row {
         qualifier: q.into(),
         event: ev.map(str::to_string),
@@ -652,16 +678,24 @@ fn iec_rows(out: &mut Out, chart: &Chart, s: &sfc_model::chart::StepNode, ops: &
             ActionTarget::Variable => {
                 let op = operand_text(ops, &a.action);
                 match (q, &a.duration) {
-                    (Qualifier::N | Qualifier::S | Qualifier::R, _) => rows.push(row(q.name(), None, op)),
-                    (Qualifier::D | Qualifier::L, Some(Duration::Literal(us))) => {
-                        rows.push(row(q.name(), None, format!("{op} , {}", time_literal(*us))))
+                    (Qualifier::N | Qualifier::S | Qualifier::R, _) => {
+                        push(&mut rows, &mut assoc_of_rows, &a.action, row(q.name(), None, op))
                     }
-                    (Qualifier::D | Qualifier::L, Some(Duration::Variable(v))) => {
-                        rows.push(row(q.name(), None, format!("{op} , {}", operand_text(ops, v))))
-                    }
+                    (Qualifier::D | Qualifier::L, Some(Duration::Literal(us))) => push(
+                        &mut rows,
+                        &mut assoc_of_rows,
+                        &a.action,
+                        row(q.name(), None, format!("{op} , {}", time_literal(*us))),
+                    ),
+                    (Qualifier::D | Qualifier::L, Some(Duration::Variable(v))) => push(
+                        &mut rows,
+                        &mut assoc_of_rows,
+                        &a.action,
+                        row(q.name(), None, format!("{op} , {}", operand_text(ops, v))),
+                    ),
                     (Qualifier::P1 | Qualifier::P0 | Qualifier::P, _) => {
                         let ev = if q == Qualifier::P0 { "S0" } else { "S1" };
-                        rows.push(row("N", Some(ev), format!("{op} := TRUE")));
+                        push(&mut rows, &mut assoc_of_rows, &a.action, row("N", Some(ev), format!("{op} := TRUE")));
                         out.warn(a.span, format!("the pulse association of `{}` is written as an assignment in the step's {ev} event (TRUE once, not reset after)", a.action));
                     }
                     _ => out.error(
@@ -684,17 +718,26 @@ fn iec_rows(out: &mut Out, chart: &Chart, s: &sfc_model::chart::StepNode, ops: &
                 };
                 match q {
                     Qualifier::N => {
-                        rows.push(row("N", None, body));
+                        push(&mut rows, &mut assoc_of_rows, &a.action, row("N", None, body));
                         out.warn(a.span, format!("S7-GRAPH does not run the N action `{}` once more when its step is left, as IEC 61131-3 does", act.name));
                     }
-                    Qualifier::P1 | Qualifier::P => rows.push(row("N", Some("S1"), body)),
-                    Qualifier::P0 => rows.push(row("N", Some("S0"), body)),
+                    Qualifier::P1 | Qualifier::P => push(&mut rows, &mut assoc_of_rows, &a.action, row("N", Some("S1"), body)),
+                    Qualifier::P0 => push(&mut rows, &mut assoc_of_rows, &a.action, row("N", Some("S0"), body)),
                     _ => out.error(
                         a.span,
                         format!("the {} association of the action `{}` cannot be written in S7-GRAPH (its rows hold N/S/R/D/L on operands and assignments)", q.name(), act.name),
                     ),
                 }
             }
+        }
+    }
+    // Interlock-dependent associations (GRAPH's C), as the `graph` profile reads them.
+    let gated: Vec<String> = attr(&s.attributes, "sfc.s7graph.interlocked")
+        .map(|l| l.split(',').map(|x| x.trim().to_ascii_uppercase()).collect())
+        .unwrap_or_default();
+    for (r, a) in rows.iter_mut().zip(assoc_of_rows.iter()) {
+        if gated.contains(&a.to_ascii_uppercase()) {
+            r.interlock = true;
         }
     }
     rows
