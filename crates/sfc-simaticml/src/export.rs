@@ -143,6 +143,12 @@ fn operands(checked: &Checked, p: &ast::Pou, chart: &Chart, globals: &HashMap<St
             }
         }
     }
+    // Globals the file declares and the POU reads without VAR_EXTERNAL.
+    for (k, g) in globals {
+        if !ops.vars.contains_key(k) {
+            ops.globals.entry(k.clone()).or_insert_with(|| g.clone());
+        }
+    }
     for s in &chart.steps {
         let raw = attr(&s.attributes, "sfc.s7graph.name").unwrap_or_else(|| s.name.clone());
         ops.steps.insert(s.name.to_ascii_uppercase(), raw);

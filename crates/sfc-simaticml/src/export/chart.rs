@@ -112,7 +112,43 @@ pub(crate) fn block(
             .unwrap_or_default()
     };
 
+    // A BOOL variable held by N (or D, L) in one step and set or reset in another: IEC combines
+    // the associations into one action control, GRAPH runs each row on its own.
+    let mut quals: HashMap<String, (bool, bool)> = HashMap::new();
     for s in &chart.steps {
+        for a in s.associations.iter().filter(|a| a.target == ActionTarget::Variable) {
+            let e = quals.entry(a.action.to_ascii_uppercase()).or_default();
+            match a.qualifier {
+                Qualifier::S | Qualifier::R => e.1 = true,
+                _ => e.0 = true,
+            }
+        }
+    }
+    for s in &chart.steps {
+        for a in s.associations.iter().filter(|a| a.target == ActionTarget::Variable) {
+            if quals.get(&a.action.to_ascii_uppercase()) == Some(&(true, true))
+                && matches!(a.qualifier, Qualifier::S | Qualifier::R)
+            {
+                out.warn(
+                    a.span,
+                    format!(
+                        "`{}` is held by N in one step and {} here: IEC keeps one action control for it, S7-GRAPH runs each row on its own (an N row resets it when its step is left, whatever this row set)",
+                        a.action,
+                        if a.qualifier == Qualifier::S { "set by S" } else { "reset by R" }
+                    ),
+                );
+            }
+        }
+        if let Some(t) = s.min_time {
+            let _ = t;
+            out.error(s.name_span, "a step's minimum time (sfc.min_time) has no counterpart in S7-GRAPH; write it into the following transitions (`S.T >= t`)");
+        }
+        if s.timeout.is_some() && attr(&s.attributes, "sfc.s7graph.max_time").is_none() {
+            out.warn(
+                s.name_span,
+                "the step's maximum time (sfc.timeout) is written as its T_MAX (MaximumStepTime); S7-GRAPH has no SFCError flag: a supervision (`#Step.T > #Step.T_MAX`) acts on it, and holds the step",
+            );
+        }
         if !s.step_actions.is_empty() {
             out.error(s.name_span, "step actions (ENTRY_ACTION, …) cannot be written in an S7-GRAPH step");
         }
@@ -178,7 +214,7 @@ pub(crate) fn block(
             (
                 raw_step(i),
                 step_no.get(i).copied().unwrap_or(0),
-                attr(&s.attributes, "sfc.s7graph.max_time"),
+                attr(&s.attributes, "sfc.s7graph.max_time").or_else(|| s.timeout.map(time_literal)),
                 attr(&s.attributes, "sfc.s7graph.warn_time"),
             )
         })
@@ -254,7 +290,7 @@ pub(crate) fn block(
                 ("Init", s.initial.to_string()),
                 ("Name", raw_step(i)),
             ];
-            if let Some(t) = attr(&s.attributes, "sfc.s7graph.max_time") {
+            if let Some(t) = attr(&s.attributes, "sfc.s7graph.max_time").or_else(|| s.timeout.map(time_literal)) {
                 a.push(("MaximumStepTime", t));
             }
             if let Some(t) = attr(&s.attributes, "sfc.s7graph.warn_time") {
@@ -721,7 +757,11 @@ fn iec_rows(out: &mut Out, chart: &Chart, s: &sfc_model::chart::StepNode, ops: &
                         push(&mut rows, &mut assoc_of_rows, &a.action, row("N", None, body));
                         out.warn(a.span, format!("S7-GRAPH does not run the N action `{}` once more when its step is left, as IEC 61131-3 does", act.name));
                     }
-                    Qualifier::P1 | Qualifier::P => push(&mut rows, &mut assoc_of_rows, &a.action, row("N", Some("S1"), body)),
+                    Qualifier::P1 => push(&mut rows, &mut assoc_of_rows, &a.action, row("N", Some("S1"), body)),
+                    Qualifier::P => {
+                        out.warn(a.span, format!("the P action `{}` is written as an S1 (step activated) event action: S7-GRAPH runs it once, without IEC's final run with Q FALSE", act.name));
+                        push(&mut rows, &mut assoc_of_rows, &a.action, row("N", Some("S1"), body))
+                    }
                     Qualifier::P0 => push(&mut rows, &mut assoc_of_rows, &a.action, row("N", Some("S0"), body)),
                     _ => out.error(
                         a.span,

@@ -214,7 +214,10 @@ impl<'o> Net<'o> {
                 if let Some(raw) = self.ops.steps.get(&up).or_else(|| self.ops.transitions.get(&up)) {
                     return Ok((vec![Comp { name: raw.clone(), idx: Vec::new() }], false));
                 }
-                Ok((vec![Comp { name: id.text.clone(), idx: Vec::new() }], false))
+                if self.ops.vars.contains_key(&up) {
+                    return Ok((vec![Comp { name: id.text.clone(), idx: Vec::new() }], false));
+                }
+                Err(format!("`{}` is no variable of the block, which a GRAPH network can read", id.text))
             }
             ExprKind::Member { base, member } => {
                 let (mut c, g) = self.comps(base)?;
