@@ -99,6 +99,28 @@ fn iec_charts_run_alike_as_graph_blocks() {
 }
 
 #[test]
+fn every_branch_kind_runs_alike() {
+    let dir = temp_dir("branches");
+    let here = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/simaticml_export");
+    equal_traces(&dir, &here.join("branches.st"), None, &here.join("branches.scenario.toml"), &["--profile", "graph"]);
+    // The XML holds each kind of branch and a jump.
+    let xml = std::fs::read_to_string(dir.join("branches.scenario.xml")).unwrap();
+    for kind in [
+        "\"AltBegin\"",
+        "\"AltEnd\"",
+        "\"SimBegin\"",
+        "\"SimEnd\"",
+        "<LinkType>Jump</LinkType>",
+        "Event=\"S1\"",
+        "Event=\"S0\"",
+        "Qualifier=\"D\"",
+        "Qualifier=\"L\"",
+    ] {
+        assert!(xml.contains(kind), "{kind} in\n{xml}");
+    }
+}
+
+#[test]
 fn graph_profile_fixtures_run_alike_as_graph_blocks() {
     let dir = temp_dir("graph");
     let g = root().join("crates/sfc-sim/tests/graph");

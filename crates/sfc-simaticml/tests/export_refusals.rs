@@ -1,0 +1,81 @@
+//! What S7-GRAPH cannot hold is a located SFC0830 and nothing is written; what it runs
+//! differently a located SFC0831 warning.
+#![allow(clippy::unwrap_used, clippy::expect_used, clippy::indexing_slicing)] // test code: a panic is a failed test
+
+fn export(text: &str) -> Result<(String, Vec<sfc_diagnostics::Diagnostic>), Vec<sfc_diagnostics::Diagnostic>> {
+    let checked = sfc_model::check_source(0, "x.st", text, &Default::default());
+    assert!(!checked.has_errors(), "{:?}", checked.diagnostics);
+    sfc_simaticml::export::export(&checked, None)
+}
+
+fn chart(step_body: &str, actions: &str, cond: &str) -> String {
+    format!(
+        "FUNCTION_BLOCK F\nVAR_INPUT Go : BOOL; n : INT; END_VAR\nVAR_OUTPUT x : BOOL; y : INT; END_VAR\n\
+         INITIAL_STEP S0: END_STEP\nTRANSITION FROM S0 TO S1 := {cond}; END_TRANSITION\n\
+         STEP S1:\n{step_body}\nEND_STEP\nTRANSITION FROM S1 TO S0 := NOT Go; END_TRANSITION\n{actions}\nEND_FUNCTION_BLOCK\n"
+    )
+}
+
+/// The error's message contains `what` and it is located at `at` in the text.
+fn refused(text: &str, what: &str, at: &str) {
+    let errs = export(text).expect_err("refused");
+    let e = errs.iter().find(|d| d.message.contains(what)).unwrap_or_else(|| panic!("{what}: {errs:?}"));
+    assert_eq!(e.code, "SFC0830");
+    let start = text.find(at).unwrap() as u32;
+    assert!(e.span.start >= start && e.span.start <= start + at.len() as u32, "{what}: at {:?}", e.span);
+}
+
+#[test]
+fn stored_qualifiers_on_bodies_are_refused() {
+    let t = chart("    A(S);", "ACTION A: y := y + 1; END_ACTION", "Go");
+    refused(&t, "S association of the action `A`", "A(S)");
+}
+
+#[test]
+fn statements_other_than_assignments_are_refused() {
+    let t = chart("    A(N);", "ACTION A: IF Go THEN y := 1; END_IF; END_ACTION", "Go");
+    refused(&t, "other than assignments", "A(N)");
+}
+
+#[test]
+fn arithmetic_in_a_condition_is_refused() {
+    let t = chart("", "", "n + 1 > 3");
+    refused(&t, "`n + 1` is no operand a LAD network can read", "TRANSITION FROM S0");
+}
+
+#[test]
+fn an_il_condition_or_a_step_action_is_refused() {
+    let t = "FUNCTION_BLOCK F\nVAR_INPUT Go : BOOL; END_VAR\nVAR y : INT; END_VAR\n\
+             INITIAL_STEP S0: END_STEP\nTRANSITION FROM S0 TO S1 := Go; END_TRANSITION\n\
+             STEP S1: ENTRY_ACTION := A; END_STEP\nTRANSITION FROM S1 TO S0 := NOT Go; END_TRANSITION\n\
+             ACTION A: y := 1; END_ACTION\nEND_FUNCTION_BLOCK\n";
+    let checked = sfc_model::check_source(0, "x.st", t, &Default::default());
+    if checked.has_errors() {
+        return; // the syntax of step actions is a dialect's; nothing to test here then
+    }
+    let errs = sfc_simaticml::export::export(&checked, None).expect_err("refused");
+    assert!(errs.iter().any(|d| d.message.contains("step actions")), "{errs:?}");
+}
+
+#[test]
+fn n_bodies_and_mixed_set_and_hold_are_warned() {
+    let t = chart("    A(N);\n    x(S);", "ACTION A: y := y + 1; END_ACTION", "Go");
+    let t = t
+        .replace("STEP S1:", "STEP S2:\n    x(N);\nEND_STEP\nTRANSITION FROM S2 TO S0 := Go; END_TRANSITION\nSTEP S1:");
+    let (xml, notes) = export(&t).expect("written");
+    assert!(xml.contains("<Token Text=\"#y\" />"), "{xml}");
+    let w: Vec<&str> = notes.iter().filter(|d| d.code == "SFC0831").map(|d| d.message.as_str()).collect();
+    assert!(w.iter().any(|m| m.contains("once more")), "{w:?}");
+    assert!(w.iter().any(|m| m.contains("held by N in one step and set by S")), "{w:?}");
+}
+
+#[test]
+fn the_output_reimports_without_errors() {
+    let t = chart("    x(N);\n    A(P1);", "ACTION A: y := n; END_ACTION", "Go AND (n >= 3 OR NOT x)");
+    let (xml, _) = export(&t).expect("written");
+    let back = sfc_simaticml::import(0, &xml);
+    assert!(!back.diagnostics.iter().any(|d| d.is_error()), "{:?}", back.diagnostics);
+    assert!(back.text.contains(":= Go AND ((n >= 3) OR (NOT x));"), "{}", back.text);
+    assert!(back.text.contains("x(N);"), "{}", back.text);
+    assert!(back.text.contains("(P1);"), "{}", back.text);
+}
