@@ -76,7 +76,7 @@ fn equal_traces(dir: &Path, chart: &Path, pou: Option<&str>, scenario: &Path, te
     assert_eq!(ra.status.code(), rb.status.code(), "{name}: {}\n{}", text(&ra), text(&rb));
     same_traces(&a, &b, &name);
     // The XML is a chart file like any other.
-    for target in ["plcopen", "st"] {
+    for target in ["plcopen", "st", "text"] {
         let o = dir.join(format!("{name}.{target}.out"));
         let out = sfc(&["build", xml.to_str().unwrap(), "--target", target, "-o", o.to_str().unwrap()]);
         assert_eq!(out.status.code(), Some(0), "{name} --target {target}: {}", text(&out));

@@ -134,10 +134,13 @@ fn operands(checked: &Checked, p: &ast::Pou, chart: &Chart, globals: &HashMap<St
         for d in &b.decls {
             for n in &d.names {
                 if b.kind == VarKind::External {
-                    if let Some(g) = globals.get(&n.text.to_ascii_uppercase()) {
-                        ops.globals.insert(n.text.to_ascii_uppercase(), g.clone());
-                        continue;
-                    }
+                    // A global: the import's spelling when the file declares it, else a PLC tag.
+                    let g = globals
+                        .get(&n.text.to_ascii_uppercase())
+                        .cloned()
+                        .unwrap_or_else(|| (format!("\"{}\"", n.text), type_name(&d.ty)));
+                    ops.globals.insert(n.text.to_ascii_uppercase(), g);
+                    continue;
                 }
                 ops.vars.insert(n.text.to_ascii_uppercase(), type_name(&d.ty));
             }
