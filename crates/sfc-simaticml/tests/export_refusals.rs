@@ -79,3 +79,49 @@ fn the_output_reimports_without_errors() {
     assert!(back.text.contains("x(N);"), "{}", back.text);
     assert!(back.text.contains("(P1);"), "{}", back.text);
 }
+
+/// Every chart file of the repository's examples and simulator tests: the export never panics;
+/// what it writes imports without errors, and each refusal is a located SFC0830.
+#[test]
+fn every_chart_of_the_repository_exports_or_is_refused() {
+    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../..");
+    let mut files = Vec::new();
+    let mut stack = vec![root.join("examples"), root.join("crates/sfc-sim/tests")];
+    while let Some(d) = stack.pop() {
+        for e in std::fs::read_dir(&d).unwrap().flatten() {
+            let p = e.path();
+            if p.is_dir() {
+                stack.push(p);
+            } else if p.extension().is_some_and(|x| x == "st") {
+                files.push(p);
+            }
+        }
+    }
+    files.sort();
+    let (mut written, mut refused) = (0, 0);
+    for f in &files {
+        let text = std::fs::read_to_string(f).unwrap_or_default();
+        let checked = sfc_model::check_source(0, "x.st", &text, &Default::default());
+        if checked.has_errors() {
+            continue;
+        }
+        for c in &checked.charts {
+            match sfc_simaticml::export::export(&checked, Some(&c.pou)) {
+                Ok((xml, _)) => {
+                    written += 1;
+                    let back = sfc_simaticml::import(0, &xml);
+                    let errs: Vec<_> = back.diagnostics.iter().filter(|d| d.is_error()).collect();
+                    assert!(errs.is_empty(), "{} {}: {errs:?}", f.display(), c.pou);
+                    let again = sfc_model::check_source(0, "y.st", &back.text, &Default::default());
+                    assert!(!again.has_errors(), "{} {}: {:?}\n{}", f.display(), c.pou, again.diagnostics, back.text);
+                }
+                Err(errs) => {
+                    refused += 1;
+                    assert!(!errs.is_empty() && errs.iter().all(|d| d.code == "SFC0830" && d.is_error()), "{errs:?}");
+                    assert!(errs.iter().all(|d| (d.span.end as usize) <= text.len()), "{}", f.display());
+                }
+            }
+        }
+    }
+    assert!(written >= 15 && refused >= 10, "written {written}, refused {refused}");
+}

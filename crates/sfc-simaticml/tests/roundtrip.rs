@@ -38,6 +38,12 @@ fn roundtrip(name: &str, xml: &str) -> Result<(), String> {
             .collect();
         return Err(format!("{name}: the round trip differs:\n{}", diff.join("\n")));
     }
+    // And the export is a fixed point: the second XML is the first.
+    let checked2 = sfc_model::check_source(0, "x.st", &second.text, &Default::default());
+    let (out2, _) = sfc_simaticml::export::export(&checked2, None).map_err(|e| format!("{name}: {e:?}"))?;
+    if out2 != out {
+        return Err(format!("{name}: exporting the re-import gives another XML"));
+    }
     Ok(())
 }
 

@@ -668,6 +668,33 @@ fn graph_expr(ops: &Operands, e: &Expr) -> String {
     out
 }
 
+/// Whether every name `e` reads is one GRAPH can write in an action row (a variable of the
+/// block, a global, a step); calls and other forms are refused.
+fn names(ops: &Operands, e: &Expr) -> Result<(), String> {
+    match &e.kind {
+        ExprKind::Literal(_) => Ok(()),
+        ExprKind::Name(id) => {
+            let up = id.text.to_ascii_uppercase();
+            if ops.vars.contains_key(&up) || ops.globals.contains_key(&up) || ops.steps.contains_key(&up) {
+                Ok(())
+            } else {
+                Err(format!("`{}` is no variable of the block", id.text))
+            }
+        }
+        ExprKind::Member { base, .. } => names(ops, base),
+        ExprKind::Index { base, indices } => {
+            names(ops, base)?;
+            indices.iter().try_for_each(|i| names(ops, i))
+        }
+        ExprKind::Unary { operand, .. } | ExprKind::Paren(operand) => names(ops, operand),
+        ExprKind::Binary { lhs, rhs, .. } => {
+            names(ops, lhs)?;
+            names(ops, rhs)
+        }
+        _ => Err(format!("`{}` cannot be written in a GRAPH action row", sfc_syntax::print::expr(e))),
+    }
+}
+
 /// A named action's body as GRAPH assignment lines, or why it cannot be one.
 fn assignments(ops: &Operands, body: &ActionBody) -> Result<String, String> {
     let ActionBody::St(stmts) = body else {
@@ -677,6 +704,8 @@ fn assignments(ops: &Operands, body: &ActionBody) -> Result<String, String> {
     for s in stmts {
         match &s.kind {
             StmtKind::Assign { target, value } => {
+                names(ops, target)?;
+                names(ops, value)?;
                 lines.push(format!("{} := {}", graph_expr(ops, target), graph_expr(ops, value)))
             }
             StmtKind::Empty => {}
