@@ -125,3 +125,15 @@ fn every_chart_of_the_repository_exports_or_is_refused() {
     }
     assert!(written >= 15 && refused >= 10, "written {written}, refused {refused}");
 }
+
+/// An imported chart edited so that its kept action rows no longer match its associations is
+/// refused rather than written with stale rows.
+#[test]
+fn stale_kept_rows_are_refused() {
+    let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/fixtures");
+    let xml = std::fs::read_to_string(dir.join("sequence_end_v1.xml")).unwrap();
+    let text = sfc_simaticml::import(0, &xml).text;
+    let edited = text.replace("        Valve(N);\n", "");
+    assert_ne!(edited, text);
+    refused(&edited, "kept GRAPH action rows", "STEP Filling");
+}

@@ -253,6 +253,7 @@ pub(crate) fn block(
 
     // Event actions the import kept unassociated, by step.
     let mut events: HashMap<String, Vec<Row>> = HashMap::new();
+    let mut event_at: HashMap<String, Span> = HashMap::new();
     for a in &chart.actions {
         if let Some(s) = attr(&a.attributes, "sfc.s7graph.step") {
             // Written by hand (no tokens kept): the body's assignments are the row.
@@ -269,6 +270,7 @@ pub(crate) fn block(
                     }
                 },
             };
+            event_at.entry(s.to_ascii_uppercase()).or_insert(a.name_span);
             events.entry(s.to_ascii_uppercase()).or_default().push(Row {
                 qualifier: attr(&a.attributes, "sfc.s7graph.qualifier").unwrap_or_else(|| "N".into()),
                 event: attr(&a.attributes, "sfc.s7graph.event"),
@@ -307,12 +309,27 @@ pub(crate) fn block(
             if let Some(t) = attr(&s.attributes, "sfc.s7graph.actions_title") {
                 w.texts("Title", &t);
             }
-            let kept = s.attributes.iter().any(|a| a.name.starts_with("sfc.s7graph.action"))
-                || events.contains_key(&s.name.to_ascii_uppercase());
+            let kept = s.attributes.iter().any(|a| a.name.starts_with("sfc.s7graph.action"));
+            let step_events = events.remove(&s.name.to_ascii_uppercase()).unwrap_or_default();
             let rows = if kept {
-                kept_rows(s, events.remove(&s.name.to_ascii_uppercase()).unwrap_or_default())
+                let rows = kept_rows(s, step_events);
+                // The kept rows are the step's associations only if nobody changed them since.
+                let associated = rows.iter().filter(|r| matches!(r.event.as_deref(), None | Some("S1" | "S0"))).count();
+                if associated != s.associations.len() {
+                    out.error(
+                        s.name_span,
+                        format!(
+                            "the step `{}` has {} association(s) but its kept GRAPH action rows (sfc.s7graph.action<k>.*) give {associated}: remove those attributes to write the associations anew",
+                            s.name,
+                            s.associations.len()
+                        ),
+                    );
+                }
+                rows
             } else {
-                iec_rows(out, chart, s, ops)
+                let mut rows = iec_rows(out, chart, s, ops);
+                rows.extend(step_events);
+                rows
             };
             for r in rows {
                 let mut a = Vec::new();
@@ -494,6 +511,10 @@ pub(crate) fn block(
         w.close("Sequence");
     }
 
+    for (step, _) in events {
+        let at = event_at.get(&step).copied().unwrap_or(chart.name_span);
+        out.error(at, format!("the event action's step `{step}` (sfc.s7graph.step) is no step of the chart"));
+    }
     permanent(w, out, chart, ops, "post");
     w.open("AlarmsSettings", &[]);
     w.open("AlarmSupervisionCategories", &[]);
@@ -525,8 +546,6 @@ pub(crate) fn block(
     }
     w.close("ObjectList");
     w.close("SW.Blocks.FB");
-    // Interlock-dependent associations of IEC charts and the like are not written yet.
-    let _ = Span::default;
 }
 
 /// Tokens as TIA writes them: each run of non-blank characters, each run of blanks, each line
@@ -908,6 +927,17 @@ fn topology_kept(out: &mut Out, chart: &Chart, end: &[bool]) -> (Vec<Back>, Vec<
                     t.header_span,
                     format!("the branch path `{item}` of transition `{}` cannot be written back", t.name),
                 ),
+            }
+        }
+        if b.is_none() {
+            if let Some(&f) = t.from.first() {
+                let outs = chart.transitions.iter().filter(|x| x.from.contains(&f)).count();
+                if outs > 1 && t.from.len() == 1 {
+                    out.error(
+                        t.header_span,
+                        format!("transition `{}` leaves a step with several transitions but has no kept branch (sfc.s7graph.branch): number the chart's new elements or remove the chart's sfc.s7graph.number attributes to lay it out anew", t.name),
+                    );
+                }
             }
         }
         let b = b.unwrap_or_else(|| Back::Direct(t.from.first().copied().unwrap_or(0)));
