@@ -96,9 +96,18 @@ pub fn export(checked: &Checked, pou: Option<&str>) -> Result<(String, Vec<Diagn
     w.open("Document", &[]);
     w.empty("Engineering", &[("version", tia)]);
     let mut id = 0u32;
+    // Block numbers: the kept ones, the others the lowest free ones (TIA numbers FBs uniquely).
+    let taken: Vec<String> = pous.iter().filter_map(|p| attr(&p.attributes, "sfc.s7graph.number")).collect();
+    let mut free = 0u32;
     for (chart, p) in charts.iter().zip(pous.iter()) {
         let ops = operands(checked, p, chart, &globals);
-        chart::block(&mut w, &mut out, checked, p, chart, &ops, &mut id);
+        let number = attr(&p.attributes, "sfc.s7graph.number").unwrap_or_else(|| loop {
+            free += 1;
+            if !taken.contains(&free.to_string()) {
+                break free.to_string();
+            }
+        });
+        chart::block(&mut w, &mut out, checked, p, chart, &ops, &number, &mut id);
     }
     w.close("Document");
     if out.errors.is_empty() {

@@ -137,3 +137,15 @@ fn stale_kept_rows_are_refused() {
     assert_ne!(edited, text);
     refused(&edited, "kept GRAPH action rows", "STEP Filling");
 }
+
+/// Two charts in one file: two blocks in one document, numbered apart, read back both.
+#[test]
+fn two_charts_are_two_blocks() {
+    let one = chart("    x(N);", "", "Go");
+    let two = one.replace("FUNCTION_BLOCK F", "FUNCTION_BLOCK G");
+    let (xml, _) = export(&format!("{one}\n{two}")).expect("written");
+    assert_eq!(xml.matches("<SW.Blocks.FB ").count(), 2);
+    assert!(xml.contains("<Number>1</Number>") && xml.contains("<Number>2</Number>"), "{xml}");
+    let back = sfc_simaticml::import(0, &xml);
+    assert!(back.text.contains("FUNCTION_BLOCK F") && back.text.contains("FUNCTION_BLOCK G"), "{}", back.text);
+}

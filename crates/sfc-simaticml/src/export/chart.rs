@@ -71,6 +71,7 @@ pub(crate) fn block(
     p: &ast::Pou,
     chart: &Chart,
     ops: &Operands,
+    fb_number: &str,
     id: &mut u32,
 ) {
     let pa = &p.attributes;
@@ -91,7 +92,6 @@ pub(crate) fn block(
     let gv = attr(pa, "sfc.s7graph.version").unwrap_or_else(|| "6.0".into());
     let ns = attr(pa, "sfc.s7graph.ns").unwrap_or_else(|| "v5".into());
     let name = attr(pa, "sfc.s7graph.name").unwrap_or_else(|| p.name.text.clone());
-    let fb_number = attr(pa, "sfc.s7graph.number").unwrap_or_else(|| "1".into());
 
     // Steps: the sequence ends the import made (`sfc.s7graph.end`) are EndConnections.
     let end: Vec<bool> = chart.steps.iter().map(|s| attr(&s.attributes, "sfc.s7graph.end").is_some()).collect();
@@ -236,7 +236,7 @@ pub(crate) fn block(
     }
     w.leaf("LockOperatingMode", &[], &prop("LockOperatingMode"));
     w.leaf("Name", &[], &name);
-    w.leaf("Number", &[], &fb_number);
+    w.leaf("Number", &[], fb_number);
     w.leaf("PermanentILProcessingInMANMode", &[], &prop("PermanentILProcessingInMANMode"));
     w.leaf("ProgrammingLanguage", &[], "GRAPH");
     w.leaf("SkipSteps", &[], &prop("SkipSteps"));
