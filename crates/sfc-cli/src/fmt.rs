@@ -32,7 +32,8 @@ pub fn fmt(a: FmtArgs) -> u8 {
         let path = match found {
             Found::File(p) => p,
             Found::Missing(e) => {
-                let message = e.message.replace("no chart files (`*.st`, `*.xml`, `*.l5x`)", "no IEC 61131-3 files (`*.st`)");
+                let message =
+                    e.message.replace("no chart files (`*.st`, `*.xml`, `*.l5x`)", "no IEC 61131-3 files (`*.st`)");
                 term::error(&message);
                 status = status.max(Status::Usage);
                 continue;

@@ -551,5 +551,6 @@ fn supervise(rt: Runtime, a: &RunArgs, source: &TokenSource) -> u8 {
 
 /// `--profile`: `iec`, `matiec`, `codesys` or `grafcet` (any case).
 pub fn parse_profile(s: &str) -> Result<Profile, String> {
-    Profile::from_name(s).ok_or_else(|| format!("unknown profile `{s}` (expected iec, matiec, codesys, grafcet, logix or graph)"))
+    Profile::from_name(s)
+        .ok_or_else(|| format!("unknown profile `{s}` (expected iec, matiec, codesys, grafcet, logix or graph)"))
 }

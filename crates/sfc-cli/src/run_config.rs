@@ -322,7 +322,10 @@ pub fn parse(text: &str, path: &Path) -> R<RunConfig> {
             "profile" => {
                 let s = src.string(key, item)?;
                 c.profile = Some(sfc_sim::Profile::from_name(&s).ok_or_else(|| {
-                    src.err(item.span(), format!("unknown profile \"{s}\" (expected iec, matiec, codesys, grafcet, logix or graph)"))
+                    src.err(
+                        item.span(),
+                        format!("unknown profile \"{s}\" (expected iec, matiec, codesys, grafcet, logix or graph)"),
+                    )
                 })?);
             }
             "realtime" => c.realtime = Some(src.bool(key, item)?),

@@ -765,18 +765,18 @@ fn check_profile_logix_lists_the_differences() {
     let codes = |file: &str| -> Vec<String> {
         let o = sfc(&["check", "--profile", "logix", "--format", "json", dir.join(file).to_str().unwrap()]);
         let out = String::from_utf8_lossy(&o.stdout).into_owned();
-        let mut codes: Vec<String> = out
-            .split("\"code\": \"")
-            .skip(1)
-            .map(|s| s.split('"').next().unwrap().to_string())
-            .collect();
+        let mut codes: Vec<String> =
+            out.split("\"code\": \"").skip(1).map(|s| s.split('"').next().unwrap().to_string()).collect();
         codes.sort();
         codes.dedup();
         codes
     };
     assert_eq!(codes("02_dont_scan.st"), ["SFC0921", "SFC0922", "SFC0923"]);
     let programmatic = codes("03_programmatic_reset.st");
-    assert!(programmatic.contains(&"SFC0922".to_string()) && !programmatic.contains(&"SFC0923".to_string()), "{programmatic:?}");
+    assert!(
+        programmatic.contains(&"SFC0922".to_string()) && !programmatic.contains(&"SFC0923".to_string()),
+        "{programmatic:?}"
+    );
     let text = "{attribute 'sfc.dialect' := 'logix'}\n{attribute 'sfc.logix.lastscan' := 'AutomaticReset'}\n\
         PROGRAM P\nVAR_INPUT Go : BOOL; END_VAR\nINITIAL_STEP A: END_STEP\n\
         TRANSITION FROM A TO B := Go; END_TRANSITION\nSTEP B: END_STEP\n\
@@ -807,7 +807,18 @@ fn a_logix_chart_runs_with_logix_and_says_so() {
     );
     let out = String::from_utf8_lossy(&o.stdout);
     assert!(out.lines().next().unwrap().contains(r#""active":["Running"]"#), "first call fires: {out}");
-    let o = sfc(&["sim", chart.to_str().unwrap(), "--scans", "2", "--set", "Start=TRUE", "--trace", "-", "--profile", "iec"]);
+    let o = sfc(&[
+        "sim",
+        chart.to_str().unwrap(),
+        "--scans",
+        "2",
+        "--set",
+        "Start=TRUE",
+        "--trace",
+        "-",
+        "--profile",
+        "iec",
+    ]);
     let out = String::from_utf8_lossy(&o.stdout);
     assert!(out.lines().next().unwrap().contains(r#""active":["Stopped"]"#), "IEC's scan 0 fires nothing: {out}");
     assert!(!String::from_utf8_lossy(&o.stderr).contains("profile logix"));

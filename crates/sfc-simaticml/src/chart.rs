@@ -314,7 +314,9 @@ pub(crate) fn block(cx: &mut Cx, b: Node, engineering: Option<&str>) -> Emitter 
     // transition's `TT` (their diagnostics come when the transitions are written).
     let before = cx.diags.len();
     for t in &trans {
-        if let Some(Some(Some(c))) = child(t.node, "FlgNet").map(|f| flgnet::condition(cx, f, "TrCoil", Place::Transition)) {
+        if let Some(Some(Some(c))) =
+            child(t.node, "FlgNet").map(|f| flgnet::condition(cx, f, "TrCoil", Place::Transition))
+        {
             cx.conditions.insert(t.name.to_ascii_uppercase(), c.text);
         }
     }
@@ -732,7 +734,10 @@ impl Kept {
         cx.diag(
             "SFC0742",
             at,
-            format!("kept in `sfc.s7graph.*` attributes, which only the `graph` profile simulates: {}", parts.join(", ")),
+            format!(
+                "kept in `sfc.s7graph.*` attributes, which only the `graph` profile simulates: {}",
+                parts.join(", ")
+            ),
         )
         .notes
         .push(

@@ -10,8 +10,8 @@
 //! namespaces v1 to v6 and GraphVersion 2.0 to 6.0 are read alike. `docs/dev/s7graph.md` holds
 //! the research this is built on.
 
-pub mod export;
 mod chart;
+pub mod export;
 mod flgnet;
 mod interface;
 mod operand;

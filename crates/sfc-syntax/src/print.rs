@@ -884,7 +884,7 @@ fn call_args(args: &[Arg]) -> String {
 // -- Expressions ------------------------------------------------------------------------------
 
 /// An expression on one line, with the user's parentheses and only those the tree needs.
-pub(crate) fn expr(e: &Expr) -> String {
+pub fn expr(e: &Expr) -> String {
     let mut out = String::new();
     write_expr(&mut out, e);
     out
