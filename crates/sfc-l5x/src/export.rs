@@ -29,7 +29,13 @@ pub fn export(checked: &Checked, pou: Option<&str>) -> Result<(String, Vec<Diagn
     }
     for ac in &checked.action_charts {
         if charts.iter().any(|c| c.item == ac.item) {
-            ex.error(ac.name_span, format!("the action `{}` is written in SFC: an L5X SFC routine's actions are ST", ac.action.as_deref().unwrap_or("")));
+            ex.error(
+                ac.name_span,
+                format!(
+                    "the action `{}` is written in SFC: an L5X SFC routine's actions are ST",
+                    ac.action.as_deref().unwrap_or("")
+                ),
+            );
         }
     }
     let mut routines = Vec::new();
@@ -252,7 +258,11 @@ fn l5k(v: &str) -> String {
 
 fn status_hex(v: i64) -> String {
     let h = format!("{:08X}", v as u32);
-    format!("16#{}_{}", h.get(..4).unwrap_or("0000").to_ascii_lowercase(), h.get(4..).unwrap_or("0000").to_ascii_lowercase())
+    format!(
+        "16#{}_{}",
+        h.get(..4).unwrap_or("0000").to_ascii_lowercase(),
+        h.get(4..).unwrap_or("0000").to_ascii_lowercase()
+    )
 }
 
 /// The decorated data of an SFC tag with its preset (and its L5K data when kept).
@@ -265,9 +275,15 @@ fn sfc_tag_data(ty: &str, pre: i64, kept: Option<&str>) -> String {
     let status = fields.first().copied().unwrap_or(2_097_152);
     let mut o = kept.map(l5k).unwrap_or_default();
     o.push_str(&format!("<Data Format=\"Decorated\">\n<Structure DataType=\"{ty}\">\n"));
-    o.push_str(&format!("<DataValueMember Name=\"Status\" DataType=\"DINT\" Radix=\"Hex\" Value=\"{}\"/>\n", status_hex(status)));
-    let bit = |n: &str, v: bool| format!("<DataValueMember Name=\"{n}\" DataType=\"BOOL\" Value=\"{}\"/>\n", u8::from(v));
-    let dint = |n: &str, v: i64| format!("<DataValueMember Name=\"{n}\" DataType=\"DINT\" Radix=\"Decimal\" Value=\"{v}\"/>\n");
+    o.push_str(&format!(
+        "<DataValueMember Name=\"Status\" DataType=\"DINT\" Radix=\"Hex\" Value=\"{}\"/>\n",
+        status_hex(status)
+    ));
+    let bit =
+        |n: &str, v: bool| format!("<DataValueMember Name=\"{n}\" DataType=\"BOOL\" Value=\"{}\"/>\n", u8::from(v));
+    let dint = |n: &str, v: i64| {
+        format!("<DataValueMember Name=\"{n}\" DataType=\"DINT\" Radix=\"Decimal\" Value=\"{v}\"/>\n")
+    };
     let pause = status & (1 << 21) != 0;
     match ty {
         "SFC_STEP" => {
@@ -469,7 +485,8 @@ impl Ex<'_> {
             "FALSE" => "0".to_string(),
             _ if up.starts_with("T#") || up.starts_with("TIME#") => duration_ms(t)?.to_string(),
             _ => {
-                let body = t.split_once('#').map_or(t, |(k, v)| if k.chars().all(|c| c.is_ascii_digit()) { t } else { v });
+                let body =
+                    t.split_once('#').map_or(t, |(k, v)| if k.chars().all(|c| c.is_ascii_digit()) { t } else { v });
                 body.to_string()
             }
         };
@@ -492,7 +509,14 @@ impl Ex<'_> {
                 o.push_str(&description(dd));
             }
             if let Some(ast::Initializer::Array { elements, span }) = init {
-                let vals: Vec<String> = self.text(*span).trim().trim_start_matches('[').trim_end_matches(']').split(',').map(|s| s.trim().to_string()).collect();
+                let vals: Vec<String> = self
+                    .text(*span)
+                    .trim()
+                    .trim_start_matches('[')
+                    .trim_end_matches(']')
+                    .split(',')
+                    .map(|s| s.trim().to_string())
+                    .collect();
                 let _ = elements;
                 let mut ok = Vec::new();
                 for v in &vals {
@@ -502,7 +526,11 @@ impl Ex<'_> {
                     }
                     ok.push(self.value(v, *span)?);
                 }
-                o.push_str(&format!("<Data Format=\"Decorated\">\n<Array DataType=\"{}\" Dimensions=\"{}\" Radix=\"Decimal\">\n", esc(&ty), esc(&dims)));
+                o.push_str(&format!(
+                    "<Data Format=\"Decorated\">\n<Array DataType=\"{}\" Dimensions=\"{}\" Radix=\"Decimal\">\n",
+                    esc(&ty),
+                    esc(&dims)
+                ));
                 for (i, v) in ok.iter().enumerate() {
                     o.push_str(&format!("<Element Index=\"[{i}]\" Value=\"{}\"/>\n", esc(v)));
                 }
@@ -513,7 +541,8 @@ impl Ex<'_> {
         }
         match init {
             Some(ast::Initializer::Expr(e)) => {
-                let v = self.value(&self.text(e.span).to_string(), e.span)?;
+                let src = self.text(e.span).to_string();
+                let v = self.value(&src, e.span)?;
                 data.push_str(&l5k(&v));
                 data.push_str(&format!("<Data Format=\"Decorated\">\n<DataValue DataType=\"{}\" Radix=\"Decimal\" Value=\"{}\"/>\n</Data>\n", esc(&ty), esc(&v)));
             }
@@ -525,12 +554,25 @@ impl Ex<'_> {
                         self.error(*span, "a nested structure initial value".into());
                         return None;
                     };
-                    let v = self.value(&self.text(e.span).to_string(), e.span)?;
-                    let mt = members.iter().find(|(n, _)| n.eq_ignore_ascii_case(&f.text)).map_or("DINT".to_string(), |m| m.1.clone());
+                    let src = self.text(e.span).to_string();
+                    let v = self.value(&src, e.span)?;
+                    let mt = members
+                        .iter()
+                        .find(|(n, _)| n.eq_ignore_ascii_case(&f.text))
+                        .map_or("DINT".to_string(), |m| m.1.clone());
                     if mt == "BOOL" {
-                        data.push_str(&format!("<DataValueMember Name=\"{}\" DataType=\"BOOL\" Value=\"{}\"/>\n", esc(&f.text), esc(&v)));
+                        data.push_str(&format!(
+                            "<DataValueMember Name=\"{}\" DataType=\"BOOL\" Value=\"{}\"/>\n",
+                            esc(&f.text),
+                            esc(&v)
+                        ));
                     } else {
-                        data.push_str(&format!("<DataValueMember Name=\"{}\" DataType=\"{}\" Radix=\"Decimal\" Value=\"{}\"/>\n", esc(&f.text), esc(&mt), esc(&v)));
+                        data.push_str(&format!(
+                            "<DataValueMember Name=\"{}\" DataType=\"{}\" Radix=\"Decimal\" Value=\"{}\"/>\n",
+                            esc(&f.text),
+                            esc(&mt),
+                            esc(&v)
+                        ));
                     }
                 }
                 data.push_str("</Structure>\n</Data>\n");
@@ -602,7 +644,10 @@ impl Ex<'_> {
             .min()
             .unwrap_or(0);
         let cut = if logix { indent.min(8) } else { indent };
-        lines.iter().map(|l| l.get(cut.min(l.len() - l.trim_start_matches(' ').len())..).unwrap_or("").to_string()).collect()
+        lines
+            .iter()
+            .map(|l| l.get(cut.min(l.len() - l.trim_start_matches(' ').len())..).unwrap_or("").to_string())
+            .collect()
     }
 
     fn chart(&mut self, c: &Chart) -> Option<Routine> {
@@ -611,9 +656,14 @@ impl Ex<'_> {
         let logix = attr(pa, "sfc.dialect").is_some_and(|d| d.eq_ignore_ascii_case("logix"));
         let n_err = self.errors.len();
         if pou.kind != ast::PouKind::Program {
-            self.error(pou.name.span, format!("the {} `{}` (an L5X SFC routine is a program's routine)", pou.kind.keyword(), pou.name.text));
+            self.error(
+                pou.name.span,
+                format!("the {} `{}` (an L5X SFC routine is a program's routine)", pou.kind.keyword(), pou.name.text),
+            );
         }
-        let (program, routine) = match attr(pa, "sfc.logix.routine").and_then(|r| r.split_once('/').map(|(a, b)| (a.to_string(), b.to_string()))) {
+        let (program, routine) = match attr(pa, "sfc.logix.routine")
+            .and_then(|r| r.split_once('/').map(|(a, b)| (a.to_string(), b.to_string())))
+        {
             Some(x) => x,
             None => (c.pou.clone(), c.pou.clone()),
         };
@@ -694,13 +744,24 @@ impl Ex<'_> {
         for (si, s) in c.steps.iter().enumerate() {
             let stop = attr(&s.attributes, "sfc.logix.stop").is_some();
             if !s.step_actions.is_empty() || s.interlock.is_some() || s.supervision.is_some() {
-                self.error(s.name_span, format!("the step `{}` has step actions, an interlock or a supervision", s.name));
+                self.error(
+                    s.name_span,
+                    format!("the step `{}` has step actions, an interlock or a supervision", s.name),
+                );
             }
             let mut at = parse_attrs(&attr(&s.attributes, "sfc.logix.attrs").unwrap_or_default());
             if !ids.kept || at.is_empty() {
                 let (x, y) = layout.step.get(si).copied().unwrap_or((200, 100));
                 at = if stop {
-                    vec![("ID".into(), String::new()), ("X".into(), x.to_string()), ("Y".into(), y.to_string()), ("HideDesc".into(), "false".into()), ("DescX".into(), (x + 40).to_string()), ("DescY".into(), (y - 20).to_string()), ("DescWidth".into(), "0".into())]
+                    vec![
+                        ("ID".into(), String::new()),
+                        ("X".into(), x.to_string()),
+                        ("Y".into(), y.to_string()),
+                        ("HideDesc".into(), "false".into()),
+                        ("DescX".into(), (x + 40).to_string()),
+                        ("DescY".into(), (y - 20).to_string()),
+                        ("DescWidth".into(), "0".into()),
+                    ]
                 } else {
                     vec![
                         ("ID".into(), String::new()),
@@ -738,14 +799,34 @@ impl Ex<'_> {
             let pre = attr(&s.attributes, "sfc.logix.preset").and_then(|p| p.parse::<i64>().ok()).unwrap_or(0);
             let desc = attr(&s.attributes, "sfc.description");
             let kept = attr(&s.attributes, "sfc.logix.tag");
-            tags.push((s.name.clone(), tag_xml(&s.name, if stop { "SFC_STOP" } else { "SFC_STEP" }, desc.as_deref(), &if stop { kept.as_deref().map(l5k).unwrap_or_default() + &sfc_tag_data("SFC_STOP", 0, None).replace(&kept.as_deref().map(l5k).unwrap_or_default(), "") } else { sfc_tag_data("SFC_STEP", pre, kept.as_deref()) })));
+            tags.push((
+                s.name.clone(),
+                tag_xml(
+                    &s.name,
+                    if stop { "SFC_STOP" } else { "SFC_STEP" },
+                    desc.as_deref(),
+                    &if stop {
+                        kept.as_deref().map(l5k).unwrap_or_default()
+                            + &sfc_tag_data("SFC_STOP", 0, None)
+                                .replace(&kept.as_deref().map(l5k).unwrap_or_default(), "")
+                    } else {
+                        sfc_tag_data("SFC_STEP", pre, kept.as_deref())
+                    },
+                ),
+            ));
             let mut inner = String::new();
             if let Some(e) = attr(&s.attributes, "sfc.logix.preset_expr") {
-                inner.push_str(&format!("<Preset>\n{}</Preset>\n", st_content(&e.split('\n').map(str::to_string).collect::<Vec<_>>())));
+                inner.push_str(&format!(
+                    "<Preset>\n{}</Preset>\n",
+                    st_content(&e.split('\n').map(str::to_string).collect::<Vec<_>>())
+                ));
             }
             for (key, el_name) in [("sfc.logix.limithigh", "LimitHigh"), ("sfc.logix.limitlow", "LimitLow")] {
                 if let Some(e) = attr(&s.attributes, key) {
-                    inner.push_str(&format!("<{el_name}>\n{}</{el_name}>\n", st_content(&e.split('\n').map(str::to_string).collect::<Vec<_>>())));
+                    inner.push_str(&format!(
+                        "<{el_name}>\n{}</{el_name}>\n",
+                        st_content(&e.split('\n').map(str::to_string).collect::<Vec<_>>())
+                    ));
                 }
             }
             if stop && !s.associations.is_empty() {
@@ -762,9 +843,18 @@ impl Ex<'_> {
                     self.error(a.span, format!("the indicator of `{}`", a.action));
                 }
                 let Some(node) = c.actions.get(idx) else { continue };
-                let mut aat = if is_owner { parse_attrs(&attr(&node.attributes, "sfc.logix.attrs").unwrap_or_default()) } else { Vec::new() };
+                let mut aat = if is_owner {
+                    parse_attrs(&attr(&node.attributes, "sfc.logix.attrs").unwrap_or_default())
+                } else {
+                    Vec::new()
+                };
                 if !ids.kept || aat.is_empty() {
-                    aat = vec![("ID".into(), String::new()), ("Qualifier".into(), String::new()), ("IsBoolean".into(), "false".into()), ("PresetUsesExpr".into(), "false".into())];
+                    aat = vec![
+                        ("ID".into(), String::new()),
+                        ("Qualifier".into(), String::new()),
+                        ("IsBoolean".into(), "false".into()),
+                        ("PresetUsesExpr".into(), "false".into()),
+                    ];
                 }
                 let id = if is_owner { ids.action.get(&up).copied() } else { None };
                 let id = id.unwrap_or_else(|| {
@@ -772,9 +862,15 @@ impl Ex<'_> {
                     next_id - 1
                 });
                 set(&mut aat, "ID", id.to_string());
-                let stored_q = attr(&node.attributes, "sfc.logix.qualifier").filter(|q| qualifier_of(q) == Some(a.qualifier));
-                let written_q = aat.iter().find(|(k, _)| k == "Qualifier").map(|(_, v)| v.clone()).filter(|q| qualifier_of(q) == Some(a.qualifier));
-                let q = if is_owner { stored_q.or(written_q) } else { None }.unwrap_or_else(|| long_qualifier(a.qualifier).to_string());
+                let stored_q =
+                    attr(&node.attributes, "sfc.logix.qualifier").filter(|q| qualifier_of(q) == Some(a.qualifier));
+                let written_q = aat
+                    .iter()
+                    .find(|(k, _)| k == "Qualifier")
+                    .map(|(_, v)| v.clone())
+                    .filter(|q| qualifier_of(q) == Some(a.qualifier));
+                let q = if is_owner { stored_q.or(written_q) } else { None }
+                    .unwrap_or_else(|| long_qualifier(a.qualifier).to_string());
                 set(&mut aat, "Qualifier", q);
                 let boolean = attr(&node.attributes, "sfc.logix.boolean").is_some();
                 let mut preset_expr = attr(&node.attributes, "sfc.logix.preset_expr");
@@ -786,7 +882,13 @@ impl Ex<'_> {
                         if preset_expr.is_none() {
                             let ms = us / 1000;
                             if action_pre.get(&up).is_some_and(|p| *p != ms) {
-                                self.error(a.span, format!("`{}` is associated with two durations (one SFC_ACTION tag, one preset)", a.action));
+                                self.error(
+                                    a.span,
+                                    format!(
+                                        "`{}` is associated with two durations (one SFC_ACTION tag, one preset)",
+                                        a.action
+                                    ),
+                                );
                             }
                             action_pre.insert(up.clone(), ms);
                         }
@@ -805,19 +907,27 @@ impl Ex<'_> {
                 set(&mut aat, "PresetUsesExpr", if preset_expr.is_some() { "true" } else { "false" }.into());
                 inner.push_str(&format!("<Action{}>\n", start_attrs(&aat, &a.action)));
                 if let Some(e) = &preset_expr {
-                    inner.push_str(&format!("<Preset>\n{}</Preset>\n", st_content(&[e.clone()])));
+                    inner.push_str(&format!("<Preset>\n{}</Preset>\n", st_content(std::slice::from_ref(e))));
                 }
                 let reset_of_stored = a.qualifier == Qualifier::R;
                 if is_owner && !boolean && !reset_of_stored {
                     let lines = match &node.body {
                         ast::ActionBody::St(_) => {
-                            let nra: HashSet<usize> = attr(&node.attributes, "sfc.logix.nra").unwrap_or_default().split(',').filter_map(|v| v.trim().parse().ok()).collect();
+                            let nra: HashSet<usize> = attr(&node.attributes, "sfc.logix.nra")
+                                .unwrap_or_default()
+                                .split(',')
+                                .filter_map(|v| v.trim().parse().ok())
+                                .collect();
                             self.body_lines(node, logix)
                                 .iter()
                                 .enumerate()
                                 .map(|(i, l)| {
                                     let l = to_logix(l, &el, c, self, node.name_span);
-                                    if nra.contains(&i) { nra_line(&l) } else { l }
+                                    if nra.contains(&i) {
+                                        nra_line(&l)
+                                    } else {
+                                        l
+                                    }
                                 })
                                 .collect()
                         }
@@ -834,7 +944,15 @@ impl Ex<'_> {
                     let kept = attr(&node.attributes, "sfc.logix.tag");
                     let desc = attr(&node.attributes, "sfc.description");
                     tags.retain(|(n, _)| !n.eq_ignore_ascii_case(&a.action));
-                    tags.push((node.name.clone(), tag_xml(&node.name, "SFC_ACTION", desc.as_deref(), &sfc_tag_data("SFC_ACTION", pre, kept.as_deref()))));
+                    tags.push((
+                        node.name.clone(),
+                        tag_xml(
+                            &node.name,
+                            "SFC_ACTION",
+                            desc.as_deref(),
+                            &sfc_tag_data("SFC_ACTION", pre, kept.as_deref()),
+                        ),
+                    ));
                 }
             }
             if inner.is_empty() {
@@ -847,7 +965,10 @@ impl Ex<'_> {
         }
         for a in &c.actions {
             if !owner.contains_key(&a.name.to_ascii_uppercase()) {
-                self.error(a.name_span, format!("the action `{}` is associated with no step (a Logix action belongs to a step)", a.name));
+                self.error(
+                    a.name_span,
+                    format!("the action `{}` is associated with no step (a Logix action belongs to a step)", a.name),
+                );
             }
         }
         // Transitions.
@@ -855,7 +976,15 @@ impl Ex<'_> {
             let mut at = parse_attrs(&attr(&t.attributes, "sfc.logix.attrs").unwrap_or_default());
             if !ids.kept || at.is_empty() {
                 let (x, y) = layout.trans.get(ti).copied().unwrap_or((200, 220));
-                at = vec![("ID".into(), String::new()), ("X".into(), x.to_string()), ("Y".into(), y.to_string()), ("HideDesc".into(), "false".into()), ("DescX".into(), (x + 60).to_string()), ("DescY".into(), (y - 20).to_string()), ("DescWidth".into(), "0".into())];
+                at = vec![
+                    ("ID".into(), String::new()),
+                    ("X".into(), x.to_string()),
+                    ("Y".into(), y.to_string()),
+                    ("HideDesc".into(), "false".into()),
+                    ("DescX".into(), (x + 60).to_string()),
+                    ("DescY".into(), (y - 20).to_string()),
+                    ("DescWidth".into(), "0".into()),
+                ];
             }
             if let Some(id) = ids.trans.get(ti) {
                 set(&mut at, "ID", id.to_string());
@@ -872,7 +1001,10 @@ impl Ex<'_> {
                     let text = self.condition_text(t).unwrap_or_default();
                     match attr(&t.attributes, "sfc.logix.lines") {
                         Some(l) if import_condition(&l, &el) == text => l.split('\n').map(str::to_string).collect(),
-                        _ => to_logix(&text, &el, c, self, t.header_span).split('\n').map(str::to_string).collect::<Vec<_>>(),
+                        _ => to_logix(&text, &el, c, self, t.header_span)
+                            .split('\n')
+                            .map(str::to_string)
+                            .collect::<Vec<_>>(),
                     }
                 }
                 _ => {
@@ -886,7 +1018,11 @@ impl Ex<'_> {
                     self.warn(t.header_span, &t.name, format!("{} is already tested in the first call on Logix", t.name), "IEC tests no transition in scan 0; a Logix controller executes the initial step and then tests its transitions in the same first call");
                 }
             }
-            content.push_str(&format!("<Transition{}>\n<Condition>\n{}</Condition>\n</Transition>\n", start_attrs(&at, &t.name), st_content(&lines)));
+            content.push_str(&format!(
+                "<Transition{}>\n<Condition>\n{}</Condition>\n</Transition>\n",
+                start_attrs(&at, &t.name),
+                st_content(&lines)
+            ));
             tags.push((t.name.clone(), tag_xml(&t.name, "BOOL", attr(&t.attributes, "sfc.description").as_deref(), &(l5k("0") + "<Data Format=\"Decorated\">\n<DataValue DataType=\"BOOL\" Radix=\"Decimal\" Value=\"0\"/>\n</Data>\n"))));
         }
         // Branches and text boxes (in the order the import met them), then the links.
@@ -1003,7 +1139,8 @@ fn elements(c: &Chart) -> Elements {
             continue;
         }
         let pre = attr(&s.attributes, "sfc.logix.preset").and_then(|p| p.parse().ok()).unwrap_or(0);
-        let pre_expr = attr(&s.attributes, "sfc.logix.preset_expr").map(|e| st::map(&XText::synthetic(e.trim(), 0..0), &Elements::default()).frag);
+        let pre_expr = attr(&s.attributes, "sfc.logix.preset_expr")
+            .map(|e| st::map(&XText::synthetic(e.trim(), 0..0), &Elements::default()).frag);
         el.steps.insert(up, StepInfo { name: s.name.clone(), pre: Some(pre), pre_expr });
     }
     for a in &c.actions {
@@ -1018,7 +1155,9 @@ fn import_condition(lines: &str, el: &Elements) -> String {
     let toks = st::tokens(trimmed);
     let last = toks.iter().rev().find(|t| !matches!(t.kind, Tok::Space | Tok::Comment));
     let text = match last.filter(|t| trimmed.get(t.range.clone()) == Some(";")) {
-        Some(t) => format!("{} {}", trimmed.get(..t.range.start).unwrap_or(""), trimmed.get(t.range.end..).unwrap_or("")),
+        Some(t) => {
+            format!("{} {}", trimmed.get(..t.range.start).unwrap_or(""), trimmed.get(t.range.end..).unwrap_or(""))
+        }
         None => trimmed.to_string(),
     };
     st::map(&XText::synthetic(text.trim(), 0..0), el).frag.text.trim().to_string()
@@ -1044,7 +1183,14 @@ fn to_logix(src: &str, el: &Elements, _c: &Chart, ex: &mut Ex, at: Span) -> Stri
         let pos = sig.iter().position(|(j, _, _)| *j == i);
         let w = |k: usize| pos.and_then(|p| sig.get(p + k)).map_or("", |x| x.1);
         let idx = |k: usize| pos.and_then(|p| sig.get(p + k)).map_or(i, |x| x.0);
-        if t.kind == Tok::Ident && s.eq_ignore_ascii_case("TIME_TO_DINT") && w(1) == "(" && w(3) == "." && w(4).eq_ignore_ascii_case("T") && w(5) == ")" && el.steps.contains_key(&w(2).to_ascii_uppercase()) {
+        if t.kind == Tok::Ident
+            && s.eq_ignore_ascii_case("TIME_TO_DINT")
+            && w(1) == "("
+            && w(3) == "."
+            && w(4).eq_ignore_ascii_case("T")
+            && w(5) == ")"
+            && el.steps.contains_key(&w(2).to_ascii_uppercase())
+        {
             out.push_str(&format!("{}.T", w(2)));
             skip_to = Some(idx(5));
             continue;
@@ -1098,8 +1244,7 @@ fn id_in(list: &[ast::Attribute]) -> Option<u64> {
 /// The stored IDs, when every element has one and the stored links and branches still draw the
 /// text's FROM/TO.
 fn stored_ids(c: &Chart, _ex: &Ex) -> Option<Ids> {
-    let pa_links = c.steps.first().map(|_| ())?;
-    let _ = pa_links;
+    c.steps.first()?;
     let mut ids = Ids { kept: true, ..Ids::default() };
     let mut used = HashSet::new();
     for s in &c.steps {
@@ -1176,7 +1321,8 @@ fn links_fit(c: &Chart, pa: &[ast::Attribute], ids: &Ids) -> bool {
 /// transitions (by name), then branches each followed by its legs, then stops; links from the
 /// chart's FROM/TO.
 fn fresh_ids(c: &Chart) -> Ids {
-    let mut ids = Ids { kept: false, step: vec![0; c.steps.len()], trans: vec![0; c.transitions.len()], ..Ids::default() };
+    let mut ids =
+        Ids { kept: false, step: vec![0; c.steps.len()], trans: vec![0; c.transitions.len()], ..Ids::default() };
     let mut next = 0u64;
     let is_stop = |s: &sfc_model::StepNode| attr(&s.attributes, "sfc.logix.stop").is_some();
     let mut order: Vec<usize> = (0..c.steps.len()).filter(|&i| c.steps.get(i).is_some_and(|s| !is_stop(s))).collect();
@@ -1222,7 +1368,13 @@ fn fresh_ids(c: &Chart) -> Ids {
     // (branch kind, owner) → legs by partner
     let mut leg: HashMap<(u8, usize, usize), u64> = HashMap::new();
     let mut bid: HashMap<(u8, usize), u64> = HashMap::new();
-    let add = |kind: u8, owner: usize, partners: &[usize], next: &mut u64, branches: &mut String, leg: &mut HashMap<(u8, usize, usize), u64>, bid: &mut HashMap<(u8, usize), u64>| {
+    let add = |kind: u8,
+               owner: usize,
+               partners: &[usize],
+               next: &mut u64,
+               branches: &mut String,
+               leg: &mut HashMap<(u8, usize, usize), u64>,
+               bid: &mut HashMap<(u8, usize), u64>| {
         let (bt, bf) = match kind {
             0 => ("Selection", "Diverge"),
             1 => ("Selection", "Converge"),
@@ -1270,13 +1422,21 @@ fn fresh_ids(c: &Chart) -> Ids {
     let mut links = Vec::new();
     for (ti, t) in c.transitions.iter().enumerate() {
         for &s in &t.from {
-            let src = if outgoing.get(s).is_some_and(|o| o.len() > 1) { leg.get(&(0, s, ti)).copied().unwrap_or(0) } else { step_id(s) };
+            let src = if outgoing.get(s).is_some_and(|o| o.len() > 1) {
+                leg.get(&(0, s, ti)).copied().unwrap_or(0)
+            } else {
+                step_id(s)
+            };
             let dst = if t.from.len() > 1 { leg.get(&(3, ti, s)).copied().unwrap_or(0) } else { trans_id(ti) };
             links.push((src, dst));
         }
         for &s in &t.to {
             let src = if t.to.len() > 1 { leg.get(&(2, ti, s)).copied().unwrap_or(0) } else { trans_id(ti) };
-            let dst = if incoming.get(s).is_some_and(|o| o.len() > 1) { leg.get(&(1, s, ti)).copied().unwrap_or(0) } else { step_id(s) };
+            let dst = if incoming.get(s).is_some_and(|o| o.len() > 1) {
+                leg.get(&(1, s, ti)).copied().unwrap_or(0)
+            } else {
+                step_id(s)
+            };
             links.push((src, dst));
         }
         if let Some(b) = bid.get(&(2, ti)) {
@@ -1375,8 +1535,14 @@ fn layout(c: &Chart) -> Layout {
             None => break,
         }
     }
-    let step: Vec<(i64, i64)> =
-        (0..n).map(|i| (200 + 300 * col.get(i).copied().unwrap_or(0), 100 + 240 * depth.get(i).copied().flatten().unwrap_or(0) as i64)).collect();
+    let step: Vec<(i64, i64)> = (0..n)
+        .map(|i| {
+            (
+                200 + 300 * col.get(i).copied().unwrap_or(0),
+                100 + 240 * depth.get(i).copied().flatten().unwrap_or(0) as i64,
+            )
+        })
+        .collect();
     let trans = c
         .transitions
         .iter()
