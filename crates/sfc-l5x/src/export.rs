@@ -670,10 +670,19 @@ impl Ex<'_> {
         // Variables → program tags.
         let mut vars = Vec::new();
         for b in &pou.var_blocks {
-            if !matches!(b.kind, ast::VarKind::Var | ast::VarKind::Temp | ast::VarKind::External) {
-                self.error(b.span, format!("a `{}` block (an SFC routine has no interface)", b.kind.keyword()));
-                continue;
-            }
+            let usage = match b.kind {
+                ast::VarKind::Var | ast::VarKind::Temp | ast::VarKind::External => "",
+                // A program's parameters (Studio 5000 v24 and later).
+                ast::VarKind::Input if pou.kind == ast::PouKind::Program => " Usage=\"Input\"",
+                ast::VarKind::Output if pou.kind == ast::PouKind::Program => " Usage=\"Output\"",
+                _ => {
+                    self.error(
+                        b.span,
+                        format!("a `{}` block (an SFC routine's tags are its program's)", b.kind.keyword()),
+                    );
+                    continue;
+                }
+            };
             if b.kind == ast::VarKind::External {
                 continue;
             }
@@ -701,7 +710,7 @@ impl Ex<'_> {
                 }
                 for n in &d.names {
                     if let Some(t) = self.var_tag(d, n) {
-                        vars.push((n.text.clone(), t));
+                        vars.push((n.text.clone(), t.replacen(" Constant=", &format!("{usage} Constant="), 1)));
                     }
                 }
             }
@@ -836,7 +845,54 @@ impl Ex<'_> {
                 let up = a.action.to_ascii_uppercase();
                 let is_owner = owner.get(&up) == Some(&(si, ai));
                 let ActionTarget::Action(idx) = a.target else {
-                    self.error(a.span, format!("the association of the BOOL variable `{}` (IEC's Boolean action; a Logix action is a tag of its own)", a.action));
+                    // IEC's Boolean action: the variable follows the association's Q. With N it
+                    // is an N action setting it and a P0 action clearing it in the step's last
+                    // scan (P0 executes then under every last-scan setting), when no other step
+                    // active at the same time drives it.
+                    let shared = c.steps.iter().enumerate().any(|(o, st)| {
+                        o != si && st.associations.iter().any(|b| b.action.eq_ignore_ascii_case(&a.action))
+                    });
+                    let parallel = c.transitions.iter().any(|t| t.to.len() > 1 || t.from.len() > 1)
+                        || c.steps.iter().filter(|s| s.initial).count() > 1;
+                    let delay = match (a.qualifier, &a.duration) {
+                        (Qualifier::N, None) => None,
+                        (Qualifier::D, Some(Duration::Literal(us))) if us % 1000 == 0 => Some(us / 1000),
+                        (Qualifier::D, Some(Duration::Variable(v))) if self.constant_time(&pou, c, v).is_some() => {
+                            self.constant_time(&pou, c, v)
+                        }
+                        _ => {
+                            self.error(a.span, format!("the association `{}({})` of a BOOL variable (IEC's Boolean action: Logix has it as an N or D association, set by the action and cleared by a P0 action)", a.action, a.qualifier.name()));
+                            continue;
+                        }
+                    };
+                    if shared && parallel {
+                        self.error(a.span, format!("the BOOL variable `{}` associated with steps that may be active together (a P0 action clearing it would clear it for both)", a.action));
+                        continue;
+                    }
+                    let on = if delay.is_some() { "TimeDelayed" } else { "NonStored" };
+                    for (suffix, q, value) in [("", on, "1"), ("_Off", "PulseFallingEdge", "0")] {
+                        let mut name = format!("{}_{}{suffix}", s.name, a.action);
+                        while c.steps.iter().any(|x| x.name.eq_ignore_ascii_case(&name))
+                            || c.actions.iter().any(|x| x.name.eq_ignore_ascii_case(&name))
+                            || c.transitions.iter().any(|x| x.name.eq_ignore_ascii_case(&name))
+                            || tags.iter().any(|(x, _)| x.eq_ignore_ascii_case(&name))
+                            || vars.iter().any(|(x, _)| x.eq_ignore_ascii_case(&name))
+                        {
+                            name.push('_');
+                        }
+                        next_id += 1;
+                        inner.push_str(&format!(
+                            "<Action ID=\"{}\" Operand=\"{}\" Qualifier=\"{q}\" IsBoolean=\"false\" PresetUsesExpr=\"false\">\n<Body>\n{}</Body>\n</Action>\n",
+                            next_id - 1,
+                            esc(&name),
+                            st_content(&[format!("{} := {value};", a.action)])
+                        ));
+                        let pre = if value == "1" { delay.unwrap_or(0) } else { 0 };
+                        tags.push((
+                            name.clone(),
+                            tag_xml(&name, "SFC_ACTION", None, &sfc_tag_data("SFC_ACTION", pre, None)),
+                        ));
+                    }
                     continue;
                 };
                 if !a.indicators.is_empty() {
@@ -873,7 +929,7 @@ impl Ex<'_> {
                     .unwrap_or_else(|| long_qualifier(a.qualifier).to_string());
                 set(&mut aat, "Qualifier", q);
                 let boolean = attr(&node.attributes, "sfc.logix.boolean").is_some();
-                let mut preset_expr = attr(&node.attributes, "sfc.logix.preset_expr");
+                let preset_expr = attr(&node.attributes, "sfc.logix.preset_expr");
                 match &a.duration {
                     Some(Duration::Literal(us)) => {
                         if us % 1000 != 0 {
@@ -893,7 +949,12 @@ impl Ex<'_> {
                             action_pre.insert(up.clone(), ms);
                         }
                     }
-                    Some(Duration::Variable(v)) => preset_expr = Some(v.clone()),
+                    Some(Duration::Variable(v)) => match self.constant_time(&pou, c, v) {
+                        Some(ms) if preset_expr.is_none() => {
+                            action_pre.insert(up.clone(), ms);
+                        }
+                        _ => self.error(a.span, format!("the duration `{v}` of `{}`, a variable the chart writes (a preset expression the round trip and the `logix` profile do not keep)", a.action)),
+                    },
                     None => {}
                 }
                 if a.qualifier == Qualifier::P && !logix {
@@ -1061,6 +1122,32 @@ impl Ex<'_> {
         }
         let main = attr(pa, "sfc.logix.main").is_some() || !logix;
         Some(Routine { program, routine, main, tags, vars, xml })
+    }
+
+    /// The initial value in ms of a TIME variable of the POU that nothing in the chart writes
+    /// (a duration named by a variable is written as its value).
+    fn constant_time(&self, pou: &ast::Pou, c: &Chart, name: &str) -> Option<i64> {
+        let d = pou
+            .var_blocks
+            .iter()
+            .filter(|b| matches!(b.kind, ast::VarKind::Var))
+            .flat_map(|b| &b.decls)
+            .find(|d| d.names.iter().any(|n| n.is(name)))?;
+        let Some(ast::Initializer::Expr(e)) = &d.init else { return None };
+        let ms = duration_ms(self.text(e.span).trim())?;
+        for a in &c.actions {
+            let body = self.text(a.span);
+            let toks = st::tokens(body);
+            let sig: Vec<&str> = toks
+                .iter()
+                .filter(|t| !matches!(t.kind, Tok::Space | Tok::Comment))
+                .filter_map(|t| body.get(t.range.clone()))
+                .collect();
+            if sig.windows(2).any(|w| matches!(w, [n, ":="] if n.eq_ignore_ascii_case(name))) {
+                return None;
+            }
+        }
+        Some(ms)
     }
 
     /// The IDs of the chart's elements: the stored ones when they still fit the text, else
