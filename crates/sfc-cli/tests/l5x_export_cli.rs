@@ -135,7 +135,14 @@ fn an_l5x_fixture_written_back_runs_alike() {
         let b = trace(&back, &p, None, &tmp(&format!("{name}.y.csv")));
         same_trace(&a, &b, &[], name);
         for target in ["plcopen", "st"] {
-            let o = sfc(&["build", back.to_str().unwrap(), "--target", target, "-o", tmp(&format!("{name}.{target}")).to_str().unwrap()]);
+            let o = sfc(&[
+                "build",
+                back.to_str().unwrap(),
+                "--target",
+                target,
+                "-o",
+                tmp(&format!("{name}.{target}")).to_str().unwrap(),
+            ]);
             assert_eq!(o.status.code(), Some(0), "{name} → {target}: {}", text(&o));
         }
         n += 1;

@@ -716,8 +716,8 @@ impl Ex<'_> {
             }
         }
         let el = elements(c);
-        let ids = self.ids(c);
         let layout = layout(c);
+        let ids = self.ids(c, &layout);
         let names = attr(pa, "sfc.logix.names");
         let mut xml = format!("<Routine Name=\"{}\" Type=\"SFC\">\n", esc(&routine));
         if let Some(d) = attr(pa, "sfc.description") {
@@ -727,13 +727,12 @@ impl Ex<'_> {
         if let Some(s) = attr(pa, "sfc.logix.sheet") {
             let (size, orient) = s.split_once('|').unwrap_or((s.as_str(), ""));
             content.push_str(&format!(" SheetSize=\"{}\" SheetOrientation=\"{}\"", esc(size), esc(orient)));
-        } else if !logix {
+        } else {
             content.push_str(" SheetSize=\"Letter - 8.5 x 11 in\" SheetOrientation=\"Landscape\"");
         }
         let nm: Vec<String> = match &names {
             Some(n) => n.split('|').map(str::to_string).collect(),
-            None if !logix => ["Step", "Tran", "Action", "Stop"].map(str::to_string).to_vec(),
-            None => Vec::new(),
+            None => ["Step", "Tran", "Action", "Stop"].map(str::to_string).to_vec(),
         };
         for (k, v) in ["StepName", "TransitionName", "ActionName", "StopName"].iter().zip(&nm) {
             content.push_str(&format!(" {k}=\"{}\"", esc(v)));
@@ -1152,12 +1151,12 @@ impl Ex<'_> {
 
     /// The IDs of the chart's elements: the stored ones when they still fit the text, else
     /// fresh ones (with branches and links).
-    fn ids(&self, c: &Chart) -> Ids {
+    fn ids(&self, c: &Chart, layout: &Layout) -> Ids {
         let pa = self.pou(c).map(|p| p.attributes.as_slice()).unwrap_or_default();
         if let Some(ids) = stored_ids(c, self).filter(|ids| links_fit(c, pa, ids)) {
             return ids;
         }
-        fresh_ids(c)
+        fresh_ids(c, layout)
     }
 }
 
@@ -1407,7 +1406,7 @@ fn links_fit(c: &Chart, pa: &[ast::Attribute], ids: &Ids) -> bool {
 /// Fresh IDs in Studio's canonical order: steps (by name) each followed by its actions, then
 /// transitions (by name), then branches each followed by its legs, then stops; links from the
 /// chart's FROM/TO.
-fn fresh_ids(c: &Chart) -> Ids {
+fn fresh_ids(c: &Chart, layout: &Layout) -> Ids {
     let mut ids =
         Ids { kept: false, step: vec![0; c.steps.len()], trans: vec![0; c.transitions.len()], ..Ids::default() };
     let mut next = 0u64;
@@ -1456,6 +1455,7 @@ fn fresh_ids(c: &Chart) -> Ids {
     let mut leg: HashMap<(u8, usize, usize), u64> = HashMap::new();
     let mut bid: HashMap<(u8, usize), u64> = HashMap::new();
     let add = |kind: u8,
+               y: i64,
                owner: usize,
                partners: &[usize],
                next: &mut u64,
@@ -1472,7 +1472,7 @@ fn fresh_ids(c: &Chart) -> Ids {
         *next += 1;
         bid.insert((kind, owner), id);
         let prio = if kind == 0 { " Priority=\"Default\"" } else { "" };
-        branches.push_str(&format!("<Branch ID=\"{id}\" BranchType=\"{bt}\" BranchFlow=\"{bf}\"{prio}>\n"));
+        branches.push_str(&format!("<Branch ID=\"{id}\" Y=\"{y}\" BranchType=\"{bt}\" BranchFlow=\"{bf}\"{prio}>\n"));
         for &p in partners {
             branches.push_str(&format!("<Leg ID=\"{}\"/>\n", *next));
             leg.insert((kind, owner, p), *next);
@@ -1482,18 +1482,22 @@ fn fresh_ids(c: &Chart) -> Ids {
     };
     for s in 0..n {
         if let Some(o) = outgoing.get(s).filter(|o| o.len() > 1) {
-            add(0, s, o, &mut next, &mut branches, &mut leg, &mut bid);
+            let y = layout.step.get(s).map_or(0, |p| p.1) + 60;
+            add(0, y, s, o, &mut next, &mut branches, &mut leg, &mut bid);
         }
         if let Some(o) = incoming.get(s).filter(|o| o.len() > 1) {
-            add(1, s, o, &mut next, &mut branches, &mut leg, &mut bid);
+            let y = layout.step.get(s).map_or(0, |p| p.1) - 60;
+            add(1, y, s, o, &mut next, &mut branches, &mut leg, &mut bid);
         }
     }
     for (ti, t) in c.transitions.iter().enumerate() {
         if t.to.len() > 1 {
-            add(2, ti, &t.to, &mut next, &mut branches, &mut leg, &mut bid);
+            let y = layout.trans.get(ti).map_or(0, |p| p.1) + 60;
+            add(2, y, ti, &t.to, &mut next, &mut branches, &mut leg, &mut bid);
         }
         if t.from.len() > 1 {
-            add(3, ti, &t.from, &mut next, &mut branches, &mut leg, &mut bid);
+            let y = layout.trans.get(ti).map_or(0, |p| p.1) - 60;
+            add(3, y, ti, &t.from, &mut next, &mut branches, &mut leg, &mut bid);
         }
     }
     for (i, s) in c.steps.iter().enumerate() {

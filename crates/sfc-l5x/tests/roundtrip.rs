@@ -66,3 +66,105 @@ fn the_export_is_stable() {
         assert_eq!(l5x, again, "{}", p.display());
     }
 }
+
+fn check(text: &str) -> sfc_model::Checked {
+    let c = sfc_model::check_source(1, "chart.st", text, &Default::default());
+    assert!(!c.has_errors(), "{:?}", c.diagnostics);
+    c
+}
+
+/// The transitions of the first chart as `name: from -> to` with step names, sorted.
+fn topology(c: &sfc_model::Checked) -> Vec<String> {
+    let ch = &c.charts[0];
+    let names = |v: &[usize]| v.iter().map(|&s| ch.steps[s].name.clone()).collect::<Vec<_>>().join(",");
+    let mut v: Vec<String> = ch
+        .transitions
+        .iter()
+        .map(|t| format!("{}: {} -> {} ({:?})", t.name, names(&t.from), names(&t.to), t.priority))
+        .collect();
+    v.sort();
+    v
+}
+
+#[test]
+fn a_changed_chart_gets_fresh_ids_and_links() {
+    let xml =
+        std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/fixtures/tank_fill.L5X")).unwrap();
+    let text = sfc_l5x::import(0, &xml)
+        .text
+        .replace("TRANSITION Tran_003 FROM Draining TO Idle", "TRANSITION Tran_003 FROM Draining TO Filling");
+    let checked = check(&text);
+    let (l5x, _) = sfc_l5x::export::export(&checked, None).unwrap();
+    let back = sfc_l5x::import(0, &l5x);
+    assert!(!back.diagnostics.iter().any(|d| d.is_error()), "{:?}", back.diagnostics);
+    let again = check(&back.text);
+    assert_eq!(topology(&checked), topology(&again));
+    // Studio's order: steps by name, each followed by its actions (Draining 0, its actions 1
+    // and 2, Filling 3, …), then the transitions by name.
+    assert!(l5x.contains("<Step ID=\"0\" X=\"200\" Y=\"820\" Operand=\"Draining\""), "{l5x}");
+    assert!(l5x.contains("<Step ID=\"3\" X=\"200\" Y=\"340\" Operand=\"Filling\""), "{l5x}");
+    assert!(l5x.contains("<Transition ID=\"9\" X=\"200\" Y=\"220\" Operand=\"Tran_000\""), "{l5x}");
+    assert!(l5x.contains("BranchType=\"Selection\" BranchFlow=\"Converge\""), "{l5x}");
+}
+
+const IEC: &str = "PROGRAM Cell
+    VAR
+        Go, Left, Right, Done : BOOL;
+        Count : INT := 0;
+        Limit : TIME := T#2s;
+    END_VAR
+    INITIAL_STEP Idle: END_STEP
+    TRANSITION TGo FROM Idle TO Pick := Go; END_TRANSITION
+    STEP Pick: Pulse(P); END_STEP
+    TRANSITION TLeft (PRIORITY := 1) FROM Pick TO (A1, B1) := Left; END_TRANSITION
+    TRANSITION TRight (PRIORITY := 2) FROM Pick TO C1 := Right AND Pick.T >= T#1s500ms; END_TRANSITION
+    STEP A1: Work(N); END_STEP
+    STEP B1: END_STEP
+    STEP C1: Slow(D, T#3s); END_STEP
+    TRANSITION TJoin FROM (A1, B1) TO Idle := Done; END_TRANSITION
+    TRANSITION TBack FROM C1 TO Idle := C1.T > Limit; END_TRANSITION
+    ACTION Pulse: Count := Count + 1; END_ACTION
+    ACTION Work:
+        Count := Count + 10;
+    END_ACTION
+    ACTION Slow: Count := Count + 100; END_ACTION
+END_PROGRAM
+";
+
+#[test]
+fn an_iec_chart_is_written_with_branches_and_read_back_alike() {
+    let checked = check(IEC);
+    let (l5x, notes) = sfc_l5x::export::export(&checked, None).unwrap();
+    let back = sfc_l5x::import(0, &l5x);
+    assert!(!back.diagnostics.iter().any(|d| d.is_error()), "{:?}\n{l5x}", back.diagnostics);
+    let again = check(&back.text);
+    assert_eq!(topology(&checked), topology(&again), "{}", back.text);
+    // TIME literals and variables in milliseconds, the step time a DINT.
+    assert!(l5x.contains("Right AND Pick.T >= 1500"), "{l5x}");
+    assert!(l5x.contains("C1.T > Limit"), "{l5x}");
+    assert!(l5x.contains("<Tag Name=\"Limit\" TagType=\"Base\" DataType=\"DINT\""), "{l5x}");
+    assert!(back.text.contains("Slow(D, T#3000ms);"), "{}", back.text);
+    for (code, what) in [
+        ("SFC0821", "`Pulse(P)` executes when Pick is activated and again"),
+        ("SFC0821", "`Work` does not execute again when it stops"),
+    ] {
+        assert!(notes.iter().any(|d| d.code == code && d.message.contains(what)), "{what}: {notes:?}");
+    }
+    let p = notes.iter().find(|d| d.message.contains("Pulse(P)")).unwrap();
+    assert_eq!(&IEC[p.span.start as usize..p.span.end as usize], "Pulse(P);");
+}
+
+#[test]
+fn what_logix_cannot_hold_is_refused_where_it_is_written() {
+    for (text, what, at) in [
+        ("FUNCTION_BLOCK F\n    VAR_IN_OUT x : INT; END_VAR\n    INITIAL_STEP S: END_STEP\n    TRANSITION FROM S TO S := x > 0; END_TRANSITION\nEND_FUNCTION_BLOCK\nPROGRAM P\n    VAR f : F; y : INT; END_VAR\n    f(x := y);\nEND_PROGRAM\n", "VAR_IN_OUT", "VAR_IN_OUT x : INT; END_VAR"),
+        ("PROGRAM P\n    VAR b : BOOL; END_VAR\n    INITIAL_STEP S: b(S); END_STEP\n    TRANSITION FROM S TO S := TRUE; END_TRANSITION\nEND_PROGRAM\n", "b(S)", "b(S);"),
+        ("PROGRAM P\n    VAR b : BOOL; END_VAR\n    INITIAL_STEP S: A(N); END_STEP\n    TRANSITION FROM S TO S := TRUE; END_TRANSITION\n    ACTION A:\n        LD TRUE\n        ST b\n    END_ACTION\nEND_PROGRAM\n", "not written in ST", "A"),
+    ] {
+        let checked = sfc_model::check_source(1, "chart.st", text, &Default::default());
+        let errs = sfc_l5x::export::export(&checked, None).unwrap_err();
+        let e = errs.iter().find(|d| d.message.contains(what)).unwrap_or_else(|| panic!("{what}: {errs:?}"));
+        assert_eq!(e.code, "SFC0820");
+        assert_eq!(&text[e.span.start as usize..e.span.end as usize], at, "{what}");
+    }
+}
