@@ -38,6 +38,28 @@ pub fn export(checked: &Checked, pou: Option<&str>) -> Result<(String, Vec<Diagn
             );
         }
     }
+    if pou.is_none() {
+        for it in &checked.unit.items {
+            if let ast::Item::Pou(p) = it {
+                if !checked.charts.iter().any(|c| c.pou.eq_ignore_ascii_case(&p.name.text)) {
+                    let mut d = Diagnostic::new(
+                        "SFC0821",
+                        p.name.span,
+                        format!(
+                            "the {} `{}` is not written: the L5X export writes the SFC programs",
+                            p.kind.keyword(),
+                            p.name.text
+                        ),
+                    )
+                    .with_note(
+                        "a chart that calls it or whose variables it drives runs without it in Studio 5000".to_string(),
+                    );
+                    d.severity = Severity::Warning;
+                    ex.notes.push(d);
+                }
+            }
+        }
+    }
     let mut routines = Vec::new();
     for c in &charts {
         if let Some(r) = ex.chart(c) {
@@ -483,15 +505,26 @@ impl Ex<'_> {
         let v = match up.as_str() {
             "TRUE" => "1".to_string(),
             "FALSE" => "0".to_string(),
-            _ if up.starts_with("T#") || up.starts_with("TIME#") => duration_ms(t)?.to_string(),
+            _ if up.starts_with("T#") || up.starts_with("TIME#") => match duration_ms(t) {
+                Some(ms) => ms.to_string(),
+                None => {
+                    self.error(at, format!("the duration `{t}` (not whole milliseconds)"));
+                    return None;
+                }
+            },
             _ => {
                 let body =
                     t.split_once('#').map_or(t, |(k, v)| if k.chars().all(|c| c.is_ascii_digit()) { t } else { v });
                 body.to_string()
             }
         };
-        if v.is_empty() {
-            self.error(at, format!("the initial value `{t}`"));
+        let based = v.split_once('#').is_some_and(|(b, d)| {
+            matches!(b, "2" | "8" | "16") && !d.is_empty() && d.chars().all(|c| c.is_ascii_hexdigit() || c == '_')
+        });
+        let number = based || v.replace('_', "").parse::<f64>().is_ok_and(f64::is_finite);
+        let string = v.len() >= 2 && v.starts_with('\'') && v.ends_with('\'');
+        if !number && !string {
+            self.error(at, format!("the initial value `{t}` (a tag's value is a literal)"));
             return None;
         }
         Some(v)
@@ -814,9 +847,7 @@ impl Ex<'_> {
                     if stop { "SFC_STOP" } else { "SFC_STEP" },
                     desc.as_deref(),
                     &if stop {
-                        kept.as_deref().map(l5k).unwrap_or_default()
-                            + &sfc_tag_data("SFC_STOP", 0, None)
-                                .replace(&kept.as_deref().map(l5k).unwrap_or_default(), "")
+                        sfc_tag_data("SFC_STOP", 0, kept.as_deref())
                     } else {
                         sfc_tag_data("SFC_STEP", pre, kept.as_deref())
                     },
