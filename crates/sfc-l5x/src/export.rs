@@ -1184,7 +1184,7 @@ impl Ex<'_> {
     /// fresh ones (with branches and links).
     fn ids(&self, c: &Chart, layout: &Layout) -> Ids {
         let pa = self.pou(c).map(|p| p.attributes.as_slice()).unwrap_or_default();
-        if let Some(ids) = stored_ids(c, self).filter(|ids| links_fit(c, pa, ids)) {
+        if let Some(ids) = stored_ids(c, pa).filter(|ids| links_fit(c, pa, ids)) {
             return ids;
         }
         fresh_ids(c, layout)
@@ -1360,26 +1360,46 @@ fn id_in(list: &[ast::Attribute]) -> Option<u64> {
 
 /// The stored IDs, when every element has one and the stored links and branches still draw the
 /// text's FROM/TO.
-fn stored_ids(c: &Chart, _ex: &Ex) -> Option<Ids> {
+fn stored_ids(c: &Chart, pa: &[ast::Attribute]) -> Option<Ids> {
     c.steps.first()?;
     let mut ids = Ids { kept: true, ..Ids::default() };
     let mut used = HashSet::new();
     for s in &c.steps {
         let id = id_in(&s.attributes)?;
         ids.step.push(id);
-        used.insert(id);
+        // Two elements with one ID (a copy in the editor): fresh IDs.
+        if !used.insert(id) {
+            return None;
+        }
     }
     for t in &c.transitions {
         let id = id_in(&t.attributes)?;
         ids.trans.push(id);
-        used.insert(id);
+        if !used.insert(id) {
+            return None;
+        }
     }
     for a in &c.actions {
         let id = id_in(&a.attributes)?;
         ids.action.insert(a.name.to_ascii_uppercase(), id);
-        used.insert(id);
+        if !used.insert(id) {
+            return None;
+        }
     }
-    ids.next = used.iter().max().map_or(0, |m| m + 1);
+    // IDs past every one the routine holds (branches, legs, text boxes too) for the actions of
+    // second associations.
+    let mut max = used.iter().max().copied().unwrap_or(0);
+    for key in ["sfc.logix.branch", "sfc.logix.links", "sfc.logix.textbox", "sfc.logix.attachment", "sfc.logix.sbrret"]
+    {
+        for v in all_attrs(pa, key) {
+            for n in v.split(|ch: char| !ch.is_ascii_digit()).filter_map(|n| n.parse::<u64>().ok()) {
+                if n < 1 << 32 {
+                    max = max.max(n);
+                }
+            }
+        }
+    }
+    ids.next = max + 1;
     Some(ids)
 }
 
@@ -1408,6 +1428,11 @@ fn links_fit(c: &Chart, pa: &[ast::Attribute], ids: &Ids) -> bool {
         }
     }
     let step_of: HashMap<u64, usize> = ids.step.iter().enumerate().map(|(i, id)| (*id, i)).collect();
+    // Every link between elements the chart still has.
+    let known = |v: &u64| junction.contains(v) || ids.step.contains(v) || ids.trans.contains(v);
+    if !succ.iter().all(|(f, ts)| known(f) && ts.iter().all(known)) {
+        return false;
+    }
     let walk = |id: u64, edges: &BTreeMap<u64, Vec<u64>>| -> Vec<usize> {
         let mut found = Vec::new();
         let mut seen = HashSet::new();

@@ -168,3 +168,20 @@ fn what_logix_cannot_hold_is_refused_where_it_is_written() {
         assert_eq!(&text[e.span.start as usize..e.span.end as usize], at, "{what}");
     }
 }
+
+#[test]
+fn a_chart_with_an_element_removed_gets_fresh_links() {
+    let xml =
+        std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/fixtures/tank_fill.L5X")).unwrap();
+    let text = sfc_l5x::import(0, &xml).text;
+    let start = text.find("    {attribute 'sfc.x' := '200'}\n    {attribute 'sfc.y' := '940'}").unwrap();
+    let end = text[start..].find("END_TRANSITION\n").unwrap() + start + "END_TRANSITION\n".len();
+    let text = format!("{}{}", &text[..start], &text[end..]);
+    assert!(!text.contains("Tran_003"));
+    let checked = check(&text);
+    let (l5x, _) = sfc_l5x::export::export(&checked, None).unwrap();
+    let back = sfc_l5x::import(0, &l5x);
+    assert!(!back.diagnostics.iter().any(|d| d.is_error()), "{:?}\n{l5x}", back.diagnostics);
+    assert_eq!(topology(&checked), topology(&check(&back.text)));
+    assert!(!l5x.contains("ToID=\"12\""), "{l5x}");
+}
