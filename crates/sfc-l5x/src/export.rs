@@ -749,6 +749,19 @@ impl Ex<'_> {
             }
         }
         let el = elements(c);
+        // Logix tag names have at most 40 characters.
+        let long: Vec<(Span, &str)> = c
+            .steps
+            .iter()
+            .map(|s| (s.name_span, s.name.as_str()))
+            .chain(c.transitions.iter().map(|t| (t.header_span, t.name.as_str())))
+            .chain(c.actions.iter().map(|a| (a.name_span, a.name.as_str())))
+            .chain(vars.iter().map(|(n, _)| (pou.name.span, n.as_str())))
+            .filter(|(_, n)| n.len() > 40)
+            .collect();
+        for (at, n) in long {
+            self.error(at, format!("the name `{n}` (a Logix tag name has at most 40 characters)"));
+        }
         let layout = layout(c);
         let ids = self.ids(c, &layout);
         let names = attr(pa, "sfc.logix.names");
