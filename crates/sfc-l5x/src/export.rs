@@ -702,6 +702,7 @@ impl Ex<'_> {
         };
         // Variables → program tags.
         let mut vars = Vec::new();
+        let mut inferred: Vec<String> = Vec::new();
         for b in &pou.var_blocks {
             let usage = match b.kind {
                 ast::VarKind::Var | ast::VarKind::Temp | ast::VarKind::External => "",
@@ -722,6 +723,7 @@ impl Ex<'_> {
             for d in &b.decls {
                 if attr(&d.attributes, "sfc.logix.inferred").is_some() {
                     // Not declared in the file it came from: left undeclared again.
+                    inferred.extend(d.names.iter().map(|n| n.text.clone()));
                     continue;
                 }
                 if let Some(target) = attr(&d.attributes, "sfc.logix.alias") {
@@ -747,6 +749,21 @@ impl Ex<'_> {
                     }
                 }
             }
+        }
+        if !inferred.is_empty() {
+            let mut d = Diagnostic::new(
+                "SFC0821",
+                pou.name.span,
+                format!(
+                    "the tags {} are not written: the L5X import declared them from their use",
+                    inferred.join(", ")
+                ),
+            )
+            .with_note(
+                "the file they came from (a program export) did not hold them; Studio's project must".to_string(),
+            );
+            d.severity = Severity::Note;
+            self.notes.push(d);
         }
         let el = elements(c);
         // Logix tag names have at most 40 characters.
