@@ -185,3 +185,24 @@ fn a_chart_with_an_element_removed_gets_fresh_links() {
     assert_eq!(topology(&checked), topology(&check(&back.text)));
     assert!(!l5x.contains("ToID=\"12\""), "{l5x}");
 }
+
+#[test]
+fn a_changed_chart_writes_its_text_box_after_the_elements() {
+    let xml = std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/fixtures/stops_textbox.L5X"))
+        .unwrap();
+    let first = sfc_l5x::import(0, &xml).text;
+    // A copy of the chart without its stored links: fresh IDs.
+    let text: String = first.lines().filter(|l| !l.contains("sfc.logix.links")).map(|l| format!("{l}\n")).collect();
+    let checked = check(&text);
+    let (l5x, _) = sfc_l5x::export::export(&checked, None).unwrap();
+    let back = sfc_l5x::import(0, &l5x);
+    assert!(!back.diagnostics.iter().any(|d| d.is_error()), "{:?}\n{l5x}", back.diagnostics);
+    assert_eq!(topology(&checked), topology(&check(&back.text)));
+    let ids: Vec<u64> =
+        l5x.split(" ID=\"").skip(1).filter_map(|r| r.split('"').next().and_then(|n| n.parse().ok())).collect();
+    let mut unique = ids.clone();
+    unique.sort_unstable();
+    unique.dedup();
+    assert_eq!(unique.len(), ids.len(), "IDs used twice: {ids:?}\n{l5x}");
+    assert!(l5x.contains("<TextBox"), "{l5x}");
+}
