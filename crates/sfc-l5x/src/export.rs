@@ -1167,8 +1167,7 @@ impl Ex<'_> {
         } else {
             content.push_str(&ids.branches);
             // Text boxes last, with IDs after every other element's (Studio's order).
-            let mut next = ids.next;
-            for tb in all_attrs(pa, "sfc.logix.textbox") {
+            for (next, tb) in (ids.next..).zip(all_attrs(pa, "sfc.logix.textbox")) {
                 let tb = match tb
                     .find(" ID=\"")
                     .and_then(|i| tb.get(i + 5..).and_then(|r| r.find('"')).map(|e| (i, i + 5 + e)))
@@ -1176,7 +1175,6 @@ impl Ex<'_> {
                     Some((a, z)) => format!("{} ID=\"{next}{}", tb.get(..a).unwrap_or(""), tb.get(z..).unwrap_or("")),
                     None => tb,
                 };
-                next += 1;
                 content.push_str(&tb);
                 content.push('\n');
             }
