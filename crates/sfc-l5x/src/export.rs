@@ -687,8 +687,21 @@ impl Ex<'_> {
         let pou = self.pou(c)?.clone();
         let pa = &pou.attributes;
         let logix = attr(pa, "sfc.dialect").is_some_and(|d| d.eq_ignore_ascii_case("logix"));
+        // The rules the chart was written for, against Logix's: only what differs is said.
+        let source = sfc_model::RunRules::of(attr(pa, "sfc.dialect").as_deref(), c);
         let n_err = self.errors.len();
-        if pou.kind != ast::PouKind::Program {
+        // A chart function block (an S7-GRAPH block, a CODESYS FB) becomes a program: called
+        // once per cycle, as such a block usually is, it runs as the program's routine does.
+        let block = pou.kind == ast::PouKind::FunctionBlock;
+        if block {
+            self.warn(
+                pou.name.span,
+                &pou.name.text,
+                format!("the FUNCTION_BLOCK `{}` is written as a program whose SFC routine is the chart", pou.name.text),
+                "an L5X SFC routine belongs to a program, which a task runs once per scan: the block's instances become one \
+                 program; its inputs and outputs become the program's parameters",
+            );
+        } else if pou.kind != ast::PouKind::Program {
             self.error(
                 pou.name.span,
                 format!("the {} `{}` (an L5X SFC routine is a program's routine)", pou.kind.keyword(), pou.name.text),
@@ -707,8 +720,8 @@ impl Ex<'_> {
             let usage = match b.kind {
                 ast::VarKind::Var | ast::VarKind::Temp | ast::VarKind::External => "",
                 // A program's parameters (Studio 5000 v24 and later).
-                ast::VarKind::Input if pou.kind == ast::PouKind::Program => " Usage=\"Input\"",
-                ast::VarKind::Output if pou.kind == ast::PouKind::Program => " Usage=\"Output\"",
+                ast::VarKind::Input if pou.kind == ast::PouKind::Program || block => " Usage=\"Input\"",
+                ast::VarKind::Output if pou.kind == ast::PouKind::Program || block => " Usage=\"Output\"",
                 _ => {
                     self.error(
                         b.span,
@@ -1021,8 +1034,9 @@ impl Ex<'_> {
                     self.warn(a.span, &s.name, format!("`{}(P)` executes when {} is activated and again when it is left, on Logix", a.action, s.name), "IEC's P executes in the scan its step is entered and once more (its final run, Q FALSE) in the next scan; Logix's P executes once on activation and once on deactivation");
                 }
                 let dont_scan = c.logix.last_scan != LastScan::ProgrammaticReset;
-                if !logix && dont_scan && matches!(a.qualifier, Qualifier::N | Qualifier::L | Qualifier::D) {
-                    self.warn(a.span, &s.name, format!("`{}` does not execute again when it stops, on Logix ({})", a.action, c.logix.last_scan.name()), "IEC runs an action once more, with Q FALSE, after it stops (its final run); a Logix controller set to \"Don't scan\" (Studio 5000's default) executes only P and P0 actions in a step's last scan: clear what the action set in a P0 action, or choose \"Programmatic reset\" (`sfc.logix.lastscan`)");
+                if !logix && source.final_run && dont_scan && matches!(a.qualifier, Qualifier::N | Qualifier::L | Qualifier::D) {
+                    let note = format!("{} runs an action once more, with Q FALSE, after it stops (its final run); a Logix controller set to \"Don't scan\" (Studio 5000's default) executes only P and P0 actions in a step's last scan: clear what the action set in a P0 action, or choose \"Programmatic reset\" (`sfc.logix.lastscan`)", source.name);
+                    self.warn(a.span, &s.name, format!("`{}` does not execute again when it stops, on Logix ({})", a.action, c.logix.last_scan.name()), &note);
                 }
                 set(&mut aat, "IsBoolean", if boolean { "true" } else { "false" }.into());
                 set(&mut aat, "PresetUsesExpr", if preset_expr.is_some() { "true" } else { "false" }.into());
@@ -1133,10 +1147,11 @@ impl Ex<'_> {
                     Vec::new()
                 }
             };
-            if !logix && t.from.iter().all(|&s| c.steps.get(s).is_some_and(|s| s.initial)) {
+            if !source.first_call_tests && t.from.iter().all(|&s| c.steps.get(s).is_some_and(|s| s.initial)) {
                 let literal_false = matches!(&t.condition, ast::Condition::St(e) if self.text(e.span).trim().eq_ignore_ascii_case("FALSE"));
                 if !literal_false {
-                    self.warn(t.header_span, &t.name, format!("{} is already tested in the first call on Logix", t.name), "IEC tests no transition in scan 0; a Logix controller executes the initial step and then tests its transitions in the same first call");
+                    let note = format!("{} tests no transition in its first scan; a Logix controller executes the initial step and then tests its transitions in the same first call", source.name);
+                    self.warn(t.header_span, &t.name, format!("{} is already tested in the first call on Logix", t.name), &note);
                 }
             }
             content.push_str(&format!(

@@ -234,6 +234,36 @@ impl Default for GraphSettings {
     }
 }
 
+/// How the tool a chart was written for runs the two things a conversion to another vendor most
+/// often changes, so that an export says what changes (and only that): from the POU's
+/// `sfc.dialect` (none: IEC 61131-3) and, for Studio 5000, its last-scan setting. The rules are
+/// the simulator's profiles' (docs/sim.md).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct RunRules {
+    /// Who runs the chart so: "IEC 61131-3", "CODESYS", "Studio 5000", "S7-GRAPH".
+    pub name: &'static str,
+    /// An action that stops (its step left, its time over, reset) runs once more, with Q FALSE.
+    pub final_run: bool,
+    /// The first call already tests the initial steps' transitions.
+    pub first_call_tests: bool,
+}
+
+impl RunRules {
+    /// The rules of the chart `chart` of a POU whose `sfc.dialect` is `dialect`.
+    pub fn of(dialect: Option<&str>, chart: &Chart) -> RunRules {
+        match dialect.map(|d| d.trim().to_ascii_lowercase()).as_deref() {
+            Some("codesys") => RunRules { name: "CODESYS", final_run: true, first_call_tests: true },
+            Some("logix") => RunRules {
+                name: "Studio 5000",
+                final_run: chart.logix.last_scan == LastScan::ProgrammaticReset,
+                first_call_tests: true,
+            },
+            Some("graph") => RunRules { name: "S7-GRAPH", final_run: false, first_call_tests: false },
+            _ => RunRules { name: "IEC 61131-3", final_run: true, first_call_tests: false },
+        }
+    }
+}
+
 /// What a step's actions do in the step's last scan (Logix's "Last Scan of Active Steps").
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub enum LastScan {

@@ -34,6 +34,9 @@ pub(crate) fn attr(attrs: &[Attribute], key: &str) -> Option<String> {
 pub(crate) struct Out {
     pub errors: Vec<Diagnostic>,
     pub notes: Vec<Diagnostic>,
+    /// The rules the chart being written was made for (its POU's `sfc.dialect`): a behaviour
+    /// warning says only what S7-GRAPH changes against them.
+    pub source: sfc_model::RunRules,
 }
 
 impl Out {
@@ -48,7 +51,11 @@ impl Out {
 /// Writes the charts of `checked` (only `pou` when given) as a SimaticML document holding each chart as an S7-GRAPH function block; the notes say what changed
 /// on the way, the error what the format cannot express (located in the checked text).
 pub fn export(checked: &Checked, pou: Option<&str>) -> Result<(String, Vec<Diagnostic>), Vec<Diagnostic>> {
-    let mut out = Out { errors: Vec::new(), notes: Vec::new() };
+    let mut out = Out {
+        errors: Vec::new(),
+        notes: Vec::new(),
+        source: sfc_model::RunRules { name: "IEC 61131-3", final_run: true, first_call_tests: false },
+    };
     let charts: Vec<&Chart> =
         checked.charts.iter().filter(|c| pou.is_none_or(|p| c.pou.eq_ignore_ascii_case(p))).collect();
     if charts.is_empty() {

@@ -75,6 +75,22 @@ pub(crate) fn block(
     id: &mut u32,
 ) {
     let pa = &p.attributes;
+    out.source = sfc_model::RunRules::of(super::attr(pa, "sfc.dialect").as_deref(), chart);
+    // The first call: S7-GRAPH switches no transition in it (as IEC's scan 0).
+    if out.source.first_call_tests {
+        for t in chart.transitions.iter().filter(|t| t.from.iter().all(|&s| chart.steps.get(s).is_some_and(|s| s.initial))) {
+            let literal_false = matches!(&t.condition, ast::Condition::St(e) if matches!(&e.kind, ast::ExprKind::Literal(l) if matches!(l.kind, ast::LiteralKind::Bool(false))));
+            if !literal_false {
+                out.warn(
+                    t.header_span,
+                    format!(
+                        "{} is tested in the first call under {}'s rules, not in S7-GRAPH's first call",
+                        t.name, out.source.name
+                    ),
+                );
+            }
+        }
+    }
     // A chart the import wrote numbers every step and transition; its topology and action rows
     // are in its attributes. Any other chart (also one written by hand in the graph dialect) is
     // laid out from its structure.
@@ -803,11 +819,15 @@ fn iec_rows(out: &mut Out, chart: &Chart, s: &sfc_model::chart::StepNode, ops: &
                 match q {
                     Qualifier::N => {
                         push(&mut rows, &mut assoc_of_rows, &a.action, row("N", None, body));
-                        out.warn(a.span, format!("S7-GRAPH does not run the N action `{}` once more when its step is left, as IEC 61131-3 does", act.name));
+                        if out.source.final_run {
+                            let who = out.source.name;
+                            out.warn(a.span, format!("S7-GRAPH does not run the N action `{}` once more when its step is left, as {who} does", act.name));
+                        }
                     }
                     Qualifier::P1 => push(&mut rows, &mut assoc_of_rows, &a.action, row("N", Some("S1"), body)),
                     Qualifier::P => {
-                        out.warn(a.span, format!("the P action `{}` is written as an S1 (step activated) event action: S7-GRAPH runs it once, without IEC's final run with Q FALSE", act.name));
+                        let how = if out.source.name == "Studio 5000" { "Logix's P also runs when the step is left" } else { "without the final run with Q FALSE" };
+                        out.warn(a.span, format!("the P action `{}` is written as an S1 (step activated) event action: S7-GRAPH runs it once ({how})", act.name));
                         push(&mut rows, &mut assoc_of_rows, &a.action, row("N", Some("S1"), body))
                     }
                     Qualifier::P0 => push(&mut rows, &mut assoc_of_rows, &a.action, row("N", Some("S0"), body)),
