@@ -629,6 +629,13 @@ otherwise.";
 the chart's own rules (the message says how; docs/sim.md, \"The `graph` profile\"). The block \
 is written; check the behaviour, or change the chart.";
 
+    "SFC0840" Warning "behaves differently in IEC 61131-3 tools"
+        "The chart was written for Studio 5000 or S7-GRAPH (`sfc.dialect`) and the output (PLCopen \
+XML, ST) goes to tools that run IEC 61131-3's rules (CODESYS, TwinCAT, Beremiz, OpenPLC): the \
+message says what runs differently there (the order of a call, the first call, an action's \
+final run, S7-GRAPH's interlocks and supervisions, which act in no IEC tool). The output is \
+written; check the behaviour (`sfc sim --profile iec`).";
+
     "SFC0901" Warning "transition tested in scan 0 under MatIEC"
         "MatIEC's generated code has no first-scan guard: a transition leaving an initial step is \
 tested in the very first scan, so when its condition already holds the initial step is left \

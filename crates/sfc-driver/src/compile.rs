@@ -272,6 +272,60 @@ fn codesys_extensions(checked: &Checked, dialect: sfc_codegen::st::StDialect) ->
     out
 }
 
+/// SFC0840 for a chart written for Studio 5000 or S7-GRAPH (`sfc.dialect`) that a PLCopen or ST
+/// output hands to IEC 61131-3 tools (CODESYS, Beremiz, OpenPLC …): what runs differently there,
+/// per construct (`sfc_model::RunRules`), and the S7-GRAPH conditions that act nowhere else.
+fn vendor_conversion_notes(checked: &Checked, target: BuildTarget) -> Vec<Diagnostic> {
+    let mut out = Vec::new();
+    for c in &checked.charts {
+        let iec = sfc_model::RunRules::of(None, c);
+        let Some(sfc_syntax::ast::Item::Pou(p)) = checked.unit.items.get(c.item) else { continue };
+        let dialect = p
+            .attributes
+            .iter()
+            .rev()
+            .find(|a| a.name.eq_ignore_ascii_case("sfc.dialect"))
+            .and_then(|a| a.value.clone());
+        let source = sfc_model::RunRules::of(dialect.as_deref(), c);
+        if !matches!(source.name, "Studio 5000" | "S7-GRAPH") {
+            continue;
+        }
+        let warn = |span, msg: String| Diagnostic::warning("SFC0840", span, msg);
+        let tools = format!("the {} output runs by IEC 61131-3's rules (CODESYS, Beremiz, OpenPLC)", target.name());
+        if let Some(why) = sfc_model::RunRules::order_change(source, iec) {
+            out.push(warn(c.name_span, format!("`{}` was written for {}: {tools}, whose call differs", c.pou, source.name)).with_note(why));
+        }
+        if source.first_call_tests {
+            for t in c.transitions.iter().filter(|t| t.from.iter().all(|&s| c.steps.get(s).is_some_and(|s| s.initial))) {
+                out.push(warn(
+                    t.header_span,
+                    format!("{} is tested in the first call under {}'s rules, not in IEC 61131-3's first scan", t.name, source.name),
+                ));
+            }
+        }
+        if !source.final_run {
+            for s in &c.steps {
+                for a in s.associations.iter().filter(|a| matches!(a.qualifier, sfc_model::Qualifier::N | sfc_model::Qualifier::L | sfc_model::Qualifier::D)) {
+                    if matches!(a.target, sfc_model::ActionTarget::Action(_)) {
+                        out.push(warn(
+                            a.span,
+                            format!("`{}` runs once more, with Q FALSE, when it stops under IEC 61131-3's rules; not under {}'s", a.action, source.name),
+                        ));
+                    }
+                }
+            }
+        }
+        let conditions = c.steps.iter().filter(|s| s.interlock.is_some() || s.supervision.is_some()).count();
+        if conditions > 0 {
+            out.push(warn(
+                c.name_span,
+                format!("`{}` has {conditions} step(s) with an S7-GRAPH interlock or supervision: kept in the output's attributes, they act in no IEC 61131-3 tool", c.pou),
+            ));
+        }
+    }
+    out
+}
+
 /// Compiles a checked file (without errors) for `target`.
 pub fn compile(checked: &Checked, target: BuildTarget, opts: &CompileOptions) -> Result<Compiled, CompileError> {
     let plain = |text: String| Compiled { text, notes: Vec::new(), flattened: None, symbols: None };
@@ -284,7 +338,10 @@ pub fn compile(checked: &Checked, target: BuildTarget, opts: &CompileOptions) ->
         }
         BuildTarget::Plcopen => {
             return sfc_plcopen::export_with(checked, opts.original)
-                .map(|(text, notes)| Compiled { text, notes, flattened: None, symbols: None })
+                .map(|(text, mut notes)| {
+                    notes.extend(vendor_conversion_notes(checked, target));
+                    Compiled { text, notes, flattened: None, symbols: None }
+                })
                 .map_err(CompileError::Diagnostics)
         }
         BuildTarget::L5x | BuildTarget::Simaticml => {
@@ -316,6 +373,7 @@ pub fn compile(checked: &Checked, target: BuildTarget, opts: &CompileOptions) ->
             return sfc_codegen::st::build_st_file(checked, opts.pou, &st)
                 .map(|(text, mut notes)| {
                     notes.extend(codesys_extensions(checked, opts.st_dialect));
+                    notes.extend(vendor_conversion_notes(checked, target));
                     Compiled { text, notes, flattened: None, symbols: None }
                 })
                 .map_err(CompileError::Diagnostics);

@@ -690,6 +690,15 @@ impl Ex<'_> {
         // The rules the chart was written for, against Logix's: only what differs is said.
         let source = sfc_model::RunRules::of(attr(pa, "sfc.dialect").as_deref(), c);
         let n_err = self.errors.len();
+        let target = sfc_model::RunRules::of(Some("logix"), c);
+        if let Some(why) = sfc_model::RunRules::order_change(source, target) {
+            self.warn(
+                c.name_span,
+                &pou.name.text,
+                format!("the chart is written for Studio 5000, whose call differs from {}'s", source.name),
+                &why,
+            );
+        }
         // A chart function block (an S7-GRAPH block, a CODESYS FB) becomes a program: called
         // once per cycle, as such a block usually is, it runs as the program's routine does.
         let block = pou.kind == ast::PouKind::FunctionBlock;

@@ -246,20 +246,39 @@ pub struct RunRules {
     pub final_run: bool,
     /// The first call already tests the initial steps' transitions.
     pub first_call_tests: bool,
+    /// A call runs the actions of the active steps before it tests the transitions (CODESYS,
+    /// Logix), so a step's actions start in the call after it is entered; otherwise (IEC,
+    /// S7-GRAPH) the transitions fire first and the entered step's actions run in the same call.
+    pub actions_first: bool,
 }
 
 impl RunRules {
+    /// The note of a conversion from rules `from` to rules `to` whose call orders differ (what
+    /// the chart's outputs do differently), `None` when they are the same.
+    pub fn order_change(from: RunRules, to: RunRules) -> Option<String> {
+        (from.actions_first != to.actions_first).then(|| {
+            let (first, then) = if to.actions_first { (to, from) } else { (from, to) };
+            format!(
+                "{} runs the actions of the active steps before it tests the transitions, so a step's actions start in \
+                 the call after it is entered and its outputs follow one call later than under {}'s rules, which fire \
+                 the transitions first",
+                first.name, then.name
+            )
+        })
+    }
+
     /// The rules of the chart `chart` of a POU whose `sfc.dialect` is `dialect`.
     pub fn of(dialect: Option<&str>, chart: &Chart) -> RunRules {
         match dialect.map(|d| d.trim().to_ascii_lowercase()).as_deref() {
-            Some("codesys") => RunRules { name: "CODESYS", final_run: true, first_call_tests: true },
+            Some("codesys") => RunRules { name: "CODESYS", final_run: true, first_call_tests: true, actions_first: true },
             Some("logix") => RunRules {
                 name: "Studio 5000",
                 final_run: chart.logix.last_scan == LastScan::ProgrammaticReset,
                 first_call_tests: true,
+                actions_first: true,
             },
-            Some("graph") => RunRules { name: "S7-GRAPH", final_run: false, first_call_tests: false },
-            _ => RunRules { name: "IEC 61131-3", final_run: true, first_call_tests: false },
+            Some("graph") => RunRules { name: "S7-GRAPH", final_run: false, first_call_tests: false, actions_first: false },
+            _ => RunRules { name: "IEC 61131-3", final_run: true, first_call_tests: false, actions_first: false },
         }
     }
 }

@@ -54,7 +54,7 @@ pub fn export(checked: &Checked, pou: Option<&str>) -> Result<(String, Vec<Diagn
     let mut out = Out {
         errors: Vec::new(),
         notes: Vec::new(),
-        source: sfc_model::RunRules { name: "IEC 61131-3", final_run: true, first_call_tests: false },
+        source: sfc_model::RunRules { name: "IEC 61131-3", final_run: true, first_call_tests: false, actions_first: false },
     };
     let charts: Vec<&Chart> =
         checked.charts.iter().filter(|c| pou.is_none_or(|p| c.pou.eq_ignore_ascii_case(p))).collect();

@@ -76,6 +76,10 @@ pub(crate) fn block(
 ) {
     let pa = &p.attributes;
     out.source = sfc_model::RunRules::of(super::attr(pa, "sfc.dialect").as_deref(), chart);
+    let graph = sfc_model::RunRules::of(Some("graph"), chart);
+    if let Some(why) = sfc_model::RunRules::order_change(out.source, graph) {
+        out.warn(chart.name_span, format!("the chart is written for S7-GRAPH, whose call differs from {}'s: {why}", out.source.name));
+    }
     // The first call: S7-GRAPH switches no transition in it (as IEC's scan 0).
     if out.source.first_call_tests {
         for t in chart.transitions.iter().filter(|t| t.from.iter().all(|&s| chart.steps.get(s).is_some_and(|s| s.initial))) {
