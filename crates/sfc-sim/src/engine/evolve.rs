@@ -788,6 +788,22 @@ fn evolve_until_stable(ctx: &mut Ctx<'_>, chart: usize, code: &ChartCode, plan: 
     }
 }
 
+/// A call's time: the chart clock advances by the time since the last call, and the mirrored `T`
+/// slots of the active steps follow (the `logix` and `graph` profiles' calls, which never pause).
+pub(super) fn advance_clock(ctx: &mut Ctx<'_>, chart: usize, now: i64) {
+    let st = &mut ctx.charts[chart];
+    let delta = now - st.last_time;
+    st.last_time = now;
+    if delta != 0 {
+        st.clock += delta;
+        if st.any_mirror_t {
+            for &s in &st.active {
+                st.publish_t(ctx.mem, s);
+            }
+        }
+    }
+}
+
 /// Writes the `X` and `T` slots of the initial steps (evolutions write them as they fire).
 pub(crate) fn publish_initial(ctx: &mut Ctx<'_>, chart: usize) {
     let st = &ctx.charts[chart];

@@ -29,7 +29,9 @@
 //! IEC's scan 0).
 
 use super::action::run_iec_actions;
-use super::evolve::{evolve, held_or_reset, publish_initial, put_bool, read_bool, reset, set_trans, start, update_current_step};
+use super::evolve::{
+    advance_clock, evolve, held_or_reset, publish_initial, put_bool, read_bool, reset, set_trans, start, update_current_step,
+};
 use super::plan::{ChartPlan, GraphEvent};
 use crate::code::{ChartCode, Ctx, Fault};
 
@@ -55,17 +57,7 @@ pub(super) fn run(ctx: &mut Ctx<'_>, chart: usize, code: &ChartCode) -> Result<(
         start(ctx, chart, plan);
         publish_initial(ctx, chart);
     }
-    let st = &mut ctx.charts[chart];
-    let delta = now - st.last_time;
-    st.last_time = now;
-    if delta != 0 {
-        st.clock += delta;
-        if st.any_mirror_t {
-            for &s in &st.active {
-                st.publish_t(ctx.mem, s);
-            }
-        }
-    }
+    advance_clock(ctx, chart, now);
     // 2. Permanent instructions before the sequencer.
     for &a in &plan.permanent_pre {
         (code.bodies[a])(ctx, frame)?;

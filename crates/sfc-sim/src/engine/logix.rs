@@ -19,7 +19,7 @@
 //! The first call activates the initial steps and executes them like any call.
 
 use super::action::run_iec_actions;
-use super::evolve::{evolve, held_or_reset, publish_initial, set_trans, start, update_current_step};
+use super::evolve::{advance_clock, evolve, held_or_reset, publish_initial, set_trans, start, update_current_step};
 use crate::code::{ChartCode, Ctx, Fault};
 
 /// Evolutions one call of a chart set to "Execute until FALSE transition" may make before the
@@ -37,17 +37,7 @@ pub(super) fn run(ctx: &mut Ctx<'_>, chart: usize, code: &ChartCode) -> Result<(
         start(ctx, chart, plan);
         publish_initial(ctx, chart);
     }
-    let st = &mut ctx.charts[chart];
-    let delta = now - st.last_time;
-    st.last_time = now;
-    if delta != 0 {
-        st.clock += delta;
-        if st.any_mirror_t {
-            for &s in &st.active {
-                st.publish_t(ctx.mem, s);
-            }
-        }
-    }
+    advance_clock(ctx, chart, now);
     let fired_before = ctx.sink.fired.len();
     let mut evolutions = 0;
     loop {
