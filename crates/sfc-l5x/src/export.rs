@@ -180,18 +180,7 @@ fn all_attrs(list: &[ast::Attribute], name: &str) -> Vec<String> {
 
 /// XML attribute text.
 fn esc(s: &str) -> String {
-    let mut o = String::with_capacity(s.len());
-    for c in s.chars() {
-        match c {
-            '&' => o.push_str("&amp;"),
-            '<' => o.push_str("&lt;"),
-            '>' => o.push_str("&gt;"),
-            '"' => o.push_str("&quot;"),
-            '\n' => o.push_str("&#10;"),
-            _ => o.push(c),
-        }
-    }
-    o
+    sfc_xmlmap::xml::escape_attr(s)
 }
 
 fn cdata(s: &str) -> String {

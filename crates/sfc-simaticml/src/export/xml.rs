@@ -6,20 +6,7 @@ pub(crate) struct W {
 }
 
 pub(crate) fn esc(v: &str) -> String {
-    let mut o = String::with_capacity(v.len());
-    for c in v.chars() {
-        match c {
-            '&' => o.push_str("&amp;"),
-            '<' => o.push_str("&lt;"),
-            '>' => o.push_str("&gt;"),
-            '"' => o.push_str("&quot;"),
-            '\n' => o.push_str("&#10;"),
-            '\r' => o.push_str("&#13;"),
-            '\t' => o.push_str("&#9;"),
-            c => o.push(c),
-        }
-    }
-    o
+    sfc_xmlmap::xml::escape_attr(v)
 }
 
 fn attrs(a: &[(&str, String)]) -> String {
