@@ -108,14 +108,34 @@ fn the_car_wash_runs_alike_as_l5x() {
     assert!(t.contains("note[SFC0821]") && t.contains("DINT tag of milliseconds"), "{t}");
 }
 
+/// The spindle reversal's block: its in-outs become InOut parameters of the program, its
+/// supervision times (sfc.timeout), the SFCError its error transitions read and the
+/// SFCQuitError that acknowledges it become a first action of each step, and it runs as the
+/// text does under the `logix` profile. The program `Main` (ST) is not written, and says so.
 #[test]
-fn the_spindle_is_refused_where_logix_cannot_hold_it() {
-    let out = tmp("spindle.L5X");
-    let o = build_l5x(&root().join("examples/spindle/spindle.st"), &out);
+fn the_spindle_runs_alike_as_l5x() {
+    let chart = root().join("examples/spindle/spindle.st");
+    let scenario = root().join("examples/spindle/spindle_fb.scenario.toml");
+    let l5x = tmp("spindle.L5X");
+    let o = build_l5x(&chart, &l5x);
     let t = text(&o);
-    assert_ne!(o.status.code(), Some(0), "{t}");
-    assert!(t.contains("error[SFC0820]") && t.contains("VAR_IN_OUT") && t.contains("spindle.st:"), "{t}");
-    assert!(!out.exists(), "nothing is written");
+    assert_eq!(o.status.code(), Some(0), "{t}");
+    assert!(t.contains("the PROGRAM `Main` is not written"), "{t}");
+    assert!(t.contains("of OpenKM1, CloseKM2 is written as actions: Logix has no SFCError"), "{t}");
+    let x = std::fs::read_to_string(&l5x).unwrap();
+    assert!(x.contains("Usage=\"InOut\"") && x.contains("OpenKM1_Supervision"), "{x}");
+    let a = trace(&l5x, &scenario, None, &tmp("spindle.a.csv"));
+    let b = trace(&chart, &scenario, Some("logix"), &tmp("spindle.b.csv"));
+    same_trace(&a, &b, &["SettleDelay"], "spindle");
+    let at = |row: &Vec<(String, String)>, k: &str| row.iter().find(|(j, _)| j == k).map(|(_, v)| v.clone()).unwrap();
+    assert!(a.iter().any(|r| at(r, "active") == "Err405"), "the supervision time runs out in CloseKM2");
+    // Back from the L5X and written again: the same routine.
+    let again = tmp("spindle_again.L5X");
+    let o = build_l5x(&l5x, &again);
+    assert_eq!(o.status.code(), Some(0), "{}", text(&o));
+    let t1 = sfc(&["build", l5x.to_str().unwrap(), "--target", "text"]);
+    let t2 = sfc(&["build", again.to_str().unwrap(), "--target", "text"]);
+    assert_eq!(t1.stdout, t2.stdout);
 }
 
 #[test]

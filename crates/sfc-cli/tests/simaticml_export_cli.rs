@@ -181,18 +181,65 @@ fn what_graph_cannot_hold_is_refused() {
     let out = sfc(&["build", spindle.to_str().unwrap(), "--target", "simaticml", "-o", xml.to_str().unwrap()]);
     assert!(text(&out).contains("`Main` is not a chart"), "{}", text(&out));
     assert!(!xml.exists());
-    // The spindle's block reads CODESYS's implicit SFCError, which GRAPH has not.
-    let out = sfc(&[
-        "build",
-        spindle.to_str().unwrap(),
-        "--pou",
-        "SpindleReversal",
-        "--target",
-        "simaticml",
-        "-o",
-        xml.to_str().unwrap(),
-    ]);
+    // A chart that reads SFCError but supervises no step: GRAPH has no SFCError to read.
+    let chart = dir.join("error_read.st");
+    std::fs::write(
+        &chart,
+        "FUNCTION_BLOCK F\n    VAR_OUTPUT lamp : BOOL; END_VAR\n    INITIAL_STEP S: END_STEP\n    STEP E: lamp(N); END_STEP\n    TRANSITION FROM S TO E := SFCError; END_TRANSITION\n    TRANSITION FROM E TO S := NOT SFCError; END_TRANSITION\nEND_FUNCTION_BLOCK\n",
+    )
+    .unwrap();
+    let out = sfc(&["build", chart.to_str().unwrap(), "--target", "simaticml", "-o", xml.to_str().unwrap()]);
     assert!(text(&out).contains("`SFCError` is no variable of the block"), "{}", text(&out));
-    assert!(text(&out).contains("spindle.st:88:"), "{}", text(&out));
+    assert!(text(&out).contains("error_read.st:5:"), "{}", text(&out));
     assert!(!xml.exists());
+}
+
+/// The spindle reversal's block: its supervision times (sfc.timeout), the SFCError its error
+/// transitions read and the SFCQuitError that acknowledges it become permanent instructions,
+/// and the block runs as the text does under the `graph` profile: a successful reversal, error
+/// 4.05 and its acknowledgement, scan by scan. Written back from the XML, it is the same block.
+#[test]
+fn the_spindle_runs_alike_as_a_graph_block() {
+    let dir = temp_dir("spindle");
+    let r = root();
+    let chart = r.join("examples/spindle/spindle.st");
+    let scenario = r.join("examples/spindle/spindle_fb.scenario.toml");
+    let xml = dir.join("spindle.xml");
+    let args = ["build", chart.to_str().unwrap(), "--pou", "SpindleReversal", "--target", "simaticml", "-o", xml.to_str().unwrap()];
+    let out = sfc(&args);
+    assert_eq!(out.status.code(), Some(0), "{}", text(&out));
+    assert!(text(&out).contains("of OpenKM1, CloseKM2 is written as permanent instructions"), "{}", text(&out));
+    let x = std::fs::read_to_string(&xml).unwrap();
+    assert!(x.contains("<PreOperations>") && x.contains("OpenKM1_Overdue") && x.contains("SFCQuitError"), "{x}");
+    let (a, b) = (dir.join("xml.csv"), dir.join("st.csv"));
+    let ra = sfc(&["sim", xml.to_str().unwrap(), "--scenario", scenario.to_str().unwrap(), "--trace", a.to_str().unwrap()]);
+    let rb = sfc(&[
+        "sim",
+        chart.to_str().unwrap(),
+        "--scenario",
+        scenario.to_str().unwrap(),
+        "--profile",
+        "graph",
+        "--trace",
+        b.to_str().unwrap(),
+    ]);
+    assert_eq!(rb.status.code(), Some(0), "{}", text(&rb));
+    // The block sets SFCError as the text does; only what sfc adds to its own supervision
+    // (SFCErrorStep, the error record) is not in the GRAPH block.
+    let failed: Vec<&str> = std::str::from_utf8(&ra.stderr).unwrap().lines().chain(std::str::from_utf8(&ra.stdout).unwrap().lines()).filter(|l| l.contains("expected")).collect();
+    assert!(!failed.is_empty() && failed.iter().all(|l| l.contains("SFCErrorStep") || l.contains("error_record")), "{}", text(&ra));
+    same_traces(&a, &b, "spindle");
+    let (ha, ra) = csv(&a);
+    let col = ha.iter().position(|h| h == "SFCError").unwrap();
+    let act = ha.iter().position(|h| h == "active").unwrap();
+    let first = ra.iter().position(|r| r[col] == "TRUE" || r[col] == "true" || r[col] == "1").unwrap();
+    assert_eq!(ra[first][act], "CloseKM2", "SFCError rises in CloseKM2");
+    assert_eq!(ra[first + 1][act], "Err405", "and TKM2Missing fires in the next scan");
+    // Written back from the XML: the same block.
+    let again = dir.join("again.xml");
+    let out = sfc(&["build", xml.to_str().unwrap(), "--target", "simaticml", "-o", again.to_str().unwrap()]);
+    assert_eq!(out.status.code(), Some(0), "{}", text(&out));
+    let t1 = sfc(&["build", xml.to_str().unwrap(), "--target", "text"]);
+    let t2 = sfc(&["build", again.to_str().unwrap(), "--target", "text"]);
+    assert_eq!(t1.stdout, t2.stdout);
 }

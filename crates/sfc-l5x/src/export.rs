@@ -20,7 +20,56 @@ use std::collections::{BTreeMap, HashMap, HashSet};
 /// Writes the charts of `checked` (only `pou` when given) as an L5X file (a controller export) holding each chart as an SFC routine; the notes say what changed
 /// on the way, the error what the format cannot express (located in the checked text).
 pub fn export(checked: &Checked, pou: Option<&str>) -> Result<(String, Vec<Diagnostic>), Vec<Diagnostic>> {
-    let mut ex = Ex { checked, errors: Vec::new(), notes: Vec::new() };
+    // sfc's supervision (sfc.timeout, SFCError, SFCQuitError) becomes a first action per step.
+    let Some(lowered) = sfc_model::supervision::lower(checked, sfc_model::supervision::Style::StepActions, pou) else {
+        return write(checked, pou, Vec::new());
+    };
+    let mut notes = Vec::new();
+    for (item, steps) in &lowered.steps {
+        let Some(c) = checked.charts.iter().find(|c| c.item == *item && c.action.is_none()) else { continue };
+        let names: Vec<&str> = steps.iter().map(|(n, _)| n.as_str()).collect();
+        let mut d = Diagnostic::new(
+            "SFC0821",
+            c.name_span,
+            format!(
+                "the maximum time (sfc.timeout) of {} is written as actions: Logix has no SFCError",
+                names.join(", ")
+            ),
+        )
+        .with_note(
+            "each step's first action `<Step>_Supervision` (N) clears `SFCError` while `SFCQuitError` is TRUE and, in a \
+             step active longer than its time, sets it once per activation (flags `<Step>_Overdue`), as sfc does in the \
+             `logix` profile before the actions; `SFCErrorStep` is not written. A step's `LimitHigh` alarm (`AH`) would \
+             not latch"
+                .to_string(),
+        );
+        d.severity = Severity::Warning;
+        notes.push(d);
+    }
+    // What is said about the written supervision itself is said above.
+    let end = checked.file.text.len() as u32;
+    let at = checked.charts.first().map_or(Span::new(0, 0, 0), |c| c.name_span);
+    match write(&lowered.checked, pou, notes) {
+        Ok((text, notes)) => Ok((text, notes.into_iter().filter(|d| d.span.start < end).collect())),
+        Err(errors) => Err(errors
+            .into_iter()
+            .map(|mut d| {
+                if d.span.start >= end {
+                    d.message = format!("the supervision written for sfc.timeout: {}", d.message);
+                    d.span = at;
+                }
+                d
+            })
+            .collect()),
+    }
+}
+
+fn write(
+    checked: &Checked,
+    pou: Option<&str>,
+    notes: Vec<Diagnostic>,
+) -> Result<(String, Vec<Diagnostic>), Vec<Diagnostic>> {
+    let mut ex = Ex { checked, errors: Vec::new(), notes };
     let charts: Vec<&Chart> =
         checked.charts.iter().filter(|c| pou.is_none_or(|p| c.pou.eq_ignore_ascii_case(p))).collect();
     if charts.is_empty() {
@@ -697,7 +746,7 @@ impl Ex<'_> {
                 &pou.name.text,
                 format!("the FUNCTION_BLOCK `{}` is written as a program whose SFC routine is the chart", pou.name.text),
                 "an L5X SFC routine belongs to a program, which a task runs once per scan: the block's instances become one \
-                 program; its inputs and outputs become the program's parameters",
+                 program; its inputs, outputs and in-outs become the program's parameters (connect the InOut ones in the program's properties)",
             );
         } else if pou.kind != ast::PouKind::Program {
             self.error(
@@ -720,6 +769,7 @@ impl Ex<'_> {
                 // A program's parameters (Studio 5000 v24 and later).
                 ast::VarKind::Input if pou.kind == ast::PouKind::Program || block => " Usage=\"Input\"",
                 ast::VarKind::Output if pou.kind == ast::PouKind::Program || block => " Usage=\"Output\"",
+                ast::VarKind::InOut if pou.kind == ast::PouKind::Program || block => " Usage=\"InOut\"",
                 _ => {
                     self.error(
                         b.span,
@@ -754,7 +804,20 @@ impl Ex<'_> {
                         }
                     }
                 }
+                let usage = match attr(&d.attributes, "sfc.logix.usage") {
+                    Some(u) if usage.is_empty() => format!(" Usage=\"{}\"", esc(&u)),
+                    _ => usage.to_string(),
+                };
                 for n in &d.names {
+                    if b.kind == ast::VarKind::InOut {
+                        // A reference to the tag connected to it: no data of its own.
+                        if let Some((ty, dims)) = self.logix_type(&d.ty) {
+                            let dims = if dims.is_empty() { String::new() } else { format!(" Dimensions=\"{}\"", esc(&dims)) };
+                            let desc = attr(&d.attributes, "sfc.description").map(|t| description(&t)).unwrap_or_default();
+                            vars.push((n.text.clone(), format!("<Tag Name=\"{}\" TagType=\"Base\" DataType=\"{}\"{dims} Usage=\"InOut\" Constant=\"false\" ExternalAccess=\"Read/Write\">\n{desc}</Tag>\n", esc(&n.text), esc(&ty))));
+                        }
+                        continue;
+                    }
                     if let Some(t) = self.var_tag(d, n) {
                         vars.push((n.text.clone(), t.replacen(" Constant=", &format!("{usage} Constant="), 1)));
                     }

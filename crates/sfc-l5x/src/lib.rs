@@ -504,6 +504,7 @@ fn pou_vars(cx: &mut Ctx, scope: &Scope, globals: &Scope, chart: &chart::ChartOu
                     ty: ty.into(),
                     init: None,
                     attrs,
+                    usage: None,
                 });
             }
             None => {
@@ -519,7 +520,7 @@ fn pou_vars(cx: &mut Ctx, scope: &Scope, globals: &Scope, chart: &chart::ChartOu
                 } else {
                     "it takes part in arithmetic or comparisons with numbers".to_string()
                 });
-                vars.push(Var { name: name.clone(), name_at, anchor: at.clone(), ty: ty.into(), init: None, attrs });
+                vars.push(Var { name: name.clone(), name_at, anchor: at.clone(), ty: ty.into(), init: None, attrs, usage: None });
             }
         }
     }
@@ -544,9 +545,14 @@ fn pou(cx: &mut Ctx, p: Pou) {
     cx.em.open(p.anchor.clone());
     cx.attributes(&p.attrs, "");
     cx.em.str(&format!("PROGRAM {}\n", p.name));
-    if !p.vars.is_empty() {
-        cx.em.str("    VAR\n");
-        for v in &p.vars {
+    // The program's parameters (by their `Usage`), then its other tags.
+    for (usage, kw) in [(Some("Input"), "VAR_INPUT"), (Some("Output"), "VAR_OUTPUT"), (Some("InOut"), "VAR_IN_OUT"), (None, "VAR")] {
+        let vars: Vec<&Var> = p.vars.iter().filter(|v| v.usage.as_deref() == usage).collect();
+        if vars.is_empty() {
+            continue;
+        }
+        cx.em.str(&format!("    {kw}\n"));
+        for v in vars {
             var_decl(cx, v, "        ");
         }
         cx.em.str("    END_VAR\n");

@@ -60,6 +60,10 @@ pub(crate) struct Var {
     pub ty: String,
     pub init: Option<String>,
     pub attrs: Vec<(String, String)>,
+    /// A program parameter's `Usage` (Studio 5000 v24 and later): `Input`, `Output` or
+    /// `InOut`, declared as VAR_INPUT, VAR_OUTPUT, VAR_IN_OUT (a `Public` one is a VAR with
+    /// `sfc.logix.usage`).
+    pub usage: Option<String>,
 }
 
 /// The data types of the file: user-defined names (upper case) and which of the predefined
@@ -374,7 +378,15 @@ pub(crate) fn tag(cx: &mut Ctx, t: Node) -> TagKind {
             value.flatten()
         }
     };
-    TagKind::Var(Var { name, name_at, anchor: anchor(t), ty, init, attrs })
+    let usage = match attr(t, "Usage") {
+        Some(u @ ("Input" | "Output" | "InOut")) => Some(u.to_string()),
+        Some(other) => {
+            attrs.push(("sfc.logix.usage".to_string(), other.to_string()));
+            None
+        }
+        None => None,
+    };
+    TagKind::Var(Var { name, name_at, anchor: anchor(t), ty, init, attrs, usage })
 }
 
 fn decorated<'a, 'i>(t: Node<'a, 'i>) -> Option<Node<'a, 'i>> {

@@ -157,7 +157,7 @@ fn an_iec_chart_is_written_with_branches_and_read_back_alike() {
 #[test]
 fn what_logix_cannot_hold_is_refused_where_it_is_written() {
     for (text, what, at) in [
-        ("FUNCTION_BLOCK F\n    VAR_IN_OUT x : INT; END_VAR\n    INITIAL_STEP S: END_STEP\n    TRANSITION FROM S TO S := x > 0; END_TRANSITION\nEND_FUNCTION_BLOCK\nPROGRAM P\n    VAR f : F; y : INT; END_VAR\n    f(x := y);\nEND_PROGRAM\n", "VAR_IN_OUT", "VAR_IN_OUT x : INT; END_VAR"),
+        ("PROGRAM P\n    VAR_GLOBAL g : INT; END_VAR\n    INITIAL_STEP S: END_STEP\n    TRANSITION FROM S TO S := g > 0; END_TRANSITION\nEND_PROGRAM\n", "VAR_GLOBAL", "VAR_GLOBAL g : INT; END_VAR"),
         ("PROGRAM P\n    VAR b : BOOL; END_VAR\n    INITIAL_STEP S: b(S); END_STEP\n    TRANSITION FROM S TO S := TRUE; END_TRANSITION\nEND_PROGRAM\n", "b(S)", "b(S);"),
         ("PROGRAM P\n    VAR b : BOOL; END_VAR\n    INITIAL_STEP S: A(N); END_STEP\n    TRANSITION FROM S TO S := TRUE; END_TRANSITION\n    ACTION A:\n        LD TRUE\n        ST b\n    END_ACTION\nEND_PROGRAM\n", "not written in ST", "A"),
     ] {
@@ -205,4 +205,31 @@ fn a_changed_chart_writes_its_text_box_after_the_elements() {
     unique.dedup();
     assert_eq!(unique.len(), ids.len(), "IDs used twice: {ids:?}\n{l5x}");
     assert!(l5x.contains("<TextBox"), "{l5x}");
+}
+
+#[test]
+fn program_parameters_keep_their_direction() {
+    // A block's inputs, outputs and in-outs are the program's parameters (`Usage`), and come
+    // back as VAR_INPUT, VAR_OUTPUT and VAR_IN_OUT; an in-out is a reference without data.
+    let text = "FUNCTION_BLOCK F\n    VAR_INPUT go : BOOL; END_VAR\n    VAR_OUTPUT busy : BOOL; END_VAR\n    VAR_IN_OUT motor : BOOL; END_VAR\n    VAR n : INT := 3; END_VAR\n    INITIAL_STEP S: END_STEP\n    STEP W: busy(N); END_STEP\n    TRANSITION FROM S TO W := go; END_TRANSITION\n    TRANSITION FROM W TO S := NOT motor; END_TRANSITION\nEND_FUNCTION_BLOCK\n";
+    let checked = check(text);
+    let (l5x, _) = sfc_l5x::export::export(&checked, None).unwrap();
+    for (name, usage) in [("go", "Input"), ("busy", "Output"), ("motor", "InOut")] {
+        assert!(l5x.contains(&format!("<Tag Name=\"{name}\" TagType=\"Base\" DataType=\"BOOL\"")), "{l5x}");
+        let at = l5x.find(&format!("<Tag Name=\"{name}\"")).unwrap();
+        let tag = &l5x[at..at + l5x[at..].find("</Tag>").unwrap()];
+        assert!(tag.contains(&format!("Usage=\"{usage}\"")), "{tag}");
+        assert!(usage != "InOut" || !tag.contains("<Data"), "{tag}");
+    }
+    let back = sfc_l5x::import(0, &l5x);
+    assert!(!back.diagnostics.iter().any(|d| d.is_error()), "{:?}", back.diagnostics);
+    for block in ["VAR_INPUT\n        go : BOOL;", "VAR_OUTPUT\n        busy : BOOL;", "VAR_IN_OUT\n        motor : BOOL;", "VAR\n        n : INT := 3;"] {
+        assert!(back.text.contains(block), "{block}: {}", back.text);
+    }
+    // A `Public` parameter is a VAR that keeps its usage.
+    let public = l5x.replace("<Tag Name=\"n\" TagType=\"Base\" DataType=\"INT\"", "<Tag Name=\"n\" TagType=\"Base\" DataType=\"INT\" Usage=\"Public\"");
+    let back = sfc_l5x::import(0, &public);
+    assert!(back.text.contains("{attribute 'sfc.logix.usage' := 'Public'}"), "{}", back.text);
+    let (again, _) = sfc_l5x::export::export(&check(&back.text), None).unwrap();
+    assert!(again.contains("Usage=\"Public\""), "{again}");
 }

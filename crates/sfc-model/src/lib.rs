@@ -6,6 +6,7 @@ pub mod chart;
 mod code;
 mod latch;
 pub mod lower;
+pub mod supervision;
 mod objects;
 pub mod validate;
 

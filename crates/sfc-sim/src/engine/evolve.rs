@@ -51,9 +51,7 @@ pub fn run_chart(ctx: &mut Ctx<'_>, chart: usize) -> Result<(), Fault> {
     if held_or_reset(ctx, chart, code) {
         return Ok(());
     }
-    if read_bool(ctx.mem, frame + ctl.quit_error as usize) {
-        ctx.mem[frame + ctl.error as usize] = Value::Bool(false);
-    }
+    acknowledge(ctx, chart, code);
     if !ctx.charts[chart].started {
         start(ctx, chart, plan);
         publish_initial(ctx, chart);
@@ -91,6 +89,15 @@ pub fn run_chart(ctx: &mut Ctx<'_>, chart: usize) -> Result<(), Fault> {
     action_phase(ctx, chart, code, plan)?;
     finish_scan(ctx, chart, code, plan);
     Ok(())
+}
+
+/// `SFCQuitError` TRUE at the start of a call acknowledges `SFCError` (clears it).
+pub(super) fn acknowledge(ctx: &mut Ctx<'_>, chart: usize, code: &ChartCode) {
+    let frame = ctx.charts[chart].frame;
+    let ctl = code.control;
+    if read_bool(ctx.mem, frame + ctl.quit_error as usize) {
+        ctx.mem[frame + ctl.error as usize] = Value::Bool(false);
+    }
 }
 
 /// Chart control at the start of a call: SFCInit puts the chart back into its initial situation

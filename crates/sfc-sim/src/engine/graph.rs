@@ -25,12 +25,16 @@
 //! 7. The permanent instructions after the sequencer ('post').
 //! 8. `ERR_FLT`, when declared: some active step has an interlock or supervision error (15.12).
 //!
+//! sfc's own chart control works as in every profile: `SFCQuitError` acknowledges `SFCError`
+//! at the start of the call (after 1), and the supervision of `sfc.timeout` sets it after 6.
+//!
 //! The first call activates the initial steps and runs 5–8 (no transition switches in it, as in
 //! IEC's scan 0).
 
 use super::action::run_iec_actions;
 use super::evolve::{
-    advance_clock, evolve, held_or_reset, publish_initial, put_bool, read_bool, reset, set_trans, start, update_current_step,
+    acknowledge, advance_clock, check_times, evolve, held_or_reset, publish_initial, put_bool, read_bool, reset, set_trans,
+    start, update_current_step,
 };
 use super::plan::{ChartPlan, GraphEvent};
 use crate::code::{ChartCode, Ctx, Fault};
@@ -58,6 +62,7 @@ pub(super) fn run(ctx: &mut Ctx<'_>, chart: usize, code: &ChartCode) -> Result<(
         publish_initial(ctx, chart);
     }
     advance_clock(ctx, chart, now);
+    acknowledge(ctx, chart, code);
     // 2. Permanent instructions before the sequencer.
     for &a in &plan.permanent_pre {
         (code.bodies[a])(ctx, frame)?;
@@ -80,6 +85,10 @@ pub(super) fn run(ctx: &mut Ctx<'_>, chart: usize, code: &ChartCode) -> Result<(
     }
     // The actions of the step events raised in this call.
     event_actions(ctx, chart, code, plan, &events)?;
+    // sfc's supervision of `sfc.timeout` (SFCError), after the actions as in IEC's scan.
+    if plan.supervised {
+        check_times(ctx, chart, code, plan);
+    }
     // 7. Permanent instructions after the sequencer.
     for &a in &plan.permanent_post {
         (code.bodies[a])(ctx, frame)?;

@@ -16,10 +16,16 @@
 //!    fired, 1 and 2 are repeated in the same call; a chart that never stops advancing would
 //!    trip the controller's watchdog, here an error after [`MAX_EVOLUTIONS`] evolutions.
 //!
+//! sfc's own chart control (`SFCQuitError`, then the supervision of `sfc.timeout` setting
+//! `SFCError`) comes first in the call, before 1.
+//!
 //! The first call activates the initial steps and executes them like any call.
 
 use super::action::run_iec_actions;
-use super::evolve::{advance_clock, evolve, held_or_reset, publish_initial, set_trans, start, update_current_step};
+use super::evolve::{
+    acknowledge, advance_clock, check_times, evolve, held_or_reset, publish_initial, set_trans, start,
+    update_current_step,
+};
 use crate::code::{ChartCode, Ctx, Fault};
 
 /// Evolutions one call of a chart set to "Execute until FALSE transition" may make before the
@@ -38,6 +44,13 @@ pub(super) fn run(ctx: &mut Ctx<'_>, chart: usize, code: &ChartCode) -> Result<(
         publish_initial(ctx, chart);
     }
     advance_clock(ctx, chart, now);
+    // sfc's supervision (`sfc.timeout`, docs/sim.md "Chart control variables"): acknowledged
+    // at the start of the call, checked with the step timers, before the actions, as Logix
+    // updates a step's timer and its alarms when it scans the step.
+    acknowledge(ctx, chart, code);
+    if plan.supervised {
+        check_times(ctx, chart, code, plan);
+    }
     let fired_before = ctx.sink.fired.len();
     let mut evolutions = 0;
     loop {

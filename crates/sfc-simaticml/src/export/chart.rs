@@ -163,12 +163,6 @@ pub(crate) fn block(
             let _ = t;
             out.error(s.name_span, "a step's minimum time (sfc.min_time) has no counterpart in S7-GRAPH; write it into the following transitions (`S.T >= t`)");
         }
-        if s.timeout.is_some() && attr(&s.attributes, "sfc.s7graph.max_time").is_none() {
-            out.warn(
-                s.name_span,
-                "the step's maximum time (sfc.timeout) is written as its T_MAX (MaximumStepTime); S7-GRAPH has no SFCError flag: a supervision (`#Step.T > #Step.T_MAX`) acts on it, and holds the step",
-            );
-        }
         if !s.step_actions.is_empty() {
             out.error(s.name_span, "step actions (ENTRY_ACTION, …) cannot be written in an S7-GRAPH step");
         }
@@ -234,7 +228,7 @@ pub(crate) fn block(
             (
                 raw_step(i),
                 step_no.get(i).copied().unwrap_or(0),
-                attr(&s.attributes, "sfc.s7graph.max_time").or_else(|| s.timeout.map(time_literal)),
+                attr(&s.attributes, "sfc.s7graph.max_time"),
                 attr(&s.attributes, "sfc.s7graph.warn_time"),
             )
         })
@@ -312,7 +306,7 @@ pub(crate) fn block(
                 ("Init", s.initial.to_string()),
                 ("Name", raw_step(i)),
             ];
-            if let Some(t) = attr(&s.attributes, "sfc.s7graph.max_time").or_else(|| s.timeout.map(time_literal)) {
+            if let Some(t) = attr(&s.attributes, "sfc.s7graph.max_time") {
                 a.push(("MaximumStepTime", t));
             }
             if let Some(t) = attr(&s.attributes, "sfc.s7graph.warn_time") {
