@@ -42,6 +42,9 @@ pub fn codesys_actions(checked: Option<&Checked>, chart: &Chart, target: &str) -
             }
         }
     }
+    if let Some(c) = checked {
+        out.extend(sfc_model::vendor::logix_step_counts(c, chart, target));
+    }
     for s in &chart.steps {
         if s.min_time.is_some() {
             out.push(
@@ -69,3 +72,4 @@ pub fn codesys_actions(checked: Option<&Checked>, chart: &Chart, target: &str) -
     }
     out
 }
+

@@ -337,6 +337,14 @@ pub fn compile(checked: &Checked, target: BuildTarget, opts: &CompileOptions) ->
             return Ok(plain(sfc_syntax::print::print(&unit)));
         }
         BuildTarget::Plcopen => {
+            let refused: Vec<Diagnostic> = checked
+                .charts
+                .iter()
+                .flat_map(|c| sfc_model::vendor::logix_step_counts(checked, c, "PLCopen XML for IEC 61131-3 tools"))
+                .collect();
+            if !refused.is_empty() {
+                return Err(CompileError::Diagnostics(refused));
+            }
             return sfc_plcopen::export_with(checked, opts.original)
                 .map(|(text, mut notes)| {
                     notes.extend(vendor_conversion_notes(checked, target));

@@ -1436,6 +1436,16 @@ fn to_logix(src: &str, el: &Elements, _c: &Chart, ex: &mut Ex, at: Span) -> Stri
                 }
             }
         }
+        // The timer's overflow, as the import writes it.
+        if s == "(" && w(2) == "." && w(3).eq_ignore_ascii_case("T") && w(4) == ">" && w(6) == ")" {
+            if el.steps.contains_key(&w(1).to_ascii_uppercase())
+                && w(5).eq_ignore_ascii_case(&format!("T#{}ms", crate::st::OV_MS))
+            {
+                out.push_str(&format!("{}.OV", w(1)));
+                skip_to = Some(idx(6));
+                continue;
+            }
+        }
         if t.kind == Tok::Number && s.contains('#') {
             let (k, _) = s.split_once('#').unwrap_or(("", ""));
             let k = k.to_ascii_uppercase();

@@ -149,7 +149,6 @@ const STEP_MEMBERS: &[(&str, &str)] = &[
     ("FS", "FALSE"),
     ("SA", "FALSE"),
     ("LS", "FALSE"),
-    ("OV", "FALSE"),
     ("ALARMEN", "FALSE"),
     ("ALARMLOW", "FALSE"),
     ("ALARMHIGH", "FALSE"),
@@ -157,7 +156,6 @@ const STEP_MEMBERS: &[(&str, &str)] = &[
     ("PAUSETIMER", "FALSE"),
     ("STATUS", "0"),
     ("TMAX", "0"),
-    ("COUNT", "0"),
     ("LIMITLOW", "0"),
     ("LIMITHIGH", "0"),
 ];
@@ -359,6 +357,10 @@ pub(crate) fn map(x: &XText, el: &Elements) -> Mapped {
     m
 }
 
+/// The largest step time a Logix step timer (`T`, a DINT of ms) holds before it rolls over
+/// (`OV`).
+pub(crate) const OV_MS: i64 = 2_147_483_647;
+
 /// `S.X` stays, `S.T` is a DINT of ms, `S.DN` the preset reached, `S.PRE` the preset; the
 /// other members are the `logix` profile's.
 fn member_of_step(
@@ -373,6 +375,10 @@ fn member_of_step(
     let n = &s.name;
     match (mup, &s.pre_expr) {
         ("X", _) => w.replace_text(whole, format!("{n}.X")),
+        // How many times the step became active: the `logix` dialect's step member.
+        ("COUNT", _) => w.replace_text(whole, format!("{n}.Count")),
+        // The timer rolled over: `T`, a DINT of ms in Logix, passed 2^31 - 1.
+        ("OV", _) => w.replace_text(whole, format!("({n}.T > T#{OV_MS}ms)")),
         ("T", _) => w.replace_text(whole, format!("TIME_TO_DINT({n}.T)")),
         ("DN", Some(e)) => {
             let mut f = Frag::plain(format!("(TIME_TO_DINT({n}.T) >= "));
@@ -413,7 +419,7 @@ fn logix_member(at: Range<u32>, element: &str, member: &str, ty: &str) -> Proble
         format!("`{element}.{member}` is a member of Logix's {ty} tag that sfc's IEC text has no equivalent for"),
         Some(
             "the `logix` simulation profile does not simulate these SFC_STEP, SFC_ACTION and SFC_STOP members \
-             yet; sfc reads `.X`, `.T` (as DINT ms), `.DN` and `.PRE` of a step, \
+             yet; sfc reads `.X`, `.T` (as DINT ms), `.DN`, `.PRE`, `.OV` and `.Count` of a step, \
              `.Q` and `.A` of an action and `.X` of a stop; the member is replaced by a constant in the text"
                 .into(),
         ),

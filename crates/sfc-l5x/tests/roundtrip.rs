@@ -233,3 +233,20 @@ fn program_parameters_keep_their_direction() {
     let (again, _) = sfc_l5x::export::export(&check(&back.text), None).unwrap();
     assert!(again.contains("Usage=\"Public\""), "{again}");
 }
+
+#[test]
+fn step_count_and_overflow_come_and_go() {
+    // SFC_STEP.Count is the `logix` dialect's step member; SFC_STEP.OV (the DINT timer rolled
+    // over) is the step time past 2^31 - 1 ms. Both are written back as Logix spells them.
+    let text = "{attribute 'sfc.dialect' := 'logix'}\nPROGRAM P\n    VAR_OUTPUT n : DINT; END_VAR\n    INITIAL_STEP S: Keep(N); END_STEP\n    TRANSITION FROM S TO W := S.Count > 2 OR (S.T > T#2147483647ms); END_TRANSITION\n    STEP W: END_STEP\n    TRANSITION FROM W TO S := TRUE; END_TRANSITION\n    ACTION Keep: n := W.Count; END_ACTION\nEND_PROGRAM\n";
+    let checked = check(text);
+    let (l5x, _) = sfc_l5x::export::export(&checked, None).unwrap();
+    assert!(l5x.contains("S.Count > 2 OR S.OV"), "{l5x}");
+    assert!(l5x.contains("n := W.Count;"), "{l5x}");
+    let back = sfc_l5x::import(0, &l5x);
+    assert!(!back.diagnostics.iter().any(|d| d.is_error()), "{:?}", back.diagnostics);
+    assert!(back.text.contains("S.Count > 2 OR (S.T > T#2147483647ms)"), "{}", back.text);
+    assert!(back.text.contains("n := W.Count;"), "{}", back.text);
+    let again = check(&back.text);
+    assert!(!again.has_errors(), "{:?}", again.diagnostics);
+}

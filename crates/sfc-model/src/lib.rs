@@ -7,6 +7,7 @@ mod code;
 mod latch;
 pub mod lower;
 pub mod supervision;
+pub mod vendor;
 mod objects;
 pub mod validate;
 

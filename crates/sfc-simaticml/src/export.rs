@@ -134,6 +134,12 @@ fn write(
             }
         }
     }
+    for c in &charts {
+        for mut d in sfc_model::vendor::logix_step_counts(checked, c, "an S7-GRAPH block") {
+            d.code = "SFC0830".into();
+            out.errors.push(d);
+        }
+    }
     let globals = file_globals(checked);
     let pous: Vec<&ast::Pou> = charts
         .iter()

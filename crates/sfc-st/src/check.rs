@@ -66,6 +66,9 @@ pub struct Checker<'s, 'e> {
     /// The POU is an S7-GRAPH block's (`{attribute 'sfc.dialect' := 'graph'}`): its steps have
     /// `U` besides `X` and `T`.
     pub(crate) graph: bool,
+    /// The POU is a Studio 5000 SFC routine's (`{attribute 'sfc.dialect' := 'logix'}`): its
+    /// steps have Logix's `Count` (DINT, how many times the step became active).
+    pub(crate) logix: bool,
 }
 
 impl<'s, 'e> Checker<'s, 'e> {
@@ -77,6 +80,11 @@ impl<'s, 'e> Checker<'s, 'e> {
     /// Gives steps S7-GRAPH's `U` (see [`Checker::graph`]'s field).
     pub fn set_graph(&mut self, on: bool) {
         self.graph = on;
+    }
+
+    /// Gives steps Logix's `Count` (see [`Checker::logix`]'s field).
+    pub fn set_logix(&mut self, on: bool) {
+        self.logix = on;
     }
 
     /// A checker for code in `scope`.
@@ -94,6 +102,7 @@ impl<'s, 'e> Checker<'s, 'e> {
             keep_types: false,
             codesys: false,
             graph: false,
+            logix: false,
         }
     }
 
@@ -1216,6 +1225,8 @@ impl<'s, 'e> Checker<'s, 'e> {
                     // S7-GRAPH's steps also have `U`, their time without disturbance.
                     let members: &[(&str, Type)] = if self.graph {
                         &[("X", Type::Bool), ("T", Type::Time), ("U", Type::Time)]
+                    } else if self.logix {
+                        &[("X", Type::Bool), ("T", Type::Time), ("Count", Type::DInt)]
                     } else {
                         &[("X", Type::Bool), ("T", Type::Time)]
                     };

@@ -130,8 +130,13 @@ pub fn is_codesys(pou: &Pou) -> bool {
 /// Whether `pou` is marked `{attribute 'sfc.dialect' := 'graph'}` (imported from an S7-GRAPH
 /// block): its steps have S7-GRAPH's `U`.
 pub fn is_graph(pou: &Pou) -> bool {
+    is_dialect(pou, "graph")
+}
+
+/// The POU is marked `{attribute 'sfc.dialect' := '<dialect>'}`.
+pub fn is_dialect(pou: &Pou, dialect: &str) -> bool {
     pou.attributes.iter().any(|a| {
-        a.name.eq_ignore_ascii_case("sfc.dialect") && a.value.as_deref().is_some_and(|v| v.eq_ignore_ascii_case("graph"))
+        a.name.eq_ignore_ascii_case("sfc.dialect") && a.value.as_deref().is_some_and(|v| v.eq_ignore_ascii_case(dialect))
     })
 }
 
@@ -177,6 +182,7 @@ fn check_pou_inner(
     let mut ck = Checker::new(&mut scope);
     ck.set_codesys(is_codesys(pou));
     ck.set_graph(is_graph(pou));
+    ck.set_logix(is_dialect(pou, "logix"));
     if types.is_some() {
         ck.keep_types();
     }

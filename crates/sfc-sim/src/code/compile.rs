@@ -153,6 +153,7 @@ impl Program {
                 names: HashMap::new(),
                 step_x: Vec::new(),
                 step_t: Vec::new(),
+                step_count: Vec::new(),
                 action_q: Vec::new(),
                 action_a: Vec::new(),
                 control: ControlSlots::default(),
@@ -220,6 +221,7 @@ impl Program {
             chart: Option<usize>,
             step_x: Vec<u32>,
             step_t: Vec<u32>,
+            step_count: Vec<u32>,
             action_q: Vec<u32>,
             action_a: Vec<u32>,
             control: ControlSlots,
@@ -239,6 +241,7 @@ impl Program {
                 chart: m.chart,
                 step_x: m.step_x,
                 step_t: m.step_t,
+                step_count: m.step_count,
                 action_q: m.action_q,
                 action_a: m.action_a,
                 control: m.control,
@@ -267,6 +270,7 @@ impl Program {
                         PouBody::Chart(Box::new(ChartCode {
                             control: meta.control,
                             chart_slot: meta.chart_slot,
+                            step_count: meta.step_count,
                             ..code
                         })),
                         subs,
@@ -444,6 +448,7 @@ fn lay_out(u: &mut Unit<'_>, i: usize) {
     }
     let mut step_x = Vec::new();
     let mut step_t = Vec::new();
+    let mut step_count = Vec::new();
     let mut action_q = Vec::new();
     let mut action_a = Vec::new();
     if let Some(ch) = chart {
@@ -456,6 +461,12 @@ fn lay_out(u: &mut Unit<'_>, i: usize) {
             action_q.push(off);
             action_a.push(off + 1);
             off += 2;
+        }
+        if sfc_st::is_dialect(m.ast, "logix") {
+            for _ in &ch.steps {
+                step_count.push(off);
+                off += 1;
+            }
         }
     }
     let mut subs = m.subs.clone();
@@ -607,6 +618,7 @@ fn lay_out(u: &mut Unit<'_>, i: usize) {
     m.layout = Layout { vars, size: off };
     m.step_x = step_x;
     m.step_t = step_t;
+    m.step_count = step_count;
     m.action_q = action_q;
     m.action_a = action_a;
     m.control = control;
@@ -1163,6 +1175,7 @@ fn chart_code(chart: Chart, x: &[u32], t: &[u32], q: Vec<u32>, a: Vec<u32>, p: C
         chart,
         step_x: x.to_vec(),
         step_t: t.to_vec(),
+        step_count: Vec::new(),
         action_q: q,
         action_a: a,
         guards: p.guards,

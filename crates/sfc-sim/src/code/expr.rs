@@ -348,6 +348,10 @@ impl Cx<'_, '_> {
                         // S7-GRAPH's `U` (a POU marked `sfc.dialect 'graph'`): no profile simulates
                         // disturbances yet, so it is `T`.
                         "T" | "_T" | "U" => Ok(PlaceC::new(Loc::Static(Place::Local(m.step_t[i])), Type::Time)),
+                        // Logix's `Count` (a POU marked `sfc.dialect 'logix'`).
+                        "COUNT" if m.step_count.get(i).is_some() => {
+                            Ok(PlaceC::new(Loc::Static(Place::Local(m.step_count[i])), Type::DInt))
+                        }
                         _ => Err(self.error(member.span, format!("steps have no member `{}`", member.text))),
                     };
                 }

@@ -278,6 +278,9 @@ pub struct ChartCode {
     /// Per step: frame offsets of `X` and `T`.
     pub step_x: Vec<u32>,
     pub step_t: Vec<u32>,
+    /// Per step of a Logix chart (`sfc.dialect 'logix'`): the frame offset of its `Count`
+    /// (how many times it became active); empty for other charts.
+    pub step_count: Vec<u32>,
     /// Per action: frame offsets of `Q` and `A`.
     pub action_q: Vec<u32>,
     pub action_a: Vec<u32>,

@@ -143,6 +143,7 @@ impl Program {
                     match n.to_ascii_uppercase().as_str() {
                         "X" | "_X" => Cur::Val { slot: base + cc.step_x[k] as usize, ty: Type::Bool },
                         "T" | "_T" | "U" => Cur::Val { slot: base + cc.step_t[k] as usize, ty: Type::Time },
+                        "COUNT" => Cur::Val { slot: base + *cc.step_count.get(k)? as usize, ty: Type::DInt },
                         _ => return None,
                     }
                 }

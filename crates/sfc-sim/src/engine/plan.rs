@@ -139,6 +139,8 @@ pub struct ChartPlan {
     /// Frame offsets of the `X` and `T` slots of each step.
     pub(crate) x_slots: Vec<u32>,
     pub(crate) t_slots: Vec<u32>,
+    /// A Logix chart's `Count` slots (empty for other charts).
+    pub(crate) count_slots: Vec<u32>,
     /// Sort key of each transition for conflict resolution: explicit priorities first.
     pub(crate) order_key: Vec<(u8, i64, u32)>,
     pub(crate) explicit: Vec<bool>,
@@ -339,6 +341,7 @@ impl ChartPlan {
             link,
             x_slots: code.step_x.clone(),
             t_slots: code.step_t.clone(),
+            count_slots: code.step_count.clone(),
             pre,
             post,
             order_key,

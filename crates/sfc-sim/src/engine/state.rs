@@ -102,6 +102,10 @@ pub struct ChartState {
     pub(crate) marks: Vec<StepMarks>,
     /// Absolute memory slots of each step's `X` and `T`.
     pub(crate) slots: Vec<(u32, u32)>,
+    /// A Logix chart's steps: the absolute slot of `Count`, how many times the step became
+    /// active (its time analysis's activations: kept over SFCInit, as Logix keeps it over an
+    /// SFC Reset).
+    pub(crate) count_slots: Vec<u32>,
     /// Some step has a mirrored `X` or `T` slot / a mirrored `T` slot.
     pub(crate) any_mirror: bool,
     pub(crate) any_mirror_t: bool,
@@ -178,6 +182,7 @@ impl ChartState {
             steps,
             marks: vec![StepMarks::default(); n],
             slots,
+            count_slots: plan.count_slots.iter().map(|&c| (frame + c as usize) as u32).collect(),
             any_mirror: true,
             any_mirror_t: true,
             fired_count: vec![0; nt],
@@ -311,6 +316,7 @@ impl ChartState {
         }
         st.t = clock;
         st.overdue = false;
+
         if self.plan.has_entities[s as usize] {
             self.entered.push(s);
         }
@@ -352,6 +358,17 @@ impl ChartState {
     pub(crate) fn publish_x(&self, mem: &mut [Value], s: u32, x: bool) {
         if self.steps[s as usize].mirror_x {
             super::evolve::put_bool(mem, self.slots[s as usize].0 as usize, x);
+        }
+        if x {
+            self.publish_count(mem, s);
+        }
+    }
+
+    /// Writes the `Count` slot of `s` (a Logix chart's step).
+    #[inline]
+    pub(crate) fn publish_count(&self, mem: &mut [Value], s: u32) {
+        if let (Some(&slot), Some(step)) = (self.count_slots.get(s as usize), self.steps.get(s as usize)) {
+            mem[slot as usize] = Value::Int(i64::try_from(step.tally.activations).unwrap_or(i64::MAX));
         }
     }
 
