@@ -7,6 +7,8 @@
 //!
 //! One call:
 //! 1. `INIT_SQ` TRUE puts the sequence back to its initial steps and holds it there (14.2).
+//!    `OFF_SQ` TRUE switches the sequencer off: every step is deactivated and the action
+//!    control cleared, as INIT_SQ clears it; the sequence stays off until INIT_SQ.
 //! 2. The permanent instructions before the sequencer (actions marked `sfc.s7graph.permanent`
 //!    'pre'), every call (6.3).
 //! 3. The supervisions of the active steps: TRUE is a supervision error, which holds the step
@@ -62,6 +64,10 @@ pub(super) fn run(ctx: &mut Ctx<'_>, chart: usize, code: &ChartCode) -> Result<(
         publish_initial(ctx, chart);
     }
     advance_clock(ctx, chart, now);
+    // OFF_SQ switches the sequencer off: every step is left; it stays off until INIT_SQ.
+    if ctl.off_sq.is_some_and(|s| read_bool(ctx.mem, frame + s as usize)) && !ctx.charts[chart].active.is_empty() {
+        switch_off(ctx, chart, code);
+    }
     acknowledge(ctx, chart, code);
     // 2. Permanent instructions before the sequencer.
     for &a in &plan.permanent_pre {
@@ -185,4 +191,21 @@ fn group_error(ctx: &mut Ctx<'_>, chart: usize, code: &ChartCode) {
     });
     let frame = st.frame;
     put_bool(ctx.mem, frame + slot as usize, error);
+}
+
+/// `OFF_SQ`: every step is left and the action control cleared (as by INIT_SQ, without the
+/// initial steps): the sequence has no active step until INIT_SQ puts it back.
+fn switch_off(ctx: &mut Ctx<'_>, chart: usize, code: &ChartCode) {
+    reset(ctx, chart, code);
+    let frame = ctx.charts[chart].frame;
+    let st = &mut ctx.charts[chart];
+    while let Some(&s) = st.active.last() {
+        st.deactivate(s);
+    }
+    st.started = true;
+    st.held = false;
+    st.changed = true;
+    for &off in &code.step_x {
+        put_bool(ctx.mem, frame + off as usize, false);
+    }
 }
