@@ -21,20 +21,11 @@ use std::collections::{BTreeMap, HashMap, HashSet};
 /// on the way, the error what the format cannot express (located in the checked text).
 pub fn export(checked: &Checked, pou: Option<&str>) -> Result<(String, Vec<Diagnostic>), Vec<Diagnostic>> {
     // sfc's supervision (sfc.timeout, SFCError, SFCQuitError) becomes a first action per step.
-    let Some(lowered) = sfc_model::supervision::lower(checked, sfc_model::supervision::Style::StepActions, pou) else {
-        return write(checked, pou, Vec::new());
-    };
-    let mut notes = Vec::new();
-    for (item, steps) in &lowered.steps {
-        let Some(c) = checked.charts.iter().find(|c| c.item == *item && c.action.is_none()) else { continue };
-        let names: Vec<&str> = steps.iter().map(|(n, _)| n.as_str()).collect();
+    let note = |c: &Chart, steps: &str| {
         let mut d = Diagnostic::new(
             "SFC0821",
             c.name_span,
-            format!(
-                "the maximum time (sfc.timeout) of {} is written as actions: Logix has no SFCError",
-                names.join(", ")
-            ),
+            format!("the maximum time (sfc.timeout) of {steps} is written as actions: Logix has no SFCError"),
         )
         .with_note(
             "each step's first action `<Step>_Supervision` (N) clears `SFCError` while `SFCQuitError` is TRUE and, in a \
@@ -44,24 +35,11 @@ pub fn export(checked: &Checked, pou: Option<&str>) -> Result<(String, Vec<Diagn
                 .to_string(),
         );
         d.severity = Severity::Warning;
-        notes.push(d);
-    }
-    // What is said about the written supervision itself is said above.
-    let end = checked.file.text.len() as u32;
-    let at = checked.charts.first().map_or(Span::new(0, 0, 0), |c| c.name_span);
-    match write(&lowered.checked, pou, notes) {
-        Ok((text, notes)) => Ok((text, notes.into_iter().filter(|d| d.span.start < end).collect())),
-        Err(errors) => Err(errors
-            .into_iter()
-            .map(|mut d| {
-                if d.span.start >= end {
-                    d.message = format!("the supervision written for sfc.timeout: {}", d.message);
-                    d.span = at;
-                }
-                d
-            })
-            .collect()),
-    }
+        d
+    };
+    sfc_model::supervision::export_lowered(checked, sfc_model::supervision::Style::StepActions, pou, note, |c, notes| {
+        write(c, pou, notes)
+    })
 }
 
 fn write(

@@ -21,7 +21,7 @@
 
 use crate::chart::{ActionNode, ActionTarget, Association, Chart, Qualifier};
 use crate::Checked;
-use sfc_diagnostics::{SourceFile, Span};
+use sfc_diagnostics::{Diagnostic, SourceFile, Span};
 use sfc_syntax::ast;
 use std::collections::HashSet;
 
@@ -204,6 +204,47 @@ pub fn lower(checked: &Checked, style: Style, pou: Option<&str>) -> Option<Lower
     }
     out.file = SourceFile::new(out.file.name.clone(), text);
     Some(Lowered { checked: out, steps: steps_out })
+}
+
+/// What an exporter returns: the file and its notes, or the errors.
+pub type Exported = Result<(String, Vec<Diagnostic>), Vec<Diagnostic>>;
+
+/// Runs an exporter (`write`, given the notes so far) on `checked` with the supervision written
+/// as `style` says; `note` words the warning for a chart and the names of its supervised steps.
+/// Nothing is said about the generated code itself: its notes are dropped, and an error in it
+/// is put on the chart's name.
+pub fn export_lowered(
+    checked: &Checked,
+    style: Style,
+    pou: Option<&str>,
+    note: impl Fn(&Chart, &str) -> Diagnostic,
+    write: impl FnOnce(&Checked, Vec<Diagnostic>) -> Exported,
+) -> Exported {
+    let Some(lowered) = lower(checked, style, pou) else {
+        return write(checked, Vec::new());
+    };
+    let mut notes = Vec::new();
+    for (item, steps) in &lowered.steps {
+        if let Some(c) = checked.charts.iter().find(|c| c.item == *item && c.action.is_none()) {
+            let names: Vec<&str> = steps.iter().map(|(n, _)| n.as_str()).collect();
+            notes.push(note(c, &names.join(", ")));
+        }
+    }
+    let end = checked.file.text.len() as u32;
+    let at = checked.charts.first().map_or(Span::new(0, 0, 0), |c| c.name_span);
+    match write(&lowered.checked, notes) {
+        Ok((text, notes)) => Ok((text, notes.into_iter().filter(|d| d.span.start < end).collect())),
+        Err(errors) => Err(errors
+            .into_iter()
+            .map(|mut d| {
+                if d.span.start >= end {
+                    d.message = format!("the supervision written for sfc.timeout: {}", d.message);
+                    d.span = at;
+                }
+                d
+            })
+            .collect()),
+    }
 }
 
 fn span(file: u32, start: usize, end: usize) -> Span {

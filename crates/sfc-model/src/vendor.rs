@@ -24,7 +24,7 @@ pub fn logix_step_counts(checked: &Checked, chart: &Chart, target: &str) -> Vec<
             let mut from = 0;
             while let Some(k) = upper.get(from..).and_then(|r| r.find(&pat)).map(|k| k + from) {
                 from = k + pat.len();
-                let before = upper[..k].chars().next_back();
+                let before = upper.get(..k).and_then(|r| r.chars().next_back());
                 let after = upper.get(from..).and_then(|r| r.chars().next());
                 let word = |c: Option<char>| c.is_some_and(|c| c.is_ascii_alphanumeric() || c == '_');
                 if word(before) || word(after) {

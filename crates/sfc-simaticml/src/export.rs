@@ -52,43 +52,20 @@ impl Out {
 /// on the way, the error what the format cannot express (located in the checked text).
 pub fn export(checked: &Checked, pou: Option<&str>) -> Result<(String, Vec<Diagnostic>), Vec<Diagnostic>> {
     // sfc's supervision (sfc.timeout, SFCError, SFCQuitError) becomes permanent instructions.
-    let Some(lowered) = sfc_model::supervision::lower(checked, sfc_model::supervision::Style::Permanent, pou) else {
-        return write(checked, pou, Vec::new());
-    };
-    let mut notes = Vec::new();
-    for (item, steps) in &lowered.steps {
-        let Some(c) = checked.charts.iter().find(|c| c.item == *item && c.action.is_none()) else { continue };
-        let names: Vec<&str> = steps.iter().map(|(n, _)| n.as_str()).collect();
+    let note = |c: &Chart, steps: &str| {
         let mut d = Diagnostic::warning(
             "SFC0831",
             c.name_span,
-            format!(
-                "the maximum time (sfc.timeout) of {} is written as permanent instructions: S7-GRAPH has no SFCError",
-                names.join(", ")
-            ),
+            format!("the maximum time (sfc.timeout) of {steps} is written as permanent instructions: S7-GRAPH has no SFCError"),
         );
         d.notes.push(
-            "before the sequencer `SFCQuitError` clears `SFCError`; after it, a step active longer than its time sets `SFCError` once per activation (flags `<Step>_Overdue`), as sfc does; `SFCErrorStep` is not written. GRAPH's own supervision (T_MAX) would hold the step instead"
-                .into(),
+            "before the sequencer `SFCQuitError` clears `SFCError`; after it, a step active longer than its time sets `SFCError` once per activation (flags `<Step>_Overdue`), as sfc does; `SFCErrorStep` is not written. GRAPH's own supervision (T_MAX) would hold the step instead".into(),
         );
-        notes.push(d);
-    }
-    // What is said about the written supervision itself is said above.
-    let end = checked.file.text.len() as u32;
-    let at = checked.charts.first().map_or(Span::new(0, 0, 0), |c| c.name_span);
-    match write(&lowered.checked, pou, notes) {
-        Ok((text, notes)) => Ok((text, notes.into_iter().filter(|d| d.span.start < end).collect())),
-        Err(errors) => Err(errors
-            .into_iter()
-            .map(|mut d| {
-                if d.span.start >= end {
-                    d.message = format!("the supervision written for sfc.timeout: {}", d.message);
-                    d.span = at;
-                }
-                d
-            })
-            .collect()),
-    }
+        d
+    };
+    sfc_model::supervision::export_lowered(checked, sfc_model::supervision::Style::Permanent, pou, note, |c, notes| {
+        write(c, pou, notes)
+    })
 }
 
 fn write(
