@@ -706,7 +706,7 @@ fn codesys_rules_give_the_traces_derived_by_hand() {
 /// derived by hand from Rockwell's SFC manual (1756-PM006) and Logix Designer's help.
 #[test]
 fn logix_rules_give_the_traces_derived_by_hand() {
-    rules_give_the_traces_derived_by_hand("logix", 10);
+    rules_give_the_traces_derived_by_hand("logix", 11);
 }
 
 /// The `graph` profile, rule by rule (`crates/sfc-sim/tests/graph/`): the traces derived by hand

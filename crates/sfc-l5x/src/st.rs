@@ -146,9 +146,6 @@ pub(crate) const INSTRUCTIONS: &[&str] = &[
 
 /// The members of an SFC_STEP tag that sfc's IEC text cannot say yet.
 const STEP_MEMBERS: &[(&str, &str)] = &[
-    ("FS", "FALSE"),
-    ("SA", "FALSE"),
-    ("LS", "FALSE"),
     ("ALARMEN", "FALSE"),
     ("ALARMLOW", "FALSE"),
     ("ALARMHIGH", "FALSE"),
@@ -377,6 +374,8 @@ fn member_of_step(
         ("X", _) => w.replace_text(whole, format!("{n}.X")),
         // How many times the step became active: the `logix` dialect's step member.
         ("COUNT", _) => w.replace_text(whole, format!("{n}.Count")),
+        // Its first scan, the scans between, its last scan: the dialect's step members too.
+        ("FS" | "SA" | "LS", _) => w.replace_text(whole, format!("{n}.{mup}")),
         // The timer rolled over: `T`, a DINT of ms in Logix, passed 2^31 - 1.
         ("OV", _) => w.replace_text(whole, format!("({n}.T > T#{OV_MS}ms)")),
         ("T", _) => w.replace_text(whole, format!("TIME_TO_DINT({n}.T)")),
@@ -419,7 +418,7 @@ fn logix_member(at: Range<u32>, element: &str, member: &str, ty: &str) -> Proble
         format!("`{element}.{member}` is a member of Logix's {ty} tag that sfc's IEC text has no equivalent for"),
         Some(
             "the `logix` simulation profile does not simulate these SFC_STEP, SFC_ACTION and SFC_STOP members \
-             yet; sfc reads `.X`, `.T` (as DINT ms), `.DN`, `.PRE`, `.OV` and `.Count` of a step, \
+             yet; sfc reads `.X`, `.T` (as DINT ms), `.DN`, `.PRE`, `.OV`, `.Count`, `.FS`, `.SA` and `.LS` of a step, \
              `.Q` and `.A` of an action and `.X` of a stop; the member is replaced by a constant in the text"
                 .into(),
         ),

@@ -2,8 +2,8 @@
 
 use crate::{Chart, Checked};
 
-/// SFC0806 for the `Count` of a step read by a Studio 5000 chart (`sfc.dialect 'logix'`), which
-/// IEC 61131-3's steps do not have: every place a condition or an action of `chart` reads one.
+/// SFC0806 for the `Count`, `FS`, `SA` or `LS` of a step read by a Studio 5000 chart
+/// (`sfc.dialect 'logix'`), which IEC 61131-3's steps do not have: every place a condition or an action of `chart` reads one.
 pub fn logix_step_counts(checked: &Checked, chart: &Chart, target: &str) -> Vec<sfc_diagnostics::Diagnostic> {
     let Some(sfc_syntax::ast::Item::Pou(p)) = checked.unit.items.get(chart.item) else { return Vec::new() };
     if !sfc_st::is_dialect(p, "logix") {
@@ -19,8 +19,8 @@ pub fn logix_step_counts(checked: &Checked, chart: &Chart, target: &str) -> Vec<
     for span in spans {
         let Some(part) = text.get(span.start as usize..span.end as usize) else { continue };
         let upper = part.to_ascii_uppercase();
-        for s in &chart.steps {
-            let pat = format!("{}.COUNT", s.name.to_ascii_uppercase());
+        for (s, member) in chart.steps.iter().flat_map(|s| ["Count", "FS", "SA", "LS"].map(|m| (s, m))) {
+            let pat = format!("{}.{}", s.name.to_ascii_uppercase(), member.to_ascii_uppercase());
             let mut from = 0;
             while let Some(k) = upper.get(from..).and_then(|r| r.find(&pat)).map(|k| k + from) {
                 from = k + pat.len();
@@ -36,8 +36,9 @@ pub fn logix_step_counts(checked: &Checked, chart: &Chart, target: &str) -> Vec<
                         "SFC0806",
                         at,
                         format!(
-                            "`{}.Count` is a Studio 5000 step member (how many times the step became active), which {target} has no counterpart for yet",
-                            s.name
+                            "`{}.{member}` is a Studio 5000 step member ({}), which {target} has no counterpart for yet",
+                            s.name,
+                            if member == "Count" { "how many times the step became active" } else { "a scan bit of the step" }
                         ),
                     )
                     .with_element(&s.name),

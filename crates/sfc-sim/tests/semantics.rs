@@ -572,7 +572,7 @@ fn codesys_rules() {
 /// The `logix` profile's fixtures (`tests/logix/`), likewise.
 #[test]
 fn logix_rules() {
-    profile_rules("logix", 10);
+    profile_rules("logix", 11);
 }
 
 /// The `graph` profile's fixtures (`tests/graph/`), likewise.

@@ -67,7 +67,8 @@ pub struct Checker<'s, 'e> {
     /// `U` besides `X` and `T`.
     pub(crate) graph: bool,
     /// The POU is a Studio 5000 SFC routine's (`{attribute 'sfc.dialect' := 'logix'}`): its
-    /// steps have Logix's `Count` (DINT, how many times the step became active).
+    /// steps have Logix's `Count` (DINT, how many times the step became active) and its scan
+    /// bits `FS`, `SA`, `LS`.
     pub(crate) logix: bool,
 }
 
@@ -1226,7 +1227,14 @@ impl<'s, 'e> Checker<'s, 'e> {
                     let members: &[(&str, Type)] = if self.graph {
                         &[("X", Type::Bool), ("T", Type::Time), ("U", Type::Time)]
                     } else if self.logix {
-                        &[("X", Type::Bool), ("T", Type::Time), ("Count", Type::DInt)]
+                        &[
+                            ("X", Type::Bool),
+                            ("T", Type::Time),
+                            ("Count", Type::DInt),
+                            ("FS", Type::Bool),
+                            ("SA", Type::Bool),
+                            ("LS", Type::Bool),
+                        ]
                     } else {
                         &[("X", Type::Bool), ("T", Type::Time)]
                     };

@@ -153,7 +153,7 @@ impl Program {
                 names: HashMap::new(),
                 step_x: Vec::new(),
                 step_t: Vec::new(),
-                step_count: Vec::new(),
+                step_logix: Vec::new(),
                 action_q: Vec::new(),
                 action_a: Vec::new(),
                 control: ControlSlots::default(),
@@ -221,7 +221,7 @@ impl Program {
             chart: Option<usize>,
             step_x: Vec<u32>,
             step_t: Vec<u32>,
-            step_count: Vec<u32>,
+            step_logix: Vec<u32>,
             action_q: Vec<u32>,
             action_a: Vec<u32>,
             control: ControlSlots,
@@ -241,7 +241,7 @@ impl Program {
                 chart: m.chart,
                 step_x: m.step_x,
                 step_t: m.step_t,
-                step_count: m.step_count,
+                step_logix: m.step_logix,
                 action_q: m.action_q,
                 action_a: m.action_a,
                 control: m.control,
@@ -270,7 +270,7 @@ impl Program {
                         PouBody::Chart(Box::new(ChartCode {
                             control: meta.control,
                             chart_slot: meta.chart_slot,
-                            step_count: meta.step_count,
+                            step_logix: meta.step_logix,
                             ..code
                         })),
                         subs,
@@ -448,7 +448,7 @@ fn lay_out(u: &mut Unit<'_>, i: usize) {
     }
     let mut step_x = Vec::new();
     let mut step_t = Vec::new();
-    let mut step_count = Vec::new();
+    let mut step_logix = Vec::new();
     let mut action_q = Vec::new();
     let mut action_a = Vec::new();
     if let Some(ch) = chart {
@@ -463,9 +463,10 @@ fn lay_out(u: &mut Unit<'_>, i: usize) {
             off += 2;
         }
         if sfc_st::is_dialect(m.ast, "logix") {
+            // Count, FS, SA, LS.
             for _ in &ch.steps {
-                step_count.push(off);
-                off += 1;
+                step_logix.push(off);
+                off += 4;
             }
         }
     }
@@ -618,7 +619,7 @@ fn lay_out(u: &mut Unit<'_>, i: usize) {
     m.layout = Layout { vars, size: off };
     m.step_x = step_x;
     m.step_t = step_t;
-    m.step_count = step_count;
+    m.step_logix = step_logix;
     m.action_q = action_q;
     m.action_a = action_a;
     m.control = control;
@@ -1175,7 +1176,7 @@ fn chart_code(chart: Chart, x: &[u32], t: &[u32], q: Vec<u32>, a: Vec<u32>, p: C
         chart,
         step_x: x.to_vec(),
         step_t: t.to_vec(),
-        step_count: Vec::new(),
+        step_logix: Vec::new(),
         action_q: q,
         action_a: a,
         guards: p.guards,

@@ -348,9 +348,10 @@ impl Cx<'_, '_> {
                         // S7-GRAPH's `U` (a POU marked `sfc.dialect 'graph'`): no profile simulates
                         // disturbances yet, so it is `T`.
                         "T" | "_T" | "U" => Ok(PlaceC::new(Loc::Static(Place::Local(m.step_t[i])), Type::Time)),
-                        // Logix's `Count` (a POU marked `sfc.dialect 'logix'`).
-                        "COUNT" if m.step_count.get(i).is_some() => {
-                            Ok(PlaceC::new(Loc::Static(Place::Local(m.step_count[i])), Type::DInt))
+                        // Logix's members (a POU marked `sfc.dialect 'logix'`).
+                        "COUNT" | "FS" | "SA" | "LS" if m.step_logix.get(i).is_some() => {
+                            let (k, ty) = logix_member(&member.text);
+                            Ok(PlaceC::new(Loc::Static(Place::Local(m.step_logix[i] + k)), ty))
                         }
                         _ => Err(self.error(member.span, format!("steps have no member `{}`", member.text))),
                     };
@@ -599,5 +600,16 @@ pub(crate) fn deref_reference(p: PlaceC, span: sfc_diagnostics::Span) -> PlaceC 
     match p.ty.clone() {
         Type::Reference(t) => PlaceC::new(Loc::Dyn(pointee(p.loc.slot_fn(), span)), *t),
         _ => p,
+    }
+}
+
+/// A Logix step member's offset among the step's Logix slots (`Count`, `FS`, `SA`, `LS`) and
+/// its type.
+pub(crate) fn logix_member(member: &str) -> (u32, Type) {
+    match member.to_ascii_uppercase().as_str() {
+        "FS" => (1, Type::Bool),
+        "SA" => (2, Type::Bool),
+        "LS" => (3, Type::Bool),
+        _ => (0, Type::DInt),
     }
 }

@@ -280,7 +280,7 @@ pub struct ChartCode {
     pub step_t: Vec<u32>,
     /// Per step of a Logix chart (`sfc.dialect 'logix'`): the frame offset of its `Count`
     /// (how many times it became active); empty for other charts.
-    pub step_count: Vec<u32>,
+    pub step_logix: Vec<u32>,
     /// Per action: frame offsets of `Q` and `A`.
     pub action_q: Vec<u32>,
     pub action_a: Vec<u32>,

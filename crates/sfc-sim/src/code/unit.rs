@@ -39,7 +39,7 @@ pub(crate) struct PouMeta<'a> {
     pub step_x: Vec<u32>,
     pub step_t: Vec<u32>,
     /// A Logix chart's (`sfc.dialect 'logix'`): per step the slot of its `Count`.
-    pub step_count: Vec<u32>,
+    pub step_logix: Vec<u32>,
     pub action_q: Vec<u32>,
     pub action_a: Vec<u32>,
     pub control: ControlSlots,

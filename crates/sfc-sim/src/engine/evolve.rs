@@ -379,7 +379,7 @@ pub(super) fn evolve(ctx: &mut Ctx<'_>, chart: usize, code: &ChartCode, plan: &C
         // entered by another one.
         let fired = !fire.is_empty();
         if fired {
-            if st.any_mirror || plan.any_entities || st.track_left || !st.count_slots.is_empty() {
+            if st.any_mirror || plan.any_entities || st.track_left || !st.logix_slots.is_empty() {
                 fire_simple::<true>(st, ctx.mem, &mut ctx.sink.fired, &mut ctx.sink.moved, chart, plan, &fire);
             } else {
                 fire_simple::<false>(st, ctx.mem, &mut ctx.sink.fired, &mut ctx.sink.moved, chart, plan, &fire);
@@ -814,7 +814,7 @@ pub(super) fn advance_clock(ctx: &mut Ctx<'_>, chart: usize, now: i64) {
 /// Writes the `X` and `T` slots of the initial steps (evolutions write them as they fire).
 pub(crate) fn publish_initial(ctx: &mut Ctx<'_>, chart: usize) {
     let st = &ctx.charts[chart];
-    for s in 0..st.count_slots.len() {
+    for s in 0..st.logix_slots.len() {
         st.publish_count(ctx.mem, s as u32);
     }
     for &s in &st.active {

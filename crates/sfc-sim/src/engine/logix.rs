@@ -53,12 +53,25 @@ pub(super) fn run(ctx: &mut Ctx<'_>, chart: usize, code: &ChartCode) -> Result<(
     }
     let fired_before = ctx.sink.fired.len();
     let mut evolutions = 0;
+    let bits = !ctx.charts[chart].logix_slots.is_empty();
     loop {
+        if bits {
+            scan_bits(ctx, chart, true);
+        }
         let st = &ctx.charts[chart];
         if !st.entered.is_empty() || !st.live.is_empty() {
             run_iec_actions(ctx, chart, code, plan)?;
         }
+        let before = if bits { ctx.charts[chart].active.clone() } else { Vec::new() };
+        if bits {
+            scan_bits(ctx, chart, false);
+        }
         let fired = evolve(ctx, chart, code, plan)?;
+        if bits {
+            let st = &mut ctx.charts[chart];
+            let left: Vec<u32> = before.into_iter().filter(|s| !st.active.contains(s)).collect();
+            st.logix_left = left;
+        }
         if !(fired && code.chart.logix.until_false) {
             break;
         }
@@ -80,4 +93,37 @@ pub(super) fn run(ctx: &mut Ctx<'_>, chart: usize, code: &ChartCode) -> Result<(
         update_current_step(ctx, chart, code, plan);
     }
     Ok(())
+}
+
+/// The scan bits of a Logix chart's steps (1756-PM006, SFC_STEP members): around the actions of
+/// a call (`on`), `FS` is on in a step's first scan, `LS` in its last (the scan after it was
+/// left), `SA` while it is active in the scans between; "once a step finishes executing the code
+/// within its actions, the FS or the LS or both bits are reset" (after, `!on`), and `SA` goes
+/// off with the last scan.
+fn scan_bits(ctx: &mut Ctx<'_>, chart: usize, on: bool) {
+    let st = &mut ctx.charts[chart];
+    let put = |mem: &mut [crate::value::Value], st: &super::state::ChartState, s: u32, k: usize, v: bool| {
+        if let Some(&base) = st.logix_slots.get(s as usize) {
+            super::evolve::put_bool(mem, base as usize + k, v);
+        }
+    };
+    if on {
+        for &s in &st.active {
+            let first = st.entered.contains(&s);
+            put(ctx.mem, st, s, 1, first);
+            put(ctx.mem, st, s, 2, !first);
+            put(ctx.mem, st, s, 3, false);
+        }
+        for &s in &st.logix_left {
+            put(ctx.mem, st, s, 1, false);
+            put(ctx.mem, st, s, 2, false);
+            put(ctx.mem, st, s, 3, true);
+        }
+    } else {
+        for s in 0..st.logix_slots.len() as u32 {
+            put(ctx.mem, st, s, 1, false);
+            put(ctx.mem, st, s, 3, false);
+        }
+        st.logix_left.clear();
+    }
 }

@@ -140,7 +140,7 @@ pub struct ChartPlan {
     pub(crate) x_slots: Vec<u32>,
     pub(crate) t_slots: Vec<u32>,
     /// A Logix chart's `Count` slots (empty for other charts).
-    pub(crate) count_slots: Vec<u32>,
+    pub(crate) logix_slots: Vec<u32>,
     /// Sort key of each transition for conflict resolution: explicit priorities first.
     pub(crate) order_key: Vec<(u8, i64, u32)>,
     pub(crate) explicit: Vec<bool>,
@@ -341,7 +341,7 @@ impl ChartPlan {
             link,
             x_slots: code.step_x.clone(),
             t_slots: code.step_t.clone(),
-            count_slots: code.step_count.clone(),
+            logix_slots: code.step_logix.clone(),
             pre,
             post,
             order_key,

@@ -102,10 +102,12 @@ pub struct ChartState {
     pub(crate) marks: Vec<StepMarks>,
     /// Absolute memory slots of each step's `X` and `T`.
     pub(crate) slots: Vec<(u32, u32)>,
-    /// A Logix chart's steps: the absolute slot of `Count`, how many times the step became
-    /// active (its time analysis's activations: kept over SFCInit, as Logix keeps it over an
-    /// SFC Reset).
-    pub(crate) count_slots: Vec<u32>,
+    /// A Logix chart's steps: the absolute slots of `Count` (how many times the step became
+    /// active: its time analysis's activations, kept over SFCInit as Logix keeps it over an SFC
+    /// Reset), then `FS`, `SA`, `LS`.
+    pub(crate) logix_slots: Vec<u32>,
+    /// `logix`: the steps left in the last evolution, whose last scan comes next.
+    pub(crate) logix_left: Vec<u32>,
     /// Some step has a mirrored `X` or `T` slot / a mirrored `T` slot.
     pub(crate) any_mirror: bool,
     pub(crate) any_mirror_t: bool,
@@ -182,7 +184,8 @@ impl ChartState {
             steps,
             marks: vec![StepMarks::default(); n],
             slots,
-            count_slots: plan.count_slots.iter().map(|&c| (frame + c as usize) as u32).collect(),
+            logix_slots: plan.logix_slots.iter().map(|&c| (frame + c as usize) as u32).collect(),
+            logix_left: Vec::new(),
             any_mirror: true,
             any_mirror_t: true,
             fired_count: vec![0; nt],
@@ -367,7 +370,7 @@ impl ChartState {
     /// Writes the `Count` slot of `s` (a Logix chart's step).
     #[inline]
     pub(crate) fn publish_count(&self, mem: &mut [Value], s: u32) {
-        if let (Some(&slot), Some(step)) = (self.count_slots.get(s as usize), self.steps.get(s as usize)) {
+        if let (Some(&slot), Some(step)) = (self.logix_slots.get(s as usize), self.steps.get(s as usize)) {
             mem[slot as usize] = Value::Int(i64::try_from(step.tally.activations).unwrap_or(i64::MAX));
         }
     }
