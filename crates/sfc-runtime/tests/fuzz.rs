@@ -194,8 +194,11 @@ async fn bad_messages_get_error_replies_then_the_client_is_dropped() {
     // A good command resets the count; then 20 bad ones in a row drop the client.
     let r = c.cmd(json!({"cmd": "breakpoints"})).await;
     assert_eq!(r["ok"], true);
+    // (The server may drop the client before the last ones are sent: a broken pipe then.)
     for _ in 0..25 {
-        c.send_text("garbage").await;
+        if !c.try_send_text("garbage").await {
+            break;
+        }
     }
     let mut closed = false;
     for _ in 0..200 {

@@ -75,6 +75,11 @@ impl Client {
         self.ws.send(Message::Text(s.into())).await.unwrap();
     }
 
+    /// Sends `s`; FALSE when the server has already closed the connection.
+    pub async fn try_send_text(&mut self, s: &str) -> bool {
+        self.ws.send(Message::Text(s.into())).await.is_ok()
+    }
+
     /// The next message, or `None` after `secs` seconds or when the server closed.
     pub async fn next(&mut self, secs: f64) -> Option<Value> {
         loop {
