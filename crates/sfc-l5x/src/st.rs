@@ -152,7 +152,6 @@ const STEP_MEMBERS: &[(&str, &str)] = &[
     ("RESET", "FALSE"),
     ("PAUSETIMER", "FALSE"),
     ("STATUS", "0"),
-    ("TMAX", "0"),
     ("LIMITLOW", "0"),
     ("LIMITHIGH", "0"),
 ];
@@ -376,6 +375,7 @@ fn member_of_step(
         ("COUNT", _) => w.replace_text(whole, format!("{n}.Count")),
         // Its first scan, the scans between, its last scan: the dialect's step members too.
         ("FS" | "SA" | "LS", _) => w.replace_text(whole, format!("{n}.{mup}")),
+        ("TMAX", _) => w.replace_text(whole, format!("{n}.TMax")),
         // The timer rolled over: `T`, a DINT of ms in Logix, passed 2^31 - 1.
         ("OV", _) => w.replace_text(whole, format!("({n}.T > T#{OV_MS}ms)")),
         ("T", _) => w.replace_text(whole, format!("TIME_TO_DINT({n}.T)")),
@@ -418,7 +418,7 @@ fn logix_member(at: Range<u32>, element: &str, member: &str, ty: &str) -> Proble
         format!("`{element}.{member}` is a member of Logix's {ty} tag that sfc's IEC text has no equivalent for"),
         Some(
             "the `logix` simulation profile does not simulate these SFC_STEP, SFC_ACTION and SFC_STOP members \
-             yet; sfc reads `.X`, `.T` (as DINT ms), `.DN`, `.PRE`, `.OV`, `.Count`, `.FS`, `.SA` and `.LS` of a step, \
+             yet; sfc reads `.X`, `.T` (as DINT ms), `.DN`, `.PRE`, `.OV`, `.Count`, `.FS`, `.SA`, `.LS` and `.TMax` of a step, \
              `.Q` and `.A` of an action and `.X` of a stop; the member is replaced by a constant in the text"
                 .into(),
         ),

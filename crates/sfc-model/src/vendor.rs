@@ -2,7 +2,7 @@
 
 use crate::{Chart, Checked};
 
-/// SFC0806 for the `Count`, `FS`, `SA` or `LS` of a step read by a Studio 5000 chart
+/// SFC0806 for the `Count`, `FS`, `SA`, `LS` or `TMax` of a step read by a Studio 5000 chart
 /// (`sfc.dialect 'logix'`), which IEC 61131-3's steps do not have: every place a condition or an action of `chart` reads one.
 pub fn logix_step_counts(checked: &Checked, chart: &Chart, target: &str) -> Vec<sfc_diagnostics::Diagnostic> {
     let Some(sfc_syntax::ast::Item::Pou(p)) = checked.unit.items.get(chart.item) else { return Vec::new() };
@@ -19,7 +19,7 @@ pub fn logix_step_counts(checked: &Checked, chart: &Chart, target: &str) -> Vec<
     for span in spans {
         let Some(part) = text.get(span.start as usize..span.end as usize) else { continue };
         let upper = part.to_ascii_uppercase();
-        for (s, member) in chart.steps.iter().flat_map(|s| ["Count", "FS", "SA", "LS"].map(|m| (s, m))) {
+        for (s, member) in chart.steps.iter().flat_map(|s| ["Count", "FS", "SA", "LS", "TMax"].map(|m| (s, m))) {
             let pat = format!("{}.{}", s.name.to_ascii_uppercase(), member.to_ascii_uppercase());
             let mut from = 0;
             while let Some(k) = upper.get(from..).and_then(|r| r.find(&pat)).map(|k| k + from) {
@@ -38,7 +38,11 @@ pub fn logix_step_counts(checked: &Checked, chart: &Chart, target: &str) -> Vec<
                         format!(
                             "`{}.{member}` is a Studio 5000 step member ({}), which {target} has no counterpart for yet",
                             s.name,
-                            if member == "Count" { "how many times the step became active" } else { "a scan bit of the step" }
+                            match member {
+                                "Count" => "how many times the step became active",
+                                "TMax" => "the longest time the step was active",
+                                _ => "a scan bit of the step",
+                            }
                         ),
                     )
                     .with_element(&s.name),

@@ -68,7 +68,7 @@ pub struct Checker<'s, 'e> {
     pub(crate) graph: bool,
     /// The POU is a Studio 5000 SFC routine's (`{attribute 'sfc.dialect' := 'logix'}`): its
     /// steps have Logix's `Count` (DINT, how many times the step became active) and its scan
-    /// bits `FS`, `SA`, `LS`.
+    /// bits `FS`, `SA`, `LS`, and `TMax` (DINT ms, its longest activation).
     pub(crate) logix: bool,
 }
 
@@ -1234,6 +1234,7 @@ impl<'s, 'e> Checker<'s, 'e> {
                             ("FS", Type::Bool),
                             ("SA", Type::Bool),
                             ("LS", Type::Bool),
+                            ("TMax", Type::DInt),
                         ]
                     } else {
                         &[("X", Type::Bool), ("T", Type::Time)]

@@ -463,10 +463,10 @@ fn lay_out(u: &mut Unit<'_>, i: usize) {
             off += 2;
         }
         if sfc_st::is_dialect(m.ast, "logix") {
-            // Count, FS, SA, LS.
+            // Count, FS, SA, LS, TMax.
             for _ in &ch.steps {
                 step_logix.push(off);
-                off += 4;
+                off += 5;
             }
         }
     }

@@ -349,7 +349,7 @@ impl Cx<'_, '_> {
                         // disturbances yet, so it is `T`.
                         "T" | "_T" | "U" => Ok(PlaceC::new(Loc::Static(Place::Local(m.step_t[i])), Type::Time)),
                         // Logix's members (a POU marked `sfc.dialect 'logix'`).
-                        "COUNT" | "FS" | "SA" | "LS" if m.step_logix.get(i).is_some() => {
+                        "COUNT" | "FS" | "SA" | "LS" | "TMAX" if m.step_logix.get(i).is_some() => {
                             let (k, ty) = logix_member(&member.text);
                             Ok(PlaceC::new(Loc::Static(Place::Local(m.step_logix[i] + k)), ty))
                         }
@@ -603,13 +603,14 @@ pub(crate) fn deref_reference(p: PlaceC, span: sfc_diagnostics::Span) -> PlaceC 
     }
 }
 
-/// A Logix step member's offset among the step's Logix slots (`Count`, `FS`, `SA`, `LS`) and
-/// its type.
+/// A Logix step member's offset among the step's Logix slots (`Count`, `FS`, `SA`, `LS`,
+/// `TMax`) and its type.
 pub(crate) fn logix_member(member: &str) -> (u32, Type) {
     match member.to_ascii_uppercase().as_str() {
         "FS" => (1, Type::Bool),
         "SA" => (2, Type::Bool),
         "LS" => (3, Type::Bool),
+        "TMAX" => (4, Type::DInt),
         _ => (0, Type::DInt),
     }
 }

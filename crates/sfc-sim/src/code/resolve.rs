@@ -143,7 +143,7 @@ impl Program {
                     match n.to_ascii_uppercase().as_str() {
                         "X" | "_X" => Cur::Val { slot: base + cc.step_x[k] as usize, ty: Type::Bool },
                         "T" | "_T" | "U" => Cur::Val { slot: base + cc.step_t[k] as usize, ty: Type::Time },
-                        m @ ("COUNT" | "FS" | "SA" | "LS") => {
+                        m @ ("COUNT" | "FS" | "SA" | "LS" | "TMAX") => {
                             let (off, ty) = super::expr::logix_member(m);
                             Cur::Val { slot: base + (*cc.step_logix.get(k)? + off) as usize, ty }
                         }

@@ -816,6 +816,11 @@ pub(crate) fn publish_initial(ctx: &mut Ctx<'_>, chart: usize) {
     let st = &ctx.charts[chart];
     for s in 0..st.logix_slots.len() {
         st.publish_count(ctx.mem, s as u32);
+        if let Some(&base) = st.logix_slots.get(s) {
+            if !matches!(ctx.mem[base as usize + 4], Value::Int(_)) {
+                ctx.mem[base as usize + 4] = Value::Int(0);
+            }
+        }
     }
     for &s in &st.active {
         let (x_slot, t_slot) = st.slots[s as usize];

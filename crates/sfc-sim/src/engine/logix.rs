@@ -99,7 +99,7 @@ pub(super) fn run(ctx: &mut Ctx<'_>, chart: usize, code: &ChartCode) -> Result<(
 /// a call (`on`), `FS` is on in a step's first scan, `LS` in its last (the scan after it was
 /// left), `SA` while it is active in the scans between; "once a step finishes executing the code
 /// within its actions, the FS or the LS or both bits are reset" (after, `!on`), and `SA` goes
-/// off with the last scan.
+/// off with the last scan. `TMax` follows the step's time at each scan of its actions.
 fn scan_bits(ctx: &mut Ctx<'_>, chart: usize, on: bool) {
     let st = &mut ctx.charts[chart];
     let put = |mem: &mut [crate::value::Value], st: &super::state::ChartState, s: u32, k: usize, v: bool| {
@@ -113,6 +113,16 @@ fn scan_bits(ctx: &mut Ctx<'_>, chart: usize, on: bool) {
             put(ctx.mem, st, s, 1, first);
             put(ctx.mem, st, s, 2, !first);
             put(ctx.mem, st, s, 3, false);
+            // TMax: the longest time the step has been active, in ms ("for diagnostic
+            // purposes"; kept until a restart at the initial step).
+            if let Some(&base) = st.logix_slots.get(s as usize) {
+                let ms = st.time(s) / 1000;
+                let slot = &mut ctx.mem[base as usize + 4];
+                match slot {
+                    crate::value::Value::Int(m) if *m >= ms => {}
+                    _ => *slot = crate::value::Value::Int(ms),
+                }
+            }
         }
         for &s in &st.logix_left {
             put(ctx.mem, st, s, 1, false);

@@ -104,7 +104,7 @@ pub struct ChartState {
     pub(crate) slots: Vec<(u32, u32)>,
     /// A Logix chart's steps: the absolute slots of `Count` (how many times the step became
     /// active: its time analysis's activations, kept over SFCInit as Logix keeps it over an SFC
-    /// Reset), then `FS`, `SA`, `LS`.
+    /// Reset), then `FS`, `SA`, `LS` and `TMax` (ms).
     pub(crate) logix_slots: Vec<u32>,
     /// `logix`: the steps left in the last evolution, whose last scan comes next.
     pub(crate) logix_left: Vec<u32>,
