@@ -211,6 +211,7 @@ pub(crate) fn reset(ctx: &mut Ctx<'_>, chart: usize, code: &ChartCode) {
         step.overdue = false;
         step.held = false;
         step.interlock_open = false;
+        step.supervision_was = false;
     }
     for &s in &plan.initial {
         let clock = st.clock;

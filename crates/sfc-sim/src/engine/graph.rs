@@ -11,9 +11,11 @@
 //!    control cleared, as INIT_SQ clears it; the sequence stays off until INIT_SQ.
 //! 2. The permanent instructions before the sequencer (actions marked `sfc.s7graph.permanent`
 //!    'pre'), every call (6.3).
-//! 3. The supervisions of the active steps: TRUE is a supervision error, which holds the step
-//!    (its transitions do not switch) until the condition is gone and, with "Acknowledge
-//!    errors" (`sfc.s7graph.ack_required`, on by default), `ACK_EF` acknowledged it (7.10).
+//! 3. The supervisions of the active steps: the condition rising (or TRUE as the step is
+//!    activated) is a supervision error, which holds the step (its transitions do not switch)
+//!    until, with "Acknowledge errors" (`sfc.s7graph.ack_required`, on by default), `ACK_EF`
+//!    acknowledges it, even while the condition still holds, or, without, the condition is gone
+//!    (7.10, 13.5).
 //! 4. The transitions switch (as IEC's evolution; 6.1, 6.7).
 //! 5. The interlocks of the active steps, the entered ones included: while a step's interlock
 //!    is not satisfied, its interlock-dependent actions ("C", named in the step's attribute
@@ -108,8 +110,9 @@ pub(super) fn run(ctx: &mut Ctx<'_>, chart: usize, code: &ChartCode) -> Result<(
     Ok(())
 }
 
-/// Evaluates the supervisions of the active steps (a supervision error holds its step until it
-/// is gone and, when required, acknowledged), and with `interlocks` their interlocks too; the
+/// Evaluates the supervisions of the active steps (a supervision error, made by the condition's
+/// rising edge, holds its step until acknowledged, or gone when no acknowledgement is
+/// required), and with `interlocks` their interlocks too; the
 /// step events this raises (V1, V0, A1, L1, L0) are added to `events`.
 fn conditions(
     ctx: &mut Ctx<'_>,
@@ -127,20 +130,26 @@ fn conditions(
         let fresh = ctx.charts[chart].entered.contains(&s);
         let su = s as usize;
         if let Some(g) = &code.supervisions[su] {
-            let error = g(ctx, frame)?;
+            let condition = g(ctx, frame)?;
             let step = &mut ctx.charts[chart].steps[su];
             let was = step.held && !fresh;
-            if error {
+            let rising = condition && (fresh || !step.supervision_was);
+            step.supervision_was = condition;
+            if was {
+                // The error leaves the state when it "is eliminated or acknowledged" (13.5,
+                // V0): acknowledged with ACK_EF when acknowledgement is required (the condition
+                // may still hold: it makes an error again only when it rises again), else gone.
+                let ends = if needs_ack { ack } else { !condition };
+                if ends {
+                    step.held = false;
+                    events.push((s, GraphEvent::V0));
+                    if needs_ack {
+                        events.push((s, GraphEvent::A1));
+                    }
+                }
+            } else if rising {
                 step.held = true;
-                if !was {
-                    events.push((s, GraphEvent::V1));
-                }
-            } else if was && (ack || !needs_ack) {
-                step.held = false;
-                events.push((s, GraphEvent::V0));
-                if needs_ack {
-                    events.push((s, GraphEvent::A1));
-                }
+                events.push((s, GraphEvent::V1));
             } else if fresh {
                 step.held = false;
             }

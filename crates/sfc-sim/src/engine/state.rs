@@ -57,6 +57,9 @@ pub(crate) struct StepState {
     pub(crate) held: bool,
     /// `graph`: the step's S7-GRAPH interlock is not satisfied (its "C" actions do not run).
     pub(crate) interlock_open: bool,
+    /// `graph`: the step's supervision condition in the previous call (an error comes on its
+    /// rising edge).
+    pub(crate) supervision_was: bool,
     /// Time analysis: activations and active times.
     pub(crate) tally: StepTally,
 }
