@@ -713,7 +713,7 @@ fn logix_rules_give_the_traces_derived_by_hand() {
 /// from the S7-GRAPH manual.
 #[test]
 fn graph_rules_give_the_traces_derived_by_hand() {
-    rules_give_the_traces_derived_by_hand("graph", 9);
+    rules_give_the_traces_derived_by_hand("graph", 10);
 }
 
 fn rules_give_the_traces_derived_by_hand(profile: &str, at_least: usize) {

@@ -987,12 +987,13 @@ fn step_flags_read(lower: &str) -> std::collections::HashSet<(String, u8)> {
         while k < b.len() && b[k] == b' ' {
             k += 1;
         }
-        // CODESYS's `_x` and `_t` read the same flags.
+        // CODESYS's `_x` and `_t` read the same flags; S7-GRAPH's `U` is kept with `T`.
         if b.get(k) == Some(&b'_') {
             k += 1;
         }
         let flag = match b.get(k) {
             Some(&c @ (b'x' | b't')) if !b.get(k + 1).is_some_and(|&n| ident(n)) => c,
+            Some(b'u') if !b.get(k + 1).is_some_and(|&n| ident(n)) => b't',
             _ => continue,
         };
         let mut end = i;

@@ -578,7 +578,7 @@ fn logix_rules() {
 /// The `graph` profile's fixtures (`tests/graph/`), likewise.
 #[test]
 fn graph_rules() {
-    profile_rules("graph", 9);
+    profile_rules("graph", 10);
 }
 
 fn profile_rules(profile: &str, at_least: usize) {

@@ -64,7 +64,7 @@ pub struct Checker<'s, 'e> {
     /// converted implicitly).
     pub(crate) codesys: bool,
     /// The POU is an S7-GRAPH block's (`{attribute 'sfc.dialect' := 'graph'}`): its steps have
-    /// `U` besides `X` and `T`.
+    /// `U` (the time without disturbance) besides `X` and `T`.
     pub(crate) graph: bool,
     /// The POU is a Studio 5000 SFC routine's (`{attribute 'sfc.dialect' := 'logix'}`): its
     /// steps have Logix's `Count` (DINT, how many times the step became active) and its scan

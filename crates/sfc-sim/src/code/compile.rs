@@ -153,7 +153,8 @@ impl Program {
                 names: HashMap::new(),
                 step_x: Vec::new(),
                 step_t: Vec::new(),
-                step_logix: Vec::new(),
+                step_vendor: Vec::new(),
+                step_members: Default::default(),
                 action_q: Vec::new(),
                 action_a: Vec::new(),
                 control: ControlSlots::default(),
@@ -221,7 +222,8 @@ impl Program {
             chart: Option<usize>,
             step_x: Vec<u32>,
             step_t: Vec<u32>,
-            step_logix: Vec<u32>,
+            step_vendor: Vec<u32>,
+            step_members: super::StepMembers,
             action_q: Vec<u32>,
             action_a: Vec<u32>,
             control: ControlSlots,
@@ -241,7 +243,8 @@ impl Program {
                 chart: m.chart,
                 step_x: m.step_x,
                 step_t: m.step_t,
-                step_logix: m.step_logix,
+                step_vendor: m.step_vendor,
+                step_members: m.step_members,
                 action_q: m.action_q,
                 action_a: m.action_a,
                 control: m.control,
@@ -270,7 +273,8 @@ impl Program {
                         PouBody::Chart(Box::new(ChartCode {
                             control: meta.control,
                             chart_slot: meta.chart_slot,
-                            step_logix: meta.step_logix,
+                            step_vendor: meta.step_vendor,
+                            step_members: meta.step_members,
                             ..code
                         })),
                         subs,
@@ -448,7 +452,8 @@ fn lay_out(u: &mut Unit<'_>, i: usize) {
     }
     let mut step_x = Vec::new();
     let mut step_t = Vec::new();
-    let mut step_logix = Vec::new();
+    let mut step_vendor = Vec::new();
+    let mut step_members = super::StepMembers::Iec;
     let mut action_q = Vec::new();
     let mut action_a = Vec::new();
     if let Some(ch) = chart {
@@ -462,11 +467,12 @@ fn lay_out(u: &mut Unit<'_>, i: usize) {
             action_a.push(off + 1);
             off += 2;
         }
-        if sfc_st::is_dialect(m.ast, "logix") {
-            // Count, FS, SA, LS, TMax.
+        let (members, width) = super::StepMembers::of(m.ast);
+        step_members = members;
+        if width > 0 {
             for _ in &ch.steps {
-                step_logix.push(off);
-                off += 5;
+                step_vendor.push(off);
+                off += width;
             }
         }
     }
@@ -619,7 +625,8 @@ fn lay_out(u: &mut Unit<'_>, i: usize) {
     m.layout = Layout { vars, size: off };
     m.step_x = step_x;
     m.step_t = step_t;
-    m.step_logix = step_logix;
+    m.step_vendor = step_vendor;
+    m.step_members = step_members;
     m.action_q = action_q;
     m.action_a = action_a;
     m.control = control;
@@ -1176,7 +1183,8 @@ fn chart_code(chart: Chart, x: &[u32], t: &[u32], q: Vec<u32>, a: Vec<u32>, p: C
         chart,
         step_x: x.to_vec(),
         step_t: t.to_vec(),
-        step_logix: Vec::new(),
+        step_vendor: Vec::new(),
+        step_members: Default::default(),
         action_q: q,
         action_a: a,
         guards: p.guards,

@@ -345,13 +345,18 @@ impl Cx<'_, '_> {
                 (Some(Sym::Step(i)), Some(m)) => {
                     return match member.text.to_ascii_uppercase().as_str() {
                         "X" | "_X" => Ok(PlaceC::new(Loc::Static(Place::Local(m.step_x[i])), Type::Bool)),
-                        // S7-GRAPH's `U` (a POU marked `sfc.dialect 'graph'`): no profile simulates
-                        // disturbances yet, so it is `T`.
+                        // S7-GRAPH's `U` (a POU marked `sfc.dialect 'graph'`): the step's time
+                        // without disturbance, in its own slot.
+                        "U" if m.step_members == super::StepMembers::Graph && m.step_vendor.get(i).is_some() => {
+                            Ok(PlaceC::new(Loc::Static(Place::Local(m.step_vendor[i])), Type::Time))
+                        }
                         "T" | "_T" | "U" => Ok(PlaceC::new(Loc::Static(Place::Local(m.step_t[i])), Type::Time)),
                         // Logix's members (a POU marked `sfc.dialect 'logix'`).
-                        "COUNT" | "FS" | "SA" | "LS" | "TMAX" if m.step_logix.get(i).is_some() => {
+                        "COUNT" | "FS" | "SA" | "LS" | "TMAX"
+                            if m.step_members == super::StepMembers::Logix && m.step_vendor.get(i).is_some() =>
+                        {
                             let (k, ty) = logix_member(&member.text);
-                            Ok(PlaceC::new(Loc::Static(Place::Local(m.step_logix[i] + k)), ty))
+                            Ok(PlaceC::new(Loc::Static(Place::Local(m.step_vendor[i] + k)), ty))
                         }
                         _ => Err(self.error(member.span, format!("steps have no member `{}`", member.text))),
                     };

@@ -272,15 +272,40 @@ pub enum FastGuard {
 }
 
 /// A compiled chart.
+/// The step members a POU's dialect adds to IEC's `X` and `T`, in their frame slots.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub enum StepMembers {
+    #[default]
+    Iec,
+    /// `sfc.dialect 'logix'`: `Count`, `FS`, `SA`, `LS`, `TMax`.
+    Logix,
+    /// `sfc.dialect 'graph'`: `U`, the step's time without disturbance.
+    Graph,
+}
+
+impl StepMembers {
+    /// The members of the POU `pou` and how many slots a step needs for them.
+    pub(crate) fn of(pou: &sfc_syntax::ast::Pou) -> (StepMembers, u32) {
+        if sfc_st::is_dialect(pou, "logix") {
+            (StepMembers::Logix, 5)
+        } else if sfc_st::is_dialect(pou, "graph") {
+            (StepMembers::Graph, 1)
+        } else {
+            (StepMembers::Iec, 0)
+        }
+    }
+}
+
 pub struct ChartCode {
     /// The model; its conditions and bodies are compiled below and are not used at run time.
     pub chart: Chart,
     /// Per step: frame offsets of `X` and `T`.
     pub step_x: Vec<u32>,
     pub step_t: Vec<u32>,
-    /// Per step of a Logix chart (`sfc.dialect 'logix'`): the frame offset of its `Count`
-    /// (how many times it became active); empty for other charts.
-    pub step_logix: Vec<u32>,
+    /// Per step, the frame offset of the first of the step members its POU's dialect adds
+    /// ([`StepMembers`]); empty for other charts.
+    pub step_vendor: Vec<u32>,
+    pub step_members: StepMembers,
     /// Per action: frame offsets of `Q` and `A`.
     pub action_q: Vec<u32>,
     pub action_a: Vec<u32>,

@@ -142,10 +142,13 @@ impl Program {
                     let PouBody::Chart(cc) = &self.pous[pou].body else { return None };
                     match n.to_ascii_uppercase().as_str() {
                         "X" | "_X" => Cur::Val { slot: base + cc.step_x[k] as usize, ty: Type::Bool },
+                        "U" if cc.step_members == crate::code::StepMembers::Graph => {
+                            Cur::Val { slot: base + *cc.step_vendor.get(k)? as usize, ty: Type::Time }
+                        }
                         "T" | "_T" | "U" => Cur::Val { slot: base + cc.step_t[k] as usize, ty: Type::Time },
-                        m @ ("COUNT" | "FS" | "SA" | "LS" | "TMAX") => {
+                        m @ ("COUNT" | "FS" | "SA" | "LS" | "TMAX") if cc.step_members == crate::code::StepMembers::Logix => {
                             let (off, ty) = super::expr::logix_member(m);
-                            Cur::Val { slot: base + (*cc.step_logix.get(k)? + off) as usize, ty }
+                            Cur::Val { slot: base + (*cc.step_vendor.get(k)? + off) as usize, ty }
                         }
                         _ => return None,
                     }

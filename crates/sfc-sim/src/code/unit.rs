@@ -38,8 +38,9 @@ pub(crate) struct PouMeta<'a> {
     pub names: HashMap<String, Sym>,
     pub step_x: Vec<u32>,
     pub step_t: Vec<u32>,
-    /// A Logix chart's (`sfc.dialect 'logix'`): per step the slot of its `Count`.
-    pub step_logix: Vec<u32>,
+    /// Per step the first slot of its dialect's own members (`super::StepMembers`).
+    pub step_vendor: Vec<u32>,
+    pub step_members: super::StepMembers,
     pub action_q: Vec<u32>,
     pub action_a: Vec<u32>,
     pub control: ControlSlots,

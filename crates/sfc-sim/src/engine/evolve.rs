@@ -380,7 +380,7 @@ pub(super) fn evolve(ctx: &mut Ctx<'_>, chart: usize, code: &ChartCode, plan: &C
         // entered by another one.
         let fired = !fire.is_empty();
         if fired {
-            if st.any_mirror || plan.any_entities || st.track_left || !st.logix_slots.is_empty() {
+            if st.any_mirror || plan.any_entities || st.track_left || !st.vendor_slots.is_empty() {
                 fire_simple::<true>(st, ctx.mem, &mut ctx.sink.fired, &mut ctx.sink.moved, chart, plan, &fire);
             } else {
                 fire_simple::<false>(st, ctx.mem, &mut ctx.sink.fired, &mut ctx.sink.moved, chart, plan, &fire);
@@ -582,6 +582,9 @@ fn fire_simple<const SLOW: bool>(
             }
             st.publish_x(mem, to, true);
             st.publish_t(mem, to);
+            if let Some(d) = st.disturbance.get_mut(to as usize) {
+                *d = (0, None);
+            }
             if plan.has_entities[to as usize] {
                 st.entered.push(to);
             }
@@ -815,12 +818,21 @@ pub(super) fn advance_clock(ctx: &mut Ctx<'_>, chart: usize, now: i64) {
 /// Writes the `X` and `T` slots of the initial steps (evolutions write them as they fire).
 pub(crate) fn publish_initial(ctx: &mut Ctx<'_>, chart: usize) {
     let st = &ctx.charts[chart];
-    for s in 0..st.logix_slots.len() {
-        st.publish_count(ctx.mem, s as u32);
-        if let Some(&base) = st.logix_slots.get(s) {
-            if !matches!(ctx.mem[base as usize + 4], Value::Int(_)) {
-                ctx.mem[base as usize + 4] = Value::Int(0);
+    for s in 0..st.vendor_slots.len() {
+        let Some(&base) = st.vendor_slots.get(s) else { continue };
+        match st.members {
+            crate::code::StepMembers::Logix => {
+                st.publish_count(ctx.mem, s as u32);
+                if !matches!(ctx.mem[base as usize + 4], Value::Int(_)) {
+                    ctx.mem[base as usize + 4] = Value::Int(0);
+                }
             }
+            crate::code::StepMembers::Graph => {
+                if !matches!(ctx.mem[base as usize], Value::Time(_)) {
+                    ctx.mem[base as usize] = Value::Time(0);
+                }
+            }
+            crate::code::StepMembers::Iec => {}
         }
     }
     for &s in &st.active {

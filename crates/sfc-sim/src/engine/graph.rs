@@ -66,6 +66,7 @@ pub(super) fn run(ctx: &mut Ctx<'_>, chart: usize, code: &ChartCode) -> Result<(
         publish_initial(ctx, chart);
     }
     advance_clock(ctx, chart, now);
+    publish_u(ctx, chart);
     // OFF_SQ switches the sequencer off: every step is left; it stays off until INIT_SQ.
     if ctl.off_sq.is_some_and(|s| read_bool(ctx.mem, frame + s as usize)) && !ctx.charts[chart].active.is_empty() {
         switch_off(ctx, chart, code);
@@ -82,8 +83,10 @@ pub(super) fn run(ctx: &mut Ctx<'_>, chart: usize, code: &ChartCode) -> Result<(
         conditions(ctx, chart, code, false, &mut events)?;
         evolve(ctx, chart, code, plan)?;
     }
+    publish_u(ctx, chart);
     // 5. Interlocks (and the supervisions of the steps just entered).
     conditions(ctx, chart, code, true, &mut events)?;
+    note_disturbances(ctx, chart);
     let fired = ctx.sink.fired[fired_before..].iter().any(|f| f.0 == chart as u32);
     set_trans(ctx, chart, code, fired);
     // 6. Actions.
@@ -216,5 +219,42 @@ fn switch_off(ctx: &mut Ctx<'_>, chart: usize, code: &ChartCode) {
     st.changed = true;
     for &off in &code.step_x {
         put_bool(ctx.mem, frame + off as usize, false);
+    }
+}
+
+/// Writes each active step's `U` (15.11: "step activation time without disturbance"): its time
+/// less the time it has been disturbed, by an interlock or a supervision error, in this
+/// activation.
+fn publish_u(ctx: &mut Ctx<'_>, chart: usize) {
+    let st = &ctx.charts[chart];
+    if st.disturbance.is_empty() {
+        return;
+    }
+    for &s in &st.active {
+        let (Some(&slot), Some(&(past, since))) = (st.vendor_slots.get(s as usize), st.disturbance.get(s as usize))
+        else {
+            continue;
+        };
+        let now = since.map_or(0, |t0| st.clock - t0);
+        ctx.mem[slot as usize] = crate::value::Value::Time((st.time(s) - past - now).max(0));
+    }
+}
+
+/// After the interlocks and supervisions of a call: a step whose disturbance began starts
+/// counting it, one whose disturbance ended adds it up.
+fn note_disturbances(ctx: &mut Ctx<'_>, chart: usize) {
+    let st = &mut ctx.charts[chart];
+    if st.disturbance.is_empty() {
+        return;
+    }
+    let clock = st.clock;
+    for &s in &st.active {
+        let disturbed = st.steps.get(s as usize).is_some_and(|x| x.held || x.interlock_open);
+        let Some(d) = st.disturbance.get_mut(s as usize) else { continue };
+        match (disturbed, d.1) {
+            (true, None) => d.1 = Some(clock),
+            (false, Some(t0)) => *d = (d.0 + clock - t0, None),
+            _ => {}
+        }
     }
 }

@@ -53,7 +53,7 @@ pub(super) fn run(ctx: &mut Ctx<'_>, chart: usize, code: &ChartCode) -> Result<(
     }
     let fired_before = ctx.sink.fired.len();
     let mut evolutions = 0;
-    let bits = !ctx.charts[chart].logix_slots.is_empty();
+    let bits = ctx.charts[chart].members == crate::code::StepMembers::Logix;
     loop {
         if bits {
             scan_bits(ctx, chart, true);
@@ -103,7 +103,7 @@ pub(super) fn run(ctx: &mut Ctx<'_>, chart: usize, code: &ChartCode) -> Result<(
 fn scan_bits(ctx: &mut Ctx<'_>, chart: usize, on: bool) {
     let st = &mut ctx.charts[chart];
     let put = |mem: &mut [crate::value::Value], st: &super::state::ChartState, s: u32, k: usize, v: bool| {
-        if let Some(&base) = st.logix_slots.get(s as usize) {
+        if let Some(&base) = st.vendor_slots.get(s as usize) {
             super::evolve::put_bool(mem, base as usize + k, v);
         }
     };
@@ -115,7 +115,7 @@ fn scan_bits(ctx: &mut Ctx<'_>, chart: usize, on: bool) {
             put(ctx.mem, st, s, 3, false);
             // TMax: the longest time the step has been active, in ms ("for diagnostic
             // purposes"; kept until a restart at the initial step).
-            if let Some(&base) = st.logix_slots.get(s as usize) {
+            if let Some(&base) = st.vendor_slots.get(s as usize) {
                 let ms = st.time(s) / 1000;
                 let slot = &mut ctx.mem[base as usize + 4];
                 match slot {
@@ -130,7 +130,7 @@ fn scan_bits(ctx: &mut Ctx<'_>, chart: usize, on: bool) {
             put(ctx.mem, st, s, 3, true);
         }
     } else {
-        for s in 0..st.logix_slots.len() as u32 {
+        for s in 0..st.vendor_slots.len() as u32 {
             put(ctx.mem, st, s, 1, false);
             put(ctx.mem, st, s, 3, false);
         }

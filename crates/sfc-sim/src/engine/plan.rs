@@ -139,8 +139,10 @@ pub struct ChartPlan {
     /// Frame offsets of the `X` and `T` slots of each step.
     pub(crate) x_slots: Vec<u32>,
     pub(crate) t_slots: Vec<u32>,
-    /// A Logix chart's `Count` slots (empty for other charts).
-    pub(crate) logix_slots: Vec<u32>,
+    /// The first slot of each step's dialect members (`Count`… of Logix, `U` of S7-GRAPH; empty
+    /// for other charts) and which they are.
+    pub(crate) vendor_slots: Vec<u32>,
+    pub(crate) step_members: crate::code::StepMembers,
     /// Sort key of each transition for conflict resolution: explicit priorities first.
     pub(crate) order_key: Vec<(u8, i64, u32)>,
     pub(crate) explicit: Vec<bool>,
@@ -341,7 +343,8 @@ impl ChartPlan {
             link,
             x_slots: code.step_x.clone(),
             t_slots: code.step_t.clone(),
-            logix_slots: code.step_logix.clone(),
+            vendor_slots: code.step_vendor.clone(),
+            step_members: code.step_members,
             pre,
             post,
             order_key,

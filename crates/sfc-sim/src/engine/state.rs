@@ -105,10 +105,16 @@ pub struct ChartState {
     pub(crate) marks: Vec<StepMarks>,
     /// Absolute memory slots of each step's `X` and `T`.
     pub(crate) slots: Vec<(u32, u32)>,
-    /// A Logix chart's steps: the absolute slots of `Count` (how many times the step became
-    /// active: its time analysis's activations, kept over SFCInit as Logix keeps it over an SFC
-    /// Reset), then `FS`, `SA`, `LS` and `TMax` (ms).
-    pub(crate) logix_slots: Vec<u32>,
+    /// The absolute first slot of each step's dialect members: a Logix chart's `Count` (how many
+    /// times the step became active: its time analysis's activations, kept over SFCInit as
+    /// Logix keeps it over an SFC Reset), then `FS`, `SA`, `LS` and `TMax` (ms); an S7-GRAPH
+    /// chart's `U`.
+    pub(crate) vendor_slots: Vec<u32>,
+    pub(crate) members: crate::code::StepMembers,
+    /// An S7-GRAPH chart's steps: how long the step has been disturbed (an interlock or a
+    /// supervision error) in its activation, and since when it is disturbed now; its `U` is its
+    /// time less this.
+    pub(crate) disturbance: Vec<(i64, Option<i64>)>,
     /// `logix`: the steps left in the last evolution, whose last scan comes next.
     pub(crate) logix_left: Vec<u32>,
     /// Some step has a mirrored `X` or `T` slot / a mirrored `T` slot.
@@ -187,7 +193,13 @@ impl ChartState {
             steps,
             marks: vec![StepMarks::default(); n],
             slots,
-            logix_slots: plan.logix_slots.iter().map(|&c| (frame + c as usize) as u32).collect(),
+            vendor_slots: plan.vendor_slots.iter().map(|&c| (frame + c as usize) as u32).collect(),
+            members: plan.step_members,
+            disturbance: if plan.step_members == crate::code::StepMembers::Graph {
+                vec![(0, None); n]
+            } else {
+                Vec::new()
+            },
             logix_left: Vec::new(),
             any_mirror: true,
             any_mirror_t: true,
@@ -323,10 +335,14 @@ impl ChartState {
         st.t = clock;
         st.overdue = false;
 
+
         if self.plan.has_entities[s as usize] {
             self.entered.push(s);
         }
         self.steps[s as usize].tally.activations += 1;
+        if let Some(d) = self.disturbance.get_mut(s as usize) {
+            *d = (0, None);
+        }
         self.changed = true;
         flipped
     }
@@ -365,7 +381,7 @@ impl ChartState {
         if self.steps[s as usize].mirror_x {
             super::evolve::put_bool(mem, self.slots[s as usize].0 as usize, x);
         }
-        if x {
+        if x && self.members == crate::code::StepMembers::Logix {
             self.publish_count(mem, s);
         }
     }
@@ -373,7 +389,7 @@ impl ChartState {
     /// Writes the `Count` slot of `s` (a Logix chart's step).
     #[inline]
     pub(crate) fn publish_count(&self, mem: &mut [Value], s: u32) {
-        if let (Some(&slot), Some(step)) = (self.logix_slots.get(s as usize), self.steps.get(s as usize)) {
+        if let (Some(&slot), Some(step)) = (self.vendor_slots.get(s as usize), self.steps.get(s as usize)) {
             mem[slot as usize] = Value::Int(i64::try_from(step.tally.activations).unwrap_or(i64::MAX));
         }
     }
@@ -383,6 +399,13 @@ impl ChartState {
     pub(crate) fn publish_t(&self, mem: &mut [Value], s: u32) {
         if self.steps[s as usize].mirror_t {
             super::evolve::put_time(mem, self.slots[s as usize].1 as usize, self.time(s));
+            // An S7-GRAPH step's `U`: its `T` until the `graph` profile, which models
+            // disturbances, subtracts them.
+            if self.members == crate::code::StepMembers::Graph {
+                if let Some(&u) = self.vendor_slots.get(s as usize) {
+                    super::evolve::put_time(mem, u as usize, self.time(s));
+                }
+            }
         }
     }
 }
