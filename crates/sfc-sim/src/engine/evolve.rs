@@ -213,6 +213,9 @@ pub(crate) fn reset(ctx: &mut Ctx<'_>, chart: usize, code: &ChartCode) {
         step.interlock_open = false;
         step.supervision_was = false;
     }
+    for d in st.disturbance.iter_mut() {
+        *d = (0, None);
+    }
     for &s in &plan.initial {
         let clock = st.clock;
         let step = &mut st.steps[s as usize];
