@@ -8,6 +8,7 @@ use std::process::ExitCode;
 
 mod build;
 mod check;
+mod diff;
 mod edit;
 mod fmt;
 mod lsp;
@@ -46,6 +47,10 @@ enum Command {
     Build(BuildArgs),
     /// Simulate a chart on virtual time, optionally against a scenario, writing a trace.
     Sim(SimArgs),
+    /// Compare two versions of a chart file by meaning: steps, transitions, conditions, actions
+    /// and variables added, removed, renamed or changed (`sfc diff OLD NEW`, `sfc diff REV --
+    /// FILE`, `sfc diff REV1 REV2 -- FILE`).
+    Diff(diff::DiffArgs),
     /// Run every `*.scenario.toml` under the given files and directories.
     Test(test::TestArgs),
     /// Prove or refute the requirements of `<chart>.props.toml` under the exact scan semantics.
@@ -243,6 +248,7 @@ fn run() -> u8 {
     match cli.command {
         Command::Check(a) => check::check(a),
         Command::Fmt(a) => fmt::fmt(a),
+        Command::Diff(a) => diff::diff(a),
         Command::Build(a) => build::build(build::BuildRequest {
             file: a.file,
             target: match a.target {

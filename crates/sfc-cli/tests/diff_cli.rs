@@ -1,0 +1,121 @@
+//! `sfc diff` through the binary: charts compared by meaning, per POU, with `diff`'s exit
+//! status (0 equal in meaning, 1 different, 2 usage), across text and PLCopen XML, and on git
+//! revisions.
+#![allow(clippy::unwrap_used, clippy::expect_used, clippy::indexing_slicing)] // test code: a panic is a failed test
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+fn sfc_in(dir: &Path, args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_sfc")).current_dir(dir).args(args).output().expect("sfc runs")
+}
+
+fn fixtures() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/diff")
+}
+
+fn out(o: &Output) -> String {
+    String::from_utf8_lossy(&o.stdout).to_string()
+}
+
+fn tmp(name: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("sfc-diff-cli-{}-{name}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&d);
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}
+
+/// Each edit of a colleague's version is named once, and nothing else is.
+#[test]
+fn every_edit_is_named_once() {
+    let o = sfc_in(&fixtures(), &["diff", "--color", "never", "fill_old.st", "fill_new.st"]);
+    assert_eq!(o.status.code(), Some(1), "{}", String::from_utf8_lossy(&o.stderr));
+    let expected = std::fs::read_to_string(fixtures().join("fill.expected.txt")).unwrap();
+    assert_eq!(out(&o), expected);
+    // The rename carries its references: no condition change for `Mixing.T` → `Stirring.T`.
+    assert!(!out(&o).contains("Mixing.T"), "{}", out(&o));
+}
+
+#[test]
+fn a_chart_equals_itself_and_a_moved_step_is_layout() {
+    let o = sfc_in(&fixtures(), &["diff", "fill_old.st", "fill_old.st"]);
+    assert_eq!(o.status.code(), Some(0));
+    assert!(out(&o).contains("equal in meaning"), "{}", out(&o));
+    let o = sfc_in(&fixtures(), &["diff", "fill_old.st", "fill_moved.st"]);
+    assert_eq!(o.status.code(), Some(0), "{}", out(&o));
+    assert!(out(&o).contains("layout: 1 element moved or resized"), "{}", out(&o));
+    assert!(out(&o).contains("equal in meaning"), "{}", out(&o));
+    let o = sfc_in(&fixtures(), &["diff", "--layout", "fill_old.st", "fill_moved.st"]);
+    assert!(out(&o).contains("layout step Filling: sfc.x 200 -> 240"), "{}", out(&o));
+}
+
+#[test]
+fn json_lists_the_changes() {
+    let o = sfc_in(&fixtures(), &["diff", "--format", "json", "fill_old.st", "fill_new.st"]);
+    assert_eq!(o.status.code(), Some(1));
+    let v: serde_json::Value = serde_json::from_str(&out(&o)).unwrap();
+    assert_eq!(v["equal"], false);
+    let changes = v["changes"].as_array().unwrap();
+    assert_eq!(changes.len(), 9, "{v}");
+    let renamed = changes.iter().find(|c| c["kind"] == "renamed").unwrap();
+    assert_eq!((renamed["element"].as_str(), renamed["old"].as_str(), renamed["new"].as_str()), (Some("step"), Some("Mixing"), Some("Stirring")));
+    let cond = changes.iter().find(|c| c["what"] == "condition").unwrap();
+    assert_eq!(cond["name"], "TStart");
+    assert_eq!(cond["new"], "Start AND Empty AND NOT Full");
+}
+
+/// A chart and its PLCopen export are the same chart: only the layout the export adds differs.
+#[test]
+fn text_and_its_plcopen_export_are_equal_in_meaning() {
+    let dir = tmp("xml");
+    let xml = dir.join("fill.xml");
+    let b = sfc_in(&fixtures(), &["build", "fill_old.st", "--target", "plcopen", "-o", xml.to_str().unwrap()]);
+    assert_eq!(b.status.code(), Some(0), "{}", String::from_utf8_lossy(&b.stderr));
+    let o = sfc_in(&fixtures(), &["diff", "fill_old.st", xml.to_str().unwrap()]);
+    assert_eq!(o.status.code(), Some(0), "{}", out(&o));
+    assert!(out(&o).contains("equal in meaning"), "{}", out(&o));
+    let o = sfc_in(&fixtures(), &["diff", xml.to_str().unwrap(), "fill_new.st"]);
+    assert_eq!(o.status.code(), Some(1));
+    assert!(out(&o).contains("~ step Mixing renamed Stirring"), "{}", out(&o));
+}
+
+fn git(dir: &Path, args: &[&str]) {
+    let o = Command::new("git")
+        .current_dir(dir)
+        .args(["-c", "user.email=test@example.com", "-c", "user.name=test", "-c", "commit.gpgsign=false"])
+        .args(args)
+        .output()
+        .expect("git runs");
+    assert!(o.status.success(), "git {args:?}: {}", String::from_utf8_lossy(&o.stderr));
+}
+
+#[test]
+fn git_revisions_against_the_working_tree_and_each_other() {
+    let dir = tmp("git");
+    git(&dir, &["init", "-q"]);
+    std::fs::copy(fixtures().join("fill_old.st"), dir.join("tank.st")).unwrap();
+    git(&dir, &["add", "tank.st"]);
+    git(&dir, &["commit", "-qm", "old"]);
+    std::fs::copy(fixtures().join("fill_new.st"), dir.join("tank.st")).unwrap();
+    let o = sfc_in(&dir, &["diff", "--color", "never", "HEAD", "--", "tank.st"]);
+    assert_eq!(o.status.code(), Some(1), "{}", String::from_utf8_lossy(&o.stderr));
+    assert!(out(&o).starts_with("--- tank.st@HEAD\n+++ tank.st\n"), "{}", out(&o));
+    assert!(out(&o).contains("~ step Mixing renamed Stirring"), "{}", out(&o));
+    git(&dir, &["commit", "-qam", "new"]);
+    let o = sfc_in(&dir, &["diff", "--color", "never", "HEAD~1", "HEAD", "--", "tank.st"]);
+    assert_eq!(o.status.code(), Some(1));
+    assert!(out(&o).contains("+ transition TSettled (FROM Settling TO Draining)"), "{}", out(&o));
+    let o = sfc_in(&dir, &["diff", "HEAD", "--", "tank.st"]);
+    assert_eq!(o.status.code(), Some(0), "{}", out(&o));
+    // A revision git does not know: a usage error that says so.
+    let o = sfc_in(&dir, &["diff", "nosuchrev", "--", "tank.st"]);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&o.stderr).contains("nosuchrev"));
+}
+
+#[test]
+fn one_file_alone_is_a_usage_error() {
+    let o = sfc_in(&fixtures(), &["diff", "fill_old.st"]);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&o.stderr).contains("two files"), "{}", String::from_utf8_lossy(&o.stderr));
+}
