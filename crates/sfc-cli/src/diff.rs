@@ -11,7 +11,7 @@ use std::process::Command;
 pub struct DiffArgs {
     /// Two files (`OLD NEW`), or with `-- FILE` one or two git revisions (`REV`: the revision
     /// against the working tree; `REV1 REV2`: two revisions).
-    #[arg(value_name = "OLD|REV", num_args = 1..=2, required = true)]
+    #[arg(value_name = "OLD|REV", num_args = 1..=7, required = true)]
     sides: Vec<String>,
     /// The file whose revisions are compared (after `--`).
     #[arg(last = true, value_name = "FILE")]
@@ -22,6 +22,11 @@ pub struct DiffArgs {
     /// List every layout change (moved or resized elements) instead of counting them.
     #[arg(long)]
     layout: bool,
+    /// Called by git as its external diff (`sfc git setup` configures it): PATH OLD-FILE
+    /// OLD-HEX OLD-MODE NEW-FILE NEW-HEX NEW-MODE. Always exits 0, as git expects; a file that
+    /// is no chart is shown as git would show it.
+    #[arg(long, hide = true)]
+    git_external: bool,
 }
 
 #[derive(Clone, Copy, clap::ValueEnum)]
@@ -63,6 +68,9 @@ fn at_revision(rev: &str, file: &Path) -> Result<Side, String> {
 }
 
 fn sides(a: &DiffArgs) -> Result<(Side, Side), String> {
+    if a.sides.len() > 2 {
+        return Err("two files, or one or two revisions and `-- FILE`".into());
+    }
     match (&a.file, a.sides.as_slice()) {
         (None, [old, new]) => Ok((read(Path::new(old))?, read(Path::new(new))?)),
         (None, [_]) => Err("two files to compare, or `REV -- FILE` for a git revision".into()),
@@ -72,7 +80,56 @@ fn sides(a: &DiffArgs) -> Result<(Side, Side), String> {
     }
 }
 
+/// git's external diff: `PATH OLD-FILE OLD-HEX OLD-MODE NEW-FILE NEW-HEX NEW-MODE`.
+fn git_external(a: &DiffArgs) -> u8 {
+    let [path, old, _, _, new, _, _] = a.sides.as_slice() else {
+        term::error("--git-external takes the seven arguments git passes to an external diff");
+        return Status::Usage.code();
+    };
+    let side = |file: &str, label: String| -> Option<Side> {
+        if file == "/dev/null" {
+            return None;
+        }
+        let text = std::fs::read_to_string(file).ok()?;
+        Some(Side { label, path: PathBuf::from(path), text })
+    };
+    let (o, n) = (side(old, format!("a/{path}")), side(new, format!("b/{path}")));
+    let charts = |s: &Side| {
+        let (_, c, d) = sfc_driver::check_any(0, &s.path, &s.text, &sfc_model::CheckOptions::default());
+        (!c.unit.items.is_empty() && !d.iter().any(|x| x.is_error())).then_some(c)
+    };
+    match (&o, &n) {
+        (Some(os), Some(ns)) => match (charts(os), charts(ns)) {
+            (Some(oc), Some(nc)) => {
+                let d = sfc_diff::diff(&oc, &nc);
+                println!("sfc diff {path}\n--- {}\n+++ {}", os.label, ns.label);
+                print!("{}", colour(&d.text(a.layout)));
+                if d.equal() {
+                    println!("equal in meaning");
+                }
+            }
+            // Not a chart sfc reads without errors: the lines, as git shows them.
+            _ => plain(old, new),
+        },
+        (None, Some(_)) => println!("sfc diff {path}: new file"),
+        (Some(_), None) => println!("sfc diff {path}: deleted"),
+        (None, None) => {}
+    }
+    Status::Ok.code()
+}
+
+/// The line diff git itself would show.
+fn plain(old: &str, new: &str) {
+    let out = Command::new("git").args(["diff", "--no-index", "--no-ext-diff", "--no-textconv", "--", old, new]).output();
+    if let Ok(o) = out {
+        print!("{}", String::from_utf8_lossy(&o.stdout));
+    }
+}
+
 pub fn diff(a: DiffArgs) -> u8 {
+    if a.git_external {
+        return git_external(&a);
+    }
     let (old, new) = match sides(&a) {
         Ok(s) => s,
         Err(m) => {

@@ -9,6 +9,7 @@ use std::process::ExitCode;
 mod build;
 mod check;
 mod diff;
+mod git;
 mod edit;
 mod fmt;
 mod lsp;
@@ -51,6 +52,8 @@ enum Command {
     /// and variables added, removed, renamed or changed (`sfc diff OLD NEW`, `sfc diff REV --
     /// FILE`, `sfc diff REV1 REV2 -- FILE`).
     Diff(diff::DiffArgs),
+    /// Set a git repository up so that `git diff` compares charts by meaning.
+    Git(git::GitArgs),
     /// Run every `*.scenario.toml` under the given files and directories.
     Test(test::TestArgs),
     /// Prove or refute the requirements of `<chart>.props.toml` under the exact scan semantics.
@@ -249,6 +252,7 @@ fn run() -> u8 {
         Command::Check(a) => check::check(a),
         Command::Fmt(a) => fmt::fmt(a),
         Command::Diff(a) => diff::diff(a),
+        Command::Git(a) => git::git(a),
         Command::Build(a) => build::build(build::BuildRequest {
             file: a.file,
             target: match a.target {

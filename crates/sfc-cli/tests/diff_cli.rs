@@ -119,3 +119,52 @@ fn one_file_alone_is_a_usage_error() {
     assert_eq!(o.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&o.stderr).contains("two files"), "{}", String::from_utf8_lossy(&o.stderr));
 }
+
+/// `sfc git setup`: `git diff` then shows charts by meaning (text and PLCopen XML alike), a
+/// file that is no chart as git would, and a second setup changes nothing.
+#[test]
+fn git_setup_makes_git_diff_compare_charts_by_meaning() {
+    let dir = tmp("setup");
+    git(&dir, &["init", "-q"]);
+    let o = sfc_in(&dir, &["git", "setup"]);
+    assert_eq!(o.status.code(), Some(0), "{}", String::from_utf8_lossy(&o.stderr));
+    let attrs = std::fs::read_to_string(dir.join(".gitattributes")).unwrap();
+    assert!(attrs.contains("*.st diff=sfc") && attrs.contains("*.xml diff=sfc"), "{attrs}");
+    std::fs::copy(fixtures().join("fill_old.st"), dir.join("tank.st")).unwrap();
+    let b = sfc_in(&dir, &["build", "tank.st", "--target", "plcopen", "-o", "tank.xml"]);
+    assert_eq!(b.status.code(), Some(0));
+    std::fs::write(dir.join("other.xml"), "<note>not a chart</note>\n").unwrap();
+    git(&dir, &["add", "."]);
+    git(&dir, &["commit", "-qm", "old"]);
+    std::fs::copy(fixtures().join("fill_new.st"), dir.join("tank.st")).unwrap();
+    let b = sfc_in(&dir, &["build", "tank.st", "--target", "plcopen", "-o", "tank.xml"]);
+    assert_eq!(b.status.code(), Some(0));
+    std::fs::write(dir.join("other.xml"), "<note>still not</note>\n").unwrap();
+    let o = Command::new("git").current_dir(&dir).args(["diff"]).output().unwrap();
+    let shown = out(&o);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    for file in ["tank.st", "tank.xml"] {
+        assert!(shown.contains(&format!("sfc diff {file}\n--- a/{file}\n+++ b/{file}\n")), "{shown}");
+    }
+    assert_eq!(shown.matches("~ step Mixing renamed Stirring").count(), 2, "{shown}");
+    assert!(shown.contains("-<note>not a chart</note>") && shown.contains("+<note>still not</note>"), "{shown}");
+    // With --no-ext-diff, the charts as canonical text.
+    let o = Command::new("git").current_dir(&dir).args(["diff", "--no-ext-diff", "tank.xml"]).output().unwrap();
+    assert!(out(&o).contains("+    STEP Stirring:"), "{}", out(&o));
+    let o = sfc_in(&dir, &["git", "setup"]);
+    assert!(out(&o).contains("already"), "{}", out(&o));
+    assert_eq!(std::fs::read_to_string(dir.join(".gitattributes")).unwrap(), attrs);
+}
+
+#[test]
+fn git_setup_outside_a_repository_says_so() {
+    let dir = tmp("norepo");
+    let o = Command::new(env!("CARGO_BIN_EXE_sfc"))
+        .current_dir(&dir)
+        .env("GIT_CEILING_DIRECTORIES", dir.parent().unwrap())
+        .args(["git", "setup"])
+        .output()
+        .unwrap();
+    assert_eq!(o.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&o.stderr).contains("not in a git repository"));
+}
