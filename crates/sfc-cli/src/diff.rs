@@ -16,7 +16,7 @@ pub struct DiffArgs {
     /// The file whose revisions are compared (after `--`).
     #[arg(last = true, value_name = "FILE")]
     file: Option<PathBuf>,
-    /// Output: text (default) or JSON.
+    /// Output: text (default), JSON, or the charts drawn side by side (SVG, an HTML page).
     #[arg(long, value_enum, default_value = "text")]
     format: DiffFormat,
     /// List every layout change (moved or resized elements) instead of counting them.
@@ -29,10 +29,15 @@ pub struct DiffArgs {
     git_external: bool,
 }
 
-#[derive(Clone, Copy, clap::ValueEnum)]
+#[derive(Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
 pub enum DiffFormat {
     Text,
     Json,
+    /// The old and new charts drawn side by side, added elements green, removed red, changed
+    /// and renamed orange (one SVG).
+    Svg,
+    /// A review page: the changes listed, and the charts drawn as `svg` does.
+    Html,
 }
 
 /// One side: its name for messages, its file name (for the format), its text.
@@ -158,6 +163,14 @@ pub fn diff(a: DiffArgs) -> u8 {
             v["new"] = new.label.clone().into();
             println!("{v}");
         }
+        DiffFormat::Svg | DiffFormat::Html => {
+            let drawn = drawings(&d, &oc, &nc);
+            if a.format == DiffFormat::Svg {
+                println!("{}", side_by_side(&drawn, &old.label, &new.label));
+            } else {
+                println!("{}", html(&d, &drawn, &old.label, &new.label, a.layout));
+            }
+        }
         DiffFormat::Text => {
             println!("--- {}\n+++ {}", old.label, new.label);
             print!("{}", colour(&d.text(a.layout)));
@@ -191,4 +204,147 @@ fn colour(text: &str) -> String {
             format!("{}\n", term::paint(on, code, l))
         })
         .collect()
+}
+
+/// Per chart POU in either file: its old and new drawings (SVG), empty where it has none.
+fn drawings(d: &sfc_diff::Diff, oc: &sfc_model::Checked, nc: &sfc_model::Checked) -> Vec<(String, String, String)> {
+    let mut pous: Vec<String> = Vec::new();
+    for c in oc.charts.iter().chain(nc.charts.iter()).filter(|c| c.action.is_none()) {
+        if !pous.iter().any(|p| p.eq_ignore_ascii_case(&c.pou)) {
+            pous.push(c.pou.clone());
+        }
+    }
+    let draw = |c: &sfc_model::Checked, pou: &str| -> String {
+        if !c.charts.iter().any(|ch| ch.action.is_none() && ch.pou.eq_ignore_ascii_case(pou)) {
+            return String::new();
+        }
+        let opts = sfc_driver::compile::CompileOptions { pou: Some(pou), ..Default::default() };
+        match sfc_driver::compile::compile(c, sfc_driver::compile::BuildTarget::Svg, &opts) {
+            Ok(out) => out.text.trim_start_matches("<?xml version=\"1.0\" encoding=\"UTF-8\"?>").trim().to_string(),
+            Err(_) => String::new(),
+        }
+    };
+    pous.into_iter()
+        .map(|p| {
+            let (a, b) = (draw(oc, &p), draw(nc, &p));
+            (colour_svg(&a, d, &p, true), colour_svg(&b, d, &p, false), p)
+        })
+        .map(|(a, b, p)| (p, a, b))
+        .collect()
+}
+
+/// A drawing with its changed elements coloured, by a style on their `data-id`s.
+fn colour_svg(svg: &str, d: &sfc_diff::Diff, pou: &str, old: bool) -> String {
+    if svg.is_empty() {
+        return String::new();
+    }
+    let side = if old { "sfc-old" } else { "sfc-new" };
+    let mut rules = Vec::new();
+    for c in d.changes.iter().filter(|c| c.pou.eq_ignore_ascii_case(pou)) {
+        if !matches!(c.element, "step" | "transition") {
+            continue;
+        }
+        let (name, colour) = match (c.kind, old) {
+            (sfc_diff::Kind::Added, false) => (c.name.clone(), "#2e7d32"),
+            (sfc_diff::Kind::Removed, true) => (c.name.clone(), "#c62828"),
+            (sfc_diff::Kind::Renamed, true) => (c.old.clone().unwrap_or_default(), "#ef6c00"),
+            (sfc_diff::Kind::Renamed, false) => (c.new.clone().unwrap_or_default(), "#ef6c00"),
+            (sfc_diff::Kind::Changed, _) => (c.name.clone(), "#ef6c00"),
+            _ => continue,
+        };
+        let id = format!("{}:{}", c.element, name).replace(['"', '\\'], "");
+        let g = format!(".{side} g[data-id=\"{id}\"]");
+        rules.push(format!(
+            "{g} rect, {g} line, {g} polyline {{ stroke: {colour}; stroke-width: 3; }} {g} text {{ fill: {colour}; font-weight: bold; }}"
+        ));
+    }
+    // The side's class scopes its rules (the drawings share one document in `svg` and `html`).
+    let svg = svg.replacen("<svg ", &format!("<svg class=\"{side}\" "), 1);
+    if rules.is_empty() {
+        return svg;
+    }
+    let style = format!("<style>{}</style>", rules.join(" "));
+    match svg.find('>') {
+        Some(k) => format!("{}{style}{}", svg.get(..=k).unwrap_or(""), svg.get(k + 1..).unwrap_or("")),
+        None => svg,
+    }
+}
+
+/// `width`/`height` of a drawing's root element.
+fn size(svg: &str) -> (f64, f64) {
+    let root = svg.split('>').next().unwrap_or("");
+    let attr = |n: &str| {
+        root.split(&format!(" {n}=\"")).nth(1).and_then(|r| r.split('"').next()).and_then(|v| v.parse::<f64>().ok()).unwrap_or(0.0)
+    };
+    (attr("width"), attr("height"))
+}
+
+fn esc(s: &str) -> String {
+    s.replace('&', "&amp;").replace('<', "&lt;").replace('>', "&gt;").replace('"', "&quot;")
+}
+
+/// The drawings of every POU in one SVG: old on the left, new on the right.
+fn side_by_side(drawn: &[(String, String, String)], old: &str, new: &str) -> String {
+    let mut body = String::new();
+    let mut y = 0.0;
+    let mut width: f64 = 0.0;
+    for (pou, a, b) in drawn {
+        let (wa, ha) = size(a);
+        let (wb, hb) = size(b);
+        let left = wa.max(200.0);
+        body.push_str(&format!("<text x=\"0\" y=\"{}\" font-size=\"14\" font-weight=\"bold\">{}</text>\n", y + 16.0, esc(pou)));
+        body.push_str(&format!("<text x=\"0\" y=\"{}\" font-size=\"12\">{}</text>\n", y + 34.0, esc(old)));
+        body.push_str(&format!("<text x=\"{}\" y=\"{}\" font-size=\"12\">{}</text>\n", left + 40.0, y + 34.0, esc(new)));
+        let place = |svg: &str, x: f64| -> String {
+            if svg.is_empty() {
+                return String::new();
+            }
+            svg.replacen("<svg ", &format!("<svg x=\"{x}\" y=\"{}\" ", y + 44.0), 1)
+        };
+        body.push_str(&place(a, 0.0));
+        body.push_str(&place(b, left + 40.0));
+        width = width.max(left + 40.0 + wb);
+        y += 44.0 + ha.max(hb) + 30.0;
+    }
+    format!(
+        "<svg xmlns=\"http://www.w3.org/2000/svg\" version=\"1.1\" width=\"{width}\" height=\"{y}\" font-family=\"sans-serif\">\n<rect width=\"100%\" height=\"100%\" fill=\"#ffffff\"/>\n{body}</svg>"
+    )
+}
+
+/// A review page: the changes, then the drawings.
+fn html(d: &sfc_diff::Diff, drawn: &[(String, String, String)], old: &str, new: &str, layout: bool) -> String {
+    let list: String = d
+        .text(layout)
+        .lines()
+        .map(|l| {
+            let t = l.trim_start();
+            let class = if t.starts_with("+ ") {
+                "added"
+            } else if t.starts_with("- ") {
+                "removed"
+            } else if t.starts_with("~ ") {
+                "changed"
+            } else {
+                "pou"
+            };
+            format!("<li class=\"{class}\">{}</li>\n", esc(l.trim()))
+        })
+        .collect();
+    let verdict = if d.equal() { "<p>Equal in meaning.</p>" } else { "" };
+    let mut charts = String::new();
+    for (pou, a, b) in drawn {
+        charts.push_str(&format!(
+            "<h2>{}</h2>\n<div class=\"pair\"><figure><figcaption>{}</figcaption>{a}</figure><figure><figcaption>{}</figcaption>{b}</figure></div>\n",
+            esc(pou),
+            esc(old),
+            esc(new)
+        ));
+    }
+    format!(
+        "<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\"><title>sfc diff {} {}</title>\n<style>body {{ font-family: sans-serif; }} li.added {{ color: #2e7d32; }} li.removed {{ color: #c62828; }} li.changed {{ color: #ef6c00; }} li.pou {{ font-weight: bold; list-style: none; }} .pair {{ display: flex; gap: 2em; align-items: flex-start; }} figure {{ margin: 0; }}</style></head>\n<body><h1>{} → {}</h1>\n{verdict}<ul>\n{list}</ul>\n{charts}</body></html>",
+        esc(old),
+        esc(new),
+        esc(old),
+        esc(new)
+    )
 }

@@ -168,3 +168,27 @@ fn git_setup_outside_a_repository_says_so() {
     assert_eq!(o.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&o.stderr).contains("not in a git repository"));
 }
+
+/// `--format svg|html`: the old and new charts drawn side by side, the changed elements
+/// coloured by a style on their drawing's `data-id`, scoped to their side.
+#[test]
+fn the_charts_are_drawn_side_by_side_with_the_changes_coloured() {
+    let o = sfc_in(&fixtures(), &["diff", "--format", "svg", "fill_old.st", "fill_new.st"]);
+    assert_eq!(o.status.code(), Some(1));
+    let svg = out(&o);
+    assert!(svg.starts_with("<svg xmlns=\"http://www.w3.org/2000/svg\""), "{svg}");
+    assert_eq!(svg.matches("<svg ").count(), 3, "one drawing per side in one document");
+    assert!(svg.contains("class=\"sfc-old\"") && svg.contains("class=\"sfc-new\""));
+    // Renamed: orange on both sides; added: green on the new side; a drawn element per rule.
+    assert!(svg.contains(".sfc-old g[data-id=\"step:Mixing\"] rect, ") && svg.contains("#ef6c00"), "{svg}");
+    assert!(svg.contains(".sfc-new g[data-id=\"step:Stirring\"] rect, "), "{svg}");
+    assert!(svg.contains(".sfc-new g[data-id=\"step:Settling\"] rect, ") && svg.contains("#2e7d32"), "{svg}");
+    assert!(svg.contains("<g data-id=\"step:Settling\">") && svg.contains("<g data-id=\"step:Mixing\">"));
+    assert!(!svg.contains(".sfc-old g[data-id=\"step:Settling\"]"), "an added step is not on the old side");
+    let o = sfc_in(&fixtures(), &["diff", "--format", "html", "fill_old.st", "fill_new.st"]);
+    let page = out(&o);
+    assert!(page.starts_with("<!DOCTYPE html>"), "{page}");
+    assert!(page.contains("<li class=\"changed\">~ step Mixing renamed Stirring</li>"), "{page}");
+    assert!(page.contains("<li class=\"added\">+ step Settling</li>"), "{page}");
+    assert_eq!(page.matches("<figure>").count(), 2);
+}
