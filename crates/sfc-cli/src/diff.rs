@@ -186,22 +186,35 @@ pub fn diff(a: DiffArgs) -> u8 {
     }
 }
 
+/// What a line of the text output is: `added`, `removed`, `changed`, or none (a POU's name, the
+/// layout line).
+fn class(line: &str) -> Option<&'static str> {
+    let t = line.trim_start();
+    if t.starts_with("+ ") {
+        Some("added")
+    } else if t.starts_with("- ") {
+        Some("removed")
+    } else if t.starts_with("~ ") {
+        Some("changed")
+    } else {
+        None
+    }
+}
+
 /// Added lines green, removed red, changed yellow, on a terminal.
 fn colour(text: &str) -> String {
     let on = term::color_stdout();
     text.lines()
-        .map(|l| {
-            let t = l.trim_start();
-            let code = if t.starts_with("+ ") {
-                "32"
-            } else if t.starts_with("- ") {
-                "31"
-            } else if t.starts_with("~ ") {
-                "33"
-            } else {
-                return format!("{l}\n");
-            };
-            format!("{}\n", term::paint(on, code, l))
+        .map(|l| match class(l) {
+            Some(c) => {
+                let code = match c {
+                    "added" => "32",
+                    "removed" => "31",
+                    _ => "33",
+                };
+                format!("{}\n", term::paint(on, code, l))
+            }
+            None => format!("{l}\n"),
         })
         .collect()
 }
@@ -221,7 +234,11 @@ fn drawings(d: &sfc_diff::Diff, oc: &sfc_model::Checked, nc: &sfc_model::Checked
         let opts = sfc_driver::compile::CompileOptions { pou: Some(pou), ..Default::default() };
         match sfc_driver::compile::compile(c, sfc_driver::compile::BuildTarget::Svg, &opts) {
             Ok(out) => out.text.trim_start_matches("<?xml version=\"1.0\" encoding=\"UTF-8\"?>").trim().to_string(),
-            Err(_) => String::new(),
+            Err(_) => {
+                // Not silently blank: the side is missing from the drawing, and this says why.
+                eprintln!("note: `{pou}` of `{}` could not be drawn; its side of the drawing is empty", c.file.name);
+                String::new()
+            }
         }
     };
     pous.into_iter()
@@ -316,19 +333,7 @@ fn html(d: &sfc_diff::Diff, drawn: &[(String, String, String)], old: &str, new: 
     let list: String = d
         .text(layout)
         .lines()
-        .map(|l| {
-            let t = l.trim_start();
-            let class = if t.starts_with("+ ") {
-                "added"
-            } else if t.starts_with("- ") {
-                "removed"
-            } else if t.starts_with("~ ") {
-                "changed"
-            } else {
-                "pou"
-            };
-            format!("<li class=\"{class}\">{}</li>\n", esc(l.trim()))
-        })
+        .map(|l| format!("<li class=\"{}\">{}</li>\n", class(l).unwrap_or("pou"), esc(l.trim())))
         .collect();
     let verdict = if d.equal() { "<p>Equal in meaning.</p>" } else { "" };
     let mut charts = String::new();
