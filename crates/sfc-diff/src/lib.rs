@@ -257,6 +257,38 @@ fn squeeze(s: &str) -> String {
     s.split_whitespace().collect::<Vec<_>>().join(" ")
 }
 
+/// Code without the white space that does not separate two words (`a+b` and `a + b` are the
+/// same code), keywords and names in upper case: what two bodies are compared on.
+fn code_key(s: &str) -> String {
+    let word = |c: char| c.is_ascii_alphanumeric() || c == '_' || c == '#' || c == '.';
+    let mut out = String::new();
+    let mut pending = false;
+    let mut quote: Option<char> = None;
+    for c in s.chars() {
+        // Inside a string literal every character counts as written.
+        if let Some(q) = quote {
+            out.push(c);
+            if c == q {
+                quote = None;
+            }
+            continue;
+        }
+        if c == '\'' || c == '"' {
+            quote = Some(c);
+        }
+        if c.is_whitespace() {
+            pending = true;
+            continue;
+        }
+        if pending && out.chars().next_back().is_some_and(word) && word(c) {
+            out.push(' ');
+        }
+        pending = false;
+        out.push(if quote.is_some() { c } else { c.to_ascii_uppercase() });
+    }
+    out
+}
+
 fn slice(c: &Checked, span: Span) -> &str {
     c.file.text.get(span.start as usize..span.end as usize).unwrap_or("")
 }
@@ -274,7 +306,7 @@ fn compare_pou(d: &mut Diff, oc: &Checked, nc: &Checked, o: &Pou<'_>, n: &Pou<'_
             // A POU in ST or IL: its body, as printed.
             let a = body_text(oc, o.pou);
             let b = body_text(nc, n.pou);
-            if a != b {
+            if code_key(&a) != code_key(&b) {
                 d.changes.push(changed(name, "body", name, "statements", a, b));
             }
         }
@@ -609,7 +641,7 @@ fn chart(d: &mut Diff, oc: &Checked, nc: &Checked, pou: &str, a: &Chart, b: &Cha
             None => d.changes.push(change(pou, "action", &x.name, Kind::Removed)),
             Some(y) => {
                 let (p, q) = (action_body(oc, x), action_body(nc, y));
-                if rename_words(&p, &renames) != q {
+                if code_key(&rename_words(&p, &renames)) != code_key(&q) {
                     d.changes.push(changed(pou, "action", &y.name, "body", p, q));
                 }
                 attributes(d, pou, "action", &y.name, &x.attributes, &y.attributes);

@@ -95,3 +95,13 @@ fn every_step_moved_is_layout_only() {
         }
     }
 }
+
+#[test]
+fn spacing_of_code_is_no_change_but_a_string_is() {
+    let a = "PROGRAM P\n    VAR x : INT; s : STRING; END_VAR\n    x := x+1;\n    s := 'abc';\nEND_PROGRAM\n";
+    let b = "PROGRAM P\n    VAR x : INT; s : STRING; END_VAR\n    x   :=  x + 1 ;\n    s := 'abc';\nEND_PROGRAM\n";
+    assert!(diff(&check(a), &check(b)).equal());
+    let c = a.replace("'abc'", "'ABC'");
+    let d = diff(&check(a), &check(&c));
+    assert_eq!(d.changes.len(), 1, "{:?}", d.changes);
+}
