@@ -25,12 +25,14 @@ pub(crate) use sfc_xmlmap::emit;
 #[allow(clippy::indexing_slicing)]
 mod export;
 mod import;
+mod patch;
 mod splice;
 pub(crate) use sfc_xmlmap::xml;
 
 pub use emit::{MapEntry, SourceMap};
 pub use export::{export, export_pou, export_with, fmt_duration, SOURCE_DATA};
 pub use import::NAMESPACES;
+pub use patch::{patch_pou, Patched};
 pub use splice::{splice_pou, SpliceError};
 
 use sfc_diagnostics::{Diagnostic, Label, SourceFile};

@@ -1,6 +1,8 @@
 //! Putting one POU back into a PLCopen XML file: the `pou` element of that name is replaced by
 //! the export of the new POU text, and every other byte of the file stays as it was (the other
 //! POUs in FBD, LD or ST as their tool drew them, the headers, the instances, vendor data).
+//! The editor's save goes through [`crate::patch_pou`], which changes the old `pou` element in
+//! place when it can and falls back to this.
 
 use crate::export::export_pou;
 use crate::xml::{attr, child, children};

@@ -471,17 +471,31 @@ fn save_file(s: &AppState, req: SaveRequest) -> Answer {
             sfc_doc::splice_replacing(text, &req.doc, &replacing)
         }
         FileFormat::Xml => {
-            // Only this POU's element is replaced: every other byte of the file (the other
-            // POUs as their tool drew them, headers, instances, vendor data) stays as it was.
+            // Only what changed in this POU is written (`patch_pou`: places, sizes, an inline
+            // ST condition, a step's name in place; else the POU's element replaced): every
+            // other byte of the file (the other POUs as their tool drew them, headers,
+            // instances, vendor data, element ids) stays as it was.
             let pou_text = sfc_doc::to_text(&req.doc).text;
+            let mut unchanged = None;
             if let Some(xml) = &current {
                 let others = sfc_plcopen::import(0, &name, xml);
                 refuse_rename_onto(&name, &others.text, renamed, &req.doc.pou)?;
+                // The chart as the file opens, saved without an edit: the file stays byte for
+                // byte (also one the file holds without a layout, which the editor draws).
+                let opened = sfc_doc::open(0, &format!("{name} (imported)"), &others.text);
+                let same = |c: &EditorDoc| c.pou == req.doc.pou && sfc_doc::to_text(c).text == pou_text;
+                if !renamed && opened.charts.iter().any(same) {
+                    unchanged = Some(xml.clone());
+                }
             }
             let checked = sfc_analysis::check_source(0, &format!("{name} (as text)"), &pou_text, &plain);
             let base = current.clone().unwrap_or_else(|| sfc_plcopen::export(&checked).unwrap_or_default());
-            match sfc_plcopen::splice_pou(&base, &replacing, &checked) {
-                Ok(xml) => xml,
+            let patched = match unchanged {
+                Some(xml) => Ok((xml, sfc_plcopen::Patched::Unchanged)),
+                None => sfc_plcopen::patch_pou(&base, &replacing, &checked),
+            };
+            match patched {
+                Ok((xml, _)) => xml,
                 Err(sfc_plcopen::SpliceError::Diagnostics(errors)) => {
                     let d =
                         page_diagnostics(&checked.file.name, &pou_text, None, &errors, std::slice::from_ref(&req.doc));
