@@ -347,6 +347,7 @@ mod readback;
 mod region;
 pub mod route;
 mod sidecar;
+mod keep;
 mod splice;
 mod structured;
 mod svg;
@@ -455,9 +456,18 @@ pub fn splice(file_text: &str, doc: &EditorDoc) -> String {
 /// [`splice`] for a POU renamed in the editor: the POU named `replacing` (the name it had when
 /// opened) is replaced by the document, whose name may differ; appended when the file has no
 /// such POU.
+///
+/// Only what changed is rewritten (`keep`): every element the document did not change keeps
+/// its bytes (comments, spacing, no layout pragmas where the file had none); a moved block
+/// changes its position lines only. Where that cannot be done so that the file reads back as
+/// the document, the POU is replaced whole.
 pub fn splice_replacing(file_text: &str, doc: &EditorDoc, replacing: &str) -> String {
+    let written = to_text(doc).text;
+    if let Some(kept) = keep::keep(file_text, replacing, &written) {
+        return kept;
+    }
     let kept: Vec<String> = doc.attributes.iter().map(|a| a.name.clone()).collect();
-    splice::splice(file_text, replacing, &to_text(doc).text, &kept)
+    splice::splice(file_text, replacing, &written, &kept)
 }
 
 /// Whether IEC text holds a POU named `name` (compared as IEC does, ignoring case).

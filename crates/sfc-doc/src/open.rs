@@ -301,7 +301,7 @@ pub fn read_in<'a>(
         actions,
         comments,
         trailing_comments,
-        graph: pragma::text(attrs, sidecar::NAME),
+        graph: sidecar::read(attrs),
         // An action's chart is read and written in its POU's dialect (`sfc.dialect`, not
         // written into the action: see `write::flat_action`).
         attributes: if holder.action {

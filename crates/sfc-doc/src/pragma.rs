@@ -44,7 +44,8 @@ pub const TRANSITION: &[&str] = &[
 /// The attributes the editor reads into an action's fields.
 pub const ACTION: &[&str] = &["sfc.description"];
 /// The attributes the editor reads into the document (before the POU).
-pub const POU: &[&str] = &["sfc.target", "sfc.description", "sfc.comment", "sfc.graph", "sfc.loose"];
+pub const POU: &[&str] =
+    &["sfc.target", "sfc.description", "sfc.comment", "sfc.graph", "sfc.graph.e", "sfc.graph.c", "sfc.loose"];
 
 pub use sfc_syntax::attr_value::{escape, unescape};
 

@@ -3,13 +3,64 @@
 //! the text and their own attributes); every other block is stored whole; connections refer to
 //! blocks by their position in the document.
 
+use crate::pragma;
 use crate::{ActionDef, Element, OtherAttribute, Point};
 use serde::{Deserialize, Serialize};
 
 /// The attribute's name.
 pub const NAME: &str = "sfc.graph";
-/// The format version written in `v`.
+/// The format version of the assembled JSON (`v`).
 pub const VERSION: u32 = 1;
+/// `v` of the attribute as written since the layout is one element per line: the attribute
+/// holds everything but the blocks and connections, each block is one `sfc.graph.e` attribute
+/// and each connection one `sfc.graph.c` attribute, in document order, so moving or editing one
+/// block changes one line of the file. An attribute with `v` 1 holds everything (read still).
+pub const SPLIT: u32 = 2;
+/// One block of a split layout.
+pub const ENTRY: &str = "sfc.graph.e";
+/// One connection of a split layout.
+pub const WIRE: &str = "sfc.graph.c";
+
+/// The layout's attribute lines: `sfc.graph` with `v` 2, then one line per block and per
+/// connection.
+pub fn write(car: &Sidecar) -> String {
+    let mut head = serde_json::to_value(car).unwrap_or_default();
+    if let Some(o) = head.as_object_mut() {
+        o.remove("e");
+        o.remove("c");
+        o.insert("v".into(), SPLIT.into());
+    }
+    let mut out = pragma::line("", NAME, &pragma::escape(&head.to_string()));
+    for e in &car.e {
+        out.push_str(&pragma::line("", ENTRY, &pragma::escape(&serde_json::to_string(e).unwrap_or_default())));
+    }
+    for c in &car.c {
+        out.push_str(&pragma::line("", WIRE, &pragma::escape(&serde_json::to_string(c).unwrap_or_default())));
+    }
+    out
+}
+
+/// The layout of a POU's attributes as one JSON text (`v` 1), from either form; `None`
+/// without one, or when a split line does not read (the chart is then laid out afresh).
+pub fn read(attrs: &[sfc_syntax::ast::Attribute]) -> Option<String> {
+    let raw = pragma::text(attrs, NAME)?;
+    let mut head: serde_json::Value = match serde_json::from_str(&raw) {
+        Ok(v) => v,
+        Err(_) => return Some(raw),
+    };
+    if head.get("v").and_then(serde_json::Value::as_u64) != Some(u64::from(SPLIT)) {
+        return Some(raw);
+    }
+    let list = |name: &str| -> Option<Vec<serde_json::Value>> {
+        pragma::all(attrs, name).iter().map(|v| serde_json::from_str(v).ok()).collect()
+    };
+    let (e, c) = (list(ENTRY)?, list(WIRE)?);
+    let o = head.as_object_mut()?;
+    o.insert("v".into(), VERSION.into());
+    o.insert("e".into(), e.into());
+    o.insert("c".into(), c.into());
+    Some(head.to_string())
+}
 
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize, Default)]
 #[serde(default)]

@@ -338,8 +338,7 @@ pub fn write(doc: &EditorDoc) -> Written {
         car.attrs = Some(doc.attributes.clone());
     }
     out.push_str(&pragma::write_others("", &doc.attributes, pragma::POU));
-    let json = serde_json::to_string(&car).unwrap_or_default();
-    out.push_str(&line("", sidecar::NAME, &escape(&json)));
+    out.push_str(&sidecar::write(&car));
     let kind = match doc.pou_kind {
         PouKind::Program => "PROGRAM",
         PouKind::FunctionBlock => "FUNCTION_BLOCK",

@@ -556,7 +556,7 @@ fn graph_edits(a: &Analysis, s: &Symbol, new_name: &str) -> Vec<TextEdit> {
     }) else {
         return edits;
     };
-    for attr in item.attributes.iter().filter(|at| at.name == "sfc.graph") {
+    for attr in item.attributes.iter().filter(|at| at.name.starts_with("sfc.graph")) {
         let text = a.text.get(attr.span.range()).unwrap_or("");
         let mut from = 0;
         while let Some(i) = text.get(from..).and_then(|t| t.find(key)) {

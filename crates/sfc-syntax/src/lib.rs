@@ -10,6 +10,7 @@ pub mod lexer;
 pub mod literal;
 mod parser;
 pub mod print;
+pub mod regions;
 pub mod visit;
 
 pub use parser::{parse, parse_expression, parse_statements, MAX_DEPTH, MAX_STMT_DEPTH};
