@@ -2,7 +2,8 @@
 //! `.gitattributes` that give `*.st`, `*.xml` and `*.l5x` the diff driver `sfc`, and configures
 //! that driver in the repository's own config: `sfc diff --git-external` as git's external diff
 //! (`git diff`, `git show`, `git log -p`), and `sfc build --target text` as its textconv (used
-//! with `--no-ext-diff`: the charts as canonical text, PLCopen XML included).
+//! with `--no-ext-diff`: the charts as canonical text, PLCopen XML included). `*.st` and `*.xml`
+//! also get the merge driver `sfc`: `sfc merge %O %A %B -o %A --path %P`.
 
 use crate::term;
 use crate::Status;
@@ -30,7 +31,9 @@ struct SetupArgs {
 }
 
 /// The lines `.gitattributes` gets.
-const ATTRIBUTES: [&str; 4] = ["*.st diff=sfc", "*.xml diff=sfc", "*.l5x diff=sfc", "*.L5X diff=sfc"];
+const ATTRIBUTES: [&str; 4] = ["*.st diff=sfc merge=sfc", "*.xml diff=sfc merge=sfc", "*.l5x diff=sfc", "*.L5X diff=sfc"];
+/// Lines an earlier `sfc git setup` wrote, replaced by the ones above.
+const EARLIER: [(&str, &str); 2] = [("*.st diff=sfc", "*.st diff=sfc merge=sfc"), ("*.xml diff=sfc", "*.xml diff=sfc merge=sfc")];
 
 pub fn git(a: GitArgs) -> u8 {
     match a.command {
@@ -67,11 +70,22 @@ fn setup(dir: &Path) -> Result<(), String> {
     run_git(&root, &["config", "diff.sfc.command", &format!("{quoted} diff --git-external")])?;
     run_git(&root, &["config", "diff.sfc.textconv", &format!("{quoted} build --target text")])?;
     run_git(&root, &["config", "diff.sfc.binary", "false"])?;
+    run_git(&root, &["config", "merge.sfc.name", "sfc: charts merged by element"])?;
+    run_git(&root, &["config", "merge.sfc.driver", &format!("{quoted} merge %O %A %B -o %A --path %P")])?;
     let path = root.join(".gitattributes");
-    let before = std::fs::read_to_string(&path).unwrap_or_default();
+    let read = std::fs::read_to_string(&path).unwrap_or_default();
+    // An earlier setup's lines get the merge driver in place.
+    let upgraded: String = read
+        .split_inclusive('\n')
+        .map(|l| match EARLIER.iter().find(|(old, _)| l.trim() == *old) {
+            Some((_, new)) => format!("{new}\n"),
+            None => l.to_string(),
+        })
+        .collect();
+    let before = upgraded.clone();
     let present: Vec<&str> = before.lines().map(str::trim).collect();
     let missing: Vec<&str> = ATTRIBUTES.iter().copied().filter(|l| !present.contains(l)).collect();
-    if !missing.is_empty() {
+    if !missing.is_empty() || upgraded != read {
         let mut text = before.clone();
         if !text.is_empty() && !text.ends_with('\n') {
             text.push('\n');
@@ -86,11 +100,11 @@ fn setup(dir: &Path) -> Result<(), String> {
     println!("git in {} diffs charts by meaning:", root.display());
     println!("  git config diff.sfc.command: sfc diff --git-external (git diff, git show, git log -p)");
     println!("  git config diff.sfc.textconv: sfc build --target text (with --no-ext-diff)");
+    println!("  git config merge.sfc.driver: sfc merge (git merge, rebase, cherry-pick of *.st and *.xml)");
     if missing.is_empty() {
-        println!("  .gitattributes already gives *.st, *.xml and *.l5x the driver");
+        println!("  .gitattributes already gives *.st, *.xml and *.l5x the drivers");
     } else {
         println!("  .gitattributes: added {}", missing.join(", "));
     }
-    println!("  (a merge driver comes with `sfc merge`, not there yet)");
     Ok(())
 }

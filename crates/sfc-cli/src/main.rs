@@ -10,6 +10,7 @@ mod build;
 mod check;
 mod diff;
 mod git;
+mod merge;
 mod edit;
 mod fmt;
 mod lsp;
@@ -52,7 +53,11 @@ enum Command {
     /// and variables added, removed, renamed or changed (`sfc diff OLD NEW`, `sfc diff REV --
     /// FILE`, `sfc diff REV1 REV2 -- FILE`).
     Diff(diff::DiffArgs),
-    /// Set a git repository up so that `git diff` compares charts by meaning.
+    /// Merge two versions of a chart file with their common ancestor by element: changes to
+    /// different steps, transitions and actions merge, the same element changed both ways is a
+    /// conflict (`sfc merge BASE OURS THEIRS -o OUT`; git's merge driver).
+    Merge(merge::MergeArgs),
+    /// Set a git repository up so that `git diff` and `git merge` treat charts by meaning.
     Git(git::GitArgs),
     /// Run every `*.scenario.toml` under the given files and directories.
     Test(test::TestArgs),
@@ -252,6 +257,7 @@ fn run() -> u8 {
         Command::Check(a) => check::check(a),
         Command::Fmt(a) => fmt::fmt(a),
         Command::Diff(a) => diff::diff(a),
+        Command::Merge(a) => merge::merge(a),
         Command::Git(a) => git::git(a),
         Command::Build(a) => build::build(build::BuildRequest {
             file: a.file,

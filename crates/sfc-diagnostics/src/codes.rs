@@ -347,6 +347,11 @@ a duration, `sfc.target` one of blank, atmt, eatmt.";
 example Studio 5000's \"Automatic reset\" last scan, `sfc.logix.lastscan 'AutomaticReset'`, whose \
 postscan mode is not simulated). The message says what runs instead; docs/sim.md gives the \
 details.";
+    "SFC0605" Error "unresolved merge conflict"
+        "`sfc merge` (or git's merge through `sfc git setup`) found an element changed both ways \
+and wrote our version of it, marked with `{attribute 'sfc.conflict' := …}` before the POU, which \
+holds the element and their version. Open the file in the editor and take ours or theirs for \
+each conflict, or edit the element by hand and delete the attribute.";
 
     "SFC0701" Error "malformed XML"
         "The file is not well-formed XML (an unclosed element, a stray `<` or `&`, a mismatched end \

@@ -11,6 +11,8 @@
 //! spacing, case of keywords or comments is no change. Layout (`sfc.x`, `sfc.y`, sizes, the
 //! editor's `sfc.graph`) is apart: a layout-only change leaves the files equal in meaning.
 
+pub mod merge;
+
 use sfc_diagnostics::Span;
 use sfc_model::{Chart, Checked, Duration};
 use sfc_syntax::ast::{self, Attribute, Item};
@@ -187,6 +189,8 @@ pub fn is_layout(attribute: &str) -> bool {
             | "sfc.width"
             | "sfc.height"
             | "sfc.graph"
+            | "sfc.graph.e"
+            | "sfc.graph.c"
             | "sfc.layout"
             | "sfc.actionblock"
             | "sfc.jump"
@@ -475,15 +479,19 @@ fn chart(d: &mut Diff, oc: &Checked, nc: &Checked, pou: &str, a: &Chart, b: &Cha
             map.insert(i, j);
         }
     }
+    // A step that is its own neighbour (a transition from it back to it) is named as itself,
+    // whatever its name, so that it matches when renamed.
+    const ITSELF: &str = "\u{0}itself";
     let neighbours = |c: &Chart, i: usize| -> (Vec<String>, Vec<String>) {
+        let name = |k: usize| if k == i { Some(ITSELF.to_string()) } else { c.steps.get(k).map(|s| s.name.to_ascii_uppercase()) };
         let mut before = Vec::new();
         let mut after = Vec::new();
         for t in &c.transitions {
             if t.to.contains(&i) {
-                before.extend(t.from.iter().filter_map(|&k| c.steps.get(k)).map(|s| s.name.to_ascii_uppercase()));
+                before.extend(t.from.iter().filter_map(|&k| name(k)));
             }
             if t.from.contains(&i) {
-                after.extend(t.to.iter().filter_map(|&k| c.steps.get(k)).map(|s| s.name.to_ascii_uppercase()));
+                after.extend(t.to.iter().filter_map(|&k| name(k)));
             }
         }
         before.sort();
@@ -493,6 +501,7 @@ fn chart(d: &mut Diff, oc: &Checked, nc: &Checked, pou: &str, a: &Chart, b: &Cha
     // The neighbours of an old step, named as in the new file where already matched.
     let renamed_neighbours = |i: usize, map: &HashMap<usize, usize>| -> (Vec<String>, Vec<String>) {
         let name = |k: usize| match map.get(&k).and_then(|&j| b.steps.get(j)) {
+            _ if k == i => ITSELF.to_string(),
             Some(s) => s.name.to_ascii_uppercase(),
             None => a.steps.get(k).map(|s| s.name.to_ascii_uppercase()).unwrap_or_default(),
         };

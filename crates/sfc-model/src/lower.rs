@@ -87,6 +87,8 @@ const KNOWN_ATTRIBUTES: &[&str] = &[
     // Written by the editor (`sfc-doc`): the blocks, connections and bends the text cannot hold;
     // the build output of an "IEC 61131-3" chart (a blank one), kept for the editor's toolbar.
     "sfc.graph",
+    "sfc.graph.e",
+    "sfc.graph.c",
     "sfc.build",
 ];
 
@@ -118,7 +120,19 @@ pub fn check_attributes(attrs: &[ast::Attribute], allowed: &[&str], what: &str, 
         // What an import keeps of a vendor's format for its export (`sfc.logix.*` of an L5X
         // file, `sfc.s7graph.*` of a TIA Portal file) is known by its prefix.
         let vendor = VENDOR_PREFIXES.iter().any(|p| lname.starts_with(p));
-        if !vendor && !KNOWN_ATTRIBUTES.contains(&lname.as_str()) {
+        if lname == "sfc.conflict" {
+            let v = a.value.as_deref().map(sfc_syntax::attr_value::unescape).unwrap_or_default();
+            let key = v.lines().next().unwrap_or("");
+            let element = match key.split_once(':') {
+                Some((kind, name)) => format!("{kind} `{name}`"),
+                None => key.to_string(),
+            };
+            diags.push(Diagnostic::error(
+                "SFC0605",
+                a.span,
+                format!("unresolved merge conflict: {element} was changed both ways; take ours or theirs"),
+            ));
+        } else if !vendor && !KNOWN_ATTRIBUTES.contains(&lname.as_str()) {
             diags.push(Diagnostic::warning("SFC0602", a.span, format!("unknown attribute `{}`", a.name)));
         } else if !meaningful {
             diags.push(Diagnostic::warning(
