@@ -192,3 +192,23 @@ fn the_charts_are_drawn_side_by_side_with_the_changes_coloured() {
     assert!(page.contains("<li class=\"added\">+ step Settling</li>"), "{page}");
     assert_eq!(page.matches("<figure>").count(), 2);
 }
+
+/// Two revisions of a project file as a tool saves them (the shape of a real public history,
+/// see tests/diff/README.md): a short readable summary, the XML churn counted in one line.
+#[test]
+fn revisions_of_a_project_file_read_as_a_short_summary() {
+    let dir = fixtures().join("history");
+    let o = sfc_in(&dir, &["diff", "--color", "never", "crossing_v1.xml", "crossing_v2.xml"]);
+    assert_eq!(o.status.code(), Some(1), "{}", String::from_utf8_lossy(&o.stderr));
+    let expected = std::fs::read_to_string(dir.join("crossing.expected.txt")).unwrap();
+    assert_eq!(out(&o), expected);
+    assert!(out(&o).lines().count() < 15, "{}", out(&o));
+    // The drawn chart itself is equal in meaning: only its layout and header changed.
+    let v1 = std::fs::read_to_string(dir.join("crossing_v1.xml")).unwrap();
+    let v2 = std::fs::read_to_string(dir.join("crossing_v2.xml")).unwrap();
+    let lines_changed = v1.lines().zip(v2.lines()).filter(|(a, b)| a != b).count();
+    assert!(lines_changed > 5, "the XML changes on many lines");
+    let o = sfc_in(&dir, &["diff", "--color", "never", "--layout", "crossing_v1.xml", "crossing_v2.xml"]);
+    assert!(out(&o).contains("layout comment \"The sequence of a pedestrian crossing"), "{}", out(&o));
+    assert!(out(&o).contains("modificationDateTime=\"2024-05-21T16:44:03\""), "{}", out(&o));
+}

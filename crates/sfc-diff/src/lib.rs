@@ -69,6 +69,9 @@ pub struct LayoutChange {
 pub struct Diff {
     pub changes: Vec<Change>,
     pub layout: Vec<LayoutChange>,
+    /// What a tool records about the file rather than the chart (PLCopen's file and content
+    /// headers with their modification times, project data), apart like the layout.
+    pub info: Vec<LayoutChange>,
 }
 
 impl Diff {
@@ -82,7 +85,8 @@ impl Diff {
     pub fn text(&self, layout: bool) -> String {
         let mut out = String::new();
         let mut pous: Vec<&str> = Vec::new();
-        for p in self.changes.iter().map(|c| c.pou.as_str()).chain(self.layout.iter().map(|l| l.pou.as_str())) {
+        let all = self.layout.iter().chain(&self.info);
+        for p in self.changes.iter().map(|c| c.pou.as_str()).chain(all.map(|l| l.pou.as_str())) {
             if !pous.contains(&p) {
                 pous.push(p);
             }
@@ -92,12 +96,19 @@ impl Diff {
             for c in self.changes.iter().filter(|c| c.pou == p) {
                 let _ = writeln!(out, "  {}", line(c));
             }
-            let moved: Vec<&LayoutChange> = self.layout.iter().filter(|l| l.pou == p).collect();
-            if moved.is_empty() {
-                continue;
+            for l in self.info.iter().filter(|l| l.pou == p && l.attribute == "comment") {
+                let how = if l.old.is_none() { "added" } else { "removed" };
+                let _ = writeln!(out, "  # {} {how}", l.element);
             }
+            let info: Vec<&LayoutChange> = self.info.iter().filter(|l| l.pou == p && l.attribute != "comment").collect();
+            if !info.is_empty() && !layout {
+                let mut names: Vec<&str> = info.iter().map(|l| info_name(&l.attribute)).collect();
+                names.dedup();
+                let _ = writeln!(out, "  file information: {} changed (--layout lists it)", names.join(", "));
+            }
+            let moved: Vec<&LayoutChange> = self.layout.iter().filter(|l| l.pou == p).collect();
             if layout {
-                for l in moved {
+                for l in info.iter().chain(&moved) {
                     let _ = writeln!(
                         out,
                         "  layout {}: {} {} -> {}",
@@ -107,7 +118,7 @@ impl Diff {
                         l.new.as_deref().unwrap_or("(none)")
                     );
                 }
-            } else {
+            } else if !moved.is_empty() {
                 let mut elements: Vec<&str> = moved.iter().map(|l| l.element.as_str()).collect();
                 elements.dedup();
                 let n = elements.iter().collect::<HashSet<_>>().len();
@@ -147,7 +158,16 @@ impl Diff {
                 })
             })
             .collect();
-        serde_json::json!({ "equal": self.equal(), "changes": changes, "layout": layout })
+        let info: Vec<serde_json::Value> = self
+            .info
+            .iter()
+            .map(|l| {
+                serde_json::json!({
+                    "pou": l.pou, "element": l.element, "attribute": l.attribute, "old": l.old, "new": l.new,
+                })
+            })
+            .collect();
+        serde_json::json!({ "equal": self.equal(), "changes": changes, "layout": layout, "info": info })
     }
 }
 
@@ -164,6 +184,22 @@ pub fn line(c: &Change) -> String {
             None => format!("- {} {}", c.element, c.name),
         },
         Kind::Renamed => format!("~ {} {} renamed {}", c.element, c.name, c.new.as_deref().unwrap_or("")),
+        // Statements: the ones removed and added, one per line.
+        Kind::Changed
+            if (c.what == "statements" || (c.element == "action" && c.what == "body"))
+                && (c.old.as_deref().unwrap_or("").contains('\n') || c.new.as_deref().unwrap_or("").contains('\n')) =>
+        {
+            let (a, b) = (c.old.as_deref().unwrap_or(""), c.new.as_deref().unwrap_or(""));
+            let mut s = format!("~ {} {} {}:", c.element, c.name, c.what);
+            for l in diffy::create_patch(&lines_of(a), &lines_of(b)).hunks().iter().flat_map(|h| h.lines()) {
+                match l {
+                    diffy::Line::Delete(t) => s.push_str(&format!("\n      - {}", t.trim_end())),
+                    diffy::Line::Insert(t) => s.push_str(&format!("\n      + {}", t.trim_end())),
+                    diffy::Line::Context(_) => {}
+                }
+            }
+            s
+        }
         Kind::Changed => format!(
             "~ {} {} {}: {} -> {}",
             c.element,
@@ -172,6 +208,25 @@ pub fn line(c: &Change) -> String {
             c.old.as_deref().unwrap_or("(none)"),
             c.new.as_deref().unwrap_or("(none)")
         ),
+    }
+}
+
+/// A text as lines, each ending with a line break (for the line diff of statements).
+fn lines_of(s: &str) -> String {
+    s.lines().map(|l| format!("{l}\n")).collect()
+}
+
+/// Attributes in which an import keeps what a tool records about the file: PLCopen's file
+/// and content headers (with their modification times) and foreign project data.
+pub fn is_file_info(attribute: &str) -> bool {
+    matches!(attribute.to_ascii_lowercase().as_str(), "sfc.fileheader" | "sfc.contentheader" | "sfc.projectdata")
+}
+
+fn info_name(attribute: &str) -> &'static str {
+    match attribute {
+        "sfc.fileheader" => "file header",
+        "sfc.contentheader" => "content header",
+        _ => "project data",
     }
 }
 
@@ -331,7 +386,7 @@ fn body_text(c: &Checked, p: &ast::Pou) -> String {
         ast::Body::St(s) => s.iter().map(|s| slice(c, s.span)).collect(),
         _ => Vec::new(),
     };
-    squeeze(&stmts.join(" "))
+    stmts.iter().map(|s| squeeze(s)).collect::<Vec<_>>().join("\n")
 }
 
 /// A declaration's meaning: kind, address, type and initial value.
@@ -398,7 +453,8 @@ fn attributes(d: &mut Diff, pou: &str, element: &'static str, name: &str, a: &[A
         l.iter().map(|x| (x.name.to_ascii_lowercase(), x.value.clone().unwrap_or_default())).collect()
     };
     let (ma, mb) = (map(a), map(b));
-    let keys: HashSet<&String> = ma.keys().chain(mb.keys()).collect();
+    comments(d, pou, a, b);
+    let keys: HashSet<&String> = ma.keys().chain(mb.keys()).filter(|k| k.as_str() != "sfc.comment").collect();
     let mut keys: Vec<&String> = keys.into_iter().collect();
     keys.sort();
     for k in keys {
@@ -406,7 +462,15 @@ fn attributes(d: &mut Diff, pou: &str, element: &'static str, name: &str, a: &[A
         if x == y {
             continue;
         }
-        if is_layout(k) {
+        if is_file_info(k) {
+            d.info.push(LayoutChange {
+                pou: pou.to_string(),
+                element: format!("{element} {name}"),
+                attribute: k.clone(),
+                old: x.cloned(),
+                new: y.cloned(),
+            });
+        } else if is_layout(k) {
             d.layout.push(LayoutChange {
                 pou: pou.to_string(),
                 element: format!("{element} {name}"),
@@ -425,6 +489,63 @@ fn attributes(d: &mut Diff, pou: &str, element: &'static str, name: &str, a: &[A
                 new: y.cloned(),
             });
         }
+    }
+}
+
+/// The text labels of a POU (`sfc.comment`: a box, a line break, the text): a label whose text
+/// is on both sides is the same label (moved or resized: layout), others added or removed
+/// (documentation, listed with the file information: no change of meaning).
+fn comments(d: &mut Diff, pou: &str, a: &[Attribute], b: &[Attribute]) {
+    let labels = |l: &[Attribute]| -> Vec<(String, String)> {
+        l.iter()
+            .filter(|x| x.name.eq_ignore_ascii_case("sfc.comment"))
+            .map(|x| {
+                let v = sfc_syntax::attr_value::unescape(x.value.as_deref().unwrap_or(""));
+                let (bx, text) = v.split_once('\n').unwrap_or(("", v.as_str()));
+                (bx.trim().to_string(), text.trim().to_string())
+            })
+            .collect()
+    };
+    let short = |t: &str| {
+        let one = squeeze(t);
+        if one.chars().count() > 60 {
+            format!("{}…", one.chars().take(60).collect::<String>())
+        } else {
+            one
+        }
+    };
+    let (la, mut lb) = (labels(a), labels(b));
+    for (bx, text) in la {
+        match lb.iter().position(|(_, t)| squeeze(t) == squeeze(&text)) {
+            Some(i) => {
+                let (nbx, _) = lb.remove(i);
+                if nbx != bx {
+                    d.layout.push(LayoutChange {
+                        pou: pou.to_string(),
+                        element: format!("comment \"{}\"", short(&text)),
+                        attribute: "sfc.comment".into(),
+                        old: Some(bx),
+                        new: Some(nbx),
+                    });
+                }
+            }
+            None => d.info.push(LayoutChange {
+                pou: pou.to_string(),
+                element: format!("comment \"{}\"", short(&text)),
+                attribute: "comment".into(),
+                old: Some(text),
+                new: None,
+            }),
+        }
+    }
+    for (_, text) in lb {
+        d.info.push(LayoutChange {
+            pou: pou.to_string(),
+            element: format!("comment \"{}\"", short(&text)),
+            attribute: "comment".into(),
+            old: None,
+            new: Some(text),
+        });
     }
 }
 
