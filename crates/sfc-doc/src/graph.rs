@@ -399,9 +399,13 @@ pub fn dangling(id: &str) -> String {
 }
 
 /// The document with the ids `open` would give it (see [`canonical_ids`]); references to
-/// blocks follow, references to missing blocks become [`dangling`].
+/// blocks follow, references to missing blocks become [`dangling`]. Wires are as `open` gives
+/// them: a straight wire kept as its two pins (as the canvas keeps it) has no waypoints, a
+/// wire without waypoints that is not straight runs on its automatic route (the canvas draws
+/// it so).
 pub fn normalize(doc: &EditorDoc, d: &Derived) -> EditorDoc {
     let (ids, conn_ids) = canonical_ids(doc, d);
+    let routes = crate::layout::canonical_routes(doc, d);
     let map = |old: &str| -> String {
         match d.by_id.get(old) {
             Some(&i) => ids[i].clone(),
@@ -415,7 +419,10 @@ pub fn normalize(doc: &EditorDoc, d: &Derived) -> EditorDoc {
             *s = map(s);
         }
     }
-    for (c, id) in out.connections.iter_mut().zip(conn_ids) {
+    for (k, (c, id)) in out.connections.iter_mut().zip(conn_ids).enumerate() {
+        if let Some(Some(w)) = routes.get(k) {
+            c.waypoints = w.clone();
+        }
         c.id = id;
         c.source = map(&c.source);
         c.target = map(&c.target);

@@ -171,9 +171,13 @@ pub fn keep(file_text: &str, name: &str, after_text: &str) -> Option<String> {
     // Blocks left without a position are laid out around the positioned ones when the file
     // is opened again; those that would land elsewhere than where the document has them get
     // their position written too.
+    // The layout lines are written when they changed; when the file has none and the drawing
+    // opened again without them would differ (a bar, a bend, a label placed by hand), they
+    // are written too.
+    let mut graph = before.text_of("graph") != after.text_of("graph");
     let mut forced: Vec<String> = Vec::new();
-    for _ in 0..4 {
-        let result = build(file_text, &file, &before, &after, &forced)?;
+    for _ in 0..6 {
+        let result = build(file_text, &file, &before, &after, &forced, graph)?;
         let check = crate::open(0, "file", &result);
         let doc = check.charts.iter().find(|c| c.pou.eq_ignore_ascii_case(name))?;
         let written = crate::to_text(doc).text;
@@ -190,12 +194,37 @@ pub fn keep(file_text: &str, name: &str, after_text: &str) -> Option<String> {
             .filter_map(key_of)
             .filter(|k| !forced.contains(k))
             .collect();
-        if moved.is_empty() {
-            return Some(result);
+        if !moved.is_empty() {
+            forced.extend(moved);
+            continue;
         }
-        forced.extend(moved);
+        if !graph && !same_drawing(doc, &saved) {
+            graph = true;
+            continue;
+        }
+        return Some(result);
     }
     None
+}
+
+/// Whether two documents draw the same: every block at the same place and size, every wire
+/// between the same pins along the same route.
+fn same_drawing(a: &crate::EditorDoc, b: &crate::EditorDoc) -> bool {
+    let blocks = |d: &crate::EditorDoc| -> Vec<(String, f64, f64, f64, f64)> {
+        let mut v: Vec<_> = d.elements.iter().map(|e| (e.id.clone(), e.x, e.y, e.w, e.h)).collect();
+        v.sort_by(|x, y| x.0.cmp(&y.0));
+        v
+    };
+    let wires = |d: &crate::EditorDoc| -> Vec<(String, u32, String, u32, Vec<crate::Point>)> {
+        let mut v: Vec<_> = d
+            .connections
+            .iter()
+            .map(|c| (c.source.clone(), c.source_pin, c.target.clone(), c.target_pin, c.waypoints.clone()))
+            .collect();
+        v.sort_by(|x, y| (&x.0, x.1, &x.2, x.3).cmp(&(&y.0, y.1, &y.2, y.3)));
+        v
+    };
+    blocks(a) == blocks(b) && wires(a) == wires(b)
 }
 
 /// The region key of a step or transition block (`step:NAME`, `transition:NAME`; `None` for
@@ -207,10 +236,9 @@ fn key_of(e: &Element) -> Option<String> {
 
 /// The POU's new text: the regions of `file` in its order, changed, kept or dropped, and the new
 /// ones of `after`; the regions named in `forced` get the position `after` gives them.
-fn build(file_text: &str, file: &Cut, before: &Cut, after: &Cut, forced: &[String]) -> Option<String> {
+fn build(file_text: &str, file: &Cut, before: &Cut, after: &Cut, forced: &[String], graph_new: bool) -> Option<String> {
     // The layout attribute: kept as in the file unless it changed; written anew, every block
     // needs its position (the layout is read only when all steps and transitions have one).
-    let graph_new = before.text_of("graph") != after.text_of("graph");
     let mut out: Vec<(String, String)> = Vec::new();
     for r in &file.regions {
         let f = file.text.get(r.range.clone()).unwrap_or("");
@@ -222,6 +250,14 @@ fn build(file_text: &str, file: &Cut, before: &Cut, after: &Cut, forced: &[Strin
             (None, None) => f.to_string(),
             (None, Some(a)) => a.to_string(),
             (Some(b), Some(a)) if r.kind == RegionKind::Graph => {
+                if b == a {
+                    f.to_string()
+                } else {
+                    a.to_string()
+                }
+            }
+            // An action (its chart's steps inside) or anything else that changed: written anew.
+            (Some(b), Some(a)) if !matches!(r.kind, RegionKind::Step | RegionKind::Transition) => {
                 if b == a {
                     f.to_string()
                 } else {

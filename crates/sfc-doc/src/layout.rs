@@ -355,20 +355,80 @@ pub fn place(doc: &mut EditorDoc, d: &Derived, m: &Model, layout: &Layout, keep:
 /// Routes every connection read around the blocks and labels (`route.rs`): straight where the
 /// pins are aligned and nothing is in the way.
 pub fn route_all(doc: &mut EditorDoc, d: &Derived) {
+    route_where(doc, d, |_| true);
+}
+
+/// Routes the connections that have no waypoints (a layout stored without the automatic routes).
+pub fn route_empty(doc: &mut EditorDoc, d: &Derived) {
+    route_where(doc, d, |c| c.waypoints.is_empty());
+}
+
+fn obstacles(doc: &EditorDoc) -> Vec<Rect> {
     let mut obstacles: Vec<Rect> = doc.elements.iter().filter(|e| e.kind.is_some()).map(Rect::of).collect();
     obstacles.extend(drawing::labels(doc).into_iter().map(|l| l.rect));
+    obstacles
+}
+
+/// The automatic route of connection `c` (empty for a straight wire), with its two pins.
+fn automatic(doc: &EditorDoc, d: &Derived, obstacles: &[Rect], c: usize) -> Option<(Vec<Point>, Point, Point)> {
+    if !d.used.get(c).copied().unwrap_or(false) {
+        return None;
+    }
+    let con = doc.connections.get(c)?;
+    let (Some(&s), Some(&t)) = (d.by_id.get(&con.source), d.by_id.get(&con.target)) else { return None };
+    let from = pin_pos(doc.elements.get(s)?, false, con.source_pin);
+    let to = pin_pos(doc.elements.get(t)?, true, con.target_pin);
+    let straight =
+        (from.x - to.x).abs() < 0.5 && to.y > from.y && !obstacles.iter().any(|r| crate::route::crosses(from, to, r));
+    let route = if straight { Vec::new() } else { crate::route::route(from, to, obstacles, None) };
+    Some((route, from, to))
+}
+
+fn route_where(doc: &mut EditorDoc, d: &Derived, which: impl Fn(&crate::Connection) -> bool) {
+    let obstacles = obstacles(doc);
     for c in 0..doc.connections.len() {
-        if !d.used[c] {
+        if !which(&doc.connections[c]) {
             continue;
         }
-        let con = &doc.connections[c];
-        let (Some(&s), Some(&t)) = (d.by_id.get(&con.source), d.by_id.get(&con.target)) else { continue };
-        let from = pin_pos(&doc.elements[s], false, con.source_pin);
-        let to = pin_pos(&doc.elements[t], true, con.target_pin);
-        let straight = (from.x - to.x).abs() < 0.5
-            && to.y > from.y
-            && !obstacles.iter().any(|r| crate::route::crosses(from, to, r));
-        doc.connections[c].waypoints =
-            if straight { Vec::new() } else { crate::route::route(from, to, &obstacles, None) };
+        if let Some((route, _, _)) = automatic(doc, d, &obstacles, c) {
+            doc.connections[c].waypoints = route;
+        }
     }
+}
+
+/// For each connection, its waypoints as `open` gives them when they differ: none for a
+/// straight wire kept as its two pins, the automatic route for a wire without waypoints.
+pub fn canonical_routes(doc: &EditorDoc, d: &Derived) -> Vec<Option<Vec<Point>>> {
+    let obstacles = obstacles(doc);
+    (0..doc.connections.len())
+        .map(|c| {
+            let w = &doc.connections[c].waypoints;
+            let (route, from, to) = automatic(doc, d, &obstacles, c)?;
+            if route.is_empty() && w.len() == 2 && w[0] == from && w[1] == to {
+                Some(Vec::new())
+            } else if w.is_empty() && !route.is_empty() {
+                Some(route)
+            } else {
+                None
+            }
+        })
+        .collect()
+}
+
+/// For each connection, whether it runs on its automatic route (the one [`route_all`] gives,
+/// or for a straight wire its two pins, as the canvas keeps it): saved without waypoints, it
+/// is routed the same way when opened.
+pub fn on_automatic_route(doc: &EditorDoc, d: &Derived) -> Vec<bool> {
+    let obstacles = obstacles(doc);
+    (0..doc.connections.len())
+        .map(|c| {
+            let w = &doc.connections[c].waypoints;
+            match automatic(doc, d, &obstacles, c) {
+                Some((route, from, to)) => {
+                    *w == route || (route.is_empty() && w.len() == 2 && w[0] == from && w[1] == to)
+                }
+                None => false,
+            }
+        })
+        .collect()
 }

@@ -319,13 +319,21 @@ pub fn read_in<'a>(
 /// The document of a chart read from text, with canonical ids.
 pub fn document(r: &ReadChart) -> EditorDoc {
     let mut probe = Probe::for_attributes(&r.attributes);
-    let doc = from_sidecar(r, &mut probe).unwrap_or_else(|| {
-        let mut doc = laid_out(r, &mut probe);
-        add_loose(&mut doc, &r.loose);
-        doc
-    });
-    let d = graph::derive(&doc, &mut probe);
-    graph::normalize(&doc, &d)
+    match from_sidecar(r, &mut probe) {
+        Some(mut doc) => {
+            // Wires saved on their automatic route have no waypoints: routed again.
+            let d = graph::derive(&doc, &mut probe);
+            layout::route_empty(&mut doc, &d);
+            let d = graph::derive(&doc, &mut probe);
+            graph::normalize(&doc, &d)
+        }
+        None => {
+            let mut doc = laid_out(r, &mut probe);
+            add_loose(&mut doc, &r.loose);
+            let d = graph::derive(&doc, &mut probe);
+            graph::normalize(&doc, &d)
+        }
+    }
 }
 
 /// Draws the transitions of `sfc.loose` (a chart being drawn in another tool): each at its
@@ -447,7 +455,15 @@ fn from_sidecar(r: &ReadChart, probe: &mut Probe) -> Option<EditorDoc> {
             let list = &r.step_assocs[k];
             let assocs = list.get(cursor[k]..cursor[k].checked_add(count)?)?.to_vec();
             cursor[k] += count;
-            Element { kind: Some(ElementKind::ActionBlock), step: Some(tmp(en.st?)), associations: assocs, ..a.clone() }
+            let mut block = a.clone();
+            if let Some(j) = en.ab {
+                let g = r.step_blocks.get(k)?.as_ref()?.get(j)?;
+                if g[4] != count as f64 {
+                    return None;
+                }
+                (block.x, block.y, block.w, block.h) = (g[0], g[1], g[2], g[3]);
+            }
+            Element { kind: Some(ElementKind::ActionBlock), step: Some(tmp(en.st?)), associations: assocs, ..block }
         } else if let Some(x) = &en.x {
             restore(x.clone())?
         } else {
@@ -782,12 +798,29 @@ fn laid_out(r: &ReadChart, probe: &mut Probe) -> EditorDoc {
 
     let d = graph::derive(&doc, probe);
     let only_labels_kept = doc.elements.iter().zip(&keep).all(|(e, k)| !k || e.kind == Some(ElementKind::Text));
-    if !(only_labels_kept
-        && lay.kind == LayoutKind::Structured
-        && structured(&mut doc, &d, chart, &step_of, &transition_of))
-    {
-        layout::place(&mut doc, &d, &Model { step_of: &step_of, transition_of: &transition_of }, &lay, &keep);
+    // Blocks with a stored place keep it; every other block is where the structured layout
+    // puts it when nothing is stored (so a file that stores the place of a few blocks only,
+    // as a save that changed only those writes it, opens as it was drawn), and the wires are
+    // routed again.
+    let stored: Vec<(usize, (f64, f64, f64, f64))> = doc
+        .elements
+        .iter()
+        .enumerate()
+        .filter(|(i, e)| keep.get(*i).copied().unwrap_or(false) && e.kind != Some(ElementKind::Text))
+        .map(|(i, e)| (i, (e.x, e.y, e.w, e.h)))
+        .collect();
+    if lay.kind == LayoutKind::Structured && structured(&mut doc, &d, chart, &step_of, &transition_of) {
+        if !only_labels_kept {
+            for (i, g) in stored {
+                if let Some(e) = doc.elements.get_mut(i) {
+                    (e.x, e.y, e.w, e.h) = g;
+                }
+            }
+            layout::route_all(&mut doc, &d);
+        }
+        return doc;
     }
+    layout::place(&mut doc, &d, &Model { step_of: &step_of, transition_of: &transition_of }, &lay, &keep);
     doc
 }
 

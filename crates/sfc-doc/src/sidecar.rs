@@ -107,6 +107,11 @@ pub struct Entry {
     pub a: Option<Element>,
     #[serde(skip_serializing_if = "Option::is_none")]
     pub n: Option<usize>,
+    /// The action block's place and size are its step's `ab`-th `sfc.actionblock` entry (the
+    /// element then has none of its own), so moving a step with its action blocks changes
+    /// the step's lines only.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub ab: Option<usize>,
     /// Any other block, whole (without id; an action block's step as `st` or `sr`).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub x: Option<Element>,

@@ -269,15 +269,19 @@ pub fn write(doc: &EditorDoc) -> Written {
     if probe.comments(&doc.trailing_comments) != doc.trailing_comments {
         car.tc = Some(doc.trailing_comments.clone());
     }
+    // A wire on its automatic route is saved without waypoints (opening routes it again), so
+    // moving a block does not change the lines of its wires.
+    let automatic = crate::layout::on_automatic_route(doc, &d);
     car.c = doc
         .connections
         .iter()
-        .map(|c| Wire {
+        .enumerate()
+        .map(|(k, c)| Wire {
             s: end(&d, &c.source),
             sp: c.source_pin,
             t: end(&d, &c.target),
             tp: c.target_pin,
-            w: c.waypoints.clone(),
+            w: if automatic.get(k).copied().unwrap_or(false) { Vec::new() } else { c.waypoints.clone() },
             col: c.color.clone(),
             lw: c.line_width,
         })
@@ -507,12 +511,21 @@ fn other_entry(
                 Some(texts) => {
                     let n = texts.len();
                     step_assocs.entry(s).or_default().extend(texts);
-                    step_blocks
-                        .entry(s)
-                        .or_default()
-                        .push(format!("{} {} {} {} {n}", num(e.x), num(e.y), num(e.w), num(e.h)));
-                    let a = Element { id: String::new(), step: None, associations: Vec::new(), ..e.clone() };
-                    return Entry { a: Some(a), n: Some(n), st: Some(s), ..Entry::default() };
+                    let blocks = step_blocks.entry(s).or_default();
+                    let ab = blocks.len();
+                    blocks.push(format!("{} {} {} {} {n}", num(e.x), num(e.y), num(e.w), num(e.h)));
+                    // Its place is in the step's `sfc.actionblock`.
+                    let a = Element {
+                        id: String::new(),
+                        step: None,
+                        associations: Vec::new(),
+                        x: 0.0,
+                        y: 0.0,
+                        w: 0.0,
+                        h: 0.0,
+                        ..e.clone()
+                    };
+                    return Entry { a: Some(a), n: Some(n), st: Some(s), ab: Some(ab), ..Entry::default() };
                 }
                 None => problems.push(problem(
                     "SFC0209",
