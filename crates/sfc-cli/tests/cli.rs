@@ -207,6 +207,24 @@ fn fmt_rewrites_in_place_and_check_reports() {
     assert!(leftovers.is_empty(), "temporary files left behind");
 }
 
+/// An editor's layout saved in the older form (one `sfc.graph` line) is written one element per
+/// line by `sfc fmt`, and opens in the editor as before; a formatted file stays as it is.
+#[test]
+fn fmt_writes_the_layout_one_element_per_line() {
+    let d = temp_dir("fmt-layout");
+    let f = d.join("v1.st");
+    let v1 = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/../sfc-doc/tests/snapshots/layout_v1.st")).unwrap();
+    std::fs::write(&f, &v1).unwrap();
+    assert_eq!(sfc(&["fmt", f.to_str().unwrap()]).status.code(), Some(0));
+    let formatted = std::fs::read_to_string(&f).unwrap();
+    assert!(formatted.contains("{attribute 'sfc.graph' := '{\"v\":2$7D'}\n{attribute 'sfc.graph.e' := '{\"s\":\"Idle\"$7D'}\n"), "{formatted}");
+    assert_eq!(formatted.matches("sfc.graph.c").count(), 4, "{formatted}");
+    let before = sfc_doc::open(0, "v1.st", &v1).charts;
+    let after = sfc_doc::open(0, "v1.st", &formatted).charts;
+    assert_eq!(before, after);
+    assert_eq!(sfc(&["fmt", "--check", f.to_str().unwrap()]).status.code(), Some(0));
+}
+
 #[test]
 fn fmt_refuses_files_with_syntax_errors() {
     let d = temp_dir("fmt-bad");

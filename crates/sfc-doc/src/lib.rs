@@ -470,6 +470,12 @@ pub fn splice_replacing(file_text: &str, doc: &EditorDoc, replacing: &str) -> St
     splice::splice(file_text, replacing, &written, &kept)
 }
 
+/// `text` (IEC text, as `sfc fmt` prints it) with the editor's layout attributes of an older
+/// save (`sfc.graph` on one line) written one element per line, as the editor writes them now.
+pub fn split_layout(text: &str) -> String {
+    sidecar::split_old(text)
+}
+
 /// Whether IEC text holds a POU named `name` (compared as IEC does, ignoring case).
 pub fn holds_pou(file_text: &str, name: &str) -> bool {
     splice::holds_pou(file_text, name)

@@ -40,6 +40,35 @@ pub fn write(car: &Sidecar) -> String {
     out
 }
 
+/// `text` with every layout attribute of the older form (`sfc.graph` with `v` 1, everything on
+/// one line) written in today's form, one line per block and connection, indented alike; a
+/// line that does not read as a layout stays as it is.
+pub fn split_old(text: &str) -> String {
+    const HEAD: &str = "{attribute 'sfc.graph' := '";
+    let mut out = String::with_capacity(text.len());
+    for line in text.split_inclusive('\n') {
+        let body = line.trim_end_matches(['\n', '\r']);
+        let rest = body.trim_start();
+        let indent = body.get(..body.len() - rest.len()).unwrap_or("");
+        let car = rest
+            .strip_prefix(HEAD)
+            .and_then(|r| r.strip_suffix("'}"))
+            .and_then(|v| serde_json::from_str::<Sidecar>(&pragma::unescape(v)).ok())
+            .filter(|car| car.v == VERSION);
+        let Some(car) = car else {
+            out.push_str(line);
+            continue;
+        };
+        let end = line.get(body.len()..).filter(|e| !e.is_empty()).unwrap_or("\n");
+        for l in write(&car).lines() {
+            out.push_str(indent);
+            out.push_str(l);
+            out.push_str(end);
+        }
+    }
+    out
+}
+
 /// The layout of a POU's attributes as one JSON text (`v` 1), from either form; `None`
 /// without one, or when a split line does not read (the chart is then laid out afresh).
 pub fn read(attrs: &[sfc_syntax::ast::Attribute]) -> Option<String> {

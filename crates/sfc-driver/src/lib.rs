@@ -46,5 +46,7 @@ pub fn format(name: &str, text: &str) -> Result<String, FormatError> {
     if !errors.is_empty() {
         return Err(FormatError::Syntax { file: SourceFile::new(name, text), diagnostics: errors });
     }
-    Ok(sfc_syntax::print::print(&unit))
+    // The editor's layout attribute of an older save is written one element per line, as the
+    // editor writes it now (`sfc_doc::split_layout`).
+    Ok(sfc_doc::split_layout(&sfc_syntax::print::print(&unit)))
 }
