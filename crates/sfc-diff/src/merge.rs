@@ -262,7 +262,11 @@ fn merge_pou(m: &mut Merged, name: &str, base: &str, ours: &str, theirs: &str) -
     for key in keys {
         let (bt, ot, tt) = (get(&b, &key), get(&o, &key), get(&t, &key));
         let is_graph = [&b, &o, &t].iter().any(|v| v.iter().any(|r| r.0 == key && r.1 == RegionKind::Graph));
+        // The layout's lines refer to blocks by their place in the list: changed on both sides,
+        // their lines cannot be merged safely, and the layout is dropped (below).
+        let both_changed = ot != bt && tt != bt && ot != tt;
         let merged = match three(bt.as_deref(), ot.as_deref(), tt.as_deref()) {
+            Ok(_) if is_graph && both_changed => Err("changed both ways".to_string()),
             Err(why) if !is_graph => match (&bt, &ot, &tt) {
                 (Some(b), Some(o), Some(t)) => apart(b, o, t, &mut |what| {
                     m.notes.push(format!("{} of `{name}`: {what}", said(&key).replacen(':', " ", 1)));
@@ -369,4 +373,75 @@ fn apart(base: &str, ours: &str, theirs: &str, note: &mut dyn FnMut(String)) -> 
         out.push_str(&layout);
     }
     Some(out)
+}
+
+/// The conflicts a merged POU is marked with: (element as `kind:Name`, their text).
+pub fn conflicts_of(attributes: &[sfc_syntax::ast::Attribute]) -> Vec<(String, String)> {
+    attributes
+        .iter()
+        .filter(|a| a.name.eq_ignore_ascii_case(CONFLICT))
+        .map(|a| {
+            let v = sfc_syntax::attr_value::unescape(a.value.as_deref().unwrap_or(""));
+            let (element, theirs) = v.split_once('\n').unwrap_or((v.as_str(), ""));
+            (element.to_string(), theirs.to_string())
+        })
+        .collect()
+}
+
+/// `text` with the conflict of `element` (`kind:Name`, as marked) in POU `pou` resolved: its
+/// `sfc.conflict` attribute removed, and with `theirs` the element's text replaced by theirs
+/// (removed when their side removed it). `Err` says why it cannot be done.
+pub fn resolve(text: &str, pou: &str, element: &str, theirs: bool) -> Result<String, String> {
+    let (unit, _) = sfc_syntax::parse(0, text);
+    let p = unit
+        .items
+        .iter()
+        .find_map(|i| match i {
+            Item::Pou(p) if p.name.text.eq_ignore_ascii_case(pou) => Some(p),
+            _ => None,
+        })
+        .ok_or_else(|| format!("no POU `{pou}`"))?;
+    let mark = p
+        .attributes
+        .iter()
+        .find(|a| {
+            a.name.eq_ignore_ascii_case(CONFLICT)
+                && conflicts_of(std::slice::from_ref(a)).first().is_some_and(|(e, _)| e.eq_ignore_ascii_case(element))
+        })
+        .ok_or_else(|| format!("`{pou}` has no conflict on {element}"))?;
+    let their_text = conflicts_of(std::slice::from_ref(mark)).into_iter().next().map(|(_, t)| t).unwrap_or_default();
+    // The attribute's line (with its line break).
+    let (s, e) = (mark.span.start as usize, mark.span.end as usize);
+    let line_start = text.get(..s).and_then(|b| b.rfind('\n')).map_or(0, |i| i + 1);
+    let line_end = text.get(e..).and_then(|r| r.find('\n')).map_or(text.len(), |i| e + i + 1);
+    let own_line = text.get(line_start..s).is_some_and(|b| b.trim().is_empty())
+        && text.get(e..line_end).is_some_and(|a| a.trim().is_empty());
+    let cut = if own_line { line_start..line_end } else { s..e };
+    let mut edits: Vec<(std::ops::Range<usize>, String)> = vec![(cut, String::new())];
+    if theirs {
+        let key = match element.split_once(':') {
+            Some((kind, name)) => format!("{}:{}", kind.to_ascii_lowercase(), name.to_ascii_lowercase()),
+            None => element.to_ascii_lowercase(),
+        };
+        let r = regions(text, p).into_iter().find(|r| r.key == key).map(|r| r.range);
+        match r {
+            Some(range) => edits.push((range, their_text)),
+            None if !their_text.is_empty() => {
+                // Removed on our side: theirs goes before the end of the POU.
+                let tail = regions(text, p).into_iter().find(|r| r.kind == RegionKind::Tail).map(|r| r.range.start);
+                let at = tail.ok_or_else(|| format!("cannot place {element} in `{pou}`"))?;
+                edits.push((at..at, their_text));
+            }
+            None => {}
+        }
+    }
+    edits.sort_by_key(|(r, _)| std::cmp::Reverse(r.start));
+    let mut out = text.to_string();
+    for (r, t) in edits {
+        if out.get(r.clone()).is_none() {
+            return Err("the marks do not fit the text".into());
+        }
+        out.replace_range(r, &t);
+    }
+    Ok(out)
 }

@@ -287,3 +287,27 @@ fn apply_both(c: &Chart, e1: &Edit, e2: &Edit) -> Chart {
 fn index(c: &Chart, name: &str) -> usize {
     c.trs.iter().position(|t| t.name == name).unwrap()
 }
+
+/// A conflict resolved either way gives a chart without marks: ours, or theirs.
+#[test]
+fn a_conflict_is_resolved_by_taking_a_side() {
+    let base = "PROGRAM P\n    VAR\n        a, b : BOOL;\n    END_VAR\n    INITIAL_STEP S1: END_STEP\n    STEP S2: END_STEP\n    TRANSITION T1 FROM S1 TO S2\n        := a;\n    END_TRANSITION\n    TRANSITION T2 FROM S2 TO S1\n        := b;\n    END_TRANSITION\nEND_PROGRAM\n";
+    let ours = base.replace(":= a;", ":= a AND b;");
+    let theirs = base.replace(":= a;", ":= a OR b;");
+    let m = merge(base, &ours, &theirs);
+    assert_eq!(m.conflicts.len(), 1);
+    let marked = sfc_diff::merge::conflicts_of(
+        &match sfc_syntax::parse(0, &m.text).0.items.remove(0) {
+            sfc_syntax::ast::Item::Pou(p) => p,
+            _ => unreachable!(),
+        }
+        .attributes,
+    );
+    assert_eq!(marked.len(), 1);
+    assert_eq!(marked[0].0, "transition:T1");
+    let kept = sfc_diff::merge::resolve(&m.text, "P", "transition:T1", false).unwrap();
+    assert_eq!(kept, ours);
+    let taken = sfc_diff::merge::resolve(&m.text, "P", "transition:T1", true).unwrap();
+    assert_eq!(taken, theirs);
+    assert!(sfc_diff::merge::resolve(&m.text, "P", "transition:T2", true).is_err());
+}
