@@ -5,6 +5,10 @@
 export type {
   BuildResult,
   BuildTarget,
+  ChangeKind,
+  CompareAgainst,
+  CompareChange,
+  CompareResult,
   Diag,
   FileEntry,
   FileFormat,

@@ -109,7 +109,7 @@ fn is_chart_file(p: &Path) -> bool {
 
 /// `path` from the page: one of the files named on the command line, or a chart file under a
 /// directory named there; the page cannot touch other files.
-fn chart_path(s: &AppState, raw: &str) -> Result<PathBuf, ApiError> {
+pub(crate) fn chart_path(s: &AppState, raw: &str) -> Result<PathBuf, ApiError> {
     let path = crate::confine(&s.0.roots, &s.0.open, raw)?;
     if is_chart_file(&path) || s.0.open.contains(&path) {
         Ok(path)
@@ -140,7 +140,7 @@ pub(crate) fn file_for_simulation(
 }
 
 /// The file's bytes; `None` when it does not exist.
-fn read_existing(path: &Path) -> Result<Option<Vec<u8>>, ApiError> {
+pub(crate) fn read_existing(path: &Path) -> Result<Option<Vec<u8>>, ApiError> {
     match std::fs::metadata(path) {
         Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(None),
         Err(e) => return Err(io_error(path, &e)),

@@ -224,6 +224,69 @@ pub struct BuildResult {
     pub result_written: Option<String>,
 }
 
+/// What `POST /api/compare` compares the chart with: the file as saved on disk, or as in git
+/// HEAD.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[cfg_attr(test, derive(ts_rs::TS))]
+#[serde(rename_all = "lowercase")]
+pub enum CompareAgainst {
+    Saved,
+    Head,
+}
+
+/// What became of an element (`sfc diff`'s kinds).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[cfg_attr(test, derive(ts_rs::TS))]
+#[serde(rename_all = "lowercase")]
+pub enum ChangeKind {
+    Added,
+    Removed,
+    Renamed,
+    Changed,
+}
+
+/// One change of meaning, as `sfc diff --format json` gives it, with the blocks of the chart
+/// on the canvas it concerns.
+#[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
+#[cfg_attr(test, derive(ts_rs::TS))]
+#[serde(rename_all = "camelCase", deny_unknown_fields)]
+pub struct CompareChange {
+    /// `pou`, `variable`, `step`, `transition`, `action` or `body`.
+    pub element: String,
+    /// The element's name (the old one when renamed or removed).
+    pub name: String,
+    pub kind: ChangeKind,
+    /// For a change, what changed (`condition`, `steps`, `actions`, `type`, `attribute NAME` …).
+    pub what: String,
+    pub old: Option<String>,
+    pub new: Option<String>,
+    /// Ids of the blocks of the current chart it concerns (`step:NAME`, `transition:NAME`, the
+    /// action blocks naming an action); none for a variable, the POU, or a removed element.
+    pub element_ids: Vec<String>,
+}
+
+/// `POST /api/compare`.
+#[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
+#[cfg_attr(test, derive(ts_rs::TS))]
+#[serde(deny_unknown_fields)]
+pub struct CompareResult {
+    pub against: CompareAgainst,
+    /// What the chart was compared with: the file's path, `PATH@HEAD` for git HEAD.
+    pub file: String,
+    pub pou: String,
+    /// Equal in meaning (the layout may differ).
+    pub equal: bool,
+    /// Added, renamed and changed elements.
+    pub changes: Vec<CompareChange>,
+    /// Removed elements: the current chart has no block for them.
+    pub removed: Vec<CompareChange>,
+    /// How many blocks of the chart have another place or size than in the chart the file
+    /// opens as (steps and transitions matched by name, through renames).
+    pub layout: u32,
+    /// A side with errors compared as far as it could be read.
+    pub notes: Vec<String>,
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -253,6 +316,10 @@ mod tests {
             Replay::decl(&cfg),
             ProveSummary::decl(&cfg),
             ProveResult::decl(&cfg),
+            CompareAgainst::decl(&cfg),
+            ChangeKind::decl(&cfg),
+            CompareChange::decl(&cfg),
+            CompareResult::decl(&cfg),
         ] {
             out.push_str("export ");
             out.push_str(&decl);

@@ -9,6 +9,7 @@
 mod access;
 mod api;
 mod assets;
+mod compare;
 mod confine;
 pub mod contract;
 mod diag;
@@ -196,6 +197,7 @@ pub fn app(state: AppState) -> Router {
         .route("/api/layout", post(api::layout))
         .route("/api/new", post(api::new_chart))
         .route("/api/prove", post(prove::prove))
+        .route("/api/compare", post(compare::compare))
         .route("/api/sim/start", post(sim::start))
         .route("/api/sim/stop", post(sim::stop))
         .route("/api", any(api::not_found))

@@ -1,7 +1,7 @@
 // The SFC Editor's shell: menus, toolbar, chart tabs (MDI) or the single chart (host mode), the
 // canvas of each chart, the Properties, Error List and Result panels, dialogs and status bar.
 import { useEffect, useMemo, useRef, useState } from 'preact/hooks';
-import type { BuildTarget, Diag, FileFormat, Session } from '../api';
+import type { BuildTarget, CompareAgainst, Diag, FileFormat, Session } from '../api';
 import type { CanvasHandle, CreateCanvas } from '../diagram/types';
 import type { EditorDoc } from '../doc';
 import { currentLanguage, i18n, LANGUAGES, nextLanguage, setLanguage, t, type Lang } from '../i18n';
@@ -10,6 +10,8 @@ import { targetsFor } from './buildResult';
 import { chartBuild, chartKind, kindFields, withBuild, type ChartKind } from './chartKind';
 import { witnessSituations } from './chart';
 import { actionChart, assemble, blocksNamed, sfcActions, viewKey } from './actionCharts';
+import { compareColours, type ChangeRow } from './compare';
+import { ComparePanel } from './ComparePanel';
 import { AboutDialog, CloseDialog, ConflictDialog, NewDialog, OpenDialog, SaveAsDialog, ShortcutsDialog, type NewChartRequest } from './dialogs';
 import { ErrorList, type WitnessView } from './ErrorList';
 import { rememberFile, Welcome } from './Welcome';
@@ -85,7 +87,8 @@ export function App({ api, createCanvas }: AppProps) {
   const docChanged = useForceUpdate();
   const [zoom, setZoom] = useState(1);
   const [panels, setPanels] = useState({ tools: true, properties: true, bottom: true });
-  const [bottomTab, setBottomTab] = useState<'errors' | 'result'>('errors');
+  const [bottomTab, setBottomTab] = useState<'errors' | 'result' | 'compare'>('errors');
+  const [selectedChange, setSelectedChange] = useState<number | null>(null);
   const [buildMode, setBuildMode] = useState<BuildMode>('build');
   const [dialog, setDialog] = useState<Dialog | null>(null);
   const [selectedDiag, setSelectedDiag] = useState<number | null>(null);
@@ -185,6 +188,8 @@ export function App({ api, createCanvas }: AppProps) {
     setZoom(canvas ? canvas.getZoom() : 1);
     setSelectedDiag(null);
     setWitness(null);
+    setSelectedChange(null);
+    setBottomTab((b) => (b === 'compare' && !store.active()?.compare ? 'errors' : b));
   }, [tab?.id, canvas]);
 
   // Every error and warning block framed. In an action's chart the blocks are found by the
@@ -230,6 +235,21 @@ export function App({ api, createCanvas }: AppProps) {
     if (fired) canvas.reveal(fired);
   }, [canvas, witness, diagnostics]);
 
+  // A comparison's colours on the POU's chart of each tab: added green, renamed or changed
+  // orange (highlights: the document is not touched); none once it is closed or the chart changed.
+  const comparisons = store.tabs.map((x) => x.compare);
+  useEffect(() => {
+    for (const x of store.tabs) {
+      const c = canvases.current.get(x.id);
+      if (!c) continue;
+      const colours = x.compare ? compareColours(x.compare) : { added: [], changed: [] };
+      c.highlight('diff-added', colours.added);
+      c.highlight('diff-changed', colours.changed);
+    }
+    setSelectedChange(null);
+    setBottomTab((b) => (b === 'compare' && !store.active()?.compare ? 'errors' : b));
+  }, comparisons);
+
   function addTab(init: NewTab, doc: EditorDoc): TabState {
     const created = store.add(init);
     pending.current.set(created.id, doc);
@@ -258,8 +278,8 @@ export function App({ api, createCanvas }: AppProps) {
         const dirty = x ? canvasesOf(x).some((o) => o.isDirty()) : c.isDirty();
         if (isPou) {
           const d = c.getDoc();
-          store.update(id, { canvasDirty: dirty, outcome: 'none', pou: d.pou, ...kindOfTab(d) });
-        } else store.update(id, { canvasDirty: dirty, outcome: 'none' });
+          store.update(id, { canvasDirty: dirty, outcome: 'none', compare: null, pou: d.pou, ...kindOfTab(d) });
+        } else store.update(id, { canvasDirty: dirty, outcome: 'none', compare: null });
         docChanged();
       }),
       c.on('selection', (ids) => {
@@ -497,6 +517,57 @@ export function App({ api, createCanvas }: AppProps) {
     }
   }
 
+  /** File → Compare with saved / git HEAD: the chart as on the canvas compared by meaning with
+   *  its file (`POST /api/compare`); the answer colours its blocks and fills the Comparison panel. */
+  async function runCompare(against: CompareAgainst): Promise<void> {
+    if (!tab || !canvas || busy) return;
+    if (!tab.path) {
+      toasts.show('error', t('compare.saveFirst'));
+      return;
+    }
+    (document.activeElement as HTMLElement | null)?.blur?.();
+    const x = tab;
+    const doc = docOf(x.id) ?? canvas.getDoc();
+    // An edit made while the server compares makes the answer stale: it is dropped.
+    const revisions = () => canvasesOf(x).map((c) => c.revision()).join(',');
+    const before = revisions();
+    const renamed = x.filePou !== null && x.filePou !== doc.pou ? x.filePou : undefined;
+    setBusy(true);
+    try {
+      const r = await api.compare(x.path!, doc, against, renamed);
+      if (revisions() !== before) {
+        toasts.show('info', t('compare.stale'));
+        return;
+      }
+      store.update(x.id, { compare: r });
+      setBottomTab('compare');
+      setPanels((p) => ({ ...p, bottom: true }));
+    } catch {
+      // The API client has shown the server's message (not under git, does not parse, …).
+    } finally {
+      setBusy(false);
+    }
+  }
+
+  /** Closes the comparison: its colours and its panel. */
+  function closeCompare(x: TabState): void {
+    store.update(x.id, { compare: null });
+    if (bottomTab === 'compare') setBottomTab('errors');
+  }
+
+  /** A row of the Comparison panel: its blocks selected (and shown) on the POU's chart. */
+  function selectChange(index: number, row: ChangeRow): void {
+    setSelectedChange(index);
+    if (!tab || !row.onCanvas) return;
+    if (tab.view !== null) showView(tab, null);
+    const c = canvases.current.get(tab.id);
+    if (!c) return;
+    const ids = row.change.elementIds.filter((id) => c.getDoc().elements.some((e) => e.id === id));
+    if (ids.length === 0) return;
+    c.select(ids);
+    c.reveal(ids[0]);
+  }
+
   async function autoLayout(): Promise<void> {
     if (!canvas) return;
     try {
@@ -587,6 +658,10 @@ export function App({ api, createCanvas }: AppProps) {
         { separator: true, label: '' },
         { label: t('menu.save'), shortcut: 'Ctrl+S', icon: 'save', disabled: !tab, action: () => tab && void save(tab) },
         { label: t('menu.saveAs'), disabled: !tab || !!host, action: () => tab && void save(tab, true) },
+        { separator: true, label: '' },
+        { label: t('compare.menuSaved'), disabled: !hasChart || !tab?.path || busy, action: () => void runCompare('saved') },
+        { label: t('compare.menuHead'), disabled: !hasChart || !tab?.path || busy, action: () => void runCompare('head') },
+        { label: t('compare.close'), disabled: !tab?.compare, action: () => tab && closeCompare(tab) },
         { separator: true, label: '' },
         { label: t('menu.exportSvg'), icon: 'svg', disabled: !hasChart, action: exportSvg },
         { label: t('menu.print'), shortcut: 'Ctrl+P', icon: 'print', disabled: !hasChart, action: print },
@@ -836,13 +911,18 @@ export function App({ api, createCanvas }: AppProps) {
                 <button class={`panel-tab ${bottomTab === 'result' ? 'active' : ''}`} onClick={() => setBottomTab('result')}>
                   {t('panel.result')}
                 </button>
+                {tab?.compare && (
+                  <button class={`panel-tab ${bottomTab === 'compare' ? 'active' : ''}`} onClick={() => setBottomTab('compare')}>
+                    {t('compare.panel')}
+                  </button>
+                )}
                 <span class="spacer" />
                 <button class="icon-button" title={t('common.close')} onClick={() => setPanels({ ...panels, bottom: false })}>
                   <Icon name="close" />
                 </button>
               </div>
               <div class="panel-body">
-                {bottomTab === 'errors' ? (
+                {bottomTab === 'errors' || (bottomTab === 'compare' && !tab?.compare) ? (
                   <ErrorList
                     diagnostics={diagnostics}
                     selected={selectedDiag}
@@ -859,6 +939,8 @@ export function App({ api, createCanvas }: AppProps) {
                       return e.kind === 'jump' && e.target ? `${t('kind.jump')} → ${e.target}` : t(`kind.${e.kind}`);
                     }}
                   />
+                ) : bottomTab === 'compare' && tab?.compare ? (
+                  <ComparePanel result={tab.compare} selected={selectedChange} onSelect={selectChange} onClose={() => closeCompare(tab)} />
                 ) : (
                   <ResultPanel pou={tab?.pou ?? ''} result={tab?.result ?? null} />
                 )}

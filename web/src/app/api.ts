@@ -4,7 +4,7 @@
 // origins cannot send; scripts and tests may pass a token, sent as `X-Sfc-Token`. A failed call
 // throws an ApiError and shows the server's message as a toast, and never touches the document
 // being edited.
-import type { BuildResult, BuildTarget, Diag, FileFormat, OpenResult, ProveResult, SaveResult, Session } from '../api';
+import type { BuildResult, BuildTarget, CompareAgainst, CompareResult, Diag, FileFormat, OpenResult, ProveResult, SaveResult, Session } from '../api';
 import type { ChartTarget, EditorDoc } from '../doc';
 import { toasts } from './toast';
 
@@ -129,6 +129,10 @@ export function createApi(opts: ApiOptions) {
       call<BuildResult>('POST', '/api/build', { doc, target, ...(limits ?? {}) }),
     /** `sfc prove` on the chart with `<chart>.props.toml` beside `path`; `404`: no property file. */
     prove: (doc: EditorDoc, path: string) => call<ProveResult>('POST', '/api/prove', { doc, path }, [404]),
+    /** The chart compared by meaning with its file as saved (`saved`) or in git HEAD (`head`);
+     *  `pou`: the POU's name in the file when the chart was renamed since it was opened. */
+    compare: (path: string, doc: EditorDoc, against: CompareAgainst, pou?: string) =>
+      call<CompareResult>('POST', '/api/compare', { path, doc, against, ...(pou !== undefined ? { pou } : {}) }),
     layout: (doc: EditorDoc) => call<{ doc: EditorDoc }>('POST', '/api/layout', { doc }).then((r) => r.doc),
     codes: () => call<{ code: string; severity: string; title: string }[]>('GET', '/api/codes'),
     /** The document of a new chart (an initial step), as `sfc-doc` makes it. */

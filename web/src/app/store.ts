@@ -1,6 +1,6 @@
 // The open charts (one tab each in MDI mode, the only one in host mode), their dirty state,
 // last diagnostics and build result, and the guard that asks before unsaved changes are lost.
-import type { BuildResult, BuildTarget, Diag, FileFormat } from '../api';
+import type { BuildResult, BuildTarget, CompareResult, Diag, FileFormat } from '../api';
 import { targetsFor } from './buildResult';
 import type { ChartKind } from './chartKind';
 
@@ -34,6 +34,9 @@ export interface TabState {
   view: string | null;
   /** The actions whose charts have a canvas in this tab, in the order they were opened. */
   views: string[];
+  /** File → Compare with saved / git HEAD: its answer while the chart shows it (cleared by
+   *  the next change of the chart and by Close comparison). */
+  compare: CompareResult | null;
 }
 
 export type NewTab = Pick<TabState, 'path' | 'format' | 'hash' | 'pou' | 'chartTarget'> & Partial<Pick<TabState, 'unsaved' | 'diagnostics' | 'filePou' | 'buildTarget'>>;
@@ -67,6 +70,7 @@ export class TabStore {
       buildTarget: targetsFor(init.chartTarget)[0],
       view: null,
       views: [],
+      compare: null,
       ...init,
     };
     this.tabs = [...this.tabs, tab];

@@ -105,3 +105,53 @@ file: string, };
 export type ProveSummary = { holds: number, violated: number, unknown: number, };
 
 export type ProveResult = { propertiesFile: string, diagnostics: Array<Diag>, summary: ProveSummary | null, };
+
+export type CompareAgainst = "saved" | "head";
+
+export type ChangeKind = "added" | "removed" | "renamed" | "changed";
+
+export type CompareChange = { 
+/**
+ * `pou`, `variable`, `step`, `transition`, `action` or `body`.
+ */
+element: string, 
+/**
+ * The element's name (the old one when renamed or removed).
+ */
+name: string, kind: ChangeKind, 
+/**
+ * For a change, what changed (`condition`, `steps`, `actions`, `type`, `attribute NAME` …).
+ */
+what: string, old: string | null, new: string | null, 
+/**
+ * Ids of the blocks of the current chart it concerns (`step:NAME`, `transition:NAME`, the
+ * action blocks naming an action); none for a variable, the POU, or a removed element.
+ */
+elementIds: Array<string>, };
+
+export type CompareResult = { against: CompareAgainst, 
+/**
+ * What the chart was compared with: the file's path, `PATH@HEAD` for git HEAD.
+ */
+file: string, pou: string, 
+/**
+ * Equal in meaning (the layout may differ).
+ */
+equal: boolean, 
+/**
+ * Added, renamed and changed elements.
+ */
+changes: Array<CompareChange>, 
+/**
+ * Removed elements: the current chart has no block for them.
+ */
+removed: Array<CompareChange>, 
+/**
+ * How many blocks of the chart have another place or size than in the chart the file
+ * opens as (steps and transitions matched by name, through renames).
+ */
+layout: number, 
+/**
+ * A side with errors compared as far as it could be read.
+ */
+notes: Array<string>, };

@@ -10,7 +10,9 @@ export type HighlightKind =
   | 'active' // monitor: active step (green frame)
   | 'enabled' // monitor: transition whose condition holds
   | 'breakpoint' // monitor: breakpoint set (red dot)
-  | 'hit'; // monitor: breakpoint hit (orange frame)
+  | 'hit' // monitor: breakpoint hit (orange frame)
+  | 'diff-added' // compare: block added since the saved file / git HEAD (green)
+  | 'diff-changed'; // compare: block renamed or changed since (orange)
 
 export interface CanvasEvents {
   /** The document changed (any command executed, undone or redone). */

@@ -20,6 +20,9 @@ const FRAME: Partial<Record<HighlightKind, { stroke: string; width: number; dash
   witness: { stroke: '#2563eb', width: 3, fill: 'rgba(37,99,235,0.08)' },
   active: { stroke: '#16a34a', width: 3, fill: 'rgba(22,163,74,0.12)' },
   hit: { stroke: '#f97316', width: 3, fill: 'rgba(249,115,22,0.12)' },
+  // The colours of `sfc diff --format svg` (crates/sfc-cli/src/diff.rs).
+  'diff-added': { stroke: '#2e7d32', width: 3, fill: 'rgba(46,125,50,0.10)' },
+  'diff-changed': { stroke: '#ef6c00', width: 3, fill: 'rgba(239,108,0,0.10)' },
 };
 const LABEL_COLOUR: Partial<Record<HighlightKind, string>> = {
   active: '#15803d',
@@ -284,7 +287,7 @@ export class SfcRenderer extends BaseRenderer {
 
   private drawFrames(g: SVGElement, s: SfcShape, kinds: Set<HighlightKind>) {
     let pad = 4;
-    for (const kind of ['warning', 'error', 'witness', 'hit', 'active', 'selected-diagnostic'] as HighlightKind[]) {
+    for (const kind of ['diff-added', 'diff-changed', 'warning', 'error', 'witness', 'hit', 'active', 'selected-diagnostic'] as HighlightKind[]) {
       const f = FRAME[kind];
       if (!f || !kinds.has(kind)) continue;
       const attrs: Record<string, string | number> = {
