@@ -544,16 +544,7 @@ fn save_file(s: &AppState, req: SaveRequest) -> Answer {
 /// (`FALSE` for a condition, an empty body). The answer names each piece (`422`, with the
 /// problems as `diagnostics`); nothing is written, and the page keeps the typed text.
 fn refuse_unparsed(doc: &EditorDoc) -> Result<(), ApiError> {
-    let written = sfc_doc::to_text(doc);
-    let typed = |id: &str| {
-        doc.elements
-            .iter()
-            .find(|e| e.id == id)
-            .and_then(|e| e.condition.as_deref())
-            .is_some_and(|c| !c.trim().is_empty())
-    };
-    let lost: Vec<&sfc_doc::Problem> =
-        written.problems.iter().filter(|p| p.code == "SFC0101" || (p.code == "SFC0217" && typed(&p.element))).collect();
+    let (written, lost) = unparsed(doc);
     if lost.is_empty() {
         return Ok(());
     }
@@ -578,6 +569,27 @@ fn refuse_unparsed(doc: &EditorDoc) -> Result<(), ApiError> {
         ),
     )
     .with("diagnostics", json!(d)))
+}
+
+/// The document as text, and the problems of text the user typed that does not parse (its
+/// text would hold something else: `FALSE` for a condition, an empty body). SFC0217 is a
+/// transition without a condition: lost text only when one was typed.
+pub(crate) fn unparsed(doc: &EditorDoc) -> (sfc_doc::Written, Vec<sfc_doc::Problem>) {
+    let written = sfc_doc::to_text(doc);
+    let typed = |id: &str| {
+        doc.elements
+            .iter()
+            .find(|e| e.id == id)
+            .and_then(|e| e.condition.as_deref())
+            .is_some_and(|c| !c.trim().is_empty())
+    };
+    let lost = written
+        .problems
+        .iter()
+        .filter(|p| p.code == "SFC0101" || (p.code == "SFC0217" && typed(&p.element)))
+        .cloned()
+        .collect();
+    (written, lost)
 }
 
 /// A renamed POU may not take the name of another POU of its file: saving would leave two.

@@ -299,17 +299,7 @@ fn to_contract(c: &sfc_diff::Change, doc: &EditorDoc) -> CompareChange {
 /// A document with text the user typed that does not parse (a condition, a body, the
 /// declarations, a name) is not compared: its text would not say what the canvas shows.
 fn refuse_unparsed(doc: &EditorDoc) -> Result<(), Failure> {
-    let written = sfc_doc::to_text(doc);
-    // SFC0217 is a transition without a condition: lost text only when one was typed.
-    let typed = |id: &str| {
-        doc.elements
-            .iter()
-            .find(|e| e.id == id)
-            .and_then(|e| e.condition.as_deref())
-            .is_some_and(|c| !c.trim().is_empty())
-    };
-    let lost: Vec<&sfc_doc::Problem> =
-        written.problems.iter().filter(|p| p.code == "SFC0101" || (p.code == "SFC0217" && typed(&p.element))).collect();
+    let (written, lost) = crate::api::unparsed(doc);
     let Some(first) = lost.first() else { return Ok(()) };
     let name = format!("{}.st", doc.pou);
     let block = doc.elements.iter().find(|e| e.id == first.element).filter(|e| !e.name.is_empty());
