@@ -12,7 +12,9 @@ export function shotPath(t, name) {
   return path.join(dir, name);
 }
 
-/** Starts `sfc edit ARGS`, loads the page in English and waits for the shell. */
+/** Starts `sfc edit ARGS`, loads the page in English and waits for the shell. (The language is
+ *  left in localStorage as an editor of before kept it; the page moves it to the settings the
+ *  server keeps, in the test's own config directory, where they have no language yet.) */
 export async function openEditor(t, args = [], { lang = 'en' } = {}) {
   const server = await t.edit(args);
   await t.page.addInitScript((l) => {

@@ -1,7 +1,9 @@
 // End-to-end tests of the SFC Editor: the real `sfc edit` server, the built web app, headless
 // Debian Chromium driven by playwright-core. Tests live in e2e/tests/*.mjs and export
 // `tests = [{ name, run: async (t) => … }]`; `t` gives a fresh page, a scratch directory with
-// copies of examples/, and `t.edit(args)` to start `sfc edit` on it. The (debug) binary serves
+// copies of examples/, and `t.edit(args)` to start `sfc edit` on it, with the editor's settings
+// kept in a scratch config directory of the test (`SFC_CONFIG_DIR` = `t.config`, shared by the
+// test's servers; never the real home; `t.edit(args, cwd, { env })` adds variables). The (debug) binary serves
 // the test build of the app, web/dist-test, the one with the test hook `window.__sfc`
 // (`t.edit(args, cwd, { production: true })` serves web/dist, the build users get). A failing test leaves a
 // screenshot in e2e/out/. The last line is cargo's `test result:` format (counted by .ci/run).
@@ -21,13 +23,13 @@ const outDir = path.join(here, 'out');
 const filters = process.argv.slice(2);
 
 /** Starts `sfc edit ARGS` and resolves once it printed its URL. */
-function edit(args, cwd, { production = false, bin = sfcBin } = {}) {
+function edit(args, cwd, { production = false, bin = sfcBin, env = {} } = {}) {
   return new Promise((resolve, reject) => {
     const dist = production ? '' : (process.env.SFC_WEB_DIST ?? path.join(root, 'web', 'dist-test'));
     const proc = spawn(bin, ['edit', '--no-open', '--port', '0', ...args], {
       cwd,
       stdio: ['ignore', 'pipe', 'pipe'],
-      env: { ...process.env, DISPLAY: '', WAYLAND_DISPLAY: '', SFC_WEB_DIST: dist },
+      env: { ...process.env, DISPLAY: '', WAYLAND_DISPLAY: '', SFC_WEB_DIST: dist, ...env },
     });
     let out = '';
     let err = '';
@@ -110,6 +112,7 @@ async function main() {
     const id = `${test.file}::${test.name}`;
     const scratch = fs.mkdtempSync(path.join(os.tmpdir(), 'sfc-e2e-'));
     copyDir(path.join(root, 'examples'), path.join(scratch, 'examples'));
+    const config = fs.mkdtempSync(path.join(os.tmpdir(), 'sfc-e2e-config-'));
     const context = await browser.newContext({ viewport: { width: 1440, height: 900 }, acceptDownloads: true });
     const page = await context.newPage();
     const consoleLines = [];
@@ -121,11 +124,12 @@ async function main() {
       context,
       browser,
       scratch,
+      config,
       root,
       sfcBin,
       log: (...a) => console.log(`    ${id}:`, ...a),
       edit: async (args = [], cwd = scratch, opts = {}) => {
-        const s = await edit(args, cwd, opts);
+        const s = await edit(args, cwd, { ...opts, env: { SFC_CONFIG_DIR: config, ...opts.env } });
         servers.push(s);
         return s;
       },
@@ -151,6 +155,7 @@ async function main() {
       await context.close().catch(() => {});
       for (const s of servers) await s.stop();
       fs.rmSync(scratch, { recursive: true, force: true });
+      fs.rmSync(config, { recursive: true, force: true });
     }
   }
   await browser.close();

@@ -14,6 +14,9 @@ pub enum FbArg {
 }
 
 #[derive(clap::Args)]
+#[command(after_help = "The editor's settings (language, recent charts, watch lists) are kept in \
+    $SFC_CONFIG_DIR/editor.json when SFC_CONFIG_DIR is set, else in the user's config directory: \
+    $XDG_CONFIG_HOME/sfc/editor.json or ~/.config/sfc/editor.json (%APPDATA%\\sfc\\editor.json on Windows).")]
 pub struct EditArgs {
     /// Charts (`.st`, `.xml`) and directories to edit; the editor may read and write files under
     /// these directories and the files' directories (default: the current directory).

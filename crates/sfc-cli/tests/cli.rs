@@ -355,3 +355,31 @@ fn a_twincat_source_file_is_refused_with_the_export_to_use() {
     }
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// `--target svg` draws a long condition whole, wrapped over as many lines as it needs (the
+/// editor's drawing, `sfc_doc::svg`): every word in the picture, nothing cut with `…`.
+#[test]
+fn svg_target_wraps_long_conditions_whole() {
+    let d = temp_dir("svg-wrap");
+    let words: Vec<String> = (0..16).map(|k| format!("Sensor{k}")).collect();
+    let condition = words.join(" AND ");
+    let text = format!(
+        "PROGRAM P\n    VAR {} : BOOL; END_VAR\n    INITIAL_STEP S1: END_STEP\n    STEP S2: END_STEP\n    \
+         TRANSITION FROM S1 TO S2 := {condition}; END_TRANSITION\n    TRANSITION FROM S2 TO S1 := Sensor0; END_TRANSITION\nEND_PROGRAM\n",
+        words.join(", ")
+    );
+    let chart = d.join("long.st");
+    std::fs::write(&chart, text).unwrap();
+    let out = sfc(&["build", chart.to_str().unwrap(), "--target", "svg"]);
+    assert_eq!(out.status.code(), Some(0), "{}", String::from_utf8_lossy(&out.stderr));
+    let svg = String::from_utf8_lossy(&out.stdout);
+    assert!(!svg.contains('…'), "{svg}");
+    let lines: Vec<&str> = svg
+        .lines()
+        .filter(|l| l.starts_with("<text") && l.contains("Mono"))
+        .filter_map(|l| l.split('>').nth(1)?.split('<').next())
+        .collect();
+    // The long condition's lines, then the other transition's.
+    assert!(lines.len() >= 5 && lines.last() == Some(&"Sensor0"), "{lines:?}");
+    assert_eq!(lines[..lines.len() - 1].join(" "), condition);
+}

@@ -103,7 +103,7 @@ fn edit_usage_errors_exit_2() {
     let out = run(&["--help"]);
     assert_eq!(out.status.code(), Some(0));
     let help = String::from_utf8_lossy(&out.stdout);
-    for word in ["--port", "--no-open", "--fb", "--nstep", "--ntr", "--result"] {
+    for word in ["--port", "--no-open", "--fb", "--nstep", "--ntr", "--result", "SFC_CONFIG_DIR"] {
         assert!(help.contains(word), "{word} in {help}");
     }
 }
@@ -293,4 +293,62 @@ fn the_browser_is_opened_without_the_token_in_its_arguments() {
     assert!(html.contains(&token), "the page forwards to the URL: {html}");
     // The page goes when the editor stops.
     drop(server);
+}
+
+/// The editor's settings are kept in `SFC_CONFIG_DIR` (the tests never touch the real home), so
+/// a later run on another port reads what an earlier one stored; a corrupt file is reported
+/// once on stderr and the server keeps serving.
+#[test]
+fn settings_are_kept_in_the_config_directory_across_runs() {
+    let d = temp_dir("settings");
+    std::fs::write(d.join("chart.st"), "PROGRAM P\nEND_PROGRAM\n").unwrap();
+    let config = d.join("config");
+    let chart = d.join("chart.st");
+    let env = [("SFC_CONFIG_DIR", config.as_os_str())];
+    let (first, port, token) = start(&["--no-open".as_ref(), d.as_os_str()], &env);
+    let auth = [format!("X-Sfc-Token: {token}")];
+    let update = serde_json::json!({ "language": "de", "recent": [chart], "watch": { "P": ["Go"] } }).to_string();
+    let (status, _, body) = http(port, "POST", "/api/settings", &auth, &update);
+    assert_eq!(status, 200, "{body}");
+    let (status, _, _) = http(port, "POST", "/api/settings", &[], &update);
+    assert_eq!(status, 403, "the token is needed");
+    drop(first);
+    assert!(config.join("editor.json").is_file());
+
+    let (_second, port2, token2) = start(&["--no-open".as_ref(), d.as_os_str()], &env);
+    assert_ne!(port2, port);
+    let (status, _, body) = http(port2, "GET", "/api/settings", &[format!("X-Sfc-Token: {token2}")], "");
+    assert_eq!(status, 200, "{body}");
+    let settings: serde_json::Value = serde_json::from_str(&body).unwrap();
+    assert_eq!(
+        settings,
+        serde_json::json!({ "language": "de", "recent": [chart], "watch": { "P": ["Go"] } }),
+        "{body}"
+    );
+
+    // A corrupt file: said once on stderr (however often the page asks), defaults answered.
+    std::fs::write(config.join("editor.json"), "{ not json").unwrap();
+    let mut cmd = Command::new(env!("CARGO_BIN_EXE_sfc"));
+    cmd.args(["edit", "--no-open", "--port", "0"]).arg(&d).env("SFC_CONFIG_DIR", &config);
+    let mut server = Server(cmd.stdout(Stdio::piped()).stderr(Stdio::piped()).spawn().expect("sfc runs"));
+    let mut line = String::new();
+    BufReader::new(server.0.stdout.take().unwrap()).read_line(&mut line).unwrap();
+    let rest = line.trim_end().strip_prefix("SFC Editor: http://127.0.0.1:").expect("URL line");
+    let (port3, token3) = rest.split_once("/?token=").expect("token in the URL");
+    let port3: u16 = port3.parse().unwrap();
+    let auth3 = [format!("X-Sfc-Token: {token3}")];
+    for _ in 0..2 {
+        // The second read finds the file set aside; write a corrupt one again.
+        let (status, _, body) = http(port3, "GET", "/api/settings", &auth3, "");
+        assert_eq!(status, 200, "{body}");
+        assert_eq!(body, r#"{"recent":[],"watch":{}}"#);
+        std::fs::write(config.join("editor.json"), "{ not json").unwrap();
+    }
+    assert!(config.join("editor.json.corrupt").is_file(), "the corrupt file is kept aside");
+    let _ = server.0.kill();
+    let _ = server.0.wait();
+    let mut stderr = String::new();
+    server.0.stderr.take().unwrap().read_to_string(&mut stderr).unwrap();
+    assert_eq!(stderr.matches("settings file").count(), 1, "reported once: {stderr}");
+    assert!(stderr.contains("editor.json"), "{stderr}");
 }

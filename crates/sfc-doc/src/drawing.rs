@@ -122,29 +122,22 @@ pub fn action_block_size(assocs: &[Association]) -> (f64, f64) {
     (ceil_to(q + a + i, 10.0).max(100.0), ROW_H * assocs.len().max(1) as f64)
 }
 
-/// The condition of a transition as the canvas prints it: its lines (a one-line condition
-/// wrapped at words into at most two lines of [`CONDITION_CHARS`], the second cut with `…`; at
-/// most three lines of a multi-line one).
+/// The condition of a transition as the canvas prints it: every line of it, each line longer
+/// than [`CONDITION_CHARS`] wrapped at its spaces ([`wrap_condition`]). Never cut: the label
+/// is as tall as its lines, and the layout makes room for it. `web/src/diagram/drawing.ts`
+/// follows the same rule, on the cases of `tests/shared/condition_lines.json`.
 pub fn condition_lines(e: &Element) -> Vec<String> {
     let Some(c) = e.condition.as_deref().map(str::trim).filter(|c| !c.is_empty()) else { return Vec::new() };
-    let lines: Vec<&str> = c.lines().map(str::trim).filter(|l| !l.is_empty()).collect();
-    if lines.len() == 1 {
-        return wrap_condition(lines[0]);
-    }
-    let mut shown: Vec<String> = lines.iter().take(3).map(|l| l.to_string()).collect();
-    if lines.len() > 3 {
-        if let Some(l) = shown.last_mut() {
-            l.push_str(" …");
-        }
-    }
-    shown
+    c.lines().map(str::trim).filter(|l| !l.is_empty()).flat_map(wrap_condition).collect()
 }
 
 fn chars(s: &str) -> usize {
     s.chars().count()
 }
 
-/// A one-line condition as at most two lines of whole words, the second cut with `…`.
+/// One line of a condition as lines of whole words of at most [`CONDITION_CHARS`] characters
+/// (greedy; runs of white space become one space); a word longer than that stands on a line
+/// of its own, whole. A line that fits is kept as written.
 pub fn wrap_condition(line: &str) -> Vec<String> {
     let max = CONDITION_CHARS;
     if chars(line) <= max {
@@ -166,17 +159,7 @@ pub fn wrap_condition(line: &str) -> Vec<String> {
     if !cur.is_empty() {
         out.push(cur);
     }
-    if out.len() <= 2 {
-        return out;
-    }
-    let rest = out[1..].join(" ");
-    let second = if chars(&rest) <= max {
-        rest
-    } else {
-        let cut: String = rest.chars().take(max - 1).collect();
-        format!("{}…", cut.trim_end())
-    };
-    vec![out[0].clone(), second]
+    out
 }
 
 /// What a label is.
@@ -252,8 +235,9 @@ mod tests {
         assert_eq!(wrap_condition(long), ["StartButton AND CarPresent AND", "AtHome AND NOT StopButton"]);
         let longer = "aaaa bbbb cccc dddd eeee ffff gggg hhhh iiii jjjj kkkk llll mmmm nnnn oooo";
         let w = wrap_condition(longer);
-        assert_eq!(w.len(), 2);
-        assert!(w[1].ends_with('…') && w[1].chars().count() <= CONDITION_CHARS, "{w:?}");
+        assert_eq!(w.len(), 3);
+        assert_eq!(w.join(" "), longer, "nothing is cut");
+        assert!(w.iter().all(|l| l.chars().count() <= CONDITION_CHARS), "{w:?}");
     }
 
     #[test]

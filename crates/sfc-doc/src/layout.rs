@@ -18,6 +18,8 @@ pub const BAR_H: f64 = 10.0;
 pub const BAR_PAD: f64 = 10.0;
 pub const JUMP_SIZE: f64 = 20.0;
 pub const ROW_H: f64 = 24.0;
+/// Least distance between a label and a block placed below it.
+const LABEL_CLEARANCE: f64 = 4.0;
 /// `sfc-render`'s layout is drawn with smaller boxes; its coordinates are scaled by these
 /// factors so the editor's sizes fit (the fallback for charts the structured layout of
 /// `structured.rs` does not take).
@@ -314,15 +316,21 @@ pub fn place(doc: &mut EditorDoc, d: &Derived, m: &Model, layout: &Layout, keep:
         placed[i] = true;
     }
     centre_runs(doc, d, &placed, keep);
-    // Jumps, below the pin they leave.
+    // Jumps, below the pin they leave and the labels of the block there (a wrapped condition
+    // reaches below its bar).
     for i in 0..n {
         if placed[i] || doc.elements[i].kind != Some(ElementKind::Jump) {
             continue;
         }
-        let from = across(doc, d, i, true, 0).map(|(s, p)| pin_pos(&doc.elements[s], false, p));
+        let from = across(doc, d, i, true, 0).map(|(s, p)| {
+            let src = &doc.elements[s];
+            let clear = drawing::labels_of(src, s).iter().map(|l| l.rect.bottom()).fold(f64::NEG_INFINITY, f64::max);
+            (pin_pos(src, false, p), clear)
+        });
         let e = &mut doc.elements[i];
-        if let Some(p) = from {
-            (e.x, e.y) = (p.x - JUMP_SIZE / 2.0, p.y + 2.0 * GRID);
+        if let Some((p, clear)) = from {
+            let below_labels = ((clear + LABEL_CLEARANCE) / GRID).ceil() * GRID;
+            (e.x, e.y) = (p.x - JUMP_SIZE / 2.0, (p.y + 2.0 * GRID).max(below_labels));
         }
         (e.w, e.h) = (JUMP_SIZE, JUMP_SIZE);
         placed[i] = true;

@@ -10,7 +10,9 @@
 //!   goes on straight down from its middle;
 //! * branches are spaced by their outlines (each block with its labels and action blocks, and
 //!   the lines down to the convergence), so no wire runs through a block or a label and no two
-//!   labels or action blocks overlap; loops are jumps (arrows naming the target step), as in
+//!   labels or action blocks overlap; a transition whose wrapped condition reaches further
+//!   above and below its bar than the gaps there leave room for is drawn lower, with as much
+//!   room below it; loops are jumps (arrows naming the target step), as in
 //!   CODESYS, so nothing is routed back up;
 //! * everything sits on the grid of 10.
 //!
@@ -39,6 +41,9 @@ const ACTION_GAP: f64 = 30.0;
 const NETWORK_GAP: f64 = 60.0;
 /// Top-left margin of the drawing.
 const MARGIN: f64 = 40.0;
+/// How far a condition label may reach above or below its transition into the gap before the
+/// block there (the shortest gap is a branch's [`STUB`]) and stay clear of it.
+const LABEL_REACH: f64 = STUB - 6.0;
 /// Outlines with more bands are merged (conservatively) to keep spacing fast on big charts.
 const MAX_BANDS: usize = 256;
 
@@ -222,13 +227,33 @@ impl Placer<'_> {
         Ext { bands, h: snap(bottom), out_dx: 0.0 }
     }
 
-    /// The outline of a block drawn at axis 0, top 0, with its labels.
+    /// The outline of a block drawn at axis 0, top 0, with its labels. A transition whose
+    /// condition label reaches further than [`LABEL_REACH`] above and below its bar has room
+    /// made for it: the block is drawn [`Self::label_pad`] lower and the outline is as much
+    /// taller at each end.
     fn block_ext(&self, b: usize) -> Ext {
         let e = &self.doc.elements[b];
-        let probe = Element { x: -e.w / 2.0, y: 0.0, ..e.clone() };
-        let mut bands = vec![Band { y0: 0.0, y1: e.h, lo: -e.w / 2.0, hi: e.w / 2.0 }];
+        let pad = self.label_pad(b);
+        let probe = Element { x: -e.w / 2.0, y: pad, ..e.clone() };
+        let mut bands = vec![Band { y0: pad, y1: pad + e.h, lo: -e.w / 2.0, hi: e.w / 2.0 }];
         bands.extend(labels_of(&probe, b).into_iter().map(|l| Band::rect(l.rect)));
-        Ext { bands, h: e.h, out_dx: 0.0 }
+        Ext { bands, h: e.h + 2.0 * pad, out_dx: 0.0 }
+    }
+
+    /// The room added above and below block `b` for its labels (a wrapped condition taller than
+    /// the gaps around the bar leave room for), on the grid; 0 for most blocks.
+    fn label_pad(&self, b: usize) -> f64 {
+        let e = &self.doc.elements[b];
+        if e.kind != Some(ElementKind::Transition) {
+            return 0.0;
+        }
+        let probe = Element { y: 0.0, ..e.clone() };
+        let reach = labels_of(&probe, b).iter().map(|l| (-l.rect.y).max(l.rect.bottom() - e.h)).fold(0.0, f64::max);
+        if reach <= LABEL_REACH {
+            0.0
+        } else {
+            snap_up(reach - LABEL_REACH)
+        }
     }
 
     fn ext_elem(&mut self, seq: &[Elem], i: usize) -> Fit<Ext> {
@@ -398,7 +423,8 @@ impl Placer<'_> {
             }
             Elem::Transition(_) => {
                 let b = self.block(&seq[i]).ok_or(Mismatch)?;
-                self.set(b, axis - TRANSITION_W / 2.0, y);
+                let pad = self.label_pad(b);
+                self.set(b, axis - TRANSITION_W / 2.0, y + pad);
             }
             Elem::Jump { transition, .. } => {
                 let j = self.jump_block(*transition)?;

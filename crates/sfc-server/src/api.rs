@@ -41,7 +41,7 @@ impl ApiError {
     }
 
     /// The error with more fields (`conflict`, `diagnostics`).
-    fn with(mut self, key: &str, value: Value) -> Self {
+    pub(crate) fn with(mut self, key: &str, value: Value) -> Self {
         if let Some(o) = self.body.as_object_mut() {
             o.insert(key.to_string(), value);
         }
@@ -194,7 +194,7 @@ fn model_target(t: ChartTarget) -> Target {
 /// Diagnostics of IEC `text` (file 0) for the page: moved to the XML when the text was
 /// imported from it (after the import's own diagnostics), each with the blocks of the chart it
 /// concerns among `charts`.
-fn page_diagnostics(
+pub(crate) fn page_diagnostics(
     name: &str,
     text: &str,
     import: Option<&Imported>,

@@ -287,6 +287,77 @@ pub struct CompareResult {
     pub notes: Vec<String>,
 }
 
+/// `GET /api/settings` and the answer of `POST /api/settings`: the editor's settings as kept in
+/// the user's config directory (`editor.json`), so they outlast the run (and its port).
+#[derive(Debug, Clone, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[cfg_attr(test, derive(ts_rs::TS))]
+#[serde(deny_unknown_fields)]
+pub struct Settings {
+    /// The language chosen in the status bar (`cs`, `en`, `de`); none: the browser's.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    #[cfg_attr(test, ts(optional))]
+    pub language: Option<String>,
+    /// Charts opened lately, newest first, as the page opened them (at most 20).
+    pub recent: Vec<String>,
+    /// The monitor's watch list per chart (its POU's name), at most 200 names each.
+    pub watch: std::collections::BTreeMap<String, Vec<String>>,
+}
+
+/// `POST /api/settings`: what changes. An absent field stays as it is; `language: null` clears
+/// the choice, `recent` replaces the list, and each chart of `watch` gets its list (`null`
+/// removes it).
+#[derive(Debug, Clone, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[cfg_attr(test, derive(ts_rs::TS))]
+#[serde(deny_unknown_fields)]
+pub struct SettingsUpdate {
+    #[serde(default, with = "present", skip_serializing_if = "Option::is_none")]
+    #[cfg_attr(test, ts(optional, type = "string | null"))]
+    pub language: Option<Option<String>>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    #[cfg_attr(test, ts(optional))]
+    pub recent: Option<Vec<String>>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    #[cfg_attr(test, ts(optional, type = "{ [chart in string]?: string[] | null }"))]
+    pub watch: Option<std::collections::BTreeMap<String, Option<Vec<String>>>>,
+}
+
+/// A field that may be absent (`None`, the default), `null` (`Some(None)`) or a value.
+mod present {
+    use serde::{Deserialize, Deserializer, Serialize, Serializer};
+
+    pub fn serialize<S: Serializer, T: Serialize>(v: &Option<Option<T>>, s: S) -> Result<S::Ok, S::Error> {
+        match v {
+            Some(x) => x.serialize(s),
+            None => s.serialize_none(),
+        }
+    }
+
+    pub fn deserialize<'de, D: Deserializer<'de>, T: Deserialize<'de>>(d: D) -> Result<Option<Option<T>>, D::Error> {
+        Option::<T>::deserialize(d).map(Some)
+    }
+}
+
+/// The side `POST /api/resolve` takes of a merge conflict: ours (the element as written, the
+/// mark removed) or theirs (the element's text replaced by theirs, removed when they removed it).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[cfg_attr(test, derive(ts_rs::TS))]
+#[serde(rename_all = "lowercase")]
+pub enum ConflictSide {
+    Ours,
+    Theirs,
+}
+
+/// `POST /api/resolve`: the chart with one merge conflict resolved (not written to its file),
+/// and the diagnostics of its text as `POST /api/open` gives them.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[cfg_attr(test, derive(ts_rs::TS))]
+#[serde(deny_unknown_fields)]
+pub struct ResolveResult {
+    #[cfg_attr(test, ts(type = "EditorDoc"))]
+    pub doc: EditorDoc,
+    pub diagnostics: Vec<Diag>,
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -320,6 +391,10 @@ mod tests {
             ChangeKind::decl(&cfg),
             CompareChange::decl(&cfg),
             CompareResult::decl(&cfg),
+            ConflictSide::decl(&cfg),
+            ResolveResult::decl(&cfg),
+            Settings::decl(&cfg),
+            SettingsUpdate::decl(&cfg),
         ] {
             out.push_str("export ");
             out.push_str(&decl);

@@ -15,6 +15,8 @@ pub mod contract;
 mod diag;
 mod disk;
 mod prove;
+mod resolve;
+mod settings;
 mod sim;
 
 use sfc_driver::compile;
@@ -22,6 +24,7 @@ use sfc_driver::compile;
 pub use access::TOKEN_HEADER;
 pub use confine::{confine, Refusal};
 pub use disk::content_hash;
+pub use settings::{config_dir, CONFIG_DIR_VAR};
 
 use axum::extract::DefaultBodyLimit;
 use axum::routing::{any, get, post};
@@ -117,6 +120,8 @@ struct Session {
     /// The first named file, opened while the browser loads the app (taken by its first
     /// `POST /api/open`; locked while it is being made).
     prepared: Arc<tokio::sync::Mutex<Option<api::Prepared>>>,
+    /// The editor's settings in the user's config directory (`GET`/`POST /api/settings`).
+    settings: settings::Store,
 }
 
 /// The server's state, shared by every request.
@@ -125,9 +130,16 @@ pub struct AppState(Arc<Session>);
 
 impl AppState {
     /// The session for `opts`, served on `port` (the `Host` header must name it). Fails when a
-    /// path cannot be used, or host mode is not given exactly one chart file.
+    /// path cannot be used, or host mode is not given exactly one chart file. The settings are
+    /// kept in the directory [`config_dir`] names (`SFC_CONFIG_DIR`, else the user's).
     pub fn new(opts: &EditOptions, port: u16) -> Result<AppState, String> {
+        AppState::with_config_dir(opts, port, None)
+    }
+
+    /// [`AppState::new`] with the settings kept in `config` (`None`: where [`config_dir`] says).
+    pub fn with_config_dir(opts: &EditOptions, port: u16, config: Option<PathBuf>) -> Result<AppState, String> {
         let cwd = std::env::current_dir().map_err(|e| format!("cannot read the current directory: {e}"))?;
+        let config = config.or_else(|| config_dir(&|k| std::env::var_os(k), cfg!(windows), &cwd));
         let (roots, open) = confine::roots_of(&opts.files, &cwd)?;
         let host = match &opts.host {
             None => None,
@@ -160,6 +172,7 @@ impl AppState {
             save_lock: Arc::new(tokio::sync::Mutex::new(())),
             sims: sim::Simulations::default(),
             prepared: Arc::new(tokio::sync::Mutex::new(None)),
+            settings: settings::Store::new(config),
         })))
     }
 
@@ -198,6 +211,8 @@ pub fn app(state: AppState) -> Router {
         .route("/api/new", post(api::new_chart))
         .route("/api/prove", post(prove::prove))
         .route("/api/compare", post(compare::compare))
+        .route("/api/resolve", post(resolve::resolve))
+        .route("/api/settings", get(settings::read).post(settings::update))
         .route("/api/sim/start", post(sim::start))
         .route("/api/sim/stop", post(sim::stop))
         .route("/api", any(api::not_found))

@@ -1,10 +1,35 @@
 // Export SVG… downloads the chart as a standalone SVG file: well-formed (xmllint and the
 // browser's XML parser), with every step's name; Print… opens the page preview whose legend
-// lists every block of the chart.
+// lists every block of the chart. A long condition is drawn whole, wrapped, and the legend
+// gives it whole; neither prints the error frames unless asked.
 import { execFileSync } from 'node:child_process';
 import fs from 'node:fs';
 import path from 'node:path';
 import { assert, openEditor, shotPath, waitChart } from '../helpers.mjs';
+
+const LONG = 'StartButton AND CarPresent AND AtHome AND NOT StopButton AND NOT EmergencyStop AND DoorClosed AND AirPressureOk';
+
+// T1's condition wraps over four lines; T2 names a variable nobody declared: an error, framed red.
+const MARKED = `PROGRAM Marked
+    VAR
+        StartButton, CarPresent, AtHome, StopButton, EmergencyStop, DoorClosed, AirPressureOk : BOOL;
+    END_VAR
+
+    INITIAL_STEP S0: END_STEP
+
+    TRANSITION T1 FROM S0 TO S1
+        := ${LONG};
+    END_TRANSITION
+
+    STEP S1: END_STEP
+
+    TRANSITION T2 FROM S1 TO S0
+        := Nobody;
+    END_TRANSITION
+END_PROGRAM
+`;
+
+const ERROR_RED = '#dc2626';
 
 export const tests = [
   {
@@ -71,6 +96,47 @@ export const tests = [
       const pages = await page.locator('.print-modal .print-page').count();
       await page.locator('.print-modal .print-setup input[type="checkbox"]').last().uncheck();
       await page.waitForFunction((n) => document.querySelectorAll('.print-modal .print-page').length < n, pages);
+      await page.keyboard.press('Escape');
+      await page.waitForFunction(() => !document.querySelector('.print-modal'));
+    },
+  },
+  {
+    name: 'a long condition is exported and printed whole; the legend gives it; error frames only when asked',
+    run: async (t) => {
+      const { page } = t;
+      fs.writeFileSync(path.join(t.scratch, 'marked.st'), MARKED);
+      await openEditor(t, ['marked.st']);
+      await waitChart(page);
+      await page.waitForFunction((red) => document.querySelector(`.canvas-pane.active [data-element-id="transition:T2"] rect[stroke="${red}"]`), ERROR_RED);
+      // Export SVG: the condition whole over several lines, no error frame.
+      const downloading = page.waitForEvent('download');
+      await page.locator('.toolbar button[title="Export SVG…"]').click();
+      const file = path.join(t.scratch, 'marked.svg');
+      await (await downloading).saveAs(file);
+      const svg = fs.readFileSync(file, 'utf8');
+      assert(!svg.includes(ERROR_RED), 'the exported SVG holds the error frame');
+      assert(!svg.includes('…'), 'the exported SVG cuts a label');
+      const lines = await page.evaluate((text) => {
+        const x = new DOMParser().parseFromString(text, 'image/svg+xml');
+        return [...x.querySelectorAll('g[data-id="transition:T1"] text')].map((e) => e.textContent).filter((l) => l !== 'T1');
+      }, svg);
+      assert(lines.length >= 3 && lines.join(' ') === LONG, `T1's condition as drawn: ${JSON.stringify(lines)}`);
+      assert((await page.evaluate(() => window.__sfc.exportSvg({ marks: true }))).includes(ERROR_RED), 'asked for, the marks are there');
+      // Print: the legend gives T1's condition whole; the picture has no frame until asked for.
+      await page.locator('.toolbar button[title^="Print…"]').click();
+      await page.waitForSelector('.print-modal .print-page');
+      const legend = await page.locator('.print-modal table.legend tbody tr').evaluateAll((rows) =>
+        rows.map((r) => [...r.querySelectorAll('td')].map((td) => td.textContent.trim())),
+      );
+      assert(legend.some((row) => row[1] === 'T1' && row[3] === LONG), `T1 in the legend: ${JSON.stringify(legend)}`);
+      assert(legend.some((row) => row[1] === 'T2' && row[3] === 'Nobody'), `T2 in the legend: ${JSON.stringify(legend)}`);
+      const picture = () => page.evaluate(() => decodeURIComponent(document.querySelector('.print-modal .print-area img').getAttribute('src')));
+      assert(!(await picture()).includes(ERROR_RED), 'the printed chart holds the error frame');
+      await page.locator('.print-modal input[name="print-marks"]').check();
+      await page.waitForFunction(
+        (red) => decodeURIComponent(document.querySelector('.print-modal .print-area img').getAttribute('src')).includes(red),
+        ERROR_RED,
+      );
       await page.keyboard.press('Escape');
       await page.waitForFunction(() => !document.querySelector('.print-modal'));
     },

@@ -80,8 +80,10 @@ export const tests = [
       expectLanguage(german, 'de');
       assert(german.message === `${catalogue('de').diag.SFC0301}: Buton`, `German diagnostic: ${german.message}`);
       assert(loads.length === 0, `the page was reloaded: ${loads}`);
-      // The choice is remembered for the next start.
-      assert((await page.evaluate(() => localStorage.getItem('sfc.language'))) === 'de', 'language not remembered');
+      // The choice is remembered for the next start: the server keeps it (tests/settings.mjs).
+      const kept = () => page.evaluate(async () => (await (await fetch('/api/settings', { headers: { 'X-Sfc-Page': '1' } })).json()).language);
+      for (let k = 0; k < 50 && (await kept()) !== 'de'; k++) await page.waitForTimeout(100);
+      assert((await kept()) === 'de', 'language not remembered');
     },
   },
 ];

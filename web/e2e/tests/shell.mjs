@@ -50,7 +50,10 @@ export const tests = [
       assert(l.y >= p.y && l.y + l.height <= p.y + p.height + 1, `Action block is reachable inside the palette: ${JSON.stringify({ p, l })}`);
       const pane = await page.locator('.canvas-pane.active').boundingBox();
       assert(p.y + p.height <= pane.y + pane.height, 'the palette stays inside the canvas');
-      await page.evaluate(() => localStorage.setItem('sfc.language', 'de'));
+      // German from the status bar, kept by the server (its answer awaited), then a fresh page.
+      const kept = page.waitForResponse((r) => r.url().endsWith('/api/settings') && r.request().method() === 'POST');
+      await page.locator('.statusbar .status-lang select').selectOption('de');
+      await kept;
       await page.reload();
       await waitChart(page);
       const overflowing = await page.evaluate(() =>

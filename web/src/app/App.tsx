@@ -12,6 +12,8 @@ import { witnessSituations } from './chart';
 import { actionChart, assemble, blocksNamed, sfcActions, viewKey } from './actionCharts';
 import { compareColours, type ChangeRow } from './compare';
 import { ComparePanel } from './ComparePanel';
+import { ConflictPanel } from './ConflictPanel';
+import { conflictBlocks, conflictIds, conflictKindLabel, conflictsOf, type MergeConflict } from './conflicts';
 import { AboutDialog, CloseDialog, ConflictDialog, NewDialog, OpenDialog, SaveAsDialog, ShortcutsDialog, type NewChartRequest } from './dialogs';
 import { ErrorList, type WitnessView } from './ErrorList';
 import { rememberFile, Welcome } from './Welcome';
@@ -31,7 +33,7 @@ type Dialog =
   | { kind: 'saveAs'; path: string; format: FileFormat; resolve: (r: { path: string; format: FileFormat } | null) => void }
   | { kind: 'close'; name: string; resolve: (c: CloseChoice) => void }
   | { kind: 'conflict'; path: string; resolve: (overwrite: boolean) => void }
-  | { kind: 'print'; svg: string; doc: EditorDoc; path: string | null }
+  | { kind: 'print'; svg: (marks: boolean) => string; doc: EditorDoc; path: string | null }
   | { kind: 'about' }
   | { kind: 'shortcuts' };
 
@@ -87,8 +89,12 @@ export function App({ api, createCanvas }: AppProps) {
   const docChanged = useForceUpdate();
   const [zoom, setZoom] = useState(1);
   const [panels, setPanels] = useState({ tools: true, properties: true, bottom: true });
-  const [bottomTab, setBottomTab] = useState<'errors' | 'result' | 'compare'>('errors');
+  const [bottomTab, setBottomTab] = useState<'errors' | 'result' | 'compare' | 'conflicts'>('errors');
   const [selectedChange, setSelectedChange] = useState<number | null>(null);
+  const [selectedConflict, setSelectedConflict] = useState<number | null>(null);
+  /** Tabs in which a merge conflict was resolved: their Merge conflicts tab stays (saying so)
+   *  when none is left. */
+  const [resolvedIn, setResolvedIn] = useState<ReadonlySet<string>>(new Set());
   const [buildMode, setBuildMode] = useState<BuildMode>('build');
   const [dialog, setDialog] = useState<Dialog | null>(null);
   const [selectedDiag, setSelectedDiag] = useState<number | null>(null);
@@ -189,6 +195,7 @@ export function App({ api, createCanvas }: AppProps) {
     setSelectedDiag(null);
     setWitness(null);
     setSelectedChange(null);
+    setSelectedConflict(null);
     setBottomTab((b) => (b === 'compare' && !store.active()?.compare ? 'errors' : b));
   }, [tab?.id, canvas]);
 
@@ -568,6 +575,56 @@ export function App({ api, createCanvas }: AppProps) {
     c.reveal(ids[0]);
   }
 
+  /** A row of the Merge conflicts panel: its blocks selected (and shown) on the POU's chart. */
+  function selectConflict(index: number, c: MergeConflict): void {
+    setSelectedConflict(index);
+    if (!tab) return;
+    const pc = canvases.current.get(tab.id);
+    const ids = pc ? conflictBlocks(pc.getDoc(), c) : [];
+    if (!pc || ids.length === 0) return;
+    if (tab.view !== null) showView(tab, null);
+    pc.select(ids);
+    pc.reveal(ids[0]);
+  }
+
+  /** "Keep ours" / "Take theirs" of a merge conflict: the chart resolved by the server
+   *  (`POST /api/resolve`) replaces the tab's as an edit (undoable when its blocks stay the
+   *  same); the file is written by the next save. */
+  async function resolveConflict(c: MergeConflict, side: 'ours' | 'theirs'): Promise<void> {
+    if (!tab || busy) return;
+    (document.activeElement as HTMLElement | null)?.blur?.();
+    const x = tab;
+    const pc = canvases.current.get(x.id);
+    const doc = docOf(x.id);
+    if (!pc || !doc) return;
+    // An edit made while the server resolves makes the answer stale: it is dropped.
+    const revisions = () => canvasesOf(x).map((o) => o.revision()).join(',');
+    const before = revisions();
+    const renamed = x.filePou !== null && x.filePou !== doc.pou ? x.filePou : undefined;
+    setBusy(true);
+    try {
+      const r = await api.resolve({ ...(x.path ? { path: x.path } : {}), ...(renamed ? { pou: renamed } : {}), doc, element: c.element, side });
+      if (revisions() !== before) {
+        toasts.show('info', t('merge.stale'));
+        return;
+      }
+      // The charts of actions open in the tab went to the server within the document: the
+      // resolved chart holds them; their canvases close.
+      if (x.views.length > 0) store.update(x.id, { views: [], view: null });
+      pc.replace(r.doc);
+      store.update(x.id, { diagnostics: r.diagnostics, canvasDirty: true });
+      setResolvedIn((prev) => new Set(prev).add(x.id));
+      setSelectedConflict(null);
+      setSelectedDiag(null);
+      const what = `${conflictKindLabel(c, t)} ${c.name}`.trim();
+      toasts.show('success', t(side === 'ours' ? 'merge.keptOurs' : 'merge.tookTheirs', { element: what }));
+    } catch {
+      // The API client has shown the server's message; the chart is unchanged.
+    } finally {
+      setBusy(false);
+    }
+  }
+
   async function autoLayout(): Promise<void> {
     if (!canvas) return;
     try {
@@ -610,7 +667,10 @@ export function App({ api, createCanvas }: AppProps) {
   const zoomBy = (f: number) => canvas?.zoom(Math.min(4, Math.max(0.2, canvas.getZoom() * f)));
   // An action's chart is exported as `POU.Action.svg`.
   const exportSvg = () => canvas && tab && download(`${tab.pou}${tab.view ? `.${tab.view}` : ''}.svg`, canvas.exportSvg(), 'image/svg+xml');
-  const print = () => canvas && tab && setDialog({ kind: 'print', svg: canvas.exportSvg(), doc: canvas.getDoc(), path: tab.path });
+  const print = () => {
+    const c = canvas;
+    if (c && tab) setDialog({ kind: 'print', svg: (marks) => c.exportSvg({ marks }), doc: c.getDoc(), path: tab.path });
+  };
   const mdi = session !== null && !host;
   const hasChart = !!canvas;
 
@@ -733,6 +793,20 @@ export function App({ api, createCanvas }: AppProps) {
   const pouCanvas = tab ? canvases.current.get(tab.id) : undefined;
   const pouRevision = pouCanvas?.revision();
   const pouDoc = useMemo(() => pouCanvas?.getDoc(), [pouCanvas, pouRevision]);
+  // Merge conflicts `sfc merge` marked the POU with (`sfc.conflict`): listed in their panel,
+  // their blocks framed red-orange.
+  const conflicts = useMemo(() => conflictsOf(pouDoc), [pouDoc]);
+  const hasConflicts = conflicts.length > 0;
+  const showConflicts = !!tab && (hasConflicts || resolvedIn.has(tab.id));
+  useEffect(() => {
+    if (pouCanvas && pouDoc) pouCanvas.highlight('conflict', conflictIds(pouDoc));
+  }, [pouCanvas, pouDoc]);
+  // A chart with conflicts shows their panel when it opens (or when an undo brings them back).
+  useEffect(() => {
+    if (!hasConflicts) return;
+    setBottomTab('conflicts');
+    setPanels((p) => (p.bottom ? p : { ...p, bottom: true }));
+  }, [tab?.id, hasConflicts]);
 
   return (
     <>
@@ -916,13 +990,19 @@ export function App({ api, createCanvas }: AppProps) {
                     {t('compare.panel')}
                   </button>
                 )}
+                {showConflicts && (
+                  <button class={`panel-tab ${bottomTab === 'conflicts' ? 'active' : ''}`} data-testid="conflict-tab" onClick={() => setBottomTab('conflicts')}>
+                    {t('merge.panel')}
+                    {hasConflicts && <span class="badge badge-conflict">{conflicts.length}</span>}
+                  </button>
+                )}
                 <span class="spacer" />
                 <button class="icon-button" title={t('common.close')} onClick={() => setPanels({ ...panels, bottom: false })}>
                   <Icon name="close" />
                 </button>
               </div>
               <div class="panel-body">
-                {bottomTab === 'errors' || (bottomTab === 'compare' && !tab?.compare) ? (
+                {bottomTab === 'errors' || (bottomTab === 'compare' && !tab?.compare) || (bottomTab === 'conflicts' && !showConflicts) ? (
                   <ErrorList
                     diagnostics={diagnostics}
                     selected={selectedDiag}
@@ -938,6 +1018,15 @@ export function App({ api, createCanvas }: AppProps) {
                       if (e.name) return e.name;
                       return e.kind === 'jump' && e.target ? `${t('kind.jump')} → ${e.target}` : t(`kind.${e.kind}`);
                     }}
+                  />
+                ) : bottomTab === 'conflicts' ? (
+                  <ConflictPanel
+                    conflicts={conflicts}
+                    onCanvas={(c) => !!pouDoc && conflictBlocks(pouDoc, c).length > 0}
+                    selected={selectedConflict}
+                    busy={busy}
+                    onSelect={selectConflict}
+                    onResolve={(c, side) => void resolveConflict(c, side)}
                   />
                 ) : bottomTab === 'compare' && tab?.compare ? (
                   <ComparePanel result={tab.compare} selected={selectedChange} onSelect={selectChange} onClose={() => closeCompare(tab)} />
@@ -984,6 +1073,7 @@ export function App({ api, createCanvas }: AppProps) {
         selection={selection.length}
         zoom={zoom}
         hasChart={hasChart}
+        conflicts={conflicts.length}
         onZoom={(z) => (z === 'fit' ? canvas?.zoom('fit') : zoomBy(z))}
         onZoomTo={(z) => canvas?.zoom(Math.min(4, Math.max(0.2, z)))}
         lang={lang}
@@ -1072,6 +1162,8 @@ function StatusBar(props: {
   selection: number;
   zoom: number;
   hasChart: boolean;
+  /** Merge conflicts left in the chart. */
+  conflicts: number;
   onZoom: (z: number | 'fit') => void;
   /** An absolute zoom level, from the slider. */
   onZoomTo: (z: number) => void;
@@ -1082,6 +1174,11 @@ function StatusBar(props: {
       <span class="status-item">{props.tab ? (props.tab.path ?? t('tabs.unsaved')) : t('status.ready')}</span>
       {props.host && <span class="status-item">{t('status.limits', { fb: props.host.fb.toUpperCase(), nstep: props.host.nstep, ntr: props.host.ntr })}</span>}
       {props.selection > 0 && <span class="status-item">{t('status.selected', { count: props.selection })}</span>}
+      {props.conflicts > 0 && (
+        <span class="status-item status-conflicts" data-testid="status-conflicts">
+          {t('merge.left', { count: props.conflicts })}
+        </span>
+      )}
       <span class="spacer" />
       <span class="status-zoom">
         <button class="icon-button" title={t('menu.zoomOut')} disabled={!props.hasChart} onClick={() => props.onZoom(1 / 1.2)}>

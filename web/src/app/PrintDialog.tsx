@@ -1,28 +1,29 @@
 // Print…: page setup beside a large preview of the pages (the chart scaled to the page, or cut
-// into several pages at a scale; then the legend); "Print" prints exactly these pages.
+// into several pages at a scale; then the legend, every transition with its whole condition);
+// "Print" prints exactly these pages. The chart is printed without the highlights' marks
+// (error and comparison frames, monitor states) unless asked for.
 import { useMemo, useState } from 'preact/hooks';
 import type { EditorDoc } from '../doc';
 import { currentLanguage, t } from '../i18n';
 import { legendRows } from './chart';
 import { Modal } from './dialogs';
-import { chartPages, DEFAULT_SETUP, HEADER_MM, pageRule, pageSize, svgSize, type PageSetup, type Paper } from './print';
+import { chartPages, DEFAULT_SETUP, HEADER_MM, legendPages, pageRule, pageSize, svgSize, type PageSetup, type Paper } from './print';
 import { baseName } from './store';
 
-const LEGEND_ROWS_PER_PAGE = 28;
-
-export function PrintDialog(props: { svg: string; doc: EditorDoc; path: string | null; onClose: () => void }) {
+/** `svg(marks)`: the chart as Export SVG writes it, with the highlights' marks or without. */
+export function PrintDialog(props: { svg: (marks: boolean) => string; doc: EditorDoc; path: string | null; onClose: () => void }) {
   const [setup, setSetup] = useState<PageSetup>(DEFAULT_SETUP);
   const [zoom, setZoom] = useState(0.5);
   const set = (p: Partial<PageSetup>) => setSetup({ ...setup, ...p });
   const page = pageSize(setup);
-  const size = useMemo(() => svgSize(props.svg), [props.svg]);
+  const svg = useMemo(() => props.svg(setup.marks), [props.svg, setup.marks]);
+  const size = useMemo(() => svgSize(svg), [svg]);
   const layout = chartPages(setup, size);
-  const src = useMemo(() => `data:image/svg+xml;charset=utf-8,${encodeURIComponent(props.svg)}`, [props.svg]);
-  const legend = useMemo(() => legendRows(props.doc), [props.doc]);
+  const src = useMemo(() => `data:image/svg+xml;charset=utf-8,${encodeURIComponent(svg)}`, [svg]);
+  const legend = useMemo(() => legendPages(legendRows(props.doc)), [props.doc]);
   const date = new Date().toLocaleString(currentLanguage());
-  const legendPages: (typeof legend)[] = [];
-  if (setup.legend) for (let k = 0; k < legend.length || k === 0; k += LEGEND_ROWS_PER_PAGE) legendPages.push(legend.slice(k, k + LEGEND_ROWS_PER_PAGE));
-  const total = layout.cols * layout.rows + legendPages.length;
+  const shownLegend = setup.legend ? legend : [];
+  const total = layout.cols * layout.rows + shownLegend.length;
 
   const header = (n: number) =>
     setup.header && (
@@ -58,7 +59,7 @@ export function PrintDialog(props: { svg: string; doc: EditorDoc; path: string |
       );
     }
   }
-  legendPages.forEach((rows, k) => {
+  shownLegend.forEach((rows, k) => {
     n++;
     pages.push(
       <div class="print-page" style={pageStyle} key={`l${k}`}>
@@ -70,6 +71,7 @@ export function PrintDialog(props: { svg: string; doc: EditorDoc; path: string |
               <th>{t('print.kind')}</th>
               <th>{t('print.name')}</th>
               <th>{t('print.tag')}</th>
+              <th>{t('print.condition')}</th>
               <th>{t('print.description')}</th>
             </tr>
           </thead>
@@ -79,6 +81,7 @@ export function PrintDialog(props: { svg: string; doc: EditorDoc; path: string |
                 <td>{t(`kind.${row.kind}`)}</td>
                 <td>{row.name}</td>
                 <td>{row.tag}</td>
+                <td class="legend-condition">{row.condition}</td>
                 <td class="legend-description">{row.description}</td>
               </tr>
             ))}
@@ -153,7 +156,11 @@ export function PrintDialog(props: { svg: string; doc: EditorDoc; path: string |
             {t('print.header')}
           </label>
           <label class="inline-check">
-            <input type="checkbox" checked={setup.legend} onChange={(e) => set({ legend: e.currentTarget.checked })} />
+            <input type="checkbox" name="print-marks" checked={setup.marks} onChange={(e) => set({ marks: e.currentTarget.checked })} />
+            {t('print.marks')}
+          </label>
+          <label class="inline-check">
+            <input type="checkbox" name="print-legend" checked={setup.legend} onChange={(e) => set({ legend: e.currentTarget.checked })} />
             {t('print.withLegend')}
           </label>
           <label>

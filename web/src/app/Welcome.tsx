@@ -1,32 +1,25 @@
 // The start screen, shown while no chart is open: New and Open, the charts opened lately (kept
-// in the browser, shown when this editor serves them) and the charts in the folders it serves.
+// by the server in the user's config directory, src/app/settings.ts) and the charts in the
+// folders it serves. A recent chart this editor does not serve (it was started on other files)
+// is listed greyed with a note, not opened: the server opens only what it was started on.
 import { useEffect, useState } from 'preact/hooks';
 import type { FileFormat } from '../api';
 import { t } from '../i18n';
 import { Icon } from './icons';
+import { settings, withRecent } from './settings';
 
-const RECENT_KEY = 'sfc.recent';
-const RECENT_MAX = 8;
+/** Recent charts shown (the server keeps up to 20). */
+const RECENT_SHOWN = 10;
 const LISTED_MAX = 12;
 
 /** Paths opened lately, newest first. */
 export function recentFiles(): string[] {
-  try {
-    const v = JSON.parse(localStorage.getItem(RECENT_KEY) ?? '[]');
-    return Array.isArray(v) ? v.filter((x): x is string => typeof x === 'string') : [];
-  } catch {
-    return [];
-  }
+  return settings.recent();
 }
 
 /** Puts `path` first among the recent files. */
 export function rememberFile(path: string): void {
-  try {
-    const list = [path, ...recentFiles().filter((p) => p !== path)].slice(0, RECENT_MAX);
-    localStorage.setItem(RECENT_KEY, JSON.stringify(list));
-  } catch {
-    // Storage may be unavailable (private mode): the list is a convenience.
-  }
+  void settings.update({ recent: withRecent(settings.recent(), path) });
 }
 
 function baseName(p: string): string {
@@ -50,17 +43,33 @@ export function Welcome(props: {
     );
   }, [props.mdi]);
   const served = new Set(files ?? []);
-  const recent = recentFiles().filter((p) => served.has(p));
+  // Listed once the served files are known (until then every chart would look unserved).
+  const recent = files === null ? [] : recentFiles().slice(0, RECENT_SHOWN);
   const others = (files ?? []).filter((p) => !recent.includes(p)).slice(0, LISTED_MAX);
-  const row = (p: string) => (
-    <li key={p}>
-      <button class="welcome-file" title={p} onClick={() => props.onOpen(p)}>
-        <Icon name="open" />
-        <span class="welcome-file-name">{baseName(p)}</span>
-        <span class="welcome-file-path muted">{p}</span>
-      </button>
-    </li>
-  );
+  const row = (p: string) => {
+    if (served.has(p)) {
+      return (
+        <li key={p}>
+          <button class="welcome-file" title={p} onClick={() => props.onOpen(p)}>
+            <Icon name="open" />
+            <span class="welcome-file-name">{baseName(p)}</span>
+            <span class="welcome-file-path muted">{p}</span>
+          </button>
+        </li>
+      );
+    }
+    // Not served by this editor: listed, greyed, with the reason; never opened.
+    return (
+      <li key={p}>
+        <div class="welcome-file not-served" title={`${p}\n${t('start.notServed')}`} aria-disabled="true">
+          <Icon name="open" />
+          <span class="welcome-file-name">{baseName(p)}</span>
+          <span class="welcome-file-path muted">{p}</span>
+          <span class="welcome-file-note muted">{t('start.notServed')}</span>
+        </div>
+      </li>
+    );
+  };
   return (
     <div class="welcome" data-testid="welcome">
       <div class="welcome-card">

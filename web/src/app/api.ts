@@ -4,7 +4,7 @@
 // origins cannot send; scripts and tests may pass a token, sent as `X-Sfc-Token`. A failed call
 // throws an ApiError and shows the server's message as a toast, and never touches the document
 // being edited.
-import type { BuildResult, BuildTarget, CompareAgainst, CompareResult, Diag, FileFormat, OpenResult, ProveResult, SaveResult, Session } from '../api';
+import type { BuildResult, BuildTarget, CompareAgainst, CompareResult, ConflictSide, Diag, FileFormat, OpenResult, ProveResult, ResolveResult, SaveResult, Session, Settings, SettingsUpdate } from '../api';
 import type { ChartTarget, EditorDoc } from '../doc';
 import { toasts } from './toast';
 
@@ -34,9 +34,11 @@ export interface ApiOptions {
   start?: StartRequests;
 }
 
-/** The session, and the first named file's opening, requested by index.html's inline script. */
+/** The session, the settings and the first named file's opening, requested by index.html's
+ *  inline script. */
 export interface StartRequests {
   session: Promise<Response>;
+  settings?: Promise<Response>;
   open: Promise<{ path: string; res: Promise<Response> } | null>;
 }
 
@@ -50,6 +52,17 @@ export interface SaveRequest {
   pou?: string;
 }
 
+export interface ResolveRequest {
+  /** The chart's file, as opened (none for a chart never saved). */
+  path?: string;
+  /** The POU's name in the file when the chart was renamed since it was opened. */
+  pou?: string;
+  doc: EditorDoc;
+  /** The conflict's element as marked (`transition:TStart`). */
+  element: string;
+  side: ConflictSide;
+}
+
 export type Api = ReturnType<typeof createApi>;
 
 export function createApi(opts: ApiOptions) {
@@ -57,6 +70,7 @@ export function createApi(opts: ApiOptions) {
   const notify = opts.notify ?? ((m: string) => toasts.show('error', m));
   const base = opts.base ?? '';
   let session = opts.start?.session;
+  let settings = opts.start?.settings;
   let opening = opts.start?.open;
 
   /** The response of a request index.html already made, if this is it (each taken once; one
@@ -65,6 +79,11 @@ export function createApi(opts: ApiOptions) {
     if (method === 'GET' && path === '/api/session' && session) {
       const s = session;
       session = undefined;
+      return s.catch(() => undefined);
+    }
+    if (method === 'GET' && path === '/api/settings' && settings) {
+      const s = settings;
+      settings = undefined;
       return s.catch(() => undefined);
     }
     if (method === 'POST' && path === '/api/open' && opening) {
@@ -77,8 +96,10 @@ export function createApi(opts: ApiOptions) {
     return undefined;
   }
 
-  /** One call; statuses in `quiet` throw without a toast (the caller handles them). */
-  async function call<T>(method: 'GET' | 'POST', path: string, body?: unknown, quiet: number[] = []): Promise<T> {
+  /** One call; statuses in `quiet` throw without a toast (the caller handles them; `'all'`:
+   *  every failure, the server unreachable included). */
+  async function call<T>(method: 'GET' | 'POST', path: string, body?: unknown, quiet: number[] | 'all' = []): Promise<T> {
+    const loud = (status: number) => quiet !== 'all' && !quiet.includes(status);
     const headers: Record<string, string> = { Accept: 'application/json', 'X-Sfc-Page': '1' };
     if (opts.token) headers['X-Sfc-Token'] = opts.token;
     if (body !== undefined) headers['Content-Type'] = 'application/json';
@@ -92,7 +113,7 @@ export function createApi(opts: ApiOptions) {
       }));
     } catch (e) {
       const err = new ApiError(`${method} ${path}: the server cannot be reached (${(e as Error).message})`, 0);
-      notify(err.message);
+      if (loud(0)) notify(err.message);
       throw err;
     }
     const text = await res.text();
@@ -102,7 +123,7 @@ export function createApi(opts: ApiOptions) {
     } catch {
       if (res.ok) {
         const err = new ApiError(`${method} ${path}: the answer is not JSON`, res.status);
-        notify(err.message);
+        if (loud(res.status)) notify(err.message);
         throw err;
       }
     }
@@ -110,7 +131,7 @@ export function createApi(opts: ApiOptions) {
       const obj = (data ?? {}) as { error?: string; conflict?: boolean };
       const message = obj.error ?? (text.trim() || res.statusText || `HTTP ${res.status}`);
       const err = new ApiError(message, res.status, obj.conflict === true);
-      if (!quiet.includes(res.status)) notify(`${path}: ${message}`);
+      if (loud(res.status)) notify(`${path}: ${message}`);
       throw err;
     }
     return data as T;
@@ -133,7 +154,15 @@ export function createApi(opts: ApiOptions) {
      *  `pou`: the POU's name in the file when the chart was renamed since it was opened. */
     compare: (path: string, doc: EditorDoc, against: CompareAgainst, pou?: string) =>
       call<CompareResult>('POST', '/api/compare', { path, doc, against, ...(pou !== undefined ? { pou } : {}) }),
+    /** One merge conflict of the chart resolved by taking a side (`sfc.conflict`, docs/diff.md):
+     *  the resolved chart and its diagnostics; the file is not written. */
+    resolve: (req: ResolveRequest) => call<ResolveResult>('POST', '/api/resolve', req),
     layout: (doc: EditorDoc) => call<{ doc: EditorDoc }>('POST', '/api/layout', { doc }).then((r) => r.doc),
+    /** The settings kept in the user's config directory; failures throw without a toast (the
+     *  page then keeps them in localStorage, src/app/settings.ts). */
+    settings: () => call<Settings>('GET', '/api/settings', undefined, 'all'),
+    /** Merges `update` into the kept settings; answers the whole. */
+    saveSettings: (update: SettingsUpdate) => call<Settings>('POST', '/api/settings', update, 'all'),
     codes: () => call<{ code: string; severity: string; title: string }[]>('GET', '/api/codes'),
     /** The document of a new chart (an initial step), as `sfc-doc` makes it. */
     newChart: (name: string, target: ChartTarget) => call<{ doc: EditorDoc }>('POST', '/api/new', { name, target }).then((r) => r.doc),

@@ -8,6 +8,8 @@ export interface LegendRow {
   kind: ElementKind;
   name: string;
   tag: string;
+  /** A transition's condition, whole, with its line breaks (the drawing wraps it). */
+  condition: string;
   description: string;
 }
 
@@ -44,13 +46,16 @@ export function blockLabel(e: Element, doc: EditorDoc): string {
   }
 }
 
-/** Every block of the chart, grouped by kind (steps first), then by tag and name. */
+/** Every block of the chart, grouped by kind (steps first), then by tag and name; every
+ *  transition with its whole condition. */
 export function legendRows(doc: EditorDoc): LegendRow[] {
   const rows = doc.elements.map((e) => ({
     id: e.id,
     kind: e.kind,
-    name: blockLabel(e, doc),
+    // A transition's condition has a column of its own.
+    name: e.kind === 'transition' ? (e.name ?? '') : blockLabel(e, doc),
     tag: e.tag === undefined || e.tag === null ? '' : String(e.tag),
+    condition: e.kind === 'transition' ? conditionText(e.condition) : '',
     description: e.description ?? '',
     order: KIND_ORDER.indexOf(e.kind),
   }));
@@ -61,6 +66,15 @@ export function legendRows(doc: EditorDoc): LegendRow[] {
       a.name.localeCompare(b.name),
   );
   return rows.map(({ order: _order, ...row }) => row);
+}
+
+/** A condition as the legend prints it: whole, its lines trimmed, blank lines left out. */
+function conditionText(c: string | undefined): string {
+  return (c ?? '')
+    .split('\n')
+    .map((l) => l.trim())
+    .filter((l) => l !== '')
+    .join('\n');
 }
 
 function byId(doc: EditorDoc): Map<string, Element> {

@@ -1,5 +1,5 @@
 // Page setup of the print dialog: paper sizes, how the chart's SVG is scaled and cut into
-// pages, and the `@page` rule of the print stylesheet.
+// pages, how the legend is cut into pages, and the `@page` rule of the print stylesheet.
 
 export type Paper = 'A4' | 'A3' | 'Letter';
 export type Orientation = 'portrait' | 'landscape';
@@ -14,9 +14,20 @@ export interface PageSetup {
   scale: number;
   legend: boolean;
   header: boolean;
+  /** Print the highlights' marks (error, warning and comparison frames, monitor states). */
+  marks: boolean;
 }
 
-export const DEFAULT_SETUP: PageSetup = { paper: 'A4', orientation: 'landscape', margin: 10, fit: true, scale: 100, legend: true, header: true };
+export const DEFAULT_SETUP: PageSetup = {
+  paper: 'A4',
+  orientation: 'landscape',
+  margin: 10,
+  fit: true,
+  scale: 100,
+  legend: true,
+  header: true,
+  marks: false,
+};
 
 const PAPER_MM: Record<Paper, [number, number]> = { A4: [210, 297], A3: [297, 420], Letter: [215.9, 279.4] };
 /** CSS pixels are 1/96 inch. */
@@ -76,4 +87,34 @@ export function chartPages(setup: PageSetup, svgPx: { w: number; h: number }): C
 export function pageRule(setup: PageSetup): string {
   const { w, h } = pageSize(setup);
   return `@page { size: ${w}mm ${h}mm; margin: 0; }`;
+}
+
+/** Lines of a legend page (a row of one line each). */
+export const LEGEND_LINES_PER_PAGE = 28;
+/** Characters of a line of the legend's condition and description columns, about (the
+ *  narrowest page: A4 portrait). */
+export const LEGEND_CHARS = 32;
+
+/** How many lines a legend row takes: its tallest cell, each of its lines wrapped at about
+ *  `LEGEND_CHARS` characters. */
+export function legendRowLines(row: { name: string; condition: string; description: string }): number {
+  const lines = (s: string) => s.split('\n').reduce((n, l) => n + Math.max(1, Math.ceil([...l].length / LEGEND_CHARS)), 0);
+  return Math.max(1, lines(row.name), lines(row.condition), lines(row.description));
+}
+
+/** The legend's rows cut into pages of at most `perPage` lines (a taller row alone on its
+ *  page); one empty page for no rows. */
+export function legendPages<T extends { name: string; condition: string; description: string }>(rows: T[], perPage = LEGEND_LINES_PER_PAGE): T[][] {
+  const pages: T[][] = [[]];
+  let used = 0;
+  for (const row of rows) {
+    const n = legendRowLines(row);
+    if (used > 0 && used + n > perPage) {
+      pages.push([]);
+      used = 0;
+    }
+    pages[pages.length - 1].push(row);
+    used += n;
+  }
+  return pages;
 }

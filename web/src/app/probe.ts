@@ -27,8 +27,8 @@ export interface SfcProbe {
   cursor(): string;
   canUndo(): boolean;
   canRedo(): boolean;
-  /** The active chart as Export SVG writes it. */
-  exportSvg(): string;
+  /** The active chart as Export SVG writes it (with the highlights' marks when asked). */
+  exportSvg(options?: { marks?: boolean }): string;
 }
 
 /** Installs `window.__sfc` over the app's tabs and canvases; returns the uninstaller. */
@@ -63,7 +63,7 @@ export function installProbe(store: TabStore, canvases: Map<string, CanvasHandle
     cursor: cursorOf,
     canUndo: () => active().canUndo(),
     canRedo: () => active().canRedo(),
-    exportSvg: () => active().exportSvg(),
+    exportSvg: (options?: { marks?: boolean }) => active().exportSvg(options),
   };
   const w = window as unknown as { __sfc?: SfcProbe };
   w.__sfc = probe;

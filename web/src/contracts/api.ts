@@ -155,3 +155,23 @@ layout: number,
  * A side with errors compared as far as it could be read.
  */
 notes: Array<string>, };
+
+export type ConflictSide = "ours" | "theirs";
+
+export type ResolveResult = { doc: EditorDoc, diagnostics: Array<Diag>, };
+
+export type Settings = { 
+/**
+ * The language chosen in the status bar (`cs`, `en`, `de`); none: the browser's.
+ */
+language?: string, 
+/**
+ * Charts opened lately, newest first, as the page opened them (at most 20).
+ */
+recent: Array<string>, 
+/**
+ * The monitor's watch list per chart (its POU's name), at most 200 names each.
+ */
+watch: { [key in string]: Array<string> }, };
+
+export type SettingsUpdate = { language?: string | null, recent?: Array<string>, watch?: { [chart in string]?: string[] | null }, };

@@ -100,7 +100,11 @@ export function actionBlockSize(rows: Association[]): { w: number; h: number } {
   return { w: Math.max(100, ceilTo(c.q + c.a + c.i, 10)), h: ROW_H * Math.max(1, rows.length) };
 }
 
-/** A one-line condition as at most two lines of whole words, the second cut with `…`. */
+/**
+ * One line of a condition as lines of whole words of at most `max` characters (greedy; runs of
+ * white space become one space); a longer word stands whole on a line of its own. A line that
+ * fits is kept as written (sfc-doc's `wrap_condition`).
+ */
 export function wrapCondition(line: string, max = CONDITION_CHARS): string[] {
   if ([...line].length <= max) return [line];
   const out: string[] = [];
@@ -114,20 +118,22 @@ export function wrapCondition(line: string, max = CONDITION_CHARS): string[] {
     }
   }
   if (cur !== '') out.push(cur);
-  if (out.length <= 2) return out;
-  const rest = out.slice(1).join(' ');
-  return [out[0], [...rest].length <= max ? rest : `${[...rest].slice(0, max - 1).join('').trimEnd()}…`];
+  return out;
 }
 
-/** The condition as printed beside the bar. */
+/**
+ * The condition as printed beside the bar: every line of it, each wrapped (`wrapCondition`).
+ * Never cut: the label is as tall as its lines. The same rule as sfc-doc's `condition_lines`,
+ * on the shared cases of crates/sfc-doc/tests/shared/condition_lines.json.
+ */
 export function conditionLines(e: Pick<Element, 'condition'>): string[] {
   const c = e.condition?.trim();
   if (!c) return [];
-  const lines = c.split('\n').map((l) => l.trim()).filter((l) => l !== '');
-  if (lines.length === 1) return wrapCondition(lines[0]);
-  const shown = lines.slice(0, 3);
-  if (lines.length > 3) shown[2] = `${shown[2]} …`;
-  return shown;
+  return c
+    .split('\n')
+    .map((l) => l.trim())
+    .filter((l) => l !== '')
+    .flatMap((l) => wrapCondition(l));
 }
 
 export interface LabelBox {

@@ -23,12 +23,14 @@ import type { DocFields } from './core/DocState';
 import EditingModule from './editing';
 import { exportSvg } from './export/SvgExport';
 import type { Highlights } from './highlight/Highlights';
-import type { DocImporter } from './import/DocImporter';
+import { validate, type DocImporter } from './import/DocImporter';
+import { sameStructure } from './modeling/cmd/ReplaceDocHandler';
 import ImportModule from './import';
 import { isConnection, shapesOf, type Service } from './model';
 import ModelingModule from './modeling';
 import PaletteModule from './palette';
 import RenderModule from './render';
+import type { SfcRenderer } from './render/SfcRenderer';
 import RulesModule from './rules';
 import type { CanvasEvents, CanvasHandle, CanvasOptions, CreateCanvas } from './types';
 import ViewModule from './view';
@@ -189,6 +191,18 @@ export const createCanvas: CreateCanvas = (container: HTMLElement, opts: CanvasO
       }
       modeling.applyLayout(laidOut);
     },
+    replace(doc) {
+      validate(doc);
+      if (sameStructure(importer.getDoc(), doc)) {
+        modeling.replaceDoc(doc);
+        return true;
+      }
+      // Another set of blocks: loaded, and dirty until saved (no saved state to undo to).
+      savedTop = { unsaved: true };
+      importer.load(doc);
+      revision++;
+      return false;
+    },
     undo: () => commandStack.undo(),
     redo: () => commandStack.redo(),
     canUndo: () => commandStack.canUndo(),
@@ -229,7 +243,7 @@ export const createCanvas: CreateCanvas = (container: HTMLElement, opts: CanvasO
       view.tick();
     },
     getZoom: () => view.view().scale,
-    exportSvg: () => exportSvg(elementRegistry),
+    exportSvg: (options) => exportSvg(elementRegistry, get<SfcRenderer>('sfcRenderer'), options),
     relabel() {
       eventBus.fire('i18n.changed');
     },

@@ -12,7 +12,8 @@ export type HighlightKind =
   | 'breakpoint' // monitor: breakpoint set (red dot)
   | 'hit' // monitor: breakpoint hit (orange frame)
   | 'diff-added' // compare: block added since the saved file / git HEAD (green)
-  | 'diff-changed'; // compare: block renamed or changed since (orange)
+  | 'diff-changed' // compare: block renamed or changed since (orange)
+  | 'conflict'; // merge: block of an element `sfc merge` marked as a conflict (red-orange)
 
 export interface CanvasEvents {
   /** The document changed (any command executed, undone or redone). */
@@ -47,6 +48,10 @@ export interface CanvasHandle {
   updateDoc(props: Partial<Pick<EditorDoc, 'pou' | 'target' | 'description' | 'declarations' | 'actions' | 'attributes' | 'body' | 'bodyLanguage'>>): void;
   /** Replaces all geometry with that of `laidOut` (same ids), as one undoable command. */
   applyLayout(laidOut: EditorDoc): void;
+  /** Replaces the whole document by `doc` as an edit (the chart is dirty afterwards): one
+   *  undoable command when `doc` has the same blocks and wires (ids, kinds, ends), else loaded
+   *  with the undo history cleared. Returns whether it can be undone. */
+  replace(doc: EditorDoc): boolean;
   undo(): void;
   redo(): void;
   canUndo(): boolean;
@@ -64,8 +69,9 @@ export interface CanvasHandle {
   /** 'fit' fits the whole chart. */
   zoom(level: number | 'fit'): void;
   getZoom(): number;
-  /** Standalone SVG of the chart as drawn (no selection, no grid). */
-  exportSvg(): string;
+  /** Standalone SVG of the chart as drawn (no selection, no grid); the highlights' marks
+   *  (validation and comparison frames, monitor states) only with `marks`. */
+  exportSvg(options?: { marks?: boolean }): string;
   /** Re-translates palette and tooltips after a language switch. */
   relabel(): void;
   on<K extends keyof CanvasEvents>(event: K, cb: CanvasEvents[K]): () => void;

@@ -11,8 +11,6 @@ import monitorEn from './monitor.en.json';
 export const LANGUAGES = ['cs', 'en', 'de'] as const;
 export type Lang = (typeof LANGUAGES)[number];
 
-const STORAGE_KEY = 'sfc.language';
-
 export const i18n = i18next.createInstance();
 
 /** The stored choice, else the browser's language (cs, de, anything else English). */
@@ -27,18 +25,19 @@ export function nextLanguage(lang: Lang): Lang {
   return LANGUAGES[(LANGUAGES.indexOf(lang) + 1) % LANGUAGES.length];
 }
 
-function storage(): Storage | null {
-  try {
-    return typeof localStorage === 'undefined' ? null : localStorage;
-  } catch {
-    // Storage can be disabled (privacy settings); the language then lasts for the session.
-    return null;
-  }
+/** Keeps the language the user chose: main.ts hands it to the settings the server keeps
+ *  (src/app/settings.ts); until then (and in unit tests) it lasts for the page. */
+let keep: (lang: Lang) => void = () => {};
+
+/** Where `setLanguage` keeps the choice from now on. */
+export function keepLanguageWith(fn: (lang: Lang) => void): void {
+  keep = fn;
 }
 
-/** Initialises i18next synchronously with the detected language. */
+/** Initialises i18next synchronously with `lang`, else the browser's language (main.ts passes
+ *  the kept choice, read before the first render). */
 export function initI18n(lang?: Lang): Lang {
-  const chosen = lang ?? detectLanguage(storage()?.getItem(STORAGE_KEY) ?? null, globalThis.navigator?.language);
+  const chosen = lang ?? detectLanguage(null, globalThis.navigator?.language);
   if (!i18n.isInitialized) {
     void i18n.init({
       lng: chosen,
@@ -62,7 +61,7 @@ export function initI18n(lang?: Lang): Lang {
 /** Switches the language (takes effect at once) and remembers it. */
 export function setLanguage(lang: Lang): void {
   void i18n.changeLanguage(lang);
-  storage()?.setItem(STORAGE_KEY, lang);
+  keep(lang);
 }
 
 export function currentLanguage(): Lang {

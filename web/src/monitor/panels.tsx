@@ -3,11 +3,10 @@
 import { Fragment } from 'preact';
 import { useEffect, useState } from 'preact/hooks';
 import { t } from '../i18n';
+import { settings, WATCH_MAX } from '../app/settings';
 import { toasts } from '../app/toast';
 import type { MonitorClient } from './client';
 import { parseValue, showValue, type MechanismRuns, type ScanState, type StepReport, type VariableInfo } from './protocol';
-
-const WATCH_KEY = 'sfc.monitor.watch';
 
 /** The variables watched at first: the located ones (the I/O), else the first ten. */
 export function defaultWatch(vars: VariableInfo[]): string[] {
@@ -15,22 +14,13 @@ export function defaultWatch(vars: VariableInfo[]): string[] {
   return located.length ? located : vars.slice(0, 10).map((v) => v.name);
 }
 
+/** The watch list kept for the POU `pou` (the settings the server keeps, src/app/settings.ts). */
 function storedWatch(pou: string): string[] | null {
-  try {
-    const raw = globalThis.localStorage?.getItem(`${WATCH_KEY}.${pou}`);
-    const list = raw ? (JSON.parse(raw) as unknown) : null;
-    return Array.isArray(list) ? list.filter((x): x is string => typeof x === 'string') : null;
-  } catch {
-    return null;
-  }
+  return settings.watch(pou);
 }
 
 function storeWatch(pou: string, list: string[]): void {
-  try {
-    globalThis.localStorage?.setItem(`${WATCH_KEY}.${pou}`, JSON.stringify(list));
-  } catch {
-    // Storage disabled: the list lasts for this session.
-  }
+  void settings.update({ watch: { [pou]: list.slice(0, WATCH_MAX) } });
 }
 
 function fail(e: Error): void {

@@ -25,9 +25,22 @@ describe('legend', () => {
     ]);
     expect(rows.find((r) => r.id === 'step:A')?.description).toBe('Fill the tank');
   });
-  it('names an unnamed transition by its condition', () => {
-    const d: EditorDoc = { ...doc, elements: [{ id: 'transition#1', kind: 'transition', condition: ' x AND y ', x: 0, y: 0, w: 1, h: 1 }] };
-    expect(legendRows(d)[0].name).toBe('x AND y');
+  it('lists every transition with its whole condition, named or not', () => {
+    const long = 'Brushing.T >= MaxBrushTime AND NOT CarLeft AND NOT StopButton AND NOT Reset AND NOT Fault';
+    const d: EditorDoc = {
+      ...doc,
+      elements: [
+        { id: 'transition#1', kind: 'transition', condition: ' x AND y ', x: 0, y: 0, w: 1, h: 1 },
+        { id: 'transition:T9', kind: 'transition', name: 'T9', condition: `${long}\n\n  OR Manual `, x: 0, y: 0, w: 1, h: 1 },
+        { id: 'step:S', kind: 'step', name: 'S', x: 0, y: 0, w: 1, h: 1 },
+      ],
+    };
+    const rows = legendRows(d);
+    expect(rows.map((r) => [r.kind, r.name, r.condition])).toEqual([
+      ['step', 'S', ''],
+      ['transition', '', 'x AND y'],
+      ['transition', 'T9', `${long}\nOR Manual`],
+    ]);
   });
 });
 

@@ -62,6 +62,10 @@ export function createFakeCanvas(container: HTMLElement): FakeCanvas {
     applyLayout(laidOut) {
       apply(clone(laidOut));
     },
+    replace(d) {
+      apply(clone(d));
+      return true;
+    },
     undo() {
       const prev = undo.pop();
       if (prev) {

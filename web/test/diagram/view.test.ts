@@ -3,7 +3,7 @@ import { describe, expect, it } from 'vitest';
 import { mount } from './harness';
 import { conveyorDoc } from './fixtures';
 import { makeBigDoc } from './big';
-import { wrapCondition } from '../../src/diagram/drawing';
+import { CONDITION_CHARS, conditionLines, LINE_H, labelsOf, wrapCondition } from '../../src/diagram/drawing';
 
 describe('highlights', () => {
   it('frames blocks by kind, labels them, and replaces the set of a kind', () => {
@@ -114,6 +114,30 @@ describe('exportSvg', () => {
     expect(parsed.querySelector('g[data-id="step:S1"]')!.getAttribute('transform')).toBe('translate(200,140)');
   }, 60_000);
 
+  it('leaves the highlights out (validation and comparison frames, monitor states) unless asked', () => {
+    const m = mount();
+    m.canvas.load(conveyorDoc());
+    const clean = m.canvas.exportSvg();
+    m.canvas.highlight('error', ['step:B', 'c2']);
+    m.canvas.highlight('diff-added', ['step:A']);
+    m.canvas.highlight('diff-changed', ['transition:Go']);
+    m.canvas.highlight('active', ['step:Run'], { 'step:Run': '3.4 s' });
+    m.canvas.highlight('enabled', ['transition:Box']);
+    m.canvas.highlight('breakpoint', ['transition#3']);
+    // Printed and exported as if nothing were highlighted.
+    expect(m.canvas.exportSvg()).toBe(clean);
+    expect(m.canvas.exportSvg({ marks: false })).toBe(clean);
+    const marked = m.canvas.exportSvg({ marks: true });
+    for (const colour of ['#dc2626', '#2e7d32', '#ef6c00', '#16a34a']) {
+      expect(clean.split(colour).length, colour).toBeLessThan(marked.split(colour).length);
+    }
+    expect(marked).toContain('3.4 s');
+    expect(clean).not.toContain('3.4 s');
+    // The canvas keeps its highlights.
+    const gfx = m.get('elementRegistry').getGraphics('step:B') as Element;
+    expect([...gfx.querySelectorAll('rect')].map((r) => r.getAttribute('stroke'))).toContain('#dc2626');
+  });
+
   it('keeps the tooltip as an SVG title', () => {
     const m = mount();
     m.canvas.load(conveyorDoc());
@@ -143,14 +167,27 @@ describe('exportSvg', () => {
   });
 });
 
+// The cases sfc-doc's tests check too (crates/sfc-doc/tests/drawing.rs): one wrap rule for the
+// server's layout and SVG and the canvas. The file lies outside the web app, so it is read with
+// node:fs (the module name a variable, so TypeScript needs no @types/node); tests run from web/.
+const nodeFs = 'node:fs';
+const fs = (await import(/* @vite-ignore */ nodeFs)) as { readFileSync(path: string, encoding: 'utf8'): string };
+const shared = JSON.parse(
+  fs.readFileSync(`${(globalThis as unknown as { process: { cwd(): string } }).process.cwd()}/../crates/sfc-doc/tests/shared/condition_lines.json`, 'utf8'),
+) as { chars: number; cases: { what: string; condition: string; lines: string[] }[] };
+
 describe('transition labels', () => {
-  it('wrap a long one-line condition at words into two lines, the second cut with an ellipsis', () => {
-    expect(wrapCondition('Start')).toEqual(['Start']);
+  it('wrap long conditions at words, never cut, on the cases shared with sfc-doc', () => {
+    expect(shared.chars).toBe(CONDITION_CHARS);
+    expect(shared.cases.length).toBeGreaterThan(10);
+    for (const c of shared.cases) expect(conditionLines({ condition: c.condition }), c.what).toEqual(c.lines);
     expect(wrapCondition('CarLeft AND NOT DryerSelect AND NOT StopButton')).toEqual(['CarLeft AND NOT DryerSelect AND', 'NOT StopButton']);
-    const long = wrapCondition('Brushing.T >= MaxBrushTime AND NOT CarLeft AND NOT StopButton AND NOT Reset');
-    expect(long).toHaveLength(2);
-    expect(long[0]).toBe('Brushing.T >= MaxBrushTime AND');
-    expect(long[1].endsWith('…')).toBe(true);
-    expect(long[1].length).toBeLessThanOrEqual(32);
+  });
+  it('are as tall as their lines', () => {
+    const condition = 'Brushing.T >= MaxBrushTime AND NOT CarLeft AND NOT StopButton AND NOT Reset';
+    const [label] = labelsOf({ id: 't', kind: 'transition', condition, x: 0, y: 0, w: 40, h: 20 }, 40, 20);
+    expect(label.lines.join(' ')).toBe(condition);
+    expect(label.height).toBe(3 * LINE_H);
+    expect(label.y).toBe(10 - (3 * LINE_H) / 2);
   });
 });

@@ -1,7 +1,7 @@
 // The three catalogues have the same keys (up to each language's plural forms), no empty
 // values, a title for every diagnostic code of codes.rs, and every key the sources use.
 import { describe, expect, it } from 'vitest';
-import { detectLanguage, initI18n, nextLanguage, setLanguage, t } from '../../src/i18n';
+import { detectLanguage, initI18n, keepLanguageWith, nextLanguage, setLanguage, t } from '../../src/i18n';
 import cs from '../../src/i18n/cs.json';
 import de from '../../src/i18n/de.json';
 import en from '../../src/i18n/en.json';
@@ -125,7 +125,9 @@ describe('language switch', () => {
     expect(nextLanguage('en')).toBe('de');
     expect(nextLanguage('de')).toBe('cs');
   });
-  it('translates at once, with Czech plurals, and remembers the choice', () => {
+  it('translates at once, with Czech plurals, and keeps the choice where it is told (the settings)', () => {
+    const kept: string[] = [];
+    keepLanguageWith((l) => kept.push(l));
     initI18n('en');
     expect(t('errors.count.error', { count: 2 })).toBe('2 errors');
     setLanguage('cs');
@@ -133,8 +135,11 @@ describe('language switch', () => {
     expect(t('errors.count.error', { count: 1 })).toBe('1 chyba');
     expect(t('errors.count.error', { count: 3 })).toBe('3 chyby');
     expect(t('errors.count.error', { count: 5 })).toBe('5 chyb');
-    expect(localStorage.getItem('sfc.language')).toBe('cs');
+    expect(kept).toEqual(['cs']);
     setLanguage('de');
     expect(t('menu.file')).toBe('Datei');
+    expect(kept).toEqual(['cs', 'de']);
+    expect(localStorage.getItem('sfc.language')).toBeNull();
+    keepLanguageWith(() => {});
   });
 });

@@ -5,6 +5,7 @@ import type { EditorDoc } from '../../doc';
 import type { DocFields } from '../core/DocState';
 import type { Service, SfcElement } from '../model';
 import { ApplyLayoutHandler } from './cmd/ApplyLayoutHandler';
+import { ReplaceDocHandler } from './cmd/ReplaceDocHandler';
 import { UpdateDocHandler } from './cmd/UpdateDocHandler';
 import { UpdateElementHandler } from './cmd/UpdateElementHandler';
 
@@ -19,6 +20,7 @@ export class SfcModeling extends BaseModeling {
       'sfc.element.update': UpdateElementHandler,
       'sfc.doc.update': UpdateDocHandler,
       'sfc.layout.apply': ApplyLayoutHandler,
+      'sfc.doc.replace': ReplaceDocHandler,
     };
   }
 
@@ -47,5 +49,10 @@ export class SfcModeling extends BaseModeling {
 
   applyLayout(laidOut: EditorDoc) {
     this._commandStack.execute('sfc.layout.apply', { laidOut });
+  }
+
+  /** Everything of a document with the same blocks and wires (see ReplaceDocHandler). */
+  replaceDoc(doc: EditorDoc) {
+    this._commandStack.execute('sfc.doc.replace', { doc });
   }
 }

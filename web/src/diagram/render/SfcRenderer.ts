@@ -23,6 +23,8 @@ const FRAME: Partial<Record<HighlightKind, { stroke: string; width: number; dash
   // The colours of `sfc diff --format svg` (crates/sfc-cli/src/diff.rs).
   'diff-added': { stroke: '#2e7d32', width: 3, fill: 'rgba(46,125,50,0.10)' },
   'diff-changed': { stroke: '#ef6c00', width: 3, fill: 'rgba(239,108,0,0.10)' },
+  // A merge conflict (`sfc.conflict`): red-orange, apart from the comparison's orange.
+  conflict: { stroke: '#e64a19', width: 3, dash: '8 3', fill: 'rgba(230,74,25,0.12)' },
 };
 const LABEL_COLOUR: Partial<Record<HighlightKind, string>> = {
   active: '#15803d',
@@ -34,8 +36,14 @@ const LABEL_COLOUR: Partial<Record<HighlightKind, string>> = {
 export const ENABLED = '#16a34a';
 const BREAKPOINT = '#dc2626';
 
+/** No highlight: how a block is drawn for Print and Export SVG without marks. */
+const UNMARKED: { kinds: Set<HighlightKind>; label?: string } = { kinds: new Set() };
+
 export class SfcRenderer extends BaseRenderer {
   static $inject = ['eventBus', 'elementRegistry', 'sfcHighlights'];
+
+  /** While set, blocks and wires are drawn without their highlights (`drawUnmarked`). */
+  private unmarked = false;
 
   constructor(
     eventBus: Service,
@@ -49,12 +57,31 @@ export class SfcRenderer extends BaseRenderer {
     return !!element.businessObject;
   }
 
+  /**
+   * Draws a block or wire into `parent` as it is, without the marks of its highlights (error,
+   * warning and comparison frames, monitor states, breakpoints, their labels and colours): what
+   * Print and Export SVG show unless asked for the marks.
+   */
+  drawUnmarked(parent: SVGElement, element: Service): void {
+    this.unmarked = true;
+    try {
+      if (isConnection(element)) this.drawConnection(parent, element);
+      else this.drawShape(parent, element);
+    } finally {
+      this.unmarked = false;
+    }
+  }
+
+  private marks(id: string): { kinds: Set<HighlightKind>; label?: string } {
+    return this.unmarked ? UNMARKED : this.highlights.of(id);
+  }
+
   drawShape(parent: SVGElement, shape: Service): SVGElement {
     const s = shape as SfcShape;
     const e = s.businessObject;
     // Drawn straight into diagram-js's visual group: no wrapper, fewer nodes per block.
     const g = parent;
-    const hl = this.highlights.of(s.id);
+    const hl = this.marks(s.id);
     this.drawFrames(g, s, hl.kinds);
     switch (e.kind) {
       case 'step':
@@ -95,7 +122,7 @@ export class SfcRenderer extends BaseRenderer {
   drawConnection(parent: SVGElement, connection: Service): SVGElement {
     const c = connection as SfcConnection;
     const bo = c.businessObject;
-    const hl = this.highlights.of(c.id);
+    const hl = this.marks(c.id);
     const colour = hl.kinds.has('error') ? FRAME.error!.stroke : hl.kinds.has('witness') ? FRAME.witness!.stroke : (bo.color ?? INK);
     return el(
       'polyline',
@@ -287,7 +314,7 @@ export class SfcRenderer extends BaseRenderer {
 
   private drawFrames(g: SVGElement, s: SfcShape, kinds: Set<HighlightKind>) {
     let pad = 4;
-    for (const kind of ['diff-added', 'diff-changed', 'warning', 'error', 'witness', 'hit', 'active', 'selected-diagnostic'] as HighlightKind[]) {
+    for (const kind of ['conflict', 'diff-added', 'diff-changed', 'warning', 'error', 'witness', 'hit', 'active', 'selected-diagnostic'] as HighlightKind[]) {
       const f = FRAME[kind];
       if (!f || !kinds.has(kind)) continue;
       const attrs: Record<string, string | number> = {
