@@ -371,6 +371,11 @@ pub fn route_empty(doc: &mut EditorDoc, d: &Derived) {
     route_where(doc, d, |c| c.waypoints.is_empty());
 }
 
+/// Routes the connections `which` selects.
+pub fn route_matching(doc: &mut EditorDoc, d: &Derived, which: impl Fn(&crate::Connection) -> bool) {
+    route_where(doc, d, which);
+}
+
 fn obstacles(doc: &EditorDoc) -> Vec<Rect> {
     let mut obstacles: Vec<Rect> = doc.elements.iter().filter(|e| e.kind.is_some()).map(Rect::of).collect();
     obstacles.extend(drawing::labels(doc).into_iter().map(|l| l.rect));

@@ -341,6 +341,7 @@ use sfc_diagnostics::{Diagnostic, Severity, SourceFile};
 pub mod drawing;
 mod graph;
 mod layout;
+mod loose;
 mod open;
 mod pragma;
 mod readback;

@@ -5,6 +5,7 @@
 
 use crate::graph::{self, Role};
 use crate::layout::{self, Model};
+use crate::loose;
 use crate::pragma;
 use crate::readback::Probe;
 use crate::region;
@@ -331,6 +332,29 @@ pub fn document(r: &ReadChart) -> EditorDoc {
             let mut doc = laid_out(r, &mut probe);
             add_loose(&mut doc, &r.loose);
             let d = graph::derive(&doc, &mut probe);
+            // Blocks an import stacked at one place are laid side by side, and loose pieces
+            // the new layout put blocks under go beside the chart.
+            let spread = loose::spread_duplicates(&mut doc);
+            let lone = loose::loose_blocks(&doc, &d);
+            let covered = {
+                use crate::drawing::Rect;
+                let chart: Vec<Rect> = (0..doc.elements.len())
+                    .filter(|&i| !lone[i] && doc.elements[i].kind.is_some())
+                    .map(|i| Rect::of(&doc.elements[i]))
+                    .collect();
+                (0..doc.elements.len())
+                    .any(|i| lone[i] && chart.iter().any(|c| c.overlaps(&Rect::of(&doc.elements[i]))))
+            };
+            if covered {
+                loose::place_beside(&mut doc, &d, &lone);
+            }
+            let mut moved = spread;
+            if covered {
+                moved.extend((0..lone.len()).filter(|&i| lone[i]));
+            }
+            if !moved.is_empty() {
+                loose::route_of(&mut doc, &d, &moved);
+            }
             graph::normalize(&doc, &d)
         }
     }
@@ -928,7 +952,17 @@ pub fn auto_layout(doc: &EditorDoc) -> EditorDoc {
                 || (*r == Role::Other && matches!(e.kind, Some(ElementKind::Step | ElementKind::Transition)))
         })
         .collect();
-    let only_labels_kept = out.elements.iter().zip(&keep).all(|(e, k)| !k || e.kind == Some(ElementKind::Text));
+    // Loose pieces (blocks not wired to the chart) take no part in the chart's layout: they
+    // are hidden from it (no kind: no outline, no obstacle) and put beside it afterwards.
+    let lone = loose::loose_blocks(doc, &d);
+    let kinds: Vec<Option<ElementKind>> = out.elements.iter().map(|e| e.kind).collect();
+    for (e, l) in out.elements.iter_mut().zip(&lone) {
+        if *l {
+            e.kind = None;
+        }
+    }
+    let only_labels_kept =
+        out.elements.iter().zip(&keep).zip(&lone).all(|((e, k), l)| !k || *l || e.kind == Some(ElementKind::Text));
     if !(only_labels_kept
         && lay.kind == LayoutKind::Structured
         && structured(&mut out, &d, &chart, &step_of, &transition_of))
@@ -936,6 +970,14 @@ pub fn auto_layout(doc: &EditorDoc) -> EditorDoc {
         layout::place(&mut out, &d, &Model { step_of: &step_of, transition_of: &transition_of }, &lay, &keep);
         clear_text_labels(&mut out);
         layout::route_all(&mut out, &d);
+    }
+    for (e, k) in out.elements.iter_mut().zip(kinds) {
+        e.kind = k;
+    }
+    if lone.iter().any(|&l| l) {
+        loose::place_beside(&mut out, &d, &lone);
+        let pieces: Vec<usize> = (0..lone.len()).filter(|&i| lone[i]).collect();
+        loose::route_of(&mut out, &d, &pieces);
     }
     out
 }

@@ -88,8 +88,9 @@ fn in_place(xml: &str, replacing: &str, checked: &Checked) -> Option<Result<(Str
     // element.
     let renames = renamed_steps(old_pou, new_pou);
     let old = Shape::of(&old_unit, old_pou, &renames);
+    let shared = old.shared_jumps(&new);
     let mut plan = Plan { doc: &doc, map: &imported.map, old_text: &imported.text, edits: Vec::new(), content: false };
-    plan.compare(&old, &new, new_text)?;
+    plan.compare(&old, &new, new_text, &shared)?;
     if !renames.is_empty() {
         plan.rename(&old, &renames)?;
     }
@@ -108,7 +109,7 @@ fn in_place(xml: &str, replacing: &str, checked: &Checked) -> Option<Result<(Str
     let (again_unit, _) = sfc_syntax::parse(0, &again.text);
     let again_pou = find_pou(&again_unit, replacing)?;
     let written = Shape::of(&again_unit, again_pou, &HashMap::new());
-    if !written.same_as(&new) {
+    if !written.same_as(&new, &shared) {
         return None;
     }
     Some(Ok((out, Patched::InPlace)))
@@ -329,9 +330,29 @@ impl<'u> Shape<'u> {
         Shape { head, attrs: pou_attrs, comments, elems }
     }
 
+    /// The places of jumps the file draws once for several transitions (one `jumpStep` after
+    /// a convergence, which the editor draws as a jump per transition, side by side) that
+    /// `new` puts at different places: the file's one `jumpStep` cannot follow, and keeps its
+    /// place. Target and place as PLCopen writes them. (Moved together, they move it.)
+    fn shared_jumps(&self, new: &Shape) -> SharedJumps {
+        let mut seen: HashMap<(String, String, String), std::collections::HashSet<(String, String)>> = HashMap::new();
+        let mut count: HashMap<(String, String, String), usize> = HashMap::new();
+        for (o, n) in self.elems.iter().zip(&new.elems) {
+            for (a, b) in o.jumps.iter().zip(&n.jumps) {
+                seen.entry(jump_key(a)).or_default().insert((attrs::fmt_num(b.1), attrs::fmt_num(b.2)));
+                *count.entry(jump_key(a)).or_default() += 1;
+            }
+        }
+        seen.into_iter()
+            .filter(|(k, places)| places.len() > 1 && count.get(k).is_some_and(|n| *n > 1))
+            .map(|(k, _)| k)
+            .collect()
+    }
+
     /// The same meaning and the same places as `other` (`self` read from a file: a size the
-    /// file does not hold is any size).
-    fn same_as(&self, other: &Shape) -> bool {
+    /// file does not hold is any size; a jump the file draws once for several transitions,
+    /// `shared`, may be anywhere: the file has one place for all of them).
+    fn same_as(&self, other: &Shape, shared: &SharedJumps) -> bool {
         self.head == other.head
             && self.attrs == other.attrs
             && self.comments == other.comments
@@ -353,11 +374,18 @@ impl<'u> Shape<'u> {
                     && a.jumps.len() == b.jumps.len()
                     && a.jumps.iter().zip(&b.jumps).all(|(x, y)| {
                         x.0.eq_ignore_ascii_case(&y.0)
-                            && same_num(Some(x.1), Some(y.1))
-                            && same_num(Some(x.2), Some(y.2))
+                            && (shared.contains(&jump_key(x))
+                                || (same_num(Some(x.1), Some(y.1)) && same_num(Some(x.2), Some(y.2))))
                     })
             })
     }
+}
+
+/// Jumps by target and place, as PLCopen writes the place.
+type SharedJumps = std::collections::HashSet<(String, String, String)>;
+
+fn jump_key(j: &(String, f64, f64)) -> (String, String, String) {
+    (j.0.to_ascii_lowercase(), attrs::fmt_num(j.1), attrs::fmt_num(j.2))
 }
 
 /// `x y w h n;…` → the places and the counts (`;`-joined), `None` when malformed.
@@ -450,7 +478,7 @@ impl<'d, 'i> Plan<'d, 'i> {
 
     /// Compares the old POU with the new one element by element and plans the edits; `None`
     /// when a difference cannot be written in place.
-    fn compare(&mut self, old: &Shape, new: &Shape, new_text: &str) -> Option<()> {
+    fn compare(&mut self, old: &Shape, new: &Shape, new_text: &str, shared: &SharedJumps) -> Option<()> {
         if old.head != new.head || old.attrs != new.attrs || old.comments != new.comments {
             return None;
         }
@@ -483,6 +511,10 @@ impl<'d, 'i> Plan<'d, 'i> {
                 self.action_blocks(o, n)?;
             }
             for (a, b) in o.jumps.iter().zip(&n.jumps) {
+                // A jump the file draws once for several transitions keeps its one place.
+                if shared.contains(&jump_key(a)) {
+                    continue;
+                }
                 if !same_num(Some(a.1), Some(b.1)) || !same_num(Some(a.2), Some(b.2)) {
                     self.jump(o, a, b)?;
                 }

@@ -264,6 +264,12 @@ fn action_blocks_and_jumps_move_in_place() {
     let (out, how) = save(&xml, &moved);
     assert_eq!(how, Patched::InPlace);
     assert_eq!(diff(&xml, &out), [("<position x=\"90\" y=\"330\"/>".into(), "<position x=\"130\" y=\"370\"/>".into())]);
+    // Laid side by side (the editor draws one jump per transition; issue 36): the file's one
+    // jump keeps its place, and nothing else changes.
+    let spread = text.replacen("'Init 90 330'", "'Init 130 330'", 1);
+    assert_eq!(spread.matches("'Init 90 330'").count(), 1);
+    let (out, _) = save(&xml, &spread);
+    assert_eq!(out, xml);
     // Resized: the element's own `width` and `height`.
     let resized = text.replacen("{attribute 'sfc.w' := '80'}", "{attribute 'sfc.w' := '100'}", 1);
     let (out, how) = save(&xml, &resized);
