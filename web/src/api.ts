@@ -15,6 +15,8 @@ export type {
   FileFormat,
   HostInfo,
   OpenResult,
+  PouAction,
+  PouEntry,
   ProveResult,
   ProveSummary,
   Replay,

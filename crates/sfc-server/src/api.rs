@@ -4,7 +4,7 @@
 
 use crate::compile::{self, BuildTarget, CompileError, CompileOptions};
 use crate::confine::Refusal;
-use crate::diag::{chart_of, diag_json, pou_spans, problem_json};
+use crate::diag::{chart_of, diag_json, pou_spans, problem_json, PouSpans};
 use crate::disk::{content_hash, write_atomically};
 use crate::{assets, AppState};
 use axum::body::Bytes;
@@ -201,13 +201,37 @@ pub(crate) fn page_diagnostics(
     in_text: &[Diagnostic],
     charts: &[EditorDoc],
 ) -> Vec<Value> {
-    let pous = pou_spans(text);
-    let mut items: Vec<(Diagnostic, Option<&EditorDoc>)> = Vec::new();
+    page_diagnostics_in(&pou_spans(text), name, text, import, in_text, charts)
+}
+
+/// [`page_diagnostics`] with the POUs of `text` already found. Each diagnostic names the POU
+/// it lies in (`pou`): its chart's name when it concerns one of `charts`, the POU holding its
+/// span otherwise; none outside every POU (a TYPE), nor for the import's own, unless the file
+/// holds just one chart.
+pub(crate) fn page_diagnostics_in(
+    pous: &PouSpans,
+    name: &str,
+    text: &str,
+    import: Option<&Imported>,
+    in_text: &[Diagnostic],
+    charts: &[EditorDoc],
+) -> Vec<Value> {
+    let mut items: Vec<(Diagnostic, Option<&EditorDoc>, Option<String>)> = Vec::new();
     if let Some(imp) = import {
-        items.extend(imp.diagnostics.iter().map(|d| (d.clone(), chart_of(charts, &pous, None))));
+        items.extend(imp.diagnostics.iter().map(|d| {
+            let doc = chart_of(charts, pous, None);
+            (d.clone(), doc, doc.map(|c| c.pou.clone()))
+        }));
     }
     for d in in_text {
-        let doc = chart_of(charts, &pous, (d.span.file == 0).then_some(d.span));
+        let span = (d.span.file == 0).then_some(d.span);
+        let doc = chart_of(charts, pous, span);
+        let pou = match (doc, span.and_then(|s| pous.pou_at(s))) {
+            (Some(c), Some(_)) => Some(c.pou.clone()),
+            (_, Some(p)) => Some(p.to_string()),
+            (Some(c), None) if span.is_none() => Some(c.pou.clone()),
+            _ => None,
+        };
         // A syntax error inside a step, transition or action concerns that element.
         let inside = (d.element.is_none() && d.span.file == 0).then(|| pous.element_at(d.span)).flatten();
         let mut d = match import {
@@ -217,9 +241,9 @@ pub(crate) fn page_diagnostics(
         if let Some(name) = inside {
             d.element = Some(name.to_string());
         }
-        items.push((d, doc));
+        items.push((d, doc, pou));
     }
-    items.sort_by(|(a, _), (b, _)| {
+    items.sort_by(|(a, _, _), (b, _, _)| {
         (a.span.file, a.span.start, a.span.end, a.code).cmp(&(b.span.file, b.span.start, b.span.end, b.code))
     });
     items.dedup_by(|a, b| a.0 == b.0);
@@ -227,7 +251,7 @@ pub(crate) fn page_diagnostics(
         Some(imp) => imp.xml.clone(),
         None => SourceFile::new(name, text),
     }];
-    items.iter().map(|(d, doc)| diag_json(d, &files, *doc)).collect()
+    items.iter().map(|(d, doc, pou)| diag_json(d, &files, *doc, pou.as_deref())).collect()
 }
 
 /// The check of a document: its problems, then the check of its text with `opts`.
@@ -381,15 +405,17 @@ fn open_bytes(path: &Path, bytes: Vec<u8>) -> Answer {
     let text = utf8(path, bytes)?;
     let name = path.display().to_string();
     let xml = compile::is_xml(path, &text);
-    let (charts, diagnostics) = if xml {
+    let (charts, diagnostics, pous) = if xml {
         let imported = sfc_plcopen::import(0, &name, &text);
         let opened = sfc_doc::open(0, &format!("{name} (imported)"), &imported.text);
-        let d = page_diagnostics(&name, &imported.text, Some(&imported), &opened.diagnostics, &opened.charts);
-        (opened.charts, d)
+        let pous = pou_spans(&imported.text);
+        let d = page_diagnostics_in(&pous, &name, &imported.text, Some(&imported), &opened.diagnostics, &opened.charts);
+        (opened.charts, d, pous.tree)
     } else {
         let opened = sfc_doc::open(0, &name, &text);
-        let d = page_diagnostics(&name, &text, None, &opened.diagnostics, &opened.charts);
-        (opened.charts, d)
+        let pous = pou_spans(&text);
+        let d = page_diagnostics_in(&pous, &name, &text, None, &opened.diagnostics, &opened.charts);
+        (opened.charts, d, pous.tree)
     };
     Ok(json!({
         "path": path_string(path),
@@ -397,6 +423,7 @@ fn open_bytes(path: &Path, bytes: Vec<u8>) -> Answer {
         "charts": charts,
         "diagnostics": diagnostics,
         "hash": hash,
+        "pous": pous,
     }))
 }
 
@@ -560,10 +587,22 @@ fn refuse_unparsed(doc: &EditorDoc) -> Result<(), ApiError> {
         })
         .collect();
     let d: Vec<Value> = lost.iter().map(|p| problem_json(p, doc, &name, &written.text)).collect();
+    // Where the first problem is (file:line:col), as the Error list shows it.
+    let at = d
+        .first()
+        .map(|f| {
+            format!(
+                " at {}:{}:{}",
+                f["file"].as_str().unwrap_or(""),
+                f["line"].as_u64().unwrap_or(1),
+                f["column"].as_u64().unwrap_or(1)
+            )
+        })
+        .unwrap_or_default();
     Err(ApiError::new(
         StatusCode::UNPROCESSABLE_ENTITY,
         format!(
-            "not saved: {} does not parse; fix it first (the file would otherwise hold something else than what \
+            "not saved: {} does not parse{at}; fix it first (the file would otherwise hold something else than what \
              you typed). Nothing was written.",
             what.join(", ")
         ),

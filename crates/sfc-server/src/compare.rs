@@ -139,7 +139,7 @@ fn compare_file(s: &AppState, req: CompareRequest) -> Result<CompareResult, Fail
     // The other side: the file's text (imported when it is PLCopen XML), which must read.
     let (file, old, diags) = sfc_driver::check_any(0, Path::new(&label), &text, &plain);
     let files = [file];
-    let broken: Vec<Value> = diags.iter().filter(|d| unreadable(d)).map(|d| diag_json(d, &files, None)).collect();
+    let broken: Vec<Value> = diags.iter().filter(|d| unreadable(d)).map(|d| diag_json(d, &files, None, None)).collect();
     if let Some(first) = broken.first() {
         let against = match req.against {
             CompareAgainst::Saved => "the saved file",
@@ -174,7 +174,7 @@ fn compare_file(s: &AppState, req: CompareRequest) -> Result<CompareResult, Fail
     let new = sfc_analysis::check_source(0, &name, &current, &plain);
     let new_files = [new.file.clone()];
     let broken: Vec<Value> =
-        new.diagnostics.iter().filter(|d| unreadable(d)).map(|d| diag_json(d, &new_files, None)).collect();
+        new.diagnostics.iter().filter(|d| unreadable(d)).map(|d| diag_json(d, &new_files, None, None)).collect();
     if let Some(first) = broken.first() {
         return Err(Failure::Located(Located {
             status: StatusCode::UNPROCESSABLE_ENTITY,
@@ -376,7 +376,7 @@ mod tests {
         // `located_line` reads what `diag_json` writes.
         let f = SourceFile::new("a.st", "PROGRAM P\nEND_PROGRAM x");
         let d = Diagnostic::error("SFC0101", sfc_diagnostics::Span::new(0, 22, 23), "unexpected `x`");
-        let v = diag_json(&d, &[f], None);
+        let v = diag_json(&d, &[f], None, None);
         assert_eq!(located_line(&v), "a.st:2:13: unexpected `x`");
     }
 }

@@ -50,6 +50,12 @@ pub struct Diag {
     #[serde(default, skip_serializing_if = "Option::is_none")]
     #[cfg_attr(test, ts(optional))]
     pub replay: Option<Replay>,
+    /// The POU of the file the diagnostic lies in (its chart's, when it concerns a chart); absent
+    /// for one outside every POU (a TYPE, the XML itself). The page lists it under that chart's
+    /// tab, or under the file when no chart of the file is that POU.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    #[cfg_attr(test, ts(optional))]
+    pub pou: Option<String>,
 }
 
 /// A witness of `sfc prove` as the monitor replays it: the inputs to set before each scan.
@@ -157,6 +163,37 @@ pub struct OpenResult {
     pub diagnostics: Vec<Diag>,
     /// Hash of the file's bytes when read; sent back on save to detect changes made outside.
     pub hash: String,
+    /// Every POU of the file in order (the project tree), charts or not.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    #[cfg_attr(test, ts(optional))]
+    pub pous: Option<Vec<PouEntry>>,
+}
+
+/// A POU of an opened file, as the project tree lists it.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[cfg_attr(test, derive(ts_rs::TS))]
+#[serde(rename_all = "camelCase", deny_unknown_fields)]
+pub struct PouEntry {
+    pub name: String,
+    /// `program`, `functionBlock` or `function`.
+    pub kind: String,
+    /// The body's language: `SFC`, `ST` or `IL`.
+    pub language: String,
+    /// Whether the editor opens it as a chart (its body, or an action, is written in SFC).
+    pub chart: bool,
+    /// Its actions, in order.
+    pub actions: Vec<PouAction>,
+    /// Its chart's transitions by name (an unnamed one `T<n>`), in order.
+    pub transitions: Vec<String>,
+}
+
+/// An action of a POU: whether it is written in SFC (a chart of its own).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[cfg_attr(test, derive(ts_rs::TS))]
+#[serde(rename_all = "camelCase", deny_unknown_fields)]
+pub struct PouAction {
+    pub name: String,
+    pub sfc: bool,
 }
 
 /// `POST /api/save`.
@@ -378,6 +415,8 @@ mod tests {
             HostInfo::decl(&cfg),
             Session::decl(&cfg),
             FileEntry::decl(&cfg),
+            PouAction::decl(&cfg),
+            PouEntry::decl(&cfg),
             OpenResult::decl(&cfg),
             SaveResult::decl(&cfg),
             BuildTarget::decl(&cfg),

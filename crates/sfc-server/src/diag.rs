@@ -28,8 +28,9 @@ fn camel(key: &str) -> String {
     out
 }
 
-/// One diagnostic located in `files`; `doc` is the chart it concerns, when known.
-pub fn diag_json(d: &Diagnostic, files: &[SourceFile], doc: Option<&EditorDoc>) -> Value {
+/// One diagnostic located in `files`; `doc` is the chart it concerns, when known; `pou` the POU
+/// of the file it lies in (the page scopes the Error list by it).
+pub fn diag_json(d: &Diagnostic, files: &[SourceFile], doc: Option<&EditorDoc>, pou: Option<&str>) -> Value {
     let mut out = Map::new();
     if let Value::Object(m) = sfc_diagnostics::to_json_value(d, files) {
         for (k, v) in m {
@@ -45,6 +46,9 @@ pub fn diag_json(d: &Diagnostic, files: &[SourceFile], doc: Option<&EditorDoc>) 
     if let (Some(doc), Some(Witness::Firing(names))) = (doc, &d.witness) {
         let fired: Vec<String> = names.iter().flat_map(|n| sfc_doc::element_ids(doc, n)).collect();
         out.insert("witnessIds".into(), json!(fired));
+    }
+    if let Some(pou) = pou {
+        out.insert("pou".into(), json!(pou));
     }
     Value::Object(out)
 }
@@ -85,6 +89,7 @@ pub fn problem_json(p: &Problem, doc: &EditorDoc, file: &str, text: &str) -> Val
         "elementIds": [p.element],
         "notes": [],
         "witness": null,
+        "pou": doc.pou,
     })
 }
 
@@ -129,9 +134,16 @@ pub struct PouSpans {
     /// `(span, name)` of every step, transition and action of an SFC body, as the model names
     /// them (an unnamed transition `T<n>`, n its position among the POU's transitions).
     pub elements: Vec<(Span, String)>,
+    /// Every POU as the project tree lists it (`PouEntry` of the contract).
+    pub tree: Vec<Value>,
 }
 
 impl PouSpans {
+    /// The name of the POU whose text holds `span`.
+    pub fn pou_at(&self, span: Span) -> Option<&str> {
+        self.pous.iter().find(|(s, _)| s.start <= span.start && span.start <= s.end).map(|(_, n)| n.as_str())
+    }
+
     /// The chart element whose text holds `span`: the innermost step, transition or action.
     pub fn element_at(&self, span: Span) -> Option<&str> {
         self.elements
@@ -142,26 +154,47 @@ impl PouSpans {
     }
 }
 
-/// The POU each span of a file's text lies in, and its SFC elements.
+/// The POU each span of a file's text lies in, its SFC elements, and the project tree.
 pub fn pou_spans(text: &str) -> PouSpans {
-    use sfc_syntax::ast::{Item, SfcElement};
+    use sfc_syntax::ast::{ActionBody, Body, Item, PouKind, SfcElement};
     let (unit, _) = sfc_syntax::parse(0, text);
     let mut out = PouSpans::default();
     for item in &unit.items {
         let Item::Pou(p) = item else { continue };
         out.pous.push((p.span, p.name.text.clone()));
         let mut k = 0;
+        let mut transitions = Vec::new();
         for e in p.body.sfc().unwrap_or(&[]) {
             let name = match e {
                 SfcElement::Step(s) => s.name.text.clone(),
                 SfcElement::Transition(t) => {
                     k += 1;
-                    t.name.as_ref().map_or_else(|| format!("T{k}"), |n| n.text.clone())
+                    let name = t.name.as_ref().map_or_else(|| format!("T{k}"), |n| n.text.clone());
+                    transitions.push(name.clone());
+                    name
                 }
                 SfcElement::Action(a) => a.name.text.clone(),
             };
             out.elements.push((e.span(), name));
         }
+        let actions: Vec<Value> =
+            p.actions().map(|a| json!({"name": a.name.text, "sfc": matches!(a.body, ActionBody::Sfc(_))})).collect();
+        out.tree.push(json!({
+            "name": p.name.text,
+            "kind": match p.kind {
+                PouKind::Program => "program",
+                PouKind::FunctionBlock => "functionBlock",
+                PouKind::Function => "function",
+            },
+            "language": match p.body {
+                Body::Sfc(_) => "SFC",
+                Body::St(_) => "ST",
+                Body::Il(_) => "IL",
+            },
+            "chart": p.has_chart(),
+            "actions": actions,
+            "transitions": transitions,
+        }));
     }
     out
 }
@@ -186,7 +219,7 @@ mod tests {
     fn keys_are_camel_case_with_title() {
         let f = SourceFile::new("a.st", "PROGRAM P\nEND_PROGRAM\n");
         let d = Diagnostic::new("SFC0101", Span::new(0, 10, 21), "syntax error here").with_note("a note");
-        let v = diag_json(&d, &[f], None);
+        let v = diag_json(&d, &[f], None, None);
         assert_eq!(v["endLine"], 2);
         assert_eq!(v["endColumn"], 12);
         assert_eq!(v["line"], 2);

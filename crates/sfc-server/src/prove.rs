@@ -56,6 +56,7 @@ fn diag(code: &str, severity: Severity, message: String, element: Option<&str>, 
         witness: Value::Null,
         witness_ids: None,
         replay: None,
+        pou: None,
     }
 }
 

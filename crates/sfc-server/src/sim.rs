@@ -210,7 +210,7 @@ fn start_simulation(state: &AppState, req: StartRequest, port: u16) -> Result<Va
         Ok(_) => return Err(Refused::Chart(format!("the chart `{}` has errors", doc.pou), diagnostics)),
         Err((file, diags)) => {
             let files = [file];
-            diagnostics.extend(diags.iter().map(|d| diag_json(d, &files, Some(&doc))));
+            diagnostics.extend(diags.iter().map(|d| diag_json(d, &files, Some(&doc), Some(&doc.pou))));
             return Err(Refused::Chart(format!("the chart `{}` has errors", doc.pou), diagnostics));
         }
     };

@@ -309,6 +309,10 @@ async fn typed_text_that_does_not_parse_is_never_replaced() {
     assert_eq!(a.status, 422, "{}", a.text);
     let msg = a.body["error"].as_str().unwrap();
     assert!(msg.contains("not saved") && msg.contains("T1"), "{msg}");
+    // Where the first problem is: file:line:col, as the Error list gives it.
+    let first = &a.body["diagnostics"][0];
+    let at = format!(" at {}:{}:{}", first["file"].as_str().unwrap(), first["line"], first["column"]);
+    assert!(msg.contains(&at), "{msg} lacks {at}");
     assert_eq!(a.body["diagnostics"][0]["elementIds"], json!(["transition:T1"]));
     assert_eq!(std::fs::read_to_string(&path).unwrap(), before, "nothing written");
     // The drawing's problems carry their block and a place in the text.

@@ -80,7 +80,7 @@ export const tests = [
       const jump = d.elements.find((e) => e.kind === 'jump');
       await select(page, jump.id);
       await page.locator('.menubar .menu-title', { hasText: 'Edit' }).click();
-      await page.locator('.menu-dropdown .menu-item', { hasText: 'Delete' }).click();
+      await page.locator('.menu-dropdown .menu-item').filter({ has: page.locator('.menu-label', { hasText: /^Delete$/ }) }).click();
       await page.waitForFunction((id) => !window.__sfc.doc().elements.some((e) => e.id === id), jump.id);
       const done = await dropFromPalette(page, 'step', { x: 80, y: 440 });
       assert(await wire(page, back.id, done), 'the transition was not wired to the new step');

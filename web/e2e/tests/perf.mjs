@@ -133,7 +133,8 @@ export const tests = [
       const FRAMES = 60;
       let moving = 0;
       for (let k = 1; k <= FRAMES; k++) {
-        await page.mouse.move(from.x + 2.5 * k, from.y + 1.5 * k);
+        // Left, into the free canvas beside the chart: a move onto another block is refused.
+        await page.mouse.move(from.x - 2.5 * k, from.y + 1.5 * k);
         await nextFrame();
         // The first moves pick the step up (diagram-js starts the drag after a few pixels).
         if (k === 3) moving = await mark();

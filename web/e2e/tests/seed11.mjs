@@ -162,10 +162,11 @@ export const tests = [
       await page.locator('.bottom-panel .panel-tabs .icon-button').click();
       await zoomOut(page, 3);
       const view = await page.evaluate(() => window.__sfc.view());
-      const pane = await page.locator('.canvas-pane.active').boundingBox();
+      // The palette is docked beside the view (it covers none of it).
+      const pane = await page.locator('.canvas-pane.active .djs-container').boundingBox();
       const palette = await page.locator('.canvas-pane.active .djs-palette').boundingBox();
       const grid = (v) => Math.ceil(v / 10) * 10;
-      const left = grid(view.x + (palette.x + palette.width - pane.x) / view.scale + 40);
+      const left = grid(view.x + Math.max(0, palette.x + palette.width - pane.x) / view.scale + 40);
       const top = grid(view.y + 40 / view.scale);
       assert(left + plan.width <= view.x + view.width && top + plan.height <= view.y + view.height, `the chart (${plan.width}×${plan.height}) does not fit the view ${JSON.stringify(view)}`);
       const at = (cx, y, h) => ({ x: left + cx, y: top + y + h / 2 });

@@ -1,7 +1,7 @@
 // The SFC Editor's shell: menus, toolbar, chart tabs (MDI) or the single chart (host mode), the
 // canvas of each chart, the Properties, Error List and Result panels, dialogs and status bar.
 import { useEffect, useMemo, useRef, useState } from 'preact/hooks';
-import type { BuildTarget, CompareAgainst, Diag, FileFormat, Session } from '../api';
+import type { BuildTarget, CompareAgainst, Diag, FileFormat, PouEntry, Session } from '../api';
 import type { CanvasHandle, CreateCanvas } from '../diagram/types';
 import type { EditorDoc } from '../doc';
 import { currentLanguage, i18n, LANGUAGES, nextLanguage, setLanguage, t, type Lang } from '../i18n';
@@ -20,6 +20,8 @@ import { rememberFile, Welcome } from './Welcome';
 import { Icon } from './icons';
 import { MenuBar, type MenuDef } from './Menu';
 import { PrintDialog } from './PrintDialog';
+import { diagnosticsOf, fileDiagnostics, type TreeNode } from './project';
+import { ProjectTree } from './ProjectTree';
 import { useMonitor } from '../monitor';
 import { installProbe } from './probe';
 import { PropertiesPanel } from './Properties';
@@ -101,6 +103,11 @@ export function App({ api, createCanvas }: AppProps) {
   const [highlightOn, setHighlightOn] = useState(true);
   const [witness, setWitness] = useState<WitnessView | null>(null);
   const [busy, setBusy] = useState(false);
+  /** Per opened file: its POUs (the project tree) and its diagnostics outside every chart. */
+  const [files, setFiles] = useState<Record<string, { pous: PouEntry[]; charts: string[]; diagnostics: Diag[]; all: Diag[] }>>({});
+  const [treeOpen, setTreeOpen] = useState(true);
+  /** The pending revalidation of each tab after an edit (debounced). */
+  const rechecks = useRef(new Map<string, number>());
 
   const host = session?.mode === 'host' ? session.host ?? null : null;
   const tab = store.active();
@@ -188,11 +195,19 @@ export function App({ api, createCanvas }: AppProps) {
     );
   }, []);
 
-  // Switching tabs shows that chart's selection, zoom and diagnostics.
+  // The active tab is scrolled into view in the tab strip.
+  useEffect(() => {
+    document.querySelector('.tabstrip .tab.active')?.scrollIntoView?.({ block: 'nearest', inline: 'nearest' });
+  }, [store.activeId, store.tabs.length]);
+
+  // Switching tabs shows that chart's selection, zoom and diagnostics (a row of the Error list
+  // stays selected when it showed another chart of the same tab).
+  const shownTab = useRef<string | undefined>(undefined);
   useEffect(() => {
     setSelection(canvas ? canvas.selection() : []);
     setZoom(canvas ? canvas.getZoom() : 1);
-    setSelectedDiag(null);
+    if (shownTab.current !== tab?.id) setSelectedDiag(null);
+    shownTab.current = tab?.id;
     setWitness(null);
     setSelectedChange(null);
     setSelectedConflict(null);
@@ -287,6 +302,7 @@ export function App({ api, createCanvas }: AppProps) {
           const d = c.getDoc();
           store.update(id, { canvasDirty: dirty, outcome: 'none', compare: null, pou: d.pou, ...kindOfTab(d) });
         } else store.update(id, { canvasDirty: dirty, outcome: 'none', compare: null });
+        scheduleRecheck(id);
         docChanged();
       }),
       c.on('selection', (ids) => {
@@ -353,9 +369,16 @@ export function App({ api, createCanvas }: AppProps) {
       const r = await api.open(path);
       rememberFile(r.path);
       if (r.charts.length === 0) toasts.show('info', t('open.noCharts', { file: baseName(path) }));
+      // Each tab lists its own chart's diagnostics; the rest are the file's (project.ts).
+      const names = r.charts.map((c) => c.pou);
+      setFiles((f) => ({ ...f, [r.path]: { pous: r.pous ?? [], charts: names, diagnostics: fileDiagnostics(r.diagnostics, names), all: r.diagnostics } }));
+      let first: TabState | undefined;
       for (const chart of r.charts) {
-        addTab({ path: r.path, format: r.format, hash: r.hash, pou: chart.pou, filePou: chart.pou, ...kindOfTab(chart), diagnostics: r.diagnostics }, chart);
+        const added = addTab({ path: r.path, format: r.format, hash: r.hash, pou: chart.pou, filePou: chart.pou, ...kindOfTab(chart), diagnostics: diagnosticsOf(r.diagnostics, chart.pou, names) }, chart);
+        first ??= added;
       }
+      // The file's first chart is the one shown.
+      if (first) store.activate(first.id);
     } catch (e) {
       if (e instanceof ApiError && e.status === 404) toasts.show('error', t('open.missing', { file: path }));
     }
@@ -432,7 +455,11 @@ export function App({ api, createCanvas }: AppProps) {
       }
     }
     for (const o of canvasesOf(x)) o.markSaved();
-    store.update(x.id, { path: result.path, format, hash: result.hash, unsaved: false, canvasDirty: false, pou: doc.pou, filePou: doc.pou, diagnostics: result.diagnostics });
+    const known = files[result.path];
+    const names = known ? known.charts.map((c) => (c.toLowerCase() === (x.filePou ?? x.pou).toLowerCase() ? doc.pou : c)) : [doc.pou];
+    if (!names.some((c) => c.toLowerCase() === doc.pou.toLowerCase())) names.push(doc.pou);
+    store.update(x.id, { path: result.path, format, hash: result.hash, unsaved: false, canvasDirty: false, pou: doc.pou, filePou: doc.pou, diagnostics: diagnosticsOf(result.diagnostics, doc.pou, names) });
+    if (known) setFiles((f) => ({ ...f, [result.path]: { ...known, charts: names, diagnostics: fileDiagnostics(result.diagnostics, names), all: result.diagnostics } }));
     // Other charts of the same file now compare against the new contents.
     for (const o of store.tabs) if (o.id !== x.id && o.path === result.path) store.update(o.id, { hash: result.hash });
     toasts.show('success', t('save.saved', { file: baseName(result.path) }));
@@ -651,6 +678,93 @@ export function App({ api, createCanvas }: AppProps) {
     );
   }
 
+  /** After an edit (undo and redo included) the tab's Error list is checked again, 300 ms after
+   *  the last change; an answer overtaken by a later edit is dropped. */
+  function scheduleRecheck(id: string): void {
+    const timers = rechecks.current;
+    window.clearTimeout(timers.get(id));
+    timers.set(
+      id,
+      window.setTimeout(() => {
+        timers.delete(id);
+        void recheck(id);
+      }, 300),
+    );
+  }
+
+  async function recheck(id: string): Promise<void> {
+    const x = store.get(id);
+    const doc = x ? docOf(id) : null;
+    if (!x || !doc) return;
+    const revisions = () => {
+      const y = store.get(id);
+      return y ? canvasesOf(y).map((c) => `${c.revision()}`).join(',') : '';
+    };
+    const before = revisions();
+    try {
+      const diags = await api.check(doc, false);
+      if (!store.get(id) || revisions() !== before || rechecks.current.has(id)) return;
+      // What the check of the chart does not see (a requirement's verdict) stays.
+      const kept = (store.get(id)?.diagnostics ?? []).filter((d) => d.code.startsWith('SFC10'));
+      store.update(id, { diagnostics: [...diags, ...kept] });
+    } catch {
+      // The API client has shown the server's message; the list stays as it was.
+    }
+  }
+
+  /** A row of the project tree: its chart's tab shown (opened again when it was closed), the
+   *  action's chart or the transition's block. */
+  async function openFromTree(path: string, node: TreeNode): Promise<void> {
+    let x = store.find(path, node.pou) ?? store.tabs.find((y) => y.path === path && y.filePou?.toLowerCase() === node.pou.toLowerCase());
+    if (!x) {
+      try {
+        const r = await api.open(path);
+        const chart = r.charts.find((c) => c.pou.toLowerCase() === node.pou.toLowerCase());
+        if (!chart) return;
+        const names = r.charts.map((c) => c.pou);
+        x = addTab({ path: r.path, format: r.format, hash: r.hash, pou: chart.pou, filePou: chart.pou, ...kindOfTab(chart), diagnostics: diagnosticsOf(r.diagnostics, chart.pou, names) }, chart);
+      } catch {
+        return;
+      }
+    }
+    store.activate(x.id);
+    if (node.kind === 'action') showView(x, node.name ?? null);
+    else if (node.kind === 'pou') store.update(x.id, { view: null });
+    else if (node.kind === 'transition') {
+      store.update(x.id, { view: null });
+      const id = x.id;
+      // The canvas of a tab just added is made on the next render.
+      window.setTimeout(() => {
+        const c = canvases.current.get(id);
+        const d = c?.getDoc();
+        const block = node.id ?? d?.elements.filter((e) => e.kind === 'transition').find((e, k) => (e.name || `T${k + 1}`).toLowerCase() === node.name?.toLowerCase())?.id;
+        if (c && block) {
+          c.select([block]);
+          c.reveal(block);
+        }
+      }, 0);
+    }
+  }
+
+  /** A row of the Error list: its block framed on the chart that holds it, the POU's or one of
+   *  its actions' (shown when another is). */
+  function selectDiag(index: number): void {
+    setSelectedDiag(index);
+    const d = diagnostics[index];
+    if (!tab || !d || !d.element) return;
+    const pc = canvases.current.get(tab.id);
+    const shownDoc = canvas?.getDoc();
+    const here = tab.view === null ? d.elementIds.length > 0 : !!shownDoc && blocksNamed(shownDoc, d.element).length > 0;
+    if (here || !pc) return;
+    const pouDocNow = pc.getDoc();
+    if (tab.view !== null && d.elementIds.length > 0) {
+      showView(tab, null);
+      return;
+    }
+    const action = sfcActions(pouDocNow).find((a) => a.chart && blocksNamed(a.chart, d.element).length > 0);
+    if (action) showView(tab, action.name);
+  }
+
   /** Sends a key to the canvas' own keyboard handling (copy, paste, delete). */
   function canvasKey(key: string, ctrl = false): void {
     const container = tab ? containers.current.get(viewKey(tab.id, tab.view)) : undefined;
@@ -698,6 +812,8 @@ export function App({ api, createCanvas }: AppProps) {
     if (ctrl && (k === '+' || k === '=')) return run(() => zoomBy(1.2));
     if (ctrl && k === '-') return run(() => zoomBy(1 / 1.2));
     if (ctrl && k === '0') return run(() => canvas.zoom('fit'));
+    // Structured editing when the canvas has not the focus (it handles these keys itself).
+    if (!ctrl && !e.altKey && e.key === 'Insert') return run(() => canvas.structure(e.shiftKey ? 'insertBefore' : 'insertAfter'));
   };
   useEffect(() => {
     const onKey = (e: KeyboardEvent) => keys.current(e);
@@ -741,6 +857,10 @@ export function App({ api, createCanvas }: AppProps) {
         { label: t('menu.paste'), shortcut: 'Ctrl+V', icon: 'paste', disabled: !hasChart, action: () => canvasKey('v', true) },
         { label: t('menu.delete'), shortcut: 'Del', icon: 'delete', disabled: selection.length === 0, action: () => canvasKey('Delete') },
         { label: t('menu.selectAll'), shortcut: 'Ctrl+A', disabled: !hasChart, action: selectAll },
+        { separator: true, label: '' },
+        { label: t('menu.insertAfter'), shortcut: 'Ins', disabled: !canvas?.canStructure('insertAfter'), action: () => canvas?.structure('insertAfter') },
+        { label: t('menu.insertBefore'), shortcut: 'Shift+Ins', disabled: !canvas?.canStructure('insertBefore'), action: () => canvas?.structure('insertBefore') },
+        { label: t('menu.deleteStep'), shortcut: 'Del', disabled: !canvas?.canStructure('deleteStep'), action: () => canvas?.structure('deleteStep') },
         { separator: true, label: '' },
         { label: t('menu.autoLayout'), icon: 'layout', disabled: !hasChart, action: () => void autoLayout() },
         { label: t('menu.validate'), icon: 'validate', disabled: !hasChart, action: () => void runBuild('validate') },
@@ -897,6 +1017,26 @@ export function App({ api, createCanvas }: AppProps) {
 
       <div class="workspace">
         {monitor.overlay}
+        {mdi && tab?.path && (files[tab.path]?.pous.length ?? 0) > 1 &&
+          (treeOpen ? (
+            <ProjectTree
+              file={baseName(tab.path)}
+              pous={files[tab.path].pous}
+              live={(pou) => {
+                const y = store.find(tab.path!, pou);
+                return y && y.id === tab.id ? pouDoc : undefined;
+              }}
+              diagnostics={store.tabs.filter((y) => y.path === tab.path).flatMap((y) => y.diagnostics).concat(files[tab.path].diagnostics)}
+              activePou={tab.pou}
+              activeView={tab.view}
+              onOpen={(node) => void openFromTree(tab.path!, node)}
+              onCollapse={() => setTreeOpen(false)}
+            />
+          ) : (
+            <button class="tree-expand no-print" title={t('project.expand')} aria-label={t('project.expand')} onClick={() => setTreeOpen(true)}>
+              <Icon name="next" />
+            </button>
+          ))}
         <div class="main-column">
           {tab && pouDoc && (sfcActions(pouDoc).length > 0 || tab.views.length > 0) && (
             <div class="chart-views no-print" role="tablist" aria-label={t('views.label')}>
@@ -1005,8 +1145,10 @@ export function App({ api, createCanvas }: AppProps) {
                 {bottomTab === 'errors' || (bottomTab === 'compare' && !tab?.compare) || (bottomTab === 'conflicts' && !showConflicts) ? (
                   <ErrorList
                     diagnostics={diagnostics}
+                    fileDiagnostics={tab?.path ? files[tab.path]?.diagnostics : undefined}
+                    fileName={tab?.path ? baseName(tab.path) : undefined}
                     selected={selectedDiag}
-                    onSelect={setSelectedDiag}
+                    onSelect={selectDiag}
                     highlightOn={highlightOn}
                     onToggleHighlight={() => setHighlightOn(!highlightOn)}
                     witness={witness}

@@ -23,6 +23,10 @@ export function ErrorList(props: {
   onReplay?: (d: Diag) => void;
   /** The name shown for a block without an element name (a jump, a bar, an action block). */
   blockName?: (id: string) => string;
+  /** Diagnostics of the chart's file outside every chart (a TYPE, a POU in ST), listed under
+   *  the file after the chart's own; selected as `diagnostics.length + k`. */
+  fileDiagnostics?: Diag[];
+  fileName?: string;
 }) {
   const [shown, setShown] = useState<Record<Severity, boolean>>({ error: true, warning: true, note: true });
   const count = (s: Severity) => props.diagnostics.filter((d) => d.severity === s).length;
@@ -117,9 +121,31 @@ export function ErrorList(props: {
                 </tr>
               ) : null,
             )}
+            {(props.fileDiagnostics ?? []).length > 0 && (
+              <tr class="file-scope">
+                <td colSpan={6}>{t('errors.fileScope', { file: props.fileName ?? '' })}</td>
+              </tr>
+            )}
+            {(props.fileDiagnostics ?? []).map((d, j) => {
+              const k = props.diagnostics.length + j;
+              return shown[d.severity] ? (
+                <tr key={`f${j}`} class={`sev-${d.severity} in-file ${props.selected === k ? 'selected' : ''}`} onClick={() => props.onSelect(k)}>
+                  <td class="col-icon">
+                    <Icon name={d.severity} title={t(`severity.${d.severity}`)} />
+                  </td>
+                  <td class="col-code">{d.code}</td>
+                  <td class="col-element">{d.pou ?? ''}</td>
+                  <td class="col-message" title={en ? d.notes.join('\n') || undefined : d.message}>
+                    {diagMessage(d)}
+                  </td>
+                  <td class="col-line">{d.line > 0 ? `${d.line}:${d.column}` : ''}</td>
+                  <td class="col-action" />
+                </tr>
+              ) : null;
+            })}
           </tbody>
         </table>
-        {props.diagnostics.length === 0 && <div class="empty">{t('errors.none')}</div>}
+        {props.diagnostics.length === 0 && (props.fileDiagnostics ?? []).length === 0 && <div class="empty">{t('errors.none')}</div>}
       </div>
     </div>
   );

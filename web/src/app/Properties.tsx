@@ -491,10 +491,10 @@ function AssociationTable(props: { doc: EditorDoc; actions: ActionDef[]; block: 
       <table class="assoc-table">
         <thead>
           <tr>
-            <th class="col-qualifier">{t('props.qualifier')}</th>
-            {anyTimed && <th class="col-duration">{t('props.duration')}</th>}
-            <th class="col-action">{t('props.action')}</th>
-            <th class="col-indicator">{t('props.indicator')}</th>
+            <th class="col-qualifier" title={t('props.qualifier')}>{t('props.qualifierHead')}</th>
+            {anyTimed && <th class="col-duration" title={t('props.duration')}>{t('props.duration')}</th>}
+            <th class="col-action" title={t('props.action')}>{t('props.action')}</th>
+            <th class="col-indicator" title={t('props.indicator')}>{t('props.indicatorHead')}</th>
             <th class="col-buttons" />
           </tr>
         </thead>

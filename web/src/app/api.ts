@@ -131,7 +131,8 @@ export function createApi(opts: ApiOptions) {
       const obj = (data ?? {}) as { error?: string; conflict?: boolean };
       const message = obj.error ?? (text.trim() || res.statusText || `HTTP ${res.status}`);
       const err = new ApiError(message, res.status, obj.conflict === true);
-      if (loud(res.status)) notify(`${path}: ${message}`);
+      // The toast shows the server's message alone, never the API path.
+      if (loud(res.status)) notify(message);
       throw err;
     }
     return data as T;

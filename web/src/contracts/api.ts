@@ -32,7 +32,13 @@ witnessIds?: Array<string>,
 /**
  * For a violated requirement (`sfc prove`): its witness, to replay in monitor mode.
  */
-replay?: Replay, };
+replay?: Replay, 
+/**
+ * The POU of the file the diagnostic lies in (its chart's, when it concerns a chart); absent
+ * for one outside every POU (a TYPE, the XML itself). The page lists it under that chart's
+ * tab, or under the file when no chart of the file is that POU.
+ */
+pou?: string, };
 
 export type FileFormat = "st" | "xml";
 
@@ -52,11 +58,39 @@ open: Array<string>, host?: HostInfo, };
 
 export type FileEntry = { path: string, format: FileFormat, };
 
+export type PouAction = { name: string, sfc: boolean, };
+
+export type PouEntry = { name: string, 
+/**
+ * `program`, `functionBlock` or `function`.
+ */
+kind: string, 
+/**
+ * The body's language: `SFC`, `ST` or `IL`.
+ */
+language: string, 
+/**
+ * Whether the editor opens it as a chart (its body, or an action, is written in SFC).
+ */
+chart: boolean, 
+/**
+ * Its actions, in order.
+ */
+actions: Array<PouAction>, 
+/**
+ * Its chart's transitions by name (an unnamed one `T<n>`), in order.
+ */
+transitions: Array<string>, };
+
 export type OpenResult = { path: string, format: FileFormat, charts: Array<EditorDoc>, diagnostics: Array<Diag>, 
 /**
  * Hash of the file's bytes when read; sent back on save to detect changes made outside.
  */
-hash: string, };
+hash: string, 
+/**
+ * Every POU of the file in order (the project tree), charts or not.
+ */
+pous?: Array<PouEntry>, };
 
 export type SaveResult = { path: string, hash: string, diagnostics: Array<Diag>, };
 

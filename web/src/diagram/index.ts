@@ -25,6 +25,7 @@ import { exportSvg } from './export/SvgExport';
 import type { Highlights } from './highlight/Highlights';
 import { validate, type DocImporter } from './import/DocImporter';
 import { sameStructure } from './modeling/cmd/ReplaceDocHandler';
+import { canDeleteStep, canInsert } from './modeling/cmd/StructureHandlers';
 import ImportModule from './import';
 import { isConnection, shapesOf, type Service } from './model';
 import ModelingModule from './modeling';
@@ -41,10 +42,9 @@ export type { CanvasHandle, CanvasOptions, CreateCanvas } from './types';
 
 const MIN_ZOOM = 0.1;
 const MAX_ZOOM = 4;
-/** The smallest zoom "fit" chooses: 12 px labels at 9 px on screen. */
-export const READABLE_ZOOM = 0.75;
-/** Width the palette covers on the canvas's left edge, in pixels. */
-const PALETTE_ROOM = 190;
+/** The smallest zoom a chart opens at (smaller, it opens at 100 % showing its top; *Fit*
+ *  shows all of it). */
+export const OPEN_MIN_ZOOM = 0.6;
 
 export const createCanvas: CreateCanvas = (container: HTMLElement, opts: CanvasOptions): CanvasHandle => {
   const readOnly = !!opts.readOnly;
@@ -82,6 +82,14 @@ export const createCanvas: CreateCanvas = (container: HTMLElement, opts: CanvasO
     ],
   } as Service);
 
+  // The palette docks: its own column left of the drawing (not floating over it), so the view,
+  // and "fit", have the free canvas only.
+  const dockedPalette = host.querySelector('.djs-palette');
+  if (dockedPalette) {
+    host.classList.add('sfc-docked');
+    host.insertBefore(dockedPalette, host.firstChild);
+  }
+
   const get = <T = Service>(name: string): T => diagram.get(name) as T;
   const eventBus = get('eventBus');
   const canvas = get('canvas');
@@ -92,6 +100,7 @@ export const createCanvas: CreateCanvas = (container: HTMLElement, opts: CanvasO
   const importer = get<DocImporter>('sfcImporter');
   const highlights = get<Highlights>('sfcHighlights');
   const view = get<ViewTracker>('sfcView');
+  if (dockedPalette) view.measure();
 
   type Listener = (...args: unknown[]) => void;
   const listeners = new Map<keyof CanvasEvents, Set<Listener>>();
@@ -125,49 +134,42 @@ export const createCanvas: CreateCanvas = (container: HTMLElement, opts: CanvasO
     return e;
   };
 
-  let paletteRoom = 0;
-  /** Shows the chart from its top, centred: all of it (`whole`, never beyond 100 %), or on
-   *  load all of it when that stays readable, else its top at 100 %. */
+  /** Shows the chart: all of it centred in the view (`whole`, never beyond 100 %: *Fit*), or
+   *  on load all of it when that stays readable, else its top at 100 %. The palette has its own
+   *  column, so the view is the free canvas. */
   const showChart = (whole: boolean) => {
     const b = chartBounds(elementRegistry);
     const { width, height } = view.size();
     if (!b || width === 0 || height === 0) return;
     const m = 40;
-    // The palette floats over the left edge: centre the chart in the room beside it (the
-    // palette is as wide as its longest label, which depends on the language; measured before
-    // the chart is drawn, when that costs no layout of the drawing).
-    const inset = readOnly ? 0 : Math.min(paletteRoom || PALETTE_ROOM, width / 3);
-    const room = width - inset;
-    let scale = Math.max(MIN_ZOOM, Math.min(1, room / (b.width + 2 * m), height / (b.height + 2 * m)));
-    // Names and conditions (12 px) stay readable: "fit" shrinks no further than 9 px on
-    // screen, and shows the chart's top when all of it does not fit then.
-    if (whole && scale < READABLE_ZOOM) scale = READABLE_ZOOM;
-    if (!whole && scale < 0.6) scale = 1;
+    let scale = Math.max(MIN_ZOOM, Math.min(1, width / (b.width + 2 * m), height / (b.height + 2 * m)));
+    // On load, names and conditions (12 px) stay readable: a chart that fits only below 60 %
+    // shows its top at 100 % instead.
+    if (!whole && scale < OPEN_MIN_ZOOM) scale = 1;
     // A chart wider than the view shows its top around the initial step (where it starts),
     // kept within the chart's extent.
     let x: number;
-    if (b.width + 2 * m <= room / scale) {
-      x = b.x + b.width / 2 - (inset + room / 2) / scale;
+    if (b.width + 2 * m <= width / scale) {
+      x = b.x + b.width / 2 - width / 2 / scale;
     } else {
       const first = shapesOf(elementRegistry).find((s) => s.businessObject.kind === 'step' && s.businessObject.initial);
-      const left = b.x - m - inset / scale;
+      const left = b.x - m;
       const right = b.x + b.width + m - width / scale;
-      x = first ? Math.min(right, Math.max(left, first.x + first.width / 2 - (inset + room / 2) / scale)) : left;
+      x = first ? Math.min(right, Math.max(left, first.x + first.width / 2 - width / 2 / scale)) : left;
     }
+    // *Fit* centres it vertically too; on load (and when it does not fit) it shows from its top,
+    // where blocks dropped below it land in view.
+    const y = whole && b.height + 2 * m <= height / scale ? b.y + b.height / 2 - height / 2 / scale : b.y - m;
     // As `canvas.viewbox(box)` with the size kept by the tracker: diagram-js would read the
     // container's size, forcing a layout of the whole drawing just added (200 ms at 500 steps).
     canvas._changeViewbox(() => {
-      canvas._viewport.setAttribute('transform', `matrix(${scale},0,0,${scale},${-x * scale},${-(b.y - m) * scale})`);
+      canvas._viewport.setAttribute('transform', `matrix(${scale},0,0,${scale},${-x * scale},${-y * scale})`);
     });
     view.tick();
   };
 
   const handle: CanvasHandle = {
     load(doc: EditorDoc) {
-      if (!readOnly && elementRegistry.getAll().length <= 1) {
-        const palette = host.querySelector('.djs-palette') as HTMLElement | null;
-        if (palette && palette.offsetWidth > 0) paletteRoom = palette.offsetWidth + 20;
-      }
       importer.load(doc);
       revision++;
       savedTop = top();
@@ -202,6 +204,23 @@ export const createCanvas: CreateCanvas = (container: HTMLElement, opts: CanvasO
       importer.load(doc);
       revision++;
       return false;
+    },
+    structure(op) {
+      if (readOnly || !handle.canStructure(op)) return false;
+      const e = selection.get()[0];
+      if (op === 'deleteStep') {
+        modeling.deleteStepReconnect(e);
+      } else {
+        const created: Service[] = modeling.insertStructure(e, op === 'insertAfter' ? 'after' : 'before');
+        const same = created.find((b) => b.businessObject.kind === e.businessObject.kind);
+        if (same) selection.select(same);
+      }
+      return true;
+    },
+    canStructure(op) {
+      const sel: Service[] = selection.get();
+      if (readOnly || sel.length !== 1) return false;
+      return op === 'deleteStep' ? canDeleteStep(sel[0]) : canInsert(sel[0]);
     },
     undo: () => commandStack.undo(),
     redo: () => commandStack.redo(),

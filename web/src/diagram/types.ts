@@ -15,6 +15,8 @@ export type HighlightKind =
   | 'diff-changed' // compare: block renamed or changed since (orange)
   | 'conflict'; // merge: block of an element `sfc merge` marked as a conflict (red-orange)
 
+export type StructureOp = 'insertAfter' | 'insertBefore' | 'deleteStep';
+
 export interface CanvasEvents {
   /** The document changed (any command executed, undone or redone). */
   change: () => void;
@@ -52,6 +54,13 @@ export interface CanvasHandle {
    *  undoable command when `doc` has the same blocks and wires (ids, kinds, ends), else loaded
    *  with the undo history cleared. Returns whether it can be undone. */
   replace(doc: EditorDoc): boolean;
+  /** Structured editing of the selected block (one undoable command; docs/editor.md,
+   *  "Structured editing"): `insertAfter` / `insertBefore` a step and a transition into the
+   *  sequence after or before the selected step or transition; `deleteStep` the selected step
+   *  between two transitions with the transition after it, reconnecting. Returns whether it applied. */
+  structure(op: StructureOp): boolean;
+  /** Whether `structure(op)` applies to the selection. */
+  canStructure(op: StructureOp): boolean;
   undo(): void;
   redo(): void;
   canUndo(): boolean;

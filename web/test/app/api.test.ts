@@ -60,7 +60,7 @@ describe('API client', () => {
     expect(err).toBeInstanceOf(ApiError);
     expect(err.status).toBe(403);
     expect(err.message).toBe('path outside the roots');
-    expect(notify).toHaveBeenCalledWith('/api/open: path outside the roots');
+    expect(notify).toHaveBeenCalledWith('path outside the roots');
   });
   it('leaves a missing file (404 on open) and a save conflict (409) to the caller', async () => {
     const notify = vi.fn();

@@ -140,6 +140,9 @@ describe('shell', () => {
   it('marks a changed chart with * and asks before discarding it', async () => {
     server.files['/w/mixer.st'].charts.push({ ...doc, pou: 'Second' });
     await start();
+    // The file's first chart is shown; the second is chosen by its tab.
+    expect(root.querySelector('.tab.active .tab-title')?.textContent).toBe('mixer.st: Mixer');
+    await click(root.querySelectorAll<HTMLElement>('.tab')[1]);
     await act(async () => void canvases[1].updateDoc({ description: 'changed' }));
     await flush();
     expect(root.querySelector('.tab.active .tab-title')?.textContent).toBe('mixer.st: Second*');

@@ -86,6 +86,8 @@ export function createFakeCanvas(container: HTMLElement): FakeCanvas {
     },
     canUndo: () => undo.length > 0,
     canRedo: () => redo.length > 0,
+    structure: () => false,
+    canStructure: () => false,
     isDirty: () => undo.length !== savedAt,
     markSaved() {
       savedAt = undo.length;

@@ -103,7 +103,7 @@ describe('resizing', () => {
     expect(limits({ kind: 'selectionDivergence', pins: 4 }).resize).toBe('width');
   });
 
-  it('offers handles by kind: none on transitions, only sides on bars', () => {
+  it('offers handles by kind: none on transitions, only sides on bars, none on the pins of steps and jumps', () => {
     const m = mount();
     m.canvas.load(conveyorDoc());
     const reg = m.get('elementRegistry');
@@ -111,7 +111,8 @@ describe('resizing', () => {
     const dirs = (id: string) => ['n', 'w', 's', 'e', 'nw', 'ne', 'se', 'sw'].filter((d) => resize.canResize({ shape: reg.get(id), direction: d }));
     expect(dirs('transition:Go')).toEqual([]);
     expect(dirs('b2')).toEqual(['w', 'e']);
-    expect(dirs('step:Run')).toHaveLength(8);
+    expect(dirs('step:Run')).toEqual(['w', 'e', 'nw', 'ne', 'se', 'sw']);
+    expect(dirs('b4')).toEqual(['w', 'e', 'nw', 'ne', 'se', 'sw']);
   });
 
   it('pins of a resized bar stay equidistant on the grid and keep their wires', () => {
@@ -262,6 +263,31 @@ describe('palette', () => {
     expect(added[2].initial).toBe(true);
     // Snapped to the grid by the create tool's position.
     for (const e of added) expect(e.x % 10).toBe(0);
+  });
+
+  it('gives a new transition no condition (saved as FALSE until one is written)', () => {
+    const m = mount();
+    // A Blank chart (an ATMT chart's new transition reads the next free input, C<n>).
+    m.canvas.load({ ...conveyorDoc(), target: 'blank' });
+    const palette = m.get('sfcPalette');
+    const spec = palette['specs']().find((s: { id: string }) => s.id === 'transition');
+    m.get('modeling').createShape(palette.newShape(spec), { x: 400, y: 600 }, m.get('canvas').getRootElement());
+    const made = m.canvas.getDoc().elements.at(-1)!;
+    expect(made.kind).toBe('transition');
+    expect(made.condition ?? '').toBe('');
+  });
+
+  it('refuses a move onto another block, and allows one to free room', () => {
+    const m = mount();
+    m.canvas.load(conveyorDoc());
+    const registry = m.get('elementRegistry');
+    const rules = m.get('rules');
+    const root = m.get('canvas').getRootElement();
+    const steps = registry.filter((e: { businessObject?: { kind?: string } }) => e.businessObject?.kind === 'step');
+    const [a, b] = steps;
+    const onto = { x: b.x - a.x + 5, y: b.y - a.y + 5 };
+    expect(rules.allowed('elements.move', { shapes: [a], delta: onto, target: root })).toBe(false);
+    expect(rules.allowed('elements.move', { shapes: [a], delta: { x: -400, y: 0 }, target: root })).toBe(true);
   });
 
   it('is absent on a read-only canvas', () => {

@@ -12,8 +12,9 @@ import { kindsMayConnect, nearestFreePin } from '../rules/SfcRules';
 import { el, points } from '../render/svg';
 import type { ViewTracker } from '../view/ViewTracker';
 
-/** How close to a pin a press must be to start a wire instead of a move. */
-const GRAB = 7;
+/** How close to a pin a press must be to start a wire instead of a move (or a lasso: a
+ *  press just outside the block, beyond its pin, grabs the pin too). */
+export const GRAB = 10;
 
 interface Candidate {
   shape: SfcShape;
@@ -45,15 +46,11 @@ export class PinConnect {
   ) {
     eventBus.on('element.mousedown', 1600, (event: Service) => {
       if (config?.readOnly) return;
-      const shape = event.element;
       const oe = event.originalEvent as MouseEvent | undefined;
-      if (!isShape(shape) || !oe || !isPrimaryButton(oe) || oe.shiftKey || oe.ctrlKey || oe.metaKey) return;
-      const p = this.toCanvas(oe);
-      const out = nearestFreePin(shape, 'out', p, GRAB);
-      const inn = nearestFreePin(shape, 'in', p, GRAB);
-      const pick = out && (!inn || out.dist <= inn.dist) ? { side: 'out' as const, ...out } : inn ? { side: 'in' as const, ...inn } : undefined;
+      if (!oe || !isPrimaryButton(oe) || oe.shiftKey || oe.ctrlKey || oe.metaKey) return;
+      const pick = this.pinAt(this.toCanvas(oe), isShape(event.element) ? event.element : undefined);
       if (!pick) return;
-      this.start(oe, shape, pick.side, pick.pin, pick.at);
+      this.start(oe, pick.shape, pick.side, pick.pin, pick.at);
       return true;
     });
 
@@ -96,6 +93,28 @@ export class PinConnect {
       cursor: 'crosshair',
       data: { shape, context: { shape, side, pin, at } satisfies ConnectContext },
     });
+  }
+
+  /** The free pin within GRAB of `p`: of the block pressed on first, else of any block (a
+   *  press on the chart or a wire just beyond a pin). */
+  pinAt(p: Point, pressed?: SfcShape): { shape: SfcShape; side: 'in' | 'out'; pin: number; at: Point } | undefined {
+    const pickOf = (shape: SfcShape) => {
+      const out = nearestFreePin(shape, 'out', p, GRAB);
+      const inn = nearestFreePin(shape, 'in', p, GRAB);
+      if (out && (!inn || out.dist <= inn.dist)) return { shape, side: 'out' as const, ...out };
+      return inn ? { shape, side: 'in' as const, ...inn } : undefined;
+    };
+    if (pressed) {
+      const own = pickOf(pressed);
+      if (own) return own;
+    }
+    let best: ReturnType<typeof pickOf>;
+    for (const s of shapesOf(this.elementRegistry)) {
+      if (s === pressed || p.x < s.x - GRAB || p.x > s.x + s.width + GRAB || p.y < s.y - GRAB || p.y > s.y + s.height + GRAB) continue;
+      const hit = pickOf(s);
+      if (hit && (!best || hit.dist < best.dist)) best = hit;
+    }
+    return best;
   }
 
   /** The nearest free pin of another block that the wire may end on. */

@@ -6,6 +6,7 @@ import type { DocFields } from '../core/DocState';
 import type { Service, SfcElement } from '../model';
 import { ApplyLayoutHandler } from './cmd/ApplyLayoutHandler';
 import { ReplaceDocHandler } from './cmd/ReplaceDocHandler';
+import { DeleteStepHandler, InsertStructureHandler, type InsertWhere } from './cmd/StructureHandlers';
 import { UpdateDocHandler } from './cmd/UpdateDocHandler';
 import { UpdateElementHandler } from './cmd/UpdateElementHandler';
 
@@ -21,6 +22,8 @@ export class SfcModeling extends BaseModeling {
       'sfc.doc.update': UpdateDocHandler,
       'sfc.layout.apply': ApplyLayoutHandler,
       'sfc.doc.replace': ReplaceDocHandler,
+      'sfc.structure.insert': InsertStructureHandler,
+      'sfc.structure.deleteStep': DeleteStepHandler,
     };
   }
 
@@ -49,6 +52,20 @@ export class SfcModeling extends BaseModeling {
 
   applyLayout(laidOut: EditorDoc) {
     this._commandStack.execute('sfc.layout.apply', { laidOut });
+  }
+
+  /** A step and a transition inserted into the sequence after or before `element` (a step or
+   *  transition); returns the new blocks, top to bottom. */
+  insertStructure(element: SfcElement, where: InsertWhere): SfcElement[] {
+    const ctx: Record<string, unknown> = { element, where };
+    this._commandStack.execute('sfc.structure.insert', ctx);
+    return (ctx.created as SfcElement[]) ?? [];
+  }
+
+  /** A step between two transitions removed with the transition after it, the one before
+   *  wired to what followed. */
+  deleteStepReconnect(step: SfcElement) {
+    this._commandStack.execute('sfc.structure.deleteStep', { step });
   }
 
   /** Everything of a document with the same blocks and wires (see ReplaceDocHandler). */

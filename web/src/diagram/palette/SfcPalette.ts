@@ -74,7 +74,7 @@ export class SfcPalette {
     return [
       { id: 'initial-step', group: 'blocks', label: 'palette.initialStep', icon: ICONS.initialStep, make: named('step', 'S', { initial: true }) },
       { id: 'step', group: 'blocks', label: 'palette.step', icon: ICONS.step, make: named('step', 'S') },
-      { id: 'transition', group: 'blocks', label: 'palette.transition', icon: ICONS.transition, make: named('transition', 'T', { condition: 'TRUE' }) },
+      { id: 'transition', group: 'blocks', label: 'palette.transition', icon: ICONS.transition, make: named('transition', 'T', { condition: '' }) },
       { id: 'jump', group: 'blocks', label: 'palette.jump', icon: ICONS.jump, make: () => ({ kind: 'jump' }) },
       { id: 'selection-divergence', group: 'groups', label: 'palette.selectionDivergence', icon: ICONS.selectionDivergence, make: () => ({ kind: 'selectionDivergence', pins: 2 }) },
       { id: 'selection-convergence', group: 'groups', label: 'palette.selectionConvergence', icon: ICONS.selectionConvergence, make: () => ({ kind: 'selectionConvergence', pins: 2 }) },

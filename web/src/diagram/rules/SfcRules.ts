@@ -7,14 +7,16 @@ import { pinCounts, VALID_TARGETS, type ChartTarget, type ElementKind, type Poin
 import type { DocState } from '../core/DocState';
 import { inputPin, limits, outputPin, PIN_SNAP } from '../geometry';
 import { isConnection, type Service, type SfcConnection, type SfcShape } from '../model';
+import { movesOntoAnother, type Box } from './overlap';
 
 export class SfcRules extends RuleProvider {
-  static $inject = ['eventBus', 'config.sfc', 'sfcDocState'];
+  static $inject = ['eventBus', 'config.sfc', 'sfcDocState', 'elementRegistry'];
 
   constructor(
     eventBus: Service,
     private config: { readOnly?: boolean },
     private state: DocState,
+    private elementRegistry?: Service,
   ) {
     super(eventBus);
   }
@@ -30,7 +32,16 @@ export class SfcRules extends RuleProvider {
     const intoChart = (target: unknown) => !target || (!isBlock(target) && !isConnection(target));
     this.addRule('shape.create', (ctx: Service) => !ro() && intoChart(ctx.target) && allowedHere([ctx.shape]));
     this.addRule('elements.create', (ctx: Service) => !ro() && intoChart(ctx.target) && allowedHere(ctx.elements ?? []));
-    this.addRule('elements.move', (ctx: Service) => !ro() && intoChart(ctx.target));
+    const box = (s: Service): Box => ({ id: s.id, x: s.x, y: s.y, width: s.width, height: s.height, kind: s.businessObject?.kind, step: s.businessObject?.step });
+    /** Whether the move puts a block onto another (refused: blocks never lie on each other). */
+    const ontoAnother = (ctx: Service) => {
+      const delta = ctx.delta;
+      if (!delta || !this.elementRegistry || (delta.x === 0 && delta.y === 0)) return false;
+      const moved = ((ctx.shapes ?? []) as unknown[]).filter(isBlock).map(box);
+      const all = (this.elementRegistry.getAll() as unknown[]).filter(isBlock).map(box);
+      return movesOntoAnother(moved, delta, all);
+    };
+    this.addRule('elements.move', (ctx: Service) => !ro() && intoChart(ctx.target) && !ontoAnother(ctx));
     this.addRule(['elements.delete', 'element.copy'], () => !ro());
     this.addRule('connection.create', (ctx: Service) => {
       if (ro()) return false;
@@ -57,6 +68,9 @@ export class SfcRules extends RuleProvider {
       const lim = limits(shape.businessObject);
       if (lim.resize === 'none') return false;
       if (lim.resize === 'width' && ctx.direction && ctx.direction !== 'e' && ctx.direction !== 'w') return false;
+      // The middle of the top and bottom edges holds the pins (steps, jumps): no handle there, so
+      // a drag from a pin always draws a wire (height changes by the corners).
+      if ((ctx.direction === 'n' || ctx.direction === 's') && pinCounts(shape.businessObject).inputs + pinCounts(shape.businessObject).outputs > 0) return false;
       const b = ctx.newBounds;
       if (b) {
         if (b.width < lim.min.w || b.width > lim.max.w || b.height < lim.min.h || b.height > lim.max.h) return false;

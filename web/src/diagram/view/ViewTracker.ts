@@ -41,7 +41,8 @@ export class ViewTracker {
     eventBus.on('diagram.destroy', () => this.observer?.disconnect());
   }
 
-  private measure() {
+  /** Measures the container again (after the palette docked beside it). */
+  measure() {
     const c: HTMLElement = this.canvas.getContainer();
     this.w = c.clientWidth;
     this.h = c.clientHeight;
